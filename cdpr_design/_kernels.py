@@ -1,0 +1,353 @@
+"""Every numba kernel of cdpr-design, in one place.
+
+Kernels take contiguous float64 arrays in SI units and never model objects.
+Conventions (see ``shared/design/spec-format.md``):
+
+- full pose ``[x, y, z, rx, ry, rz]``, R = Rx(rx) Ry(ry) Rz(rz);
+- full wrench ``[fx, fy, fz, mx, my, mz]``; ``rows`` picks the balanced rows;
+- cable vector l_i = a_i - (p + R b_i), u_i = l_i / |l_i| (pulls towards the outlet);
+- structure matrix column i = [u_i ; (R b_i) x u_i][rows].
+
+The jit options are set here once (``cache=True`` so users pay the compile
+time once per machine, ``nogil`` so sweeps can run in threads).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+JIT = dict(cache=True, nogil=True, error_model="numpy")
+njit = nb.njit(**JIT)
+njit_parallel = nb.njit(parallel=True, **JIT)
+
+#: Relative tolerance below which a facet normal or a pivot counts as zero.
+RANK_TOL = 1e-10
+
+KIND_STATIC = 0
+KIND_WRENCH_FEASIBLE = 1
+KIND_WRENCH_CLOSURE = 2
+
+
+# ----------------------------------------------------------------------------
+# Kinematics
+# ----------------------------------------------------------------------------
+
+
+@njit
+def rotation(rx, ry, rz, R):
+    """R = Rx(rx) Ry(ry) Rz(rz) written into ``R`` (3, 3)."""
+    cx, sx = math.cos(rx), math.sin(rx)
+    cy, sy = math.cos(ry), math.sin(ry)
+    cz, sz = math.cos(rz), math.sin(rz)
+    R[0, 0] = cy * cz
+    R[0, 1] = -cy * sz
+    R[0, 2] = sy
+    R[1, 0] = sx * sy * cz + cx * sz
+    R[1, 1] = -sx * sy * sz + cx * cz
+    R[1, 2] = -sx * cy
+    R[2, 0] = -cx * sy * cz + sx * sz
+    R[2, 1] = cx * sy * sz + sx * cz
+    R[2, 2] = cx * cy
+
+
+@njit
+def rotate_attachments(R, B, Rb):
+    """Rb[i] = R @ B[i] for every attachment."""
+    for i in range(B.shape[0]):
+        for r in range(3):
+            Rb[i, r] = R[r, 0] * B[i, 0] + R[r, 1] * B[i, 1] + R[r, 2] * B[i, 2]
+
+
+@njit
+def structure_matrix(px, py, pz, Rb, A, rows, W, L):
+    """Fill the structure matrix ``W`` (n, m) and lengths ``L`` (m) at one pose.
+
+    Returns False when a cable has zero length (its direction is undefined);
+    that column of ``W`` is then zero.
+    """
+    m = A.shape[0]
+    n = rows.shape[0]
+    ok = True
+    full = np.empty(6)
+    for i in range(m):
+        lx = A[i, 0] - px - Rb[i, 0]
+        ly = A[i, 1] - py - Rb[i, 1]
+        lz = A[i, 2] - pz - Rb[i, 2]
+        li = math.sqrt(lx * lx + ly * ly + lz * lz)
+        L[i] = li
+        if li <= 1e-12:
+            ok = False
+            for k in range(n):
+                W[k, i] = 0.0
+            continue
+        ux, uy, uz = lx / li, ly / li, lz / li
+        bx, by, bz = Rb[i, 0], Rb[i, 1], Rb[i, 2]
+        full[0] = ux
+        full[1] = uy
+        full[2] = uz
+        full[3] = by * uz - bz * uy
+        full[4] = bz * ux - bx * uz
+        full[5] = bx * uy - by * ux
+        for k in range(n):
+            W[k, i] = full[rows[k]]
+    return ok
+
+
+# ----------------------------------------------------------------------------
+# Small dense linear algebra
+# ----------------------------------------------------------------------------
+
+
+@njit
+def det_small(M, k):
+    """Determinant of the leading k x k block of ``M`` (copied; partial pivoting)."""
+    a = np.empty((k, k))
+    for i in range(k):
+        for j in range(k):
+            a[i, j] = M[i, j]
+    d = 1.0
+    for c in range(k):
+        piv = c
+        best = abs(a[c, c])
+        for r in range(c + 1, k):
+            if abs(a[r, c]) > best:
+                best = abs(a[r, c])
+                piv = r
+        if best == 0.0:
+            return 0.0
+        if piv != c:
+            for j in range(k):
+                tmp = a[c, j]
+                a[c, j] = a[piv, j]
+                a[piv, j] = tmp
+            d = -d
+        d *= a[c, c]
+        for r in range(c + 1, k):
+            f = a[r, c] / a[c, c]
+            for j in range(c + 1, k):
+                a[r, j] -= f * a[c, j]
+    return d
+
+
+@njit
+def inverse_small(W, Winv):
+    """Invert the square ``W`` (n, n) into ``Winv`` by Gauss-Jordan with pivoting.
+
+    Returns False when W is singular to working precision (relative pivot
+    below ``RANK_TOL``).
+    """
+    n = W.shape[0]
+    a = np.empty((n, 2 * n))
+    scale = 0.0
+    for i in range(n):
+        for j in range(n):
+            a[i, j] = W[i, j]
+            a[i, n + j] = 1.0 if i == j else 0.0
+            if abs(W[i, j]) > scale:
+                scale = abs(W[i, j])
+    if scale == 0.0:
+        return False
+    for c in range(n):
+        piv = c
+        best = abs(a[c, c])
+        for r in range(c + 1, n):
+            if abs(a[r, c]) > best:
+                best = abs(a[r, c])
+                piv = r
+        if best <= RANK_TOL * scale:
+            return False
+        if piv != c:
+            for j in range(2 * n):
+                tmp = a[c, j]
+                a[c, j] = a[piv, j]
+                a[piv, j] = tmp
+        inv = 1.0 / a[c, c]
+        for j in range(2 * n):
+            a[c, j] *= inv
+        for r in range(n):
+            if r != c and a[r, c] != 0.0:
+                f = a[r, c]
+                for j in range(2 * n):
+                    a[r, j] -= f * a[c, j]
+    for i in range(n):
+        for j in range(n):
+            Winv[i, j] = a[i, n + j]
+    return True
+
+
+# ----------------------------------------------------------------------------
+# Square systems (m = n): closed forms
+# ----------------------------------------------------------------------------
+
+
+@njit
+def square_eval(W, wreq, tmin, tmax, t):
+    """Tensions and capacity margin of a square structure matrix.
+
+    For m = n the tensions are unique, t = W^-1 w, and the capacity margin is
+    min_i min(t_i - t_min,i, t_max,i - t_i) / ||row_i(W^-1)||_2, minimised over
+    the required-wrench vertices (rows of ``wreq``); ``t`` receives the
+    tensions for the first vertex.  Returns (rank_ok, margin).  This equals the
+    hyperplane-shifting margin (the facet normals of a parallelotope are the
+    rows of W^-1).
+    """
+    n = W.shape[0]
+    nv = wreq.shape[0]
+    if n == 2:
+        det = W[0, 0] * W[1, 1] - W[0, 1] * W[1, 0]
+        scale = max(max(abs(W[0, 0]), abs(W[0, 1])), max(abs(W[1, 0]), abs(W[1, 1])))
+        if abs(det) <= RANK_TOL * scale * scale:
+            for i in range(2):
+                t[i] = np.nan
+            return False, np.nan
+        i00 = W[1, 1] / det
+        i01 = -W[0, 1] / det
+        i10 = -W[1, 0] / det
+        i11 = W[0, 0] / det
+        r0 = math.sqrt(i00 * i00 + i01 * i01)
+        r1 = math.sqrt(i10 * i10 + i11 * i11)
+        margin = np.inf
+        for k in range(nv):
+            t0 = i00 * wreq[k, 0] + i01 * wreq[k, 1]
+            t1 = i10 * wreq[k, 0] + i11 * wreq[k, 1]
+            if k == 0:
+                t[0] = t0
+                t[1] = t1
+            s0 = min(t0 - tmin[0], tmax[0] - t0) / r0
+            s1 = min(t1 - tmin[1], tmax[1] - t1) / r1
+            margin = min(margin, min(s0, s1))
+        return True, margin
+    Winv = np.empty((n, n))
+    if not inverse_small(W, Winv):
+        for i in range(n):
+            t[i] = np.nan
+        return False, np.nan
+    rn = np.empty(n)
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            s += Winv[i, j] * Winv[i, j]
+        rn[i] = math.sqrt(s)
+    margin = np.inf
+    for k in range(nv):
+        for i in range(n):
+            ti = 0.0
+            for j in range(n):
+                ti += Winv[i, j] * wreq[k, j]
+            if k == 0:
+                t[i] = ti
+            margin = min(margin, min(ti - tmin[i], tmax[i] - ti) / rn[i])
+    return True, margin
+
+
+# ----------------------------------------------------------------------------
+# Hyperplane shifting: capacity margin for any m >= n
+# ----------------------------------------------------------------------------
+
+
+@njit
+def facet_normal(W, subset, nu):
+    """Unit normal ``nu`` (n) of the hyperplane spanned by the columns ``subset`` (n-1).
+
+    Generalised cross product: nu_k = (-1)^k det(W_S without row k).
+    Returns False when those columns have rank < n-1 (no facet).
+    """
+    n = W.shape[0]
+    k1 = n - 1
+    if n == 2:
+        c = subset[0]
+        nu[0] = -W[1, c]
+        nu[1] = W[0, c]
+    elif n == 3:
+        a = subset[0]
+        b = subset[1]
+        nu[0] = W[1, a] * W[2, b] - W[2, a] * W[1, b]
+        nu[1] = W[2, a] * W[0, b] - W[0, a] * W[2, b]
+        nu[2] = W[0, a] * W[1, b] - W[1, a] * W[0, b]
+    else:
+        M = np.empty((k1, k1))
+        sign = 1.0
+        for k in range(n):
+            r = 0
+            for i in range(n):
+                if i == k:
+                    continue
+                for j in range(k1):
+                    M[r, j] = W[i, subset[j]]
+                r += 1
+            nu[k] = sign * det_small(M, k1)
+            sign = -sign
+    # Hadamard bound: |nu| <= prod of column norms; relative rank test
+    bound = 1.0
+    for j in range(k1):
+        s = 0.0
+        for i in range(n):
+            s += W[i, subset[j]] * W[i, subset[j]]
+        bound *= math.sqrt(s)
+    norm = 0.0
+    for i in range(n):
+        norm += nu[i] * nu[i]
+    norm = math.sqrt(norm)
+    if bound == 0.0 or norm <= RANK_TOL * bound:
+        return False
+    for i in range(n):
+        nu[i] /= norm
+    return True
+
+
+@njit
+def hsm_margin(W, wreq, tmin, tmax, combos):
+    """Capacity margin by the hyperplane shifting method.
+
+    Gouttefarde & Krut, ARK 2010; Bouchard, Gosselin & Moore, ASME JMR 2010;
+    Guay et al. 2014 (capacity margin).  For every subset S of n-1 columns of
+    rank n-1, with unit normal nu and l_j = nu . w_j:
+
+        s_S(w) = 1/2 sum_j |l_j| (t_max,j - t_min,j) - |nu . (W t_mid - w)|
+
+    The margin is min over S and over the required-wrench vertices ``wreq``
+    (nv, n).  Returns (rank_ok, margin); rank_ok is False (margin NaN) when W
+    has rank < n.  A negative margin is the largest facet violation.
+    """
+    n, m = W.shape
+    nv = wreq.shape[0]
+    nu = np.empty(n)
+    wmid = np.empty(n)
+    for i in range(n):
+        s = 0.0
+        for j in range(m):
+            s += W[i, j] * 0.5 * (tmin[j] + tmax[j])
+        wmid[i] = s
+    rank_ok = False
+    margin = np.inf
+    for c in range(combos.shape[0]):
+        if not facet_normal(W, combos[c], nu):
+            continue
+        half = 0.0
+        lmax = 0.0
+        for j in range(m):
+            lj = 0.0
+            for i in range(n):
+                lj += nu[i] * W[i, j]
+            lj = abs(lj)
+            if lj > lmax:
+                lmax = lj
+            half += 0.5 * lj * (tmax[j] - tmin[j])
+        if lmax > RANK_TOL:
+            rank_ok = True
+        cmid = 0.0
+        for i in range(n):
+            cmid += nu[i] * wmid[i]
+        for k in range(nv):
+            cw = 0.0
+            for i in range(n):
+                cw += nu[i] * wreq[k, i]
+            s = half - abs(cmid - cw)
+            if s < margin:
+                margin = s
+    if not rank_ok:
+        return False, np.nan
+    return True, margin

@@ -1,0 +1,46 @@
+"""Typed errors of cdpr-design.
+
+Only the command line turns these into exit codes: :class:`SpecError` and
+:class:`InputError` mean bad input (exit 2), :class:`CheckFailed` means a design
+failed a check it was asked to pass (exit 1).
+"""
+
+from __future__ import annotations
+
+
+class CdprError(Exception):
+    """Base class of every error this package raises on purpose."""
+
+
+class SpecError(CdprError, ValueError):
+    """A design spec (or catalogue, or option) breaks the format.
+
+    Parameters
+    ----------
+    problems : list of (path, message)
+        Each offending key by its path (``cables[1].outlet``) and what is wrong.
+    source : str, optional
+        The file the spec came from, for the message.
+    """
+
+    def __init__(self, problems, source: str | None = None):
+        if isinstance(problems, str):
+            problems = [("", problems)]
+        self.problems = [(str(p), str(m)) for p, m in problems]
+        self.source = source
+        super().__init__(self._text())
+
+    def _text(self) -> str:
+        lines = [f"{p}: {m}" if p else m for p, m in self.problems]
+        head = f"{self.source}: " if self.source else ""
+        if len(lines) == 1:
+            return head + lines[0]
+        return head + f"{len(lines)} problems\n" + "\n".join("  " + s for s in lines)
+
+
+class InputError(CdprError, ValueError):
+    """A bad command-line value or input file other than a spec."""
+
+
+class CheckFailed(CdprError):
+    """A design failed a requirement it was asked to pass."""

@@ -1,0 +1,265 @@
+"""Inverse and forward kinematics, structure matrix and wrenches (numpy API).
+
+Poses are given in the motion type's own coordinates (``x, y`` for 2T,
+``x, y, phi`` for 1R2T, ``x, y, z`` for 3T, ``x, y, z, rx, ry, rz`` for
+3R3T).  The vector loop is the paper's equation (1): a_i + l_i = p + R b_i,
+here written l_i = a_i - (p + R b_i) so that u_i = l_i / |l_i| points from
+the effector to the outlet, the direction the cable pulls.
+
+References
+----------
+Rivera, Garrido, Riveiro, Silva: "Environment for the Design and Automation
+of New CDPR Architectures" (the seed paper): eq. (1)-(3) inverse kinematics,
+(4)-(5) closed-form forward kinematics of the planar 2-cable robot,
+(6)-(9) statics A T = B.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from . import _kernels as K
+from .model import Design
+
+
+def rotation_matrix(rx: float = 0.0, ry: float = 0.0, rz: float = 0.0) -> np.ndarray:
+    """R = Rx(rx) Ry(ry) Rz(rz) (xyz Euler angles [rad])."""
+    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
+    Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return Rx @ Ry @ Rz
+
+
+def pose_rotation(design: Design, pose) -> np.ndarray:
+    """The rotation matrix of a pose (identity for 2T and 3T)."""
+    full = design.full_pose(pose)
+    return rotation_matrix(*full[3:])
+
+
+@dataclass(frozen=True)
+class CableGeometry:
+    """Cable geometry at one pose (all frame coordinates).
+
+    Attributes
+    ----------
+    vectors : (m, 3) array
+        l_i = a_i - (p + R b_i) [m].
+    lengths : (m,) array
+        |l_i| [m].
+    directions : (m, 3) array
+        u_i = l_i / |l_i| (NaN for a zero-length cable).
+    attachments : (m, 3) array
+        R b_i, the attachment points relative to the platform origin [m].
+    anchors : (m, 3) array
+        p + R b_i, the attachment points in the frame [m].
+    """
+
+    vectors: np.ndarray
+    lengths: np.ndarray
+    directions: np.ndarray
+    attachments: np.ndarray
+    anchors: np.ndarray
+
+
+def cable_geometry(design: Design, pose) -> CableGeometry:
+    """Inverse kinematics of one pose: vectors, lengths and directions of every cable."""
+    full = design.full_pose(pose)
+    R = rotation_matrix(*full[3:])
+    Rb = design.attachments @ R.T
+    anchors = full[:3] + Rb
+    vec = design.outlets - anchors
+    L = np.linalg.norm(vec, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = vec / L[:, None]
+    u[L <= 1e-12] = np.nan
+    return CableGeometry(vec, L, u, Rb, anchors)
+
+
+def inverse_kinematics(design: Design, pose) -> np.ndarray:
+    """Cable lengths [m] at a pose: L_i = |a_i - p - R b_i| (paper eq. 2-3)."""
+    return cable_geometry(design, pose).lengths
+
+
+def lengths_many(design: Design, poses) -> np.ndarray:
+    """Cable lengths for many poses, (k, ncoords) -> (k, m) [m]."""
+    poses = np.atleast_2d(np.asarray(poses, dtype=float))
+    full = np.zeros((poses.shape[0], 6))
+    full[:, list(design.motion.pose_index)] = poses
+    A, B = design.outlets, design.attachments
+    if not design.motion.rotational:
+        Rb = B  # orientation fixed at identity
+        vec = A[None, :, :] - full[:, None, :3] - Rb[None, :, :]
+    else:
+        out = np.empty((poses.shape[0], design.m))
+        for k in range(poses.shape[0]):
+            out[k] = inverse_kinematics(design, poses[k])
+        return out
+    return np.linalg.norm(vec, axis=2)
+
+
+def structure_matrix(design: Design, pose) -> np.ndarray:
+    """Structure (wrench) matrix W (n x m) at a pose (paper eq. 9).
+
+    Column i is [u_i ; (R b_i) x u_i] restricted to the motion's wrench rows.
+    A zero-length cable gives a zero column.
+    """
+    g = cable_geometry(design, pose)
+    u = np.nan_to_num(g.directions)
+    full = np.vstack([u.T, np.cross(g.attachments, u).T])
+    return full[list(design.motion.wrench_rows), :]
+
+
+def gravity_wrench(design: Design, pose) -> np.ndarray:
+    """Wrench of gravity on the effector, restricted to the motion's rows [N, N m].
+
+    Force m g applied at the centre of mass R c (moment (R c) x m g about the
+    platform origin).
+    """
+    R = pose_rotation(design, pose)
+    f = design.effector.mass * np.asarray(design.gravity)
+    c = R @ np.asarray(design.effector.center_of_mass)
+    full = np.concatenate([f, np.cross(c, f)])
+    return full[list(design.motion.wrench_rows)]
+
+
+def inertial_wrench(design: Design, pose, acceleration, angular_velocity=None,
+                    angular_acceleration=None) -> np.ndarray:
+    """d'Alembert wrench -(m a_c, I alpha + w x I w) on the effector [N, N m].
+
+    ``acceleration`` is the platform origin's linear acceleration (frame,
+    motion's position dims); rotation terms use the inertia about the COM,
+    rotated to the frame.  Returned restricted to the motion's rows: the
+    wrench the cables must balance is -(gravity + inertial + external).
+    """
+    d = design.motion.dim
+    a = np.zeros(3)
+    a[:d] = np.asarray(acceleration, float)[:d]
+    R = pose_rotation(design, pose)
+    c = R @ np.asarray(design.effector.center_of_mass)
+    w = np.zeros(3) if angular_velocity is None else np.asarray(angular_velocity, float)
+    al = np.zeros(3) if angular_acceleration is None else np.asarray(angular_acceleration, float)
+    m = design.effector.mass
+    a_c = a + np.cross(al, c) + np.cross(w, np.cross(w, c))
+    I = R @ design.effector.inertia_matrix @ R.T
+    f = -m * a_c
+    tau_c = -(I @ al + np.cross(w, I @ w))
+    full = np.concatenate([f, tau_c + np.cross(c, f)])
+    return full[list(design.motion.wrench_rows)]
+
+
+def required_wrench(design: Design, pose, external=None) -> np.ndarray:
+    """w_req = -(w_gravity + w_external): what the cables must supply, W t = w_req."""
+    w = gravity_wrench(design, pose)
+    if external is not None:
+        w = w + np.asarray(external, dtype=float)
+    return -w
+
+
+def length_rates(design: Design, pose, velocity) -> np.ndarray:
+    """Cable speeds dL/dt [m/s] for a pose velocity in the motion's coordinates.
+
+    dL_i/dt = -u_i . (v + omega x R b_i) = -W_full[:, i] . [v; omega].
+    For the rotational motions the angular velocity is taken as the rates of
+    the pose angles mapped through the xyz Euler kinematics.
+    """
+    mot = design.motion
+    g = cable_geometry(design, pose)
+    vel = np.zeros(6)
+    vel[list(mot.pose_index)] = np.asarray(velocity, dtype=float)
+    v = vel[:3]
+    omega = euler_rates_to_omega(design.full_pose(pose)[3:], vel[3:])
+    pt = v[None, :] + np.cross(omega, g.attachments)
+    return -np.einsum("ij,ij->i", np.nan_to_num(g.directions), pt)
+
+
+def euler_rates_to_omega(angles, rates) -> np.ndarray:
+    """Angular velocity (frame) of R = Rx(a) Ry(b) Rz(c) for angle rates."""
+    a, b, _ = angles
+    da, db, dc = rates
+    ex = np.array([1.0, 0.0, 0.0])
+    ey = rotation_matrix(a, 0, 0) @ np.array([0.0, 1.0, 0.0])
+    ez = rotation_matrix(a, b, 0) @ np.array([0.0, 0.0, 1.0])
+    return da * ex + db * ey + dc * ez
+
+
+# ----------------------------------------------------------------------------
+# Forward kinematics
+# ----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class FKResult:
+    """Forward kinematics result: pose (motion coords) and the length residual [m]."""
+
+    pose: np.ndarray
+    residual: float
+    method: str
+
+
+def planar2_closed_form(design: Design, lengths) -> np.ndarray | None:
+    """The paper's closed form (eq. 4-5) generalised to any two planar outlets.
+
+    Each attachment point lies on a circle of radius L_i about its outlet; the
+    platform origin is the intersection of the circles about a_i - b_i, taking
+    the solution below the line joining them (a suspended robot hangs under
+    its outlets).  With the paper's geometry (outlets at the same height,
+    attachments at (-Bx/2, By/2), (Bx/2, By/2)) this reduces to eq. (4)-(5).
+    Returns None when the circles do not meet.
+    """
+    L1, L2 = float(lengths[0]), float(lengths[1])
+    c1 = np.asarray(design.outlets[0, :2]) - design.attachments[0, :2]
+    c2 = np.asarray(design.outlets[1, :2]) - design.attachments[1, :2]
+    d_vec = c2 - c1
+    d = float(np.hypot(*d_vec))
+    if d == 0.0 or d > L1 + L2 + 1e-12 or d < abs(L1 - L2) - 1e-12:
+        return None
+    # distance from c1 along the line to the chord (eq. 4 in the paper's frame)
+    a = (L1 * L1 - L2 * L2 + d * d) / (2 * d)
+    h = np.sqrt(max(L1 * L1 - a * a, 0.0))
+    e = d_vec / d
+    nrm = np.array([e[1], -e[0]])  # the side "below" for c1 left of c2
+    if nrm[1] > 0:
+        nrm = -nrm
+    p = c1 + a * e + h * nrm
+    return p
+
+
+def forward_kinematics(design: Design, lengths, guess=None, tol: float = 1e-12) -> FKResult:
+    """The pose for given cable lengths.
+
+    Closed form for a 2T design with two cables (paper eq. 4-5); otherwise a
+    Levenberg-Marquardt solve of the length residuals |a_i - p - R b_i| - L_i
+    from ``guess`` (default: the centre of the workspace grid at the fixed
+    orientation).  Under-constrained robots (m < n) have a family of poses:
+    the one found depends on the guess.  ``residual`` is the 2-norm of the
+    length residuals [m].
+    """
+    lengths = np.asarray(lengths, dtype=float).reshape(-1)
+    if lengths.size != design.m:
+        raise ValueError(f"expected {design.m} cable lengths, got {lengths.size}")
+    if np.any(lengths < 0) or not np.all(np.isfinite(lengths)):
+        raise ValueError("cable lengths must be finite and non-negative")
+    mot = design.motion
+    if mot.name == "2T" and design.m == 2:
+        p = planar2_closed_form(design, lengths)
+        if p is not None:
+            res = float(np.linalg.norm(inverse_kinematics(design, p) - lengths))
+            return FKResult(np.asarray(p, float), res, "closed-form")
+    if guess is None:
+        grid = design.workspace.grid
+        centre = [(lo + hi) / 2 for lo, hi in zip(grid.lower, grid.upper)]
+        ori = list(design.workspace.orientation)
+        guess = np.array(centre + ori, dtype=float)
+    guess = np.asarray(guess, dtype=float)
+
+    def fun(x):
+        return inverse_kinematics(design, x) - lengths
+
+    sol = least_squares(fun, guess, method="lm" if design.m >= len(guess) else "trf",
+                        xtol=tol, ftol=tol, gtol=tol, max_nfev=2000)
+    res = float(np.linalg.norm(fun(sol.x)))
+    return FKResult(sol.x, res, "levenberg-marquardt" if design.m >= len(guess) else "trust-region")
