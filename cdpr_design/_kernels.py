@@ -65,13 +65,13 @@ def rotate_attachments(R, B, Rb):
 def structure_matrix(px, py, pz, Rb, A, rows, W, L):
     """Fill the structure matrix ``W`` (n, m) and lengths ``L`` (m) at one pose.
 
-    Returns False when a cable has zero length (its direction is undefined);
-    that column of ``W`` is then zero.
+    Column i is [u_i ; (R b_i) x u_i] restricted to ``rows`` (spec-format.md,
+    paper eq. 9).  Returns False when a cable has zero length (its direction
+    is undefined); that column of ``W`` is then zero.
     """
     m = A.shape[0]
     n = rows.shape[0]
     ok = True
-    full = np.empty(6)
     for i in range(m):
         lx = A[i, 0] - px - Rb[i, 0]
         ly = A[i, 1] - py - Rb[i, 1]
@@ -85,14 +85,20 @@ def structure_matrix(px, py, pz, Rb, A, rows, W, L):
             continue
         ux, uy, uz = lx / li, ly / li, lz / li
         bx, by, bz = Rb[i, 0], Rb[i, 1], Rb[i, 2]
-        full[0] = ux
-        full[1] = uy
-        full[2] = uz
-        full[3] = by * uz - bz * uy
-        full[4] = bz * ux - bx * uz
-        full[5] = bx * uy - by * ux
         for k in range(n):
-            W[k, i] = full[rows[k]]
+            r = rows[k]
+            if r == 0:
+                W[k, i] = ux
+            elif r == 1:
+                W[k, i] = uy
+            elif r == 2:
+                W[k, i] = uz
+            elif r == 3:
+                W[k, i] = by * uz - bz * uy
+            elif r == 4:
+                W[k, i] = bz * ux - bx * uz
+            else:
+                W[k, i] = bx * uy - by * ux
     return ok
 
 
@@ -351,3 +357,222 @@ def hsm_margin(W, wreq, tmin, tmax, combos):
     if not rank_ok:
         return False, np.nan
     return True, margin
+
+
+# ----------------------------------------------------------------------------
+# Per-pose evaluation and the grid sweep
+# ----------------------------------------------------------------------------
+
+
+@njit
+def eval_pose(W, wreq, tmin, tmax, combos, kind, t_out):
+    """Feasibility, capacity margin and tensions of one pose.
+
+    Parameters
+    ----------
+    W : (n, m) structure matrix.
+    wreq : (nv, n) required-wrench vertices [N, N m]; row 0 is the nominal
+        wrench (gravity only), the one whose tensions are reported.
+    tmin, tmax : (m,) tension bounds [N].
+    combos : (C(m, n-1), n-1) int64, the column subsets of the HSM.
+    kind : KIND_STATIC (row 0 only), KIND_WRENCH_FEASIBLE (every row),
+        KIND_WRENCH_CLOSURE (positive spanning, bounds ignored).
+    t_out : (m,) receives the minimum 2-norm feasible tensions for row 0 [N]
+        (NaN where there are none).
+
+    Returns
+    -------
+    (feasible, margin) : margin is NaN where rank W < n.
+    """
+    n, m = W.shape
+    nv = wreq.shape[0] if kind == KIND_WRENCH_FEASIBLE else 1
+    for i in range(m):
+        t_out[i] = np.nan
+    if m == n:
+        rank_ok, margin = square_eval(W, wreq[:nv], tmin, tmax, t_out)
+        if not rank_ok:
+            return False, np.nan
+        # t = W^-1 w is unique: it is the tension distribution where it
+        # respects the bounds, and there is none otherwise
+        for i in range(m):
+            if not (tmin[i] <= t_out[i] <= tmax[i]):
+                for j in range(m):
+                    t_out[j] = np.nan
+                break
+        # m = n columns can never positively span R^n: no wrench closure
+        feasible = kind != KIND_WRENCH_CLOSURE and margin >= 0.0
+        return feasible, margin
+    rank_ok, margin = hsm_margin(W, wreq[:nv], tmin, tmax, combos)
+    if not rank_ok:
+        return False, np.nan
+    return margin >= 0.0, margin
+
+
+@njit_parallel
+def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos,
+               kind, feasible, margin, tensions, lengths):
+    """Evaluate ``count`` grid poses from flat index ``start`` (C order over x, y, z).
+
+    Outputs are written to rows 0..count-1 of ``feasible`` (uint8), ``margin``,
+    ``tensions`` (count, m) and ``lengths`` (count, m).  The orientation is
+    fixed: ``Rb`` holds R b_i.  Work is split into blocks, each with its own
+    scratch arrays, so no allocation happens per pose.
+    """
+    n = rows.shape[0]
+    m = A.shape[0]
+    nblocks = min(count, 256)
+    if nblocks == 0:
+        return
+    bsize = (count + nblocks - 1) // nblocks
+    ny = shape[1]
+    nz = shape[2]
+    for b in nb.prange(nblocks):
+        W = np.empty((n, m))
+        t = np.empty(m)
+        L = np.empty(m)
+        k0 = b * bsize
+        k1 = min(count, k0 + bsize)
+        # grid indices of the block's first pose, then counted up (no division per pose)
+        idx = start + k0
+        iz = idx % nz
+        r = idx // nz
+        iy = r % ny
+        ix = r // ny
+        for k in range(k0, k1):
+            px = lower[0] + ix * step[0]
+            py = lower[1] + iy * step[1]
+            pz = lower[2] + iz * step[2]
+            iz += 1
+            if iz == nz:
+                iz = 0
+                iy += 1
+                if iy == ny:
+                    iy = 0
+                    ix += 1
+            ok = structure_matrix(px, py, pz, Rb, A, rows, W, L)
+            for i in range(m):
+                lengths[k, i] = L[i]
+            if not ok:
+                feasible[k] = 0
+                margin[k] = np.nan
+                for i in range(m):
+                    tensions[k, i] = np.nan
+                continue
+            f, mg = eval_pose(W, wreq, tmin, tmax, combos, kind, t)
+            feasible[k] = 1 if f else 0
+            margin[k] = mg
+            for i in range(m):
+                tensions[k, i] = t[i]
+
+
+@njit_parallel
+def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax,
+                       feasible, margin, tensions, lengths):
+    """:func:`sweep_grid` specialised to two cables and two wrench rows (2T, m = n = 2).
+
+    The seed paper's robot: everything inlined in closed form.  With
+    u_i the unit cable vectors, det = u1x u2y - u2x u1y,
+    t1 = (w_x u2y - w_y u2x) / det, t2 = (u1x w_y - u1y w_x) / det
+    (algorithms.md; paper eq. 6-9), and the capacity margin is
+    min_i min(t_i - t_min,i, t_max,i - t_i) / ||row_i(W^-1)||.
+    Only the nominal wrench (row 0 of ``wreq``) is evaluated, plus the other
+    rows for the margin when there are several (wrench-feasible sweeps).
+    Same outputs as :func:`sweep_grid`.
+    """
+    nblocks = min(count, 256)
+    if nblocks == 0:
+        return
+    bsize = (count + nblocks - 1) // nblocks
+    ny = shape[1]
+    nz = shape[2]
+    nv = wreq.shape[0]
+    a0x = A[0, 0] - Rb[0, 0]
+    a0y = A[0, 1] - Rb[0, 1]
+    a1x = A[1, 0] - Rb[1, 0]
+    a1y = A[1, 1] - Rb[1, 1]
+    for b in nb.prange(nblocks):
+        k0 = b * bsize
+        k1 = min(count, k0 + bsize)
+        idx = start + k0
+        iz = idx % nz
+        r = idx // nz
+        iy = r % ny
+        ix = r // ny
+        for k in range(k0, k1):
+            px = lower[0] + ix * step[0]
+            py = lower[1] + iy * step[1]
+            iz += 1
+            if iz == nz:
+                iz = 0
+                iy += 1
+                if iy == ny:
+                    iy = 0
+                    ix += 1
+            lx0 = a0x - px
+            ly0 = a0y - py
+            lx1 = a1x - px
+            ly1 = a1y - py
+            L0 = math.sqrt(lx0 * lx0 + ly0 * ly0)
+            L1 = math.sqrt(lx1 * lx1 + ly1 * ly1)
+            lengths[k, 0] = L0
+            lengths[k, 1] = L1
+            if L0 <= 1e-12 or L1 <= 1e-12:
+                feasible[k] = 0
+                margin[k] = np.nan
+                tensions[k, 0] = np.nan
+                tensions[k, 1] = np.nan
+                continue
+            u0x = lx0 / L0
+            u0y = ly0 / L0
+            u1x = lx1 / L1
+            u1y = ly1 / L1
+            det = u0x * u1y - u1x * u0y
+            if abs(det) <= RANK_TOL:
+                feasible[k] = 0
+                margin[k] = np.nan
+                tensions[k, 0] = np.nan
+                tensions[k, 1] = np.nan
+                continue
+            inv = 1.0 / det
+            i00 = u1y * inv
+            i01 = -u1x * inv
+            i10 = -u0y * inv
+            i11 = u0x * inv
+            r0 = math.sqrt(i00 * i00 + i01 * i01)
+            r1 = math.sqrt(i10 * i10 + i11 * i11)
+            t0 = i00 * wreq[0, 0] + i01 * wreq[0, 1]
+            t1 = i10 * wreq[0, 0] + i11 * wreq[0, 1]
+            s = min(min(t0 - tmin[0], tmax[0] - t0) / r0, min(t1 - tmin[1], tmax[1] - t1) / r1)
+            inb = s >= 0.0
+            for v in range(1, nv):
+                q0 = i00 * wreq[v, 0] + i01 * wreq[v, 1]
+                q1 = i10 * wreq[v, 0] + i11 * wreq[v, 1]
+                s = min(s, min(min(q0 - tmin[0], tmax[0] - q0) / r0,
+                               min(q1 - tmin[1], tmax[1] - q1) / r1))
+            margin[k] = s
+            feasible[k] = 1 if s >= 0.0 else 0
+            tensions[k, 0] = t0 if inb else np.nan
+            tensions[k, 1] = t1 if inb else np.nan
+
+
+@njit
+def chunk_stats(feasible, margin, tensions, count, tpeak):
+    """Feasible count and margin extremes over the feasible rows; ``tpeak`` (m) is
+    raised to each cable's largest feasible tension.  Returns (count, min, max)."""
+    nf = 0
+    mmin = np.inf
+    mmax = -np.inf
+    m = tensions.shape[1]
+    for k in range(count):
+        if feasible[k]:
+            nf += 1
+            v = margin[k]
+            if v < mmin:
+                mmin = v
+            if v > mmax:
+                mmax = v
+            for i in range(m):
+                t = tensions[k, i]
+                if t > tpeak[i]:
+                    tpeak[i] = t
+    return nf, mmin, mmax

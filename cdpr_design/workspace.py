@@ -1,0 +1,342 @@
+"""Workspace grids and chunked sweeps.
+
+:func:`run` sweeps a grid of platform positions at the workspace's fixed
+orientation in chunks (bounded memory: one chunk of rows at a time, however
+large the grid), hands each chunk to an optional callback (the CLI streams it
+to ``workspace.csv``), and returns a :class:`WorkspaceResult` with the summary
+figures and maps for the pictures (subsampled for very large grids).
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from . import _kernels as K
+from . import kinematics as kin
+from .errors import SpecError
+from .model import Design, Grid
+
+KINDS = {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
+         "wrench-closure": K.KIND_WRENCH_CLOSURE}
+
+#: Largest grid swept without ``force=True`` (poses).
+MAX_POSES = 20_000_000
+#: Rows evaluated per chunk (bounded memory: ~ CHUNK * (2 m + 2) * 8 bytes).
+CHUNK = 1 << 18
+#: Largest number of cells kept for the maps behind the pictures.
+MAP_CELLS = 4_000_000
+
+
+@dataclass
+class Chunk:
+    """One chunk of a sweep: rows ``start .. start + len`` of the grid (C order x, y, z).
+
+    ``poses`` are in the motion's coordinates (orientation columns hold the
+    sweep's fixed orientation).
+    """
+
+    start: int
+    poses: np.ndarray
+    feasible: np.ndarray
+    margin: np.ndarray
+    tensions: np.ndarray
+    lengths: np.ndarray
+
+
+@dataclass
+class WorkspaceResult:
+    """Result of a workspace sweep. Infeasible poses are flags and NaNs, never errors.
+
+    Attributes
+    ----------
+    poses, feasible : int
+        Grid poses evaluated and how many are feasible.
+    fraction : float
+        feasible / poses.
+    measure : float
+        Feasible area [m^2] (planar) or volume [m^3]: feasible count x cell size.
+    min_margin, max_margin : float or None
+        Extremes of the capacity margin [N] over the feasible poses.
+    max_tension : (m,) array
+        Largest tension [N] of each cable over the feasible poses (NaN if none).
+    feasible_map, margin_map : arrays of the grid's shape (nx, ny[, nz])
+        For the pictures; subsampled with ``map_stride`` when the grid is huge.
+    tension_maps : (m, nx, ny[, nz]) float32
+    map_axes : list of arrays, the coordinates of the map cells per axis.
+    """
+
+    design: Design
+    kind: str
+    grid: Grid
+    orientation: np.ndarray
+    poses: int
+    feasible: int
+    min_margin: float | None
+    max_margin: float | None
+    max_tension: np.ndarray
+    elapsed_s: float
+    feasible_map: np.ndarray
+    margin_map: np.ndarray
+    tension_maps: np.ndarray
+    map_axes: list
+    map_stride: tuple
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def fraction(self) -> float:
+        return self.feasible / self.poses if self.poses else 0.0
+
+    @property
+    def measure(self) -> float:
+        return self.feasible * self.grid.cell
+
+    def summary(self) -> dict:
+        """The contract's ``summary.json`` / ``--json`` keys (cli.md), plus extras."""
+        mt = self.max_tension
+        finite = mt[np.isfinite(mt)]
+        out = {
+            "name": self.design.name,
+            "kind": self.kind,
+            "poses": int(self.poses),
+            "feasible": int(self.feasible),
+            "fraction": float(self.fraction),
+            "measure": float(self.measure),
+            "min_margin": _num(self.min_margin),
+            "max_margin": _num(self.max_margin),
+            "max_tension": float(finite.max()) if finite.size else None,
+            "elapsed_s": round(float(self.elapsed_s), 4),
+            "max_tension_per_cable": {c: _num(v) for c, v in zip(self.design.cable_names, mt)},
+            "grid": {"lower": list(self.grid.lower), "upper": list(self.grid.upper),
+                     "step": list(self.grid.step), "shape": list(self.grid.shape)},
+            "orientation": [float(x) for x in self.orientation_coords()],
+            "measure_unit": "m^2" if self.design.motion.planar else "m^3",
+        }
+        out.update(self.extra)
+        return out
+
+    def orientation_coords(self) -> list[float]:
+        """The fixed orientation in the motion's rotation coordinates."""
+        mot = self.design.motion
+        if mot.name == "1R2T":
+            return [float(self.orientation[2])]
+        if mot.name == "3R3T":
+            return [float(x) for x in self.orientation]
+        return []
+
+
+def _num(x):
+    if x is None:
+        return None
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def make_grid(design: Design, step: float | None = None, force: bool = False) -> Grid:
+    """The design's workspace grid, with ``step`` [m] overriding ``workspace.grid.step``.
+
+    Raises
+    ------
+    SpecError
+        When the step is not positive, or the grid exceeds :data:`MAX_POSES`
+        poses without ``force`` (the message says how many it would be).
+    """
+    g = design.workspace.grid
+    if step is not None:
+        if not np.isfinite(step) or step <= 0:
+            raise SpecError([("--step", f"expected a positive number of metres, got {step}")])
+        g = Grid(g.lower, g.upper, (float(step),) * len(g.lower))
+    check_grid_size(g, force, path="--step" if step is not None else "workspace.grid.step")
+    return g
+
+
+def check_grid_size(g: Grid, force: bool, path: str = "workspace.grid.step") -> None:
+    if not force and g.size > MAX_POSES:
+        dims = " x ".join(str(s) for s in g.shape)
+        raise SpecError([(path, f"the grid would have {g.size:,} poses ({dims}), more than the "
+                                f"{MAX_POSES:,} swept without --force; raise the step or pass --force")])
+
+
+def wrench_vertices(design: Design, kind: str, orientation=None) -> np.ndarray:
+    """Required-wrench vertices (nv, n) for a sweep at a fixed orientation.
+
+    Row 0 is the nominal wrench -gravity (the one whose tensions are
+    reported).  For ``wrench-feasible`` every vertex of the external wrench
+    box is added to gravity (dimensions where lower = upper contribute one value).
+    """
+    ori = design.default_orientation_full() if orientation is None else np.asarray(orientation, float)
+    pose = _pose_at(design, np.zeros(3), ori)
+    g = kin.gravity_wrench(design, pose)
+    rows = [-g]
+    box = design.workspace.external_wrench
+    if kind == "wrench-feasible" and box is not None:
+        lo, hi = np.asarray(box.lower), np.asarray(box.upper)
+        choices = [(lo[i],) if lo[i] == hi[i] else (lo[i], hi[i]) for i in range(lo.size)]
+        for v in itertools.product(*choices):
+            rows.append(-(g + np.asarray(v)))
+    return np.ascontiguousarray(np.array(rows, dtype=float))
+
+
+def combinations(m: int, n: int) -> np.ndarray:
+    """All subsets of n-1 of the m cables, as a (C(m, n-1), n-1) int64 array."""
+    c = list(itertools.combinations(range(m), n - 1))
+    return np.array(c, dtype=np.int64).reshape(len(c), n - 1)
+
+
+def _pose_at(design: Design, position3, ori3) -> np.ndarray:
+    full = np.concatenate([np.asarray(position3, float), np.asarray(ori3, float)])
+    return full[list(design.motion.pose_index)]
+
+
+def _grid3(g: Grid):
+    d = len(g.lower)
+    lower = np.zeros(3)
+    step = np.ones(3)
+    shape = np.ones(3, dtype=np.int64)
+    lower[:d] = g.lower
+    step[:d] = g.step
+    shape[:d] = g.shape
+    return lower, step, shape
+
+
+def grid_positions(g: Grid, start: int, count: int) -> np.ndarray:
+    """Positions (count, dim) of flat grid indices start .. start+count (C order)."""
+    lower, step, shape = _grid3(g)
+    idx = np.arange(start, start + count, dtype=np.int64)
+    iz = idx % shape[2]
+    r = idx // shape[2]
+    iy = r % shape[1]
+    ix = r // shape[1]
+    pos = np.stack([lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2]], axis=1)
+    return pos[:, : len(g.lower)]
+
+
+def run(design: Design, kind: str = "static", step: float | None = None, grid: Grid | None = None,
+        orientation=None, on_chunk: Callable[[Chunk], None] | None = None,
+        progress: Callable[[int, int], None] | None = None, force: bool = False,
+        chunk: int = CHUNK, keep_maps: bool = True) -> WorkspaceResult:
+    """Sweep the workspace grid and return the summary and maps.
+
+    Parameters
+    ----------
+    design : Design
+    kind : {'static', 'wrench-feasible', 'wrench-closure'}
+        ``static``: gravity only; ``wrench-feasible``: gravity plus every vertex
+        of ``workspace.external_wrench``; ``wrench-closure``: tension bounds
+        ignored, the cables positively span the wrench space.
+    step : float, optional
+        Grid step [m] overriding ``workspace.grid.step``.
+    grid : Grid, optional
+        Sweep this grid instead of the design's (e.g. the task box).
+    orientation : (3,) array, optional
+        Fixed (rx, ry, rz) [rad]; default ``workspace.orientation``.
+    on_chunk : callable, optional
+        Called with each :class:`Chunk` in grid order (stream rows to a file).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each chunk.
+    """
+    if kind not in KINDS:
+        raise SpecError([("--kind", f"expected one of {', '.join(KINDS)}, got {kind!r}")])
+    t0 = time.perf_counter()
+    g = grid if grid is not None else make_grid(design, step, force)
+    if grid is not None:
+        check_grid_size(g, force)
+    ori = design.default_orientation_full() if orientation is None else np.asarray(orientation, float)
+    R = kin.rotation_matrix(*ori)
+    Rb = np.ascontiguousarray(design.attachments @ R.T)
+    A = np.ascontiguousarray(design.outlets)
+    rows = design.rows
+    tmin, tmax = design.tension_min, design.tension_max
+    wreq = wrench_vertices(design, kind, ori)
+    combos = combinations(design.m, design.n)
+    kcode = KINDS[kind]
+    # the paper's case (two cables, two wrench rows) has an inlined closed-form kernel
+    planar2 = design.m == 2 and design.n == 2 and kind != "wrench-closure"
+    wreq_used = wreq if kind == "wrench-feasible" else wreq[:1].copy()
+    lower, stp, shape = _grid3(g)
+    total = g.size
+    m = design.m
+    ncoords = len(design.motion.coords)
+    ori_coords = _pose_at(design, np.zeros(3), ori)[design.motion.dim:]
+
+    # maps for the pictures (subsampled so they never exceed MAP_CELLS)
+    gshape = np.array(g.shape, dtype=np.int64)
+    stride = np.ones_like(gshape)
+    if keep_maps:
+        while np.prod((gshape + stride - 1) // stride) > MAP_CELLS:
+            stride[np.argmax((gshape + stride - 1) // stride)] += 1
+    mshape = tuple(int(x) for x in (gshape + stride - 1) // stride) if keep_maps else (0,) * len(gshape)
+    fmap = np.zeros(mshape, dtype=np.uint8)
+    mmap = np.full(mshape, np.nan, dtype=np.float32)
+    tmaps = np.full((m,) + mshape, np.nan, dtype=np.float32)
+
+    nfeas = 0
+    mmin, mmax = np.inf, -np.inf
+    tpeak = np.full(m, -np.inf)
+    chunk = max(1, min(chunk, total))
+    feas_b = np.empty(chunk, dtype=np.uint8)
+    marg_b = np.empty(chunk)
+    ten_b = np.empty((chunk, m))
+    len_b = np.empty((chunk, m))
+    done = 0
+    while done < total:
+        cnt = min(chunk, total - done)
+        if planar2:
+            K.sweep_grid_planar2(done, cnt, lower, stp, shape, Rb, A, wreq_used, tmin, tmax,
+                                 feas_b, marg_b, ten_b, len_b)
+        else:
+            K.sweep_grid(done, cnt, lower, stp, shape, Rb, A, rows, wreq, tmin, tmax, combos, kcode,
+                         feas_b, marg_b, ten_b, len_b)
+        nf, cmin, cmax = K.chunk_stats(feas_b, marg_b, ten_b, cnt, tpeak)
+        nfeas += nf
+        if nf:
+            mmin, mmax = min(mmin, cmin), max(mmax, cmax)
+        if keep_maps and not (stride > 1).any():
+            # full-resolution maps: the chunk is a contiguous run of the flat grid
+            fmap.reshape(-1)[done:done + cnt] = feas_b[:cnt]
+            mmap.reshape(-1)[done:done + cnt] = marg_b[:cnt]
+            tmaps.reshape(m, -1)[:, done:done + cnt] = ten_b[:cnt].T
+        elif keep_maps:
+            idx = np.arange(done, done + cnt, dtype=np.int64)
+            sub = np.unravel_index(idx, g.shape)
+            keep = np.ones(cnt, dtype=bool)
+            for ax, s in zip(sub, stride):
+                if s > 1:
+                    keep &= ax % s == 0
+            msub = tuple(ax[keep] // s for ax, s in zip(sub, stride))
+            fmap[msub] = feas_b[:cnt][keep]
+            mmap[msub] = marg_b[:cnt][keep]
+            for i in range(m):
+                tmaps[(i,) + msub] = ten_b[:cnt, i][keep]
+        if on_chunk is not None:
+            pos = grid_positions(g, done, cnt)
+            poses = np.empty((cnt, ncoords))
+            poses[:, : design.motion.dim] = pos
+            poses[:, design.motion.dim:] = ori_coords
+            on_chunk(Chunk(done, poses, feas_b[:cnt].copy(), marg_b[:cnt].copy(),
+                           ten_b[:cnt].copy(), len_b[:cnt].copy()))
+        done += cnt
+        if progress is not None:
+            progress(done, total)
+    tpeak[~np.isfinite(tpeak)] = np.nan
+    axes = [ax[::s] for ax, s in zip(g.axes(), stride)]
+    return WorkspaceResult(
+        design=design, kind=kind, grid=g, orientation=ori, poses=total, feasible=nfeas,
+        min_margin=mmin if nfeas else None, max_margin=mmax if nfeas else None,
+        max_tension=tpeak, elapsed_s=time.perf_counter() - t0, feasible_map=fmap,
+        margin_map=mmap, tension_maps=tmaps, map_axes=axes, map_stride=tuple(int(s) for s in stride),
+    )
+
+
+def representative_pose(result: WorkspaceResult) -> np.ndarray | None:
+    """A feasible pose with the largest capacity margin (for drawing), or None."""
+    mm = np.where(result.feasible_map.astype(bool), result.margin_map, np.nan)
+    if not np.isfinite(mm).any():
+        return None
+    idx = np.unravel_index(int(np.nanargmax(mm)), mm.shape)
+    pos = np.array([ax[i] for ax, i in zip(result.map_axes, idx)])
+    return _pose_at(result.design, np.pad(pos, (0, 3 - pos.size)), result.orientation)
