@@ -583,3 +583,122 @@ def schema_text() -> str:
 
 def is_finite_number(x) -> bool:
     return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+# ----------------------------------------------------------------------------
+# Motor catalogue (cdpr_design/data/motors.yaml and users' --catalogue files)
+# ----------------------------------------------------------------------------
+
+
+class DriveEntry(_Strict):
+    name: str = Field(min_length=1)
+    rated_current: PosFloat = Field(description="Rated current [A rms]")
+    peak_current: PosFloat = Field(description="Peak current [A rms]")
+    source: str = ""
+
+
+class MotorEntry(_Strict):
+    name: str = Field(min_length=1)
+    rated_torque: PosFloat = Field(description="Rated (continuous) torque [N m]")
+    peak_torque: PosFloat = Field(description="Peak torque [N m]")
+    max_speed: PosFloat = Field(description="Speed limit checked by the sizing [rpm]")
+    rotor_inertia: NonNegFloat = Field(description="Rotor inertia [kg m^2]")
+    torque_constant: PosFloat | None = Field(None, description="[N m/A]")
+    rated_current: PosFloat | None = None
+    peak_current: PosFloat | None = None
+    drive: str | None = Field(None, description="Name of a drive entry whose current limits apply")
+    source: str = Field("", description="Where the figures come from")
+
+
+class GearboxEntry(_Strict):
+    name: str = Field(min_length=1)
+    ratio: PosFloat = Field(description="Motor turns per drum turn")
+    efficiency: Annotated[FiniteFloat, Field(gt=0, le=1)] = 1.0
+    inertia: NonNegFloat = Field(0.0, description="Inertia at the motor shaft [kg m^2]")
+    source: str = ""
+
+
+class CatalogueSpec(_Strict):
+    """A motor catalogue: motors, drives and gearboxes."""
+
+    motors: list[MotorEntry] = []
+    drives: list[DriveEntry] = []
+    gearboxes: list[GearboxEntry] = []
+
+
+def _check_catalogue(c: CatalogueSpec) -> list[tuple[str, str]]:
+    p: list[tuple[str, str]] = []
+    for key in ("motors", "drives", "gearboxes"):
+        seen: dict[str, int] = {}
+        for i, e in enumerate(getattr(c, key)):
+            if e.name in seen:
+                p.append((f"{key}[{i}].name", f"duplicate name {e.name!r} (also {key}[{seen[e.name]}])"))
+            seen.setdefault(e.name, i)
+    drives = {d.name for d in c.drives}
+    for i, m in enumerate(c.motors):
+        if m.peak_torque < m.rated_torque:
+            p.append((f"motors[{i}].peak_torque", f"expected a value >= rated_torque = {m.rated_torque}, got {m.peak_torque}"))
+        if m.drive is not None:
+            if m.drive not in drives:
+                p.append((f"motors[{i}].drive", f"no drive named {m.drive!r} in this catalogue's drives"))
+            if m.torque_constant is None:
+                p.append((f"motors[{i}].torque_constant", "required when a drive is given (its current limits become torque limits)"))
+    for i, d in enumerate(c.drives):
+        if d.peak_current < d.rated_current:
+            p.append((f"drives[{i}].peak_current", f"expected a value >= rated_current = {d.rated_current}, got {d.peak_current}"))
+    return p
+
+
+def catalogue_from_dict(data: Any, source: str | None = None, base=None):
+    """Validate a catalogue document and build a :class:`~cdpr_design.sizing.Catalogue`.
+
+    Drives named by motors may also come from ``base`` (the shipped catalogue).
+    """
+    from .sizing import Catalogue, Drive, Gearbox, Motor
+
+    if not isinstance(data, dict):
+        raise SpecError([("", f"expected a mapping with motors, drives, gearboxes, got {type(data).__name__}")], source)
+    try:
+        c = CatalogueSpec.model_validate(data)
+    except ValidationError as err:
+        raise SpecError(_pydantic_problems(err), source) from None
+    if base is not None:
+        extra = [DriveEntry(name=d.name, rated_current=d.rated_current, peak_current=d.peak_current,
+                            source=d.source) for d in base.drives if d.name not in {x.name for x in c.drives}]
+        c_check = c.model_copy(update={"drives": list(c.drives) + extra})
+    else:
+        c_check = c
+    problems = _check_catalogue(c_check)
+    if problems:
+        raise SpecError(problems, source)
+    drives = {d.name: Drive(d.name, d.rated_current, d.peak_current, d.source) for d in c_check.drives}
+    motors = tuple(Motor(
+        name=m.name, rated_torque=m.rated_torque, peak_torque=m.peak_torque, max_speed=m.max_speed,
+        rotor_inertia=m.rotor_inertia, torque_constant=m.torque_constant,
+        rated_current=m.rated_current, peak_current=m.peak_current,
+        drive=drives[m.drive] if m.drive is not None else None, source=m.source) for m in c.motors)
+    gearboxes = tuple(Gearbox(g.name, g.ratio, g.efficiency, g.inertia, g.source) for g in c.gearboxes)
+    return Catalogue(motors, gearboxes, tuple(drives[d.name] for d in c.drives))
+
+
+def shipped_catalogue_path() -> Path:
+    return Path(__file__).resolve().parent / "data" / "motors.yaml"
+
+
+def load_catalogue(path: str | Path | None = None):
+    """The shipped motor catalogue, extended by the catalogue file ``path`` (if given).
+
+    Entries of the user's file replace shipped entries of the same name.
+
+    Raises
+    ------
+    SpecError
+        The file is missing, is not YAML, or breaks the catalogue format; the
+        message names each offending key by its path (``motors[2].peak_torque``).
+    """
+    base_path = shipped_catalogue_path()
+    base = catalogue_from_dict(read_yaml(base_path), source=str(base_path))
+    if path is None:
+        return base
+    user = catalogue_from_dict(read_yaml(path), source=str(path), base=base)
+    return base.merged(user)
