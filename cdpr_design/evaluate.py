@@ -1,0 +1,208 @@
+"""Headline figures and requirement checks of one design (the ``design_report.csv`` row).
+
+:func:`evaluate` is a pure function of the design (and the catalogue): it
+sweeps the workspace, sweeps the task box, sizes the motors and tests the
+``requirements:`` section, and returns one flat dict of plain Python values
+(str, int, float, bool, None), picklable, ready to be a CSV row.  ``report``,
+``check`` and the batch ``sweep`` all use it.
+
+Checks (``check_<name>``: True pass, False fail, None not asked for):
+
+- ``task_box``: every grid pose of ``requirements.task_box`` is feasible
+  (``wrench-feasible`` when the spec gives ``workspace.external_wrench``,
+  otherwise ``static``);
+- ``min_margin``: the least capacity margin over the task box (over the
+  feasible workspace when there is no task box) is at least
+  ``requirements.min_margin``; an infeasible task pose has a negative margin
+  and a rank-deficient one fails;
+- ``min_fraction``: the feasible fraction of the workspace grid is at least
+  ``requirements.min_fraction``;
+- ``motors``: every axis's motor covers peak torque, RMS torque and speed with
+  the safety factor.  Asked for when the spec names a motor or gives
+  ``max_speed`` / ``max_acceleration``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from . import sizing as sz
+from . import workspace as ws
+from .model import Design
+
+CHECKS = ("task_box", "min_margin", "min_fraction", "motors")
+
+
+@dataclass
+class Evaluation:
+    """Everything :func:`evaluate_full` computed (the row plus the results behind it)."""
+
+    row: dict
+    workspace: ws.WorkspaceResult
+    task: ws.WorkspaceResult | None
+    sizing: sz.SizingResult
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.row["checks_passed"])
+
+
+def _f(x):
+    """A plain float, or None for None / NaN / inf."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _task_kind(design: Design) -> str:
+    return "wrench-feasible" if design.workspace.external_wrench is not None else "static"
+
+
+def task_sweep(design: Design, step: float | None = None, progress=None):
+    """Sweep the task box: (result, least margin over every task pose).
+
+    The least margin counts infeasible poses (negative margins) and is -inf
+    when a task pose has a rank-deficient structure matrix.
+    """
+    g = sz.task_grid(design, step)
+    if g is None:
+        return None, None
+    least = [math.inf]
+
+    def on_chunk(c):
+        mg = c.margin
+        if np.isnan(mg).any():
+            least[0] = -math.inf
+        elif mg.size:
+            least[0] = min(least[0], float(mg.min()))
+
+    res = ws.run(design, kind=_task_kind(design), grid=g, on_chunk=on_chunk, progress=progress,
+                 keep_maps=False)
+    return res, least[0]
+
+
+def evaluate_full(design: Design, *, step: float | None = None, catalogue: sz.Catalogue | None = None,
+                  samples=None, safety_factor: float | None = None, motor: str | None = None,
+                  workspace_result: ws.WorkspaceResult | None = None, keep_maps: bool = False,
+                  progress: Callable[[int, int], None] | None = None) -> Evaluation:
+    """Workspace, task box, motor sizing and checks of one design.
+
+    Parameters
+    ----------
+    design : Design
+    step : float, optional
+        Grid step [m] for the workspace and the task box.
+    catalogue : Catalogue, optional
+        Default: the shipped catalogue (``cdpr_design/data/motors.yaml``).
+    samples : trajectory samples, optional
+        Duty cycle for the RMS torque (:func:`cdpr_design.trajectory.sample`).
+    safety_factor, motor : see :func:`cdpr_design.sizing.size_motors`.
+    workspace_result : WorkspaceResult, optional
+        A static sweep already made (``report`` writes the workspace files first).
+    """
+    if catalogue is None:
+        from .spec import load_catalogue  # reads the shipped data file only
+        catalogue = load_catalogue()
+    wres = workspace_result if workspace_result is not None else ws.run(
+        design, "static", step=step, keep_maps=keep_maps, progress=progress)
+    task, task_least = task_sweep(design, step)
+    sizing = sz.size_motors(design, catalogue, step=step, samples=samples,
+                            safety_factor=safety_factor, motor=motor)
+    req = design.requirements
+    row: dict = {
+        "name": design.name, "motion": design.motion.name, "cables": design.m,
+        "kind": wres.kind, "poses": int(wres.poses), "feasible": int(wres.feasible),
+        "fraction": float(wres.fraction), "measure": float(wres.measure),
+        "min_margin": _f(wres.min_margin), "max_margin": _f(wres.max_margin),
+        "max_tension": _f(np.nanmax(wres.max_tension)) if np.isfinite(wres.max_tension).any() else None,
+    }
+    if task is not None:
+        row.update(task_poses=int(task.poses), task_feasible=int(task.feasible),
+                   task_fraction=float(task.fraction), task_min_margin=_f(task_least)
+                   if task_least != -math.inf else None)
+    else:
+        row.update(task_poses=None, task_feasible=None, task_fraction=None, task_min_margin=None)
+    axes = sizing.axes
+    motors = sorted({a.motor for a in axes})
+    row.update(
+        sizing_poses=sizing.envelope.poses,
+        peak_tension=_f(max(a.peak_tension for a in axes)),
+        peak_cable_speed=_f(max(a.peak_cable_speed for a in axes)),
+        peak_motor_torque=_f(max(a.peak_motor_torque for a in axes)),
+        rms_motor_torque=_f(max(a.rms_motor_torque for a in axes)),
+        peak_motor_speed=_f(max(a.peak_motor_speed for a in axes)),
+        motor=";".join(motors) if all(motors) else "",
+        torque_margin=_f(min(a.torque_margin for a in axes)),
+        speed_margin=_f(min(a.speed_margin for a in axes)),
+        implied_tension_max=_f(min(a.implied_tension_max for a in axes)),
+        tension_max=_f(min(a.tension_max for a in axes)),
+        drum_radius=";".join(sorted({f"{a.drum_radius:g}" for a in axes})),
+        gear_ratio=";".join(sorted({f"{a.gear_ratio:g}" for a in axes})),
+        safety_factor=sizing.safety_factor, duty_cycle=sizing.cycle,
+    )
+    # --- checks --------------------------------------------------------------
+    checks: dict = {}
+    checks["task_box"] = (task.feasible == task.poses) if task is not None else None
+    if req.min_margin is not None:
+        figure = task_least if task is not None else wres.min_margin
+        checks["min_margin"] = figure is not None and figure >= req.min_margin
+        row["min_margin_figure"] = _f(figure) if figure is not None else None
+    else:
+        checks["min_margin"] = None
+        row["min_margin_figure"] = _f(task_least) if task is not None else _f(wres.min_margin)
+    row["req_min_margin"] = req.min_margin
+    checks["min_fraction"] = (wres.fraction >= req.min_fraction) if req.min_fraction is not None else None
+    row["req_min_fraction"] = req.min_fraction
+    asked = (any(c.winch.motor for c in design.cables) or motor is not None
+             or req.max_speed is not None or req.max_acceleration is not None)
+    checks["motors"] = sizing.ok if asked else None
+    for name in CHECKS:
+        row[f"check_{name}"] = None if checks[name] is None else bool(checks[name])
+    row["checks_passed"] = all(v is not False for v in checks.values())
+    # per-cable figures last (their number depends on the design)
+    for a in axes:
+        row[f"peak_tension_{a.cable}"] = _f(a.peak_tension)
+        row[f"motor_{a.cable}"] = a.motor
+    return Evaluation(row, wres, task, sizing)
+
+
+def evaluate(design: Design, *, step: float | None = None, catalogue: sz.Catalogue | None = None,
+             samples=None, safety_factor: float | None = None, motor: str | None = None) -> dict:
+    """The headline figures of one design: one ``design_report.csv`` row (plain, picklable values).
+
+    See :func:`evaluate_full` for the parameters and the module docstring for
+    the checks.
+    """
+    return evaluate_full(design, step=step, catalogue=catalogue, samples=samples,
+                         safety_factor=safety_factor, motor=motor).row
+
+
+def check_table(row: dict) -> list[dict]:
+    """The requirement table of ``check``: one dict per requirement asked for.
+
+    Keys: ``requirement``, ``figure`` (text), ``limit`` (text), ``passed`` (bool).
+    """
+    out = []
+
+    def num(v, unit=""):
+        return "—" if v is None else f"{v:.4g}{unit}"
+
+    if row["check_task_box"] is not None:
+        out.append({"requirement": "task_box", "figure": f"{row['task_feasible']} of {row['task_poses']} poses feasible",
+                    "limit": "all", "passed": row["check_task_box"]})
+    if row["check_min_margin"] is not None:
+        out.append({"requirement": "min_margin", "figure": num(row["min_margin_figure"], " N"),
+                    "limit": f">= {row['req_min_margin']:g} N", "passed": row["check_min_margin"]})
+    if row["check_min_fraction"] is not None:
+        out.append({"requirement": "min_fraction", "figure": num(row["fraction"]),
+                    "limit": f">= {row['req_min_fraction']:g}", "passed": row["check_min_fraction"]})
+    if row["check_motors"] is not None:
+        out.append({"requirement": "motors", "figure": f"{row['motor'] or 'none fits'}: torque margin "
+                    f"{num(row['torque_margin'])}, speed margin {num(row['speed_margin'])}",
+                    "limit": ">= 1", "passed": row["check_motors"]})
+    return out
