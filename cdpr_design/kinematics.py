@@ -19,8 +19,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
-
 from . import _kernels as K
 from .model import Design
 
@@ -255,6 +253,8 @@ def forward_kinematics(design: Design, lengths, guess=None, tol: float = 1e-12) 
         ori = list(design.workspace.orientation)
         guess = np.array(centre + ori, dtype=float)
     guess = np.asarray(guess, dtype=float)
+
+    from scipy.optimize import least_squares  # imported here: scipy is slow to import
 
     def fun(x):
         return inverse_kinematics(design, x) - lengths

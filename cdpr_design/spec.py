@@ -284,7 +284,7 @@ def _check_semantics(s: DesignSpec) -> list[tuple[str, str]]:
     dm = f"{d} numbers for motion {s.motion}"
 
     def vec(path, v, n=d, what=None):
-        return _vec(p, path, v, n, what or (dm if n == d else f"numbers"))
+        return _vec(p, path, v, n, what or (f"numbers for motion {s.motion}" if n == d else "numbers"))
 
     vec("gravity", s.gravity)
     if vec("frame.lower", s.frame.lower) & vec("frame.upper", s.frame.upper):

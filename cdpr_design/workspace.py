@@ -340,3 +340,42 @@ def representative_pose(result: WorkspaceResult) -> np.ndarray | None:
     idx = np.unravel_index(int(np.nanargmax(mm)), mm.shape)
     pos = np.array([ax[i] for ax, i in zip(result.map_axes, idx)])
     return _pose_at(result.design, np.pad(pos, (0, 3 - pos.size)), result.orientation)
+
+
+@dataclass
+class PoseResult:
+    """One pose evaluated exactly as a grid sweep would (same kernel).
+
+    Attributes: pose (motion coords), lengths (m,) [m], tensions (m,) [N] (NaN
+    where infeasible), feasible, margin [N] (NaN where W is rank deficient),
+    W (n, m) structure matrix, wrench (n,) the nominal required wrench.
+    """
+
+    pose: np.ndarray
+    lengths: np.ndarray
+    tensions: np.ndarray
+    feasible: bool
+    margin: float
+    W: np.ndarray
+    wrench: np.ndarray
+
+
+def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
+    """Feasibility, capacity margin and minimum 2-norm tensions at one pose."""
+    if kind not in KINDS:
+        raise SpecError([("--kind", f"expected one of {', '.join(KINDS)}, got {kind!r}")])
+    full = design.full_pose(pose)
+    R = kin.rotation_matrix(*full[3:])
+    Rb = np.ascontiguousarray(design.attachments @ R.T)
+    W = np.empty((design.n, design.m))
+    L = np.empty(design.m)
+    ok = K.structure_matrix(full[0], full[1], full[2], Rb, np.ascontiguousarray(design.outlets),
+                            design.rows, W, L)
+    wreq = wrench_vertices(design, kind, full[3:])
+    t = np.full(design.m, np.nan)
+    if ok:
+        feasible, margin = K.eval_pose(W, wreq, design.tension_min, design.tension_max,
+                                       combinations(design.m, design.n), KINDS[kind], t)
+    else:
+        feasible, margin = False, np.nan
+    return PoseResult(np.asarray(pose, float), L, t, bool(feasible), float(margin), W, wreq[0])

@@ -1,0 +1,705 @@
+"""The ``cdpr-design`` command line (Typer). Options, printing and exit codes; no math.
+
+Exit status (cli.md): 0 done; 1 the design fails a check it was asked to
+pass; 2 bad input (spec, option, file); 130 interrupted.  Only this module
+turns exceptions into exit codes.  ``--json`` prints one JSON object on
+stdout; progress and messages go to stderr.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import sys
+from contextlib import contextmanager
+from enum import Enum
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from .errors import CheckFailed, InputError, SpecError
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    rich_markup_mode=None,
+    help="Workspace, sizing and simulation explorer for cable-driven parallel robots.",
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+err = Console(stderr=True, highlight=False)
+out_console = Console(highlight=False)
+
+# ----------------------------------------------------------------------------
+# Shared options and helpers (every command uses these)
+# ----------------------------------------------------------------------------
+
+SpecArg = Annotated[Path, typer.Argument(help="Design spec (YAML).", show_default=False)]
+OutOpt = Annotated[Optional[Path], typer.Option("--out", help="Output folder (default out/<design name>/).")]
+JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout and nothing else there.")]
+QuietOpt = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bars or messages on stderr.")]
+OverwriteOpt = Annotated[bool, typer.Option(
+    "--overwrite", help="Replace files in --out that cdpr-design did not write.")]
+ForceOpt = Annotated[bool, typer.Option("--force", help="Allow grids larger than the sane-size limit.")]
+
+
+class Kind(str, Enum):
+    static = "static"
+    wrench_feasible = "wrench-feasible"
+    wrench_closure = "wrench-closure"
+
+
+KindOpt = Annotated[Kind, typer.Option("--kind", help="static | wrench-feasible | wrench-closure.")]
+
+
+def command(fn):
+    """Turn the package's errors into exit codes and messages (no tracebacks for bad input)."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except (SpecError, InputError) as exc:
+            err.print(f"[bold red]error:[/] {exc}", markup=True, soft_wrap=True)
+            raise typer.Exit(2) from None
+        except CheckFailed as exc:
+            if str(exc):
+                err.print(f"[bold red]check failed:[/] {exc}", markup=True, soft_wrap=True)
+            raise typer.Exit(1) from None
+        except KeyboardInterrupt:
+            err.print("interrupted")
+            raise typer.Exit(130) from None
+
+    return wrapper
+
+
+def load_design(path: Path):
+    from . import spec
+
+    return spec.load(path)
+
+
+def output_dir(design, out: Path | None, overwrite: bool = False):
+    from .report import OutputDir
+
+    return OutputDir(out if out is not None else Path("out") / design.name, overwrite=overwrite)
+
+
+def parse_numbers(text: str, option: str, count: int | None = None, what: str = "numbers") -> list[float]:
+    """Comma-separated numbers of an option (``--at 0.75,0.75``); bad text is exit 2."""
+    try:
+        vals = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
+    except ValueError:
+        raise InputError(f"{option}: expected comma-separated numbers, got {text!r}") from None
+    if not all(math.isfinite(v) for v in vals):
+        raise InputError(f"{option}: expected finite numbers, got {text!r}")
+    if count is not None and len(vals) != count:
+        raise InputError(f"{option}: expected {count} {what}, got {len(vals)}")
+    return vals
+
+
+def parse_pose(design, text: str, option: str = "--at") -> list[float]:
+    coords = design.motion.coords
+    return parse_numbers(text, option, len(coords),
+                         f"numbers ({','.join(coords)}) for motion {design.motion.name}")
+
+
+def emit_json(data) -> None:
+    from .report import _json_default
+
+    sys.stdout.write(json.dumps(data, default=_json_default) + "\n")
+    sys.stdout.flush()
+
+
+def show_progress(quiet: bool) -> bool:
+    return not quiet and err.is_terminal
+
+
+@contextmanager
+def progress_bar(description: str, quiet: bool, min_total: int = 0):
+    """Yields a ``progress(done, total)`` callback drawing a rich bar on stderr.
+
+    Off when stderr is not a terminal, with ``--quiet``, or for work smaller
+    than ``min_total`` items (that finishes in well under a second).
+    """
+    if not show_progress(quiet):
+        yield None
+        return
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                  TimeRemainingColumn(), console=err, transient=True) as prog:
+        task = None
+
+        def cb(done, total):
+            nonlocal task
+            if total < min_total:
+                return
+            if task is None:
+                task = prog.add_task(description, total=total)
+            prog.update(task, completed=done)
+
+        yield cb
+
+
+def info(quiet: bool, msg: str) -> None:
+    if not quiet:
+        err.print(msg, soft_wrap=True)
+
+
+def _fmt(v, digits=4):
+    if v is None:
+        return "—"
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            return "—"
+        return f"{v:.{digits}g}"
+    return str(v)
+
+
+def summary_table(title: str, rows: list[tuple[str, object]]) -> Table:
+    t = Table(title=title, show_header=False, title_justify="left")
+    t.add_column("", style="bold")
+    t.add_column("")
+    for k, v in rows:
+        t.add_row(k, _fmt(v))
+    return t
+
+
+# ----------------------------------------------------------------------------
+# workspace
+# ----------------------------------------------------------------------------
+
+
+def run_workspace(design, out_dir, kind: str, step, force: bool, quiet: bool):
+    """Sweep, stream ``workspace.csv``, write pictures and ``summary.json``; return the result."""
+    from . import report
+    from . import workspace as ws
+
+    grid = ws.make_grid(design, step, force)
+    header = report.workspace_header(design)
+    csv_file = out_dir.stream("workspace.csv")
+    try:
+        csv_file.write(",".join(header) + "\n")
+
+        def on_chunk(chunk):
+            csv_file.write(report.workspace_rows(chunk))
+
+        with progress_bar(f"workspace {design.name}", quiet, min_total=500_000) as cb:
+            result = ws.run(design, kind=kind, grid=grid, on_chunk=on_chunk, progress=cb, force=True)
+        csv_file.commit()
+    except BaseException:
+        csv_file.abort()
+        raise
+    out_dir.write_json("summary.json", result.summary())
+    report.save_workspace_pictures(out_dir, result)
+    return result
+
+
+@app.command()
+@command
+def workspace(
+    spec: SpecArg,
+    kind: KindOpt = Kind.static,
+    step: Annotated[Optional[float], typer.Option("--step", help="Grid step [m] (overrides workspace.grid.step).")] = None,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    force: ForceOpt = False,
+    overwrite: OverwriteOpt = False,
+):
+    """Grid sweep of the workspace: workspace.csv, workspace.png, tension_map.png, summary.json."""
+    design = load_design(spec)
+    out_dir = output_dir(design, out, overwrite)
+    result = run_workspace(design, out_dir, kind.value, step, force, quiet or json_)
+    s = result.summary()
+    if json_:
+        emit_json(s)
+        return
+    unit = "m²" if design.motion.planar else "m³"
+    out_console.print(summary_table(
+        f"{design.name} — {s['kind']} workspace",
+        [("poses", f"{s['poses']:,}"), ("feasible", f"{s['feasible']:,}"),
+         ("fraction", f"{100 * s['fraction']:.2f} %"), ("measure", f"{s['measure']:.4g} {unit}"),
+         ("min margin [N]", s["min_margin"]), ("max margin [N]", s["max_margin"]),
+         ("max tension [N]", s["max_tension"]), ("elapsed [s]", s["elapsed_s"]),
+         ("files", str(out_dir.path))]))
+
+
+# ----------------------------------------------------------------------------
+# pose and fk
+# ----------------------------------------------------------------------------
+
+
+def pose_data(design, result) -> dict:
+    """The ``pose --json`` object (cli.md keys)."""
+    import numpy as np
+
+    names = design.cable_names
+    return {
+        "pose": [float(v) for v in result.pose],
+        "lengths": {c: float(v) for c, v in zip(names, result.lengths)},
+        "tensions": {c: (float(v) if np.isfinite(v) else None) for c, v in zip(names, result.tensions)},
+        "feasible": bool(result.feasible),
+        "margin": float(result.margin) if np.isfinite(result.margin) else None,
+        "structure_matrix": [[float(x) for x in row] for row in result.W],
+        "collisions": [list(p) for p in getattr(result, "collisions", [])],
+    }
+
+
+@app.command()
+@command
+def pose(
+    spec: SpecArg,
+    at: Annotated[str, typer.Option("--at", help="Pose coordinates, comma-separated (e.g. 0.75,0.75).")],
+    kind: KindOpt = Kind.static,
+    json_: JsonOpt = False,
+):
+    """One pose: cable lengths, tensions, feasibility, margin, structure matrix."""
+    from . import workspace as ws
+
+    design = load_design(spec)
+    p = parse_pose(design, at)
+    result = ws.evaluate_pose(design, p, kind.value)
+    data = pose_data(design, result)
+    if json_:
+        emit_json(data)
+        return
+    t = Table(title=f"{design.name} at ({at}) — {'feasible' if data['feasible'] else 'infeasible'}, "
+                    f"margin {_fmt(data['margin'])} N", title_justify="left")
+    for col in ("cable", "length [m]", "tension [N]", "bounds [N]"):
+        t.add_column(col)
+    for c in design.cables:
+        t.add_row(c.name, _fmt(data["lengths"][c.name], 6), _fmt(data["tensions"][c.name], 6),
+                  f"{c.tension_min:g} – {c.tension_max:g}")
+    out_console.print(t)
+    if data["collisions"]:
+        out_console.print("collisions: " + ", ".join(" – ".join(p) for p in data["collisions"]))
+
+
+@app.command()
+@command
+def fk(
+    spec: SpecArg,
+    lengths: Annotated[str, typer.Option("--lengths", help="Cable lengths [m], comma-separated, in cable order.")],
+    guess: Annotated[Optional[str], typer.Option("--guess", help="Starting pose for the numerical solver.")] = None,
+    json_: JsonOpt = False,
+):
+    """Forward kinematics: the pose for given cable lengths."""
+    from . import kinematics as kin
+
+    design = load_design(spec)
+    L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)")
+    if any(v < 0 for v in L):
+        raise InputError("--lengths: cable lengths must be non-negative")
+    g = parse_pose(design, guess, "--guess") if guess is not None else None
+    res = kin.forward_kinematics(design, L, guess=g)
+    data = {"pose": [float(v) for v in res.pose], "residual": float(res.residual), "method": res.method}
+    if json_:
+        emit_json(data)
+        return
+    out_console.print(summary_table(
+        f"{design.name} — forward kinematics ({res.method})",
+        [(c, float(v)) for c, v in zip(design.motion.coords, res.pose)] + [("residual [m]", res.residual)]))
+
+
+# ----------------------------------------------------------------------------
+# schema
+# ----------------------------------------------------------------------------
+
+
+@app.command()
+@command
+def schema():
+    """Print the JSON Schema of the spec format (for editors' YAML validation)."""
+    from . import spec as spec_mod
+
+    sys.stdout.write(spec_mod.schema_text() + "\n")
+
+
+def main() -> None:
+    """Console-script entry point."""
+    try:
+        app()
+    except KeyboardInterrupt:
+        err.print("interrupted")
+        sys.exit(130)
+
+
+# ----------------------------------------------------------------------------
+# size-motors, report, check
+# ----------------------------------------------------------------------------
+
+CatalogueOpt = Annotated[Optional[Path], typer.Option(
+    "--catalogue", help="Motor catalogue YAML extending the shipped one (same format as cdpr_design/data/motors.yaml).")]
+TrajectoryOpt = Annotated[Optional[str], typer.Option(
+    "--trajectory", help="Name of a spec trajectory whose duty cycle gives the RMS torque (default: a standard cycle).")]
+SafetyOpt = Annotated[Optional[float], typer.Option(
+    "--safety-factor", help="Factor >= 1 on required torque and speed (default requirements.safety_factor or 1).")]
+MotorOpt = Annotated[Optional[str], typer.Option(
+    "--motor", help="Evaluate this catalogue motor on every axis instead of the spec's or the smallest that fits.")]
+StepOpt = Annotated[Optional[float], typer.Option("--step", help="Grid step [m] (overrides workspace.grid.step).")]
+
+
+def load_catalogue_opt(path: Path | None):
+    from . import spec
+
+    return spec.load_catalogue(path)
+
+
+def trajectory_samples(design, name: str | None):
+    """Sample the spec trajectory ``name`` (None: no trajectory); bad names are exit 2."""
+    if name is None:
+        return None
+    import numpy as np
+
+    from . import trajectory as tr
+
+    traj = design.trajectories.get(name)
+    if traj is None:
+        known = ", ".join(design.trajectories) or "none"
+        raise InputError(f"--trajectory: no trajectory named {name!r} in the spec (known: {known})")
+    poses = None
+    if traj.type == "csv":
+        p = Path(traj.file)
+        if not p.is_absolute() and design.source:
+            p = Path(design.source).resolve().parent / p
+        try:
+            try:
+                poses = np.loadtxt(p, delimiter=",", ndmin=2)
+            except ValueError:
+                poses = np.loadtxt(p, delimiter=",", ndmin=2, skiprows=1)
+        except (OSError, ValueError) as exc:
+            raise InputError(f"trajectories.{name}.file: cannot read poses from {p}: {exc}") from None
+    try:
+        return tr.sample(design, name, csv_poses=poses)
+    except (KeyError, ValueError) as exc:
+        raise InputError(f"trajectories.{name}: {exc}") from None
+
+
+def sizing_table(design, result) -> Table:
+    t = Table(title=f"{design.name} — motor sizing ({result.envelope.poses:,} {result.envelope.source} poses, "
+                    f"safety factor {result.safety_factor:g})", title_justify="left")
+    cols = [("cable", "cable"), ("T [N]", "peak_tension"), ("τ pk", "peak_motor_torque"),
+            ("τ rms", "rms_motor_torque"), ("rpm", "peak_motor_speed"),
+            ("motor", "motor"), ("τ mrg", "torque_margin"), ("n mrg", "speed_margin"),
+            ("T lim [N]", "implied_tension_max")]
+    for head, key in cols:
+        t.add_column(head, no_wrap=key in ("motor", "cable"))
+    for row in result.rows():
+        cells = []
+        for _, key in cols:
+            v = row[key]
+            cells.append((v or "none fits") if key == "motor" else _fmt(v, 3))
+        t.add_row(*cells)
+    r0 = result.axes[0] if result.axes else None
+    if r0 is not None:
+        t.caption = (f"drum radius {r0.drum_radius:g} m, gear ratio {r0.gear_ratio:g} (cable {r0.cable}); "
+                     "T: peak tension; τ [N m] at the motor; margins ≥ 1 pass; T lim = τ_peak i η / r")
+    return t
+
+
+@app.command("size-motors")
+@command
+def size_motors(
+    spec: SpecArg,
+    catalogue: CatalogueOpt = None,
+    trajectory: TrajectoryOpt = None,
+    safety_factor: SafetyOpt = None,
+    motor: MotorOpt = None,
+    step: StepOpt = None,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    overwrite: OverwriteOpt = False,
+):
+    """Motor, gearbox and drum sizing over the task workspace: motor_sizing.csv."""
+    from . import report
+    from . import sizing as sz
+
+    design = load_design(spec)
+    cat = load_catalogue_opt(catalogue)
+    samples = trajectory_samples(design, trajectory)
+    out_dir = output_dir(design, out, overwrite)
+    result = sz.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor, motor=motor)
+    report.write_motor_sizing(out_dir, result)
+    if json_:
+        emit_json(result.summary())
+        return
+    out_console.print(sizing_table(design, result))
+    info(quiet, f"duty cycle: {result.cycle}")
+    for note in result.notes:
+        info(quiet, f"note: {note}")
+    info(quiet, f"wrote {out_dir.path / 'motor_sizing.csv'}")
+
+
+def _evaluate(design, step, catalogue, trajectory, safety_factor, motor, quiet, workspace_result=None):
+    from . import evaluate as ev
+
+    cat = load_catalogue_opt(catalogue)
+    samples = trajectory_samples(design, trajectory)
+    with progress_bar(f"evaluate {design.name}", quiet, min_total=500_000) as cb:
+        return ev.evaluate_full(design, step=step, catalogue=cat, samples=samples,
+                                safety_factor=safety_factor, motor=motor,
+                                workspace_result=workspace_result, progress=cb)
+
+
+def checks_table(design, rows: list[dict]) -> Table:
+    t = Table(title=f"{design.name} — requirements", title_justify="left")
+    for col in ("requirement", "figure", "limit", "result"):
+        t.add_column(col)
+    for r in rows:
+        t.add_row(r["requirement"], r["figure"], r["limit"], "pass" if r["passed"] else "FAIL")
+    return t
+
+
+@app.command()
+@command
+def report(
+    spec: SpecArg,
+    catalogue: CatalogueOpt = None,
+    trajectory: TrajectoryOpt = None,
+    safety_factor: SafetyOpt = None,
+    motor: MotorOpt = None,
+    step: StepOpt = None,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    force: ForceOpt = False,
+    overwrite: OverwriteOpt = False,
+):
+    """Every artefact for one design (workspace, motor sizing) plus design_report.csv."""
+    from . import evaluate as ev
+    from . import report as rep
+
+    design = load_design(spec)
+    load_catalogue_opt(catalogue)  # bad catalogue: exit 2 before any work
+    if trajectory is not None and trajectory not in design.trajectories:
+        trajectory_samples(design, trajectory)  # unknown name: exit 2 before any work
+    out_dir = output_dir(design, out, overwrite)
+    wres = run_workspace(design, out_dir, "static", step, force, quiet or json_)
+    e = _evaluate(design, step, catalogue, trajectory, safety_factor, motor, quiet or json_, wres)
+    rep.write_motor_sizing(out_dir, e.sizing)
+    rep.write_design_report(out_dir, e.row)
+    checks = ev.check_table(e.row)
+    out_dir.write_json("report.json", {"report": e.row, "checks": checks, "sizing": e.sizing.summary()})
+    if json_:
+        emit_json({**e.row, "checks": checks})
+        return
+    out_console.print(sizing_table(design, e.sizing))
+    if checks:
+        out_console.print(checks_table(design, checks))
+    info(quiet, f"wrote workspace.csv, workspace.png, tension_map.png, summary.json, motor_sizing.csv, "
+                f"design_report.csv, report.json to {out_dir.path}")
+
+
+@app.command()
+@command
+def check(
+    spec: SpecArg,
+    catalogue: CatalogueOpt = None,
+    trajectory: TrajectoryOpt = None,
+    safety_factor: SafetyOpt = None,
+    motor: MotorOpt = None,
+    step: StepOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+):
+    """Test the spec's requirements: one line per requirement; exit 0 all pass, 1 otherwise."""
+    from . import evaluate as ev
+
+    design = load_design(spec)
+    e = _evaluate(design, step, catalogue, trajectory, safety_factor, motor, quiet or json_)
+    checks = ev.check_table(e.row)
+    passed = e.passed
+    if json_:
+        emit_json({"name": design.name, "passed": passed, "checks": checks, "figures": e.row})
+    else:
+        if checks:
+            out_console.print(checks_table(design, checks))
+        else:
+            out_console.print(f"{design.name}: the spec's requirements section asks for nothing to check")
+    if not passed:
+        failed = [c["requirement"] for c in checks if not c["passed"]]
+        raise CheckFailed("" if json_ else f"{design.name}: {', '.join(failed)}")
+
+
+# ----------------------------------------------------------------------------
+# bridge (the paper's loop A: PLC <-> simulated robot over ADS)
+# ----------------------------------------------------------------------------
+
+#: Exit status of ``bridge`` when the PLC stops answering (the run's log is kept).
+EXIT_PLC_LOST = 3
+
+
+@app.command()
+@command
+def bridge(
+    spec: SpecArg,
+    test_plc: Annotated[Optional[str], typer.Option(
+        "--test-plc", metavar="TRAJECTORY",
+        help="Start a built-in test PLC on 127.0.0.1 that plays this spec trajectory as set-points.")] = None,
+    duration: Annotated[Optional[float], typer.Option(
+        "--duration", help="Stop after this many seconds (default: the test trajectory + 0.5 s; "
+        "else until Ctrl-C).")] = None,
+    cycle_time: Annotated[Optional[float], typer.Option(
+        "--cycle-time", help="Gateway cycle [s] (default plc.cycle_time).")] = None,
+    timeout: Annotated[Optional[float], typer.Option(
+        "--timeout", help="Timeout of each ADS request [s] (default max(5 cycles, 50 ms)).")] = None,
+    reconnect: Annotated[int, typer.Option(
+        "--reconnect", help="Reconnection attempts when the PLC stops answering, with back-off "
+        "0.1 s doubling to 2 s (default 0: stop).")] = 0,
+    local_net_id: Annotated[Optional[str], typer.Option(
+        "--local-net-id", help="AMS net id of this computer (the route the PLC knows it by).")] = None,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    overwrite: OverwriteOpt = False,
+):
+    """Gateway PLC <-> simulated robot over ADS: bridge.csv (simulation.csv columns), bridge.json."""
+    import signal
+
+    import numpy as np
+
+    from . import bridge as br
+    from .plc import (LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, AdsTransport, PlcLayout,
+                      PlcLinkError, TestPlc)
+    from .report import fmt
+
+    design = load_design(spec)
+    if design.plc is None:
+        raise InputError(f"{spec}: plc: the spec has no plc: section (bridge needs its symbols)")
+    dt = float(cycle_time if cycle_time is not None else design.plc.cycle_time)
+    if not (math.isfinite(dt) and 1e-4 <= dt <= 10):
+        raise InputError(f"--cycle-time: expected 0.0001 to 10 s, got {dt}")
+    if duration is not None and not (math.isfinite(duration) and duration > 0):
+        raise InputError(f"--duration: expected a positive number of seconds, got {duration}")
+    if reconnect < 0:
+        raise InputError(f"--reconnect: expected a count >= 0, got {reconnect}")
+    tmo = float(timeout) if timeout is not None else max(5 * dt, 0.05)
+    if not (math.isfinite(tmo) and tmo > 0):
+        raise InputError(f"--timeout: expected a positive number of seconds, got {timeout}")
+    layout = PlcLayout.from_design(design)
+    quiet = quiet or json_
+    plc = None
+    if test_plc is not None:
+        if test_plc not in design.trajectories:
+            known = ", ".join(design.trajectories) or "none"
+            raise InputError(f"--test-plc: no trajectory named {test_plc!r} in the spec (known: {known})")
+        samples = trajectory_samples(design, test_plc)
+        if duration is None:
+            duration = samples.duration + 0.5
+        host, net_id, port = LOOPBACK, TEST_PLC_NET_ID, design.plc.port
+        local = local_net_id or TEST_LOCAL_NET_ID
+    else:
+        host = design.plc.host or ".".join(design.plc.ams_net_id.split(".")[:4])
+        net_id, port, local = design.plc.ams_net_id, design.plc.port, local_net_id
+    out_dir = output_dir(design, out, overwrite)
+    out_dir.target("bridge.csv")
+    out_dir.target("bridge.json")
+
+    stop = {"flag": False}
+
+    def on_sigint(signum, frame):
+        if stop["flag"]:
+            raise KeyboardInterrupt
+        stop["flag"] = True
+
+    old_handler = signal.signal(signal.SIGINT, on_sigint)
+    transport = AdsTransport(layout, net_id, port, host, timeout=tmo, local_net_id=local)
+    log = None
+    res = None
+    plc_log = None
+    try:
+        if test_plc is not None:
+            info(quiet, f"test PLC on {LOOPBACK} playing {test_plc!r} ({samples.duration:.3g} s)")
+            try:
+                plc = TestPlc(layout, samples.time, samples.lengths,
+                              task_cycle=max(samples.cycle_time, 1e-3)).start()
+            except PlcLinkError as exc:
+                err.print(f"[bold red]error:[/] {exc}", markup=True, soft_wrap=True)
+                raise typer.Exit(EXIT_PLC_LOST) from None
+        wait = 0.1
+        for attempt in range(reconnect + 1):
+            try:
+                transport.connect()
+                break
+            except PlcLinkError as exc:
+                if attempt == reconnect or stop["flag"]:
+                    err.print(f"[bold red]error:[/] {exc}", markup=True, soft_wrap=True)
+                    raise typer.Exit(EXIT_PLC_LOST) from None
+                info(quiet, f"{exc}; retrying in {wait:.2g} s")
+                import time as _time
+
+                _time.sleep(wait)
+                wait = min(2 * wait, 2.0)
+        try:
+            sp0 = transport.read_setpoints()
+        except PlcLinkError as exc:
+            err.print(f"[bold red]error:[/] {exc}", markup=True, soft_wrap=True)
+            raise typer.Exit(EXIT_PLC_LOST) from None
+        sim = br.make_simulator(design, dt, sp0)
+        rows = br.RowMaker(design)
+        log = out_dir.stream("bridge.csv")
+        log.write(",".join(br.csv_header(design)) + "\n")
+        last_flush = [0.0]
+
+        def on_row(sp, state):
+            log.write(",".join(fmt(v) for v in rows.values(sp, state)) + "\n")
+            now = state.time
+            if now - last_flush[0] >= 0.1:
+                log.flush()
+                last_flush[0] = now
+
+        info(quiet, f"bridge running: {net_id}:{port} at {host}, cycle {dt * 1e3:.3g} ms"
+             + (f", {duration:.3g} s" if duration else ", Ctrl-C to stop"))
+        res = br.run(transport, sim, cycle_time=dt, duration=duration, on_row=on_row,
+                     should_stop=lambda: stop["flag"], reconnect=reconnect,
+                     on_status=lambda msg: info(quiet, msg))
+        if stop["flag"] and res.stopped == "stop":
+            res.stopped = "interrupted"
+    except KeyboardInterrupt:
+        if res is None:
+            raise
+    finally:
+        signal.signal(signal.SIGINT, old_handler)
+        transport.close()
+        if log is not None:
+            log.commit()  # every row is whole: what was logged is kept, also on failure
+        if plc is not None:
+            if res is not None:
+                plc_log = plc.log()
+            plc.stop()
+    summary = res.summary()
+    summary["delay"] = rows.delay()
+    if plc_log is not None and plc_log.shape[0] > 8:
+        m = design.m
+        summary["plc_delay"] = br.axis_delays(design.cable_names, plc_log[:, 0],
+                                              plc_log[:, 1: 1 + m], plc_log[:, 1 + m: 1 + 2 * m])
+    summary["name"] = design.name
+    summary["test_plc"] = test_plc
+    out_dir.write_json("bridge.json", summary)
+    if json_:
+        emit_json(summary)
+    else:
+        lat = summary["latency"]
+        out_console.print(summary_table(
+            f"{design.name} — bridge ({summary['stopped']})",
+            [("cycles", summary["cycles"]), ("overruns", summary["overruns"]),
+             ("cycle time [ms]", dt * 1e3),
+             ("round trip mean / p99 / max [ms]",
+              " / ".join(_fmt(None if v is None else v * 1e3) for v in
+                         (lat["mean"], lat["p99"], lat["max"]))),
+             ("delay [ms]", ", ".join(f"{k}: {_fmt(None if v is None else v * 1e3)}"
+                                      for k, v in summary["delay"].items())),
+             ("files", str(out_dir.path))]))
+    if res.stopped == "interrupted":
+        err.print("interrupted")
+        raise typer.Exit(130)
+    if res.stopped == "plc_lost":
+        err.print(f"[bold red]error:[/] PLC lost: {res.error}", markup=True, soft_wrap=True)
+        raise typer.Exit(EXIT_PLC_LOST)

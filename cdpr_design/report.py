@@ -1,0 +1,478 @@
+"""Files: atomic CSV / JSON / PNG writers and the pictures (matplotlib, Agg).
+
+Every file is written to a temporary name in the destination folder and
+renamed into place when complete, so an interrupted run never leaves a
+truncated file under the final name.  An output folder remembers what
+cdpr-design wrote into it (``.cdpr-design-outputs``): a file of the same name
+that cdpr-design did not write is never overwritten unless the user asks
+(``--overwrite``).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from .errors import InputError
+
+MANIFEST = ".cdpr-design-outputs"
+
+
+# ----------------------------------------------------------------------------
+# Output folders and atomic files
+# ----------------------------------------------------------------------------
+
+
+class OutputDir:
+    """An output folder; refuses to replace files cdpr-design did not write.
+
+    Parameters
+    ----------
+    path : folder, created if missing.
+    overwrite : replace foreign files of the same name too.
+    """
+
+    def __init__(self, path: str | Path, overwrite: bool = False):
+        self.path = Path(path)
+        self.overwrite = overwrite
+        if self.path.exists() and not self.path.is_dir():
+            raise InputError(f"--out: {self.path} exists and is not a folder")
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise InputError(f"--out: cannot create {self.path}: {exc}") from None
+        self._manifest = self.path / MANIFEST
+        try:
+            self._ours = set(self._manifest.read_text().split("\n")) - {""}
+        except FileNotFoundError:
+            self._ours = set()
+
+    def target(self, name: str) -> Path:
+        """The path for output ``name``, after checking it may be (over)written."""
+        p = self.path / name
+        if p.exists() and name not in self._ours and not self.overwrite:
+            raise InputError(
+                f"{p} exists and was not written by cdpr-design; move it away or pass --overwrite")
+        return p
+
+    def wrote(self, name: str) -> None:
+        if name not in self._ours:
+            self._ours.add(name)
+            write_text_atomic(self._manifest, "\n".join(sorted(self._ours)) + "\n")
+
+    def write_text(self, name: str, text: str) -> Path:
+        p = self.target(name)
+        write_text_atomic(p, text)
+        self.wrote(name)
+        return p
+
+    def write_json(self, name: str, data) -> Path:
+        return self.write_text(name, json.dumps(data, indent=2, default=_json_default) + "\n")
+
+    def write_csv(self, name: str, header: Sequence[str], rows: Iterable[Sequence]) -> Path:
+        buf = io.StringIO()
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(header)
+        for r in rows:
+            w.writerow([fmt(v) for v in r])
+        return self.write_text(name, buf.getvalue())
+
+    def stream(self, name: str) -> "AtomicFile":
+        """An :class:`AtomicFile` for writing ``name`` piece by piece."""
+        p = self.target(name)
+        return AtomicFile(p, on_commit=lambda: self.wrote(name))
+
+    def save_figure(self, name: str, fig, dpi: int = 120) -> Path:
+        p = self.target(name)
+        with AtomicFile(p, binary=True) as fh:
+            fig.savefig(fh, format="png", dpi=dpi)
+        self.wrote(name)
+        return p
+
+
+class AtomicFile:
+    """A file written under a temporary name and renamed into place on success.
+
+    Use as a context manager; on an exception (or :meth:`abort`) the
+    temporary file is removed and the final name is untouched.
+    ``keep_partial=True`` renames what was written to ``<name>.partial``
+    instead, so a long interrupted log is not lost.
+    """
+
+    def __init__(self, path: str | Path, binary: bool = False, on_commit=None, keep_partial: bool = False):
+        self.path = Path(path)
+        self.on_commit = on_commit
+        self.keep_partial = keep_partial
+        fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=self.path.parent)
+        self.tmp = Path(tmp)
+        os.chmod(self.tmp, 0o666 & ~_umask())
+        self.fh = os.fdopen(fd, "wb" if binary else "w", **({} if binary else {"newline": "", "encoding": "utf-8"}))
+        self.closed = False
+
+    def write(self, data):
+        return self.fh.write(data)
+
+    def flush(self):
+        self.fh.flush()
+
+    def commit(self) -> Path:
+        if self.closed:
+            return self.path
+        self.fh.flush()
+        os.fsync(self.fh.fileno())
+        self.fh.close()
+        os.replace(self.tmp, self.path)
+        self.closed = True
+        if self.on_commit:
+            self.on_commit()
+        return self.path
+
+    def abort(self) -> None:
+        if self.closed:
+            return
+        self.fh.close()
+        self.closed = True
+        if self.keep_partial and self.tmp.stat().st_size:
+            os.replace(self.tmp, self.path.with_name(self.path.name + ".partial"))
+        else:
+            self.tmp.unlink(missing_ok=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            self.commit()
+        else:
+            self.abort()
+        return False
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write_text_atomic(path: str | Path, text: str) -> None:
+    with AtomicFile(path) as fh:
+        fh.write(text)
+
+
+def _json_default(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def fmt(v) -> str:
+    """A CSV cell: numbers with 10 significant digits, NaN/None as empty."""
+    if v is None:
+        return ""
+    if isinstance(v, (bool, np.bool_)):
+        return "1" if v else "0"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        return "" if not math.isfinite(v) else format(float(v), ".10g")
+    return str(v)
+
+
+def format_block(columns: list[np.ndarray], int_cols: Sequence[int] = ()) -> str:
+    """Rows of a numeric block as CSV text: NaN cells empty, floats with 10 digits.
+
+    ``columns`` are 1-D arrays of equal length; those listed in ``int_cols``
+    are written as integers.
+    """
+    if not columns:
+        return ""
+    k = len(columns[0])
+    parts = []
+    for j, c in enumerate(columns):
+        if j in int_cols:
+            parts.append(np.asarray(c).astype(np.int64).astype(str))
+        else:
+            s = np.char.mod("%.10g", np.asarray(c, dtype=float))
+            s[~np.isfinite(c)] = ""
+            parts.append(s)
+    out = parts[0].astype(object)
+    for p in parts[1:]:
+        out = out + "," + p.astype(object)
+    return "\n".join(out.tolist()) + ("\n" if k else "")
+
+
+# ----------------------------------------------------------------------------
+# Workspace CSV (streamed)
+# ----------------------------------------------------------------------------
+
+
+def workspace_header(design) -> list[str]:
+    """``workspace.csv`` columns (cli.md): pose coords, feasible, margin, tensions, lengths."""
+    names = design.cable_names
+    return (list(design.motion.coords) + ["feasible", "margin"]
+            + [f"tension_{c}" for c in names] + [f"length_{c}" for c in names])
+
+
+def workspace_rows(chunk, extra: dict[str, np.ndarray] | None = None) -> str:
+    """CSV text of one :class:`~cdpr_design.workspace.Chunk` (no header)."""
+    cols = [chunk.poses[:, j] for j in range(chunk.poses.shape[1])]
+    cols.append(chunk.feasible)
+    cols.append(chunk.margin)
+    cols += [chunk.tensions[:, i] for i in range(chunk.tensions.shape[1])]
+    cols += [chunk.lengths[:, i] for i in range(chunk.lengths.shape[1])]
+    ints = [chunk.poses.shape[1]]
+    for v in (extra or {}).values():
+        if v.dtype.kind in "biu":
+            ints.append(len(cols))
+        cols.append(v)
+    return format_block(cols, int_cols=ints)
+
+
+# ----------------------------------------------------------------------------
+# Pictures
+# ----------------------------------------------------------------------------
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _frame_rect(ax, design, **kw):
+    from matplotlib.patches import Rectangle
+
+    lo, hi = design.frame_lower, design.frame_upper
+    ax.add_patch(Rectangle((lo[0], lo[1]), hi[0] - lo[0], hi[1] - lo[1], fill=False,
+                           lw=2.0, ec=kw.get("ec", "0.15"), zorder=3))
+
+
+def _draw_robot(ax, design, pose, proj=(0, 1)):
+    """Outlets, cables and the effector box at ``pose`` (motion coords), projected."""
+    from matplotlib.patches import Polygon
+
+    from . import kinematics as kin
+
+    a, b = proj
+    A = design.outlets
+    ax.plot(A[:, a], A[:, b], "v", ms=9, mfc="tab:red", mec="k", zorder=6, label="outlets")
+    for i, c in enumerate(design.cables):
+        ax.annotate(c.name, (A[i, a], A[i, b]), textcoords="offset points", xytext=(4, 6),
+                    fontsize=8, zorder=7)
+    if pose is None:
+        return
+    geo = kin.cable_geometry(design, pose)
+    for i in range(design.m):
+        ax.plot([A[i, a], geo.anchors[i, a]], [A[i, b], geo.anchors[i, b]], "-", color="k",
+                lw=1.2, zorder=5)
+    R = kin.pose_rotation(design, pose)
+    full = design.full_pose(pose)
+    hx, hy = design.effector.size[a] / 2, design.effector.size[b] / 2
+    corners = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
+    pts3 = np.zeros((4, 3))
+    pts3[:, a], pts3[:, b] = corners[:, 0], corners[:, 1]
+    world = full[:3] + pts3 @ R.T
+    ax.add_patch(Polygon(world[:, [a, b]], closed=True, fc="tab:orange", ec="k", lw=1.0,
+                         alpha=0.9, zorder=6, label="effector"))
+
+
+def _extent(axes2):
+    x, y = axes2
+    dx = (x[1] - x[0]) if x.size > 1 else 1.0
+    dy = (y[1] - y[0]) if y.size > 1 else 1.0
+    return [x[0] - dx / 2, x[-1] + dx / 2, y[0] - dy / 2, y[-1] + dy / 2]
+
+
+def _slices(result, nmax: int = 6) -> list[int]:
+    """z-slice indices to show for a spatial result: evenly spread, up to nmax."""
+    nz = result.feasible_map.shape[2]
+    if nz <= nmax:
+        return list(range(nz))
+    return sorted({int(round(v)) for v in np.linspace(0, nz - 1, nmax)})
+
+
+def workspace_figure(result, title_extra: str = ""):
+    """Feasible region shaded by capacity margin, with frame, outlets, cables and effector.
+
+    Planar motions: one panel.  Spatial motions: a stack of z-slices (x-y
+    panels), each with the frame's footprint and the outlets.
+    """
+    from . import workspace as wsmod
+
+    plt = _plt()
+    d = result.design
+    feas = result.feasible_map.astype(bool)
+    marg = np.where(feas, result.margin_map, np.nan)
+    finite = marg[np.isfinite(marg)]
+    vmax = float(finite.max()) if finite.size else 1.0
+    vmax = vmax if vmax > 0 else 1.0
+    kind_txt = {"static": "static-equilibrium", "wrench-feasible": "wrench-feasible",
+                "wrench-closure": "wrench-closure"}[result.kind]
+    unit = "m²" if d.motion.planar else "m³"
+    title = (f"{d.name}: {kind_txt} workspace — {100 * result.fraction:.1f} % of "
+             f"{result.poses:,} poses feasible ({result.measure:.3g} {unit})")
+    ori = result.orientation_coords()
+    if ori:
+        title += "\norientation " + ", ".join(
+            f"{n} = {np.degrees(v):.3g}°" for n, v in zip(d.motion.rotation_coords, ori))
+    if title_extra:
+        title += "\n" + title_extra
+    cmap = plt.get_cmap("viridis").copy()
+    cmap.set_bad((0.85, 0.85, 0.85, 1.0))
+    rep = wsmod.representative_pose(result)
+    if d.motion.planar:
+        fig, ax = plt.subplots(figsize=(7.5, 6.6))
+        fig.subplots_adjust(left=0.09, right=0.97, bottom=0.08, top=0.90)
+        im = ax.imshow(marg.T, origin="lower", extent=_extent(result.map_axes), cmap=cmap,
+                       vmin=0.0, vmax=vmax, interpolation="nearest", aspect="equal", zorder=1)
+        ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
+                   colors="k", linewidths=0.8, zorder=2)
+        _frame_rect(ax, d)
+        _draw_robot(ax, d, rep)
+        if d.requirements.task_box is not None:
+            from matplotlib.patches import Rectangle
+
+            lo, hi = d.requirements.task_box
+            ax.add_patch(Rectangle((lo[0], lo[1]), hi[0] - lo[0], hi[1] - lo[1], fill=False,
+                                   ls="--", lw=1.5, ec="tab:blue", zorder=4, label="task box"))
+        _pad_limits(ax, d)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        fig.colorbar(im, ax=ax, shrink=0.85, label="capacity margin [N] (grey: infeasible)")
+        ax.legend(loc="lower right", fontsize=8, framealpha=0.9)
+        ax.set_title(title, fontsize=10)
+        if rep is not None:
+            ax.text(0.01, 0.01, "drawn at the pose of largest margin " + _pose_txt(d, rep),
+                    transform=ax.transAxes, fontsize=7, va="bottom", zorder=8,
+                    bbox=dict(fc="white", ec="none", alpha=0.7))
+        return fig
+    zs = _slices(result)
+    ncol = min(3, len(zs))
+    nrow = math.ceil(len(zs) / ncol)
+    fig, axs = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 4.2 * nrow + 0.8), squeeze=False)
+    fig.subplots_adjust(left=0.07, right=0.88, bottom=0.08, top=0.88, wspace=0.3, hspace=0.35)
+    ext = _extent(result.map_axes[:2])
+    z_axis = result.map_axes[2]
+    im = None
+    for k, ax in enumerate(axs.flat):
+        if k >= len(zs):
+            ax.axis("off")
+            continue
+        iz = zs[k]
+        im = ax.imshow(marg[:, :, iz].T, origin="lower", extent=ext, cmap=cmap, vmin=0.0, vmax=vmax,
+                       interpolation="nearest", aspect="equal")
+        frac = feas[:, :, iz].mean() if feas[:, :, iz].size else 0.0
+        _frame_rect(ax, d)
+        A = d.outlets
+        ax.plot(A[:, 0], A[:, 1], "v", ms=6, mfc="tab:red", mec="k")
+        _pad_limits(ax, d)
+        ax.set_title(f"z = {z_axis[iz]:.3g} m  ({100 * frac:.0f} % feasible)", fontsize=9)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label="capacity margin [N] (grey: infeasible)")
+    fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def _pose_txt(d, pose) -> str:
+    return "(" + ", ".join(f"{n} = {v:.3g}" for n, v in zip(d.motion.coords, pose)) + ")"
+
+
+def _pad_limits(ax, d):
+    lo, hi = np.array(d.frame_lower), np.array(d.frame_upper)
+    pad = 0.06 * (hi - lo)
+    ax.set_xlim(lo[0] - pad[0], hi[0] + pad[0])
+    ax.set_ylim(lo[1] - pad[1], hi[1] + pad[1])
+
+
+def tension_figure(result):
+    """Tension of each cable over the grid: one panel per cable, shared colour scale.
+
+    Infeasible poses are masked (grey).  Spatial motions show, for every
+    cable, the z-slice with the most feasible poses.
+    """
+    plt = _plt()
+    d = result.design
+    feas = result.feasible_map.astype(bool)
+    T = np.where(feas[None], result.tension_maps, np.nan)
+    finite = T[np.isfinite(T)]
+    vmin = 0.0
+    vmax = float(finite.max()) if finite.size else 1.0
+    if vmax <= vmin:
+        vmax = vmin + 1.0
+    cmap = plt.get_cmap("magma").copy()
+    cmap.set_bad((0.85, 0.85, 0.85, 1.0))
+    m = d.m
+    ncol = min(4, m) if m > 2 else m
+    nrow = math.ceil(m / ncol)
+    fig, axs = plt.subplots(nrow, ncol, figsize=(4.4 * ncol + 0.8, 4.2 * nrow + 0.6), squeeze=False)
+    fig.subplots_adjust(left=0.07, right=0.86, bottom=0.1, top=0.86, wspace=0.3, hspace=0.35)
+    if d.motion.planar:
+        img = T
+        sub = ""
+    else:
+        iz = int(np.argmax(feas.sum(axis=(0, 1))))
+        img = T[:, :, :, iz]
+        sub = f" at z = {result.map_axes[2][iz]:.3g} m (slice with the most feasible poses)"
+    ext = _extent(result.map_axes[:2])
+    im = None
+    for i, ax in enumerate(axs.flat):
+        if i >= m:
+            ax.axis("off")
+            continue
+        im = ax.imshow(img[i].T, origin="lower", extent=ext, cmap=cmap, vmin=vmin, vmax=vmax,
+                       interpolation="nearest", aspect="equal")
+        _frame_rect(ax, d)
+        A = d.outlets
+        ax.plot(A[i, 0], A[i, 1], "v", ms=9, mfc="tab:cyan", mec="k", zorder=6)
+        _pad_limits(ax, d)
+        c = d.cables[i]
+        ax.set_title(f"{c.name}: {c.tension_min:g}–{c.tension_max:g} N", fontsize=9)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.85, label="cable tension [N] (grey: infeasible)")
+    fig.suptitle(f"{d.name}: minimum-norm cable tensions, {result.kind} workspace{sub}", fontsize=10)
+    return fig
+
+
+def save_workspace_pictures(out: OutputDir, result) -> list[Path]:
+    plt = _plt()
+    paths = []
+    for name, make in (("workspace.png", workspace_figure), ("tension_map.png", tension_figure)):
+        fig = make(result)
+        try:
+            paths.append(out.save_figure(name, fig))
+        finally:
+            plt.close(fig)
+    return paths
+
+
+# ----------------------------------------------------------------------------
+# Motor sizing and the design report (size-motors, report, check)
+# ----------------------------------------------------------------------------
+
+
+def write_motor_sizing(out: OutputDir, sizing) -> Path:
+    """``motor_sizing.csv``: one row per cable, the contract columns first (cli.md)."""
+    rows = sizing.rows()
+    header = list(rows[0].keys()) if rows else list(getattr(sizing, "CONTRACT", ()))
+    return out.write_csv("motor_sizing.csv", header, ([r[k] for k in header] for r in rows))
+
+
+def write_design_report(out: OutputDir, row: dict, name: str = "design_report.csv") -> Path:
+    """``design_report.csv``: one row of the design's headline figures (booleans as 1/0)."""
+    header = list(row.keys())
+    return out.write_csv(name, header, [[row[k] for k in header]])

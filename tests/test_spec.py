@@ -1,0 +1,156 @@
+"""Spec loading: every rejected case exits 2 and names the key; the JSON schema."""
+
+from __future__ import annotations
+
+import copy
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from cdpr_design import spec
+from cdpr_design.cli import app
+from cdpr_design.errors import SpecError
+
+from .conftest import PLANAR2, write_spec
+
+runner = CliRunner()
+
+
+def _set(data, path, value):
+    """Set a dotted path (ints index lists) in nested data; value DELETE removes it."""
+    keys = [int(k) if k.isdigit() else k for k in path.split(".")]
+    obj = data
+    for k in keys[:-1]:
+        obj = obj[k]
+    if value is DELETE:
+        del obj[keys[-1]]
+    else:
+        obj[keys[-1]] = value
+
+
+DELETE = object()
+
+# (dotted path to change, new value, text the message must contain: the key path)
+BAD = [
+    ("motion", "4T", "motion: expected one of"),
+    ("cables.1.outlet", [1.5, 1.5, 0.0], "cables[1].outlet: expected 2 numbers for motion 2T, got 3"),
+    ("cables.0.attachment", [0.1], "cables[0].attachment: expected 2 numbers for motion 2T, got 1"),
+    ("frame.upper", [1.5], "frame.upper: expected 2 numbers"),
+    ("gravity", [0.0, 0.0, -9.81], "gravity: expected 2 numbers"),
+    ("cables.0.outlet", [0.0, float("nan")], "cables[0].outlet[1]: expected a finite number"),
+    ("effector.mass", float("inf"), "effector.mass: expected a finite number"),
+    ("tension", [30.0, 20.0], "tension: expected min <= max"),
+    ("effector.mass", -1.0, "effector.mass: expected a value greater than or equal to 0"),
+    ("cables.1.name", "c1", "cables[1].name: duplicate cable name 'c1'"),
+    ("cables", [], "cables: expected at least 1 entries"),
+    ("workspace.grid.step", 0.0, "workspace.grid.step[0]: expected a value greater than 0"),
+    ("workspace.grid.step", -0.1, "workspace.grid.step[0]: expected a value greater than 0"),
+    ("workspace.grid.step", [0.1, 0.1, 0.1], "workspace.grid.step: expected a scalar or 2 numbers"),
+    ("effector.mass", "heavy", "effector.mass: expected a number, got 'heavy'"),
+    ("frame.lower", [2.0, 0.0], "frame.upper[0]: expected a value above frame.lower[0]"),
+    ("cables.0.colour", "red", "cables[0].colour: unknown key"),
+    ("winch.efficiency", 1.5, "winch.efficiency: expected a value less than or equal to 1"),
+    ("winch.gear_ratio", [3.0, -1.0], "winch.gear_ratio[1]: expected a value greater than 0"),
+    ("requirements.task_box.lower", [0.3], "requirements.task_box.lower: expected 2 numbers"),
+    ("trajectories.square_slow.side", DELETE, "trajectories.square_slow.side: required for a square path"),
+    ("trajectories.square_slow.type", "spiral", "trajectories.square_slow.type: expected one of"),
+    ("name", DELETE, "name: required key is missing"),
+    ("tension", DELETE, "cables[0].tension: required: no design-wide tension is given"),
+    ("workspace.orientation", [0.1], "workspace.orientation: motion 2T has a fixed orientation"),
+    ("workspace.external_wrench", {"lower": [0, 0, 0], "upper": [1, 1, 1]},
+     "workspace.external_wrench.lower: expected 2 numbers (fx, fy) for motion 2T, got 3"),
+    ("effector.inertia", [[1, 0, 0], [0, 1, 0]], "effector.inertia: expected a 3x3 matrix"),
+]
+
+
+@pytest.mark.parametrize("path,value,message", BAD, ids=[b[0] + ":" + b[2][:30] for b in BAD])
+def test_bad_spec_exit_2_names_key(tmp_path, planar2_data, path, value, message):
+    data = copy.deepcopy(planar2_data)
+    _set(data, path, value)
+    p = write_spec(tmp_path, data)
+    res = runner.invoke(app, ["workspace", str(p), "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2, res.output
+    assert message in res.output, res.output
+    assert "Traceback" not in res.output
+    assert not (tmp_path / "o" / "workspace.csv").exists()
+    with pytest.raises(SpecError):
+        spec.load(p)
+
+
+def test_several_problems_are_all_reported(tmp_path, planar2_data):
+    data = copy.deepcopy(planar2_data)
+    data["cables"][0]["outlet"] = [0, 1, 2]
+    data["cables"][1]["attachment"] = [0]
+    with pytest.raises(SpecError) as exc:
+        spec.from_dict(data)
+    paths = [p for p, _ in exc.value.problems]
+    assert "cables[0].outlet" in paths and "cables[1].attachment" in paths
+
+
+def test_huge_grid_needs_force(tmp_path):
+    res = runner.invoke(app, ["workspace", str(PLANAR2), "--step", "0.0001", "--out", str(tmp_path)])
+    assert res.exit_code == 2
+    assert "225,030,001 poses" in res.output and "--force" in res.output
+
+
+def test_bad_step_option(tmp_path):
+    res = runner.invoke(app, ["workspace", str(PLANAR2), "--step", "-1", "--out", str(tmp_path)])
+    assert res.exit_code == 2 and "--step" in res.output
+
+
+@pytest.mark.parametrize("text,message", [
+    ("name: [unclosed", "not valid YAML"),
+    ("- just\n- a list\n", "expected a mapping of keys at the top"),
+    ("name: a\nname: b\n", "given twice"),
+    ("!!python/object/apply:os.system ['echo hi']", "not valid YAML"),
+])
+def test_bad_yaml(tmp_path, text, message):
+    p = tmp_path / "bad.yaml"
+    p.write_text(text)
+    res = runner.invoke(app, ["workspace", str(p), "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2
+    assert message in res.output
+    assert "Traceback" not in res.output
+
+
+def test_missing_file(tmp_path):
+    res = runner.invoke(app, ["pose", str(tmp_path / "nope.yaml"), "--at", "1,1"])
+    assert res.exit_code == 2 and "no such file" in res.output
+
+
+def test_defaults_and_overrides(planar2_data):
+    data = copy.deepcopy(planar2_data)
+    del data["gravity"]
+    data["cables"][1]["tension"] = [1.0, 30.0]
+    data["cables"][1]["winch"] = {"drum_radius": [0.02, 0.03]}
+    data["cables"][1]["diameter"] = 0.004
+    d = spec.from_dict(data)
+    assert d.gravity == (0.0, -9.81, 0.0)
+    assert (d.cables[0].tension_min, d.cables[0].tension_max) == (0.0, 20.0)
+    assert (d.cables[1].tension_min, d.cables[1].tension_max) == (1.0, 30.0)
+    # per-cable winch keys override the design-wide ones key by key
+    assert d.cables[1].winch.drum_radii == (0.02, 0.03)
+    assert d.cables[1].winch.motor == d.cables[0].winch.motor
+    assert d.cables[1].props.diameter == 0.004 and d.cables[0].props.diameter == 0.002
+    # planar default inertia: a uniform box of the effector's size
+    assert d.effector.inertia_matrix[2, 2] == pytest.approx(1.0 * (0.12**2 + 0.12**2) / 12)
+
+
+def test_every_shipped_design_loads():
+    from .conftest import DESIGNS
+
+    files = sorted(DESIGNS.glob("*.yaml"))
+    assert files
+    for f in files:
+        d = spec.load(f)
+        assert d.m >= 1 and d.workspace.grid.size > 0
+
+
+def test_schema_command():
+    res = runner.invoke(app, ["schema"])
+    assert res.exit_code == 0
+    schema = json.loads(res.stdout)
+    assert schema["title"] == "cdpr-design spec"
+    assert {"motion", "frame", "effector", "cables"} <= set(schema["properties"])
+    assert set(schema["required"]) >= {"name", "motion", "frame", "effector", "cables"}
