@@ -1,0 +1,574 @@
+"""Physics simulation of a cable robot with MuJoCo (headless).
+
+The model, built from the design alone:
+
+- **Effector**: a rigid body with the spec's mass, centre of mass and inertia.
+  Planar designs move in the z = 0 plane on three joints (slide x, slide y,
+  hinge z), so the under-constrained planar robot can swing and *tilt* as the
+  real one does even for motion ``2T``; spatial designs have a free joint.
+  No contacts.
+- **Cables**: one spatial tendon per cable from a site at the outlet a_i to a
+  site at the attachment b_i, driven by a position actuator whose force is
+  limited to [-F, 0]: the cable pulls (tension = -force) but never pushes, so
+  a slack cable carries exactly zero tension.  Its gain is the cable's axial
+  stiffness k_i = EA / L0_i with L0_i the unstretched length paid out, updated
+  every step, and its damping k_v,i = 2 zeta sqrt(k_i m) (``cable_damping`` =
+  zeta).  Outlet pulleys and cable mass are not modelled.
+- **Winch axes**: each axis position q_i (the unstretched cable length it has
+  paid out, m) follows its set-point r_i through a first-order position loop
+  with velocity feed-forward, dq/dt = v_ff + omega_c (r - q) (``servo_bandwidth``
+  = omega_c in rad/s), where the set-point is held as a ramp with the
+  set-point velocity between cycles.  An optional transport delay puts the
+  set-points through a FIFO (the seed paper's communication path added
+  110-150 ms, its Table 1).
+- **Command to the cable actuator**: q_i - T_ff,i / k_i + (k_v,i / k_i) dq_i/dt,
+  i.e. the expected static stretch T_ff / k is taken up (``compensate_stretch``)
+  and the actuator damping acts on the cable's velocity *relative to the
+  winch*, so it does not make the effector lag (MuJoCo cable modelling notes
+  in the project's algorithms reference).
+
+Lengths reported by :meth:`Simulator.state` are the geometric (stretched)
+cable lengths from outlet to attachment; ``axis`` holds the winch positions q.
+
+Typical use (the PLC bridge does the same, one cycle at a time)::
+
+    sim = Simulator(design, delay=0.13)
+    sim.reset([0.65, 0.75])                  # at rest, settled under gravity
+    for k in range(n):
+        s = sim.advance(setpoint_lengths[k], 0.001)   # -> SimState
+        print(s.time, s.pose, s.lengths, s.tensions)
+
+References
+----------
+Rivera, Garrido, Riveiro, Silva: "Environment for the Design and Automation
+of New CDPR Architectures" (seed paper): section 3 (simulated model: prismatic
+joint free in compression, locked in traction), section 4 and Table 1 (delays).
+MuJoCo documentation: spatial tendons, position actuators, ``forcerange``.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from . import kinematics as kin
+from .model import Design
+
+DEFAULT_AXIAL_STIFFNESS = 1.0e5
+"""EA [N] used when the spec gives no ``cable.axial_stiffness``."""
+
+
+@dataclass(frozen=True)
+class SimState:
+    """State of the simulated robot at one instant.
+
+    Attributes
+    ----------
+    time : float
+        Simulated time [s] since :meth:`Simulator.reset`.
+    pose : (ncoords,) array
+        Effector pose in the motion's coordinates [m, rad].
+    orientation : (3,) array
+        Actual (rx, ry, rz) [rad], xyz Euler (R = Rx Ry Rz), whatever the
+        motion type (the tilt of a 2T effector is ``orientation[2]``).
+    velocity : (6,) array
+        Linear [m/s] and angular [rad/s] velocity of the platform origin (frame).
+    lengths : (m,) array
+        Geometric cable lengths outlet to attachment [m].
+    tensions : (m,) array
+        Cable tensions [N], >= 0 (0 when slack).
+    axis : (m,) array
+        Winch positions q: unstretched length paid out [m].
+    setpoints : (m,) array
+        Set-points the axes are following now (after the delay) [m].
+    """
+
+    time: float
+    pose: np.ndarray
+    orientation: np.ndarray
+    velocity: np.ndarray
+    lengths: np.ndarray
+    tensions: np.ndarray
+    axis: np.ndarray
+    setpoints: np.ndarray
+
+
+def build_xml(design: Design, timestep: float = 5e-4, force_limit: float = 1e6) -> str:
+    """MJCF text of the design's robot (see the module notes for the model).
+
+    Parameters
+    ----------
+    design : Design
+    timestep : float
+        Physics step [s].
+    force_limit : float
+        Largest cable tension the actuator can exert [N] (not a design bound:
+        tension bounds are checked by the analysis, not enforced by physics).
+    """
+    eff = design.effector
+    planar = design.motion.planar
+    g = " ".join(f"{v:.10g}" for v in design.gravity)
+    I = np.array(eff.inertia_matrix, float)
+    I = 0.5 * (I + I.T)
+    d = np.maximum(np.diag(I), 1e-9 * max(eff.mass, 1e-9))
+    full = [d[0], d[1], d[2], I[0, 1], I[0, 2], I[1, 2]]
+    com = " ".join(f"{v:.10g}" for v in eff.center_of_mass)
+    size = np.maximum(np.asarray(eff.size, float) / 2, 1e-3)
+    lines = [
+        f'<mujoco model="{design.name}">',
+        '  <compiler inertiafromgeom="false" angle="radian"/>',
+        f'  <option timestep="{timestep:.10g}" gravity="{g}" integrator="implicitfast">',
+        '    <flag contact="disable"/>',
+        '  </option>',
+        '  <worldbody>',
+    ]
+    for c in design.cables:
+        pos = " ".join(f"{v:.10g}" for v in c.outlet)
+        lines.append(f'    <site name="outlet_{c.name}" pos="{pos}" size="0.005"/>')
+    lines.append('    <body name="effector" pos="0 0 0">')
+    if planar:
+        lines += [
+            '      <joint name="x" type="slide" axis="1 0 0"/>',
+            '      <joint name="y" type="slide" axis="0 1 0"/>',
+            '      <joint name="phi" type="hinge" axis="0 0 1"/>',
+        ]
+    else:
+        lines.append('      <freejoint name="free"/>')
+    lines.append(f'      <inertial pos="{com}" mass="{eff.mass:.10g}" '
+                 f'fullinertia="{" ".join(f"{v:.10g}" for v in full)}"/>')
+    lines.append(f'      <geom type="box" size="{" ".join(f"{v:.10g}" for v in size)}" '
+                 'contype="0" conaffinity="0"/>')
+    for c in design.cables:
+        pos = " ".join(f"{v:.10g}" for v in c.attachment)
+        lines.append(f'      <site name="attach_{c.name}" pos="{pos}" size="0.005"/>')
+    lines += ['    </body>', '  </worldbody>', '  <tendon>']
+    for c in design.cables:
+        lines.append(f'    <spatial name="{c.name}" width="0.002">'
+                     f'<site site="outlet_{c.name}"/><site site="attach_{c.name}"/></spatial>')
+    lines += ['  </tendon>', '  <actuator>']
+    for c in design.cables:
+        lines.append(f'    <position name="{c.name}" tendon="{c.name}" kp="1" '
+                     f'forcelimited="true" forcerange="{-force_limit:.10g} 0"/>')
+    lines += ['  </actuator>', '</mujoco>']
+    return "\n".join(lines)
+
+
+@dataclass
+class _Entry:
+    t: float
+    sp: np.ndarray
+    vel: np.ndarray
+    tension: np.ndarray
+
+
+class Simulator:
+    """The design's robot in MuJoCo, driven by cable-length set-points.
+
+    Parameters
+    ----------
+    design : Design
+    timestep : float
+        Physics step [s] (default 0.5 ms; keep sqrt(sum k_i / m) * timestep well
+        below 1).
+    servo_bandwidth : float
+        Position-loop bandwidth omega_c of each winch axis [rad/s]; ``inf``
+        makes the axis follow the set-point exactly.
+    delay : float
+        Transport delay of the set-points [s] (FIFO), >= 0.
+    cable_damping : float
+        Damping ratio zeta of the axial cable mode with the effector's mass.
+    joint_damping : float
+        Viscous damping on the effector's joints [N s/m, N m s/rad] (air, joints).
+    feedforward : bool
+        Velocity feed-forward in the servo loop (without it the axis lags by
+        v / omega_c).
+    compensate_stretch : bool
+        Take up the expected static stretch T/k of each cable.  The expected
+        tensions are those passed to :meth:`advance`, else the static tensions
+        at the pose the set-points stand for (forward kinematics).
+    axial_stiffness : float, optional
+        EA [N] for every cable; default: the spec's, else 1e5 N.
+    """
+
+    def __init__(self, design: Design, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
+                 delay: float = 0.0, cable_damping: float = 0.7, joint_damping: float = 0.05,
+                 feedforward: bool = True, compensate_stretch: bool = True,
+                 axial_stiffness: float | None = None):
+        if not timestep > 0:
+            raise ValueError(f"timestep must be > 0, got {timestep}")
+        if not delay >= 0:
+            raise ValueError(f"delay must be >= 0, got {delay}")
+        if not servo_bandwidth > 0:
+            raise ValueError(f"servo_bandwidth must be > 0, got {servo_bandwidth}")
+        self.design = design
+        self.timestep = float(timestep)
+        self.servo_bandwidth = float(servo_bandwidth)
+        self.delay = float(delay)
+        self.cable_damping = float(cable_damping)
+        self.joint_damping = float(joint_damping)
+        self.feedforward = bool(feedforward)
+        self.compensate_stretch = bool(compensate_stretch)
+        ea = []
+        for c in design.cables:
+            v = axial_stiffness if axial_stiffness is not None else c.props.axial_stiffness
+            ea.append(float(v) if v else DEFAULT_AXIAL_STIFFNESS)
+        self.EA = np.array(ea)
+        self.xml = build_xml(design, timestep)
+        self.model = mujoco.MjModel.from_xml_string(self.xml)
+        self.data = mujoco.MjData(self.model)
+        self.model.dof_damping[:] = self.joint_damping
+        self.m = design.m
+        self._planar = design.motion.planar
+        self._fifo: deque[_Entry] = deque()
+        self._last_issue: _Entry | None = None
+        self.q = np.zeros(self.m)
+        self.qdot = np.zeros(self.m)
+        self._current = None
+        self.time = 0.0
+
+    # ------------------------------------------------------------------
+    # set-up
+    # ------------------------------------------------------------------
+    def _set_pose(self, pose) -> None:
+        full = self.design.full_pose(pose)
+        qpos = self.data.qpos
+        if self._planar:
+            qpos[0], qpos[1], qpos[2] = full[0], full[1], full[5]
+        else:
+            qpos[:3] = full[:3]
+            x, y, z, w = Rotation.from_euler("XYZ", full[3:]).as_quat()
+            qpos[3:7] = [w, x, y, z]
+        self.data.qvel[:] = 0.0
+        mujoco.mj_forward(self.model, self.data)
+
+    def static_tensions(self, pose) -> np.ndarray:
+        """Tensions [N] holding the effector at rest at a pose (gravity only), NaN if singular."""
+        from .trajectory import states
+
+        x = np.atleast_2d(np.asarray(pose, float))
+        z = np.zeros_like(x)
+        return states(self.design, x, z, z)["tensions"][0]
+
+    def reset(self, pose=None, *, settle: float = 3.0) -> SimState:
+        """Put the robot at rest at a pose, with the axes holding its cable lengths.
+
+        Parameters
+        ----------
+        pose : array, optional
+            Pose in the motion's coordinates; default: the centre of the
+            workspace grid at the workspace orientation.
+        settle : float
+            Simulated time [s] to let the body find its equilibrium under
+            gravity with extra damping (the rigid body of an under-constrained
+            robot tilts until the cable lines and gravity meet); 0 to skip.
+            The clock restarts at 0 afterwards.
+        """
+        d = self.design
+        if pose is None:
+            grid = d.workspace.grid
+            pose = [(lo + hi) / 2 for lo, hi in zip(grid.lower, grid.upper)] + list(d.workspace.orientation)
+        pose = np.asarray(pose, float)
+        mujoco.mj_resetData(self.model, self.data)
+        self._set_pose(pose)
+        L = kin.inverse_kinematics(d, pose)
+        T = self.static_tensions(pose)
+        T = np.where(np.isfinite(T), np.clip(T, 0.0, None), 0.0)
+        self.q = L.copy()
+        self.qdot = np.zeros(self.m)
+        self._fifo.clear()
+        entry = _Entry(0.0, L.copy(), np.zeros(self.m), T if self.compensate_stretch else np.zeros(self.m))
+        self._current = entry
+        self._last_issue = entry
+        self.time = 0.0
+        if settle > 0:
+            # extra damping while settling: about critical for a 1 m pendulum of the effector
+            mass = d.effector.mass
+            arm = 0.5 * float(np.max(d.effector.size)) + 0.1
+            damp = np.full(self.model.nv, 4.0 * mass)
+            if self._planar:
+                damp[2] = 4.0 * mass * arm * arm
+            else:
+                damp[3:] = 4.0 * mass * arm * arm
+            self.model.dof_damping[:] = np.maximum(damp, self.joint_damping)
+            steps = int(np.ceil(settle / self.timestep))
+            for _ in range(steps):
+                self._step()
+            self.model.dof_damping[:] = self.joint_damping
+            self.data.qvel[:] = 0.0
+            mujoco.mj_forward(self.model, self.data)
+        self.time = 0.0
+        self.data.time = 0.0
+        return self.state()
+
+    # ------------------------------------------------------------------
+    # stepping
+    # ------------------------------------------------------------------
+    def _reference(self, t: float):
+        """Set-point entry the axes follow at time t (after the delay), and its ramp value."""
+        horizon = t - self.delay
+        while self._fifo and self._fifo[0].t <= horizon + 1e-12:
+            self._current = self._fifo.popleft()
+        e = self._current
+        tau = max(horizon - e.t, 0.0)
+        return e, e.sp + e.vel * tau
+
+    def _step(self) -> None:
+        dt = self.timestep
+        e, r = self._reference(self.time)
+        wc = self.servo_bandwidth
+        vff = e.vel if self.feedforward else 0.0
+        # exact discretisation of dq/dt = vff + wc (r(t) - q) with r a ramp of slope vff
+        if np.isinf(wc):
+            q_new = r + e.vel * dt
+        else:
+            a = np.exp(-wc * dt)
+            r_end = r + (e.vel * dt)
+            q_new = r_end + (self.q - r) * a - (e.vel - vff) * (1 - a) / wc
+        self.qdot = (q_new - self.q) / dt
+        self.q = q_new
+        k = self.EA / np.maximum(self.q, 1e-6)
+        kv = 2.0 * self.cable_damping * np.sqrt(k * self.design.effector.mass)
+        mdl = self.model
+        mdl.actuator_gainprm[:, 0] = k
+        mdl.actuator_biasprm[:, 1] = -k
+        mdl.actuator_biasprm[:, 2] = -kv
+        stretch = e.tension / k if self.compensate_stretch else 0.0
+        self.data.ctrl[:] = self.q - stretch + kv / k * self.qdot
+        mujoco.mj_step(mdl, self.data)
+        self.time += dt
+
+    def advance(self, setpoints, duration: float, *, velocity=None, tension=None) -> SimState:
+        """Issue cable-length set-points now and simulate for ``duration`` seconds.
+
+        Parameters
+        ----------
+        setpoints : (m,) array
+            Cable lengths the axes must reach [m] (rigid-cable geometry, as a
+            PLC computes them by inverse kinematics).
+        duration : float
+            Simulated time to advance [s] (rounded to whole physics steps).
+        velocity : (m,) array, optional
+            Set-point velocities [m/s] for the feed-forward; default: the
+            finite difference with the previous set-points.
+        tension : (m,) array, optional
+            Expected tensions [N] for the stretch compensation; default: the
+            static tensions at the pose the set-points stand for.
+
+        Returns
+        -------
+        SimState
+            The state at the end.
+        """
+        sp = np.asarray(setpoints, float).reshape(-1)
+        if sp.size != self.m:
+            raise ValueError(f"expected {self.m} set-points, got {sp.size}")
+        if not np.all(np.isfinite(sp)):
+            raise ValueError("set-points must be finite")
+        if velocity is None:
+            prev = self._last_issue
+            span = self.time - prev.t if prev is not None else 0.0
+            vel = (sp - prev.sp) / span if prev is not None and span > 0 else np.zeros(self.m)
+        else:
+            vel = np.asarray(velocity, float).reshape(-1)
+        if tension is None:
+            if self.compensate_stretch:
+                T = self._tension_for_lengths(sp)
+            else:
+                T = np.zeros(self.m)
+        else:
+            T = np.asarray(tension, float).reshape(-1)
+        T = np.where(np.isfinite(T), np.clip(T, 0.0, None), 0.0)
+        entry = _Entry(self.time, sp.copy(), vel.copy(), T)
+        self._fifo.append(entry)
+        self._last_issue = entry
+        steps = max(int(round(duration / self.timestep)), 0)
+        for _ in range(steps):
+            self._step()
+        return self.state()
+
+    def _tension_for_lengths(self, lengths) -> np.ndarray:
+        try:
+            guess = self.state().pose
+            fk = kin.forward_kinematics(self.design, lengths, guess=guess)
+            if fk.residual > 1e-6:
+                return np.zeros(self.m)
+            return self.static_tensions(fk.pose)
+        except Exception:  # noqa: BLE001 - no compensation where the lengths fit no pose
+            return np.zeros(self.m)
+
+    # ------------------------------------------------------------------
+    # read-out
+    # ------------------------------------------------------------------
+    def state(self) -> SimState:
+        """The current :class:`SimState`."""
+        d = self.design
+        qpos, qvel = self.data.qpos, self.data.qvel
+        if self._planar:
+            full = np.array([qpos[0], qpos[1], 0.0, 0.0, 0.0, qpos[2]])
+            vel = np.array([qvel[0], qvel[1], 0.0, 0.0, 0.0, qvel[2]])
+        else:
+            w, x, y, z = qpos[3:7]
+            ang = Rotation.from_quat([x, y, z, w]).as_euler("XYZ")
+            full = np.concatenate([qpos[:3], ang])
+            R = Rotation.from_quat([x, y, z, w]).as_matrix()
+            vel = np.concatenate([qvel[:3], R @ qvel[3:6]])  # free joint: body-frame angular velocity
+        pose = full[list(d.motion.pose_index)]
+        # the actuator's force range [-F, 0] makes these >= 0 (0 when slack); + 0.0 turns -0.0 into 0.0
+        tensions = -np.asarray(self.data.actuator_force, float) + 0.0
+        sp = self._current.sp if self._current is not None else np.full(self.m, np.nan)
+        return SimState(self.time, pose, full[3:].copy(), vel,
+                        np.array(self.data.ten_length, float), tensions, self.q.copy(), sp.copy())
+
+
+# ----------------------------------------------------------------------------
+# A whole trajectory
+# ----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class SimulationResult:
+    """A simulated run of a sampled trajectory (k samples).
+
+    Attributes
+    ----------
+    time : (k,) array [s]
+    target_pose, pose : (k, ncoords) arrays
+        Set-point pose and simulated effector pose.
+    orientation : (k, 3) array
+        Simulated (rx, ry, rz) [rad] (the tilt of a planar effector is column 2).
+    target_lengths, lengths, axis, tensions : (k, m) arrays
+        Set-point lengths, simulated cable lengths, winch positions [m] and tensions [N].
+    segment : (k,) int array
+        Straight-segment id of each sample (-1: not a straight line).
+    """
+
+    name: str
+    coords: tuple[str, ...]
+    cable_names: tuple[str, ...]
+    time: np.ndarray
+    target_pose: np.ndarray
+    pose: np.ndarray
+    orientation: np.ndarray
+    target_lengths: np.ndarray
+    lengths: np.ndarray
+    axis: np.ndarray
+    tensions: np.ndarray
+    segment: np.ndarray
+    settings: dict = field(default_factory=dict)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The ``simulation.csv`` columns of the CLI contract, in order (extra ones last)."""
+        out: dict[str, np.ndarray] = {"time": self.time}
+        for j, c in enumerate(self.coords):
+            out[f"{c}_target"] = self.target_pose[:, j]
+        for j, c in enumerate(self.coords):
+            out[c] = self.pose[:, j]
+        for i, c in enumerate(self.cable_names):
+            out[f"length_{c}_target"] = self.target_lengths[:, i]
+        for i, c in enumerate(self.cable_names):
+            out[f"length_{c}"] = self.lengths[:, i]
+        for i, c in enumerate(self.cable_names):
+            out[f"tension_{c}"] = self.tensions[:, i]
+        for i, c in enumerate(self.cable_names):
+            out[f"axis_{c}"] = self.axis[:, i]
+        for j, c in enumerate(("rx", "ry", "rz")):
+            if c not in self.coords and not (c == "rz" and "phi" in self.coords):
+                out[f"tilt_{c}"] = self.orientation[:, j]
+        out["segment"] = self.segment
+        return out
+
+    def comparison(self, max_delay: float | None = None):
+        """Delay, errors and the per-segment table of target vs simulated (see :mod:`compare`)."""
+        from .compare import compare
+
+        tgt, act = {}, {}
+        for j, c in enumerate(self.coords):
+            tgt[c], act[c] = self.target_pose[:, j], self.pose[:, j]
+        for i, c in enumerate(self.cable_names):
+            tgt[f"length_{c}"], act[f"length_{c}"] = self.target_lengths[:, i], self.lengths[:, i]
+        return compare(self.time, tgt, self.time, act, segment_ids=self.segment, max_delay=max_delay)
+
+    def summary(self, max_delay: float | None = None) -> dict:
+        """JSON summary: ``rms_error``, ``max_error`` [m], ``delay`` [s] per column, ``segments``."""
+        cmp = self.comparison(max_delay)
+        out = cmp.to_json()
+        out = {"name": self.name, **out}
+        out["max_tension"] = {c: float(np.max(self.tensions[:, i])) for i, c in enumerate(self.cable_names)}
+        out["min_tension"] = {c: float(np.min(self.tensions[:, i])) for i, c in enumerate(self.cable_names)}
+        out["max_tilt"] = float(np.max(np.abs(self.orientation))) if not self.design_rotational else None
+        out["samples"] = int(self.time.size)
+        out["settings"] = dict(self.settings)
+        return out
+
+    @property
+    def design_rotational(self) -> bool:
+        return any(c in self.coords for c in ("phi", "rx", "ry", "rz"))
+
+
+def simulate(design: Design, samples, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
+             delay: float = 0.0, cable_damping: float = 0.7, joint_damping: float = 0.05,
+             feedforward: bool = True, compensate_stretch: bool = True, settle: float = 3.0,
+             progress=None) -> SimulationResult:
+    """Run a sampled trajectory on the simulated robot.
+
+    Set-point k (lengths, their speeds as feed-forward, the trajectory's
+    inertial tensions as stretch compensation) is issued at ``time[k]`` and
+    held as a ramp for one cycle; the state is recorded at every sample time.
+    Add hold time to the trajectory (``trajectory.sample(..., hold_end=...)``)
+    to see a delayed robot finish its motion.
+
+    Parameters
+    ----------
+    design : Design
+    samples : trajectory.Samples
+    progress : callable, optional
+        Called as ``progress(done, total)`` every few hundred samples.
+    Other parameters: see :class:`Simulator`.
+    """
+    sim = Simulator(design, timestep=timestep, servo_bandwidth=servo_bandwidth, delay=delay,
+                    cable_damping=cable_damping, joint_damping=joint_damping,
+                    feedforward=feedforward, compensate_stretch=compensate_stretch)
+    k = samples.time.size
+    dt = samples.cycle_time
+    sim.reset(samples.pose[0], settle=settle)
+    nc, m = samples.pose.shape[1], design.m
+    pose = np.empty((k, nc))
+    ori = np.empty((k, 3))
+    lengths = np.empty((k, m))
+    axis = np.empty((k, m))
+    tens = np.empty((k, m))
+
+    def record(j, s):
+        pose[j], ori[j], lengths[j], axis[j], tens[j] = s.pose, s.orientation, s.lengths, s.axis, s.tensions
+
+    record(0, sim.state())
+    T = samples.tensions
+    for j in range(k - 1):
+        s = sim.advance(samples.lengths[j], dt, velocity=samples.cable_speed[j],
+                        tension=T[j] if np.all(np.isfinite(T[j])) else None)
+        record(j + 1, s)
+        if progress is not None and (j % 500 == 0 or j == k - 2):
+            progress(j + 1, k - 1)
+    seg = samples.segment.copy()
+    kinds = {s.index: s.kind for s in samples.segments}
+    seg = np.array([v if kinds.get(int(v)) == "line" else -1 for v in seg], dtype=np.int64)
+    # samples of a segment: while its target moves (holds at the ends excluded)
+    for sgm in samples.segments:
+        sel = samples.segment == sgm.index
+        sel[: sgm.first] = False
+        sel[sgm.last + 1:] = False
+        seg[(samples.segment == sgm.index) & ~sel] = -1
+    settings = {"timestep": timestep, "servo_bandwidth": servo_bandwidth, "delay": delay,
+                "cable_damping": cable_damping, "joint_damping": joint_damping,
+                "feedforward": feedforward, "compensate_stretch": compensate_stretch,
+                "cycle_time": dt, "axial_stiffness": [float(v) for v in sim.EA]}
+    return SimulationResult(samples.name, tuple(samples.coords), tuple(samples.cable_names),
+                            samples.time.copy(), samples.pose.copy(), pose, ori,
+                            samples.lengths.copy(), lengths, axis, tens, seg, settings)
+
+
+__all__ = ["SimState", "SimulationResult", "Simulator", "build_xml", "simulate"]

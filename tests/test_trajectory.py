@@ -1,0 +1,263 @@
+"""Trajectory sampling: profiles within their limits, exact waypoints, kinematics and
+inertial tensions checked against finite differences and the per-pose kinematics API."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from cdpr_design import kinematics as kin
+from cdpr_design import spec
+from cdpr_design import trajectory as tr
+from cdpr_design.model import Trajectory
+
+from .conftest import PLANAR2
+
+REL = 1e-9
+
+
+@pytest.fixture(scope="module")
+def planar2():
+    return spec.load(PLANAR2)
+
+
+def point_mass(outlets, mass=1.0, tension=(0.0, 100.0), motion="2T", gravity=None, attachments=None,
+               size=None, inertia=None):
+    d = len(outlets[0])
+    data = {
+        "name": "pm", "motion": motion,
+        "frame": {"lower": [-5.0] * d, "upper": [5.0] * d},
+        "effector": {"mass": mass, "size": size or [0.1] * d},
+        "tension": list(tension),
+        "cables": [{"name": f"c{i}", "outlet": list(a),
+                    "attachment": list(attachments[i]) if attachments else [0.0] * d}
+                   for i, a in enumerate(outlets)],
+    }
+    if gravity is not None:
+        data["gravity"] = list(gravity)
+    if inertia is not None:
+        data["effector"]["inertia"] = inertia
+    return spec.from_dict(data)
+
+
+# ----------------------------------------------------------------------------
+# Profiles
+# ----------------------------------------------------------------------------
+
+
+@settings(max_examples=60, deadline=None)
+@given(D=st.floats(1e-4, 3.0), v=st.floats(0.01, 2.0), a=st.floats(0.1, 20.0),
+       j=st.one_of(st.none(), st.floats(5.0, 500.0)), dt=st.sampled_from([1e-3, 5e-4, 2e-3]))
+def test_profile_limits_and_exact_end(D, v, a, j, dt):
+    """Speed and acceleration never exceed the limits; the profile ends at rest exactly at D,
+    after a whole number of cycles."""
+    prof = tr.trapezoid(D, v, a) if j is None else tr.double_s(D, v, a, j)
+    prof = tr.fit_to_cycle(prof, dt)
+    n = prof.duration / dt
+    assert abs(n - round(n)) < 1e-6
+    t = dt * np.arange(int(round(n)) + 1)
+    s, sd, sdd = prof.evaluate(t)
+    assert s[0] == 0.0 and s[-1] == D and sd[-1] == 0.0
+    assert np.all(np.diff(s) >= -1e-15)
+    assert np.all(np.abs(sd) <= v * (1 + REL))
+    assert np.all(np.abs(sdd) <= a * (1 + REL))
+    # the speed is the derivative of the position (trapezoid rule, error <= a dt / 4)
+    fd = np.diff(s) / dt
+    assert np.all(np.abs(fd - 0.5 * (sd[1:] + sd[:-1])) <= a * dt / 4 * (1 + 1e-6) + 1e-12)
+    if j is not None:  # jerk-limited: the acceleration is continuous, |da/dt| <= j
+        assert np.all(np.abs(np.diff(sdd)) <= j * dt * (1 + 1e-6) + 1e-12)
+
+
+def test_trapezoid_minimum_time_closed_form():
+    """Rest-to-rest minimum time: D/v + v/a when the cruise speed is reached, 2 sqrt(D/a) otherwise."""
+    assert tr.trapezoid(0.3, 1.0, 5.0).raw_duration == pytest.approx(0.3 / 1.0 + 1.0 / 5.0, rel=1e-12)
+    # the paper's 198 mm side at 1 m/s and 5 m/s^2 is just too short to cruise: v_peak = sqrt(a D)
+    p = tr.trapezoid(0.198, 1.0, 5.0)
+    assert p.raw_duration == pytest.approx(2 * np.sqrt(0.198 / 5.0), rel=1e-12)
+    assert p.evaluate([p.duration / 2])[1][0] == pytest.approx(np.sqrt(5.0 * 0.198), rel=1e-12)
+    assert tr.trapezoid(0.05, 1.0, 5.0).raw_duration == pytest.approx(2 * np.sqrt(0.05 / 5.0), rel=1e-12)
+    # double S with a huge jerk tends to the trapezoid
+    assert tr.double_s(0.3, 1.0, 5.0, 1e7).raw_duration == pytest.approx(0.5, rel=1e-4)
+    # double S that never reaches amax: v = j Tj^2, D = v * 2 Tj  (no cruise)
+    p = tr.double_s(2 * 0.1 ** 3 * 10.0, 1.0, 100.0, 10.0)  # Tj = 0.1 s
+    assert p.raw_duration == pytest.approx(0.4, rel=1e-9)
+
+
+# ----------------------------------------------------------------------------
+# Paths on the paper's robot
+# ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["square_slow", "square_fast"])
+def test_square_hits_every_corner_within_limits(planar2, name):
+    traj = planar2.trajectories[name]
+    s = tr.sample(planar2, name)
+    corners = tr.path_waypoints(planar2, traj)
+    assert corners.shape == (5, 2)
+    np.testing.assert_array_equal(s.pose[0], corners[0])
+    for seg, corner in zip(s.segments, corners[1:]):
+        np.testing.assert_array_equal(s.pose[seg.last], corner)  # exactly, not approximately
+        assert np.all(s.velocity[seg.last] == 0.0)
+    speed = np.linalg.norm(s.velocity, axis=1)
+    acc = np.linalg.norm(s.acceleration, axis=1)
+    assert speed.max() <= traj.speed * (1 + REL)
+    # peak speed: the cruise speed, or sqrt(a D) on a side too short to reach it
+    assert speed.max() == pytest.approx(min(traj.speed, np.sqrt(traj.acceleration * traj.side)), rel=1e-3)
+    assert acc.max() <= traj.acceleration * (1 + REL)
+    np.testing.assert_allclose(np.diff(s.time), 1e-3, rtol=1e-9)
+    # horizontal segments at the paper's mean target heights
+    ys = sorted({round(c[1], 6) for c in corners})
+    assert ys == [0.7496, 0.9476]
+    assert s.all_feasible
+
+
+@pytest.mark.parametrize("name", ["square_slow", "square_fast"])
+def test_cable_speed_is_the_derivative_of_length(planar2, name):
+    """dL/dt (analytic) against finite differences of the lengths: the trapezoid-rule bound
+    |dL/dt_fd - mean of the two speeds| <= max|d2L/dt2| dt / 4, and d2L/dt2 likewise."""
+    s = tr.sample(planar2, name)
+    dt = s.cycle_time
+    fd = np.diff(s.lengths, axis=0) / dt
+    avg = 0.5 * (s.cable_speed[1:] + s.cable_speed[:-1])
+    bound = np.abs(s.cable_accel).max() * dt / 4
+    assert np.abs(fd - avg).max() <= bound * (1 + 1e-6)
+    assert np.abs(fd - avg).max() < 1e-3  # not vacuous: well below the 0.1-1 m/s cable speeds
+    # accelerations: away from the profile's acceleration steps
+    fd2 = np.diff(s.cable_speed, axis=0) / dt
+    avg2 = 0.5 * (s.cable_accel[1:] + s.cable_accel[:-1])
+    smooth = np.all(np.abs(np.diff(s.acceleration, axis=0)) < 1e-9, axis=1)
+    assert smooth.sum() > 0.5 * smooth.size
+    assert np.abs(fd2 - avg2)[smooth].max() < 1e-3 * max(1.0, np.abs(s.cable_accel).max())
+
+
+def test_motor_angle_sign_and_zero(planar2):
+    s = tr.sample(planar2, "square_fast")
+    r = planar2.cables[0].winch.drum_radius
+    gr = planar2.cables[0].winch.gear_ratio
+    np.testing.assert_array_equal(s.motor_angle[0], 0.0)
+    np.testing.assert_allclose(s.motor_angle, (s.lengths - s.lengths[0]) / r * gr, rtol=1e-12)
+    # moving right pays out the left cable c1: its angle grows (cable paid out = positive)
+    first = s.segments[0]
+    assert s.pose[first.last, 0] > s.pose[0, 0]
+    assert s.motor_angle[first.last, 0] > 0 > s.motor_angle[first.last, 1]
+
+
+def test_static_tensions_reference_point():
+    """algorithms.md: outlets (0,2),(3,2), point mass at (1,1), m g = 9.81 N:
+    t = (9.2489567, 7.3119423) N.  At rest the trajectory's tensions are these."""
+    d = point_mass([(0.0, 2.0), (3.0, 2.0)], 1.0, (1.0, 40.0))
+    traj = Trajectory(name="t", type="polyline", speed=0.5, acceleration=2.0,
+                      waypoints=((1.0, 1.0), (1.5, 1.0)))
+    s = tr.sample(d, traj)
+    np.testing.assert_allclose(s.tensions[0], [9.2489567, 7.3119423], atol=5e-8)
+    np.testing.assert_allclose(s.tensions[-1], kin_static(d, [1.5, 1.0]), rtol=1e-12)
+
+
+def kin_static(d, pose):
+    W = kin.structure_matrix(d, pose)
+    return np.linalg.solve(W, kin.required_wrench(d, pose))
+
+
+@settings(max_examples=25, deadline=None)
+@given(ax=st.floats(-4, 4), ay=st.floats(-4, 4), x=st.floats(0.6, 2.4), y=st.floats(0.2, 1.6))
+def test_inertial_tension_equals_static_under_shifted_gravity(ax, ay, x, y):
+    """d'Alembert: a point mass accelerating by a needs the tensions of a mass at rest under g - a."""
+    outlets = [(0.0, 2.0), (3.0, 2.0)]
+    d = point_mass(outlets, 1.3)
+    g = np.array([0.0, -9.81])
+    dg = point_mass(outlets, 1.3, gravity=list(g - [ax, ay]))
+    st_ = tr.states(d, [[x, y]], [[0.3, -0.2]], [[ax, ay]])
+    np.testing.assert_allclose(st_["tensions"][0], kin_static(dg, [x, y]), rtol=1e-10, atol=1e-10)
+
+
+def rigid_1r2t():
+    return point_mass([(0.0, 2.0), (3.0, 2.0), (3.0, 0.0)], 2.0, (0.0, 500.0), motion="1R2T",
+                      attachments=[(-0.1, 0.1), (0.1, 0.1), (0.1, -0.1)], size=[0.2, 0.2], inertia=0.05)
+
+
+def test_rotating_path_against_per_pose_kinematics():
+    """1R2T polyline that turns while it moves: vectorised lengths, speeds and inertial tensions
+    against kinematics.length_rates / inertial_wrench / structure_matrix pose by pose."""
+    d = rigid_1r2t()
+    traj = Trajectory(name="r", type="polyline", speed=0.4, acceleration=3.0,
+                      waypoints=((1.2, 1.0, 0.0), (1.6, 1.2, 0.3), (1.4, 0.9, -0.2)))
+    s = tr.sample(d, traj)
+    idx = np.linspace(0, len(s) - 1, 41).astype(int)
+    for k in idx:
+        p, v, a = s.pose[k], s.velocity[k], s.acceleration[k]
+        np.testing.assert_allclose(s.lengths[k], kin.inverse_kinematics(d, p), rtol=1e-12)
+        np.testing.assert_allclose(s.cable_speed[k], kin.length_rates(d, p, v), atol=1e-12)
+        W = kin.structure_matrix(d, p)
+        w_req = kin.required_wrench(d, p) - kin.inertial_wrench(
+            d, p, a[:2], angular_velocity=[0, 0, v[2]], angular_acceleration=[0, 0, a[2]])
+        np.testing.assert_allclose(s.tensions[k], np.linalg.solve(W, w_req), rtol=1e-9, atol=1e-9)
+    fd = np.diff(s.lengths, axis=0) / s.cycle_time
+    avg = 0.5 * (s.cable_speed[1:] + s.cable_speed[:-1])
+    assert np.abs(fd - avg).max() <= np.abs(s.cable_accel).max() * s.cycle_time / 4 * (1 + 1e-6)
+
+
+def test_circle_total_acceleration_and_closure(planar2):
+    traj = Trajectory(name="c", type="circle", speed=1.0, acceleration=5.0, center=(0.75, 0.8), radius=0.1,
+                      laps=2)
+    s = tr.sample(planar2, traj)
+    r = np.linalg.norm(s.pose - [0.75, 0.8], axis=1)
+    np.testing.assert_allclose(r, 0.1, rtol=1e-12)
+    assert np.linalg.norm(s.acceleration, axis=1).max() <= 5.0 * (1 + REL)
+    assert np.linalg.norm(s.velocity, axis=1).max() <= 1.0 * (1 + REL)
+    np.testing.assert_allclose(s.pose[-1], [0.85, 0.8], atol=1e-15)
+    # velocity is the derivative of the pose
+    fd = np.diff(s.pose, axis=0) / s.cycle_time
+    avg = 0.5 * (s.velocity[1:] + s.velocity[:-1])
+    assert np.abs(fd - avg).max() < 5.0 * s.cycle_time
+    # a whole circle has no straight segment
+    assert [g.kind for g in s.segments] == ["arc"]
+
+
+def test_start_laps_holds_and_csv(planar2):
+    traj = Trajectory(name="p", type="polyline", speed=0.5, acceleration=2.0,
+                      waypoints=((0.6, 0.7), (0.9, 0.7)), start=(0.75, 0.9), laps=2)
+    s = tr.sample(planar2, traj, hold_start=0.1, hold_end=0.2)
+    kinds = [g.kind for g in s.segments]
+    assert kinds == ["approach", "line", "line", "line"]  # approach, out, back (closing), out
+    np.testing.assert_array_equal(s.pose[0], [0.75, 0.9])
+    np.testing.assert_array_equal(s.pose[:101], np.repeat([[0.75, 0.9]], 101, axis=0))
+    np.testing.assert_array_equal(s.pose[-201:], np.repeat([[0.9, 0.7]], 201, axis=0))
+    # a csv path is the polyline through the given poses
+    c = Trajectory(name="c", type="csv", speed=0.5, acceleration=2.0, file="x.csv")
+    s2 = tr.sample(planar2, c, csv_poses=np.array([[0.6, 0.7], [0.9, 0.7]]))
+    s3 = tr.sample(planar2, Trajectory(name="c", type="polyline", speed=0.5, acceleration=2.0,
+                                       waypoints=((0.6, 0.7), (0.9, 0.7))))
+    np.testing.assert_array_equal(s2.pose, s3.pose)
+    with pytest.raises(ValueError, match="csv"):
+        tr.sample(planar2, c)
+    with pytest.raises(KeyError, match="square_slow"):
+        tr.sample(planar2, "nope")
+
+
+def test_feasibility_flag_tracks_tension_bounds(planar2):
+    """A fast drop accelerates the effector downwards faster than the cables can follow
+    without going slack: those samples are infeasible (tension below t_min = 0)."""
+    traj = Trajectory(name="drop", type="polyline", speed=2.0, acceleration=15.0,
+                      waypoints=((0.75, 1.0), (0.75, 0.5)))
+    s = tr.sample(planar2, traj)
+    low = np.any(s.tensions < planar2.tension_min - 1e-9, axis=1)
+    assert low.any()
+    np.testing.assert_array_equal(s.feasible, ~low & np.all(s.tensions <= planar2.tension_max + 1e-9, axis=1))
+    cols = s.columns()
+    assert list(cols)[:7] == ["time", "x", "y", "x_vel", "y_vel", "length_c1", "cable_speed_c1"]
+
+
+def test_spatial_3r3t_speeds_match_per_pose():
+    """3R3T: vectorised cable speeds against kinematics.length_rates (Euler rates)."""
+    outs = [(-1, -1, 2), (1, -1, 2), (1, 1, 2), (-1, 1, 2), (-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+    att = [(-.1, -.1, .1), (.1, -.1, .1), (.1, .1, .1), (-.1, .1, .1),
+           (-.1, -.1, -.1), (.1, -.1, -.1), (.1, .1, -.1), (-.1, .1, -.1)]
+    d = point_mass(outs, 5.0, (0.0, 1000.0), motion="3R3T", attachments=att, size=[0.2, 0.2, 0.2])
+    traj = Trajectory(name="s", type="polyline", speed=0.3, acceleration=2.0,
+                      waypoints=((0, 0, 1, 0, 0, 0), (0.2, 0.1, 1.1, 0.1, -0.1, 0.2)))
+    s = tr.sample(d, traj)
+    for k in np.linspace(0, len(s) - 1, 15).astype(int):
+        np.testing.assert_allclose(s.cable_speed[k], kin.length_rates(d, s.pose[k], s.velocity[k]),
+                                   atol=1e-12)
