@@ -101,7 +101,7 @@ def test_paper_tension_limit_from_the_motor(base, catalogue):
 # ----------------------------------------------------------------------------
 
 
-def _brute_peak(design, pose, A, ndirs=3600):
+def _brute_peak(design, pose, A, ndirs=720):
     from cdpr_design import kinematics as kin
 
     W = kin.structure_matrix(design, pose)
@@ -132,7 +132,7 @@ def test_square_closed_form_matches_brute_force(seed):
     pose = np.concatenate([pos[0], [0.0]]) if rigid else pos[0]
     brute = _brute_peak(d, pose, A)
     assert np.all(brute <= e["peak"][0] + 1e-9)
-    np.testing.assert_allclose(brute, e["peak"][0], rtol=1e-5)
+    np.testing.assert_allclose(brute, e["peak"][0], rtol=1e-4)  # 1 - cos(pi / 720) < 1e-5
 
 
 def test_redundant_envelope_against_cvxpy():
