@@ -1,0 +1,314 @@
+"""The PLC gateway (bridge) against pyads' ADS test server on 127.0.0.1.
+
+The test PLC binds the fixed ADS port 48898 of the loopback address, so the
+tests that start one are marked ``serial`` (run them without parallelism).
+Each bridged run lasts a few seconds.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from cdpr_design import bridge as br
+from cdpr_design import spec, trajectory
+from cdpr_design.cli import app
+from cdpr_design.plc import (ADST_REAL64, LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID,
+                             AdsTransport, PlcLayout, PlcLinkError, SymbolError, TestPlc,
+                             check_symbol_info)
+
+from .conftest import ROOT, write_spec
+
+PLC = {
+    "ams_net_id": TEST_PLC_NET_ID, "port": 851, "host": LOOPBACK, "cycle_time": 0.01,
+    "setpoints": ["MAIN.fCableLen1", "MAIN.fCableLen2"],
+    "actuals": ["MAIN.fSimLen1", "MAIN.fSimLen2"],
+    "tensions": ["MAIN.fSimT1", "MAIN.fSimT2"],
+    "pose": "MAIN.aSimPose", "heartbeat": "MAIN.nSimHeartbeat", "fault": "MAIN.bSimFault",
+}
+
+
+@pytest.fixture
+def loop_data(planar2_data) -> dict:
+    """planar2 with its plc: section pointed at the loopback test PLC."""
+    d = dict(planar2_data)
+    d["plc"] = dict(PLC)
+    d["trajectories"] = dict(d.get("trajectories") or {})
+    d["trajectories"]["probe"] = {  # an L of 0.4 m at 0.3 m/s: ~1.6 s
+        "type": "polyline", "waypoints": [[0.65, 0.75], [0.85, 0.75], [0.85, 0.95]],
+        "speed": 0.3, "acceleration": 2.0}
+    return d
+
+
+@pytest.fixture
+def design(loop_data):
+    return spec.from_dict(loop_data)
+
+
+def _env():
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    return env
+
+
+def _read_csv(path: Path):
+    lines = path.read_text().splitlines()
+    header = lines[0].split(",")
+    rows = [ln.split(",") for ln in lines[1:]]
+    assert all(len(r) == len(header) for r in rows), "a truncated row in the log"
+    data = np.array([[float(v) if v else np.nan for v in r] for r in rows]).reshape(-1, len(header))
+    return header, data
+
+
+# ----------------------------------------------------------------------------
+# Pure parts (no server)
+# ----------------------------------------------------------------------------
+
+
+def test_stream_stats_match_numpy():
+    rng = np.random.default_rng(1)
+    x = rng.lognormal(mean=-7, sigma=1.0, size=20000)
+    s = br.StreamStats()
+    for v in x:
+        s.add(float(v))
+    assert s.count == x.size
+    assert s.summary()["mean"] == pytest.approx(x.mean(), rel=1e-12)
+    assert s.max == x.max()
+    # p99 within the 1 % bin width of numpy's (upper-edge convention)
+    assert np.percentile(x, 99) * 0.99 <= s.percentile(99) <= np.percentile(x, 99) * 1.02
+
+
+def test_layout_follows_the_spec(design):
+    lay = PlcLayout.from_design(design)
+    assert [s.name for s in lay.inputs] == PLC["setpoints"]
+    assert [s.name for s in lay.outputs] == (PLC["actuals"] + PLC["tensions"]
+                                            + [PLC["pose"], PLC["heartbeat"], PLC["fault"]])
+    pose = lay.role("pose")[0]
+    assert (pose.count, pose.size, pose.plc_type) == (2, 16, "ARRAY [0..1] OF LREAL")
+    assert lay.role("heartbeat")[0].size == 4 and lay.fault.size == 1
+    vals = lay.pack_outputs([1, 2], [3, 4], [5, 6], 2**32 + 7, True)
+    assert vals == [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7, True]  # the UDINT heartbeat wraps
+
+
+def test_symbol_type_check_names_expected_and_declared():
+    lay_sym = PlcLayout((), ())
+    del lay_sym
+    from cdpr_design.plc import Symbol
+
+    lreal = Symbol("MAIN.f", "LREAL", ADST_REAL64, 1, "setpoints")
+    assert check_symbol_info(lreal, ADST_REAL64, 8, "LREAL") is None
+    msg = check_symbol_info(lreal, 4, 4, "REAL")
+    assert "expected LREAL (8 bytes)" in msg and "REAL (4 bytes)" in msg
+    arr = Symbol("MAIN.a", "ARRAY [0..2] OF LREAL", ADST_REAL64, 3, "pose")
+    assert check_symbol_info(arr, 65, 24, "ARRAY [0..2] OF LREAL") is None
+    assert check_symbol_info(arr, ADST_REAL64, 16, "ARRAY [0..1] OF LREAL") is not None
+
+
+# ----------------------------------------------------------------------------
+# Against the test PLC (serial: fixed port 48898 on 127.0.0.1)
+# ----------------------------------------------------------------------------
+
+
+@pytest.mark.serial
+def test_setpoints_from_the_test_plc_move_the_effector(design):
+    """The loop closes: PLC set-points -> simulated robot -> PLC actuals, heartbeat, pose."""
+    samples = trajectory.sample(design, "probe")
+    lay = PlcLayout.from_design(design)
+    with TestPlc(lay, samples.time, samples.lengths) as plc:
+        tr = AdsTransport(lay, TEST_PLC_NET_ID, 851, LOOPBACK, timeout=0.1,
+                          local_net_id=TEST_LOCAL_NET_ID)
+        tr.connect()
+        sp0 = tr.read_setpoints()
+        np.testing.assert_allclose(sp0, samples.lengths[0], atol=1e-12)
+        sim = br.make_simulator(design, 0.01, sp0)
+        rows = br.RowMaker(design)
+        log = []
+        res = br.run(tr, sim, cycle_time=0.01, duration=samples.duration + 0.3,
+                     on_row=lambda sp, st: log.append(rows.values(sp, st)))
+        final = sim.state()
+        hb = plc.value(PLC["heartbeat"])
+        pose = plc.value(PLC["pose"])
+        act = [plc.value(n) for n in PLC["actuals"]]
+        fault = plc.value(PLC["fault"])
+        plc_log = plc.log()
+        tr.close()
+    assert res.stopped == "duration" and res.cycles == len(log) > 50
+    assert res.sim_time == pytest.approx(samples.duration + 0.3, abs=1e-6)  # real time kept
+    assert hb == res.cycles  # incremented once per completed cycle
+    assert fault is False
+    np.testing.assert_allclose(pose, final.pose, atol=1e-12)
+    np.testing.assert_allclose(act, final.lengths, atol=1e-12)
+    log = np.array(log)
+    header = br.csv_header(design)
+    col = {h: i for i, h in enumerate(header)}
+    # the set-points the bridge read are the trajectory's lengths...
+    tgt = log[:, [col["length_c1_target"], col["length_c2_target"]]]
+    on_path = np.min(np.linalg.norm(tgt[:, None, :] - samples.lengths[None, ::5, :], axis=2), axis=1)
+    assert on_path.max() < 5e-3
+    # ...and the simulated effector went along the L (0.2 m each way) after them
+    xy = log[:, [col["x"], col["y"]]]
+    assert np.ptp(xy[:, 0]) > 0.19 and np.ptp(xy[:, 1]) > 0.19
+    np.testing.assert_allclose(xy[-1], [0.85, 0.95], atol=2e-3)
+    # on the path (distance to the nearest trajectory pose; the timing is the PLC's)
+    off_path = np.min(np.linalg.norm(xy[:, None, :] - samples.pose[None, :, :], axis=2), axis=1)
+    assert off_path.max() < 0.01
+    # the PLC saw the simulated axes follow its set-points
+    assert plc_log.shape[0] > 100
+    d = br.axis_delays(design.cable_names, plc_log[:, 0], plc_log[:, 1:3], plc_log[:, 3:5])
+    assert all(v is not None and abs(v) < 0.1 for v in d.values())
+
+
+@pytest.mark.serial
+@pytest.mark.parametrize("case", ["missing", "mistyped"])
+def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, case):
+    lay = PlcLayout.from_design(design)
+    if case == "missing":
+        kw, name = {"omit": ["MAIN.fSimT2"]}, "MAIN.fSimT2"
+    else:
+        kw, name = {"retype": {"MAIN.nSimHeartbeat": ("LREAL", ADST_REAL64, 1)}}, "MAIN.nSimHeartbeat"
+    p = write_spec(tmp_path, loop_data)
+    with TestPlc(lay, **kw):
+        r = CliRunner().invoke(app, ["bridge", str(p), "--duration", "0.5", "--local-net-id",
+                                     TEST_LOCAL_NET_ID, "--out", str(tmp_path / "o")])
+    assert r.exit_code == 2, r.output
+    assert name in r.output
+    assert "Traceback" not in r.output
+    if case == "mistyped":
+        assert "expected UDINT" in r.output
+    assert not (tmp_path / "o" / "bridge.csv").exists()
+
+
+@pytest.mark.serial
+def test_no_plc_at_all_is_a_clean_error(tmp_path, loop_data):
+    p = write_spec(tmp_path, loop_data)
+    t = time.monotonic()
+    r = CliRunner().invoke(app, ["bridge", str(p), "--duration", "0.5", "--timeout", "0.05",
+                                 "--local-net-id", TEST_LOCAL_NET_ID, "--out", str(tmp_path / "o")])
+    assert r.exit_code == 3, r.output
+    assert "Traceback" not in r.output
+    assert time.monotonic() - t < 10
+
+
+def _start_bridge(tmp_path, spec_path, *extra):
+    out = tmp_path / "o"
+    cmd = [sys.executable, "-m", "cdpr_design", "bridge", str(spec_path), "--out", str(out),
+           "--json", *extra]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=_env(), cwd=tmp_path)
+    return proc, out
+
+
+def _wait_running(proc, out: Path, timeout=60.0):
+    """Wait until the bridge has streamed some rows to its temporary log."""
+    t = time.monotonic()
+    while time.monotonic() - t < timeout:
+        if proc.poll() is not None:
+            raise AssertionError(f"bridge ended early: {proc.communicate()}")
+        tmp = list(out.glob(".bridge.csv.*.tmp"))
+        if tmp and tmp[0].stat().st_size > 2000:
+            return
+        time.sleep(0.05)
+    raise AssertionError("bridge did not start")
+
+
+@pytest.mark.serial
+@pytest.mark.parametrize("how", ["stop_server", "freeze"])
+def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_data, design, how):
+    lay = PlcLayout.from_design(design)
+    samples = trajectory.sample(design, "square_slow")
+    p = write_spec(tmp_path, loop_data)
+    with TestPlc(lay, samples.time, samples.lengths) as plc:
+        proc, out = _start_bridge(tmp_path, p, "--duration", "60", "--timeout", "0.05",
+                                  "--local-net-id", TEST_LOCAL_NET_ID)
+        try:
+            _wait_running(proc, out)
+            getattr(plc, how)()
+            t = time.monotonic()
+            stdout, stderr = proc.communicate(timeout=20)
+            took = time.monotonic() - t
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.communicate()
+    assert proc.returncode == 3, stderr
+    assert took < 5.0  # a few cycles of timeouts, not a hang
+    assert "PLC lost" in stderr and "Traceback" not in stderr
+    summary = json.loads(stdout)
+    assert summary["stopped"] == "plc_lost" and summary["missed"] >= 3
+    header, data = _read_csv(out / "bridge.csv")  # what was logged is kept
+    assert data.shape[0] == summary["cycles"] > 10
+    assert json.loads((out / "bridge.json").read_text())["stopped"] == "plc_lost"
+
+
+@pytest.mark.serial
+def test_reconnect_retries_then_gives_up(tmp_path, loop_data, design):
+    """--reconnect: the lost PLC is retried with back-off, then the run ends (exit 3)."""
+    lay = PlcLayout.from_design(design)
+    samples = trajectory.sample(design, "probe")
+    p = write_spec(tmp_path, loop_data)
+    with TestPlc(lay, samples.time, samples.lengths) as plc:
+        proc, out = _start_bridge(tmp_path, p, "--duration", "60", "--reconnect", "2",
+                                  "--local-net-id", TEST_LOCAL_NET_ID)
+        try:
+            _wait_running(proc, out)
+            plc.stop_server()
+            stdout, stderr = proc.communicate(timeout=30)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.communicate()
+    assert proc.returncode == 3, stderr
+    assert stderr.count("reconnecting in") == 2
+    assert "0.1 s" in stderr and "0.2 s" in stderr  # back-off doubles
+
+
+@pytest.mark.serial
+def test_ctrl_c_stops_cleanly_with_the_log_intact(tmp_path, loop_data):
+    p = write_spec(tmp_path, loop_data)
+    proc, out = _start_bridge(tmp_path, p, "--test-plc", "square_slow", "--duration", "60")
+    try:
+        _wait_running(proc, out)
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        stdout, stderr = proc.communicate(timeout=20)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr
+    summary = json.loads(stdout)
+    assert summary["stopped"] == "interrupted"
+    header, data = _read_csv(out / "bridge.csv")
+    assert header[:5] == ["time", "x_target", "y_target", "x", "y"]
+    assert data.shape[0] == summary["cycles"] > 20
+    assert np.all(np.diff(data[:, 0]) > 0)
+    assert not list(out.glob(".bridge.csv.*"))  # no temporary file left behind
+
+
+@pytest.mark.serial
+def test_test_plc_run_writes_compare_ready_log(tmp_path, loop_data):
+    """--test-plc: bridge.csv has the simulation.csv columns; compare reads it."""
+    p = write_spec(tmp_path, loop_data)
+    out = tmp_path / "o"
+    r = CliRunner().invoke(app, ["bridge", str(p), "--test-plc", "probe", "--duration", "2.5",
+                                 "--out", str(out), "--json"])
+    assert r.exit_code == 0, r.output
+    summary = json.loads(r.stdout.strip().splitlines()[-1])
+    for key in ("cycles", "overruns", "cycle_time", "latency", "delay"):
+        assert key in summary
+    assert set(summary["latency"]) == {"mean", "p99", "max"}
+    assert summary["latency"]["mean"] < summary["cycle_time"]
+    header, data = _read_csv(out / "bridge.csv")
+    assert header == br.csv_header(spec.from_dict(loop_data))
+    assert data.shape[0] == summary["cycles"]
+    assert set(summary["delay"]) == {"length_c1", "length_c2"}
