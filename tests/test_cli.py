@@ -1,0 +1,138 @@
+"""The command line on tmp_path: files, columns, JSON keys, exit codes (cli.md)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from cdpr_design.cli import app
+
+from .conftest import PLANAR2
+
+runner = CliRunner()
+
+SUMMARY_KEYS = {"name", "kind", "poses", "feasible", "fraction", "measure", "min_margin",
+                "max_margin", "max_tension", "elapsed_s"}
+
+
+@pytest.fixture(scope="module")
+def ws_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ws")
+    res = runner.invoke(app, ["workspace", str(PLANAR2), "--out", str(out), "--json", "--step", "0.02"])
+    return out, res
+
+
+def test_workspace_files_and_json(ws_run):
+    out, res = ws_run
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)  # stdout is one JSON object and nothing else
+    assert SUMMARY_KEYS <= set(data)
+    assert data["name"] == "planar2" and data["kind"] == "static"
+    assert data["poses"] == 76 * 76
+    for f in ("workspace.csv", "workspace.png", "tension_map.png", "summary.json"):
+        assert (out / f).stat().st_size > 0, f
+    assert json.loads((out / "summary.json").read_text())["feasible"] == data["feasible"]
+    assert (out / "workspace.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not list(out.glob("*.tmp")), "no temporary files are left behind"
+
+
+def test_workspace_csv_columns(ws_run):
+    out, _ = ws_run
+    with open(out / "workspace.csv", newline="") as fh:
+        rows = list(csv.reader(fh))
+    header, body = rows[0], rows[1:]
+    assert header[:8] == ["x", "y", "feasible", "margin", "tension_c1", "tension_c2",
+                          "length_c1", "length_c2"]
+    assert len(body) == 76 * 76
+    summary = json.loads((out / "summary.json").read_text())
+    assert sum(r[2] == "1" for r in body) == summary["feasible"]
+    for r in body:
+        assert r[2] in ("0", "1")
+        if r[2] == "0":
+            assert r[4] == "" and r[5] == ""  # tensions empty where infeasible
+        else:
+            t = [float(r[4]), float(r[5])]
+            assert 0.0 <= min(t) and max(t) <= 20.0 and float(r[3]) >= 0
+    # rows agree with `pose` at the same point
+    row = next(r for r in body if r[0] == "0.74" and r[1] == "0.8")
+    res = runner.invoke(app, ["pose", str(PLANAR2), "--at", "0.74,0.8", "--json"])
+    p = json.loads(res.stdout)
+    assert float(row[4]) == pytest.approx(p["tensions"]["c1"], rel=1e-9)
+    assert float(row[6]) == pytest.approx(p["lengths"]["c1"], rel=1e-9)
+    assert float(row[3]) == pytest.approx(p["margin"], rel=1e-9)
+
+
+def test_pose_json_keys():
+    res = runner.invoke(app, ["pose", str(PLANAR2), "--at", "0.75,0.75", "--json"])
+    assert res.exit_code == 0, res.output
+    p = json.loads(res.stdout)
+    assert set(p) >= {"pose", "lengths", "tensions", "feasible", "margin", "structure_matrix", "collisions"}
+    assert p["feasible"] is True
+    assert p["tensions"]["c1"] == pytest.approx(p["tensions"]["c2"])
+    assert np.array(p["structure_matrix"]).shape == (2, 2)
+    # an infeasible pose: tensions null, margin negative
+    res = runner.invoke(app, ["pose", str(PLANAR2), "--at", "0.75,1.45", "--json"])
+    q = json.loads(res.stdout)
+    assert q["feasible"] is False and q["tensions"] == {"c1": None, "c2": None} and q["margin"] < 0
+
+
+@pytest.mark.parametrize("args,message", [
+    (["pose", str(PLANAR2), "--at", "0.75"], "--at: expected 2 numbers (x,y) for motion 2T, got 1"),
+    (["pose", str(PLANAR2), "--at", "a,b"], "--at: expected comma-separated numbers"),
+    (["pose", str(PLANAR2), "--at", "nan,1"], "--at: expected finite numbers"),
+    (["fk", str(PLANAR2), "--lengths", "1,2,3"], "--lengths: expected 2 cable lengths"),
+    (["fk", str(PLANAR2), "--lengths", "-1,2"], "--lengths: cable lengths must be non-negative"),
+    (["workspace", str(PLANAR2), "--kind", "dynamic"], "dynamic"),
+])
+def test_bad_options_exit_2(args, message, tmp_path):
+    res = runner.invoke(app, args + (["--out", str(tmp_path)] if args[0] == "workspace" else []))
+    assert res.exit_code == 2, res.output
+    assert message in res.output
+    assert "Traceback" not in res.output
+
+
+def test_fk_round_trip():
+    res = runner.invoke(app, ["pose", str(PLANAR2), "--at", "0.4,0.9", "--json"])
+    L = json.loads(res.stdout)["lengths"]
+    res = runner.invoke(app, ["fk", str(PLANAR2), "--lengths", f"{L['c1']!r},{L['c2']!r}", "--json"])
+    assert res.exit_code == 0
+    f = json.loads(res.stdout)
+    assert set(f) >= {"pose", "residual"}
+    np.testing.assert_allclose(f["pose"], [0.4, 0.9], atol=1e-12)
+    assert f["residual"] < 1e-12
+
+
+def test_foreign_files_are_not_overwritten(tmp_path):
+    (tmp_path / "workspace.csv").write_text("my own data\n")
+    res = runner.invoke(app, ["workspace", str(PLANAR2), "--out", str(tmp_path), "--step", "0.1"])
+    assert res.exit_code == 2
+    assert "--overwrite" in res.output
+    assert (tmp_path / "workspace.csv").read_text() == "my own data\n"
+    res = runner.invoke(app, ["workspace", str(PLANAR2), "--out", str(tmp_path), "--step", "0.1", "--overwrite"])
+    assert res.exit_code == 0
+    assert (tmp_path / "workspace.csv").read_text().startswith("x,y,feasible")
+    # files cdpr-design wrote itself are simply regenerated on the next run
+    res = runner.invoke(app, ["workspace", str(PLANAR2), "--out", str(tmp_path), "--step", "0.05"])
+    assert res.exit_code == 0
+
+
+def test_table_output(tmp_path):
+    res = runner.invoke(app, ["workspace", str(PLANAR2), "--out", str(tmp_path), "--step", "0.05"])
+    assert res.exit_code == 0
+    assert "planar2" in res.stdout and "fraction" in res.stdout
+
+
+def test_python_dash_m(tmp_path):
+    res = subprocess.run([sys.executable, "-m", "cdpr_design", "pose", str(PLANAR2), "--at", "0.75,0.75",
+                          "--json"], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert json.loads(res.stdout)["feasible"] is True
+    res = subprocess.run([sys.executable, "-m", "cdpr_design", "pose", str(tmp_path / "missing.yaml"),
+                          "--at", "1,1"], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 2 and "Traceback" not in res.stderr and "no such file" in res.stderr
