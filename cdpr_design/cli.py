@@ -703,3 +703,248 @@ def bridge(
     if res.stopped == "plc_lost":
         err.print(f"[bold red]error:[/] PLC lost: {res.error}", markup=True, soft_wrap=True)
         raise typer.Exit(EXIT_PLC_LOST)
+
+
+# ----------------------------------------------------------------------------
+# trajectory, simulate, compare (the paper's Tables 1 and 2)
+# ----------------------------------------------------------------------------
+
+CycleOpt = Annotated[Optional[float], typer.Option(
+    "--cycle-time", help="Sample period [s] (default: the trajectory's cycle_time, else 0.001).")]
+
+
+def _sample_named(design, name: str, cycle_time: float | None, hold_end: float = 0.0):
+    """Sample spec trajectory ``name`` (reading a csv path's poses); bad names/files are exit 2."""
+    from . import report
+    from . import trajectory as tr
+
+    traj = design.trajectories.get(name)
+    if traj is None:
+        known = ", ".join(design.trajectories) or "none"
+        raise InputError(f"NAME: no trajectory named {name!r} in the spec (known: {known})")
+    if cycle_time is not None and not (math.isfinite(cycle_time) and 1e-5 <= cycle_time <= 1.0):
+        raise InputError(f"--cycle-time: expected 1e-5 to 1 s, got {cycle_time}")
+    poses = None
+    if traj.type == "csv":
+        p = Path(traj.file)
+        if not p.is_absolute() and design.source:
+            p = Path(design.source).resolve().parent / p
+        poses = report.read_poses(p, design, f"trajectories.{name}.file")
+    try:
+        return tr.sample(design, name, cycle_time, csv_poses=poses, hold_end=hold_end)
+    except (KeyError, ValueError) as exc:
+        raise InputError(f"trajectories.{name}: {exc}") from None
+
+
+def _path_map(design):
+    """A static workspace map for the path picture (planar designs; coarse enough to be quick)."""
+    if not design.motion.planar:
+        return None
+    from . import workspace as ws
+
+    g = design.workspace.grid
+    ext = max(h - l for l, h in zip(g.lower, g.upper))
+    step = max(max(g.step), ext / 200.0)
+    try:
+        return ws.run(design, kind="static", step=step)
+    except Exception:  # noqa: BLE001 - the picture is drawn without the map
+        return None
+
+
+@app.command("trajectory")
+@command
+def trajectory_cmd(
+    spec: SpecArg,
+    name: Annotated[str, typer.Argument(help="Name of a path in the spec's trajectories: section.")],
+    cycle_time: CycleOpt = None,
+    check: Annotated[bool, typer.Option(
+        "--check", help="Exit 1 when a sample's tensions leave the cable bounds.")] = False,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    overwrite: OverwriteOpt = False,
+):
+    """Sample a spec path at a fixed cycle: trajectory.csv, trajectory.png, trajectory_axes.png, trajectory.json."""
+    from . import report
+
+    design = load_design(spec)
+    samples = _sample_named(design, name, cycle_time)
+    out_dir = output_dir(design, out, overwrite)
+    report.write_columns(out_dir, "trajectory.csv", samples.columns())
+    s = samples.summary()
+    out_dir.write_json("trajectory.json", s)
+    report.save_figures(out_dir, {
+        "trajectory.png": report.trajectory_path_figure(design, samples, _path_map(design)),
+        "trajectory_axes.png": report.trajectory_axes_figure(samples),
+    })
+    if json_:
+        emit_json(s)
+    else:
+        out_console.print(summary_table(
+            f"{design.name} — trajectory {name}",
+            [("samples", f"{s['samples']:,}"), ("cycle time \\[ms]", 1e3 * s["cycle_time"]),
+             ("duration \\[s]", s["duration"]), ("peak speed \\[m/s]", s["max_speed"]),
+             ("peak acceleration \\[m/s²]", s["max_acceleration"]),
+             ("tension range \\[N]", ", ".join(f"{c}: {_fmt(s['min_tension'][c])}–{_fmt(s['max_tension'][c])}"
+                                             for c in samples.cable_names)),
+             ("feasible", "yes" if s["feasible"] else f"no ({s['infeasible_samples']} samples)"),
+             ("files", str(out_dir.path))]))
+    if check and not s["feasible"]:
+        raise CheckFailed(f"trajectory {name}: {s['infeasible_samples']} samples with tensions outside the bounds")
+
+
+def segments_table(title: str, segments: list[dict]) -> Table:
+    """The paper's Table 2 layout: mean target and mean actual position per straight segment."""
+    t = Table(title=title, title_justify="left")
+    for head in ("segment", "axis", "mean target \\[mm]", "mean actual \\[mm]", "error \\[mm]", "error \\[%]"):
+        t.add_column(head, justify="right")
+    for r in segments:
+        t.add_row(str(r["segment"]), r["axis"], f"{1e3 * r['mean_target']:.3f}", f"{1e3 * r['mean_actual']:.3f}",
+                  f"{1e3 * r['error']:+.3f}", f"{r['error_pct']:.3f}")
+    return t
+
+
+def delay_text(delay: dict) -> str:
+    return ", ".join(f"{k}: {_fmt(None if v is None else 1e3 * v)}" for k, v in delay.items())
+
+
+@app.command()
+@command
+def simulate(
+    spec: SpecArg,
+    name: Annotated[str, typer.Argument(help="Name of a path in the spec's trajectories: section.")],
+    delay: Annotated[float, typer.Option(
+        "--delay", help="Transport delay of the set-points [s] (the paper's ADS path: 0.11-0.15).")] = 0.0,
+    servo_bandwidth: Annotated[float, typer.Option(
+        "--servo-bandwidth", help="Position-loop bandwidth of each winch axis [rad/s].")] = 300.0,
+    feedforward: Annotated[bool, typer.Option(
+        "--feedforward/--no-feedforward", help="Velocity feed-forward in the axis position loop.")] = True,
+    compensate_stretch: Annotated[bool, typer.Option(
+        "--stretch-compensation/--no-stretch-compensation",
+        help="Take up each cable's expected elastic stretch T/k in the command.")] = True,
+    cable_damping: Annotated[float, typer.Option(
+        "--cable-damping", help="Damping ratio of the axial cable mode.")] = 0.7,
+    timestep: Annotated[float, typer.Option("--timestep", help="Physics step [s].")] = 5e-4,
+    hold: Annotated[Optional[float], typer.Option(
+        "--hold", help="Time [s] to keep the last set-point at the end (default 0.5 s + the delay).")] = None,
+    cycle_time: CycleOpt = None,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    overwrite: OverwriteOpt = False,
+):
+    """Run a spec path on the MuJoCo model of the robot: simulation.csv, simulation.json, simulation.png."""
+    from . import report
+    from . import simulation as sim
+
+    design = load_design(spec)
+    checks = [("--delay", delay, 0.0, 10.0), ("--servo-bandwidth", servo_bandwidth, 1e-3, 1e6),
+              ("--cable-damping", cable_damping, 0.0, 100.0), ("--timestep", timestep, 1e-6, 0.01)]
+    for opt, v, lo, hi in checks:
+        if not (math.isfinite(v) and lo <= v <= hi) or (opt in ("--servo-bandwidth", "--timestep") and v <= 0):
+            raise InputError(f"{opt}: expected a number in [{lo:g}, {hi:g}], got {v}")
+    if hold is not None and not (math.isfinite(hold) and 0 <= hold <= 60):
+        raise InputError(f"--hold: expected 0 to 60 s, got {hold}")
+    samples = _sample_named(design, name, cycle_time, hold_end=(0.5 + delay) if hold is None else hold)
+    if samples.cycle_time < timestep:
+        raise InputError(f"--timestep: {timestep} s is longer than the cycle time {samples.cycle_time} s")
+    out_dir = output_dir(design, out, overwrite)
+    out_dir.target("simulation.csv")
+    with progress_bar(f"simulate {name}", quiet or json_, min_total=2000) as cb:
+        try:
+            result = sim.simulate(design, samples, timestep=timestep, servo_bandwidth=servo_bandwidth,
+                                  delay=delay, cable_damping=cable_damping, feedforward=feedforward,
+                                  compensate_stretch=compensate_stretch, progress=cb)
+        except sim.SimulationError as exc:
+            raise InputError(f"--timestep / --servo-bandwidth / --cable-damping: {exc}") from None
+    report.write_columns(out_dir, "simulation.csv", result.columns())
+    s = result.summary()
+    s["trajectory_feasible"] = samples.all_feasible
+    out_dir.write_json("simulation.json", s)
+    report.save_figures(out_dir, {"simulation.png": report.simulation_figure(result)})
+    if json_:
+        emit_json(s)
+        return
+    out_console.print(summary_table(
+        f"{design.name} — simulation of {name} (delay {1e3 * delay:g} ms)",
+        [("samples", f"{s['samples']:,}"), ("RMS position error \\[mm]", 1e3 * s["rms_error"]),
+         ("max position error \\[mm]", 1e3 * s["max_error"]), ("delay \\[ms]", delay_text(s["delay"])),
+         ("tension range \\[N]", ", ".join(f"{c}: {_fmt(s['min_tension'][c])}–{_fmt(s['max_tension'][c])}"
+                                         for c in result.cable_names)),
+         ("files", str(out_dir.path))]))
+    if s["segments"]:
+        out_console.print(segments_table("straight segments (the paper's Table 2)", s["segments"]))
+    if not samples.all_feasible:
+        info(quiet, "note: the trajectory's tensions leave the cable bounds somewhere (see trajectory --check)")
+
+
+@app.command()
+@command
+def compare(
+    target: Annotated[Path, typer.Argument(help="CSV log of the target run (set-points or a reference).")],
+    actual: Annotated[Path, typer.Argument(help="CSV log of the actual run (simulation, prototype scope export).")],
+    columns: Annotated[Optional[str], typer.Option(
+        "--columns", help="Comma-separated columns to compare (default: every column in both).")] = None,
+    rename: Annotated[Optional[list[str]], typer.Option(
+        "--map", help="TARGET_COL=ACTUAL_COL: compare differently named columns (repeatable).")] = None,
+    max_delay: Annotated[Optional[float], typer.Option(
+        "--max-delay", help="Largest delay searched [s] (default: half the record).")] = None,
+    out: Annotated[Optional[Path], typer.Option(
+        "--out", help="Folder for comparison.json (default: nothing written).")] = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    overwrite: OverwriteOpt = False,
+):
+    """Compare two logs of the same motion: delay per column, position errors, per-segment table."""
+    from . import compare as cmp
+    from . import report
+
+    t_t, tgt = report.read_log(target, "TARGET")
+    t_a, act = report.read_log(actual, "ACTUAL")
+    for item in rename or []:
+        if item.count("=") != 1 or not all(item.split("=")):
+            raise InputError(f"--map: expected TARGET_COL=ACTUAL_COL, got {item!r}")
+        a, b = item.split("=")
+        if b not in act:
+            raise InputError(f"--map: ACTUAL has no column {b!r}")
+        act[a] = act.pop(b)
+    if columns is not None:
+        cols = [c.strip() for c in columns.split(",") if c.strip()]
+        for c in cols:
+            for what, d in (("TARGET", tgt), ("ACTUAL", act)):
+                if c not in d:
+                    raise InputError(f"--columns: {what} has no numeric column {c!r}")
+    else:
+        cols = [c for c in tgt if c in act and c not in ("segment", "feasible")]
+        if not cols:
+            raise InputError(f"TARGET and ACTUAL have no value column in common "
+                             f"(TARGET: {', '.join(tgt)}; ACTUAL: {', '.join(act)}); use --map")
+    if max_delay is not None and not (math.isfinite(max_delay) and max_delay > 0):
+        raise InputError(f"--max-delay: expected a positive number of seconds, got {max_delay}")
+    try:
+        res = cmp.compare(t_t, tgt, t_a, act, columns=cols, max_delay=max_delay)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    s = res.to_json()
+    s["target"], s["actual"] = str(target), str(actual)
+    if out is not None:
+        from .report import OutputDir
+
+        OutputDir(out, overwrite=overwrite).write_json("comparison.json", s)
+    if json_:
+        emit_json(s)
+        return
+    t = Table(title=f"compare {target.name} → {actual.name}", title_justify="left")
+    for head in ("column", "delay \\[ms]", "mean error", "RMS error", "max error"):
+        t.add_column(head, justify="right")
+    for c in cols:
+        st = s["columns"][c]
+        t.add_row(c, _fmt(None if s["delay"][c] is None else 1e3 * s["delay"][c]), _fmt(st["mean"]),
+                  _fmt(st["rms"]), _fmt(st["max"]))
+    out_console.print(t)
+    pos = res.position_columns
+    if pos:
+        out_console.print(summary_table("position error (" + ",".join(pos) + ")",
+                                        [("RMS \\[mm]", 1e3 * res.rms_error), ("max \\[mm]", 1e3 * res.max_error)]))
+    if s["segments"]:
+        out_console.print(segments_table("straight segments (the paper's Table 2)", s["segments"]))

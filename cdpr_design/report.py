@@ -476,3 +476,213 @@ def write_design_report(out: OutputDir, row: dict, name: str = "design_report.cs
     """``design_report.csv``: one row of the design's headline figures (booleans as 1/0)."""
     header = list(row.keys())
     return out.write_csv(name, header, [[row[k] for k in header]])
+
+
+# ----------------------------------------------------------------------------
+# Trajectories, simulations and logs (trajectory, simulate, compare)
+# ----------------------------------------------------------------------------
+
+
+def write_columns(out: OutputDir, name: str, columns: dict) -> Path:
+    """A CSV of named 1-D columns (``trajectory.csv``, ``simulation.csv``), written atomically.
+
+    Integer columns are written as integers, NaN cells empty, floats with 10
+    significant digits.
+    """
+    names = list(columns)
+    cols = [np.asarray(columns[c]) for c in names]
+    ints = [j for j, c in enumerate(cols) if c.dtype.kind in "biu"]
+    text = ",".join(names) + "\n" + format_block(cols, int_cols=ints)
+    return out.write_text(name, text)
+
+
+def read_csv_columns(path: str | Path, what: str = "CSV") -> dict[str, np.ndarray]:
+    """Numeric columns of a CSV log with a header row: name -> float array.
+
+    Empty or non-numeric cells become NaN; columns with no number at all are
+    dropped.  Bad files raise :class:`InputError` naming the file.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{what} {p}: cannot read: {exc}") from None
+    rows = list(csv.reader(io.StringIO(text)))
+    rows = [r for r in rows if r and any(c.strip() for c in r)]
+    if len(rows) < 2:
+        raise InputError(f"{what} {p}: expected a header row and at least one data row")
+    header = [h.strip() for h in rows[0]]
+    if len(set(header)) != len(header):
+        raise InputError(f"{what} {p}: duplicate column names in the header")
+    data = np.full((len(rows) - 1, len(header)), np.nan)
+    for i, r in enumerate(rows[1:]):
+        for j, cell in enumerate(r[: len(header)]):
+            try:
+                data[i, j] = float(cell)
+            except ValueError:
+                pass
+    out = {}
+    for j, h in enumerate(header):
+        if np.any(np.isfinite(data[:, j])):
+            out[h] = data[:, j]
+    return out
+
+
+def read_log(path: str | Path, what: str = "log") -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """A logged run: its time column (``time`` or ``t``, increasing) and the other columns."""
+    cols = read_csv_columns(path, what)
+    tname = "time" if "time" in cols else ("t" if "t" in cols else None)
+    if tname is None:
+        raise InputError(f"{what} {path}: no time column (expected 'time' or 't'; found {', '.join(cols) or 'none'})")
+    t = cols.pop(tname)
+    ok = np.isfinite(t)
+    t = t[ok]
+    cols = {k: v[ok] for k, v in cols.items()}
+    if t.size < 4:
+        raise InputError(f"{what} {path}: expected at least 4 timed rows, got {t.size}")
+    if np.any(np.diff(t) <= 0):
+        raise InputError(f"{what} {path}: the time column must strictly increase")
+    return t, cols
+
+
+def read_poses(path: str | Path, design, what: str) -> np.ndarray:
+    """Poses of a ``csv`` trajectory: columns named after the motion's coordinates
+    (``x,y[,z][,phi|rx,ry,rz]``; orientation optional), or a header-less table
+    in that order."""
+    p = Path(path)
+    coords = list(design.motion.coords)
+    pos = coords[: design.motion.dim]
+    try:
+        first = p.read_text(encoding="utf-8-sig").splitlines()[0] if p.exists() else None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{what}: cannot read {p}: {exc}") from None
+    if first is None:
+        raise InputError(f"{what}: no such file {p}")
+    try:
+        [float(c) for c in first.split(",") if c.strip()]
+        has_header = False
+    except ValueError:
+        has_header = True
+    if has_header:
+        cols = read_csv_columns(p, what)
+        missing = [c for c in pos if c not in cols]
+        if missing:
+            raise InputError(f"{what}: {p} lacks column(s) {', '.join(missing)} (expected {','.join(coords)})")
+        use = coords if all(c in cols for c in coords) else pos
+        arr = np.stack([cols[c] for c in use], axis=1)
+    else:
+        try:
+            arr = np.loadtxt(p, delimiter=",", ndmin=2)
+        except ValueError as exc:
+            raise InputError(f"{what}: {p}: {exc}") from None
+        if arr.shape[1] not in (len(pos), len(coords)):
+            raise InputError(f"{what}: {p} has {arr.shape[1]} columns; expected {len(pos)} or {len(coords)} "
+                             f"({','.join(coords)})")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{what}: {p} has empty or non-numeric cells")
+    if arr.shape[0] < 2:
+        raise InputError(f"{what}: {p} needs at least 2 poses, got {arr.shape[0]}")
+    return arr
+
+
+def trajectory_path_figure(design, samples, workspace_result=None):
+    """The sampled path over the static workspace map (planar) or the frame (x-y projection).
+
+    Feasible samples in blue, infeasible ones in red; corners marked; the
+    robot drawn at the first pose.
+    """
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(7.2, 6.4))
+    fig.subplots_adjust(left=0.1, right=0.97, bottom=0.08, top=0.9)
+    if workspace_result is not None and design.motion.planar:
+        feas = workspace_result.feasible_map.astype(float)
+        from matplotlib.colors import ListedColormap
+
+        ax.imshow(feas.T, origin="lower", extent=_extent(workspace_result.map_axes),
+                  cmap=ListedColormap([(0.88, 0.88, 0.88), (0.80, 0.93, 0.80)]), vmin=0, vmax=1,
+                  interpolation="nearest", aspect="equal", zorder=1)
+        ax.plot([], [], "s", color=(0.80, 0.93, 0.80), label="static workspace")
+    _frame_rect(ax, design)
+    _draw_robot(ax, design, samples.pose[0])
+    p = samples.pose
+    ax.plot(p[:, 0], p[:, 1], "-", color="tab:blue", lw=1.6, zorder=7, label="path")
+    bad = ~samples.feasible
+    if bad.any():
+        ax.plot(p[bad, 0], p[bad, 1], ".", color="tab:red", ms=3, zorder=8, label="infeasible tensions")
+    ends = [s.last for s in samples.segments if s.kind != "arc"]
+    if ends:
+        ax.plot(p[ends, 0], p[ends, 1], "o", mfc="white", mec="tab:blue", ms=5, zorder=9, label="waypoints")
+    _pad_limits(ax, design)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    s = samples.summary()
+    ax.set_title(f"{design.name}: trajectory {samples.name} — {s['duration']:.3g} s, peak "
+                 f"{s['max_speed']:.3g} m/s, {s['max_acceleration']:.3g} m/s²"
+                 + ("" if samples.all_feasible else f"\n{s['infeasible_samples']} infeasible samples"),
+                 fontsize=10)
+    ax.legend(loc="lower right", fontsize=8, framealpha=0.9)
+    return fig
+
+
+def trajectory_axes_figure(samples):
+    """Axis set-points over time: pose, cable lengths, cable speeds, motor angles, tensions."""
+    plt = _plt()
+    fig, axs = plt.subplots(5, 1, figsize=(8, 10.5), sharex=True)
+    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.05, top=0.95, hspace=0.12)
+    t = samples.time
+    for j, c in enumerate(samples.coords):
+        axs[0].plot(t, samples.pose[:, j], label=c)
+    axs[0].set_ylabel("pose [m, rad]")
+    for data, ax, lab in ((samples.lengths, axs[1], "length [m]"), (samples.cable_speed, axs[2], "cable speed [m/s]"),
+                          (samples.motor_angle, axs[3], "motor angle [rad]"), (samples.tensions, axs[4], "tension [N]")):
+        for i, c in enumerate(samples.cable_names):
+            ax.plot(t, data[:, i], label=c)
+        ax.set_ylabel(lab)
+    for ax in axs:
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=7, ncol=4)
+    axs[-1].set_xlabel("time [s]")
+    fig.suptitle(f"trajectory {samples.name}: set-points every {1000 * samples.cycle_time:g} ms", fontsize=10)
+    return fig
+
+
+def simulation_figure(result):
+    """Target against simulated run: position, position error, cable tensions over time."""
+    plt = _plt()
+    fig, axs = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True)
+    fig.subplots_adjust(left=0.11, right=0.97, bottom=0.06, top=0.93, hspace=0.12)
+    t = result.time
+    npos = sum(1 for c in result.coords if c in ("x", "y", "z"))
+    for j in range(npos):
+        c = result.coords[j]
+        line, = axs[0].plot(t, result.target_pose[:, j], "--", lw=1.0, label=f"{c} target")
+        axs[0].plot(t, result.pose[:, j], "-", color=line.get_color(), lw=1.4, label=c)
+    axs[0].set_ylabel("position [m]")
+    err_ = np.linalg.norm(result.pose[:, :npos] - result.target_pose[:, :npos], axis=1)
+    axs[1].plot(t, 1000 * err_, color="tab:red")
+    axs[1].set_ylabel("position error [mm]")
+    for i, c in enumerate(result.cable_names):
+        axs[2].plot(t, result.tensions[:, i], label=c)
+    axs[2].set_ylabel("tension [N]")
+    axs[2].set_xlabel("time [s]")
+    for ax in axs:
+        ax.grid(alpha=0.3)
+    axs[0].legend(loc="upper right", fontsize=7, ncol=3)
+    axs[2].legend(loc="upper right", fontsize=7)
+    st = result.settings
+    fig.suptitle(f"simulation of {result.name}: delay {1000 * st.get('delay', 0):g} ms, servo bandwidth "
+                 f"{st.get('servo_bandwidth', float('nan')):g} rad/s", fontsize=10)
+    return fig
+
+
+def save_figures(out: OutputDir, figures: dict) -> list[Path]:
+    """Save {name: figure} as PNGs (atomic) and close them."""
+    plt = _plt()
+    paths = []
+    for name, fig in figures.items():
+        try:
+            paths.append(out.save_figure(name, fig))
+        finally:
+            plt.close(fig)
+    return paths

@@ -61,6 +61,13 @@ from .model import Design
 DEFAULT_AXIAL_STIFFNESS = 1.0e5
 """EA [N] used when the spec gives no ``cable.axial_stiffness``."""
 
+_BAD_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADQVEL,
+                 mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADCTRL)
+
+
+class SimulationError(RuntimeError):
+    """The physics became unstable (MuJoCo reported NaN/huge values and reset the state)."""
+
 
 @dataclass(frozen=True)
 class SimState:
@@ -229,6 +236,8 @@ class Simulator:
         self.qdot = np.zeros(self.m)
         self._current = None
         self.time = 0.0
+        tmax = np.asarray(design.tension_max, float)
+        self._t_cap = np.where(np.isfinite(tmax), tmax, 1e6)
 
     # ------------------------------------------------------------------
     # set-up
@@ -276,7 +285,7 @@ class Simulator:
         self._set_pose(pose)
         L = kin.inverse_kinematics(d, pose)
         T = self.static_tensions(pose)
-        T = np.where(np.isfinite(T), np.clip(T, 0.0, None), 0.0)
+        T = np.where(np.isfinite(T), np.clip(T, 0.0, self._t_cap), 0.0)
         self.q = L.copy()
         self.qdot = np.zeros(self.m)
         self._fifo.clear()
@@ -340,6 +349,14 @@ class Simulator:
         self.data.ctrl[:] = self.q - stretch + kv / k * self.qdot
         mujoco.mj_step(mdl, self.data)
         self.time += dt
+        if self._unstable():
+            raise SimulationError(
+                f"the simulation became unstable at t = {self.time:.4g} s (MuJoCo reset it); "
+                "use a smaller timestep or check the set-points")
+
+    def _unstable(self) -> bool:
+        w = self.data.warning
+        return any(w[int(k)].number > 0 for k in _BAD_WARNINGS)
 
     def advance(self, setpoints, duration: float, *, velocity=None, tension=None) -> SimState:
         """Issue cable-length set-points now and simulate for ``duration`` seconds.
@@ -381,7 +398,8 @@ class Simulator:
                 T = np.zeros(self.m)
         else:
             T = np.asarray(tension, float).reshape(-1)
-        T = np.where(np.isfinite(T), np.clip(T, 0.0, None), 0.0)
+        # a feed-forward near a singular pose can be huge: never more than a cable's bound
+        T = np.where(np.isfinite(T), np.clip(T, 0.0, self._t_cap), 0.0)
         entry = _Entry(self.time, sp.copy(), vel.copy(), T)
         self._fifo.append(entry)
         self._last_issue = entry
@@ -571,4 +589,4 @@ def simulate(design: Design, samples, *, timestep: float = 5e-4, servo_bandwidth
                             samples.lengths.copy(), lengths, axis, tens, seg, settings)
 
 
-__all__ = ["SimState", "SimulationResult", "Simulator", "build_xml", "simulate"]
+__all__ = ["SimState", "SimulationError", "SimulationResult", "Simulator", "build_xml", "simulate"]

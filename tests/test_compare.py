@@ -126,3 +126,43 @@ def test_bad_inputs():
         C.compare(t, {"a": t}, t, {"b": t})
     with pytest.raises(ValueError, match="overlap"):
         C.compare(t, {"a": t}, t + 5, {"a": t})
+
+
+# ----------------------------------------------------------------------------
+# Command line
+# ----------------------------------------------------------------------------
+
+
+def test_cli_compare_scope_export(tmp_path, fast):
+    """A prototype-like log: 't' time column, its own names (--map), 30 ms late, 1 mm low."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from cdpr_design.cli import app
+
+    t = fast.time
+    tgt = tmp_path / "target.csv"
+    tgt.write_text("time,x,y\n" + "\n".join(f"{a:.17g},{b:.17g},{c:.17g}" for a, b, c in zip(t, fast.pose[:, 0], fast.pose[:, 1])))
+    ta = np.arange(0.0, t[-1], 2e-3)
+    xa = np.interp(ta - 0.03, t, fast.pose[:, 0])
+    ya = np.interp(ta - 0.03, t, fast.pose[:, 1]) - 0.001
+    act = tmp_path / "scope.csv"
+    act.write_text("t,PosX,PosY\n" + "\n".join(f"{a:.17g},{b:.17g},{c:.17g}" for a, b, c in zip(ta, xa, ya)))
+    r = CliRunner()
+    res = r.invoke(app, ["compare", str(tgt), str(act), "--map", "x=PosX", "--map", "y=PosY", "--json",
+                         "--out", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert s["delay"]["x"] == pytest.approx(0.03, abs=1e-3)
+    assert s["delay"]["y"] == pytest.approx(0.03, abs=1e-3)
+    assert len(s["segments"]) == 4
+    assert (tmp_path / "o" / "comparison.json").exists()
+    res = r.invoke(app, ["compare", str(tgt), str(act)])
+    assert res.exit_code == 2 and "--map" in res.output  # no common column
+    res = r.invoke(app, ["compare", str(tgt), str(tmp_path / "nothere.csv")])
+    assert res.exit_code == 2 and "Traceback" not in res.output
+    bad = tmp_path / "bad.csv"
+    bad.write_text("a,b\n1,2\n3,4\n")
+    res = r.invoke(app, ["compare", str(tgt), str(bad)])
+    assert res.exit_code == 2 and "time" in res.output

@@ -161,3 +161,33 @@ def test_bad_arguments(planar2):
     sim.reset()
     with pytest.raises(ValueError, match="expected 2 set-points"):
         sim.advance([1.0], 0.01)
+
+
+def test_cli_simulate(tmp_path):
+    import csv
+    import json
+
+    from typer.testing import CliRunner
+
+    from cdpr_design.cli import app
+
+    r = CliRunner()
+    res = r.invoke(app, ["simulate", str(PLANAR2), "square_fast", "--delay", "0.05", "--out", str(tmp_path),
+                         "--json"])
+    assert res.exit_code == 0, res.output
+    s = json.loads(res.stdout)
+    assert set(s) >= {"rms_error", "max_error", "delay", "segments"}
+    assert s["delay"]["length_c1"] == pytest.approx(0.05, abs=2e-3)
+    assert [row["axis"] for row in s["segments"]] == ["y", "x", "y", "x"]
+    with open(tmp_path / "simulation.csv") as fh:
+        header = next(csv.reader(fh))
+    assert header[:11] == ["time", "x_target", "y_target", "x", "y", "length_c1_target", "length_c2_target",
+                           "length_c1", "length_c2", "tension_c1", "tension_c2"]
+    assert (tmp_path / "simulation.png").stat().st_size > 0
+    # compare reads what simulate wrote
+    res = r.invoke(app, ["compare", str(tmp_path / "simulation.csv"), str(tmp_path / "simulation.csv"),
+                         "--columns", "x,y", "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["max_error"] == 0.0
+    res = r.invoke(app, ["simulate", str(PLANAR2), "square_fast", "--delay", "-1", "--out", str(tmp_path)])
+    assert res.exit_code == 2

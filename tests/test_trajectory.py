@@ -261,3 +261,57 @@ def test_spatial_3r3t_speeds_match_per_pose():
     for k in np.linspace(0, len(s) - 1, 15).astype(int):
         np.testing.assert_allclose(s.cable_speed[k], kin.length_rates(d, s.pose[k], s.velocity[k]),
                                    atol=1e-12)
+
+
+# ----------------------------------------------------------------------------
+# Command line
+# ----------------------------------------------------------------------------
+
+
+def test_cli_trajectory_writes_contract_columns(tmp_path):
+    import csv
+    import json
+
+    from typer.testing import CliRunner
+
+    from cdpr_design.cli import app
+
+    res = CliRunner().invoke(app, ["trajectory", str(PLANAR2), "square_fast", "--out", str(tmp_path), "--json"])
+    assert res.exit_code == 0, res.output
+    summ = json.loads(res.stdout)
+    assert summ["feasible"] is True and summ["samples"] > 1000
+    with open(tmp_path / "trajectory.csv") as fh:
+        header = next(csv.reader(fh))
+    assert header[:14] == ["time", "x", "y", "x_vel", "y_vel",
+                           "length_c1", "cable_speed_c1", "motor_angle_c1", "tension_c1",
+                           "length_c2", "cable_speed_c2", "motor_angle_c2", "tension_c2", "feasible"]
+    for f in ("trajectory.png", "trajectory_axes.png", "trajectory.json"):
+        assert (tmp_path / f).stat().st_size > 0
+
+
+def test_cli_trajectory_bad_input_and_check(tmp_path, planar2_data):
+    import yaml
+    from typer.testing import CliRunner
+
+    from cdpr_design.cli import app
+
+    r = CliRunner()
+    res = r.invoke(app, ["trajectory", str(PLANAR2), "nope", "--out", str(tmp_path)])
+    assert res.exit_code == 2 and "square_fast" in res.output and "Traceback" not in res.output
+    res = r.invoke(app, ["trajectory", str(PLANAR2), "square_fast", "--cycle-time", "-1", "--out", str(tmp_path)])
+    assert res.exit_code == 2
+    data = dict(planar2_data)
+    data["trajectories"] = {
+        "drop": {"type": "polyline", "waypoints": [[0.75, 1.0], [0.75, 0.5]], "speed": 2.0, "acceleration": 15.0},
+        "fromfile": {"type": "csv", "file": "poses.csv", "speed": 0.5, "acceleration": 2.0},
+        "missing": {"type": "csv", "file": "nothere.csv", "speed": 0.5, "acceleration": 2.0},
+    }
+    p = tmp_path / "spec.yaml"
+    p.write_text(yaml.safe_dump(data))
+    (tmp_path / "poses.csv").write_text("x,y\n0.6,0.7\n0.9,0.7\n0.9,0.9\n")
+    res = r.invoke(app, ["trajectory", str(p), "drop", "--out", str(tmp_path / "o"), "--check", "--quiet"])
+    assert res.exit_code == 1
+    res = r.invoke(app, ["trajectory", str(p), "fromfile", "--out", str(tmp_path / "o"), "--json"])
+    assert res.exit_code == 0, res.output
+    res = r.invoke(app, ["trajectory", str(p), "missing", "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2 and "nothere.csv" in res.output
