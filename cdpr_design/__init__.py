@@ -4,18 +4,51 @@ The public Python API::
 
     import cdpr_design as cd
     design = cd.load("designs/planar2.yaml")
-    result = cd.workspace(design)            # WorkspaceResult
+    result = cd.run_workspace(design, kind="static")      # WorkspaceResult
+    pose = cd.evaluate_pose(design, [0.75, 0.75])          # tensions, margin, W
     lengths = cd.inverse_kinematics(design, [0.75, 0.75])
+    sizing = cd.size_motors(design, cd.load_catalogue())   # SizingResult
+    row = cd.evaluate(design)                              # design_report.csv figures
+
+Names are imported on first use, so ``import cdpr_design`` (and every
+command's start-up) stays fast: numba, scipy and cvxpy load only when needed.
 """
 
+from __future__ import annotations
+
+import importlib
+
 from .errors import CdprError, CheckFailed, InputError, SpecError
-from .kinematics import forward_kinematics, inverse_kinematics, structure_matrix
-from .model import Design
-from .spec import from_dict, load
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "CdprError", "CheckFailed", "Design", "InputError", "SpecError", "forward_kinematics",
-    "from_dict", "inverse_kinematics", "load", "structure_matrix", "__version__",
-]
+_LAZY = {
+    "Design": ("model", "Design"),
+    "load": ("spec", "load"),
+    "from_dict": ("spec", "from_dict"),
+    "load_catalogue": ("spec", "load_catalogue"),
+    "json_schema": ("spec", "json_schema"),
+    "inverse_kinematics": ("kinematics", "inverse_kinematics"),
+    "forward_kinematics": ("kinematics", "forward_kinematics"),
+    "structure_matrix": ("kinematics", "structure_matrix"),
+    "run_workspace": ("workspace", "run"),
+    "evaluate_pose": ("workspace", "evaluate_pose"),
+    "WorkspaceResult": ("workspace", "WorkspaceResult"),
+    "size_motors": ("sizing", "size_motors"),
+    "evaluate": ("evaluate", "evaluate"),
+}
+
+__all__ = ["CdprError", "CheckFailed", "InputError", "SpecError", "__version__", *_LAZY]
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        mod, attr = _LAZY[name]
+        value = getattr(importlib.import_module(f".{mod}", __name__), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(__all__)
