@@ -626,10 +626,11 @@ def solve_tensions(design: Design, W: np.ndarray, wreq: np.ndarray) -> np.ndarra
     """Cable tensions for many poses: W t = w_req, (k, n, m), (k, n) -> (k, m) [N].
 
     m = n: t = W^-1 w_req (the paper's eq. 6 solved directly), NaN where W is
-    singular.  m != n: the minimum 2-norm feasible distribution of
-    :mod:`cdpr_design.tension` when available, otherwise the least-squares
-    minimum-norm solution W^+ w_req (bounds not enforced; the feasibility
-    flag still checks them).
+    singular.  m > n: the minimum 2-norm tensions within the cable bounds,
+    min 1/2 |t|^2 s.t. W t = w_req, t_min <= t <= t_max (the compiled
+    active-set kernel ``_kernels.min_norm_tensions`` when present, else
+    scipy's SLSQP), NaN where the bounds admit none.  m < n: the
+    least-squares solution where it balances w_req exactly, else NaN.
     """
     k, n, m = W.shape
     t = np.full((k, m), np.nan)
@@ -640,9 +641,19 @@ def solve_tensions(design: Design, W: np.ndarray, wreq: np.ndarray) -> np.ndarra
         if np.any(ok):
             t[ok] = np.linalg.solve(W[ok], wreq[ok][:, :, None])[:, :, 0]
         return t
-    general = _general_solver()
-    if general is not None:
-        return general(design, W, wreq)
+    tmin, tmax = design.tension_min, design.tension_max
+    if m > n:
+        kern = _min_norm_kernel()
+        if kern is not None:
+            solve, scratch = kern
+            scr = scratch(n, m, 1)
+            out = np.empty(m)
+            for i in range(k):
+                Wi = np.ascontiguousarray(W[i])
+                if solve(Wi, np.ascontiguousarray(wreq[i]), tmin, tmax, out, scr):
+                    t[i] = out
+            return t
+        return _min_norm_slsqp(W, wreq, tmin, tmax)
     for i in range(k):
         sol, *_ = np.linalg.lstsq(W[i], wreq[i], rcond=None)
         if np.linalg.norm(W[i] @ sol - wreq[i]) <= 1e-8 * (1 + np.linalg.norm(wreq[i])):
@@ -650,14 +661,30 @@ def solve_tensions(design: Design, W: np.ndarray, wreq: np.ndarray) -> np.ndarra
     return t
 
 
-def _general_solver():
-    """The min-norm feasible tension solver for m != n, when the tension module provides one."""
-    try:
-        from . import tension  # noqa: F401  (written by another part of the project)
-    except Exception:
-        return None
-    fn = getattr(tension, "min_norm_many", None)
-    return fn if callable(fn) else None
+def _min_norm_kernel():
+    """(min_norm_tensions, make_scratch) of the compiled kernels, when they exist."""
+    from . import _kernels as K
+
+    f, s = getattr(K, "min_norm_tensions", None), getattr(K, "make_scratch", None)
+    return (f, s) if callable(f) and callable(s) else None
+
+
+def _min_norm_slsqp(W, wreq, tmin, tmax) -> np.ndarray:
+    """Slow reference: min |t|^2 s.t. W t = w, bounds, by SLSQP per pose (NaN where it fails)."""
+    from scipy.optimize import minimize
+
+    k, n, m = W.shape
+    t = np.full((k, m), np.nan)
+    for i in range(k):
+        x0 = np.clip(np.linalg.lstsq(W[i], wreq[i], rcond=None)[0], tmin, tmax)
+        res = minimize(lambda x: 0.5 * x @ x, x0, jac=lambda x: x, method="SLSQP",
+                       bounds=list(zip(tmin, tmax)),
+                       constraints=[{"type": "eq", "fun": lambda x, i=i: W[i] @ x - wreq[i],
+                                     "jac": lambda x, i=i: W[i]}],
+                       options={"ftol": 1e-12, "maxiter": 200})
+        if res.success and np.linalg.norm(W[i] @ res.x - wreq[i]) <= 1e-6 * (1 + np.linalg.norm(wreq[i])):
+            t[i] = res.x
+    return t
 
 
 def states(design: Design, pose, velocity, acceleration, *, time=None, external=None) -> dict:

@@ -315,3 +315,45 @@ def test_cli_trajectory_bad_input_and_check(tmp_path, planar2_data):
     assert res.exit_code == 0, res.output
     res = r.invoke(app, ["trajectory", str(p), "missing", "--out", str(tmp_path / "o")])
     assert res.exit_code == 2 and "nothere.csv" in res.output
+
+
+def redundant_4_cable():
+    """A planar 1R2T robot with 4 crossed cables (m = 4 > n = 3)."""
+    return spec.from_dict({
+        "name": "r4", "motion": "1R2T", "frame": {"lower": [0, 0], "upper": [2, 1.5]},
+        "effector": {"mass": 2.0, "size": [0.2, 0.1], "inertia": 0.0083},
+        "tension": [2.0, 100.0],
+        "cables": [{"name": "c1", "outlet": [0, 0], "attachment": [0.1, -0.05]},
+                   {"name": "c2", "outlet": [2, 0], "attachment": [-0.1, -0.05]},
+                   {"name": "c3", "outlet": [2, 1.5], "attachment": [0.1, 0.05]},
+                   {"name": "c4", "outlet": [0, 1.5], "attachment": [-0.1, 0.05]}],
+    })
+
+
+@pytest.mark.parametrize("path", ["kernel", "slsqp"])
+def test_redundant_robot_min_norm_tensions_against_cvxpy(monkeypatch, path):
+    """m > n: the trajectory's tensions are the bounded minimum 2-norm ones (W t = w_req with
+    inertia), checked against cvxpy pose by pose; both the compiled and the slow path."""
+    import cvxpy as cp
+
+    if path == "slsqp":
+        monkeypatch.setattr(tr, "_min_norm_kernel", lambda: None)
+    elif tr._min_norm_kernel() is None:
+        pytest.skip("the compiled min-norm kernel is not in _kernels yet")
+    d = redundant_4_cable()
+    traj = Trajectory(name="r", type="polyline", speed=0.5, acceleration=4.0,
+                      waypoints=((0.8, 0.6, 0.0), (1.2, 0.9, 0.2)))
+    s = tr.sample(d, traj, cycle_time=0.01)
+    st_ = tr.states(d, s.pose, s.velocity, s.acceleration, time=s.time)
+    assert s.all_feasible
+    for k in np.linspace(0, len(s) - 1, 12).astype(int):
+        W = st_["structure"][k]
+        w = W @ s.tensions[k]
+        x = cp.Variable(4)
+        cp.Problem(cp.Minimize(cp.sum_squares(x)), [W @ x == w, x >= d.tension_min, x <= d.tension_max]).solve()
+        np.testing.assert_allclose(s.tensions[k], x.value, atol=1e-4)
+        # and w is the required wrench with the effector's inertia
+        p, v, a = s.pose[k], s.velocity[k], s.acceleration[k]
+        w_req = kin.required_wrench(d, p) - kin.inertial_wrench(
+            d, p, a[:2], angular_velocity=[0, 0, v[2]], angular_acceleration=[0, 0, a[2]])
+        np.testing.assert_allclose(w, w_req, atol=1e-8)
