@@ -8,7 +8,7 @@ The public Python API::
     pose = cd.evaluate_pose(design, [0.75, 0.75])          # tensions, margin, W
     lengths = cd.inverse_kinematics(design, [0.75, 0.75])
     sizing = cd.size_motors(design, cd.load_catalogue())   # SizingResult
-    row = cd.evaluate(design)                              # design_report.csv figures
+    row = cd.evaluate_design(design)                       # design_report.csv figures
 
 Names are imported on first use, so ``import cdpr_design`` (and every
 command's start-up) stays fast: numba, scipy and cvxpy load only when needed.
@@ -35,7 +35,7 @@ _LAZY = {
     "evaluate_pose": ("workspace", "evaluate_pose"),
     "WorkspaceResult": ("workspace", "WorkspaceResult"),
     "size_motors": ("sizing", "size_motors"),
-    "evaluate": ("evaluate", "evaluate"),
+    "evaluate_design": ("evaluate", "evaluate"),
 }
 
 __all__ = ["CdprError", "CheckFailed", "InputError", "SpecError", "__version__", *_LAZY]
@@ -52,3 +52,4 @@ def __getattr__(name):
 
 def __dir__():
     return sorted(__all__)
+

@@ -136,3 +136,15 @@ def test_python_dash_m(tmp_path):
     res = subprocess.run([sys.executable, "-m", "cdpr_design", "pose", str(tmp_path / "missing.yaml"),
                           "--at", "1,1"], capture_output=True, text=True, timeout=120)
     assert res.returncode == 2 and "Traceback" not in res.stderr and "no such file" in res.stderr
+
+
+def test_lazy_api_never_shadows_a_module():
+    """``from . import evaluate`` must find the module, not a lazily bound function."""
+    from pathlib import Path
+
+    import cdpr_design
+
+    modules = {p.stem for p in Path(cdpr_design.__file__).parent.glob("*.py")}
+    assert not set(cdpr_design._LAZY) & modules
+    for name in cdpr_design._LAZY:
+        assert getattr(cdpr_design, name) is not None
