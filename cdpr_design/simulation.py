@@ -238,6 +238,12 @@ class Simulator:
         self.time = 0.0
         tmax = np.asarray(design.tension_max, float)
         self._t_cap = np.where(np.isfinite(tmax), tmax, 1e6)
+        # per-step constants: kv = 2 zeta sqrt(k m), so kv / k = 2 zeta sqrt(m) / sqrt(k)
+        self._kv_per_sqrt_k = 2.0 * self.cable_damping * np.sqrt(design.effector.mass)
+        self._decay = None if np.isinf(self.servo_bandwidth) else float(np.exp(-self.servo_bandwidth * self.timestep))
+        self._gainprm = self.model.actuator_gainprm
+        self._ff_cache = None
+        self._biasprm = self.model.actuator_biasprm
 
     # ------------------------------------------------------------------
     # set-up
@@ -304,8 +310,13 @@ class Simulator:
                 damp[3:] = 4.0 * mass * arm * arm
             self.model.dof_damping[:] = np.maximum(damp, self.joint_damping)
             steps = int(np.ceil(settle / self.timestep))
-            for _ in range(steps):
+            min_steps = int(np.ceil(0.2 / self.timestep))
+            for j in range(steps):
                 self._step()
+                # at rest: stop early (velocities below 1 um/s, 1 urad/s)
+                if j >= min_steps and j % 50 == 0 and np.max(np.abs(self.data.qvel)) < 1e-6:
+                    break
+            self._check_stable()
             self.model.dof_damping[:] = self.joint_damping
             self.data.qvel[:] = 0.0
             mujoco.mj_forward(self.model, self.data)
@@ -328,30 +339,33 @@ class Simulator:
     def _step(self) -> None:
         dt = self.timestep
         e, r = self._reference(self.time)
-        wc = self.servo_bandwidth
-        vff = e.vel if self.feedforward else 0.0
-        # exact discretisation of dq/dt = vff + wc (r(t) - q) with r a ramp of slope vff
-        if np.isinf(wc):
+        # exact discretisation of dq/dt = vff + wc (r(t) - q) with r a ramp of slope e.vel
+        if self._decay is None:  # infinite bandwidth: the axis is the set-point
             q_new = r + e.vel * dt
         else:
-            a = np.exp(-wc * dt)
-            r_end = r + (e.vel * dt)
-            q_new = r_end + (self.q - r) * a - (e.vel - vff) * (1 - a) / wc
+            a = self._decay
+            q_new = r + e.vel * dt + (self.q - r) * a
+            if not self.feedforward:
+                q_new -= e.vel * ((1 - a) / self.servo_bandwidth)
         self.qdot = (q_new - self.q) / dt
         self.q = q_new
-        k = self.EA / np.maximum(self.q, 1e-6)
-        kv = 2.0 * self.cable_damping * np.sqrt(k * self.design.effector.mass)
-        mdl = self.model
-        mdl.actuator_gainprm[:, 0] = k
-        mdl.actuator_biasprm[:, 1] = -k
-        mdl.actuator_biasprm[:, 2] = -kv
-        stretch = e.tension / k if self.compensate_stretch else 0.0
-        self.data.ctrl[:] = self.q - stretch + kv / k * self.qdot
-        mujoco.mj_step(mdl, self.data)
+        k = self.EA / np.maximum(q_new, 1e-6)
+        c = self._kv_per_sqrt_k / np.sqrt(k)  # kv / k
+        gp, bp = self._gainprm, self._biasprm
+        gp[:, 0] = k
+        bp[:, 1] = -k
+        bp[:, 2] = -c * k
+        ctrl = q_new + c * self.qdot
+        if self.compensate_stretch:
+            ctrl -= e.tension / k
+        self.data.ctrl[:] = ctrl
+        mujoco.mj_step(self.model, self.data)
         self.time += dt
+
+    def _check_stable(self) -> None:
         if self._unstable():
             raise SimulationError(
-                f"the simulation became unstable at t = {self.time:.4g} s (MuJoCo reset it); "
+                f"the simulation became unstable near t = {self.time:.4g} s (MuJoCo reset it); "
                 "use a smaller timestep or check the set-points")
 
     def _unstable(self) -> bool:
@@ -406,9 +420,20 @@ class Simulator:
         steps = max(int(round(duration / self.timestep)), 0)
         for _ in range(steps):
             self._step()
+        self._check_stable()
         return self.state()
 
     def _tension_for_lengths(self, lengths) -> np.ndarray:
+        # the expected tension changes by ~0.1 N per mm of motion, i.e. nanometres of
+        # stretch: recompute (forward kinematics + statics) only after 1 mm of set-point change
+        cache = self._ff_cache
+        if cache is not None and np.max(np.abs(lengths - cache[0])) < 1e-3:
+            return cache[1]
+        T = self._tension_for_lengths_uncached(lengths)
+        self._ff_cache = (np.array(lengths, float), T)
+        return T
+
+    def _tension_for_lengths_uncached(self, lengths) -> np.ndarray:
         try:
             guess = self.state().pose
             fk = kin.forward_kinematics(self.design, lengths, guess=guess)
