@@ -576,3 +576,391 @@ def chunk_stats(feasible, margin, tensions, count, tpeak):
                 if t > tpeak[i]:
                     tpeak[i] = t
     return nf, mmin, mmax
+
+
+# ----------------------------------------------------------------------------
+# Real hardware geometry: swivel pulleys and interference
+# (conventions in cdpr_design/pulley.py and cdpr_design/interference.py)
+# ----------------------------------------------------------------------------
+
+#: Bits of the interference mask returned by :func:`interference_pose`.
+HIT_CABLE_CABLE = 1
+HIT_CABLE_EFFECTOR = 2
+HIT_EFFECTOR_FRAME = 4
+HIT_CABLE_FRAME = 8
+
+
+@njit
+def pulley_exit(A, i, k, eref, r, bx, by, bz, C):
+    """Swivel pulley of cable i: tangent point into ``C[i]``; returns (total, free) length [m].
+
+    ``A`` (m, 3) swivel points, ``k`` (m, 3) unit swivel axes (from the winch
+    into the pulley), ``eref`` (m, 3) unit reference perpendiculars (used when
+    the attachment B is on the axis), ``r`` the radius [m].  The cable wraps
+    beta = pi - theta_C with theta_C = atan2(z, x) + arccos(r / D) in the
+    pulley plane (cdpr_design/pulley.py; Pott 2018, pulley kinematics);
+    total length r beta + |B - C|.  Returns (NaN, NaN) when B is inside the
+    pulley circle.
+    """
+    ax, ay, az = A[i, 0], A[i, 1], A[i, 2]
+    dx, dy, dz = bx - ax, by - ay, bz - az
+    kx, ky, kz = k[i, 0], k[i, 1], k[i, 2]
+    za = dx * kx + dy * ky + dz * kz
+    rx, ry, rz = dx - za * kx, dy - za * ky, dz - za * kz
+    s = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if r <= 0.0:
+        C[i, 0], C[i, 1], C[i, 2] = ax, ay, az
+        d = math.sqrt(dx * dx + dy * dy + dz * dz)
+        return d, d
+    if s <= 1e-12:
+        ex, ey, ez = eref[i, 0], eref[i, 1], eref[i, 2]
+    else:
+        ex, ey, ez = rx / s, ry / s, rz / s
+    x = s - r
+    D = math.sqrt(x * x + za * za)
+    if D < r * (1.0 - 1e-12):
+        C[i, 0], C[i, 1], C[i, 2] = ax, ay, az
+        return np.nan, np.nan
+    theta = math.atan2(za, x) + math.acos(min(1.0, r / D))
+    beta = math.pi - theta
+    if beta < 0.0:
+        # the attachment lies ahead along +k: the cable does not touch the pulley
+        C[i, 0], C[i, 1], C[i, 2] = ax, ay, az
+        d = math.sqrt(dx * dx + dy * dy + dz * dz)
+        return d, d
+    c, sn = math.cos(theta), math.sin(theta)
+    cx = ax + r * ex + r * (c * ex + sn * kx)
+    cy = ay + r * ey + r * (c * ey + sn * ky)
+    cz = az + r * ez + r * (c * ez + sn * kz)
+    C[i, 0], C[i, 1], C[i, 2] = cx, cy, cz
+    fx, fy, fz = bx - cx, by - cy, bz - cz
+    free = math.sqrt(fx * fx + fy * fy + fz * fz)
+    return r * beta + free, free
+
+
+@njit
+def structure_matrix_pulley(px, py, pz, Rb, A, K, Eref, rad, rows, W, L, C):
+    """:func:`structure_matrix` with swivel-pulley outlets.
+
+    Fills ``W`` (n, m), total lengths ``L`` (m) [m] (arc + free segment) and
+    the true outlet points ``C`` (m, 3) [m] (pulley tangent points; a_i where
+    ``rad[i]`` = 0).  Column i is [u_i ; (R b_i) x u_i], u_i the unit vector
+    from the attachment to C_i.  Returns False when a free segment has zero
+    length or an attachment is inside a pulley circle (that column is zero).
+    """
+    m = A.shape[0]
+    n = rows.shape[0]
+    ok = True
+    for i in range(m):
+        bx = px + Rb[i, 0]
+        by = py + Rb[i, 1]
+        bz = pz + Rb[i, 2]
+        li, free = pulley_exit(A, i, K, Eref, rad[i], bx, by, bz, C)
+        L[i] = li
+        if not (free > 1e-12):
+            ok = False
+            for kk in range(n):
+                W[kk, i] = 0.0
+            continue
+        ux = (C[i, 0] - bx) / free
+        uy = (C[i, 1] - by) / free
+        uz = (C[i, 2] - bz) / free
+        rbx, rby, rbz = Rb[i, 0], Rb[i, 1], Rb[i, 2]
+        for kk in range(n):
+            r = rows[kk]
+            if r == 0:
+                W[kk, i] = ux
+            elif r == 1:
+                W[kk, i] = uy
+            elif r == 2:
+                W[kk, i] = uz
+            elif r == 3:
+                W[kk, i] = rby * uz - rbz * uy
+            elif r == 4:
+                W[kk, i] = rbz * ux - rbx * uz
+            else:
+                W[kk, i] = rbx * uy - rby * ux
+    return ok
+
+
+@njit
+def _clamp01(v):
+    return 0.0 if v < 0.0 else (1.0 if v > 1.0 else v)
+
+
+@njit
+def seg_seg_dist2(p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z):
+    """Squared minimum distance [m^2] between segments [p0, p1] and [q0, q1].
+
+    Closest points of two segments (Ericson, "Real-Time Collision Detection",
+    2005, sec. 5.1.9): the unconstrained line-line parameters, clamped to
+    [0, 1] one after the other; degenerate (point) segments handled.
+    """
+    d1x, d1y, d1z = p1x - p0x, p1y - p0y, p1z - p0z
+    d2x, d2y, d2z = q1x - q0x, q1y - q0y, q1z - q0z
+    rx, ry, rz = p0x - q0x, p0y - q0y, p0z - q0z
+    a = d1x * d1x + d1y * d1y + d1z * d1z
+    e = d2x * d2x + d2y * d2y + d2z * d2z
+    f = d2x * rx + d2y * ry + d2z * rz
+    eps = 1e-300
+    if a <= eps and e <= eps:
+        return rx * rx + ry * ry + rz * rz
+    if a <= eps:
+        s = 0.0
+        t = _clamp01(f / e)
+    else:
+        c = d1x * rx + d1y * ry + d1z * rz
+        if e <= eps:
+            t = 0.0
+            s = _clamp01(-c / a)
+        else:
+            b = d1x * d2x + d1y * d2y + d1z * d2z
+            denom = a * e - b * b
+            s = _clamp01((b * f - c * e) / denom) if denom > 1e-14 * a * e else 0.0
+            t = (b * s + f) / e
+            if t < 0.0:
+                t = 0.0
+                s = _clamp01(-c / a)
+            elif t > 1.0:
+                t = 1.0
+                s = _clamp01((b - c) / a)
+    dx = rx + d1x * s - d2x * t
+    dy = ry + d1y * s - d2y * t
+    dz = rz + d1z * s - d2z * t
+    return dx * dx + dy * dy + dz * dz
+
+
+@njit
+def _pt_seg_dist2(x, y, z, ax, ay, az, bx, by, bz):
+    return seg_seg_dist2(x, y, z, x, y, z, ax, ay, az, bx, by, bz)
+
+
+@njit
+def cable_cable_dist(S0, S1, i, j, tol):
+    """Distance [m] between the free segments of cables i and j (S0 attachments, S1 exits).
+
+    Cables that share an endpoint (attachment or outlet within ``tol``) touch
+    there by construction: for them the distance is that of the far
+    endpoints to the other segment (zero only when they run along each other).
+    """
+    sa = (abs(S0[i, 0] - S0[j, 0]) <= tol and abs(S0[i, 1] - S0[j, 1]) <= tol
+          and abs(S0[i, 2] - S0[j, 2]) <= tol)
+    sb = (abs(S1[i, 0] - S1[j, 0]) <= tol and abs(S1[i, 1] - S1[j, 1]) <= tol
+          and abs(S1[i, 2] - S1[j, 2]) <= tol)
+    if sa or sb:
+        if sa and sb:
+            return 0.0
+        F = S1 if sa else S0  # the far (non-shared) ends
+        d1 = _pt_seg_dist2(F[i, 0], F[i, 1], F[i, 2], S0[j, 0], S0[j, 1], S0[j, 2],
+                           S1[j, 0], S1[j, 1], S1[j, 2])
+        d2 = _pt_seg_dist2(F[j, 0], F[j, 1], F[j, 2], S0[i, 0], S0[i, 1], S0[i, 2],
+                           S1[i, 0], S1[i, 1], S1[i, 2])
+        return math.sqrt(min(d1, d2))
+    return math.sqrt(seg_seg_dist2(S0[i, 0], S0[i, 1], S0[i, 2], S1[i, 0], S1[i, 1], S1[i, 2],
+                                   S0[j, 0], S0[j, 1], S0[j, 2], S1[j, 0], S1[j, 1], S1[j, 2]))
+
+
+@njit
+def segment_box_chord(s0, s1, half, dim, shrink):
+    """Length [m] of the part of segment [s0, s1] inside the open box |x_k| < half_k - shrink.
+
+    Slab clipping (Kay & Kajiya 1986) over the first ``dim`` axes; the box
+    is centred at the origin (platform coordinates).  0 when they do not meet.
+    """
+    t0 = 0.0
+    t1 = 1.0
+    seg2 = 0.0
+    for ax in range(dim):
+        h = half[ax] - shrink
+        if h <= 0.0:
+            return 0.0
+        a = s0[ax]
+        d = s1[ax] - a
+        seg2 += d * d
+        if abs(d) <= 1e-300:
+            if a <= -h or a >= h:
+                return 0.0
+            continue
+        ta = (-h - a) / d
+        tb = (h - a) / d
+        if ta > tb:
+            ta, tb = tb, ta
+        if ta > t0:
+            t0 = ta
+        if tb < t1:
+            t1 = tb
+        if t0 >= t1:
+            return 0.0
+    for ax in range(dim, 3):
+        d = s1[ax] - s0[ax]
+        seg2 += d * d
+    return (t1 - t0) * math.sqrt(seg2)
+
+
+@njit
+def cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1):
+    """Length [m] of cable i's free segment inside the effector box, its own attachment excepted.
+
+    ``Bp`` (m, 3) attachments in platform coordinates, ``cp`` (3,) the outlet
+    point in platform coordinates.  An attachment inside the box (or on its
+    surface within ``tol``) is first moved to the nearest face: the cable
+    leaves from the surface there, and collides when it then runs through
+    the box's interior (shrunk by ``tol``).  ``s0``, ``s1`` are scratch (3,).
+    """
+    inside = True
+    best = np.inf
+    bk = 0
+    for ax in range(dim):
+        dep = half[ax] - abs(Bp[i, ax])
+        if dep < -tol:
+            inside = False
+        if dep < best:
+            best = dep
+            bk = ax
+    for ax in range(3):
+        s0[ax] = Bp[i, ax]
+        s1[ax] = cp[ax]
+    if inside:
+        s0[bk] = half[bk] if Bp[i, bk] >= 0.0 else -half[bk]
+    return segment_box_chord(s0, s1, half, dim, tol)
+
+
+@njit
+def interference_pose(S0, S1, Bp, R, px, py, pz, half, rho, flo, fhi, dim, tol, full, hits,
+                      s0, s1, cp):
+    """Interference at one pose; returns a bit mask (0: collision free).
+
+    Parameters
+    ----------
+    S0 : (m, 3) attachment points p + R b_i in the frame [m].
+    S1 : (m, 3) true outlet points (pulley tangent points or a_i) [m].
+    Bp : (m, 3) attachments b_i in platform coordinates [m].
+    R : (3, 3) platform rotation; (px, py, pz) platform origin [m].
+    half : (3,) half extents of the effector box [m] (centred on the origin).
+    rho : (m,) cable radii (diameter / 2) [m].
+    flo, fhi : (3,) frame box [m].
+    dim : 2 (planar: only x, y are checked) or 3.
+    tol : geometric tolerance [m].
+    full : when False, return at the first collision found.
+    hits : (m + 2, m + 2) uint8, set to 1 for each colliding pair when
+        ``full`` (index m = effector, m + 1 = frame); untouched otherwise.
+    s0, s1, cp : (3,) scratch.
+
+    Bits: HIT_CABLE_CABLE (free segments closer than the sum of the cable
+    radii, touching included), HIT_CABLE_EFFECTOR (a free segment through
+    the effector box other than at its own attachment), HIT_EFFECTOR_FRAME
+    (an effector box corner outside the frame box), HIT_CABLE_FRAME (an
+    attachment point outside the frame box: the free cable leaves the frame).
+    """
+    m = S0.shape[0]
+    mask = 0
+    # effector - frame: every box corner inside the frame box
+    ncorner = 4 if dim == 2 else 8
+    for c in range(ncorner):
+        sx = half[0] if (c & 1) else -half[0]
+        sy = half[1] if (c & 2) else -half[1]
+        sz = half[2] if (c & 4) else -half[2]
+        if dim == 2:
+            sz = 0.0
+        vx = px + R[0, 0] * sx + R[0, 1] * sy + R[0, 2] * sz
+        vy = py + R[1, 0] * sx + R[1, 1] * sy + R[1, 2] * sz
+        vz = pz + R[2, 0] * sx + R[2, 1] * sy + R[2, 2] * sz
+        out = vx < flo[0] - tol or vx > fhi[0] + tol or vy < flo[1] - tol or vy > fhi[1] + tol
+        if dim == 3:
+            out = out or vz < flo[2] - tol or vz > fhi[2] + tol
+        if out:
+            mask |= HIT_EFFECTOR_FRAME
+            if full:
+                hits[m, m + 1] = 1
+                hits[m + 1, m] = 1
+            else:
+                return mask
+            break
+    for i in range(m):
+        # cable - frame: the attachment point (the free segment's end) outside the frame
+        out = (S0[i, 0] < flo[0] - tol or S0[i, 0] > fhi[0] + tol
+               or S0[i, 1] < flo[1] - tol or S0[i, 1] > fhi[1] + tol)
+        if dim == 3:
+            out = out or S0[i, 2] < flo[2] - tol or S0[i, 2] > fhi[2] + tol
+        if out:
+            mask |= HIT_CABLE_FRAME
+            if not full:
+                return mask
+            hits[i, m + 1] = 1
+            hits[m + 1, i] = 1
+        # cable - effector, in platform coordinates: cp = R^T (C_i - p)
+        dx, dy, dz = S1[i, 0] - px, S1[i, 1] - py, S1[i, 2] - pz
+        for r in range(3):
+            cp[r] = R[0, r] * dx + R[1, r] * dy + R[2, r] * dz
+        if cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1) > tol:
+            mask |= HIT_CABLE_EFFECTOR
+            if not full:
+                return mask
+            hits[i, m] = 1
+            hits[m, i] = 1
+    for i in range(m):
+        for j in range(i + 1, m):
+            if cable_cable_dist(S0, S1, i, j, tol) <= rho[i] + rho[j] + tol:
+                mask |= HIT_CABLE_CABLE
+                if not full:
+                    return mask
+                hits[i, j] = 1
+                hits[j, i] = 1
+    return mask
+
+
+@njit_parallel
+def sweep_points(P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
+                 check, Bp, half, rho, flo, fhi, dim, tol, full,
+                 feasible, margin, tensions, lengths, cmask):
+    """Evaluate explicit positions ``P`` (count, 3) at one orientation, pulley- and interference-aware.
+
+    Same outputs as :func:`sweep_grid` for rows 0..count-1 (statics only:
+    ``feasible`` does not include interference), plus ``cmask`` (uint8): the
+    :func:`interference_pose` bits when ``check`` (0 when not checked).
+    Outlets with ``rad[i]`` > 0 are swivel pulleys (:func:`structure_matrix_pulley`).
+    """
+    count = P.shape[0]
+    n = rows.shape[0]
+    m = A.shape[0]
+    nblocks = min(count, 256)
+    if nblocks == 0:
+        return
+    bsize = (count + nblocks - 1) // nblocks
+    for b in nb.prange(nblocks):
+        W = np.empty((n, m))
+        t = np.empty(m)
+        L = np.empty(m)
+        C = np.empty((m, 3))
+        S0 = np.empty((m, 3))
+        hits = np.zeros((m + 2, m + 2), dtype=np.uint8)
+        s0 = np.empty(3)
+        s1 = np.empty(3)
+        cp = np.empty(3)
+        k0 = b * bsize
+        k1 = min(count, k0 + bsize)
+        for k in range(k0, k1):
+            px, py, pz = P[k, 0], P[k, 1], P[k, 2]
+            ok = structure_matrix_pulley(px, py, pz, Rb, A, K, Eref, rad, rows, W, L, C)
+            for i in range(m):
+                lengths[k, i] = L[i]
+            if check:
+                for i in range(m):
+                    S0[i, 0] = px + Rb[i, 0]
+                    S0[i, 1] = py + Rb[i, 1]
+                    S0[i, 2] = pz + Rb[i, 2]
+                cmask[k] = interference_pose(S0, C, Bp, R, px, py, pz, half, rho, flo, fhi, dim,
+                                             tol, full, hits, s0, s1, cp)
+            else:
+                cmask[k] = 0
+            if not ok:
+                feasible[k] = 0
+                margin[k] = np.nan
+                for i in range(m):
+                    tensions[k, i] = np.nan
+                continue
+            f, mg = eval_pose(W, wreq, tmin, tmax, combos, kind, t)
+            feasible[k] = 1 if f else 0
+            margin[k] = mg
+            for i in range(m):
+                tensions[k, i] = t[i]

@@ -54,6 +54,15 @@ class CableGeometry:
         R b_i, the attachment points relative to the platform origin [m].
     anchors : (m, 3) array
         p + R b_i, the attachment points in the frame [m].
+    exits : (m, 3) array or None
+        Where each free cable really leaves the frame [m]: the swivel-pulley
+        tangent point C_i (:mod:`cdpr_design.pulley`), a_i for a point outlet.
+    wrap : (m,) array or None
+        Wrap angle on the pulley [rad] (0 for a point outlet).
+
+    With a swivel pulley, ``vectors`` is the free segment C_i - (p + R b_i),
+    ``lengths`` the total length r beta + |free segment| the winch sees and
+    ``directions`` the free segment's unit vector.
     """
 
     vectors: np.ndarray
@@ -61,20 +70,67 @@ class CableGeometry:
     directions: np.ndarray
     attachments: np.ndarray
     anchors: np.ndarray
+    exits: np.ndarray | None = None
+    wrap: np.ndarray | None = None
+
+
+def has_pulleys(design: Design) -> bool:
+    """True when any cable has a swivel pulley of positive radius."""
+    return any(c.pulley is not None and c.pulley.radius > 0 for c in design.cables)
+
+
+def outlet_points(design: Design, anchors: np.ndarray):
+    """True outlet points, total lengths and wrap angles for attachment points.
+
+    ``anchors`` is (k, m, 3) (or (m, 3)) attachment points in the frame [m].
+    Returns (exits (k, m, 3), lengths (k, m), wrap (k, m)); cables without a
+    pulley leave at a_i with length |a_i - anchor|.
+    """
+    from . import pulley as pl
+
+    anc = np.asarray(anchors, float)
+    squeeze = anc.ndim == 2
+    anc = anc[None] if squeeze else anc
+    A = design.outlets
+    exits = np.broadcast_to(A[None], anc.shape).copy()
+    L = np.linalg.norm(A[None] - anc, axis=2)
+    wrap = np.zeros(L.shape)
+    for i, c in enumerate(design.cables):
+        if c.pulley is None or c.pulley.radius <= 0:
+            continue
+        g = pl.outlet_geometry(A[i], c.pulley.axis, c.pulley.radius, anc[:, i, :])
+        exits[:, i] = g.exits
+        L[:, i] = g.lengths
+        wrap[:, i] = g.wrap
+    if squeeze:
+        return exits[0], L[0], wrap[0]
+    return exits, L, wrap
 
 
 def cable_geometry(design: Design, pose) -> CableGeometry:
-    """Inverse kinematics of one pose: vectors, lengths and directions of every cable."""
+    """Inverse kinematics of one pose: vectors, lengths and directions of every cable.
+
+    Point outlets: l_i = a_i - (p + R b_i) (paper eq. 1-3).  Swivel pulleys
+    (``cables[i].pulley``): the free segment from the attachment to the
+    pulley's tangent point and the total length arc + free segment
+    (:mod:`cdpr_design.pulley`).
+    """
     full = design.full_pose(pose)
     R = rotation_matrix(*full[3:])
     Rb = design.attachments @ R.T
     anchors = full[:3] + Rb
-    vec = design.outlets - anchors
-    L = np.linalg.norm(vec, axis=1)
+    if has_pulleys(design):
+        exits, L, wrap = outlet_points(design, anchors)
+        vec = exits - anchors
+        free = np.linalg.norm(vec, axis=1)
+    else:
+        exits, wrap = design.outlets, np.zeros(design.m)
+        vec = design.outlets - anchors
+        L = free = np.linalg.norm(vec, axis=1)
     with np.errstate(invalid="ignore", divide="ignore"):
-        u = vec / L[:, None]
-    u[L <= 1e-12] = np.nan
-    return CableGeometry(vec, L, u, Rb, anchors)
+        u = vec / free[:, None]
+    u[~(free > 1e-12)] = np.nan
+    return CableGeometry(vec, L, u, Rb, anchors, exits, wrap)
 
 
 def inverse_kinematics(design: Design, pose) -> np.ndarray:
@@ -90,6 +146,8 @@ def lengths_many(design: Design, poses) -> np.ndarray:
     A, B = design.outlets, design.attachments
     if not design.motion.rotational:
         Rb = B  # orientation fixed at identity
+        if has_pulleys(design):
+            return outlet_points(design, full[:, None, :3] + Rb[None, :, :])[1]
         vec = A[None, :, :] - full[:, None, :3] - Rb[None, :, :]
     else:
         out = np.empty((poses.shape[0], design.m))
@@ -162,7 +220,10 @@ def length_rates(design: Design, pose, velocity) -> np.ndarray:
 
     dL_i/dt = -u_i . (v + omega x R b_i) = -W_full[:, i] . [v; omega].
     For the rotational motions the angular velocity is taken as the rates of
-    the pose angles mapped through the xyz Euler kinematics.
+    the pose angles mapped through the xyz Euler kinematics.  With swivel
+    pulleys u_i is the free segment's direction: the arc + free length has
+    gradient -u_i with respect to the attachment point (the tangent point
+    moves along the pulley without changing the length to first order).
     """
     mot = design.motion
     g = cable_geometry(design, pose)
@@ -232,7 +293,8 @@ def forward_kinematics(design: Design, lengths, guess=None, tol: float = 1e-12) 
     Closed form for a 2T design with two cables (paper eq. 4-5); otherwise a
     Levenberg-Marquardt solve of the length residuals |a_i - p - R b_i| - L_i
     from ``guess`` (default: the centre of the workspace grid at the fixed
-    orientation).  Under-constrained robots (m < n) have a family of poses:
+    orientation).  With swivel pulleys the residuals use the pulley-aware
+    lengths (arc + free segment), so FK inverts :func:`inverse_kinematics`.  Under-constrained robots (m < n) have a family of poses:
     the one found depends on the guess.  ``residual`` is the 2-norm of the
     length residuals [m].
     """
@@ -244,9 +306,11 @@ def forward_kinematics(design: Design, lengths, guess=None, tol: float = 1e-12) 
     mot = design.motion
     if mot.name == "2T" and design.m == 2:
         p = planar2_closed_form(design, lengths)
-        if p is not None:
+        if p is not None and not has_pulleys(design):
             res = float(np.linalg.norm(inverse_kinematics(design, p) - lengths))
             return FKResult(np.asarray(p, float), res, "closed-form")
+        if p is not None and guess is None:
+            guess = p  # the point-outlet solution starts the pulley-aware solve
     if guess is None:
         grid = design.workspace.grid
         centre = [(lo + hi) / 2 for lo, hi in zip(grid.lower, grid.upper)]

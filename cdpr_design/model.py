@@ -205,10 +205,30 @@ class WrenchBox:
 
 
 @dataclass(frozen=True)
+class OrientationSet:
+    """``workspace.orientation_set``: sampled box of orientations (rotation coords [rad])."""
+
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+    count: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class OrientationRange:
+    """``workspace.orientation_range``: nested boxes nominal +- (k/levels) max [rad]."""
+
+    max: tuple[float, ...]
+    levels: int = 10
+    count: int = 3
+
+
+@dataclass(frozen=True)
 class WorkspaceSpec:
     grid: Grid
     orientation: tuple[float, ...] = ()
     external_wrench: WrenchBox | None = None
+    orientation_set: OrientationSet | None = None
+    orientation_range: OrientationRange | None = None
 
 
 @dataclass(frozen=True)

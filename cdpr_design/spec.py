@@ -26,7 +26,7 @@ from pydantic.types import FiniteFloat
 
 from .errors import SpecError
 from .model import (  # noqa: I001
-    MOTIONS, Cable, CableProps, Design, Effector, Grid, Plc, Pulley, Requirements,
+    MOTIONS, Cable, CableProps, Design, Effector, Grid, OrientationRange, OrientationSet, Plc, Pulley, Requirements,
     Trajectory, Winch, WorkspaceSpec, WrenchBox, pad3,
 )
 
@@ -107,10 +107,28 @@ class BoxSpec(_Strict):
     upper: Vec
 
 
+class OrientationSetSpec(_Strict):
+    lower: Vec = Field(description="Lowest orientation, rotation coordinates [rad]")
+    upper: Vec = Field(description="Highest orientation, rotation coordinates [rad]")
+    count: Annotated[list[Annotated[int, Field(ge=1)]], BeforeValidator(_as_list)] = Field(
+        [5], description="Samples per coordinate (both ends included): a scalar or one per coordinate")
+
+
+class OrientationRangeSpec(_Strict):
+    max: Annotated[list[NonNegFloat], BeforeValidator(_as_list)] = Field(
+        description="Largest half-width tested around workspace.orientation [rad]: a scalar or one per coordinate (0: held)")
+    levels: Annotated[int, Field(ge=1)] = Field(10, description="Nested boxes tested (half-width k/levels * max)")
+    count: Annotated[int, Field(ge=2)] = Field(3, description="Samples per coordinate of each box (both ends included)")
+
+
 class WorkspaceSpecModel(_Strict):
     grid: GridSpec | None = None
     orientation: Vec | None = None
     external_wrench: BoxSpec | None = None
+    orientation_set: OrientationSetSpec | None = Field(
+        None, description="Total orientation workspace: feasible for every orientation of this sampled box")
+    orientation_range: OrientationRangeSpec | None = Field(
+        None, description="Orientation range per position around workspace.orientation")
 
 
 class RequirementsSpec(_Strict):
@@ -340,6 +358,9 @@ def _check_semantics(s: DesignSpec) -> list[tuple[str, str]]:
                 p.append((f"{base}.pulley.axis", f"expected 3 numbers, got {len(c.pulley.axis)}"))
             elif np.linalg.norm(c.pulley.axis) == 0:
                 p.append((f"{base}.pulley.axis", "expected a non-zero vector"))
+            elif d == 2 and c.pulley.radius > 0 and c.pulley.axis[2] != 0:
+                p.append((f"{base}.pulley.axis", "a planar design needs a swivel axis in the x-y plane "
+                          f"(z = 0; the direction the cable runs into the pulley), got {list(c.pulley.axis)}"))
     for path, w in [("winch", s.winch)] + [(f"cables[{i}].winch", c.winch) for i, c in enumerate(s.cables)]:
         if w is not None and w.motor is not None and not w.motor.strip():
             p.append((f"{path}.motor", "expected a motor name, got an empty string"))
@@ -361,6 +382,28 @@ def _check_semantics(s: DesignSpec) -> list[tuple[str, str]]:
                 p.append(("workspace.orientation", f"motion {s.motion} has a fixed orientation: remove this key"))
             else:
                 p.append(("workspace.orientation", f"expected {nrot} numbers ({', '.join(mot.rotation_coords)}) for motion {s.motion}, got {len(ws.orientation)}"))
+        for key in ("orientation_set", "orientation_range"):
+            o = getattr(ws, key)
+            if o is None:
+                continue
+            if nrot == 0:
+                p.append((f"workspace.{key}", f"motion {s.motion} has a fixed orientation: remove this key"))
+                continue
+            what = f"numbers ({', '.join(mot.rotation_coords)}) for motion {s.motion}"
+            if key == "orientation_set":
+                a = _vec(p, "workspace.orientation_set.lower", o.lower, nrot, what)
+                b = _vec(p, "workspace.orientation_set.upper", o.upper, nrot, what)
+                if len(o.count) not in (1, nrot):
+                    p.append(("workspace.orientation_set.count", f"expected a scalar or {nrot} counts, got {len(o.count)}"))
+                if a and b:
+                    for k, (lo, hi) in enumerate(zip(o.lower, o.upper)):
+                        if lo > hi:
+                            p.append((f"workspace.orientation_set.upper[{k}]", f"expected a value >= lower[{k}] = {lo}, got {hi}"))
+            else:
+                if len(o.max) not in (1, nrot):
+                    p.append(("workspace.orientation_range.max", f"expected a scalar or {nrot} {what}, got {len(o.max)}"))
+                elif not any(v > 0 for v in o.max):
+                    p.append(("workspace.orientation_range.max", "expected at least one positive half-width"))
         if ws.external_wrench is not None:
             n = mot.n
             names = ", ".join(mot.wrench_names)
@@ -516,7 +559,18 @@ def build(s: DesignSpec, raw: dict | None = None, source: str | None = None) -> 
     if ws.external_wrench is not None:
         ext = WrenchBox(tuple(ws.external_wrench.lower), tuple(ws.external_wrench.upper))
     ori = tuple(ws.orientation) if ws.orientation is not None else (0.0,) * len(mot.rotation_coords)
-    wspec = WorkspaceSpec(grid=grid, orientation=ori, external_wrench=ext)
+    oset = orng = None
+    nrot = len(mot.rotation_coords)
+    if ws.orientation_set is not None:
+        cnt = list(ws.orientation_set.count)
+        oset = OrientationSet(tuple(ws.orientation_set.lower), tuple(ws.orientation_set.upper),
+                              tuple(int(c) for c in (cnt * nrot if len(cnt) == 1 else cnt)))
+    if ws.orientation_range is not None:
+        mx = list(ws.orientation_range.max)
+        orng = OrientationRange(tuple(mx * nrot if len(mx) == 1 else mx),
+                                ws.orientation_range.levels, ws.orientation_range.count)
+    wspec = WorkspaceSpec(grid=grid, orientation=ori, external_wrench=ext,
+                          orientation_set=oset, orientation_range=orng)
 
     req = s.requirements or RequirementsSpec()
     requirements = Requirements(

@@ -46,6 +46,10 @@ class Chunk:
     margin: np.ndarray
     tensions: np.ndarray
     lengths: np.ndarray
+    #: uint8 (count,), 1 where no interference (only when the sweep checks it)
+    collision_free: np.ndarray | None = None
+    #: further CSV columns after the contract's (name -> (count,) array)
+    extra: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -86,6 +90,8 @@ class WorkspaceResult:
     map_axes: list
     map_stride: tuple
     extra: dict = field(default_factory=dict)
+    #: orientation sweeps only (:func:`run_orientations`): a hardware.OrientationMaps
+    orientation_maps: object = None
 
     @property
     def fraction(self) -> float:
@@ -218,7 +224,7 @@ def grid_positions(g: Grid, start: int, count: int) -> np.ndarray:
 def run(design: Design, kind: str = "static", step: float | None = None, grid: Grid | None = None,
         orientation=None, on_chunk: Callable[[Chunk], None] | None = None,
         progress: Callable[[int, int], None] | None = None, force: bool = False,
-        chunk: int = CHUNK, keep_maps: bool = True) -> WorkspaceResult:
+        chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False) -> WorkspaceResult:
     """Sweep the workspace grid and return the summary and maps.
 
     Parameters
@@ -238,9 +244,24 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         Called with each :class:`Chunk` in grid order (stream rows to a file).
     progress : callable, optional
         Called as ``progress(done, total)`` after each chunk.
+    interference : bool
+        Also check cable-cable, cable-effector, effector-frame and cable-frame
+        interference (:mod:`cdpr_design.interference`): ``feasible`` becomes
+        statics-feasible *and* collision free, chunks carry ``collision_free``,
+        and the summary gains ``collision_free``, ``feasible_statics`` and
+        ``collisions_by_kind``.
+
+    Swivel pulleys (``cables[i].pulley``) are honoured whenever present; a
+    design without pulleys and without ``interference`` takes the point-outlet
+    kernels unchanged.
     """
     if kind not in KINDS:
         raise SpecError([("--kind", f"expected one of {', '.join(KINDS)}, got {kind!r}")])
+    if interference or kin.has_pulleys(design):
+        from .hardware import run_hardware  # pulleys and interference (real hardware geometry)
+
+        return run_hardware(design, kind, step, grid, orientation, on_chunk, progress, force,
+                            chunk, keep_maps, interference)
     t0 = time.perf_counter()
     g = grid if grid is not None else make_grid(design, step, force)
     if grid is not None:
@@ -358,10 +379,17 @@ class PoseResult:
     margin: float
     W: np.ndarray
     wrench: np.ndarray
+    #: colliding pairs (cli.md names; :func:`cdpr_design.interference.check_pose`)
+    collisions: list = field(default_factory=list)
 
 
 def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
-    """Feasibility, capacity margin and minimum 2-norm tensions at one pose."""
+    """Feasibility, capacity margin and minimum 2-norm tensions at one pose.
+
+    Swivel pulleys are honoured (true outlet points in W, arc + free lengths);
+    ``collisions`` lists the interfering pairs (``feasible`` is the statics
+    result, as in a sweep without interference).
+    """
     if kind not in KINDS:
         raise SpecError([("--kind", f"expected one of {', '.join(KINDS)}, got {kind!r}")])
     full = design.full_pose(pose)
@@ -369,8 +397,16 @@ def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
     Rb = np.ascontiguousarray(design.attachments @ R.T)
     W = np.empty((design.n, design.m))
     L = np.empty(design.m)
-    ok = K.structure_matrix(full[0], full[1], full[2], Rb, np.ascontiguousarray(design.outlets),
-                            design.rows, W, L)
+    if kin.has_pulleys(design):
+        from .interference import hardware_arrays
+
+        hw = hardware_arrays(design)
+        ok = K.structure_matrix_pulley(full[0], full[1], full[2], Rb,
+                                       np.ascontiguousarray(design.outlets), hw.axes, hw.eref,
+                                       hw.radii, design.rows, W, L, np.empty((design.m, 3)))
+    else:
+        ok = K.structure_matrix(full[0], full[1], full[2], Rb, np.ascontiguousarray(design.outlets),
+                                design.rows, W, L)
     wreq = wrench_vertices(design, kind, full[3:])
     t = np.full(design.m, np.nan)
     if ok:
@@ -378,4 +414,19 @@ def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
                                        combinations(design.m, design.n), KINDS[kind], t)
     else:
         feasible, margin = False, np.nan
-    return PoseResult(np.asarray(pose, float), L, t, bool(feasible), float(margin), W, wreq[0])
+    from .interference import collisions
+
+    return PoseResult(np.asarray(pose, float), L, t, bool(feasible), float(margin), W, wreq[0],
+                      collisions(design, pose))
+
+
+def run_orientations(design: Design, mode: str = "total", **kwargs) -> WorkspaceResult:
+    """Total orientation workspace or orientation range per position (1R2T, 3R3T).
+
+    See :func:`cdpr_design.hardware.run_orientations` for the parameters
+    (``kind``, ``step``, ``grid``, ``orientation``, ``orientations``,
+    ``on_chunk``, ``progress``, ``force``, ``interference``).
+    """
+    from .hardware import run_orientations as _run
+
+    return _run(design, mode, **kwargs)

@@ -1,0 +1,162 @@
+"""Interference of cables, effector and frame (the paper's third workspace limit).
+
+The seed paper lists the workspace limits of a CDPR as controllability,
+tensions between limits and *cable collision avoidance* (Rivera et al., sec. 2,
+after Pott 2018, ch. 6 "workspace", and Perreault, Cardou, Gosselin, Otis:
+"Geometric determination of the interference-free constant-orientation
+workspace of parallel cable-driven mechanisms", ASME J. Mech. Robotics 2(3), 2010).
+This module checks one pose; the grid sweeps use the same kernel
+(:func:`cdpr_design._kernels.interference_pose`).
+
+What counts as a collision
+--------------------------
+- **cable - cable**: the free segments (attachment to true outlet point:
+  the swivel-pulley tangent point, or a_i) are closer than the sum of the
+  cable radii (``cable.diameter`` / 2; touching counts).  Two cables that share
+  an attachment or outlet point meet there by design; they collide only when
+  one's far end lies within that distance of the other (they run together).
+- **cable - effector**: a free segment passes through the effector box
+  (``effector.size``, centred on the platform origin) other than at its own
+  attachment: the attachment is moved to the nearest face of the box when it
+  lies inside it, and the cable collides when it then crosses the box's
+  interior.  Grazing a face or an edge is not a collision.  The box is the
+  effector's bounding box: a real platform that is a lighter frame may let
+  cables through where the box does not.
+- **effector - frame**: a corner of the effector box lies outside the frame box.
+- **cable - frame**: an attachment point lies outside the frame box (the free
+  cable leaves the frame).
+
+Pairs are named as ``cli.md`` says: two cable names, a cable name and
+``effector`` or ``frame``, and ``("effector", "frame")``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _kernels as K
+from . import kinematics as kin
+from .model import Design
+
+HIT_NAMES = {K.HIT_CABLE_CABLE: "cable-cable", K.HIT_CABLE_EFFECTOR: "cable-effector",
+             K.HIT_EFFECTOR_FRAME: "effector-frame", K.HIT_CABLE_FRAME: "cable-frame"}
+
+
+@dataclass(frozen=True)
+class HardwareArrays:
+    """Kernel arrays for pulleys and interference of one design (contiguous float64)."""
+
+    axes: np.ndarray      # (m, 3) unit swivel axes (z where there is no pulley)
+    eref: np.ndarray      # (m, 3) reference perpendiculars
+    radii: np.ndarray     # (m,) pulley radii [m] (0: point outlet)
+    half: np.ndarray      # (3,) effector half extents [m]
+    rho: np.ndarray       # (m,) cable radii [m]
+    frame_lower: np.ndarray
+    frame_upper: np.ndarray
+    dim: int
+    tol: float
+
+
+def hardware_arrays(design: Design) -> HardwareArrays:
+    """Pulley and interference arrays of ``design`` for the kernels."""
+    from .pulley import reference_perpendicular
+
+    m = design.m
+    axes = np.zeros((m, 3))
+    eref = np.zeros((m, 3))
+    radii = np.zeros(m)
+    for i, c in enumerate(design.cables):
+        ax = np.asarray(c.pulley.axis if c.pulley is not None else (0.0, 0.0, 1.0), float)
+        axes[i] = ax / np.linalg.norm(ax)
+        eref[i] = reference_perpendicular(axes[i])
+        radii[i] = c.pulley.radius if c.pulley is not None else 0.0
+    lo, hi = np.asarray(design.frame_lower, float), np.asarray(design.frame_upper, float)
+    scale = max(1.0, float(np.max(hi - lo)))
+    return HardwareArrays(
+        axes=axes, eref=eref, radii=radii,
+        half=np.asarray(design.effector.size, float) / 2.0,
+        rho=np.array([c.props.diameter / 2.0 for c in design.cables]),
+        frame_lower=lo.copy(), frame_upper=hi.copy(), dim=design.motion.dim, tol=1e-9 * scale,
+    )
+
+
+@dataclass(frozen=True)
+class Interference:
+    """Interference at one pose.
+
+    Attributes
+    ----------
+    pairs : list of (str, str)
+        Colliding pairs (cli.md names), cables in spec order first.
+    mask : int
+        Bits of :data:`HIT_NAMES`; 0 when collision free.
+    cable_distances : (m, m) array
+        Distance between free segments [m] (shared-endpoint rule applied; 0 on the diagonal).
+    effector_chords : (m,) array
+        Length of each free segment inside the effector box, own attachment excepted [m].
+    """
+
+    pairs: list
+    mask: int
+    cable_distances: np.ndarray
+    effector_chords: np.ndarray
+
+    @property
+    def collision_free(self) -> bool:
+        return self.mask == 0
+
+    @property
+    def kinds(self) -> list[str]:
+        return [name for bit, name in HIT_NAMES.items() if self.mask & bit]
+
+
+def check_pose(design: Design, pose) -> Interference:
+    """Cable-cable, cable-effector, effector-frame and cable-frame interference at one pose.
+
+    ``pose`` in the motion's coordinates.  Swivel pulleys are honoured: the
+    free segments end at the pulleys' tangent points.
+    """
+    hw = hardware_arrays(design)
+    full = design.full_pose(pose)
+    R = kin.rotation_matrix(*full[3:])
+    g = kin.cable_geometry(design, pose)
+    S0 = np.ascontiguousarray(g.anchors)
+    S1 = np.ascontiguousarray(g.exits)
+    Bp = np.ascontiguousarray(design.attachments)
+    m = design.m
+    hits = np.zeros((m + 2, m + 2), dtype=np.uint8)
+    s0, s1, cp = np.empty(3), np.empty(3), np.empty(3)
+    mask = int(K.interference_pose(S0, S1, Bp, np.ascontiguousarray(R), full[0], full[1], full[2],
+                                   hw.half, hw.rho, hw.frame_lower, hw.frame_upper, hw.dim, hw.tol,
+                                   True, hits, s0, s1, cp))
+    dist = np.zeros((m, m))
+    for i in range(m):
+        for j in range(i + 1, m):
+            dist[i, j] = dist[j, i] = K.cable_cable_dist(S0, S1, i, j, hw.tol)
+    chords = np.zeros(m)
+    for i in range(m):
+        cpi = R.T @ (S1[i] - full[:3])
+        chords[i] = K.cable_effector_chord(Bp, i, np.ascontiguousarray(cpi), hw.half, hw.dim,
+                                           hw.tol, s0, s1)
+    names = design.cable_names + ["effector", "frame"]
+    pairs = []
+    for i in range(m):
+        for j in range(i + 1, m):
+            if hits[i, j]:
+                pairs.append((names[i], names[j]))
+    for i in range(m):
+        if hits[i, m]:
+            pairs.append((names[i], "effector"))
+    for i in range(m):
+        if hits[i, m + 1]:
+            pairs.append((names[i], "frame"))
+    if hits[m, m + 1]:
+        pairs.append(("effector", "frame"))
+    return Interference(pairs, mask, dist, chords)
+
+
+def collisions(design: Design, pose) -> list[tuple[str, str]]:
+    """The colliding pairs at a pose (cli.md: two cable names, or a cable and ``effector``/``frame``)."""
+    return check_pose(design, pose).pairs
