@@ -948,3 +948,164 @@ def compare(
                                         [("RMS \\[mm]", 1e3 * res.rms_error), ("max \\[mm]", 1e3 * res.max_error)]))
     if s["segments"]:
         out_console.print(segments_table("straight segments (the paper's Table 2)", s["segments"]))
+
+
+# ----------------------------------------------------------------------------
+# sweep (batch parameter sweeps)
+# ----------------------------------------------------------------------------
+
+
+@app.command()
+@command
+def sweep(
+    spec: SpecArg,
+    vary: Annotated[Optional[list[str]], typer.Option(
+        "--vary", metavar="KEY=VALUES",
+        help="A key of the spec by dotted path (effector.mass, frame.upper.0, cables.1.outlet.1, "
+             "tension.1) and its values: a,b,c or start:stop:count. Repeat for a full grid. "
+             "Given on the command line, these replace the spec's sweep.vary.")] = None,
+    workers: Annotated[Optional[int], typer.Option(
+        "--workers", help="Worker processes (default sweep.workers, else one per core; 1: in this process).")] = None,
+    scheduler: Annotated[Optional[str], typer.Option(
+        "--scheduler", metavar="ADDRESS",
+        help="Run on the Dask scheduler at ADDRESS (tcp://host:8786); 'local' starts a LocalCluster "
+             "of --workers processes on this machine.")] = None,
+    resume: Annotated[bool, typer.Option(
+        "--resume", help="Continue an interrupted sweep from the journal in --out.")] = False,
+    rank_by: Annotated[Optional[str], typer.Option(
+        "--rank-by", metavar="FIGURE[:asc|:desc]",
+        help="Figure that ranks the variants passing every requirement (default sweep.rank_by, else fraction).")] = None,
+    check_against: Annotated[Optional[Path], typer.Option(
+        "--check-against", metavar="BASELINE.csv",
+        help="Compare with a baseline sweep.csv; exit 1 when a figure regresses.")] = None,
+    tolerance: Annotated[float, typer.Option(
+        "--tolerance", help="Relative tolerance of --check-against.")] = 1e-6,
+    abs_tolerance: Annotated[float, typer.Option(
+        "--abs-tolerance", help="Absolute tolerance of --check-against (added to the relative one).")] = 1e-9,
+    strict: Annotated[bool, typer.Option(
+        "--strict", help="With --check-against: improvements beyond the tolerance fail too.")] = False,
+    catalogue: CatalogueOpt = None,
+    trajectory: TrajectoryOpt = None,
+    safety_factor: SafetyOpt = None,
+    motor: MotorOpt = None,
+    step: StepOpt = None,
+    top: Annotated[int, typer.Option("--top", help="Best variants to list.")] = 10,
+    no_picture: Annotated[bool, typer.Option("--no-picture", help="Do not draw sweep.png.")] = False,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    overwrite: OverwriteOpt = False,
+):
+    """Batch parameter sweep: sweep.csv (one design_report.csv row per variant), sweep_best.csv, sweep.png."""
+    from . import report as rep
+    from . import sweep as sw
+
+    design = load_design(spec)
+    section = design.sweep or {}
+    axes = [sw.parse_vary(v) for v in vary] if vary else sw.vary_from_spec(section)
+    plan = sw.make_plan(design, axes)
+    rank_name, descending = sw.parse_rank(rank_by or section.get("rank_by"))
+    if workers is None:
+        workers = section.get("workers")
+    if workers is not None and workers < 1:
+        raise InputError(f"--workers: expected at least 1, got {workers}")
+    if step is not None and not (math.isfinite(step) and step > 0):
+        raise InputError(f"--step: expected a positive number of metres, got {step}")
+    if not (math.isfinite(tolerance) and tolerance >= 0 and math.isfinite(abs_tolerance) and abs_tolerance >= 0):
+        raise InputError("--tolerance / --abs-tolerance: expected non-negative numbers")
+    if trajectory is not None:
+        traj = design.trajectories.get(trajectory)
+        if traj is None:
+            known = ", ".join(design.trajectories) or "none"
+            raise InputError(f"--trajectory: no trajectory named {trajectory!r} in the spec (known: {known})")
+        if traj.type == "csv":
+            raise InputError(f"--trajectory {trajectory}: a csv trajectory cannot be swept (its poses "
+                             "do not follow the varied design); use a square, polyline or circle path")
+    baseline = rep.read_csv_table(check_against) if check_against is not None else None
+    cat = load_catalogue_opt(catalogue)
+    options = sw.Options(step=step, safety_factor=safety_factor, motor=motor, trajectory=trajectory,
+                         catalogue=cat)
+    out_dir = output_dir(design, out, overwrite)
+    for name in ("sweep.csv", "sweep_best.csv", "sweep.png"):
+        out_dir.target(name)  # refuse foreign files before any work
+    journal = rep.SweepJournal(out_dir)
+    meta = {"journal": "cdpr-design sweep", "version": sw.JOURNAL_VERSION, "name": design.name,
+            "keys": plan.keys, "variants": len(plan), "fingerprint": plan.fingerprint(options)}
+    kept: list[dict] = []
+    quiet = quiet or json_
+    if resume:
+        old_meta, old = journal.read()
+        if old_meta is None:
+            info(quiet, f"--resume: no journal in {out_dir.path}; starting the sweep")
+        elif old_meta.get("fingerprint") != meta["fingerprint"]:
+            raise InputError(f"--resume: the journal in {out_dir.path} is from another sweep (other spec, "
+                             "keys, values or options); run without --resume to start over")
+        else:
+            kept = [r for r in old if 0 <= int(r["variant"]) < len(plan)]
+            info(quiet, f"resuming: {len(kept)} of {len(plan)} variants already done")
+    journal.start(meta, kept)
+    done = {int(r["variant"]) for r in kept}
+    try:
+        with progress_bar(f"sweep {design.name}", quiet) as cb:
+            stats = sw.run(plan, options, workers=workers, scheduler=scheduler, skip=done,
+                           on_record=journal.append, progress=cb)
+    finally:
+        journal.close()
+    _, records = journal.read()
+    header, rows = sw.table(plan, records)
+    bh, brows = sw.best(header, rows, rank_name, descending)
+    rep.write_sweep(out_dir, header, rows, bh, brows, plan.keys,
+                    title=f"{design.name}: sweep of {', '.join(plan.keys)}", rank_by=rank_name,
+                    picture=not no_picture)
+    regressions, improvements = [], []
+    if baseline is not None:
+        text_rows = [[rep.fmt(v) for v in r] for r in rows]
+        regressions, improvements = sw.compare(header, text_rows, baseline[0], baseline[1], plan.keys,
+                                               tolerance, abs_tolerance, strict)
+    ie = header.index("error")
+    failed = [r for r in rows if r[ie]]
+    summary = {
+        "name": design.name, "keys": plan.keys, "variants": len(plan), "evaluated": stats.evaluated,
+        "resumed": stats.skipped, "errors": len(failed), "passed": len(brows),
+        "rank_by": rank_name, "best": [dict(zip(bh, r)) for r in brows[:top]],
+        "backend": stats.backend, "workers": stats.workers, "chunk": stats.chunk,
+        "elapsed_s": stats.elapsed_s, "files": str(out_dir.path),
+    }
+    if baseline is not None:
+        summary["baseline"] = str(check_against)
+        summary["regressions"] = [d.as_dict() for d in regressions]
+        summary["improvements"] = [d.as_dict() for d in improvements]
+    if json_:
+        emit_json(summary)
+    else:
+        out_console.print(summary_table(
+            f"{design.name} — sweep of {', '.join(plan.keys)}",
+            [("variants", f"{len(plan):,}"), ("evaluated now", f"{stats.evaluated:,}"),
+             ("resumed from journal", f"{stats.skipped:,}"), ("failed to evaluate", f"{len(failed):,}"),
+             ("pass every requirement", f"{len(brows):,}"),
+             ("backend", f"{stats.backend}, {stats.workers} worker(s), {stats.chunk} variant(s) per task"),
+             ("elapsed \\[s]", stats.elapsed_s), ("files", str(out_dir.path))]))
+        if brows:
+            t = Table(title=f"best variants by {rank_name} ({'descending' if descending else 'ascending'})",
+                      title_justify="left")
+            cols = ["rank", "variant"] + plan.keys + [rank_name]
+            for c in cols:
+                t.add_column(c)
+            for r in brows[:top]:
+                t.add_row(*[_fmt(r[bh.index(c)]) for c in cols])
+            out_console.print(t)
+        for r in failed[:5]:
+            info(False, f"variant {r[0]}: {r[ie]}")
+        if baseline is not None:
+            if regressions:
+                t = Table(title=f"regressions against {check_against}", title_justify="left")
+                for c in ("variant", "figure", "baseline", "now", "change"):
+                    t.add_column(c)
+                for d in regressions[:30]:
+                    t.add_row(str(d.variant), d.column, d.baseline, d.current, d.change)
+                out_console.print(t)
+            else:
+                out_console.print(f"no regression against {check_against} "
+                                  f"({len(improvements)} figure(s) better)")
+    if regressions:
+        raise CheckFailed("" if json_ else f"{len(regressions)} figure(s) regressed against {check_against}")

@@ -457,6 +457,18 @@ def _check_semantics(s: DesignSpec) -> list[tuple[str, str]]:
         vary = s.sweep.get("vary")
         if vary is not None and not isinstance(vary, dict):
             p.append(("sweep.vary", f"expected a mapping of dotted keys to values, got {vary!r}"))
+        elif vary:
+            for key, v in vary.items():
+                ok = (isinstance(v, str) or (isinstance(v, list) and len(v) > 0)
+                      or (isinstance(v, (int, float)) and not isinstance(v, bool)))
+                if not ok:
+                    p.append((f"sweep.vary.{key}", f"expected a list of values or 'start:stop:count', got {v!r}"))
+        workers = s.sweep.get("workers")
+        if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
+            p.append(("sweep.workers", f"expected a whole number >= 1, got {workers!r}"))
+        rank_by = s.sweep.get("rank_by")
+        if rank_by is not None and not isinstance(rank_by, str):
+            p.append(("sweep.rank_by", f"expected a figure name such as fraction, got {rank_by!r}"))
     return p
 
 
