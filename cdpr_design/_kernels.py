@@ -360,6 +360,598 @@ def hsm_margin(W, wreq, tmin, tmax, combos):
 
 
 # ----------------------------------------------------------------------------
+# General m != n: basis factorisation, fast HSM, wrench closure, min-norm QP
+# ----------------------------------------------------------------------------
+
+#: Relative tolerance of the wrench-closure sign test (|l_j| against |w_j|).
+CLOSURE_TOL = 1e-12
+#: Relative tolerance (to the largest tension bound) of the QP's bound checks.
+QP_TOL = 1e-11
+
+
+@njit
+def make_scratch(n, m, nv):
+    """Scratch arrays for :func:`eval_general` (allocate once per block of poses).
+
+    A tuple so that every array keeps its contiguous type; ``nv`` is the
+    number of required-wrench rows.
+    """
+    r = max(m - n, 1)
+    return (np.empty((n, m + n)),       # 0 tab: [G W | G], G = W_B^-1
+            np.empty((n, n)),           # 1 M = G G^T
+            np.empty((max(nv, 1), n)),  # 2 G w_v
+            np.empty(n),                # 3 G W t_mid
+            np.empty((n, n)),           # 4 A (k, k+1)
+            np.empty((n, n)),           # 5 minor
+            np.empty(n + 1),            # 6 mu
+            np.empty(m),                # 7 closure tolerance per column
+            np.empty((m, r)),           # 8 N, orthonormal null basis
+            np.empty(m),                # 9 t_p
+            np.empty((r, r)),           # 10 J
+            np.empty((r, r)),           # 11 R of the active normals
+            np.empty((r, r)),           # 12 active normals
+            np.empty((r, r)),           # 13 Householder vectors
+            np.empty(r),                # 14 z
+            np.empty(r),                # 15 d
+            np.empty(r),                # 16 dual direction
+            np.empty(r + 1),            # 17 multipliers
+            np.empty(m, dtype=np.int64),      # 18 slot of each column (-1: non-basic)
+            np.empty(max(m - n, 1), dtype=np.int64),  # 19 non-basic columns
+            np.empty(n, dtype=np.int64),      # 20 basis column of each slot
+            np.empty(n, dtype=np.int64),      # 21 (spare)
+            np.empty(n, dtype=np.int64),      # 22 facet: free slots
+            np.empty(n, dtype=np.int64),      # 23 facet: non-basic columns of S (positions in nbc)
+            np.empty(2 * m + 1, dtype=np.int64),  # 24 active constraints
+            np.empty(m),                # 25 t_b (basic solution)
+            np.empty(m),                # 26 facet: l_j
+            np.empty(m))                # 27 t_max - t_min
+
+
+@njit
+def basis_factor(W, tab, slot, nbc, bcol):
+    """Basis factorisation W P = W_B [I F] by Gauss-Jordan with complete pivoting.
+
+    ``tab`` (n, m + n) receives [G W | G] with G = W_B^-1 (rows in basis-slot
+    order): column j of G W is exactly e_slot(j) for a basis column and the
+    column of F for a non-basic one.  ``slot[j]`` is the basis slot of column
+    j (-1 if non-basic), ``bcol[s]`` the column in slot s, ``nbc`` lists the
+    m - n non-basic columns.  Returns False when rank W < n (a relative pivot
+    below ``RANK_TOL``).  This is the factorisation behind the fast facet
+    normals of algorithms.md ("W P = W_B [I F]").
+    """
+    n, m = W.shape
+    scale = 0.0
+    for i in range(n):
+        for j in range(m):
+            tab[i, j] = W[i, j]
+            if abs(W[i, j]) > scale:
+                scale = abs(W[i, j])
+        for j in range(n):
+            tab[i, m + j] = 1.0 if i == j else 0.0
+    for j in range(m):
+        slot[j] = -1
+    if scale == 0.0 or m < n:
+        return False
+    for c in range(n):
+        best = -1.0
+        pr = -1
+        pc = -1
+        for i in range(c, n):
+            for j in range(m):
+                if slot[j] < 0 and abs(tab[i, j]) > best:
+                    best = abs(tab[i, j])
+                    pr = i
+                    pc = j
+        if best <= RANK_TOL * scale:
+            return False
+        if pr != c:
+            for j in range(m + n):
+                tmp = tab[c, j]
+                tab[c, j] = tab[pr, j]
+                tab[pr, j] = tmp
+        slot[pc] = c
+        bcol[c] = pc
+        inv = 1.0 / tab[c, pc]
+        for j in range(m + n):
+            tab[c, j] *= inv
+        tab[c, pc] = 1.0
+        for i in range(n):
+            if i != c:
+                f = tab[i, pc]
+                if f != 0.0:
+                    for j in range(m + n):
+                        tab[i, j] -= f * tab[c, j]
+                    tab[i, pc] = 0.0
+    k = 0
+    for j in range(m):
+        if slot[j] < 0:
+            nbc[k] = j
+            k += 1
+    return True
+
+
+@njit
+def _null_vector(A, k, mu, minor):
+    """Null vector mu (k+1) of A (k, k+1) by the generalised cross product.
+
+    mu_f = (-1)^f det(A without column f).  Returns False when A has rank < k
+    (||mu|| below RANK_TOL times the Hadamard bound prod_e ||A_e||).
+    """
+    if k == 0:
+        mu[0] = 1.0
+        return True
+    if k == 1:
+        mu[0] = A[0, 1]
+        mu[1] = -A[0, 0]
+    elif k == 2:
+        mu[0] = A[0, 1] * A[1, 2] - A[0, 2] * A[1, 1]
+        mu[1] = A[0, 2] * A[1, 0] - A[0, 0] * A[1, 2]
+        mu[2] = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
+    else:
+        sign = 1.0
+        for f in range(k + 1):
+            for e in range(k):
+                cc = 0
+                for g in range(k + 1):
+                    if g == f:
+                        continue
+                    minor[e, cc] = A[e, g]
+                    cc += 1
+            mu[f] = sign * det_small(minor, k)
+            sign = -sign
+    bound = 1.0
+    for e in range(k):
+        s = 0.0
+        for g in range(k + 1):
+            s += A[e, g] * A[e, g]
+        bound *= math.sqrt(s)
+    nrm = 0.0
+    for f in range(k + 1):
+        nrm += mu[f] * mu[f]
+    return bound > 0.0 and math.sqrt(nrm) > RANK_TOL * bound
+
+
+@njit
+def _next_comb(idx, k, nn):
+    """Advance idx[:k] to the next k-subset of range(nn) (lexicographic); False at the end."""
+    i = k - 1
+    while i >= 0 and idx[i] == nn - k + i:
+        i -= 1
+    if i < 0:
+        return False
+    idx[i] += 1
+    for j in range(i + 1, k):
+        idx[j] = idx[j - 1] + 1
+    return True
+
+
+@njit
+def hsm_factored(W, wreq, nv, tmin, tmax, scr):
+    """Hyperplane shifting on the factored W: capacity margins and wrench closure.
+
+    Gouttefarde & Krut, ARK 2010; Bouchard, Gosselin & Moore, ASME JMR 2010
+    (facets of the available wrench set); capacity margin after Guay, Cardou,
+    Cruz-Ruiz & Caro 2014.  With W P = W_B [I F] and G = W_B^-1 (``scr[0]``
+    = [G W | G], from :func:`basis_factor`), every subset S of n-1 columns is
+    a set K of k non-basic columns (k <= m - n) plus the basis columns
+    outside a set Fr of k+1 "free" slots; the C(m, n-1) facets are all pairs
+    (K, Fr).  The facet normal is nu = G^T mu with mu supported on Fr and
+    orthogonal to the rows Fr of F's columns K: a k x (k+1) null vector.  Then
+    l_j = nu . w_j = mu . (G W)_j is mu_f for the basis column of slot f in
+    Fr, zero for the other columns of S, and mu . F_c for a non-basic column c
+    outside K; nu . w = mu . (G w) and ||nu||^2 = mu^T (G G^T) mu.  For every
+    facet  s_S(w) = (1/2 sum_j |l_j| dt_j - |nu . (W t_mid - w)|) / ||nu||.
+
+    Returns (margin0, margin, closure): the capacity margin [N] of
+    ``wreq[0]`` alone, of the rows ``wreq[:nv]``, and whether W positively
+    spans R^n (every facet hyperplane has columns strictly on both sides).
+    Rank n is assumed: the caller factored W.
+    """
+    n, m = W.shape
+    r = m - n
+    tab, M, wh, wmid, A, minor, mu, ctol = scr[0], scr[1], scr[2], scr[3], scr[4], scr[5], scr[6], scr[7]
+    nbc, bcol, Fr, Kc, dt = scr[19], scr[20], scr[22], scr[23], scr[27]
+    # G w_v, G W t_mid, M = G G^T, closure tolerances, tension ranges
+    for v in range(nv):
+        for i in range(n):
+            s = 0.0
+            for j in range(n):
+                s += tab[i, m + j] * wreq[v, j]
+            wh[v, i] = s
+    for i in range(n):
+        s = 0.0
+        for j in range(m):
+            s += tab[i, j] * 0.5 * (tmin[j] + tmax[j])
+        wmid[i] = s
+    for i in range(n):
+        for j in range(i, n):
+            s = 0.0
+            for k in range(n):
+                s += tab[i, m + k] * tab[j, m + k]
+            M[i, j] = s
+            M[j, i] = s
+    for j in range(m):
+        s = 0.0
+        for i in range(n):
+            s += W[i, j] * W[i, j]
+        ctol[j] = CLOSURE_TOL * math.sqrt(s)
+        dt[j] = tmax[j] - tmin[j]
+    margin0 = np.inf
+    margin = np.inf
+    closure = True
+    for k in range(min(r, n - 1) + 1):
+        nf = k + 1
+        for e in range(k):
+            Kc[e] = e
+        more_k = True
+        while more_k:
+            for f in range(nf):
+                Fr[f] = f
+            more_f = True
+            while more_f:
+                for e in range(k):
+                    c = nbc[Kc[e]]
+                    for f in range(nf):
+                        A[e, f] = tab[Fr[f], c]
+                if _null_vector(A, k, mu, minor):
+                    nrm2 = 0.0
+                    for f in range(nf):
+                        sf = Fr[f]
+                        acc = 0.0
+                        for g in range(nf):
+                            acc += mu[g] * M[sf, Fr[g]]
+                        nrm2 += mu[f] * acc
+                    if nrm2 > 0.0:
+                        nrm = math.sqrt(nrm2)
+                        half = 0.0
+                        lpos = -np.inf
+                        lneg = np.inf
+                        # basis columns of the free slots: l = mu_f
+                        for f in range(nf):
+                            j = bcol[Fr[f]]
+                            lj = mu[f]
+                            half += abs(lj) * dt[j]
+                            lpos = max(lpos, lj - ctol[j] * nrm)
+                            lneg = min(lneg, lj + ctol[j] * nrm)
+                        # non-basic columns outside K (Kc is sorted)
+                        e = 0
+                        for q in range(r):
+                            if e < k and Kc[e] == q:
+                                e += 1
+                                continue
+                            j = nbc[q]
+                            lj = 0.0
+                            for f in range(nf):
+                                lj += mu[f] * tab[Fr[f], j]
+                            half += abs(lj) * dt[j]
+                            lpos = max(lpos, lj - ctol[j] * nrm)
+                            lneg = min(lneg, lj + ctol[j] * nrm)
+                        if not (lpos > 0.0 and lneg < 0.0):
+                            closure = False
+                        inv = 1.0 / nrm
+                        half *= 0.5 * inv
+                        cmid = 0.0
+                        for f in range(nf):
+                            cmid += mu[f] * wmid[Fr[f]]
+                        for v in range(nv):
+                            cw = 0.0
+                            for f in range(nf):
+                                cw += mu[f] * wh[v, Fr[f]]
+                            s = half - abs(cmid - cw) * inv
+                            if v == 0 and s < margin0:
+                                margin0 = s
+                            if s < margin:
+                                margin = s
+                more_f = _next_comb(Fr, nf, n)
+            more_k = _next_comb(Kc, k, r)
+    return margin0, margin, closure
+
+
+@njit
+def householder_qr(A, p, q, Q, R, V):
+    """Full QR of the leading (p, q) block of ``A`` (p >= q): A = Q [R; 0].
+
+    ``A`` is overwritten; ``Q`` (p, p) orthogonal, ``R`` (q, q) upper
+    triangular, ``V`` (p, q) scratch for the reflectors.  Returns the
+    smallest |R_ii| (inf for q = 0).
+    """
+    rmin = np.inf
+    for c in range(q):
+        s = 0.0
+        for i in range(c, p):
+            s += A[i, c] * A[i, c]
+        nx = math.sqrt(s)
+        alpha = -nx if A[c, c] >= 0.0 else nx
+        for i in range(c, p):
+            V[i, c] = A[i, c]
+        V[c, c] -= alpha
+        vn = 0.0
+        for i in range(c, p):
+            vn += V[i, c] * V[i, c]
+        if vn > 0.0:
+            vn = math.sqrt(vn)
+            for i in range(c, p):
+                V[i, c] /= vn
+            for j in range(c, q):
+                d = 0.0
+                for i in range(c, p):
+                    d += V[i, c] * A[i, j]
+                for i in range(c, p):
+                    A[i, j] -= 2.0 * V[i, c] * d
+        for i in range(c + 1, p):
+            A[i, c] = 0.0
+        if abs(A[c, c]) < rmin:
+            rmin = abs(A[c, c])
+    for i in range(q):
+        for j in range(q):
+            R[i, j] = A[i, j] if j >= i else 0.0
+    for i in range(p):
+        for j in range(p):
+            Q[i, j] = 1.0 if i == j else 0.0
+    for c in range(q - 1, -1, -1):
+        for j in range(p):
+            d = 0.0
+            for i in range(c, p):
+                d += V[i, c] * Q[i, j]
+            if d != 0.0:
+                for i in range(c, p):
+                    Q[i, j] -= 2.0 * V[i, c] * d
+    return rmin
+
+
+@njit
+def null_space_setup(n, m, w, scr):
+    """Orthonormal null basis N (m, r) and t_p = W^+ w from the basis factorisation.
+
+    The columns of P [-F; I] span the null space of W; two passes of
+    classical Gram-Schmidt make them orthonormal (``scr[8]``).  The basic
+    solution t_b (t_B = G w, t_N = 0) projected off the null space is the
+    minimum-norm solution t_p = t_b - N N^T t_b (``scr[9]``).
+    """
+    tab, N, tp, tb = scr[0], scr[8], scr[9], scr[25]
+    nbc, bcol = scr[19], scr[20]
+    r = m - n
+    for k in range(r):
+        col = nbc[k]
+        for j in range(m):
+            N[j, k] = 0.0
+        N[col, k] = 1.0
+        for s in range(n):
+            N[bcol[s], k] = -tab[s, col]
+        for _ in range(2):
+            for p in range(k):
+                d = 0.0
+                for j in range(m):
+                    d += N[j, p] * N[j, k]
+                for j in range(m):
+                    N[j, k] -= d * N[j, p]
+        s = 0.0
+        for j in range(m):
+            s += N[j, k] * N[j, k]
+        s = 1.0 / math.sqrt(s)
+        for j in range(m):
+            N[j, k] *= s
+    for j in range(m):
+        tb[j] = 0.0
+    for s in range(n):
+        acc = 0.0
+        for i in range(n):
+            acc += tab[s, m + i] * w[i]
+        tb[bcol[s]] = acc
+    for j in range(m):
+        tp[j] = tb[j]
+    for k in range(r):
+        d = 0.0
+        for j in range(m):
+            d += N[j, k] * tb[j]
+        for j in range(m):
+            tp[j] -= d * N[j, k]
+
+
+@njit
+def _refactor(N, m, r, active, q, J, RA, NA, VA):
+    """QR of the active constraint normals N_A (r, q) = J [R; 0]."""
+    for a in range(q):
+        c = active[a]
+        j = c % m
+        sg = 1.0 if c < m else -1.0
+        for i in range(r):
+            NA[i, a] = sg * N[j, i]
+    householder_qr(NA, r, q, J, RA, VA)
+
+
+@njit
+def goldfarb_idnani(m, r, tmin, tmax, t, scr):
+    """Project the origin onto {z : t_min <= t_p + N z <= t_max}; t = t_p + N z.
+
+    The dual active-set method of Goldfarb & Idnani (Math. Programming 27,
+    1983) with G = I: start at the unconstrained minimum z = 0, add the most
+    violated bound, take the primal/dual step, drop a constraint whose
+    multiplier would turn negative.  A violated constraint whose normal lies
+    in the span of the active ones and whose dual step is unbounded proves
+    the bounds infeasible.  The active normals are re-factored by a
+    Householder QR at each change (r = m - n is small: cheaper and sturdier
+    than Givens bookkeeping).  Violations below ``QP_TOL`` times the largest
+    bound count as satisfied; the result is clipped into the bounds.
+    Returns False (``t`` NaN) when infeasible.
+    """
+    N, tp, J, RA, NA, VA = scr[8], scr[9], scr[10], scr[11], scr[12], scr[13]
+    z, d, rdir, u, active = scr[14], scr[15], scr[16], scr[17], scr[24]
+    scale = 1.0
+    for j in range(m):
+        scale = max(scale, max(abs(tmin[j]), abs(tmax[j])))
+    tol = QP_TOL * scale
+    for i in range(r):
+        z[i] = 0.0
+        for k in range(r):
+            J[i, k] = 1.0 if i == k else 0.0
+    q = 0
+    maxit = 20 * (2 * m + r) + 50
+    it = 0
+    feasible = True
+    while True:
+        # most violated bound: t_j - tmin_j (c < m) or tmax_j - t_j (c >= m)
+        p = -1
+        sp = -tol
+        for j in range(m):
+            tj = tp[j]
+            for i in range(r):
+                tj += N[j, i] * z[i]
+            sl = tj - tmin[j]
+            su = tmax[j] - tj
+            if sl < sp or su < sp:
+                c = j if sl < su else j + m
+                isact = False
+                for a in range(q):
+                    if active[a] == c:
+                        isact = True
+                        break
+                if not isact:
+                    sp = min(sl, su)
+                    p = c
+        if p < 0:
+            break
+        up = 0.0
+        jp = p % m
+        sg = 1.0 if p < m else -1.0
+        while True:
+            it += 1
+            if it > maxit:
+                feasible = False
+                break
+            # d = J^T a_p with a_p = sg N[jp, :]
+            for i in range(r):
+                s = 0.0
+                for k in range(r):
+                    s += J[k, i] * N[jp, k]
+                d[i] = sg * s
+            # dual direction R^-1 d[:q]
+            for i in range(q - 1, -1, -1):
+                s = d[i]
+                for k in range(i + 1, q):
+                    s -= RA[i, k] * rdir[k]
+                rdir[i] = s / RA[i, i]
+            dd = 0.0
+            for i in range(q, r):
+                dd += d[i] * d[i]
+            t1 = np.inf
+            ldrop = -1
+            for a in range(q):
+                if rdir[a] > 1e-14:
+                    ratio = u[a] / rdir[a]
+                    if ratio < t1:
+                        t1 = ratio
+                        ldrop = a
+            t2 = -sp / dd if dd > 1e-24 else np.inf
+            if t1 == np.inf and t2 == np.inf:
+                feasible = False
+                break
+            if t2 < np.inf:
+                step = min(t1, t2)
+                for i in range(r):
+                    s = 0.0
+                    for k in range(q, r):
+                        s += J[i, k] * d[k]
+                    z[i] += step * s
+                sp += step * dd
+            else:
+                step = t1
+            for a in range(q):
+                u[a] -= step * rdir[a]
+            up += step
+            if t2 <= t1:
+                active[q] = p
+                u[q] = up
+                q += 1
+                _refactor(N, m, r, active, q, J, RA, NA, VA)
+                break
+            for a in range(ldrop, q - 1):
+                active[a] = active[a + 1]
+                u[a] = u[a + 1]
+            q -= 1
+            _refactor(N, m, r, active, q, J, RA, NA, VA)
+        if not feasible:
+            break
+    if not feasible:
+        for j in range(m):
+            t[j] = np.nan
+        return False
+    for j in range(m):
+        s = tp[j]
+        for i in range(r):
+            s += N[j, i] * z[i]
+        t[j] = min(max(s, tmin[j]), tmax[j])
+    return True
+
+
+@njit
+def min_norm_tensions(W, w, tmin, tmax, t, scr):
+    """Minimum 2-norm tensions with bounds: min 1/2 |t|^2, W t = w, t_min <= t <= t_max.
+
+    The null-space reduction of algorithms.md: t = t_p + N z with t_p = W^+ w
+    and N an orthonormal null basis, so |t|^2 = |t_p|^2 + |z|^2 and the QP is
+    the projection of the origin onto an r-dimensional polytope, solved
+    exactly by :func:`goldfarb_idnani`.  Writes ``t`` (m) [N]; returns False
+    (``t`` NaN) when the bounds admit no solution or rank W < n.  ``scr``
+    from :func:`make_scratch`.
+    """
+    n, m = W.shape
+    for j in range(m):
+        t[j] = np.nan
+    if not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+        return False
+    null_space_setup(n, m, w, scr)
+    return goldfarb_idnani(m, m - n, tmin, tmax, t, scr)
+
+
+@njit
+def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr):
+    """:func:`eval_pose` for any m >= n with caller-provided scratch (no allocation).
+
+    ``scr`` comes from :func:`make_scratch` (n, m, wreq rows).  The margin is
+    the fast hyperplane-shifting one (:func:`hsm_factored`) over ``wreq[0]``
+    (static) or every row (wrench-feasible, wrench-closure); the tensions at
+    ``wreq[0]`` come from the exact QP (:func:`goldfarb_idnani`), run only
+    where the margin of ``wreq[0]`` is >= 0.  Static and wrench-feasible
+    poses are feasible when the margin is >= 0 *and* the QP found tensions,
+    so a feasible pose always has tensions; wrench-closure poses when W
+    positively spans R^n.  Rank W < n or a zero column (zero-length cable):
+    (False, NaN), tensions NaN.
+    """
+    n, m = W.shape
+    nv = wreq.shape[0] if kind != KIND_STATIC else 1
+    for i in range(m):
+        t_out[i] = np.nan
+    for j in range(m):
+        s = 0.0
+        for i in range(n):
+            s += W[i, j] * W[i, j]
+        if s == 0.0:
+            return False, np.nan
+    if not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+        return False, np.nan
+    margin0, margin, closure = hsm_factored(W, wreq, nv, tmin, tmax, scr)
+    qp_ok = False
+    if margin0 >= 0.0:
+        if m == n:
+            # unique tensions t = G w
+            tab = scr[0]
+            bcol = scr[20]
+            qp_ok = True
+            for s in range(n):
+                acc = 0.0
+                for i in range(n):
+                    acc += tab[s, m + i] * wreq[0, i]
+                t_out[bcol[s]] = min(max(acc, tmin[bcol[s]]), tmax[bcol[s]])
+        else:
+            null_space_setup(n, m, wreq[0], scr)
+            qp_ok = goldfarb_idnani(m, m - n, tmin, tmax, t_out, scr)
+    if kind == KIND_WRENCH_CLOSURE:
+        return closure and m > n, margin
+    return margin >= 0.0 and qp_ok, margin
+
+
+# ----------------------------------------------------------------------------
 # Per-pose evaluation and the grid sweep
 # ----------------------------------------------------------------------------
 
@@ -402,10 +994,10 @@ def eval_pose(W, wreq, tmin, tmax, combos, kind, t_out):
         # m = n columns can never positively span R^n: no wrench closure
         feasible = kind != KIND_WRENCH_CLOSURE and margin >= 0.0
         return feasible, margin
-    rank_ok, margin = hsm_margin(W, wreq[:nv], tmin, tmax, combos)
-    if not rank_ok:
-        return False, np.nan
-    return margin >= 0.0, margin
+    # any m != n: basis-factored HSM + exact Goldfarb-Idnani min-norm QP
+    # (allocates its scratch: sweeps call eval_general with per-block scratch)
+    return eval_general(W, wreq, tmin, tmax, combos, kind, t_out,
+                        make_scratch(n, m, wreq.shape[0]))
 
 
 @njit_parallel
@@ -430,6 +1022,7 @@ def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, 
         W = np.empty((n, m))
         t = np.empty(m)
         L = np.empty(m)
+        scr = make_scratch(n, m, wreq.shape[0])  # general m != n kernels
         k0 = b * bsize
         k1 = min(count, k0 + bsize)
         # grid indices of the block's first pose, then counted up (no division per pose)
@@ -458,7 +1051,10 @@ def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, 
                 for i in range(m):
                     tensions[k, i] = np.nan
                 continue
-            f, mg = eval_pose(W, wreq, tmin, tmax, combos, kind, t)
+            if m == n:
+                f, mg = eval_pose(W, wreq, tmin, tmax, combos, kind, t)
+            else:
+                f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr)
             feasible[k] = 1 if f else 0
             margin[k] = mg
             for i in range(m):
@@ -490,6 +1086,14 @@ def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax
     a0y = A[0, 1] - Rb[0, 1]
     a1x = A[1, 0] - Rb[1, 0]
     a1y = A[1, 1] - Rb[1, 1]
+    # scalars hoisted out of the loop: the outputs could alias these arrays,
+    # which would otherwise force a reload per pose
+    w0 = wreq[0, 0]
+    w1 = wreq[0, 1]
+    tn0 = tmin[0]
+    tn1 = tmin[1]
+    tx0 = tmax[0]
+    tx1 = tmax[1]
     for b in nb.prange(nblocks):
         k0 = b * bsize
         k1 = min(count, k0 + bsize)
@@ -540,15 +1144,15 @@ def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax
             i11 = u0x * inv
             r0 = math.sqrt(i00 * i00 + i01 * i01)
             r1 = math.sqrt(i10 * i10 + i11 * i11)
-            t0 = i00 * wreq[0, 0] + i01 * wreq[0, 1]
-            t1 = i10 * wreq[0, 0] + i11 * wreq[0, 1]
-            s = min(min(t0 - tmin[0], tmax[0] - t0) / r0, min(t1 - tmin[1], tmax[1] - t1) / r1)
+            t0 = i00 * w0 + i01 * w1
+            t1 = i10 * w0 + i11 * w1
+            s = min(min(t0 - tn0, tx0 - t0) / r0, min(t1 - tn1, tx1 - t1) / r1)
             inb = s >= 0.0
-            for v in range(1, nv):
-                q0 = i00 * wreq[v, 0] + i01 * wreq[v, 1]
-                q1 = i10 * wreq[v, 0] + i11 * wreq[v, 1]
-                s = min(s, min(min(q0 - tmin[0], tmax[0] - q0) / r0,
-                               min(q1 - tmin[1], tmax[1] - q1) / r1))
+            if nv > 1:
+                for v in range(1, nv):
+                    q0 = i00 * wreq[v, 0] + i01 * wreq[v, 1]
+                    q1 = i10 * wreq[v, 0] + i11 * wreq[v, 1]
+                    s = min(s, min(min(q0 - tn0, tx0 - q0) / r0, min(q1 - tn1, tx1 - q1) / r1))
             margin[k] = s
             feasible[k] = 1 if s >= 0.0 else 0
             tensions[k, 0] = t0 if inb else np.nan
