@@ -531,7 +531,7 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
         on_record: Callable[[dict], None] | None = None,
         progress: Callable[[int, int], None] | None = None,
         chunk: int | None = None, start_method: str = "spawn",
-        connect_timeout: float = 10.0) -> RunStats:
+        connect_timeout: float = 10.0, pool: bool | None = None) -> RunStats:
     """Evaluate every variant of ``plan`` not in ``skip``; rows go to ``on_record`` as they finish.
 
     Parameters
@@ -556,6 +556,9 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
         How pool workers start (``spawn``; see the module notes on ``fork``).
     connect_timeout : float
         Seconds to wait for a Dask scheduler at an address.
+    pool : bool, optional
+        True: a process pool even for one worker (benchmarks); default: one
+        worker runs in this process.
 
     Returns
     -------
@@ -592,7 +595,7 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
         raise InputError(f"--workers: expected at least 1, got {w}")
     if scheduler:
         _run_dask(job, todo, scheduler, w, chunk, emit, stats, connect_timeout)
-    elif w == 1 or len(todo) <= 1:
+    elif not pool and (w == 1 or len(todo) <= 1):
         stats.backend, stats.workers, stats.chunk = "serial", 1, 1
         if todo:
             _run_serial(job, todo, emit)
