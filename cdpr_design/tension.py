@@ -1,0 +1,312 @@
+"""Tension distribution, capacity margin and wrench closure (numpy / cvxpy API).
+
+Two layers:
+
+- the exact numba kernels of :mod:`cdpr_design._kernels` (hyperplane
+  shifting on a basis factorisation of W, and the Goldfarb-Idnani active-set
+  solution of the minimum 2-norm tension problem), wrapped here for one
+  pose or one structure matrix;
+- cvxpy problem definitions (:func:`solve_cvxpy`) for every objective the
+  ``pose --objective`` option offers (2-norm, infinity-norm and 1-norm of the
+  tensions, each optionally weighted).  They cover what the kernels do not
+  and are the reference the kernels are tested against.
+
+References
+----------
+Gouttefarde & Krut, "Characterization of parallel manipulator available
+wrench set facets", ARK 2010; Bouchard, Gosselin & Moore, ASME J. Mech.
+Robotics 2(1), 2010 (hyperplane shifting); Guay, Cardou, Cruz-Ruiz & Caro,
+ICRA 2014 (capacity margin); Goldfarb & Idnani, Math. Programming 27, 1983
+(dual active-set QP).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _kernels as K
+from . import kinematics as kin
+from .model import Design
+
+KINDS = {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
+         "wrench-closure": K.KIND_WRENCH_CLOSURE}
+OBJECTIVES = ("min-norm", "min-max", "min-sum")
+
+
+def combinations(m: int, n: int) -> np.ndarray:
+    """All subsets of n-1 of the m cables, a (C(m, n-1), n-1) int64 array."""
+    c = list(itertools.combinations(range(m), max(n - 1, 0)))
+    return np.array(c, dtype=np.int64).reshape(len(c), max(n - 1, 0))
+
+
+def _arr(x, shape=None) -> np.ndarray:
+    a = np.ascontiguousarray(np.asarray(x, dtype=float))
+    if shape is not None:
+        a = a.reshape(shape)
+    return a
+
+
+def _check_weights(weights, m: int) -> np.ndarray | None:
+    if weights is None:
+        return None
+    w = np.asarray(weights, dtype=float).reshape(-1)
+    if w.size != m:
+        raise ValueError(f"weights: expected {m} numbers (one per cable), got {w.size}")
+    if not np.all(np.isfinite(w)) or np.any(w <= 0):
+        raise ValueError("weights: expected finite positive numbers")
+    return w
+
+
+# ----------------------------------------------------------------------------
+# Kernel wrappers (one structure matrix)
+# ----------------------------------------------------------------------------
+
+
+def evaluate(W, wreq, tmin, tmax, kind: str = "static") -> tuple[bool, float, np.ndarray]:
+    """Feasibility, capacity margin [N] and min 2-norm tensions [N] for one W.
+
+    Parameters
+    ----------
+    W : (n, m) structure matrix.
+    wreq : (nv, n) or (n,) required wrenches W t = w [N, N m]; row 0 is the
+        nominal one (its tensions are returned).
+    tmin, tmax : (m,) tension bounds [N].
+    kind : 'static' (row 0 only), 'wrench-feasible' (every row must be
+        feasible) or 'wrench-closure' (positive spanning, bounds ignored).
+
+    Returns
+    -------
+    feasible : bool
+    margin : float
+        Capacity margin (hyperplane shifting), NaN when rank W < n.
+    tensions : (m,) array
+        Minimum 2-norm feasible tensions at row 0, NaN where there are none.
+    """
+    W = _arr(W)
+    n, m = W.shape
+    wreq = _arr(wreq).reshape(-1, n)
+    t = np.empty(m)
+    f, mg = K.eval_pose(W, wreq, _arr(tmin, (m,)), _arr(tmax, (m,)), combinations(m, n),
+                        KINDS[kind], t)
+    return bool(f), float(mg), t
+
+
+def min_norm(W, w, tmin, tmax, weights=None) -> np.ndarray | None:
+    """Exact minimum (weighted) 2-norm tensions: min sum_i c_i t_i^2, W t = w, bounds.
+
+    Weights c_i > 0 are handled by the change of variables t'_i = sqrt(c_i) t_i
+    (W' = W diag(c)^-1/2, bounds scaled), which keeps the problem a projection.
+    Returns None when no tensions within the bounds balance w, or rank W < n.
+    Solved by the Goldfarb-Idnani kernel (:func:`cdpr_design._kernels.min_norm_tensions`).
+    """
+    W = _arr(W)
+    n, m = W.shape
+    tmin, tmax = _arr(tmin, (m,)), _arr(tmax, (m,))
+    c = _check_weights(weights, m)
+    s = np.ones(m) if c is None else np.sqrt(c)
+    Ws = np.ascontiguousarray(W / s[None, :])
+    t = np.empty(m)
+    ok = K.min_norm_tensions(Ws, _arr(w, (n,)), tmin * s, tmax * s, t, K.make_scratch(n, m, 1))
+    if not ok:
+        return None
+    return np.clip(t / s, tmin, tmax)
+
+
+def capacity_margin(W, wreq, tmin, tmax) -> float:
+    """Capacity margin [N] of the wrenches ``wreq`` (hyperplane shifting kernel).
+
+    The smallest signed distance from a required wrench to a facet of the
+    available wrench set {W t : t_min <= t <= t_max}; negative = the largest
+    facet violation; NaN when rank W < n.
+    """
+    W = _arr(W)
+    n, m = W.shape
+    wreq = _arr(wreq).reshape(-1, n)
+    if m == n:
+        t = np.empty(m)
+        ok, mg = K.square_eval(W, wreq, _arr(tmin, (m,)), _arr(tmax, (m,)), t)
+        return float(mg) if ok else float("nan")
+    scr = K.make_scratch(n, m, wreq.shape[0])
+    if m < n or not K.basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+        return float("nan")
+    _, mg, _ = K.hsm_factored(W, wreq, wreq.shape[0], _arr(tmin, (m,)), _arr(tmax, (m,)), scr)
+    return float(mg)
+
+
+def wrench_closure(W) -> bool:
+    """True when the columns of W positively span R^n (rank n and W t = 0 for some t > 0)."""
+    W = _arr(W)
+    n, m = W.shape
+    if m <= n:
+        return False
+    scr = K.make_scratch(n, m, 1)
+    if not K.basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+        return False
+    zeros = np.zeros((1, n))
+    _, _, closure = K.hsm_factored(W, zeros, 1, np.zeros(m), np.ones(m), scr)
+    return bool(closure)
+
+
+# ----------------------------------------------------------------------------
+# cvxpy problem definitions (the reference, and the other objectives)
+# ----------------------------------------------------------------------------
+
+
+def cvxpy_problem(W, w, tmin, tmax, objective: str = "min-norm", weights=None):
+    """The tension distribution problem as a cvxpy Problem and its variable.
+
+    ``objective``: 'min-norm' (min sum_i c_i t_i^2), 'min-max'
+    (min max_i c_i t_i) or 'min-sum' (min sum_i c_i t_i), with weights c
+    (default 1); subject to W t = w and t_min <= t <= t_max.
+    """
+    import cvxpy as cp
+
+    W = np.asarray(W, dtype=float)
+    n, m = W.shape
+    c = _check_weights(weights, m)
+    c = np.ones(m) if c is None else c
+    t = cp.Variable(m)
+    if objective == "min-norm":
+        obj = cp.Minimize(cp.sum(cp.multiply(c, cp.square(t))))
+    elif objective == "min-max":
+        obj = cp.Minimize(cp.max(cp.multiply(c, t)))
+    elif objective == "min-sum":
+        obj = cp.Minimize(c @ t)
+    else:
+        raise ValueError(f"objective: expected one of {', '.join(OBJECTIVES)}, got {objective!r}")
+    cons = [W @ t == np.asarray(w, dtype=float).reshape(n),
+            t >= np.asarray(tmin, dtype=float), t <= np.asarray(tmax, dtype=float)]
+    return cp.Problem(obj, cons), t
+
+
+def solve_cvxpy(W, w, tmin, tmax, objective: str = "min-norm", weights=None,
+                solver: str | None = None, accurate: bool = False) -> np.ndarray | None:
+    """Solve :func:`cvxpy_problem`; the tensions [N], or None when infeasible.
+
+    Default solvers: OSQP (polished) for the 2-norm problem, Clarabel for
+    the linear programs (min-max, min-sum).  ``accurate=True`` uses Clarabel
+    with tight tolerances for every objective (the test oracle).
+    """
+    import cvxpy as cp
+
+    prob, t = cvxpy_problem(W, w, tmin, tmax, objective, weights)
+    if accurate or (solver or "").upper() == "CLARABEL":
+        kw = dict(solver=cp.CLARABEL, tol_gap_abs=1e-12, tol_gap_rel=1e-12, tol_feas=1e-12)
+    elif solver is not None:
+        kw = dict(solver=solver.upper())
+    elif objective == "min-norm":
+        kw = dict(solver=cp.OSQP, eps_abs=1e-9, eps_rel=1e-9, polish=True, max_iter=100000)
+    else:
+        kw = dict(solver=cp.CLARABEL)
+    try:
+        prob.solve(**kw)
+    except cp.error.SolverError:
+        return None
+    if prob.status not in ("optimal", "optimal_inaccurate") or t.value is None:
+        return None
+    return np.clip(np.asarray(t.value, dtype=float), tmin, tmax)
+
+
+# ----------------------------------------------------------------------------
+# One pose of a design
+# ----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class PoseAnalysis:
+    """Statics of one pose. Infeasible poses are flags and NaNs, not errors.
+
+    Attributes
+    ----------
+    pose : (ncoords,) array, the pose in the motion's coordinates.
+    kind, objective : str
+    feasible : bool
+        static / wrench-feasible: every required wrench is balanced within
+        the bounds (and tensions were found); wrench-closure: W positively spans R^n.
+    margin : float
+        Capacity margin [N] over the required wrenches (NaN if rank W < n).
+    tensions : (m,) array
+        Tensions [N] at the nominal wrench for the objective; NaN where none.
+    W : (n, m) structure matrix.
+    wrenches : (nv, n) required wrenches; row 0 the nominal one (gravity only).
+    lengths : (m,) cable lengths [m].
+    rank_ok : bool
+        rank W = n and no cable has zero length.
+    closure : bool
+        W positively spans R^n (whatever ``kind``).
+    """
+
+    pose: np.ndarray
+    kind: str
+    objective: str
+    feasible: bool
+    margin: float
+    tensions: np.ndarray
+    W: np.ndarray
+    wrenches: np.ndarray
+    lengths: np.ndarray
+    rank_ok: bool
+    closure: bool
+
+
+def required_wrenches(design: Design, pose, kind: str = "static") -> np.ndarray:
+    """Required-wrench vertices at a pose, (nv, n): row 0 = -gravity; for
+    ``wrench-feasible`` every vertex of ``workspace.external_wrench`` added."""
+    g = kin.gravity_wrench(design, pose)
+    rows = [-g]
+    box = design.workspace.external_wrench
+    if kind == "wrench-feasible" and box is not None:
+        lo, hi = np.asarray(box.lower, float), np.asarray(box.upper, float)
+        choices = [(lo[i],) if lo[i] == hi[i] else (lo[i], hi[i]) for i in range(lo.size)]
+        for v in itertools.product(*choices):
+            rows.append(-(g + np.asarray(v)))
+    return np.ascontiguousarray(np.array(rows, dtype=float))
+
+
+def analyse_pose(design: Design, pose, kind: str = "static", objective: str = "min-norm",
+                 weights=None, solver: str | None = None) -> PoseAnalysis:
+    """Feasibility, capacity margin and tension distribution at one pose.
+
+    Parameters
+    ----------
+    design : Design
+    pose : sequence of float, the motion's pose coordinates.
+    kind : 'static' | 'wrench-feasible' | 'wrench-closure'
+    objective : 'min-norm' | 'min-max' | 'min-sum'
+        Tension objective at the nominal wrench: 2-norm (exact kernel, also
+        weighted), infinity-norm or 1-norm (cvxpy).
+    weights : (m,) positive, optional; per-cable weights of the objective.
+    """
+    if kind not in KINDS:
+        raise ValueError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
+    if objective not in OBJECTIVES:
+        raise ValueError(f"objective: expected one of {', '.join(OBJECTIVES)}, got {objective!r}")
+    m, n = design.m, design.n
+    c = _check_weights(weights, m)
+    pose = np.asarray(pose, dtype=float).reshape(-1)
+    geo = kin.cable_geometry(design, pose)
+    W = np.ascontiguousarray(kin.structure_matrix(design, pose))
+    wreq = required_wrenches(design, pose, kind)
+    tmin, tmax = design.tension_min, design.tension_max
+    zero_len = bool(np.any(geo.lengths <= 1e-12))
+    nan = np.full(m, np.nan)
+    if zero_len:
+        return PoseAnalysis(pose, kind, objective, False, float("nan"), nan, W, wreq,
+                            geo.lengths, False, False)
+    feasible, margin, t = evaluate(W, wreq, tmin, tmax, kind)
+    rank_ok = bool(np.isfinite(margin))
+    closure = wrench_closure(W) if rank_ok else False
+    has_t = bool(np.all(np.isfinite(t)))
+    if has_t and (objective != "min-norm" or c is not None):
+        if objective == "min-norm":
+            t2 = min_norm(W, wreq[0], tmin, tmax, weights=c)
+        else:
+            t2 = solve_cvxpy(W, wreq[0], tmin, tmax, objective, c, solver=solver)
+        t = nan if t2 is None else t2
+        if t2 is None and kind != "wrench-closure":
+            feasible = False
+    return PoseAnalysis(pose, kind, objective, bool(feasible), float(margin), t, W, wreq,
+                        geo.lengths, rank_ok, closure)

@@ -1,0 +1,291 @@
+"""The general (m != n) kernels against slow obvious references.
+
+- capacity margin: a brute-force hyperplane-shifting method written plainly in
+  numpy (an SVD per subset of n-1 columns; Gouttefarde & Krut, ARK 2010;
+  Bouchard, Gosselin & Moore, ASME JMR 2010);
+- feasibility: scipy ``linprog`` (HiGHS) on W t = w, t_min <= t <= t_max;
+- minimum 2-norm tensions: cvxpy (Clarabel, tight tolerances), the problem
+  definition of :func:`cdpr_design.tension.cvxpy_problem`;
+- wrench closure: the linear program max s, W t = 0, t_i >= s, sum t = 1.
+
+Random robots of every motion type (2T, 1R2T, 3T, 3R3T) with m = n .. n+4
+cables; 10,000 poses in all.  Feasibility must agree outside a band of 1e-7
+(relative to the largest tension bound) around the boundary.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import cvxpy as cp
+import numpy as np
+import pytest
+from scipy.optimize import linprog
+
+from cdpr_design import _kernels as K
+from cdpr_design import kinematics as kin
+from cdpr_design.tension import combinations
+
+MOTIONS = {  # (dim, wrench rows of [fx, fy, fz, mx, my, mz])
+    "2T": (2, (0, 1)),
+    "1R2T": (2, (0, 1, 5)),
+    "3T": (3, (0, 1, 2)),
+    "3R3T": (3, (0, 1, 2, 3, 4, 5)),
+}
+POSES_PER_CASE = 500  # 4 motions x 5 cable counts x 500 = 10,000 poses
+BAND = 1e-7
+
+
+# ----------------------------------------------------------------------------
+# Slow obvious references
+# ----------------------------------------------------------------------------
+
+
+def plain_W(A, B, p, R, rows):
+    """Structure matrix written out: column i = [u_i ; (R b_i) x u_i][rows]."""
+    Rb = B @ R.T
+    l = A - p[None, :] - Rb
+    u = l / np.linalg.norm(l, axis=1)[:, None]
+    full = np.hstack([u, np.cross(Rb, u)])
+    return np.ascontiguousarray(full[:, rows].T)
+
+
+def hsm_bruteforce(W, wreq, tmin, tmax, subsets=None):
+    """Hyperplane shifting, plainly: for every n-1 columns the normal from an SVD.
+
+    Returns the margin of every row of ``wreq`` (NaN when rank W < n).
+    """
+    n, m = W.shape
+    if np.linalg.matrix_rank(W) < n:
+        return np.full(len(wreq), np.nan)
+    if subsets is None:
+        subsets = np.array(list(itertools.combinations(range(m), n - 1)), dtype=int)
+    Ws = W[:, subsets].transpose(1, 0, 2)                       # (C, n, n-1)
+    U, s, _ = np.linalg.svd(Ws, full_matrices=True)
+    nus = U[:, :, -1]                                           # (C, n)
+    keep = s[:, -1] > 1e-10 * s[:, 0]
+    nus = nus[keep]
+    L = nus @ W                                                 # l_j per facet
+    half = 0.5 * np.abs(L) @ (tmax - tmin)
+    c = nus @ (W @ (0.5 * (tmin + tmax)))
+    d = np.abs(c[:, None] - nus @ wreq.T)                       # (C, nv)
+    return np.min(half[:, None] - d, axis=0)
+
+
+def lp_feasible(W, w, tmin, tmax):
+    res = linprog(np.zeros(W.shape[1]), A_eq=W, b_eq=w, bounds=list(zip(tmin, tmax)),
+                  method="highs")
+    return res.status == 0
+
+
+def lp_closure(W):
+    """max s: W t = 0, t_i >= s, sum t = 1; the columns positively span iff s > 0 (rank n)."""
+    n, m = W.shape
+    c = np.zeros(m + 1)
+    c[-1] = -1.0
+    A_eq = np.zeros((n + 1, m + 1))
+    A_eq[:n, :m] = W
+    A_eq[n, :m] = 1.0
+    b_eq = np.zeros(n + 1)
+    b_eq[n] = 1.0
+    A_ub = np.hstack([-np.eye(m), np.ones((m, 1))])
+    res = linprog(c, A_ub=A_ub, b_ub=np.zeros(m), A_eq=A_eq, b_eq=b_eq,
+                  bounds=[(0, None)] * m + [(None, 1.0)], method="highs")
+    if res.status == 2:  # no t >= 0, t != 0 with W t = 0: no positive spanning
+        return -1.0
+    assert res.status == 0
+    return -res.fun
+
+
+class MinNormOracle:
+    """cvxpy min 1/2 |t|^2, W t = w, bounds, with Parameters (compiled once per shape)."""
+
+    def __init__(self, n, m):
+        self.W = cp.Parameter((n, m))
+        self.w = cp.Parameter(n)
+        self.lo = cp.Parameter(m)
+        self.hi = cp.Parameter(m)
+        self.t = cp.Variable(m)
+        self.prob = cp.Problem(cp.Minimize(cp.sum_squares(self.t)),
+                               [self.W @ self.t == self.w, self.t >= self.lo, self.t <= self.hi])
+
+    def __call__(self, W, w, tmin, tmax):
+        self.W.value, self.w.value, self.lo.value, self.hi.value = W, w, tmin, tmax
+        self.prob.solve(solver=cp.CLARABEL, tol_gap_abs=1e-13, tol_gap_rel=1e-13,
+                        tol_feas=1e-13, tol_ktratio=1e-10)
+        return None if self.t.value is None else np.asarray(self.t.value)
+
+
+def random_robot(rng, motion, m):
+    dim, rows = MOTIONS[motion]
+    A = np.zeros((m, 3))
+    B = np.zeros((m, 3))
+    A[:, :dim] = rng.uniform(-2.0, 2.0, (m, dim))
+    B[:, :dim] = rng.uniform(-0.3, 0.3, (m, dim))
+    tmin = rng.uniform(0.0, 10.0, m)
+    tmax = tmin + rng.uniform(20.0, 200.0, m)
+    return A, B, np.array(rows), tmin, tmax
+
+
+def random_pose(rng, motion):
+    dim, _ = MOTIONS[motion]
+    p = np.zeros(3)
+    p[:dim] = rng.uniform(-1.0, 1.0, dim)
+    ang = np.zeros(3)
+    if motion == "1R2T":
+        ang[2] = rng.uniform(-0.5, 0.5)
+    elif motion == "3R3T":
+        ang[:] = rng.uniform(-0.4, 0.4, 3)
+    return p, kin.rotation_matrix(*ang)
+
+
+CASES = [(mo, k) for mo in MOTIONS for k in range(5)]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("motion,extra", CASES, ids=[f"{mo}-m=n+{k}" for mo, k in CASES])
+def test_against_references(motion, extra):
+    rng = np.random.default_rng(1000 + 10 * list(MOTIONS).index(motion) + extra)
+    n = len(MOTIONS[motion][1])
+    m = n + extra
+    combos = combinations(m, n)
+    subsets = np.array(list(itertools.combinations(range(m), n - 1)), dtype=int)
+    oracle = MinNormOracle(n, m)
+    t = np.empty(m)
+    scr = K.make_scratch(n, m, 3)
+    counts = dict(feasible=0, infeasible=0, band=0, tensions=0, closure=0)
+    robot = None
+    for k in range(POSES_PER_CASE):
+        if k % 25 == 0:
+            robot = random_robot(rng, motion, m)
+        A, B, rows, tmin, tmax = robot
+        p, R = random_pose(rng, motion)
+        W = plain_W(A, B, p, R, rows)
+        # required wrenches: W t0 for t0 around the bounds (about half feasible),
+        # plus two more vertices for the wrench-feasible kind
+        # (half of them pushed off by a random wrench: mostly infeasible)
+        push = (k % 2) * rng.uniform(0.0, 0.5) * float(np.sum(tmax))
+        wreq = np.array([W @ rng.uniform(tmin, tmax) + push * rng.normal(size=n)
+                         for _ in range(3)])
+        scale = float(tmax.max())
+
+        # --- static: row 0 only
+        f, mg = K.eval_pose(W, wreq, tmin, tmax, combos, K.KIND_STATIC, t)
+        f2, mg2 = K.eval_general(W, wreq, tmin, tmax, combos, K.KIND_STATIC, t.copy(), scr)
+        refs = hsm_bruteforce(W, wreq, tmin, tmax, subsets)
+        ref = refs[0]
+        assert np.isfinite(mg) and np.isfinite(ref)
+        assert abs(mg - ref) <= 1e-9 * max(1.0, abs(ref)), (mg, ref)
+        assert abs(mg2 - ref) <= 1e-9 * max(1.0, abs(ref)), (mg2, ref)
+        assert f == f2
+        if f:  # feasible => tensions, balanced and within the bounds
+            assert np.all(np.isfinite(t))
+            assert np.all(t >= tmin) and np.all(t <= tmax)
+            assert np.allclose(W @ t, wreq[0], atol=1e-8 * scale)
+        if abs(ref) <= BAND * scale:
+            counts["band"] += 1
+        else:
+            lpf = lp_feasible(W, wreq[0], tmin, tmax)
+            assert f == lpf == (ref >= 0), (f, lpf, ref)
+            counts["feasible" if f else "infeasible"] += 1
+            if f:
+                tref = oracle(W, wreq[0], tmin, tmax)
+                assert tref is not None
+                assert np.max(np.abs(t - tref)) <= 1e-6, np.max(np.abs(t - tref))
+                counts["tensions"] += 1
+            else:
+                assert np.all(np.isnan(t))
+
+        # --- wrench-feasible: every row; the margin is the minimum over the rows
+        f, mg = K.eval_pose(W, wreq, tmin, tmax, combos, K.KIND_WRENCH_FEASIBLE, t)
+        ref = refs.min()
+        assert abs(mg - ref) <= 1e-9 * max(1.0, abs(ref)), (mg, ref)
+        if abs(ref) > BAND * scale:
+            assert f == (ref >= 0)
+            if f:
+                assert np.all(np.isfinite(t))
+                if k % 10 == 0:
+                    assert all(lp_feasible(W, w, tmin, tmax) for w in wreq)
+
+        # --- wrench closure (bounds ignored); m = n never positively spans
+        f, mg = K.eval_pose(W, wreq, tmin, tmax, combos, K.KIND_WRENCH_CLOSURE, t)
+        if k % 10 == 0 or m == n:
+            s = lp_closure(W) if m > n else -1.0
+            if abs(s) > BAND:
+                assert f == (s > 0), (f, s)
+            counts["closure"] += int(f)
+    # the random cases exercise both sides of the boundary
+    assert counts["feasible"] > 0.2 * POSES_PER_CASE, counts
+    assert counts["infeasible"] > 0.2 * POSES_PER_CASE, counts
+
+
+def test_square_matches_closed_form():
+    """eval_general on m = n agrees with the lead's closed form square_eval."""
+    rng = np.random.default_rng(7)
+    for n in (2, 3, 6):
+        for _ in range(200):
+            W = rng.normal(size=(n, n))
+            w = W @ rng.uniform(-5, 25, n)
+            tmin, tmax = np.zeros(n), np.full(n, 20.0)
+            t1 = np.empty(n)
+            ok, mg = K.square_eval(W, w[None, :], tmin, tmax, t1)
+            t2 = np.empty(n)
+            f, mg2 = K.eval_general(W, w[None, :], tmin, tmax, combinations(n, n), 0, t2,
+                                    K.make_scratch(n, n, 1))
+            assert abs(mg - mg2) <= 1e-9 * max(1.0, abs(mg))
+            assert f == (mg2 >= 0)
+            if f:
+                assert np.allclose(t1, t2, atol=1e-9)
+
+
+@pytest.mark.parametrize("motion", list(MOTIONS))
+def test_rank_deficient_poses_are_infeasible(motion):
+    """Coincident cables, a zero-length cable, a planar cable set in 3T: flagged, NaN margin."""
+    rng = np.random.default_rng(3)
+    n = len(MOTIONS[motion][1])
+    m = n + 2
+    A, B, rows, tmin, tmax = random_robot(rng, motion, m)
+    p, R = random_pose(rng, motion)
+    W = plain_W(A, B, p, R, rows)
+    combos = combinations(m, n)
+    t = np.empty(m)
+    w = np.zeros(n)
+    # all columns copies of two cables: rank 2 < n (n >= 3), or parallel ones for n = 2
+    Wc = W.copy()
+    if n == 2:
+        Wc[:, :] = W[:, [0]]
+        Wc[:, 1::2] *= 2.0
+    else:
+        Wc[:, 2:] = W[:, [0, 1] * ((m - 2) // 2) + [0] * ((m - 2) % 2)]
+    for kind in (0, 1, 2):
+        f, mg = K.eval_pose(np.ascontiguousarray(Wc), w[None, :], tmin, tmax, combos, kind, t)
+        assert not f and np.isnan(mg) and np.all(np.isnan(t))
+    # a zero column (zero-length cable)
+    Wz = W.copy()
+    Wz[:, 1] = 0.0
+    for kind in (0, 1, 2):
+        f, mg = K.eval_pose(Wz, (W @ (0.5 * (tmin + tmax)))[None, :], tmin, tmax, combos, kind, t)
+        assert not f and np.isnan(mg) and np.all(np.isnan(t))
+
+
+def test_min_norm_kernel_detects_infeasibility_and_is_exact():
+    """min_norm_tensions alone: infeasible <=> linprog infeasible; optimum = cvxpy's."""
+    rng = np.random.default_rng(11)
+    for _ in range(150):
+        n = int(rng.choice([2, 3, 6]))
+        m = n + int(rng.integers(1, 5))
+        W = rng.normal(size=(n, m))
+        tmin = rng.uniform(0, 5, m)
+        tmax = tmin + rng.uniform(1, 30, m)
+        w = W @ rng.uniform(tmin - 5, tmax + 5)
+        t = np.empty(m)
+        ok = K.min_norm_tensions(W, w, tmin, tmax, t, K.make_scratch(n, m, 1))
+        ref = hsm_bruteforce(W, w[None, :], tmin, tmax)[0]
+        if abs(ref) < 1e-7 * tmax.max():
+            continue
+        assert ok == lp_feasible(W, w, tmin, tmax)
+        if ok:
+            tref = MinNormOracle(n, m)(W, w, tmin, tmax)
+            assert np.max(np.abs(t - tref)) <= 1e-6
+        else:
+            assert np.all(np.isnan(t))
