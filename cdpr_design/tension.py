@@ -36,6 +36,17 @@ KINDS = {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
 OBJECTIVES = ("min-norm", "min-max", "min-sum")
 
 
+def _osqp_polish_key() -> str:
+    try:
+        from importlib.metadata import version
+        return "polishing" if int(version("osqp").split(".")[0]) >= 1 else "polish"
+    except Exception:  # pragma: no cover - metadata missing
+        return "polish"
+
+
+_OSQP_POLISH = _osqp_polish_key()
+
+
 def combinations(m: int, n: int) -> np.ndarray:
     """All subsets of n-1 of the m cables, a (C(m, n-1), n-1) int64 array."""
     c = list(itertools.combinations(range(m), max(n - 1, 0)))
@@ -198,7 +209,8 @@ def solve_cvxpy(W, w, tmin, tmax, objective: str = "min-norm", weights=None,
     elif solver is not None:
         kw = dict(solver=solver.upper())
     elif objective == "min-norm":
-        kw = dict(solver=cp.OSQP, eps_abs=1e-9, eps_rel=1e-9, polish=True, max_iter=100000)
+        kw = dict(solver=cp.OSQP, eps_abs=1e-9, eps_rel=1e-9, max_iter=100000)
+        kw[_OSQP_POLISH] = True
     else:
         kw = dict(solver=cp.CLARABEL)
     try:
