@@ -56,6 +56,11 @@ class Kind(str, Enum):
 KindOpt = Annotated[Kind, typer.Option("--kind", help="static | wrench-feasible | wrench-closure.")]
 
 
+class Orientations(str, Enum):
+    total = "total"
+    range = "range"
+
+
 def command(fn):
     """Turn the package's errors into exit codes and messages (no tracebacks for bad input)."""
 
@@ -175,28 +180,42 @@ def summary_table(title: str, rows: list[tuple[str, object]]) -> Table:
 # ----------------------------------------------------------------------------
 
 
-def run_workspace(design, out_dir, kind: str, step, force: bool, quiet: bool):
-    """Sweep, stream ``workspace.csv``, write pictures and ``summary.json``; return the result."""
+def run_workspace(design, out_dir, kind: str, step, force: bool, quiet: bool,
+                  collisions: bool = False, orientations: str | None = None):
+    """Sweep, stream ``workspace.csv``, write pictures and ``summary.json``; return the result.
+
+    ``collisions``: intersect feasibility with the interference checks (column
+    ``collision_free``); ``orientations``: ``total`` or ``range`` orientation
+    workspace (rotational motions; extra columns, ``orientation_workspace.png``).
+    """
+    from . import hardware
     from . import report
     from . import workspace as ws
 
     grid = ws.make_grid(design, step, force)
-    header = report.workspace_header(design)
+    header = report.workspace_header(design) + hardware.extra_columns(design, collisions, orientations)
     csv_file = out_dir.stream("workspace.csv")
     try:
         csv_file.write(",".join(header) + "\n")
 
         def on_chunk(chunk):
-            csv_file.write(report.workspace_rows(chunk))
+            csv_file.write(report.workspace_rows(chunk, extra=hardware.chunk_extra(chunk)))
 
         with progress_bar(f"workspace {design.name}", quiet, min_total=500_000) as cb:
-            result = ws.run(design, kind=kind, grid=grid, on_chunk=on_chunk, progress=cb, force=True)
+            if orientations:
+                result = ws.run_orientations(design, orientations, kind=kind, grid=grid, on_chunk=on_chunk,
+                                             progress=cb, force=True, interference=collisions)
+            else:
+                result = ws.run(design, kind=kind, grid=grid, on_chunk=on_chunk, progress=cb, force=True,
+                                interference=collisions)
         csv_file.commit()
     except BaseException:
         csv_file.abort()
         raise
     out_dir.write_json("summary.json", result.summary())
     report.save_workspace_pictures(out_dir, result)
+    if getattr(result, "orientation_maps", None) is not None:
+        report.save_orientation_picture(out_dir, result)
     return result
 
 
@@ -211,11 +230,19 @@ def workspace(
     quiet: QuietOpt = False,
     force: ForceOpt = False,
     overwrite: OverwriteOpt = False,
+    collisions: Annotated[bool, typer.Option(
+        "--collisions", help="Also check cable-cable, cable-effector and effector-frame interference; "
+                             "feasible = statics feasible and collision free (column collision_free).")] = False,
+    orientations: Annotated[Optional[Orientations], typer.Option(
+        "--orientations", help="total: feasible for every orientation of workspace.orientation_set; "
+                               "range: largest feasible orientation range per position "
+                               "(workspace.orientation_range). 1R2T and 3R3T.")] = None,
 ):
     """Grid sweep of the workspace: workspace.csv, workspace.png, tension_map.png, summary.json."""
     design = load_design(spec)
     out_dir = output_dir(design, out, overwrite)
-    result = run_workspace(design, out_dir, kind.value, step, force, quiet or json_)
+    result = run_workspace(design, out_dir, kind.value, step, force, quiet or json_, collisions,
+                           orientations.value if orientations is not None else None)
     s = result.summary()
     if json_:
         emit_json(s)
@@ -226,8 +253,12 @@ def workspace(
         [("poses", f"{s['poses']:,}"), ("feasible", f"{s['feasible']:,}"),
          ("fraction", f"{100 * s['fraction']:.2f} %"), ("measure", f"{s['measure']:.4g} {unit}"),
          ("min margin [N]", s["min_margin"]), ("max margin [N]", s["max_margin"]),
-         ("max tension [N]", s["max_tension"]), ("elapsed [s]", s["elapsed_s"]),
-         ("files", str(out_dir.path))]))
+         ("max tension [N]", s["max_tension"]), ("elapsed [s]", s["elapsed_s"])]
+        + ([("collision free", f"{s['collision_free']:,}"),
+            ("feasible before interference", f"{s['feasible_statics']:,}")] if "collision_free" in s else [])
+        + ([("orientations", f"{s['orientation_mode']} ({s['orientation_count']} samples)")]
+           if "orientation_mode" in s else [])
+        + [("files", str(out_dir.path))]))
 
 
 # ----------------------------------------------------------------------------

@@ -973,3 +973,86 @@ def write_sweep(out: OutputDir, header: list[str], rows: list[list], best_header
         finally:
             plt.close(fig)
     return paths
+
+
+# ----------------------------------------------------------------------------
+# Orientation workspaces (workspace --orientations total|range)
+# ----------------------------------------------------------------------------
+
+
+def orientation_figure(result):
+    """Orientation workspace picture: the fraction of the orientation set that is
+    feasible (``total``; the total orientation workspace outlined) or the
+    orientation range scale s (``range``: the largest feasible box is
+    nominal +- s * max) over the grid; a z-slice stack for spatial motions."""
+    plt = _plt()
+    d = result.design
+    om = result.orientation_maps
+    val = np.asarray(om.value, float)
+    feas = result.feasible_map.astype(bool)
+    rot = d.motion.rotation_coords
+    if om.mode == "total":
+        lo, hi = om.orientations.min(axis=0), om.orientations.max(axis=0)
+        idx = [i - 3 for i in d.motion.pose_index[d.motion.dim:]]
+        box = ", ".join(f"{c} ∈ [{np.degrees(lo[i]):.3g}°, {np.degrees(hi[i]):.3g}°]" for c, i in zip(rot, idx))
+        title = (f"{d.name}: total orientation workspace ({result.kind}) — {100 * result.fraction:.1f} % "
+                 f"of {result.poses:,} positions feasible for all {len(om.orientations)} orientations\n{box}")
+        label = "fraction of the orientation set feasible"
+        vmax = 1.0
+    else:
+        mx = ", ".join(f"{c} ± {np.degrees(s):.3g}°" for c, s in zip(rot, om.scale))
+        title = (f"{d.name}: orientation range per position ({result.kind}) — largest feasible box "
+                 f"s × ({mx})")
+        label = "range scale s (grey: nominal orientation infeasible)"
+        vmax = 1.0
+    cmap = plt.get_cmap("cividis").with_extremes(bad=(0.85, 0.85, 0.85, 1.0))
+    if d.motion.planar:
+        fig, ax = plt.subplots(figsize=(7.5, 6.6))
+        fig.subplots_adjust(left=0.09, right=0.97, bottom=0.08, top=0.88)
+        im = ax.imshow(val.T, origin="lower", extent=_extent(result.map_axes), cmap=cmap, vmin=0.0,
+                       vmax=vmax, interpolation="nearest", aspect="equal", zorder=1)
+        if om.mode == "total" and feas.any():
+            ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
+                       colors="k", linewidths=0.8, zorder=2)
+        _frame_rect(ax, d)
+        ax.plot(d.outlets[:, 0], d.outlets[:, 1], "v", ms=7, mfc="tab:red", mec="k", zorder=5)
+        _pad_limits(ax, d)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        fig.colorbar(im, ax=ax, shrink=0.85, label=label)
+        ax.set_title(title, fontsize=9)
+        return fig
+    zs = _slices(result)
+    ncol = min(3, len(zs))
+    nrow = math.ceil(len(zs) / ncol)
+    fig, axs = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 4.2 * nrow + 0.9), squeeze=False)
+    fig.subplots_adjust(left=0.07, right=0.88, bottom=0.08, top=0.86, wspace=0.3, hspace=0.35)
+    ext = _extent(result.map_axes[:2])
+    im = None
+    for k, ax in enumerate(axs.flat):
+        if k >= len(zs):
+            ax.axis("off")
+            continue
+        iz = zs[k]
+        im = ax.imshow(val[:, :, iz].T, origin="lower", extent=ext, cmap=cmap, vmin=0.0, vmax=vmax,
+                       interpolation="nearest", aspect="equal")
+        _frame_rect(ax, d)
+        ax.plot(d.outlets[:, 0], d.outlets[:, 1], "v", ms=6, mfc="tab:red", mec="k")
+        _pad_limits(ax, d)
+        ax.set_title(f"z = {result.map_axes[2][iz]:.3g} m  ({100 * feas[:, :, iz].mean():.0f} % feasible)",
+                     fontsize=9)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label=label)
+    fig.suptitle(title, fontsize=9)
+    return fig
+
+
+def save_orientation_picture(out: OutputDir, result) -> Path:
+    """``orientation_workspace.png`` of an orientation sweep (:func:`orientation_figure`)."""
+    plt = _plt()
+    fig = orientation_figure(result)
+    try:
+        return out.save_figure("orientation_workspace.png", fig)
+    finally:
+        plt.close(fig)
