@@ -56,6 +56,19 @@ class Kind(str, Enum):
 KindOpt = Annotated[Kind, typer.Option("--kind", help="static | wrench-feasible | wrench-closure.")]
 
 
+class Objective(str, Enum):
+    min_norm = "min-norm"
+    min_max = "min-max"
+    min_sum = "min-sum"
+
+
+ObjectiveOpt = Annotated[Objective, typer.Option(
+    "--objective", help="Tension objective: min-norm (2-norm, exact kernel), min-max (inf-norm) "
+                        "or min-sum (1-norm), both with cvxpy.")]
+WeightsOpt = Annotated[Optional[str], typer.Option(
+    "--weights", help="Per-cable weights of the objective, comma-separated positive numbers.")]
+
+
 class Orientations(str, Enum):
     total = "total"
     range = "range"
@@ -282,12 +295,31 @@ def pose_data(design, result) -> dict:
     }
 
 
+def _reobjective(design, result, objective: str, weights):
+    """Tensions of a pose result for another objective or weights (tension.py)."""
+    import numpy as np
+
+    from . import tension as T
+
+    if not np.all(np.isfinite(result.tensions)):
+        return result
+    tmin, tmax = design.tension_min, design.tension_max
+    if objective == "min-norm":
+        t = T.min_norm(result.W, result.wrench, tmin, tmax, weights=weights)
+    else:
+        t = T.solve_cvxpy(result.W, result.wrench, tmin, tmax, objective, weights)
+    result.tensions = np.full(design.m, np.nan) if t is None else t
+    return result
+
+
 @app.command()
 @command
 def pose(
     spec: SpecArg,
     at: Annotated[str, typer.Option("--at", help="Pose coordinates, comma-separated (e.g. 0.75,0.75).")],
     kind: KindOpt = Kind.static,
+    objective: ObjectiveOpt = Objective.min_norm,
+    weights: WeightsOpt = None,
     json_: JsonOpt = False,
 ):
     """One pose: cable lengths, tensions, feasibility, margin, structure matrix."""
@@ -295,8 +327,16 @@ def pose(
 
     design = load_design(spec)
     p = parse_pose(design, at)
+    c = None
+    if weights is not None:
+        c = parse_numbers(weights, "--weights", design.m, "weights (one per cable)")
+        if any(v <= 0 for v in c):
+            raise InputError(f"--weights: expected positive numbers, got {weights!r}")
     result = ws.evaluate_pose(design, p, kind.value)
+    if objective is not Objective.min_norm or c is not None:
+        result = _reobjective(design, result, objective.value, c)
     data = pose_data(design, result)
+    data["objective"] = objective.value
     if json_:
         emit_json(data)
         return
