@@ -186,3 +186,33 @@ def test_planar_invariance(x, y, phi, sx, sy, ang):
     assert r.margin == pytest.approx(base.margin, rel=1e-9, abs=1e-9)
     if base.feasible:
         assert np.allclose(r.tensions, base.tensions, atol=1e-6)
+
+
+def test_cli_pose_objective_and_weights():
+    import json
+
+    from typer.testing import CliRunner
+
+    from cdpr_design.cli import app
+
+    spec = str(DESIGNS / "ipanema1.yaml")
+    at = "0.5,0.3,1,0,0,0"
+    base = json.loads(CliRunner().invoke(app, ["pose", spec, "--at", at, "--json"]).stdout)
+    assert base["objective"] == "min-norm"
+    for obj in ("min-max", "min-sum"):
+        res = CliRunner().invoke(app, ["pose", spec, "--at", at, "--objective", obj, "--json"])
+        assert res.exit_code == 0, res.output
+        data = json.loads(res.stdout)
+        assert data["objective"] == obj and data["feasible"] and data["margin"] == base["margin"]
+        t = np.array(list(data["tensions"].values()))
+        t0 = np.array(list(base["tensions"].values()))
+        if obj == "min-max":
+            assert t.max() <= t0.max() + 1e-6
+        else:
+            assert t.sum() <= t0.sum() + 1e-6
+    res = CliRunner().invoke(app, ["pose", spec, "--at", at, "--weights", "1,2"])
+    assert res.exit_code == 2 and "--weights" in res.output
+    res = CliRunner().invoke(app, ["pose", spec, "--at", at, "--weights", "1,1,1,1,1,1,1,-1"])
+    assert res.exit_code == 2 and "positive" in res.output
+    res = CliRunner().invoke(app, ["pose", spec, "--at", at, "--objective", "min-foo"])
+    assert res.exit_code == 2
