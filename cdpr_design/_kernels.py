@@ -22,6 +22,8 @@ import numpy as np
 JIT = dict(cache=True, nogil=True, error_model="numpy")
 njit = nb.njit(**JIT)
 njit_parallel = nb.njit(parallel=True, **JIT)
+#: Reassociation (vectorised reductions) without giving up NaN/inf semantics.
+njit_fast = nb.njit(fastmath={"reassoc", "contract", "arcp"}, **JIT)
 
 #: Relative tolerance below which a facet normal or a pivot counts as zero.
 RANK_TOL = 1e-10
@@ -475,7 +477,8 @@ def _null_vector(A, k, mu, minor):
     """Null vector mu (k+1) of A (k, k+1) by the generalised cross product.
 
     mu_f = (-1)^f det(A without column f).  Returns False when A has rank < k
-    (||mu|| below RANK_TOL times the Hadamard bound prod_e ||A_e||).
+    (||mu|| below RANK_TOL times the Hadamard bound prod_e ||A_e||, compared
+    squared).
     """
     if k == 0:
         mu[0] = 1.0
@@ -499,16 +502,18 @@ def _null_vector(A, k, mu, minor):
                     cc += 1
             mu[f] = sign * det_small(minor, k)
             sign = -sign
-    bound = 1.0
+    if k == 1:  # |mu| equals |A_0|: only a zero row makes it vanish
+        return mu[0] != 0.0 or mu[1] != 0.0
+    bound2 = 1.0
     for e in range(k):
         s = 0.0
         for g in range(k + 1):
             s += A[e, g] * A[e, g]
-        bound *= math.sqrt(s)
-    nrm = 0.0
+        bound2 *= s
+    nrm2 = 0.0
     for f in range(k + 1):
-        nrm += mu[f] * mu[f]
-    return bound > 0.0 and math.sqrt(nrm) > RANK_TOL * bound
+        nrm2 += mu[f] * mu[f]
+    return bound2 > 0.0 and nrm2 > RANK_TOL * RANK_TOL * bound2
 
 
 @njit
@@ -525,7 +530,7 @@ def _next_comb(idx, k, nn):
     return True
 
 
-@njit
+@njit_fast
 def hsm_factored(W, wreq, nv, tmin, tmax, scr):
     """Hyperplane shifting on the factored W: capacity margins and wrench closure.
 
