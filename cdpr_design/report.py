@@ -330,8 +330,7 @@ def workspace_figure(result, title_extra: str = ""):
             f"{n} = {np.degrees(v):.3g}°" for n, v in zip(d.motion.rotation_coords, ori))
     if title_extra:
         title += "\n" + title_extra
-    cmap = plt.get_cmap("viridis").copy()
-    cmap.set_bad((0.85, 0.85, 0.85, 1.0))
+    cmap = plt.get_cmap("viridis").with_extremes(bad=(0.85, 0.85, 0.85, 1.0))
     rep = wsmod.representative_pose(result)
     if d.motion.planar:
         fig, ax = plt.subplots(figsize=(7.5, 6.6))
@@ -362,8 +361,11 @@ def workspace_figure(result, title_extra: str = ""):
     zs = _slices(result)
     ncol = min(3, len(zs))
     nrow = math.ceil(len(zs) / ncol)
-    fig, axs = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 4.2 * nrow + 0.8), squeeze=False)
-    fig.subplots_adjust(left=0.07, right=0.88, bottom=0.08, top=0.88, wspace=0.3, hspace=0.35)
+    aspect = _frame_aspect(d)
+    height = (3.9 * aspect + 0.9) * nrow + 0.9
+    fig, axs = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, height), squeeze=False)
+    fig.subplots_adjust(left=0.07, right=0.88, bottom=0.7 / height, top=1 - 0.8 / height,
+                        wspace=0.3, hspace=0.9 / (3.9 * aspect))
     ext = _extent(result.map_axes[:2])
     z_axis = result.map_axes[2]
     im = None
@@ -391,6 +393,12 @@ def _pose_txt(d, pose) -> str:
     return "(" + ", ".join(f"{n} = {v:.3g}" for n, v in zip(d.motion.coords, pose)) + ")"
 
 
+def _frame_aspect(d) -> float:
+    """Height / width of the frame's x-y footprint (panel shape of the pictures)."""
+    lo, hi = np.array(d.frame_lower), np.array(d.frame_upper)
+    return float(np.clip((hi[1] - lo[1]) / (hi[0] - lo[0]), 0.3, 3.0))
+
+
 def _pad_limits(ax, d):
     lo, hi = np.array(d.frame_lower), np.array(d.frame_upper)
     pad = 0.06 * (hi - lo)
@@ -413,13 +421,15 @@ def tension_figure(result):
     vmax = float(finite.max()) if finite.size else 1.0
     if vmax <= vmin:
         vmax = vmin + 1.0
-    cmap = plt.get_cmap("magma").copy()
-    cmap.set_bad((0.85, 0.85, 0.85, 1.0))
+    cmap = plt.get_cmap("magma").with_extremes(bad=(0.85, 0.85, 0.85, 1.0))
     m = d.m
     ncol = min(4, m) if m > 2 else m
     nrow = math.ceil(m / ncol)
-    fig, axs = plt.subplots(nrow, ncol, figsize=(4.4 * ncol + 0.8, 4.2 * nrow + 0.6), squeeze=False)
-    fig.subplots_adjust(left=0.07, right=0.86, bottom=0.1, top=0.86, wspace=0.3, hspace=0.35)
+    aspect = _frame_aspect(d)
+    height = (3.7 * aspect + 0.9) * nrow + 0.7
+    fig, axs = plt.subplots(nrow, ncol, figsize=(4.0 * ncol + 1.4, height), squeeze=False)
+    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.6 / height, top=1 - 0.6 / height,
+                        wspace=0.3, hspace=0.9 / (3.7 * aspect))
     if d.motion.planar:
         img = T
         sub = ""
