@@ -631,7 +631,13 @@ def bridge(
     quiet: QuietOpt = False,
     overwrite: OverwriteOpt = False,
 ):
-    """Gateway PLC <-> simulated robot over ADS: bridge.csv (simulation.csv columns), bridge.json."""
+    """Gateway PLC <-> simulated robot over ADS: bridge.csv (simulation.csv columns), bridge.json.
+
+    Exit status: 0 done; 2 bad input (spec, option, a PLC symbol missing or
+    mistyped: named); 3 the PLC cannot be reached or stopped answering (an
+    addition to the common 0/1/2/130: the log written so far is kept);
+    130 interrupted (Ctrl-C; the log is complete).
+    """
     import signal
 
     import numpy as np
@@ -655,6 +661,7 @@ def bridge(
     if not (math.isfinite(tmo) and tmo > 0):
         raise InputError(f"--timeout: expected a positive number of seconds, got {timeout}")
     layout = PlcLayout.from_design(design)
+    loud = not quiet  # link status (lost, reconnecting) goes to stderr unless --quiet
     quiet = quiet or json_
     plc = None
     if test_plc is not None:
@@ -730,7 +737,7 @@ def bridge(
              + (f", {duration:.3g} s" if duration else ", Ctrl-C to stop"))
         res = br.run(transport, sim, cycle_time=dt, duration=duration, on_row=on_row,
                      should_stop=lambda: stop["flag"], reconnect=reconnect,
-                     on_status=lambda msg: info(quiet, msg))
+                     on_status=lambda msg: info(not loud, msg))
         if stop["flag"] and res.stopped == "stop":
             res.stopped = "interrupted"
     except KeyboardInterrupt:
@@ -746,7 +753,8 @@ def bridge(
                 plc_log = plc.log()
             plc.stop()
     summary = res.summary()
-    summary["delay"] = rows.delay()
+    summary["delay"] = res.delay(design.cable_names)  # set-point read -> motion written (PLC view)
+    summary["delay_model"] = rows.delay()  # bridge.csv: model time (what compare reports)
     if plc_log is not None and plc_log.shape[0] > 8:
         m = design.m
         summary["plc_delay"] = br.axis_delays(design.cable_names, plc_log[:, 0],

@@ -114,6 +114,126 @@ def test_symbol_type_check_names_expected_and_declared():
 
 
 # ----------------------------------------------------------------------------
+# The loop on a fake clock (deterministic: stalls injected, no server)
+# ----------------------------------------------------------------------------
+
+
+class FakeClock:
+    """Wall clock that moves only when slept on, plus 20 us per reading."""
+
+    def __init__(self):
+        self.t = 0.0
+
+    def __call__(self):
+        self.t += 2e-5
+        return self.t
+
+    def sleep(self, s):
+        self.t += max(s, 0.0)
+
+
+class FakePlc(br.Transport):
+    """Plays the trajectory by the fake clock; the write of the cycle at each stall time hangs."""
+
+    def __init__(self, design, samples, clock, stalls=()):
+        self.layout = PlcLayout.from_design(design)
+        self.samples, self.clock, self.stalls = samples, clock, sorted(stalls)
+
+    def read_setpoints(self):
+        s = self.samples
+        return np.array([np.interp(self.clock.t, s.time, s.lengths[:, j])
+                         for j in range(s.lengths.shape[1])])
+
+    def write_outputs(self, values):
+        if self.stalls and self.clock.t >= self.stalls[0][0]:
+            self.clock.t += self.stalls.pop(0)[1]  # descheduled on a loaded machine
+
+
+def test_stalls_degrade_timing_not_the_path(design):
+    """A loaded machine (cycles hanging 120 ms, also near the corner) makes overruns, not detours.
+
+    The loop used to run the last set-point ramp on through the stalled time
+    and then step to the new set-point: 6.5 cm off the L here.
+    """
+    samples = trajectory.sample(design, "probe")
+    clock = FakeClock()
+    stalls = [(t, 0.12) for t in (0.3, 0.8, 0.95, 1.1, 1.5)]
+    sim = br.make_simulator(design, 0.01, samples.lengths[0])
+    rows = br.RowMaker(design)
+    log = []
+    res = br.run(FakePlc(design, samples, clock, stalls), sim, cycle_time=0.01,
+                 duration=samples.duration + 0.3, spin=0.0, clock=clock, sleep=clock.sleep,
+                 on_row=lambda sp, st: log.append(rows.values(sp, st)))
+    assert res.overruns == len(stalls) and res.slips == 0
+    assert res.sim_time == pytest.approx(samples.duration + 0.3, abs=1e-6)
+    log = np.array(log)
+    assert log.shape[0] == res.cycles
+    xy = log[:, 3:5]
+    off_path = np.min(np.linalg.norm(xy[:, None, :] - samples.pose[None, :, :], axis=2), axis=1)
+    assert off_path.max() < 0.01
+    np.testing.assert_allclose(xy[-1], [0.85, 0.95], atol=2e-3)
+    # the logged targets are the PLC's set-points at the rows' times
+    on_path = np.min(np.linalg.norm(log[:, None, 5:7] - samples.lengths[None, :, :], axis=2), axis=1)
+    assert on_path.max() < 1e-3
+
+
+class RecordingSim:
+    """A stand-in model that records what the loop asks of it (axes = reference)."""
+
+    timestep = 5e-4
+
+    def __init__(self, sp0):
+        from types import SimpleNamespace
+
+        self.t, self.ref, self.calls = 0.0, np.array(sp0, float), []
+        self._ns = SimpleNamespace
+
+    def advance(self, sp, duration, velocity=None, tension=None):
+        sp, v = np.asarray(sp, float), np.asarray(velocity, float)
+        self.calls.append((self.t, sp.copy(), v.copy(), duration))
+        self.t += duration
+        self.ref = sp + v * duration
+        return self.state()
+
+    def state(self):
+        return self._ns(time=self.t, pose=np.zeros(2), lengths=self.ref.copy(),
+                        tensions=np.zeros(2), setpoints=self.ref.copy())
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_reference_is_continuous_and_never_overshoots(design, seed):
+    """Whatever the timing, the axes' reference never steps and never leaves the set-points' hull."""
+    samples = trajectory.sample(design, "probe")
+    clock = FakeClock()
+    rng = np.random.default_rng(seed)
+    stalls = sorted((float(t), float(rng.uniform(0.005, 0.2))) for t in rng.uniform(0, 2.0, 12))
+    sim = RecordingSim(samples.lengths[0])
+    res = br.run(FakePlc(design, samples, clock, stalls), sim, cycle_time=0.01,
+                 duration=samples.duration + 0.2, spin=0.0, clock=clock, sleep=clock.sleep)
+    assert res.overruns >= 1 and res.cycles > 50
+    ends = [sp + v * d for _, sp, v, d in sim.calls]
+    for (t, sp, v, d), prev in zip(sim.calls[1:], ends[:-1]):
+        np.testing.assert_allclose(sp, prev, atol=1e-9)  # no step
+    lo = samples.lengths.min(axis=0) - 1e-3   # extrapolation by one cycle stays within 1 mm
+    hi = samples.lengths.max(axis=0) + 1e-3
+    assert np.all(np.array(ends) >= lo) and np.all(np.array(ends) <= hi)
+
+
+def test_delay_trace_sees_the_hold_of_the_written_values():
+    """Values written every 10 ms, each standing for 20 ms before: the PLC sees 20 + 5 ms."""
+    tr = br.DelayTrace()
+    dt, lag = 0.01, 0.02
+    f = lambda t: np.array([0.9 + 0.1 * np.sin(2 * t), 0.8 - 0.05 * t * t])  # noqa: E731
+    for k in range(300):
+        t = k * dt + 1e-4 * np.sin(7 * k)  # jittered reads
+        tr.read(t, f(t))
+        tr.wrote(t + 0.004, f(t + 0.004 - lag), t)
+    d = tr.delay(("c1", "c2"), dt)
+    for v in d.values():
+        assert v == pytest.approx(lag + dt / 2, abs=5e-4)
+
+
+# ----------------------------------------------------------------------------
 # Against the test PLC (serial: fixed port 48898 on 127.0.0.1)
 # ----------------------------------------------------------------------------
 
@@ -165,6 +285,11 @@ def test_setpoints_from_the_test_plc_move_the_effector(design):
     assert plc_log.shape[0] > 100
     d = br.axis_delays(design.cable_names, plc_log[:, 0], plc_log[:, 1:3], plc_log[:, 3:5])
     assert all(v is not None and abs(v) < 0.1 for v in d.values())
+    # the gateway's own estimate (read -> written and held) agrees with the PLC's scope; the
+    # PLC also sees its 1 ms task and the wait of a set-point before the read (< 1 cycle)
+    gw = res.delay(design.cable_names)
+    for k, v in d.items():
+        assert gw[k] is not None and -0.003 < v - gw[k] < 0.01 + 0.003, (d, gw)
 
 
 @pytest.mark.serial
