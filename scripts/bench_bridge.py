@@ -102,8 +102,10 @@ def main():
             tr.close()
         s = res.summary()
         plc_delay = br.axis_delays(d.cable_names, log[:, 0], log[:, 1:3], log[:, 3:5])
+        gw_delay = res.delay(d.cable_names)
         print(f"\ncycle {dt * 1e3:g} ms: {s['cycles']} cycles, {s['overruns']} overruns, "
-              f"{s['elapsed_s']:.2f} s")
+              f"{s['elapsed_s']:.2f} s, model lag max {s['lag']['max'] * 1e3:.3f} ms, "
+              f"{s['slips']} slips; load average {open('/proc/loadavg').read().split()[0]}")
         print("                      mean     p99      max   [ms]")
         for key, label in (("latency", "round trip"), ("exchange", "exchange/cycle"),
                            ("work", "whole cycle"), ("jitter", "start jitter")):
@@ -112,6 +114,7 @@ def main():
         for c in ("length_c1", "length_c2"):
             tot, base = plc_delay[c], off_delay[c]
             add = None if tot is None or base is None else tot - base
+            print(f"  {c}: gateway's estimate (read -> written, held) {ms(gw_delay[c])} ms")
             print(f"  {c}: delay seen by the PLC {ms(tot)} ms, offline {ms(base)} ms, "
                   f"gateway adds {ms(add)} ms  (paper: 110-150 ms; ratio "
                   f"{'—' if add is None else f'{add / 0.110:.3f}'} of 110 ms)")
