@@ -38,6 +38,7 @@ The gradient of L with respect to B is -u, u the unit vector from B to C
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -127,3 +128,188 @@ def outlet_geometry(outlet, axis, radius: float, points) -> PulleyGeometry:
     L[bad] = np.nan
     free[bad] = np.nan
     return PulleyGeometry(C, L, free, beta, e, M)
+
+
+# ----------------------------------------------------------------------------
+# Many cables at once (trajectories, sizing, simulation)
+# ----------------------------------------------------------------------------
+
+
+def any_pulley(design) -> bool:
+    """True when any cable has a swivel pulley of positive radius (as ``kinematics.has_pulleys``)."""
+    return any(c.pulley is not None and c.pulley.radius > 0 for c in design.cables)
+
+
+def design_pulleys(design):
+    """(outlets (m, 3), axes (m, 3) unit, radii (m,)) of a design's cables.
+
+    A cable without a pulley gets radius 0 (the point outlet) and axis +z.
+    """
+    A = np.asarray(design.outlets, float)
+    axes = np.empty_like(A)
+    radii = np.zeros(A.shape[0])
+    for i, c in enumerate(design.cables):
+        if c.pulley is not None and c.pulley.radius > 0:
+            k = np.asarray(c.pulley.axis, float)
+            axes[i] = k / np.linalg.norm(k)
+            radii[i] = float(c.pulley.radius)
+        else:
+            axes[i] = (0.0, 0.0, 1.0)
+    return A, axes, radii
+
+
+@dataclass(frozen=True)
+class CablePaths:
+    """Cable paths of every cable at many poses (arrays (k, m, ...)).
+
+    Attributes
+    ----------
+    exits : (k, m, 3)
+        Where the free cable leaves the outlet (tangent point C; a_i for r = 0) [m].
+    lengths : (k, m)
+        Total lengths r beta + l_f [m].
+    free_lengths : (k, m)
+        l_f = |B - C| [m].
+    directions : (k, m, 3)
+        u = (C - B) / l_f, the free segment's unit vector (the way the cable pulls).
+    wrap : (k, m)
+        Wrap angles beta [rad].
+    normals : (k, m, 3)
+        t = k x e, the unit normal of each pulley plane (zero for a point outlet).
+    swivel_curvature : (k, m)
+        kappa_t = -(u . e) / s [1/m], the second derivative of L along t (see
+        :func:`cable_paths`); 1 / l_f for a point outlet.
+    """
+
+    exits: np.ndarray
+    lengths: np.ndarray
+    free_lengths: np.ndarray
+    directions: np.ndarray
+    wrap: np.ndarray
+    normals: np.ndarray
+    swivel_curvature: np.ndarray
+
+    def second_derivative(self, v: np.ndarray) -> np.ndarray:
+        """v^T H v for attachment-point velocities v (k, m, 3): the centripetal part of L''.
+
+        H = (n n^T) / l_f + kappa_t t t^T (module notes of :func:`cable_paths`),
+        so v^T H v = (|v_perp|^2 - (v . t)^2) / l_f + kappa_t (v . t)^2 with
+        v_perp the part of v perpendicular to u.  r -> 0 gives |v_perp|^2 / L.
+        """
+        vu = np.einsum("kmi,kmi->km", v, self.directions)
+        vt = np.einsum("kmi,kmi->km", v, self.normals)
+        vperp2 = np.einsum("kmi,kmi->km", v, v) - vu * vu
+        with np.errstate(invalid="ignore", divide="ignore"):
+            swivel = np.where(vt == 0.0, 0.0, self.swivel_curvature * vt * vt)
+            return (vperp2 - vt * vt) / self.free_lengths + swivel
+
+    def max_curvature(self) -> np.ndarray:
+        """Largest |eigenvalue| of H, max(1 / l_f, |kappa_t|) (k, m) [1/m]: |v^T H v| <= this |v|^2."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.fmax(1.0 / self.free_lengths, np.abs(self.swivel_curvature))
+
+
+def cable_paths(outlets, axes, radii, points) -> CablePaths:
+    """Outlet geometry of m cables at k poses at once (vectorised :func:`outlet_geometry`).
+
+    Parameters
+    ----------
+    outlets, axes : (m, 3)
+        Swivel points a_i [m] and unit swivel axes k_i.
+    radii : (m,)
+        Pulley radii r_i [m] (0: point outlet).
+    points : (k, m, 3)
+        Attachment points B in the frame [m].
+
+    Notes
+    -----
+    The length L(B) = r beta + l_f has gradient -u and Hessian H with H u = 0
+    (moving B along the free segment only shortens it), in the pulley plane
+    the curvature of its level sets, the involutes of the pulley circle, whose
+    radius of curvature is the tangent length l_f: n^T H n = 1 / l_f; and
+    along the plane's normal t, since L is unchanged when B turns about the
+    swivel axis (B'' = -s e at unit angular rate, s the distance of B from
+    the axis): t^T H t = -(u . e) / s.  The mirror symmetry of L about the
+    pulley plane makes n^T H t = 0.  For a point outlet both are 1 / L
+    (u . e = -s / L), H = (I - u u^T) / L.  On the swivel axis (s = 0) the
+    swivel angle is undefined and kappa_t is NaN for a pulley.
+    """
+    a = np.asarray(outlets, float)[None]
+    k = np.asarray(axes, float)[None]
+    r = np.asarray(radii, float)[None]
+    B = np.asarray(points, float)
+    if B.ndim == 2:
+        B = B[None]
+    d = B - a
+    z = np.einsum("kmi,kmi->km", d, k)
+    radial = d - z[..., None] * k
+    s = np.linalg.norm(radial, axis=2)
+    on_axis = s <= 1e-12
+    with np.errstate(invalid="ignore", divide="ignore"):
+        e = radial / s[..., None]
+    if on_axis.any():
+        ref = np.array([reference_perpendicular(kk) for kk in k[0]])
+        e[on_axis] = np.broadcast_to(ref[None], e.shape)[on_axis]
+    M = a + r[..., None] * e
+    x = s - r
+    D = np.hypot(x, z)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        alpha = np.where(r > 0, np.arccos(np.clip(r / D, -1.0, 1.0)), np.pi / 2)
+    theta = np.arctan2(z, x) + alpha
+    beta = np.pi - theta
+    C = M + r[..., None] * (np.cos(theta)[..., None] * e + np.sin(theta)[..., None] * k)
+    lift = beta < 0.0
+    beta = np.where(lift, 0.0, beta)
+    C = np.where(lift[..., None], a, C)
+    vec = C - B
+    free = np.linalg.norm(vec, axis=2)
+    L = r * beta + free
+    bad = D < r * (1.0 - 1e-12)
+    L = np.where(bad, np.nan, L)
+    free = np.where(bad, np.nan, free)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        u = vec / free[..., None]
+        kappa = -np.einsum("kmi,kmi->km", u, e) / s
+    point = np.broadcast_to(r <= 0, L.shape)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        kappa = np.where(point, 1.0 / free, np.where(on_axis, np.nan, kappa))
+    t = np.cross(np.broadcast_to(k, e.shape), e)
+    t = np.where(point[..., None], 0.0, t)
+    return CablePaths(C, L, free, u, beta, t, kappa)
+
+
+def design_cable_paths(design, points) -> CablePaths:
+    """:func:`cable_paths` of a design's cables for attachment points (k, m, 3) [m]."""
+    A, axes, radii = design_pulleys(design)
+    return cable_paths(A, axes, radii, points)
+
+
+def exit_point(outlet, axis, radius: float, point):
+    """Tangent point C (3-tuple) [m] and wrap angle beta [rad] of one cable at one point.
+
+    The scalar form of :func:`outlet_geometry` (no arrays: cheap enough to run
+    every physics step of :mod:`cdpr_design.simulation`).  ``axis`` must be a
+    unit vector.  Returns (None, nan) when B is inside the pulley circle.
+    """
+    ax, ay, az = outlet
+    kx, ky, kz = axis
+    dx, dy, dz = point[0] - ax, point[1] - ay, point[2] - az
+    z = dx * kx + dy * ky + dz * kz
+    rx, ry, rz = dx - z * kx, dy - z * ky, dz - z * kz
+    s = math.sqrt(rx * rx + ry * ry + rz * rz)
+    if s <= 1e-12:
+        rx, ry, rz = reference_perpendicular(axis)
+    else:
+        rx, ry, rz = rx / s, ry / s, rz / s
+    r = float(radius)
+    x = s - r
+    D = math.hypot(x, z)
+    if D < r * (1.0 - 1e-12):
+        return None, math.nan
+    alpha = math.acos(min(r / D, 1.0)) if r > 0 else 0.5 * math.pi
+    theta = math.atan2(z, x) + alpha
+    beta = math.pi - theta
+    if beta < 0.0:
+        return (ax, ay, az), 0.0
+    c, sn = r * (1.0 + math.cos(theta)), r * math.sin(theta)
+    return (ax + c * rx + sn * kx, ay + c * ry + sn * ky, az + c * rz + sn * kz), beta
