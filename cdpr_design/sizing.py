@@ -23,6 +23,12 @@ maximum torque of the motors".  This module makes that translation, per cable:
    - cable acceleration L''_i = -u_i . a - |v_perp|^2 / L_i, bounded by
      A + V^2 / L_i over the task poses.
 
+   With swivel pulleys (``cables[i].pulley``) lengths are arc + free
+   segment and u_i leaves from the pulley's tangent point
+   (:mod:`cdpr_design.pulley`); L'_i = -u_i . v still holds (|u_i| = 1) and
+   the curvature term is bounded by V^2 max(1 / l_f, |kappa_t|), the largest
+   eigenvalue of the pulley-aware Hessian of L_i.
+
 2. **Winch and motor** for a drum radius r, gear ratio i (motor turns per drum
    turn) and efficiency eta:
 
@@ -249,16 +255,36 @@ def task_grid(design: Design, step: float | None = None) -> Grid | None:
     return Grid(tuple(float(x) for x in box[0]), tuple(float(x) for x in box[1]), tuple(st))
 
 
-def _structure_many(design: Design, positions: np.ndarray, Rb: np.ndarray):
-    """Structure matrices (k, n, m) and lengths (k, m) at positions (k, 3), fixed orientation."""
-    vec = design.outlets[None, :, :] - positions[:, None, :] - Rb[None, :, :]
-    L = np.linalg.norm(vec, axis=2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        u = vec / L[:, :, None]
-    u[L <= 1e-12] = 0.0
+def _structure_many(design: Design, positions: np.ndarray, Rb: np.ndarray, curvature: bool = False):
+    """Structure matrices (k, n, m) and lengths (k, m) at positions (k, 3), fixed orientation.
+
+    With swivel pulleys (:func:`cdpr_design.kinematics.has_pulleys`) the
+    lengths are arc + free segment and u_i the free segment's unit vector
+    from the tangent point (:mod:`cdpr_design.pulley`).  With ``curvature``
+    a third array (k, m) [1/m] bounds the length's second derivative,
+    |v^T H_i v| <= kappa_i |v|^2: 1 / L_i for a point outlet,
+    max(1 / l_f, |kappa_t|) with a pulley (:meth:`CablePaths.max_curvature`).
+    """
+    if kin.has_pulleys(design):
+        from . import pulley as pl
+
+        paths = pl.design_cable_paths(design, positions[:, None, :] + Rb[None, :, :])
+        L = paths.lengths
+        u = paths.directions.copy()
+        u[~(paths.free_lengths > 1e-12)] = 0.0
+        kappa = paths.max_curvature()
+    else:
+        vec = design.outlets[None, :, :] - positions[:, None, :] - Rb[None, :, :]
+        L = np.linalg.norm(vec, axis=2)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            u = vec / L[:, :, None]
+            kappa = 1.0 / L
+        u[L <= 1e-12] = 0.0
     mom = np.cross(Rb[None, :, :], u)
     full = np.concatenate([u, mom], axis=2)  # (k, m, 6)
     W = np.transpose(full[:, :, list(design.motion.wrench_rows)], (0, 2, 1))
+    if curvature:
+        return np.ascontiguousarray(W), L, kappa
     return np.ascontiguousarray(W), L
 
 
@@ -353,7 +379,7 @@ def envelope_chunk(design: Design, positions: np.ndarray, orientation, A: float,
     pos3[:, :d] = positions
     R = kin.rotation_matrix(*orientation)
     Rb = design.attachments @ R.T
-    W, L = _structure_many(design, pos3, Rb)
+    W, L, kappa = _structure_many(design, pos3, Rb, curvature=True)
     w0, M = wrench_model(design, orientation)
     static = np.full((k, m), np.nan)
     peak = np.full((k, m), np.nan)
@@ -386,7 +412,7 @@ def envelope_chunk(design: Design, positions: np.ndarray, orientation, A: float,
             peak[j] = np.nanmax(T, axis=0)
             low[j] = np.nanmin(T, axis=0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        accel = A + V * V / L
+        accel = A + V * V * kappa  # kappa = 1 / L for a point outlet
     accel[:, :] = np.where(L > 1e-12, accel, np.nan)
     return {"static": static, "peak": peak, "low": low, "accel": accel, "ok": ok}
 

@@ -48,6 +48,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import pulley as pl
 from .model import Design, Trajectory
 
 DEFAULT_CYCLE_TIME = 1e-3
@@ -715,6 +716,14 @@ def states(design: Design, pose, velocity, acceleration, *, time=None, external=
     Tensions solve W t = -(w_gravity + w_inertial + w_external) with the
     d'Alembert wrench w_inertial = -(m a_c, I alpha + w x I w) (paper eq. 6-9
     with the inertia added).
+
+    Swivel pulleys (``cables[i].pulley``, :mod:`cdpr_design.pulley`): L_i is
+    the arc + free length, u_i the free segment's unit vector from the
+    attachment towards the pulley's tangent point (the gradient of L_i is
+    -u_i, so dL/dt = -u . v_B still holds and W keeps its form), and
+    d2L/dt2 = v_B^T H v_B - u . a_B with the pulley-aware Hessian H of
+    :func:`cdpr_design.pulley.cable_paths` (1 / l_f in the pulley plane,
+    the swivel curvature across it).
     """
     x = np.atleast_2d(np.asarray(pose, float))
     xd = np.atleast_2d(np.asarray(velocity, float))
@@ -738,16 +747,24 @@ def states(design: Design, pose, velocity, acceleration, *, time=None, external=
         w = np.zeros((k, 3))
         al = np.zeros((k, 3))
     Rb = np.einsum("kij,mj->kmi", R, B)  # (k, m, 3)
-    vec = A[None, :, :] - P[:, None, :3] - Rb
-    L = np.linalg.norm(vec, axis=2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        u = vec / L[:, :, None]
-    u = np.nan_to_num(u)
     vB = V[:, None, :3] + np.cross(w[:, None, :], Rb)
     aB = Acc[:, None, :3] + np.cross(al[:, None, :], Rb) + np.cross(w[:, None, :], np.cross(w[:, None, :], Rb))
-    Ld = -np.einsum("kmi,kmi->km", u, vB)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        Ldd = (np.einsum("kmi,kmi->km", vB, vB) - Ld ** 2) / L - np.einsum("kmi,kmi->km", u, aB)
+    if pl.any_pulley(design):
+        # swivel pulleys: arc + free length, u along the free segment from the tangent point
+        paths = pl.design_cable_paths(design, P[:, None, :3] + Rb)
+        L = paths.lengths
+        u = np.nan_to_num(paths.directions)
+        Ld = -np.einsum("kmi,kmi->km", u, vB)
+        Ldd = paths.second_derivative(vB) - np.einsum("kmi,kmi->km", u, aB)
+    else:
+        vec = A[None, :, :] - P[:, None, :3] - Rb
+        L = np.linalg.norm(vec, axis=2)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            u = vec / L[:, :, None]
+        u = np.nan_to_num(u)
+        Ld = -np.einsum("kmi,kmi->km", u, vB)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            Ldd = (np.einsum("kmi,kmi->km", vB, vB) - Ld ** 2) / L - np.einsum("kmi,kmi->km", u, aB)
     # wrenches
     rows = list(design.motion.wrench_rows)
     Wfull = np.concatenate([u, np.cross(Rb, u)], axis=2)  # (k, m, 6)
