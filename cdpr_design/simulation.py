@@ -13,7 +13,17 @@ The model, built from the design alone:
   a slack cable carries exactly zero tension.  Its gain is the cable's axial
   stiffness k_i = EA / L0_i with L0_i the unstretched length paid out, updated
   every step, and its damping k_v,i = 2 zeta sqrt(k_i m) (``cable_damping`` =
-  zeta).  Outlet pulleys and cable mass are not modelled.
+  zeta).  Cable mass is not modelled.
+- **Swivel pulleys** (``cables[i].pulley``, :mod:`cdpr_design.pulley`): the
+  arc wrapped on the pulley is not a MuJoCo wrapping object.  The tendon runs
+  from a mocap site that the simulator moves, before every physics step, to
+  the pulley's tangent point C_i for the current attachment point, and the
+  actuator's length is the tendon's (free segment) plus the arc r beta_i, so
+  the cable's length, its stretch and the direction it pulls (from the
+  attachment towards C_i) are those of the analysis (arc + free segment;
+  the tendon's velocity, the attachment's velocity along u_i, is dL/dt
+  because the mocap site carries no degree of freedom).  The pulley's
+  inertia and friction and the cable's bending on it are not modelled.
 - **Winch axes**: each axis position q_i (the unstretched cable length it has
   paid out, m) follows its set-point r_i through a first-order position loop
   with velocity feed-forward, dq/dt = v_ff + omega_c (r - q) (``servo_bandwidth``
@@ -28,7 +38,8 @@ The model, built from the design alone:
   in the project's algorithms reference).
 
 Lengths reported by :meth:`Simulator.state` are the geometric (stretched)
-cable lengths from outlet to attachment; ``axis`` holds the winch positions q.
+cable lengths from outlet to attachment (with a pulley: arc + free segment);
+``axis`` holds the winch positions q.
 
 Typical use (the PLC bridge does the same, one cycle at a time)::
 
@@ -56,6 +67,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from . import kinematics as kin
+from . import pulley as pl
 from .model import Design
 
 DEFAULT_AXIAL_STIFFNESS = 1.0e5
@@ -122,6 +134,10 @@ def build_xml(design: Design, timestep: float = 5e-4, force_limit: float = 1e6) 
     I = np.array(eff.inertia_matrix, float)
     I = 0.5 * (I + I.T)
     d = np.maximum(np.diag(I), 1e-9 * max(eff.mass, 1e-9))
+    if planar:
+        # only the hinge about z moves: Ixx, Iyy do not enter the motion, but MuJoCo
+        # requires the triangle inequality (a planar spec's scalar inertia gives Izz alone)
+        d[0], d[1] = max(d[0], d[2]), max(d[1], d[2])
     full = [d[0], d[1], d[2], I[0, 1], I[0, 2], I[1, 2]]
     com = " ".join(f"{v:.10g}" for v in eff.center_of_mass)
     size = np.maximum(np.asarray(eff.size, float) / 2, 1e-3)
@@ -135,7 +151,13 @@ def build_xml(design: Design, timestep: float = 5e-4, force_limit: float = 1e6) 
     ]
     for c in design.cables:
         pos = " ".join(f"{v:.10g}" for v in c.outlet)
-        lines.append(f'    <site name="outlet_{c.name}" pos="{pos}" size="0.005"/>')
+        if c.pulley is not None and c.pulley.radius > 0:
+            # the free cable leaves the pulley's tangent point: a mocap body the
+            # simulator moves there every step (module notes, "Swivel pulleys")
+            lines.append(f'    <body name="pulley_{c.name}" mocap="true" pos="{pos}">'
+                         f'<site name="outlet_{c.name}" pos="0 0 0" size="0.005"/></body>')
+        else:
+            lines.append(f'    <site name="outlet_{c.name}" pos="{pos}" size="0.005"/>')
     lines.append('    <body name="effector" pos="0 0 0">')
     if planar:
         lines += [
@@ -244,6 +266,18 @@ class Simulator:
         self._gainprm = self.model.actuator_gainprm
         self._ff_cache = None
         self._biasprm = self.model.actuator_biasprm
+        # swivel pulleys: tangent exit points (mocap sites) and wrapped arc lengths r beta
+        self._arc = np.zeros(self.m)
+        self._pulley = None
+        if pl.any_pulley(design):
+            A, axes, radii = pl.design_pulleys(design)
+            idx = np.flatnonzero(radii > 0)
+            names = [design.cables[i].name for i in idx]
+            mocap = np.array([self.model.body(f"pulley_{n}").mocapid[0] for n in names])
+            sites = np.array([self.model.site(f"attach_{n}").id for n in names])
+            self._pulley = (idx, [tuple(map(float, v)) for v in A[idx]],
+                            [tuple(map(float, v)) for v in axes[idx]], [float(v) for v in radii[idx]],
+                            [int(v) for v in mocap], [int(v) for v in sites])
 
     # ------------------------------------------------------------------
     # set-up
@@ -259,6 +293,25 @@ class Simulator:
             qpos[3:7] = [w, x, y, z]
         self.data.qvel[:] = 0.0
         mujoco.mj_forward(self.model, self.data)
+        if self._pulley is not None:
+            self._update_pulleys()
+            mujoco.mj_forward(self.model, self.data)
+
+    def _update_pulleys(self) -> None:
+        """Move each pulley cable's outlet site to its tangent point and store r beta.
+
+        Uses the attachment points of the last kinematics pass (one physics
+        step old inside :meth:`_step`): the total length r beta + |B - C| is
+        stationary in C at the tangent point, so the lag costs a length error
+        of second order in the step's motion.
+        """
+        idx, A, axes, radii, mocap, sites = self._pulley
+        xpos, mpos, arc = self.data.site_xpos, self.data.mocap_pos, self._arc
+        for j in range(len(idx)):
+            C, beta = pl.exit_point(A[j], axes[j], radii[j], xpos[sites[j]])
+            if C is not None:  # inside the pulley circle: keep the last exit point
+                mpos[mocap[j]] = C
+                arc[idx[j]] = radii[j] * beta
 
     def static_tensions(self, pose) -> np.ndarray:
         """Tensions [N] holding the effector at rest at a pose (gravity only), NaN if singular."""
@@ -356,6 +409,10 @@ class Simulator:
         bp[:, 1] = -k
         bp[:, 2] = -c * k
         ctrl = q_new + c * self.qdot
+        if self._pulley is not None:
+            # the tendon spans the free segment only: the winch's length minus the wrapped arc
+            self._update_pulleys()
+            ctrl -= self._arc
         if self.compensate_stretch:
             ctrl -= e.tension / k
         self.data.ctrl[:] = ctrl
@@ -464,7 +521,7 @@ class Simulator:
         tensions = -np.asarray(self.data.actuator_force, float) + 0.0
         sp = self._current.sp if self._current is not None else np.full(self.m, np.nan)
         return SimState(self.time, pose, full[3:].copy(), vel,
-                        np.array(self.data.ten_length, float), tensions, self.q.copy(), sp.copy())
+                        np.array(self.data.ten_length, float) + self._arc, tensions, self.q.copy(), sp.copy())
 
 
 # ----------------------------------------------------------------------------
