@@ -368,10 +368,16 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
       largest tension over the set (empty unless feasible); extra column
       ``orientations_feasible`` (count of feasible set orientations) and,
       with interference, ``collision_free`` (no interference at any of them).
+      Summary extras with interference: ``collision_free`` (poses collision
+      free at every orientation), ``feasible_statics`` (statics feasible at
+      every orientation), ``collisions_by_kind`` (poses each kind hits at one
+      orientation of the set or more).
     - ``range``: ``feasible``, ``margin``, tensions at the nominal orientation;
       extra columns ``range_<coord>`` (largest feasible half-width [rad] per
       rotation coordinate; empty where the nominal is infeasible) and, with
-      interference, ``collision_free`` at the nominal.
+      interference, ``collision_free`` at the nominal; the summary extras
+      ``collision_free``, ``feasible_statics`` and ``collisions_by_kind``
+      count the nominal orientation's poses.
 
     Returns a :class:`~cdpr_design.workspace.WorkspaceResult` whose maps are
     those of the swept workspace, with ``orientation_maps`` (an
@@ -400,6 +406,7 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     counts = {name: 0 for name in HIT_NAMES.values()}
     done = 0
     n_eval = 0
+    n_free = n_stat = 0
     range_sum, range_n = 0.0, 0
     while done < total:
         cnt = min(chunk, total - done)
@@ -410,6 +417,8 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
             allok = np.ones(cnt, dtype=bool)
             nok = np.zeros(cnt, dtype=np.int64)
             cfree_all = np.ones(cnt, dtype=bool)
+            stat_all = np.ones(cnt, dtype=bool)
+            hits = np.zeros(cnt, dtype=np.uint8)
             marg = np.full(cnt, np.inf)
             ten = np.full((cnt, m), -np.inf)
             for o in oset:
@@ -417,6 +426,8 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
                 n_eval += cnt
                 ok = f.astype(bool)
                 if interference:
+                    stat_all &= ok
+                    hits |= mask
                     cf = mask == 0
                     cfree_all &= cf
                     ok &= cf
@@ -430,6 +441,10 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
             value = nok / len(oset)
             extra_cols["orientations_feasible"] = nok
             cfree = cfree_all.astype(np.uint8) if interference else None
+            if interference:
+                n_free += int(np.count_nonzero(cfree_all))
+                n_stat += int(np.count_nonzero(stat_all))
+                _kind_counts(hits, counts)
         else:
             feas, marg, ten, L, mask = ev(P, nominal)
             n_eval += cnt
@@ -437,6 +452,8 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
             if interference:
                 cfree = (mask == 0).astype(np.uint8)
                 _kind_counts(mask, counts)
+                n_free += int(np.count_nonzero(cfree))
+                n_stat += int(np.count_nonzero(feas))
                 feas &= cfree
                 ten[cfree == 0] = np.nan
             best = np.zeros(cnt)
@@ -471,6 +488,10 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     extra = {"orientation_mode": mode, "orientation_count": int(len(oset)),
              "orientations_evaluated": int(n_eval), "pulleys": bool(kin.has_pulleys(design)),
              "interference": bool(interference)}
+    if interference:
+        # total: over the whole set (collision free / statics feasible at every
+        # orientation; a kind counts a pose it hits at any orientation); range: at the nominal
+        extra.update(collision_free=n_free, feasible_statics=n_stat, collisions_by_kind=counts)
     if mode == "total":
         extra["orientation_set"] = {c: [float(oset[:, i].min()), float(oset[:, i].max())]
                                     for c, i in zip(rot_names, _rot_index(design))}
