@@ -15,6 +15,7 @@ import io
 import json
 import math
 import os
+import re
 import tempfile
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -188,27 +189,25 @@ def fmt(v) -> str:
     return str(v)
 
 
+_NONFINITE = re.compile(r"(?<![^,\n])-?(?:nan|inf)(?![^,\n])")
+
+
 def format_block(columns: list[np.ndarray], int_cols: Sequence[int] = ()) -> str:
     """Rows of a numeric block as CSV text: NaN cells empty, floats with 10 digits.
 
     ``columns`` are 1-D arrays of equal length; those listed in ``int_cols``
-    are written as integers.
+    are written as integers.  Non-finite cells (NaN, inf) are written empty.
     """
-    if not columns:
+    if not columns or not len(columns[0]):
         return ""
-    k = len(columns[0])
-    parts = []
-    for j, c in enumerate(columns):
-        if j in int_cols:
-            parts.append(np.asarray(c).astype(np.int64).astype(str))
-        else:
-            s = np.char.mod("%.10g", np.asarray(c, dtype=float))
-            s[~np.isfinite(c)] = ""
-            parts.append(s)
-    out = parts[0].astype(object)
-    for p in parts[1:]:
-        out = out + "," + p.astype(object)
-    return "\n".join(out.tolist()) + ("\n" if k else "")
+    ints = set(int_cols)
+    fmt = ",".join("%d" if j in ints else "%.10g" for j in range(len(columns)))
+    block = np.column_stack([np.asarray(c, dtype=float) for c in columns])
+    for j in ints:
+        if not np.isfinite(block[:, j]).all():
+            raise ValueError(f"integer column {j} holds a non-finite value")
+    text = "\n".join([fmt % row for row in map(tuple, block.tolist())]) + "\n"
+    return _NONFINITE.sub("", text) if "n" in text else text
 
 
 # ----------------------------------------------------------------------------
