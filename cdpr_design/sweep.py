@@ -672,9 +672,25 @@ def _run_dask(job: Job, todo, scheduler: str, w: int, chunk: int | None, emit, s
         if scheduler == "local":
             import logging
 
-            cluster = LocalCluster(n_workers=w, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, host="127.0.0.1",
-                                   silence_logs=logging.ERROR)
+            # The workers inherit this environment: one numba thread each (the
+            # parallelism is across variants), and neither the statistical
+            # profiler (a stack walk every 10 ms) nor the GIL monitor (every 1 ms)
+            # of dask's workers, which take the GIL from short Python-heavy tasks.
+            worker_env = {"NUMBA_NUM_THREADS": "1",
+                          "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED": "False",
+                          "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__GIL__ENABLED": "False"}
+            saved = {k: os.environ.get(k) for k in worker_env}
+            os.environ.update(worker_env)
+            try:
+                cluster = LocalCluster(n_workers=w, threads_per_worker=1, processes=True,
+                                       dashboard_address=None, host="127.0.0.1",
+                                       silence_logs=logging.ERROR)
+            finally:
+                for k, v in saved.items():
+                    if v is None:
+                        os.environ.pop(k, None)
+                    else:
+                        os.environ[k] = v
             client = Client(cluster)
         else:
             try:
