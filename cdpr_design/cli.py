@@ -640,8 +640,6 @@ def bridge(
     """
     import signal
 
-    import numpy as np
-
     from . import bridge as br
     from .plc import (LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, AdsTransport, PlcLayout,
                       PlcLinkError, TestPlc)

@@ -26,7 +26,6 @@ import itertools
 import math
 import time
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 

@@ -296,7 +296,7 @@ def analyse_pose(design: Design, pose, kind: str = "static", objective: str = "m
         raise ValueError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
     if objective not in OBJECTIVES:
         raise ValueError(f"objective: expected one of {', '.join(OBJECTIVES)}, got {objective!r}")
-    m, n = design.m, design.n
+    m = design.m
     c = _check_weights(weights, m)
     pose = np.asarray(pose, dtype=float).reshape(-1)
     geo = kin.cable_geometry(design, pose)

@@ -24,7 +24,6 @@ import argparse
 import time
 from pathlib import Path
 
-import numpy as np
 import yaml
 
 from cdpr_design import bridge as br

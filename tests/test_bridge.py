@@ -23,7 +23,7 @@ from cdpr_design import bridge as br
 from cdpr_design import spec, trajectory
 from cdpr_design.cli import app
 from cdpr_design.plc import (ADST_REAL64, LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID,
-                             AdsTransport, PlcLayout, PlcLinkError, SymbolError, TestPlc,
+                             AdsTransport, PlcLayout, TestPlc,
                              check_symbol_info)
 
 from .conftest import ROOT, write_spec
