@@ -138,7 +138,7 @@ class WorkspaceResult:
 def _num(x):
     if x is None:
         return None
-    x = float(x)
+    x = float(x) + 0.0  # + 0.0 turns -0.0 into 0.0
     return x if np.isfinite(x) else None
 
 
