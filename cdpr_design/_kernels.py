@@ -85,23 +85,27 @@ def structure_matrix(px, py, pz, Rb, A, rows, W, L):
             for k in range(n):
                 W[k, i] = 0.0
             continue
-        ux, uy, uz = lx / li, ly / li, lz / li
-        bx, by, bz = Rb[i, 0], Rb[i, 1], Rb[i, 2]
-        for k in range(n):
-            r = rows[k]
-            if r == 0:
-                W[k, i] = ux
-            elif r == 1:
-                W[k, i] = uy
-            elif r == 2:
-                W[k, i] = uz
-            elif r == 3:
-                W[k, i] = by * uz - bz * uy
-            elif r == 4:
-                W[k, i] = bz * ux - bx * uz
-            else:
-                W[k, i] = bx * uy - by * ux
+        fill_column(W, i, rows, lx / li, ly / li, lz / li, Rb[i, 0], Rb[i, 1], Rb[i, 2])
     return ok
+
+
+@njit
+def fill_column(W, i, rows, ux, uy, uz, bx, by, bz):
+    """Column i of the structure matrix: [u ; (R b) x u] restricted to ``rows``."""
+    for k in range(rows.shape[0]):
+        r = rows[k]
+        if r == 0:
+            W[k, i] = ux
+        elif r == 1:
+            W[k, i] = uy
+        elif r == 2:
+            W[k, i] = uz
+        elif r == 3:
+            W[k, i] = by * uz - bz * uy
+        elif r == 4:
+            W[k, i] = bz * ux - bx * uz
+        else:
+            W[k, i] = bx * uy - by * ux
 
 
 # ----------------------------------------------------------------------------
@@ -1271,24 +1275,8 @@ def structure_matrix_pulley(px, py, pz, Rb, A, K, Eref, rad, rows, W, L, C):
             for kk in range(n):
                 W[kk, i] = 0.0
             continue
-        ux = (C[i, 0] - bx) / free
-        uy = (C[i, 1] - by) / free
-        uz = (C[i, 2] - bz) / free
-        rbx, rby, rbz = Rb[i, 0], Rb[i, 1], Rb[i, 2]
-        for kk in range(n):
-            r = rows[kk]
-            if r == 0:
-                W[kk, i] = ux
-            elif r == 1:
-                W[kk, i] = uy
-            elif r == 2:
-                W[kk, i] = uz
-            elif r == 3:
-                W[kk, i] = rby * uz - rbz * uy
-            elif r == 4:
-                W[kk, i] = rbz * ux - rbx * uz
-            else:
-                W[kk, i] = rbx * uy - rby * ux
+        fill_column(W, i, rows, (C[i, 0] - bx) / free, (C[i, 1] - by) / free, (C[i, 2] - bz) / free,
+                    Rb[i, 0], Rb[i, 1], Rb[i, 2])
     return ok
 
 
