@@ -356,9 +356,7 @@ class AdsTransport(Transport):
                 return np.array(vals[self._read_n:], dtype=float)
             return np.array([conn.read_by_name("", pyads.PLCTYPE_LREAL, handle=self._handles[s.name])
                              for s in self.layout.inputs], dtype=float)
-        except pyads.ADSError as err:
-            raise self._fail("reading the set-points", err) from None
-        except (OSError, struct.error, ValueError) as err:
+        except (pyads.ADSError, OSError, struct.error, ValueError) as err:
             raise self._fail("reading the set-points", err) from None
 
     def write_outputs(self, values: Sequence) -> None:
@@ -387,9 +385,7 @@ class AdsTransport(Transport):
                 else:
                     conn.write_by_name("", values[i], ctype, handle=self._handles[s.name])
                 i += s.count
-        except pyads.ADSError as err:
-            raise self._fail("writing the outputs", err) from None
-        except (OSError, struct.error, ValueError) as err:
+        except (pyads.ADSError, OSError, struct.error, ValueError) as err:
             raise self._fail("writing the outputs", err) from None
 
     def raise_fault(self) -> bool:
