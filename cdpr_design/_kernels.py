@@ -1065,7 +1065,7 @@ def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, 
             else:
                 f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr)
             feasible[k] = 1 if f else 0
-            margin[k] = mg
+            margin[k] = mg + 0.0  # -0.0 -> 0.0: one zero in the CSV, whatever the engine
             for i in range(m):
                 tensions[k, i] = t[i]
 
@@ -1162,7 +1162,7 @@ def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax
                     q0 = i00 * wreq[v, 0] + i01 * wreq[v, 1]
                     q1 = i10 * wreq[v, 0] + i11 * wreq[v, 1]
                     s = min(s, min(min(q0 - tn0, tx0 - q0) / r0, min(q1 - tn1, tx1 - q1) / r1))
-            margin[k] = s
+            margin[k] = s + 0.0  # -0.0 -> 0.0 (as the numpy engine)
             feasible[k] = 1 if s >= 0.0 else 0
             tensions[k, 0] = t0 if inb else np.nan
             tensions[k, 1] = t1 if inb else np.nan
@@ -1188,7 +1188,7 @@ def chunk_stats(feasible, margin, tensions, count, tpeak):
                 t = tensions[k, i]
                 if t > tpeak[i]:
                     tpeak[i] = t
-    return nf, mmin, mmax
+    return nf, mmin + 0.0, mmax + 0.0
 
 
 # ----------------------------------------------------------------------------
@@ -1558,6 +1558,6 @@ def sweep_points(P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind
                 continue
             f, mg = eval_pose(W, wreq, tmin, tmax, combos, kind, t)
             feasible[k] = 1 if f else 0
-            margin[k] = mg
+            margin[k] = mg + 0.0  # -0.0 -> 0.0: one zero in the CSV, whatever the engine
             for i in range(m):
                 tensions[k, i] = t[i]

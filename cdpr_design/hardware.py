@@ -34,6 +34,7 @@ from . import kinematics as kin
 from .errors import SpecError
 from .interference import HIT_NAMES, hardware_arrays
 from .model import Design, Grid
+from .workspace import chunk_extra, extra_columns  # noqa: F401  (their home before 0.2)
 
 #: Default total-orientation set: nominal +- 10 deg about the last rotation coordinate, 5 samples.
 DEFAULT_SET_HALF = math.radians(10.0)
@@ -502,28 +503,3 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     res = maps.result(design, kind, g, nominal, t0, extra)
     res.orientation_maps = OrientationMaps(mode, maps.xmaps["value"], oset, scale)
     return res
-
-
-# ----------------------------------------------------------------------------
-# CSV columns after the contract's (cli.md: "Further columns ... come after these")
-# ----------------------------------------------------------------------------
-
-
-def extra_columns(design: Design, interference: bool, mode: str | None) -> list[str]:
-    """Names of the extra ``workspace.csv`` columns, in the order :func:`chunk_extra` gives them."""
-    cols = ["collision_free"] if interference else []
-    if mode == "total":
-        cols.append("orientations_feasible")
-    elif mode == "range":
-        cols += [f"range_{c}" for c in design.motion.rotation_coords]
-    return cols
-
-
-def chunk_extra(chunk) -> dict:
-    """The extra columns of a :class:`~cdpr_design.workspace.Chunk` (name -> array)."""
-    out = {}
-    cf = getattr(chunk, "collision_free", None)
-    if cf is not None:
-        out["collision_free"] = cf
-    out.update(getattr(chunk, "extra", None) or {})
-    return out

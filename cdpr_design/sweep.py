@@ -45,6 +45,7 @@ import json
 import math
 import os
 import re
+import sys
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Iterator, Sequence
@@ -413,6 +414,9 @@ class Job:
 
     plan: Plan
     options: Options
+    #: load the numba kernels in each worker before the first variant: the sweep
+    #: holds more poses than the numpy closed form is worth (workspace.ENGINES)
+    kernels: bool = False
 
 
 def record(index: int, values: Sequence, figures: dict | None = None, error: str = "") -> dict:
@@ -452,7 +456,11 @@ _WORKER_JOB: Job | None = None
 
 
 def _single_thread_kernels() -> None:
-    """Run numba's parallel kernels on one thread in this process (parallelism is across variants)."""
+    """Run numba's parallel kernels on one thread in this process (parallelism is across variants).
+
+    Nothing to do while numba is not loaded (small planar2 sweeps take the numpy engine)."""
+    if "numba" not in sys.modules:
+        return
     try:
         import numba
 
@@ -461,14 +469,23 @@ def _single_thread_kernels() -> None:
         pass
 
 
+def _prepare_process(job: Job) -> None:
+    """The kernels loaded if the sweep is big; one numba thread (parallelism is across variants)."""
+    if job.kernels:
+        from . import workspace as ws
+
+        ws.load_kernels()
+    _single_thread_kernels()
+
+
 def _init_worker(job: Job) -> None:
     global _WORKER_JOB
     _WORKER_JOB = job
-    _single_thread_kernels()
+    _prepare_process(job)
     if job.options.catalogue is None:
         from . import spec
 
-        _WORKER_JOB = Job(job.plan, _with_catalogue(job.options, spec.load_catalogue()))
+        _WORKER_JOB = Job(job.plan, _with_catalogue(job.options, spec.load_catalogue()), job.kernels)
 
 
 def _pool_chunk(items):
@@ -480,7 +497,7 @@ _DASK_READY: dict = {}
 
 def _dask_chunk(job: Job, items):
     if not _DASK_READY:
-        _single_thread_kernels()
+        _prepare_process(job)
         _DASK_READY["ok"] = True
     return evaluate_chunk(job, items)
 
@@ -589,7 +606,7 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
         from . import spec
 
         options = _with_catalogue(options, spec.load_catalogue())
-    job = Job(plan, options)
+    job = Job(plan, options, kernels=_worth_kernels(plan, options, len(todo)))
     w = workers if workers is not None else default_workers()
     if w < 1:
         raise InputError(f"--workers: expected at least 1, got {w}")
@@ -605,20 +622,33 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
     return stats
 
 
-def _run_serial(job: Job, todo, emit) -> None:
-    try:
-        import numba
+def _worth_kernels(plan: Plan, options: Options, variants: int) -> bool:
+    """Whether the sweep holds more grid poses than the numpy engine is worth (about
+    ``workspace.NUMPY_MAX_POSES``): then every process loads the numba kernels first."""
+    from . import spec
+    from . import workspace as ws
 
-        before = numba.get_num_threads()
-    except Exception:  # noqa: BLE001
-        numba, before = None, None
-    _single_thread_kernels()
+    try:
+        poses = ws.make_grid(spec.from_dict(plan.base), options.step, force=True).size
+    except Exception:  # noqa: BLE001 - a bad base shows up as the variants' errors
+        return True
+    return variants * poses > ws.NUMPY_MAX_POSES
+
+
+def _run_serial(job: Job, todo, emit) -> None:
+    numba = sys.modules.get("numba")
+    before = numba.get_num_threads() if numba is not None else None
+    _prepare_process(job)
     try:
         for i, vals in todo:
             emit([evaluate_variant(job, i, vals)])
     finally:
-        if numba is not None and before is not None:
-            numba.set_num_threads(before)
+        numba = sys.modules.get("numba")
+        if numba is not None:
+            try:
+                numba.set_num_threads(before if before is not None else numba.config.NUMBA_NUM_THREADS)
+            except Exception:  # noqa: BLE001
+                pass
 
 
 def _run_pool(job: Job, todo, w: int, chunk: int | None, emit, stats: RunStats, start_method: str) -> None:

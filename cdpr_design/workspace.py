@@ -10,19 +10,20 @@ figures and maps for the pictures (subsampled for very large grids).
 from __future__ import annotations
 
 import itertools
+import os
+import sys
 import time
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 
-from . import _kernels as K
 from . import kinematics as kin
-from .errors import SpecError
+from .errors import InputError, SpecError
 from .model import Design, Grid
 
-KINDS = {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
-         "wrench-closure": K.KIND_WRENCH_CLOSURE}
+#: workspace kinds and their kernel codes (= ``_kernels.KIND_*``; a test checks)
+KINDS = {"static": 0, "wrench-feasible": 1, "wrench-closure": 2}
 
 #: Largest grid swept without ``force=True`` (poses).
 MAX_POSES = 20_000_000
@@ -30,6 +31,26 @@ MAX_POSES = 20_000_000
 CHUNK = 1 << 18
 #: Largest number of cells kept for the maps behind the pictures.
 MAP_CELLS = 4_000_000
+#: Engines: ``numba`` (the kernels of :mod:`cdpr_design._kernels`) or ``numpy``
+#: (the closed form of two cables and two wrench rows, vectorised).  ``auto``
+#: takes numpy for closed-form grids up to :data:`NUMPY_MAX_POSES` poses while
+#: the kernels are not loaded in this process: numba's start-up (import and
+#: first-call set-up, about 1 s) would cost more than the sweep itself.
+ENGINES = ("auto", "numba", "numpy")
+NUMPY_MAX_POSES = 2_000_000
+
+
+def _K():
+    """The numba kernels, imported on first use (importing numba takes ~0.4 s)."""
+    from . import _kernels
+
+    return _kernels
+
+
+def load_kernels() -> None:
+    """Load the numba kernels now: for a process that will sweep many grids (a sweep
+    worker), where numba's start-up is repaid and ``auto`` should then choose them."""
+    _K()
 
 
 @dataclass
@@ -224,7 +245,8 @@ def grid_positions(g: Grid, start: int, count: int) -> np.ndarray:
 def run(design: Design, kind: str = "static", step: float | None = None, grid: Grid | None = None,
         orientation=None, on_chunk: Callable[[Chunk], None] | None = None,
         progress: Callable[[int, int], None] | None = None, force: bool = False,
-        chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False) -> WorkspaceResult:
+        chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False,
+        engine: str | None = None) -> WorkspaceResult:
     """Sweep the workspace grid and return the summary and maps.
 
     Parameters
@@ -250,6 +272,9 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         statics-feasible *and* collision free, chunks carry ``collision_free``,
         and the summary gains ``collision_free``, ``feasible_statics`` and
         ``collisions_by_kind``.
+    engine : {'auto', 'numba', 'numpy'}, optional
+        Default: the ``CDPR_DESIGN_ENGINE`` environment variable, else ``auto``
+        (see :data:`ENGINES`).  Both engines give the same results (tested).
 
     Swivel pulleys (``cables[i].pulley``) are honoured whenever present; a
     design without pulleys and without ``interference`` takes the point-outlet
@@ -277,6 +302,8 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     kcode = KINDS[kind]
     # the paper's case (two cables, two wrench rows) has an inlined closed-form kernel
     planar2 = design.m == 2 and design.n == 2 and kind != "wrench-closure"
+    use_numpy = _use_numpy(engine, planar2, g.size)
+    K = None if use_numpy else _K()
     wreq_used = wreq if kind == "wrench-feasible" else wreq[:1].copy()
     lower, stp, shape = _grid3(g)
     total = g.size
@@ -306,13 +333,17 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     done = 0
     while done < total:
         cnt = min(chunk, total - done)
-        if planar2:
+        if use_numpy:
+            _planar2_numpy(g, done, cnt, Rb, A, wreq_used, tmin, tmax, feas_b, marg_b, ten_b, len_b)
+            nf, cmin, cmax = _chunk_stats_numpy(feas_b, marg_b, ten_b, cnt, tpeak)
+        elif planar2:
             K.sweep_grid_planar2(done, cnt, lower, stp, shape, Rb, A, wreq_used, tmin, tmax,
                                  feas_b, marg_b, ten_b, len_b)
         else:
             K.sweep_grid(done, cnt, lower, stp, shape, Rb, A, rows, wreq, tmin, tmax, combos, kcode,
                          feas_b, marg_b, ten_b, len_b)
-        nf, cmin, cmax = K.chunk_stats(feas_b, marg_b, ten_b, cnt, tpeak)
+        if not use_numpy:
+            nf, cmin, cmax = K.chunk_stats(feas_b, marg_b, ten_b, cnt, tpeak)
         nfeas += nf
         if nf:
             mmin, mmax = min(mmin, cmin), max(mmax, cmax)
@@ -351,6 +382,105 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         max_tension=tpeak, elapsed_s=time.perf_counter() - t0, feasible_map=fmap,
         margin_map=mmap, tension_maps=tmaps, map_axes=axes, map_stride=tuple(int(s) for s in stride),
     )
+
+
+def _use_numpy(engine: str | None, planar2: bool, poses: int) -> bool:
+    """Whether a point-outlet sweep takes the numpy closed form (see :data:`ENGINES`)."""
+    source = "engine"
+    if engine is None:
+        engine = os.environ.get("CDPR_DESIGN_ENGINE", "").strip().lower() or "auto"
+        source = "CDPR_DESIGN_ENGINE"
+    if engine not in ENGINES:
+        raise InputError(f"{source}: expected one of {', '.join(ENGINES)}, got {engine!r}")
+    if engine == "numpy":
+        if not planar2:
+            raise InputError(f"{source}=numpy: the numpy engine covers two cables with two wrench rows "
+                             "(static or wrench-feasible); use auto or numba for this design")
+        return True
+    if engine == "numba":
+        return False
+    return planar2 and poses <= NUMPY_MAX_POSES and "cdpr_design._kernels" not in sys.modules
+
+
+def _planar2_numpy(g: Grid, start, count, Rb, A, wreq, tmin, tmax, feasible, margin, tensions, lengths):
+    """``_kernels.sweep_grid_planar2`` vectorised with numpy: same formulas, same order.
+
+    Two cables, two wrench rows: t = W^-1 w in closed form, the capacity margin
+    min_i min(t_i - t_min,i, t_max,i - t_i) / ||row_i(W^-1)||, the other rows of
+    ``wreq`` (wrench-feasible) lowering the margin.  Fills rows 0 .. count of
+    the output buffers exactly as the kernel does.
+    """
+    pos = grid_positions(g, start, count)
+    px, py = pos[:, 0], pos[:, 1]
+    lx0 = (A[0, 0] - Rb[0, 0]) - px
+    ly0 = (A[0, 1] - Rb[0, 1]) - py
+    lx1 = (A[1, 0] - Rb[1, 0]) - px
+    ly1 = (A[1, 1] - Rb[1, 1]) - py
+    L0 = np.sqrt(lx0 * lx0 + ly0 * ly0)
+    L1 = np.sqrt(lx1 * lx1 + ly1 * ly1)
+    lengths[:count, 0] = L0
+    lengths[:count, 1] = L1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u0x, u0y, u1x, u1y = lx0 / L0, ly0 / L0, lx1 / L1, ly1 / L1
+        det = u0x * u1y - u1x * u0y
+        inv = 1.0 / det
+        i00, i01, i10, i11 = u1y * inv, -u1x * inv, -u0y * inv, u0x * inv
+        r0 = np.sqrt(i00 * i00 + i01 * i01)
+        r1 = np.sqrt(i10 * i10 + i11 * i11)
+        w0, w1 = wreq[0, 0], wreq[0, 1]
+        t0 = i00 * w0 + i01 * w1
+        t1 = i10 * w0 + i11 * w1
+        s = np.minimum(np.minimum(t0 - tmin[0], tmax[0] - t0) / r0, np.minimum(t1 - tmin[1], tmax[1] - t1) / r1)
+        inb = s >= 0.0
+        for v in range(1, wreq.shape[0]):
+            q0 = i00 * wreq[v, 0] + i01 * wreq[v, 1]
+            q1 = i10 * wreq[v, 0] + i11 * wreq[v, 1]
+            s = np.minimum(s, np.minimum(np.minimum(q0 - tmin[0], tmax[0] - q0) / r0,
+                                         np.minimum(q1 - tmin[1], tmax[1] - q1) / r1))
+    # a zero-length cable or parallel cables: rank deficient, no margin, infeasible
+    bad = (L0 <= 1e-12) | (L1 <= 1e-12) | (np.abs(det) <= _RANK_TOL)
+    s[bad] = np.nan
+    s += 0.0  # -0.0 -> 0.0, as the kernel (np.minimum and min() differ on the sign of equal zeros)
+    ok = s >= 0.0
+    margin[:count] = s
+    feasible[:count] = ok
+    tensions[:count, 0] = np.where(inb & ~bad, t0, np.nan)
+    tensions[:count, 1] = np.where(inb & ~bad, t1, np.nan)
+
+
+#: = ``_kernels.RANK_TOL`` (a test checks): |det W| at or below it is rank deficient
+_RANK_TOL = 1e-10
+
+
+def _chunk_stats_numpy(feasible, margin, tensions, count, tpeak):
+    """``_kernels.chunk_stats`` with numpy: (feasible count, min margin, max margin); raises ``tpeak``."""
+    f = feasible[:count].astype(bool)
+    nf = int(np.count_nonzero(f))
+    if not nf:
+        return 0, np.inf, -np.inf
+    mm = margin[:count][f]
+    np.maximum(tpeak, tensions[:count][f].max(axis=0), out=tpeak)
+    return nf, float(mm.min()) + 0.0, float(mm.max()) + 0.0
+
+
+def extra_columns(design: Design, interference: bool, mode: str | None) -> list[str]:
+    """Names of the extra ``workspace.csv`` columns, in the order :func:`chunk_extra` gives them."""
+    cols = ["collision_free"] if interference else []
+    if mode == "total":
+        cols.append("orientations_feasible")
+    elif mode == "range":
+        cols += [f"range_{c}" for c in design.motion.rotation_coords]
+    return cols
+
+
+def chunk_extra(chunk) -> dict:
+    """The extra columns of a :class:`Chunk` (name -> array)."""
+    out = {}
+    cf = getattr(chunk, "collision_free", None)
+    if cf is not None:
+        out["collision_free"] = cf
+    out.update(getattr(chunk, "extra", None) or {})
+    return out
 
 
 def representative_pose(result: WorkspaceResult) -> np.ndarray | None:
@@ -397,6 +527,7 @@ def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
     Rb = np.ascontiguousarray(design.attachments @ R.T)
     W = np.empty((design.n, design.m))
     L = np.empty(design.m)
+    K = _K()
     if kin.has_pulleys(design):
         from .interference import hardware_arrays
 

@@ -447,3 +447,25 @@ def test_committed_ci_baseline_matches(tmp_path):
     args = [str(ROOT / a) if a.startswith(("designs/", "tests/")) else a for a in CI_SWEEP.split()]
     r = invoke(*args, "--out", tmp_path, "--quiet", "--workers", "1", "--no-picture")
     assert r.exit_code == 0, r.output
+
+
+def test_engines_give_the_identical_sweep_csv(tmp_path, monkeypatch):
+    """Small planar2 sweeps take the numpy engine, big ones the numba kernels (sweep._worth_kernels);
+    a resumed sweep may mix them, so both must write the same bytes (signed zeros included)."""
+    written = {}
+    for engine in ("numba", "numpy"):
+        monkeypatch.setenv("CDPR_DESIGN_ENGINE", engine)
+        r = invoke("sweep", PLANAR2, *RESUME_VARY, "--workers", "1", "--out", tmp_path / engine, "--quiet",
+                   "--no-picture")
+        assert r.exit_code == 0, r.output
+        written[engine] = (tmp_path / engine / "sweep.csv").read_bytes()
+    assert written["numba"] == written["numpy"]
+    assert b",-0," not in written["numpy"]
+
+
+def test_big_sweeps_load_the_kernels():
+    design_data = spec.read_yaml(PLANAR2)
+    plan = sw.make_plan(spec.from_dict(design_data), [("effector.mass", sw.parse_values("0.5:2:3"))])
+    assert not sw._worth_kernels(plan, sw.Options(), len(plan))  # 3 x 22,801 poses
+    assert sw._worth_kernels(plan, sw.Options(), 1000)  # 22.8 M poses
+    assert sw._worth_kernels(plan, sw.Options(step=0.001), 3)  # 3 x 2.25 M poses

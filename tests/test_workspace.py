@@ -57,12 +57,14 @@ def assert_same(ref, got, design):
     np.testing.assert_allclose(marg[fin], marg_r[fin], rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.parametrize("engine", ["numba", "numpy"])
 @pytest.mark.parametrize("seed", range(40))
-def test_planar_kernels_match_numpy_on_random_robots(seed):
-    """Two-cable planar robots: closed-form kernel, generic kernel and numpy agree."""
+def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
+    """Two-cable planar robots: closed-form kernel (numba or numpy engine), generic kernel and
+    a per-pose numpy reference agree."""
     rng = np.random.default_rng(seed)
     design = spec.from_dict(random_planar_data(rng, m=2))
-    got = sweep_all(design)
+    got = sweep_all(design, engine=engine)
     poses = got[0]
     wreq = ws.wrench_vertices(design, "static")
     ref = numpy_reference(design, poses, wreq)
@@ -84,16 +86,17 @@ def test_planar_kernels_match_numpy_on_random_robots(seed):
     assert_same((f2, m2, T2, L2), got, design)
 
 
-def test_planar2_wrench_feasible_matches_numpy():
+@pytest.mark.parametrize("engine", ["numba", "numpy"])
+def test_planar2_wrench_feasible_matches_numpy(engine):
     data = spec.read_yaml(PLANAR2)
     data["workspace"]["external_wrench"] = {"lower": [-2.0, -1.0], "upper": [2.0, 1.0]}
     design = spec.from_dict(data)
-    got = sweep_all(design, kind="wrench-feasible", step=0.03)
+    got = sweep_all(design, kind="wrench-feasible", step=0.03, engine=engine)
     wreq = ws.wrench_vertices(design, "wrench-feasible")
     assert wreq.shape == (5, 2)
     ref = numpy_reference(design, got[0], wreq)
     assert_same(ref, got, design)
-    static = sweep_all(design, kind="static", step=0.03)
+    static = sweep_all(design, kind="static", step=0.03, engine=engine)
     # resisting extra wrench can only shrink the workspace
     assert np.all(got[1] <= static[1]) and got[1].sum() < static[1].sum()
 
@@ -157,3 +160,104 @@ def test_grid_and_positions():
 def test_unknown_kind_is_spec_error():
     with pytest.raises(spec.SpecError):
         ws.run(spec.load(PLANAR2), kind="dynamic")
+
+
+# ----------------------------------------------------------------------------
+# Engines: the numpy closed form against the numba kernel
+# ----------------------------------------------------------------------------
+
+
+def _sweep_engine(design, engine, kind="static", **kw):
+    rows = []
+    r = ws.run(design, kind=kind, on_chunk=rows.append, engine=engine, **kw)
+    cols = {name: np.concatenate([getattr(c, name) for c in rows])
+            for name in ("poses", "feasible", "margin", "tensions", "lengths")}
+    return r, cols
+
+
+@pytest.mark.parametrize("seed", range(25))
+def test_numpy_engine_equals_numba_kernel(seed):
+    """Same formulas in the same order: every flag identical, numbers equal to rounding."""
+    rng = np.random.default_rng(1000 + seed)
+    data = random_planar_data(rng, m=2)
+    kind = "static"
+    if seed % 2:
+        data["workspace"]["external_wrench"] = {"lower": [-1.0, -2.0], "upper": [1.5, 0.5]}
+        kind = "wrench-feasible"
+    design = spec.from_dict(data)
+    ra, a = _sweep_engine(design, "numba", kind, chunk=1000)
+    rb, b = _sweep_engine(design, "numpy", kind, chunk=1000)
+    np.testing.assert_array_equal(a["feasible"], b["feasible"])
+    np.testing.assert_array_equal(a["lengths"], b["lengths"])
+    for key in ("margin", "tensions"):
+        np.testing.assert_array_equal(np.isnan(a[key]), np.isnan(b[key]))
+        np.testing.assert_allclose(a[key], b[key], rtol=1e-13, atol=1e-13, equal_nan=True)
+    sa, sb = ra.summary(), rb.summary()
+    for key in ("poses", "feasible", "min_margin", "max_margin", "max_tension", "max_tension_per_cable"):
+        assert sa[key] == pytest.approx(sb[key], rel=1e-13), key
+    np.testing.assert_array_equal(ra.feasible_map, rb.feasible_map)
+
+
+def test_numpy_engine_degenerate_poses():
+    """A grid through an outlet (zero-length cable) and along the line between the outlets
+    (parallel cables, rank deficient): infeasible with NaN margin in both engines."""
+    data = spec.read_yaml(PLANAR2)
+    data["effector"]["size"] = [0.0, 0.0]
+    for c in data["cables"]:
+        c["attachment"] = [0.0, 0.0]
+    design = spec.from_dict(data)
+    top = design.outlets[0, 1]
+    grid = ws.Grid((0.0, top - 0.5), (1.5, top), (0.05, 0.05))
+    _, a = _sweep_engine(design, "numba", grid=grid)
+    _, b = _sweep_engine(design, "numpy", grid=grid)
+    on_line = np.isclose(a["poses"][:, 1], top)
+    assert on_line.sum() == 31
+    for cols in (a, b):
+        assert not cols["feasible"][on_line].any()
+        assert np.isnan(cols["margin"][on_line]).all() and np.isnan(cols["tensions"][on_line]).all()
+    assert (b["lengths"][on_line] == 0).any(axis=1).sum() == 2  # the two outlets themselves
+    np.testing.assert_array_equal(a["feasible"], b["feasible"])
+    np.testing.assert_allclose(a["margin"], b["margin"], rtol=1e-13, equal_nan=True)
+    np.testing.assert_allclose(a["tensions"], b["tensions"], rtol=1e-13, equal_nan=True)
+
+
+def test_engine_choice(monkeypatch):
+    design = spec.load(PLANAR2)
+    assert ws._use_numpy("numpy", True, 10)
+    assert not ws._use_numpy("numba", True, 10)
+    # auto: numpy only while the kernels are not loaded, and only for grids numba would not repay
+    monkeypatch.delitem(__import__("sys").modules, "cdpr_design._kernels")
+    assert ws._use_numpy("auto", True, ws.NUMPY_MAX_POSES)
+    assert not ws._use_numpy("auto", True, ws.NUMPY_MAX_POSES + 1)
+    assert not ws._use_numpy("auto", False, 10)
+    monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")
+    assert not ws._use_numpy(None, True, 10)
+    monkeypatch.setenv("CDPR_DESIGN_ENGINE", "fortran")
+    with pytest.raises(ws.InputError, match="CDPR_DESIGN_ENGINE: expected one of auto, numba, numpy"):
+        ws.run(design)
+    monkeypatch.delenv("CDPR_DESIGN_ENGINE")
+    ipanema = spec.load(PLANAR2.parent / "ipanema3.yaml")
+    with pytest.raises(ws.InputError, match="engine=numpy: the numpy engine covers two cables"):
+        ws.run(ipanema, step=0.5, engine="numpy")
+
+
+def test_kernel_codes_match():
+    """workspace keeps copies of kernel constants so that it need not import numba."""
+    assert ws.KINDS == {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
+                        "wrench-closure": K.KIND_WRENCH_CLOSURE}
+    assert ws._RANK_TOL == K.RANK_TOL
+
+
+def test_small_planar2_sweep_does_not_load_numba():
+    """The paper's robot on its default grid is swept without numba's start-up (~1 s)."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from cdpr_design import spec, workspace as ws; "
+            f"r = ws.run(spec.load({str(PLANAR2)!r})); "
+            "print(r.feasible, 'numba' in sys.modules, 'cdpr_design._kernels' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={**__import__("os").environ, "CDPR_DESIGN_ENGINE": ""})
+    feasible, numba_loaded, kernels_loaded = out.stdout.split()
+    assert (numba_loaded, kernels_loaded) == ("False", "False")
+    assert int(feasible) == ws.run(spec.load(PLANAR2), engine="numba").feasible
