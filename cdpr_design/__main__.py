@@ -1,4 +1,19 @@
-from .cli import main
+"""``python -m cdpr_design`` and the ``cdpr-design`` console script."""
+
+import sys
+
+
+def main() -> None:
+    # start the picture worker before importing the command line (typer, rich,
+    # numpy): its matplotlib import then overlaps all of the parent's start-up
+    from . import _picture_worker
+
+    if _picture_worker.wanted(sys.argv[1:]):
+        _picture_worker.prestart()
+    from .cli import main as cli_main
+
+    cli_main()
+
 
 if __name__ == "__main__":
     main()

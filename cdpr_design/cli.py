@@ -194,25 +194,24 @@ def summary_table(title: str, rows: list[tuple[str, object]]) -> Table:
 
 
 def run_workspace(design, out_dir, kind: str, step, force: bool, quiet: bool,
-                  collisions: bool = False, orientations: str | None = None):
+                  collisions: bool = False, orientations: str | None = None, pictures=None):
     """Sweep, stream ``workspace.csv``, write pictures and ``summary.json``; return the result.
 
     ``collisions``: intersect feasibility with the interference checks (column
     ``collision_free``); ``orientations``: ``total`` or ``range`` orientation
     workspace (rotational motions; extra columns, ``orientation_workspace.png``).
     """
-    from . import hardware
     from . import report
     from . import workspace as ws
 
     grid = ws.make_grid(design, step, force)
-    header = report.workspace_header(design) + hardware.extra_columns(design, collisions, orientations)
+    header = report.workspace_header(design) + ws.extra_columns(design, collisions, orientations)
     csv_file = out_dir.stream("workspace.csv")
     try:
         csv_file.write(",".join(header) + "\n")
 
         def on_chunk(chunk):
-            csv_file.write(report.workspace_rows(chunk, extra=hardware.chunk_extra(chunk)))
+            csv_file.write(report.workspace_rows(chunk, extra=ws.chunk_extra(chunk)))
 
         with progress_bar(f"workspace {design.name}", quiet, min_total=500_000) as cb:
             if orientations:
@@ -226,7 +225,7 @@ def run_workspace(design, out_dir, kind: str, step, force: bool, quiet: bool,
         csv_file.abort()
         raise
     out_dir.write_json("summary.json", result.summary())
-    report.save_workspace_pictures(out_dir, result)
+    report.save_workspace_pictures(out_dir, result, pictures)
     if getattr(result, "orientation_maps", None) is not None:
         report.save_orientation_picture(out_dir, result)
     return result
@@ -252,10 +251,13 @@ def workspace(
                                "(workspace.orientation_range). 1R2T and 3R3T.")] = None,
 ):
     """Grid sweep of the workspace: workspace.csv, workspace.png, tension_map.png, summary.json."""
-    design = load_design(spec)
-    out_dir = output_dir(design, out, overwrite)
-    result = run_workspace(design, out_dir, kind.value, step, force, quiet or json_, collisions,
-                           orientations.value if orientations is not None else None)
+    from . import _picture_worker
+
+    with _picture_worker.take() as pictures:  # matplotlib's import overlaps the spec and the sweep
+        design = load_design(spec)
+        out_dir = output_dir(design, out, overwrite)
+        result = run_workspace(design, out_dir, kind.value, step, force, quiet or json_, collisions,
+                               orientations.value if orientations is not None else None, pictures)
     s = result.summary()
     if json_:
         emit_json(s)
@@ -393,12 +395,18 @@ def schema():
 
 
 def main() -> None:
-    """Console-script entry point."""
+    """Console-script entry point (``cdpr_design.__main__.main`` starts the picture worker earlier)."""
+    from . import _picture_worker
+
+    if _picture_worker.wanted(sys.argv[1:]):
+        _picture_worker.prestart()
     try:
         app()
     except KeyboardInterrupt:
         err.print("interrupted")
         sys.exit(130)
+    finally:
+        _picture_worker.discard()
 
 
 # ----------------------------------------------------------------------------
@@ -547,12 +555,15 @@ def report(
     from . import evaluate as ev
     from . import report as rep
 
-    design = load_design(spec)
-    load_catalogue_opt(catalogue)  # bad catalogue: exit 2 before any work
-    if trajectory is not None and trajectory not in design.trajectories:
-        trajectory_samples(design, trajectory)  # unknown name: exit 2 before any work
-    out_dir = output_dir(design, out, overwrite)
-    wres = run_workspace(design, out_dir, "static", step, force, quiet or json_)
+    from . import _picture_worker
+
+    with _picture_worker.take() as pictures:  # matplotlib's import overlaps the spec and the sweep
+        design = load_design(spec)
+        load_catalogue_opt(catalogue)  # bad catalogue: exit 2 before any work
+        if trajectory is not None and trajectory not in design.trajectories:
+            trajectory_samples(design, trajectory)  # unknown name: exit 2 before any work
+        out_dir = output_dir(design, out, overwrite)
+        wres = run_workspace(design, out_dir, "static", step, force, quiet or json_, pictures=pictures)
     e = _evaluate(design, step, catalogue, trajectory, safety_factor, motor, quiet or json_, wres)
     rep.write_motor_sizing(out_dir, e.sizing)
     rep.write_design_report(out_dir, e.row)

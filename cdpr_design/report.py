@@ -22,9 +22,12 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
+from ._picture_worker import PictureWorker
 from .errors import InputError
 
 MANIFEST = ".cdpr-design-outputs"
+#: Resolution of every PNG [dots per inch].
+DPI = 120
 
 
 # ----------------------------------------------------------------------------
@@ -91,7 +94,14 @@ class OutputDir:
         p = self.target(name)
         return AtomicFile(p, on_commit=lambda: self.wrote(name))
 
-    def save_figure(self, name: str, fig, dpi: int = 120) -> Path:
+    def write_bytes(self, name: str, data: bytes) -> Path:
+        p = self.target(name)
+        with AtomicFile(p, binary=True) as fh:
+            fh.write(data)
+        self.wrote(name)
+        return p
+
+    def save_figure(self, name: str, fig, dpi: int = DPI) -> Path:
         p = self.target(name)
         with AtomicFile(p, binary=True) as fh:
             fig.savefig(fh, format="png", dpi=dpi)
@@ -457,16 +467,14 @@ def tension_figure(result):
     return fig
 
 
-def save_workspace_pictures(out: OutputDir, result) -> list[Path]:
-    plt = _plt()
-    paths = []
-    for name, make in (("workspace.png", workspace_figure), ("tension_map.png", tension_figure)):
-        fig = make(result)
-        try:
-            paths.append(out.save_figure(name, fig))
-        finally:
-            plt.close(fig)
-    return paths
+def save_workspace_pictures(out: OutputDir, result, worker: PictureWorker | None = None) -> list[Path]:
+    """``workspace.png`` and ``tension_map.png`` of a workspace result (drawn by ``worker`` if given)."""
+    names = ("workspace.png", "tension_map.png")
+    for name in names:  # refuse a foreign file before drawing anything
+        out.target(name)
+    jobs = [(names[0], workspace_figure, (result,)), (names[1], tension_figure, (result,))]
+    pngs = (worker or PictureWorker(enabled=False)).render(jobs)
+    return [out.write_bytes(name, data) for name, data in pngs]
 
 
 # ----------------------------------------------------------------------------

@@ -1,0 +1,255 @@
+"""Pictures drawn in a child process, so importing matplotlib overlaps a command's work.
+
+Importing matplotlib and drawing the first figure costs about a second on
+one core; the numbers behind the pictures take a fraction of that for a
+typical design.  A command that ends with pictures starts a
+:class:`PictureWorker` first thing: the child imports matplotlib on the other
+core while the parent reads the spec and sweeps, then :meth:`PictureWorker.render`
+hands it the figure functions and their data and gets PNG bytes back.  The
+parent writes the files itself (atomic, manifest-checked, see
+:class:`cdpr_design.report.OutputDir`).
+
+Whenever the child cannot be used (it failed to start, died, or a figure
+raised there) ``render`` draws in-process instead, so errors surface exactly
+as without the worker.  No child is started when matplotlib is already
+imported in this process (nothing to hide) or when
+``CDPR_DESIGN_PICTURE_WORKER=0``.
+
+This module imports nothing heavy: the command line starts the worker
+(:func:`prestart`) before it imports numpy.
+
+Protocol on the child's stdin/stdout: length-prefixed pickles.  A request is
+a list of jobs ``(name, builder, args, dpi)``; the answer is
+``("ok", [(name, png_bytes), ...])`` or ``("error", text)``.  End of input
+ends the child.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import pickle
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+_LEN = struct.Struct("<Q")
+
+
+def read_message(stream):
+    """One length-prefixed pickle from ``stream``, or None at end of input."""
+    head = stream.read(_LEN.size)
+    if len(head) < _LEN.size:
+        return None
+    size = _LEN.unpack(head)[0]
+    data = stream.read(size)
+    if len(data) < size:
+        return None
+    return pickle.loads(data)
+
+
+def write_message(stream, obj) -> None:
+    data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
+    stream.write(_LEN.pack(len(data)))
+    stream.write(data)
+    stream.flush()
+
+
+def draw_parallel(jobs) -> list[tuple[str, bytes]]:
+    """:func:`draw`, the second half of the jobs in a forked copy of this process.
+
+    Used in the worker only: it runs no threads and has not loaded numba's
+    OpenMP runtime (checked), so forking it is safe; the parent command waits idle
+    meanwhile, leaving both cores to the drawing.  Falls back to drawing in
+    turn where ``fork`` does not exist or fails.
+    """
+    if len(jobs) < 2 or not hasattr(os, "fork") or "numba" in sys.modules:
+        return draw(jobs)
+    half = (len(jobs) + 1) // 2
+    first, second = jobs[:half], jobs[half:]
+    rfd, wfd = os.pipe()
+    try:
+        pid = os.fork()
+    except OSError:
+        os.close(rfd)
+        os.close(wfd)
+        return draw(jobs)
+    if pid == 0:  # the copy: draw the second half, send it back, leave without cleanup
+        code = 0
+        try:
+            os.close(rfd)
+            try:
+                answer = ("ok", draw(second))
+            except Exception as exc:
+                answer = ("error", f"{type(exc).__name__}: {exc}")
+            with os.fdopen(wfd, "wb") as fh:
+                write_message(fh, answer)
+        except BaseException:
+            code = 1
+        finally:
+            os._exit(code)
+    os.close(wfd)
+    try:
+        out = draw(first)
+    finally:
+        with os.fdopen(rfd, "rb") as fh:
+            answer = read_message(fh)
+        os.waitpid(pid, 0)
+    if answer is None or answer[0] != "ok":
+        raise RuntimeError(f"drawing in the forked worker failed: {answer[1] if answer else 'no answer'}")
+    return out + answer[1]
+
+
+def draw(jobs) -> list[tuple[str, bytes]]:
+    """PNG bytes of each job ``(name, builder, args, dpi)``; figures are closed."""
+    from . import report
+
+    plt = report._plt()
+    out = []
+    for name, builder, args, dpi in jobs:
+        fig = builder(*args)
+        try:
+            buf = io.BytesIO()
+            fig.savefig(buf, format="png", dpi=dpi)
+        finally:
+            plt.close(fig)
+        out.append((name, buf.getvalue()))
+    return out
+
+
+class PictureWorker:
+    """A child process drawing PNGs (see the module's description).
+
+    Parameters
+    ----------
+    enabled : bool
+        False: never start a child; :meth:`render` draws in-process.
+    force : bool
+        Start a child even though matplotlib is imported here already (tests).
+    """
+
+    def __init__(self, enabled: bool = True, force: bool = False):
+        self.proc = None
+        if not enabled or (not force and (os.environ.get("CDPR_DESIGN_PICTURE_WORKER", "1").strip() == "0"
+                                          or "matplotlib.pyplot" in sys.modules)):
+            return
+        env = dict(os.environ)
+        pkg_root = str(Path(__file__).resolve().parents[1])  # the child imports this very package
+        env["PYTHONPATH"] = pkg_root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+        try:
+            self.proc = subprocess.Popen([sys.executable, "-m", "cdpr_design._picture_worker"],
+                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                         stderr=subprocess.DEVNULL, env=env)
+        except OSError:
+            self.proc = None
+
+    def render(self, jobs) -> list[tuple[str, bytes]]:
+        """PNG bytes of each job ``(name, builder, args)``; builder: a figure function of
+        :mod:`cdpr_design.report` (or any importable function returning a figure)."""
+        from .report import DPI
+
+        jobs = [(name, builder, tuple(args), DPI) for name, builder, args in jobs]
+        if self.proc is not None:
+            try:
+                write_message(self.proc.stdin, jobs)
+                answer = read_message(self.proc.stdout)
+            except (OSError, ValueError, EOFError, pickle.PickleError, AttributeError, TypeError):
+                answer = None
+            if answer is not None and answer[0] == "ok":
+                return answer[1]
+            self.close(kill=True)
+        return draw(jobs)
+
+    def close(self, kill: bool = False) -> None:
+        """Let the child go: it ends at end of input.  ``kill``: stop it now (it may be busy)."""
+        proc, self.proc = self.proc, None
+        if proc is None:
+            return
+        for stream in (proc.stdin, proc.stdout):
+            try:
+                stream.close()
+            except OSError:
+                pass
+        if kill and proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        # after an error the child may still be importing: stop it rather than wait
+        self.close(kill=exc_type is not None)
+        return False
+
+
+_prestarted: PictureWorker | None = None
+
+#: commands that end with pictures drawn through :func:`take`
+PICTURE_COMMANDS = ("workspace", "report")
+
+
+def wanted(argv) -> bool:
+    """Whether the command line ``argv`` (without the program) runs a picture command."""
+    return bool(argv) and argv[0] in PICTURE_COMMANDS and not {"-h", "--help"} & set(argv)
+
+
+def prestart() -> None:
+    """Start a worker now, for the command about to run (:func:`take` hands it over)."""
+    global _prestarted
+    if _prestarted is None:
+        _prestarted = PictureWorker()
+
+
+def take() -> PictureWorker:
+    """The worker :func:`prestart` started, else a new one."""
+    global _prestarted
+    worker, _prestarted = _prestarted, None
+    return worker if worker is not None else PictureWorker()
+
+
+def discard() -> None:
+    """Stop a prestarted worker no command took."""
+    global _prestarted
+    worker, _prestarted = _prestarted, None
+    if worker is not None:
+        worker.close(kill=True)
+
+
+# ----------------------------------------------------------------------------
+# The child
+# ----------------------------------------------------------------------------
+
+
+def _warm_up() -> None:
+    """Import matplotlib and load the font the pictures' text needs."""
+    from . import report
+
+    plt = report._plt()
+    fig = plt.figure(figsize=(1, 1))
+    fig.text(0.5, 0.5, "x [m]")
+    fig.savefig(io.BytesIO(), format="png", dpi=20)
+    plt.close(fig)
+
+
+def main() -> None:
+    inp, outp = sys.stdin.buffer, sys.stdout.buffer
+    sys.stdout = sys.stderr  # nothing but answers on the pipe
+    try:
+        _warm_up()
+        while True:
+            jobs = read_message(inp)
+            if jobs is None:
+                return
+            try:
+                answer = ("ok", draw_parallel(jobs))
+            except Exception as exc:  # the parent redraws in-process and reports it
+                answer = ("error", f"{type(exc).__name__}: {exc}")
+            write_message(outp, answer)
+    except (KeyboardInterrupt, BrokenPipeError):
+        return
+
+
+if __name__ == "__main__":
+    main()

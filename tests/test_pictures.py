@@ -1,0 +1,105 @@
+"""The picture worker: PNGs drawn in a child process equal those drawn in-process."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from cdpr_design import _picture_worker as pw
+from cdpr_design import report, spec
+from cdpr_design import workspace as ws
+
+from .conftest import PLANAR2
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def result():
+    return ws.run(spec.load(PLANAR2))
+
+
+def jobs(result):
+    return [("workspace.png", report.workspace_figure, (result,)),
+            ("tension_map.png", report.tension_figure, (result,))]
+
+
+def test_worker_draws_the_same_bytes(result):
+    local = pw.PictureWorker(enabled=False).render(jobs(result))
+    with pw.PictureWorker(force=True) as worker:
+        assert worker.proc is not None
+        remote = worker.render(jobs(result))
+        again = worker.render(jobs(result)[1:])  # the worker serves several requests
+    assert [n for n, _ in remote] == ["workspace.png", "tension_map.png"]
+    assert remote == local
+    assert again == local[1:]
+    assert remote[0][1][:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_error_in_worker_is_raised_in_process():
+    """A figure that fails in the child is drawn again here, so the real error surfaces."""
+    with pw.PictureWorker(force=True) as worker:
+        with pytest.raises(AttributeError):
+            worker.render([("x.png", report.workspace_figure, (None,))])
+        assert worker.proc is None  # not trusted again
+
+
+def test_dead_worker_falls_back(result):
+    with pw.PictureWorker(force=True) as worker:
+        worker.proc.kill()
+        worker.proc.wait()
+        out = worker.render(jobs(result)[:1])
+    assert out == pw.PictureWorker(enabled=False).render(jobs(result)[:1])
+
+
+def test_disabled_by_environment(monkeypatch):
+    monkeypatch.setenv("CDPR_DESIGN_PICTURE_WORKER", "0")
+    monkeypatch.delitem(sys.modules, "matplotlib.pyplot", raising=False)
+    assert pw.PictureWorker().proc is None
+
+
+def test_prestart_take_discard(monkeypatch):
+    assert pw.wanted(["workspace", "designs/planar2.yaml"])
+    assert pw.wanted(["report", "x.yaml", "--json"])
+    assert not pw.wanted(["workspace", "x.yaml", "--help"])
+    assert not pw.wanted(["pose", "x.yaml"])
+    assert not pw.wanted([])
+    monkeypatch.delitem(sys.modules, "matplotlib.pyplot", raising=False)
+    monkeypatch.delenv("CDPR_DESIGN_PICTURE_WORKER", raising=False)
+    pw.prestart()
+    started = pw._prestarted
+    assert started is not None and started.proc is not None
+    proc = started.proc
+    assert pw.take() is started and pw._prestarted is None
+    started.close(kill=True)
+    assert proc.poll() is not None
+    pw.prestart()
+    proc = pw._prestarted.proc
+    pw.discard()
+    assert pw._prestarted is None and proc.poll() is not None
+
+
+def test_command_output_identical_with_and_without_worker(tmp_path):
+    """The real console entry: files byte-identical whether the worker drew or not."""
+    outs = {}
+    for flag in ("1", "0"):
+        out = tmp_path / f"w{flag}"
+        env = {**os.environ, "CDPR_DESIGN_PICTURE_WORKER": flag}
+        subprocess.run([sys.executable, "-m", "cdpr_design", "workspace", str(PLANAR2), "--out", str(out),
+                        "--quiet", "--json"], check=True, env=env, capture_output=True, cwd=tmp_path)
+        outs[flag] = {p.name: p.read_bytes() for p in out.iterdir() if p.suffix in (".png", ".csv")}
+    assert set(outs["1"]) == {"workspace.png", "tension_map.png", "workspace.csv"}
+    assert outs["1"] == outs["0"]
+
+
+def test_worker_refuses_foreign_file_before_drawing(tmp_path, result):
+    out = report.OutputDir(tmp_path)
+    (tmp_path / "tension_map.png").write_text("mine")
+    with pytest.raises(report.InputError, match="was not written by cdpr-design"):
+        report.save_workspace_pictures(out, result)
+    assert not (tmp_path / "workspace.png").exists()
+    assert (tmp_path / "tension_map.png").read_text() == "mine"
