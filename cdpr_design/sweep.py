@@ -44,6 +44,7 @@ import itertools
 import json
 import math
 import os
+import pickle
 import re
 import sys
 import time
@@ -691,6 +692,58 @@ def _stop_pool(ex) -> None:
             pass
 
 
+#: Settings of the LocalCluster (scheduler and nannies live in this process,
+#: the workers get them as environment variables).  One numba thread per worker
+#: (the parallelism is across variants); neither dask's statistical profiler (a
+#: stack walk every 10 ms) nor its GIL monitor (every 1 ms), which take the GIL
+#: from short Python-heavy tasks; the event-loop health check, memory monitor and
+#: system monitor at 1-2 s instead of 20-500 ms (no dashboard is served, and a
+#: sweep's memory is bounded chunk buffers): with two cores shared by the
+#: scheduler, the nannies and the workers, these cost about 0.4 s of CPU per
+#: 1,000 variants.
+LOCAL_CLUSTER_CONFIG = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.system-monitor.gil.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.admin.system-monitor.interval": "2s",
+}
+LOCAL_WORKER_ENV = {"NUMBA_NUM_THREADS": "1", **{
+    "DASK_" + key.upper().replace(".", "__").replace("-", "_"): str(value)
+    for key, value in LOCAL_CLUSTER_CONFIG.items()}}
+
+
+#: A job pickling to fewer bytes goes with every Dask task instead of being scattered.
+INLINE_JOB_BYTES = 1_000_000
+
+
+def _start_local_cluster(LocalCluster, workers: int):
+    """A LocalCluster of ``workers`` single-threaded worker processes on 127.0.0.1.
+
+    dask's nannies start workers with ``MALLOC_TRIM_THRESHOLD_=65536``
+    (``distributed.nanny.pre-spawn-environ``).  Setting that variable turns off
+    glibc's dynamic mmap threshold, so every array above 128 kB is a fresh
+    mmap with its page faults: a variant's sweep ran 1.6-2x slower than in a
+    pool worker.  The sweep's memory is bounded chunk buffers, so the workers
+    keep glibc's default.  The nannies also write their variables into this
+    process's environment; it is restored once the workers are up.
+    """
+    import logging
+
+    import dask
+
+    saved = dict(os.environ)
+    os.environ.update(LOCAL_WORKER_ENV)
+    try:
+        with dask.config.set({**LOCAL_CLUSTER_CONFIG,
+                              "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+            return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                dashboard_address=None, host="127.0.0.1", silence_logs=logging.ERROR)
+    finally:
+        os.environ.clear()
+        os.environ.update(saved)
+
+
 def _run_dask(job: Job, todo, scheduler: str, w: int, chunk: int | None, emit, stats: RunStats,
               connect_timeout: float = 10.0) -> None:
     try:
@@ -700,27 +753,7 @@ def _run_dask(job: Job, todo, scheduler: str, w: int, chunk: int | None, emit, s
     cluster = None
     try:
         if scheduler == "local":
-            import logging
-
-            # The workers inherit this environment: one numba thread each (the
-            # parallelism is across variants), and neither the statistical
-            # profiler (a stack walk every 10 ms) nor the GIL monitor (every 1 ms)
-            # of dask's workers, which take the GIL from short Python-heavy tasks.
-            worker_env = {"NUMBA_NUM_THREADS": "1",
-                          "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED": "False",
-                          "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__GIL__ENABLED": "False"}
-            saved = {k: os.environ.get(k) for k in worker_env}
-            os.environ.update(worker_env)
-            try:
-                cluster = LocalCluster(n_workers=w, threads_per_worker=1, processes=True,
-                                       dashboard_address=None, host="127.0.0.1",
-                                       silence_logs=logging.ERROR)
-            finally:
-                for k, v in saved.items():
-                    if v is None:
-                        os.environ.pop(k, None)
-                    else:
-                        os.environ[k] = v
+            cluster = _start_local_cluster(LocalCluster, w)
             client = Client(cluster)
         else:
             try:
@@ -737,7 +770,10 @@ def _run_dask(job: Job, todo, scheduler: str, w: int, chunk: int | None, emit, s
         stats.backend = "dask LocalCluster" if cluster is not None else f"dask {scheduler}"
         stats.workers, stats.chunk = nthreads, size
         if todo:
-            job_f = client.scatter(job, broadcast=True)
+            # a small job (the usual: a few kB) travels with each task, which spares
+            # a broadcast round trip before the first task; a big one is sent once
+            small = len(pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL)) < INLINE_JOB_BYTES
+            job_f = job if small else client.scatter(job, broadcast=True)
             futures = [client.submit(_dask_chunk, job_f, part, pure=False) for part in chunks(todo, size)]
             try:
                 for fut in as_completed(futures):

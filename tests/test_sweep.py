@@ -253,11 +253,16 @@ def test_dask_bad_address_is_bad_input(small_plan):
         sw.run(small_plan, sw.Options(step=0.05), scheduler="tcp://127.0.0.1:1", connect_timeout=1.0)
 
 
-def test_fork_after_openmp_is_unsafe(small_plan, serial_records):
+def test_fork_after_openmp_is_unsafe(small_plan, serial_records, monkeypatch):
     """Why workers are spawned: with numba's OpenMP layer a forked worker is terminated."""
     import numba
     from concurrent.futures.process import BrokenProcessPool
 
+    from cdpr_design import workspace as ws
+
+    # a parallel kernel has run in this process, and the forked workers use the kernels too
+    monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")
+    ws.run(spec.load(PLANAR2), step=0.05)
     if numba.threading_layer() != "omp":
         pytest.skip(f"threading layer {numba.threading_layer()} (the test is about OpenMP)")
     with pytest.raises(BrokenProcessPool):
@@ -469,3 +474,28 @@ def test_big_sweeps_load_the_kernels():
     assert not sw._worth_kernels(plan, sw.Options(), len(plan))  # 3 x 22,801 poses
     assert sw._worth_kernels(plan, sw.Options(), 1000)  # 22.8 M poses
     assert sw._worth_kernels(plan, sw.Options(step=0.001), 3)  # 3 x 2.25 M poses
+
+
+def _worker_settings():
+    import dask
+
+    return (os.environ.get("MALLOC_TRIM_THRESHOLD_"), os.environ.get("NUMBA_NUM_THREADS"),
+            dask.config.get("distributed.worker.profile.enabled"),
+            dask.config.get("distributed.admin.tick.interval"))
+
+
+def test_local_cluster_workers_keep_glibc_malloc_defaults():
+    """dask's nannies would set MALLOC_TRIM_THRESHOLD_ (fresh mmaps for every array above 128 kB,
+    1.6-2x slower variants); the sweep's LocalCluster leaves it unset and restores this
+    process's environment after the nannies wrote into it."""
+    from distributed import Client, LocalCluster
+
+    before = dict(os.environ)
+    cluster = sw._start_local_cluster(LocalCluster, 1)
+    try:
+        assert dict(os.environ) == before
+        with Client(cluster) as client:
+            (settings,) = client.run(_worker_settings).values()
+    finally:
+        cluster.close()
+    assert settings == (None, "1", False, "1s")
