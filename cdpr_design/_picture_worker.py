@@ -134,13 +134,13 @@ class PictureWorker:
         if not enabled or (not force and (os.environ.get("CDPR_DESIGN_PICTURE_WORKER", "1").strip() == "0"
                                           or "matplotlib.pyplot" in sys.modules)):
             return
-        env = dict(os.environ)
-        pkg_root = str(Path(__file__).resolve().parents[1])  # the child imports this very package
-        env["PYTHONPATH"] = pkg_root + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+        # the child imports this very package, whatever the working folder holds
+        pkg_root = str(Path(__file__).resolve().parents[1])
+        code = (f"import sys; sys.path.insert(0, {pkg_root!r}); "
+                "from cdpr_design._picture_worker import main; main()")
         try:
-            self.proc = subprocess.Popen([sys.executable, "-m", "cdpr_design._picture_worker"],
-                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                         stderr=subprocess.DEVNULL, env=env)
+            self.proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE,
+                                         stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
         except OSError:
             self.proc = None
 
