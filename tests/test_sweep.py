@@ -499,3 +499,16 @@ def test_local_cluster_workers_keep_glibc_malloc_defaults():
     finally:
         cluster.close()
     assert settings == (None, "1", False, "1s")
+
+
+@pytest.mark.parametrize("scheduler", [None, "local"])
+def test_workers_exit_after_the_sweep(small_plan, serial_records, scheduler):
+    """run() returns once every row is in; the workers exit in the background and
+    wait_closed() leaves none behind."""
+    import multiprocessing
+
+    recs = []
+    sw.run(small_plan, sw.Options(step=0.05), workers=2, scheduler=scheduler, on_record=recs.append)
+    assert sorted(r["variant"] for r in recs) == sorted(r["variant"] for r in serial_records)
+    sw.wait_closed()
+    assert multiprocessing.active_children() == []
