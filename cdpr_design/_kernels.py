@@ -1168,26 +1168,52 @@ def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax
             tensions[k, 1] = t1 if inb else np.nan
 
 
-@njit
+@njit_parallel
 def chunk_stats(feasible, margin, tensions, count, tpeak):
     """Feasible count and margin extremes over the feasible rows; ``tpeak`` (m) is
-    raised to each cable's largest feasible tension.  Returns (count, min, max)."""
+    raised to each cable's largest feasible tension.  Returns (count, min, max).
+
+    Blocks of rows in parallel, then their partial results combined (count,
+    min and max do not depend on the order; -0.0 is returned as 0.0)."""
+    m = tensions.shape[1]
+    nblocks = min(count, 64)
+    if nblocks == 0:
+        return 0, np.inf, -np.inf
+    bsize = (count + nblocks - 1) // nblocks
+    bn = np.zeros(nblocks, dtype=np.int64)
+    bmin = np.full(nblocks, np.inf)
+    bmax = np.full(nblocks, -np.inf)
+    bt = np.full((nblocks, m), -np.inf)
+    for b in nb.prange(nblocks):
+        k1 = min(count, (b + 1) * bsize)
+        nf = 0
+        lo = np.inf
+        hi = -np.inf
+        for k in range(b * bsize, k1):
+            if feasible[k]:
+                nf += 1
+                v = margin[k]
+                if v < lo:
+                    lo = v
+                if v > hi:
+                    hi = v
+                for i in range(m):
+                    t = tensions[k, i]
+                    if t > bt[b, i]:
+                        bt[b, i] = t
+        bn[b] = nf
+        bmin[b] = lo
+        bmax[b] = hi
     nf = 0
     mmin = np.inf
     mmax = -np.inf
-    m = tensions.shape[1]
-    for k in range(count):
-        if feasible[k]:
-            nf += 1
-            v = margin[k]
-            if v < mmin:
-                mmin = v
-            if v > mmax:
-                mmax = v
-            for i in range(m):
-                t = tensions[k, i]
-                if t > tpeak[i]:
-                    tpeak[i] = t
+    for b in range(nblocks):
+        nf += bn[b]
+        mmin = min(mmin, bmin[b])
+        mmax = max(mmax, bmax[b])
+        for i in range(m):
+            if bt[b, i] > tpeak[i]:
+                tpeak[i] = bt[b, i]
     return nf, mmin + 0.0, mmax + 0.0
 
 

@@ -261,3 +261,22 @@ def test_small_planar2_sweep_does_not_load_numba():
     feasible, numba_loaded, kernels_loaded = out.stdout.split()
     assert (numba_loaded, kernels_loaded) == ("False", "False")
     assert int(feasible) == ws.run(spec.load(PLANAR2), engine="numba").feasible
+
+
+@pytest.mark.parametrize("count", [0, 1, 63, 64, 65, 1000, 4099])
+def test_chunk_stats_parallel_matches_numpy(count):
+    """The parallel block reduction equals the plain numpy one (only the first ``count`` rows count)."""
+    rng = np.random.default_rng(count)
+    n = count + 17
+    feas = (rng.random(n) < 0.6).astype(np.uint8)
+    marg = rng.normal(size=n)
+    marg[rng.random(n) < 0.1] = -0.0
+    ten = rng.uniform(0, 20, size=(n, 3))
+    tp_k, tp_n = np.full(3, -np.inf), np.full(3, -np.inf)
+    got = K.chunk_stats(feas, marg, ten, count, tp_k)
+    ref = ws._chunk_stats_numpy(feas, marg, ten, count, tp_n)
+    assert got[0] == ref[0] == int(feas[:count].sum())
+    if ref[0]:
+        assert got[1:] == ref[1:]
+        assert not np.signbit(got[1]) or got[1] < 0
+    np.testing.assert_array_equal(tp_k, tp_n)
