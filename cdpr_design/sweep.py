@@ -530,6 +530,21 @@ def chunks(items: list, size: int) -> list[list]:
     return [items[k:k + size] for k in range(0, len(items), size)]
 
 
+def guided_chunks(items: list, size: int, workers: int, minimum: int = 1) -> list[list]:
+    """Chunks of at most ``size`` that shrink towards the end (guided self-scheduling):
+    each about a quarter of what is left per worker, never below ``minimum`` (unless
+    ``size`` is smaller), so the
+    workers finish together instead of one idling through the other's last big chunk."""
+    out = []
+    k = 0
+    while k < len(items):
+        left = len(items) - k
+        n = min(size, max(minimum, math.ceil(left / (4 * max(1, workers)))))
+        out.append(items[k:k + n])
+        k += n
+    return out
+
+
 @dataclass
 class RunStats:
     """How a sweep ran."""
@@ -660,7 +675,7 @@ def _run_pool(job: Job, todo, w: int, chunk: int | None, emit, stats: RunStats, 
     w = min(w, len(todo))
     size = chunk or chunk_size(len(todo), w)
     stats.backend, stats.workers, stats.chunk = f"processes ({start_method})", w, size
-    parts = chunks(todo, size)
+    parts = chunks(todo, size) if chunk else guided_chunks(todo, size, w, minimum=2)
     ex = ProcessPoolExecutor(max_workers=w, mp_context=mp.get_context(start_method),
                              initializer=_init_worker, initargs=(job,))
     try:
@@ -794,7 +809,8 @@ def _run_dask(job: Job, todo, scheduler: str, w: int, chunk: int | None, emit, s
             # a broadcast round trip before the first task; a big one is sent once
             small = len(pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL)) < INLINE_JOB_BYTES
             job_f = job if small else client.scatter(job, broadcast=True)
-            futures = [client.submit(_dask_chunk, job_f, part, pure=False) for part in chunks(todo, size)]
+            parts = chunks(todo, size) if chunk else guided_chunks(todo, size, nthreads, minimum=10)
+            futures = [client.submit(_dask_chunk, job_f, part, pure=False) for part in parts]
             try:
                 for fut in as_completed(futures):
                     emit(fut.result())

@@ -512,3 +512,15 @@ def test_workers_exit_after_the_sweep(small_plan, serial_records, scheduler):
     assert sorted(r["variant"] for r in recs) == sorted(r["variant"] for r in serial_records)
     sw.wait_closed()
     assert multiprocessing.active_children() == []
+
+
+@pytest.mark.parametrize("n,size,workers,minimum", [(1000, 32, 2, 2), (1000, 32, 2, 10), (7, 1, 2, 2),
+                                                    (5, 200, 8, 10), (0, 4, 2, 1), (333, 21, 3, 1)])
+def test_guided_chunks_cover_every_variant_once(n, size, workers, minimum):
+    items = list(range(n))
+    parts = sw.guided_chunks(items, size, workers, minimum)
+    assert [i for p in parts for i in p] == items
+    assert all(1 <= len(p) <= size for p in parts)
+    sizes = [len(p) for p in parts[:-1]]
+    assert sizes == sorted(sizes, reverse=True)  # shrinking towards the end
+    assert all(len(p) >= min(minimum, size) for p in parts[:-1])
