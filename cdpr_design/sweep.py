@@ -697,9 +697,12 @@ def _run_pool(job: Job, todo, w: int, chunk: int | None, emit, stats: RunStats, 
         raise
     # every row is in: the workers' exit (~0.4 s of interpreter teardown with
     # numba loaded) overlaps the caller's next steps; wait_closed() joins it
-    procs = list((getattr(ex, "_processes", None) or {}).values())
+    # (the executor's manager thread joins the processes; joining them here as
+    # well would race it for the exit status)
+    manager = getattr(ex, "_executor_manager_thread", None)
     ex.shutdown(wait=False)
-    _CLOSING.extend(p.join for p in procs)
+    if manager is not None:
+        _CLOSING.append(manager.join)
 
 
 #: joins of worker shut-downs still under way (see :func:`wait_closed`)
