@@ -267,8 +267,8 @@ def workspace(
         f"{design.name} — {s['kind']} workspace",
         [("poses", f"{s['poses']:,}"), ("feasible", f"{s['feasible']:,}"),
          ("fraction", f"{100 * s['fraction']:.2f} %"), ("measure", f"{s['measure']:.4g} {unit}"),
-         ("min margin [N]", s["min_margin"]), ("max margin [N]", s["max_margin"]),
-         ("max tension [N]", s["max_tension"]), ("elapsed [s]", s["elapsed_s"])]
+         ("min margin \\[N]", s["min_margin"]), ("max margin \\[N]", s["max_margin"]),
+         ("max tension \\[N]", s["max_tension"]), ("elapsed \\[s]", s["elapsed_s"])]
         + ([("collision free", f"{s['collision_free']:,}"),
             ("feasible before interference", f"{s['feasible_statics']:,}")] if "collision_free" in s else [])
         + ([("orientations", f"{s['orientation_mode']} ({s['orientation_count']} samples)")]
@@ -377,7 +377,7 @@ def fk(
         return
     out_console.print(summary_table(
         f"{design.name} — forward kinematics ({res.method})",
-        [(c, float(v)) for c, v in zip(design.motion.coords, res.pose)] + [("residual [m]", res.residual)]))
+        [(c, float(v)) for c, v in zip(design.motion.coords, res.pose)] + [("residual \\[m]", res.residual)]))
 
 
 # ----------------------------------------------------------------------------
@@ -463,10 +463,10 @@ def trajectory_samples(design, name: str | None):
 def sizing_table(design, result) -> Table:
     t = Table(title=f"{design.name} — motor sizing ({result.envelope.poses:,} {result.envelope.source} poses, "
                     f"safety factor {result.safety_factor:g})", title_justify="left")
-    cols = [("cable", "cable"), ("T [N]", "peak_tension"), ("τ pk", "peak_motor_torque"),
+    cols = [("cable", "cable"), ("T \\[N]", "peak_tension"), ("τ pk", "peak_motor_torque"),
             ("τ rms", "rms_motor_torque"), ("rpm", "peak_motor_speed"),
             ("motor", "motor"), ("τ mrg", "torque_margin"), ("n mrg", "speed_margin"),
-            ("T lim [N]", "implied_tension_max")]
+            ("T lim \\[N]", "implied_tension_max")]
     for head, key in cols:
         t.add_column(head, no_wrap=key in ("motor", "cable"))
     for row in result.rows():
@@ -778,11 +778,11 @@ def bridge(
         out_console.print(summary_table(
             f"{design.name} — bridge ({summary['stopped']})",
             [("cycles", summary["cycles"]), ("overruns", summary["overruns"]),
-             ("cycle time [ms]", dt * 1e3),
-             ("round trip mean / p99 / max [ms]",
+             ("cycle time \\[ms]", dt * 1e3),
+             ("round trip mean / p99 / max \\[ms]",
               " / ".join(_fmt(None if v is None else v * 1e3) for v in
                          (lat["mean"], lat["p99"], lat["max"]))),
-             ("delay [ms]", ", ".join(f"{k}: {_fmt(None if v is None else v * 1e3)}"
+             ("delay \\[ms]", ", ".join(f"{k}: {_fmt(None if v is None else v * 1e3)}"
                                       for k, v in summary["delay"].items())),
              ("files", str(out_dir.path))]))
     if res.stopped == "interrupted":
