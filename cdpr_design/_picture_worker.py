@@ -32,6 +32,7 @@ import pickle
 import struct
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 _LEN = struct.Struct("<Q")
@@ -129,6 +130,9 @@ class PictureWorker:
         Start a child even though matplotlib is imported here already (tests).
     """
 
+    #: seconds to wait for the child's pictures before drawing them here instead
+    timeout: float = 300.0
+
     def __init__(self, enabled: bool = True, force: bool = False):
         self.proc = None
         if not enabled or (not force and (os.environ.get("CDPR_DESIGN_PICTURE_WORKER", "1").strip() == "0"
@@ -151,14 +155,23 @@ class PictureWorker:
 
         jobs = [(name, builder, tuple(args), DPI) for name, builder, args in jobs]
         if self.proc is not None:
+            # the request is written by a thread (it may exceed the pipe's buffer) while this
+            # one waits for the answer; a child that hangs is given up on after `timeout`
+            sent: list[BaseException] = []
+            writer = threading.Thread(target=_send, args=(self.proc.stdin, jobs, sent), daemon=True)
+            writer.start()
             try:
-                write_message(self.proc.stdin, jobs)
-                answer = read_message(self.proc.stdout)
+                answer = (read_message(self.proc.stdout) if _readable(self.proc.stdout, self.timeout)
+                          else None)
             except (OSError, ValueError, EOFError, pickle.PickleError, AttributeError, TypeError):
                 answer = None
+            if sent:  # the request could not be sent (pickling it failed, or the child died)
+                answer = None
             if answer is not None and answer[0] == "ok":
+                writer.join()
                 return answer[1]
-            self.close(kill=True)
+            self.close(kill=True)  # also ends a writer blocked on the pipe
+            writer.join()
         return draw(jobs)
 
     def close(self, kill: bool = False) -> None:
@@ -166,14 +179,15 @@ class PictureWorker:
         proc, self.proc = self.proc, None
         if proc is None:
             return
+        if kill and proc.poll() is None:
+            # first, so that a thread blocked writing to it fails and lets go of the pipe
+            proc.kill()
+            proc.wait()
         for stream in (proc.stdin, proc.stdout):
             try:
                 stream.close()
             except OSError:
                 pass
-        if kill and proc.poll() is None:
-            proc.kill()
-            proc.wait()
 
     def __enter__(self):
         return self
@@ -182,6 +196,31 @@ class PictureWorker:
         # after an error the child may still be importing: stop it rather than wait
         self.close(kill=exc_type is not None)
         return False
+
+
+def _send(stream, obj, failures: list) -> None:
+    """Write a request; a failure is recorded in ``failures`` (the reader then falls back)."""
+    try:
+        write_message(stream, obj)
+    except BaseException as exc:  # noqa: BLE001 - reported to the waiting thread
+        failures.append(exc)
+        try:
+            stream.close()  # the child sees end of input and ends
+        except OSError:
+            pass
+
+
+def _readable(stream, timeout: float) -> bool:
+    """Whether ``stream`` has data (or end of input) within ``timeout`` seconds.
+    Where pipes cannot be polled (Windows) it answers True and the read blocks."""
+    import selectors
+
+    try:
+        with selectors.DefaultSelector() as sel:
+            sel.register(stream, selectors.EVENT_READ)
+            return bool(sel.select(timeout))
+    except (OSError, ValueError):
+        return True
 
 
 _prestarted: PictureWorker | None = None

@@ -103,3 +103,16 @@ def test_worker_refuses_foreign_file_before_drawing(tmp_path, result):
         report.save_workspace_pictures(out, result)
     assert not (tmp_path / "workspace.png").exists()
     assert (tmp_path / "tension_map.png").read_text() == "mine"
+
+
+def test_hung_worker_is_given_up(result, monkeypatch):
+    """A child that does not answer in time is killed and the pictures are drawn here."""
+    import signal
+
+    with pw.PictureWorker(force=True) as worker:
+        worker.timeout = 0.5
+        os.kill(worker.proc.pid, signal.SIGSTOP)  # frozen, not dead
+        proc = worker.proc
+        out = worker.render(jobs(result)[:1])
+        assert worker.proc is None and proc.poll() is not None
+    assert out == pw.PictureWorker(enabled=False).render(jobs(result)[:1])
