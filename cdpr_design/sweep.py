@@ -702,11 +702,16 @@ def _run_pool(job: Job, todo, w: int, chunk: int | None, emit, stats: RunStats, 
     manager = getattr(ex, "_executor_manager_thread", None)
     ex.shutdown(wait=False)
     if manager is not None:
-        _CLOSING.append(manager.join)
+        _closing(manager)
 
 
-#: joins of worker shut-downs still under way (see :func:`wait_closed`)
-_CLOSING: list[Callable[[], None]] = []
+#: threads still shutting down finished sweeps' workers (see :func:`wait_closed`)
+_CLOSING: list[threading.Thread] = []
+
+
+def _closing(thread: threading.Thread) -> None:
+    """Remember a shut-down under way (and forget those that are over)."""
+    _CLOSING[:] = [t for t in _CLOSING if t.is_alive()] + [thread]
 
 
 def wait_closed() -> None:
@@ -717,7 +722,7 @@ def wait_closed() -> None:
     for them before this process ends).  Benchmarks call this between runs.
     """
     while _CLOSING:
-        _CLOSING.pop(0)()
+        _CLOSING.pop(0).join()
 
 
 def _stop_pool(ex) -> None:
@@ -831,7 +836,7 @@ def _run_dask(job: Job, todo, scheduler: str, w: int, chunk: int | None, emit, s
         # exit) while the caller goes on; wait_closed() joins it
         closer = threading.Thread(target=cluster.close, name="cdpr-design LocalCluster close")
         closer.start()
-        _CLOSING.append(closer.join)
+        _closing(closer)
 
 
 # ----------------------------------------------------------------------------
