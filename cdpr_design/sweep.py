@@ -781,7 +781,10 @@ def _start_local_cluster(LocalCluster, workers: int):
         with dask.config.set({**LOCAL_CLUSTER_CONFIG,
                               "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
             return LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                dashboard_address=None, host="127.0.0.1", silence_logs=logging.ERROR)
+                                dashboard_address=None, host="127.0.0.1",
+                                # a task's error comes back with its future (the variant's row);
+                                # what dask logs at ERROR are shut-down races of heartbeats
+                                silence_logs=logging.CRITICAL)
     finally:
         os.environ.clear()
         os.environ.update(saved)
