@@ -253,8 +253,10 @@ def test_small_planar2_sweep_does_not_load_numba():
     import subprocess
     import sys
 
-    code = ("import sys; from cdpr_design import spec, workspace as ws; "
-            f"r = ws.run(spec.load({str(PLANAR2)!r})); "
+    # the sweep, and the evaluation behind report / check / size-motors
+    code = ("import sys, importlib; from cdpr_design import spec, workspace as ws; "
+            f"d = spec.load({str(PLANAR2)!r}); r = ws.run(d); "
+            "importlib.import_module('cdpr_design.evaluate').evaluate(d, catalogue=spec.load_catalogue()); "
             "print(r.feasible, 'numba' in sys.modules, 'cdpr_design._kernels' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          env={**__import__("os").environ, "CDPR_DESIGN_ENGINE": ""})
