@@ -34,7 +34,6 @@ from . import kinematics as kin
 from .errors import SpecError
 from .interference import HIT_NAMES, hardware_arrays
 from .model import Design, Grid
-from .workspace import chunk_extra, extra_columns  # noqa: F401  (their home before 0.2)
 
 #: Default total-orientation set: nominal +- 10 deg about the last rotation coordinate, 5 samples.
 DEFAULT_SET_HALF = math.radians(10.0)
