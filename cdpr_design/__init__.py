@@ -18,24 +18,24 @@ from __future__ import annotations
 
 import importlib
 
-from .errors import CdprError, CheckFailed, InputError, SpecError
+from cdpr_design.errors import CdprError, CheckFailed, InputError, SpecError
 
 __version__ = "0.1.0"
 
 _LAZY = {
-    "Design": ("model", "Design"),
-    "load": ("spec", "load"),
-    "from_dict": ("spec", "from_dict"),
-    "load_catalogue": ("spec", "load_catalogue"),
-    "json_schema": ("spec", "json_schema"),
-    "inverse_kinematics": ("kinematics", "inverse_kinematics"),
-    "forward_kinematics": ("kinematics", "forward_kinematics"),
-    "structure_matrix": ("kinematics", "structure_matrix"),
-    "run_workspace": ("workspace", "run"),
-    "evaluate_pose": ("workspace", "evaluate_pose"),
-    "WorkspaceResult": ("workspace", "WorkspaceResult"),
-    "size_motors": ("sizing", "size_motors"),
-    "evaluate_design": ("evaluate", "evaluate"),
+    "Design": ("model.design", "Design"),
+    "load": ("model.spec", "load"),
+    "from_dict": ("model.spec", "from_dict"),
+    "load_catalogue": ("model.spec", "load_catalogue"),
+    "json_schema": ("model.spec", "json_schema"),
+    "inverse_kinematics": ("statics.kinematics", "inverse_kinematics"),
+    "forward_kinematics": ("statics.kinematics", "forward_kinematics"),
+    "structure_matrix": ("statics.kinematics", "structure_matrix"),
+    "run_workspace": ("workspace.engine", "run"),
+    "evaluate_pose": ("workspace.engine", "evaluate_pose"),
+    "WorkspaceResult": ("workspace.engine", "WorkspaceResult"),
+    "size_motors": ("design.sizing", "size_motors"),
+    "evaluate_design": ("design.evaluate", "evaluate"),
 }
 
 __all__ = ["CdprError", "CheckFailed", "InputError", "SpecError", "__version__", *_LAZY]

@@ -6,11 +6,11 @@ import sys
 def main() -> None:
     # start the picture worker before importing the command line (typer, rich,
     # numpy): its matplotlib import then overlaps all of the parent's start-up
-    from . import _picture_worker
+    from cdpr_design.plots import worker as _picture_worker
 
     if _picture_worker.wanted(sys.argv[1:]):
         _picture_worker.prestart()
-    from .cli import main as cli_main
+    from cdpr_design.cli.app import main as cli_main
 
     cli_main()
 

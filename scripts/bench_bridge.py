@@ -26,9 +26,11 @@ from pathlib import Path
 
 import yaml
 
-from cdpr_design import bridge as br
-from cdpr_design import simulation, spec, trajectory
-from cdpr_design.plc import (LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, AdsTransport,
+from cdpr_design.plc import bridge as br
+from cdpr_design.motion import simulation
+from cdpr_design.model import spec
+from cdpr_design.motion import trajectory
+from cdpr_design.plc.ads import (LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, AdsTransport,
                              PlcLayout, TestPlc)
 
 ROOT = Path(__file__).resolve().parents[1]

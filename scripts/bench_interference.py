@@ -20,11 +20,11 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
-from cdpr_design import _kernels as K  # noqa: E402
-from cdpr_design import spec  # noqa: E402
-from cdpr_design import workspace as ws  # noqa: E402
-from cdpr_design.hardware import Evaluator, _positions3  # noqa: E402
-from cdpr_design.interference import HIT_NAMES  # noqa: E402
+from cdpr_design import kernels as K  # noqa: E402
+from cdpr_design.model import spec  # noqa: E402
+from cdpr_design.workspace import engine as ws  # noqa: E402
+from cdpr_design.workspace.hardware import Evaluator, _positions3  # noqa: E402
+from cdpr_design.statics.interference import HIT_NAMES  # noqa: E402
 
 
 def load_ipanema3(diameter=None):

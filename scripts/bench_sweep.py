@@ -33,14 +33,15 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from cdpr_design import spec  # noqa: E402
-from cdpr_design import sweep as sw  # noqa: E402
+from cdpr_design.model import spec  # noqa: E402
+from cdpr_design.batch import sweep as sw  # noqa: E402
 
 STARTUP = """
 import time; t0 = time.perf_counter()
 import importlib
-from cdpr_design import spec, workspace as ws
-ev = importlib.import_module("cdpr_design.evaluate")
+from cdpr_design.model import spec
+from cdpr_design.workspace import engine as ws
+ev = importlib.import_module("cdpr_design.design.evaluate")
 d = spec.load({spec!r}); cat = spec.load_catalogue()
 ws.load_kernels()  # what a worker of a big sweep does first (sweep._prepare_process)
 import numba; numba.set_num_threads(1)

@@ -32,9 +32,9 @@ sys.path.insert(0, str(ROOT))
 
 t_import = time.perf_counter()
 import cdpr_design as cd  # noqa: E402
-from cdpr_design import _kernels as K  # noqa: E402
-from cdpr_design import kinematics as kin  # noqa: E402
-from cdpr_design import workspace as ws  # noqa: E402
+from cdpr_design import kernels as K  # noqa: E402
+from cdpr_design.statics import kinematics as kin  # noqa: E402
+from cdpr_design.workspace import engine as ws  # noqa: E402
 t_import = time.perf_counter() - t_import
 
 

@@ -35,7 +35,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from cdpr_design import simulation, spec, trajectory  # noqa: E402
+from cdpr_design.motion import simulation
+from cdpr_design.model import spec
+from cdpr_design.motion import trajectory  # noqa: E402
 
 #: The paper's Table 1 [ms]: velocity -> (simulated axis 1, axis 2, prototype axis 1, axis 2).
 PAPER_T1 = {100: (150, 120, 20, 30), 1000: (130, 110, 20, 20)}

@@ -19,10 +19,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from cdpr_design import bridge as br
-from cdpr_design import spec, trajectory
-from cdpr_design.cli import app
-from cdpr_design.plc import (ADST_REAL64, LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID,
+from cdpr_design.plc import bridge as br
+from cdpr_design.model import spec
+from cdpr_design.motion import trajectory
+from cdpr_design.cli.app import app
+from cdpr_design.plc.ads import (ADST_REAL64, LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID,
                              AdsTransport, PlcLayout, TestPlc,
                              check_symbol_info)
 
@@ -102,7 +103,7 @@ def test_layout_follows_the_spec(design):
 def test_symbol_type_check_names_expected_and_declared():
     lay_sym = PlcLayout((), ())
     del lay_sym
-    from cdpr_design.plc import Symbol
+    from cdpr_design.plc.ads import Symbol
 
     lreal = Symbol("MAIN.f", "LREAL", ADST_REAL64, 1, "setpoints")
     assert check_symbol_info(lreal, ADST_REAL64, 8, "LREAL") is None

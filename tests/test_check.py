@@ -11,9 +11,9 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
-from cdpr_design import spec
-from cdpr_design.cli import app
-from cdpr_design.evaluate import check_table, evaluate
+from cdpr_design.model import spec
+from cdpr_design.cli.app import app
+from cdpr_design.design.evaluate import check_table, evaluate
 
 from .conftest import PLANAR2, write_spec
 

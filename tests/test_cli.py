@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from cdpr_design.cli import app
+from cdpr_design.cli.app import app
 
 from .conftest import PLANAR2
 

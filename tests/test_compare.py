@@ -8,9 +8,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cdpr_design import compare as C
-from cdpr_design import spec
-from cdpr_design import trajectory as tr
+from cdpr_design.motion import compare as C
+from cdpr_design.model import spec
+from cdpr_design.motion import trajectory as tr
 
 from .conftest import PLANAR2
 
@@ -139,7 +139,7 @@ def test_cli_compare_scope_export(tmp_path, fast):
 
     from typer.testing import CliRunner
 
-    from cdpr_design.cli import app
+    from cdpr_design.cli.app import app
 
     t = fast.time
     tgt = tmp_path / "target.csv"

@@ -12,12 +12,12 @@ from hypothesis import strategies as st
 from scipy.optimize import minimize
 from typer.testing import CliRunner
 
-from cdpr_design import _kernels as K
-from cdpr_design import interference as itf
-from cdpr_design import kinematics as kin
-from cdpr_design import spec
-from cdpr_design import workspace as ws
-from cdpr_design.cli import app
+from cdpr_design import kernels as K
+from cdpr_design.statics import interference as itf
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.model import spec
+from cdpr_design.workspace import engine as ws
+from cdpr_design.cli.app import app
 
 
 def seg_dist_slow(p0, p1, q0, q1):

@@ -5,7 +5,7 @@
   Bouchard, Gosselin & Moore, ASME JMR 2010);
 - feasibility: scipy ``linprog`` (HiGHS) on W t = w, t_min <= t <= t_max;
 - minimum 2-norm tensions: cvxpy (Clarabel, tight tolerances), the problem
-  definition of :func:`cdpr_design.tension.cvxpy_problem`;
+  definition of :func:`cdpr_design.statics.tension.cvxpy_problem`;
 - wrench closure: the linear program max s, W t = 0, t_i >= s, sum t = 1.
 
 Random robots of every motion type (2T, 1R2T, 3T, 3R3T) with m = n .. n+4
@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from cdpr_design import _kernels as K
-from cdpr_design import kinematics as kin
-from cdpr_design.tension import combinations
+from cdpr_design import kernels as K
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.tension import combinations
 
 MOTIONS = {  # (dim, wrench rows of [fx, fy, fz, mx, my, mz])
     "2T": (2, (0, 1)),

@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cdpr_design import _kernels as K
-from cdpr_design import kinematics as kin
-from cdpr_design import spec
-from cdpr_design import workspace as ws
+from cdpr_design import kernels as K
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.model import spec
+from cdpr_design.workspace import engine as ws
 
 from .conftest import PLANAR2
 

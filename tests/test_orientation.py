@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from cdpr_design import hardware as hwm
-from cdpr_design import spec
-from cdpr_design import workspace as ws
-from cdpr_design.cli import app
+from cdpr_design.workspace import hardware as hwm
+from cdpr_design.model import spec
+from cdpr_design.workspace import engine as ws
+from cdpr_design.cli.app import app
 from cdpr_design.errors import SpecError
 
 

@@ -9,9 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from cdpr_design import _picture_worker as pw
-from cdpr_design import report, spec
-from cdpr_design import workspace as ws
+from cdpr_design.plots import worker as pw
+from cdpr_design.jobs import report
+from cdpr_design.model import spec
+from cdpr_design.workspace import engine as ws
 
 from .conftest import PLANAR2
 

@@ -15,10 +15,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from cdpr_design import kinematics as kin
-from cdpr_design import pulley as pl
-from cdpr_design import spec
-from cdpr_design import workspace as ws
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics import pulley as pl
+from cdpr_design.model import spec
+from cdpr_design.workspace import engine as ws
 from cdpr_design.errors import SpecError
 
 IPANEMA3 = [  # reference/robots.md (cdpyr sample ipanema_3): outlet, attachment

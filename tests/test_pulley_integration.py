@@ -27,16 +27,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-from cdpr_design import kinematics as kin
-from cdpr_design import pulley as pl
-from cdpr_design import simulation as sim
-from cdpr_design import sizing as sz
-from cdpr_design import spec
-from cdpr_design import trajectory as tr
-from cdpr_design import hardware as hwm
-from cdpr_design import workspace as ws
-from cdpr_design.cli import app
-from cdpr_design.interference import HIT_NAMES, check_pose
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics import pulley as pl
+from cdpr_design.motion import simulation as sim
+from cdpr_design.design import sizing as sz
+from cdpr_design.model import spec
+from cdpr_design.motion import trajectory as tr
+from cdpr_design.workspace import hardware as hwm
+from cdpr_design.workspace import engine as ws
+from cdpr_design.cli.app import app
+from cdpr_design.statics.interference import HIT_NAMES, check_pose
 
 from .conftest import PLANAR2
 

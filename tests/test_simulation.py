@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cdpr_design import kinematics as kin
-from cdpr_design import simulation as S
-from cdpr_design import spec
-from cdpr_design import trajectory as tr
-from cdpr_design.compare import estimate_delay
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.motion import simulation as S
+from cdpr_design.model import spec
+from cdpr_design.motion import trajectory as tr
+from cdpr_design.motion.compare import estimate_delay
 
 from .conftest import PLANAR2
 
@@ -169,7 +169,7 @@ def test_cli_simulate(tmp_path):
 
     from typer.testing import CliRunner
 
-    from cdpr_design.cli import app
+    from cdpr_design.cli.app import app
 
     r = CliRunner()
     res = r.invoke(app, ["simulate", str(PLANAR2), "square_fast", "--delay", "0.05", "--out", str(tmp_path),

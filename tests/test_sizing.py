@@ -11,8 +11,8 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cdpr_design import sizing as sz
-from cdpr_design import spec
+from cdpr_design.design import sizing as sz
+from cdpr_design.model import spec
 from cdpr_design.errors import InputError, SpecError
 
 from .conftest import PLANAR2
@@ -102,7 +102,7 @@ def test_paper_tension_limit_from_the_motor(base, catalogue):
 
 
 def _brute_peak(design, pose, A, ndirs=720):
-    from cdpr_design import kinematics as kin
+    from cdpr_design.statics import kinematics as kin
 
     W = kin.structure_matrix(design, pose)
     best = np.full(design.m, -np.inf)
@@ -139,7 +139,7 @@ def test_redundant_envelope_against_cvxpy():
     """m > n: the per-vertex minimum-norm tensions equal a cvxpy QP's."""
     import cvxpy as cp
 
-    from cdpr_design import kinematics as kin
+    from cdpr_design.statics import kinematics as kin
 
     data = {"name": "p4", "motion": "2T", "frame": {"lower": [0, 0], "upper": [2, 2]},
             "effector": {"mass": 2.0, "size": [0.1, 0.1]}, "tension": [1.0, 60.0],

@@ -8,8 +8,8 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from cdpr_design import spec
-from cdpr_design.cli import app
+from cdpr_design.model import spec
+from cdpr_design.cli.app import app
 from cdpr_design.errors import SpecError
 
 from .conftest import PLANAR2, write_spec

@@ -16,9 +16,9 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from cdpr_design import spec
-from cdpr_design import sweep as sw
-from cdpr_design.cli import app
+from cdpr_design.model import spec
+from cdpr_design.batch import sweep as sw
+from cdpr_design.cli.app import app
 from cdpr_design.errors import InputError, SpecError
 
 from .conftest import PLANAR2, ROOT, write_spec
@@ -258,7 +258,7 @@ def test_fork_after_openmp_is_unsafe(small_plan, serial_records, monkeypatch):
     import numba
     from concurrent.futures.process import BrokenProcessPool
 
-    from cdpr_design import workspace as ws
+    from cdpr_design.workspace import engine as ws
 
     # a parallel kernel has run in this process, and the forked workers use the kernels too
     monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")
@@ -326,7 +326,7 @@ def test_resume_after_kill_gives_the_identical_csv(tmp_path):
 
 def test_resume_with_a_pool_in_another_order(tmp_path, small_plan, serial_records):
     """Journal rows arrive in completion order; the final table is sorted and identical."""
-    from cdpr_design.report import OutputDir, SweepJournal
+    from cdpr_design.jobs.report import OutputDir, SweepJournal
 
     header, rows = sw.table(small_plan, serial_records)
     shuffled = [serial_records[i] for i in (5, 1, 7, 0, 3, 6, 2, 4)]

@@ -1,4 +1,4 @@
-"""cdpr_design.tension: per-pose analysis, objectives, published figures, invariances."""
+"""cdpr_design.statics.tension: per-pose analysis, objectives, published figures, invariances."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from scipy.optimize import linprog
 
 import cdpr_design as cd
-from cdpr_design import kinematics as kin
-from cdpr_design import tension as T
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics import tension as T
 
 from .conftest import DESIGNS
 
@@ -193,7 +193,7 @@ def test_cli_pose_objective_and_weights():
 
     from typer.testing import CliRunner
 
-    from cdpr_design.cli import app
+    from cdpr_design.cli.app import app
 
     spec = str(DESIGNS / "ipanema1.yaml")
     at = "0.5,0.3,1,0,0,0"

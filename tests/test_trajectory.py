@@ -8,10 +8,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cdpr_design import kinematics as kin
-from cdpr_design import spec
-from cdpr_design import trajectory as tr
-from cdpr_design.model import Trajectory
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.model import spec
+from cdpr_design.motion import trajectory as tr
+from cdpr_design.model.design import Trajectory
 
 from .conftest import PLANAR2
 
@@ -274,7 +274,7 @@ def test_cli_trajectory_writes_contract_columns(tmp_path):
 
     from typer.testing import CliRunner
 
-    from cdpr_design.cli import app
+    from cdpr_design.cli.app import app
 
     res = CliRunner().invoke(app, ["trajectory", str(PLANAR2), "square_fast", "--out", str(tmp_path), "--json"])
     assert res.exit_code == 0, res.output
@@ -293,7 +293,7 @@ def test_cli_trajectory_bad_input_and_check(tmp_path, planar2_data):
     import yaml
     from typer.testing import CliRunner
 
-    from cdpr_design.cli import app
+    from cdpr_design.cli.app import app
 
     r = CliRunner()
     res = r.invoke(app, ["trajectory", str(PLANAR2), "nope", "--out", str(tmp_path)])

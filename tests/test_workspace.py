@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cdpr_design import _kernels as K
-from cdpr_design import kinematics as kin
-from cdpr_design import spec
-from cdpr_design import workspace as ws
+from cdpr_design import kernels as K
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.model import spec
+from cdpr_design.workspace import engine as ws
 
 from .conftest import PLANAR2, random_planar_data
 
@@ -226,7 +226,7 @@ def test_engine_choice(monkeypatch):
     assert ws._use_numpy("numpy", True, 10)
     assert not ws._use_numpy("numba", True, 10)
     # auto: numpy only while the kernels are not loaded, and only for grids numba would not repay
-    monkeypatch.delitem(__import__("sys").modules, "cdpr_design._kernels")
+    monkeypatch.delitem(__import__("sys").modules, "cdpr_design.kernels")
     assert ws._use_numpy("auto", True, ws.NUMPY_MAX_POSES)
     assert not ws._use_numpy("auto", True, ws.NUMPY_MAX_POSES + 1)
     assert not ws._use_numpy("auto", False, 10)
@@ -254,10 +254,10 @@ def test_small_planar2_sweep_does_not_load_numba():
     import sys
 
     # the sweep, and the evaluation behind report / check / size-motors
-    code = ("import sys, importlib; from cdpr_design import spec, workspace as ws; "
+    code = ("import sys, importlib; from cdpr_design.model import spec; from cdpr_design.workspace import engine as ws; "
             f"d = spec.load({str(PLANAR2)!r}); r = ws.run(d); "
-            "importlib.import_module('cdpr_design.evaluate').evaluate(d, catalogue=spec.load_catalogue()); "
-            "print(r.feasible, 'numba' in sys.modules, 'cdpr_design._kernels' in sys.modules)")
+            "importlib.import_module('cdpr_design.design.evaluate').evaluate(d, catalogue=spec.load_catalogue()); "
+            "print(r.feasible, 'numba' in sys.modules, 'cdpr_design.kernels' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          env={**__import__("os").environ, "CDPR_DESIGN_ENGINE": ""})
     feasible, numba_loaded, kernels_loaded = out.stdout.split()

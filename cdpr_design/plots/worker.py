@@ -7,7 +7,7 @@ typical design.  A command that ends with pictures starts a
 core while the parent reads the spec and sweeps, then :meth:`PictureWorker.render`
 hands it the figure functions and their data and gets PNG bytes back.  The
 parent writes the files itself (atomic, manifest-checked, see
-:class:`cdpr_design.report.OutputDir`).
+:class:`cdpr_design.jobs.report.OutputDir`).
 
 Whenever the child cannot be used (it failed to start, died, or a figure
 raised there) ``render`` draws in-process instead, so errors surface exactly
@@ -104,7 +104,7 @@ def draw_parallel(jobs) -> list[tuple[str, bytes]]:
 
 def draw(jobs) -> list[tuple[str, bytes]]:
     """PNG bytes of each job ``(name, builder, args, dpi)``; figures are closed."""
-    from . import report
+    from cdpr_design.jobs import report
 
     plt = report._plt()
     out = []
@@ -139,9 +139,9 @@ class PictureWorker:
                                           or "matplotlib.pyplot" in sys.modules)):
             return
         # the child imports this very package, whatever the working folder holds
-        pkg_root = str(Path(__file__).resolve().parents[1])
+        pkg_root = str(Path(__file__).resolve().parents[2])
         code = (f"import sys; sys.path.insert(0, {pkg_root!r}); "
-                "from cdpr_design._picture_worker import main; main()")
+                "from cdpr_design.plots.worker import main; main()")
         try:
             self.proc = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE,
                                          stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
@@ -150,8 +150,8 @@ class PictureWorker:
 
     def render(self, jobs) -> list[tuple[str, bytes]]:
         """PNG bytes of each job ``(name, builder, args)``; builder: a figure function of
-        :mod:`cdpr_design.report` (or any importable function returning a figure)."""
-        from .report import DPI
+        :mod:`cdpr_design.jobs.report` (or any importable function returning a figure)."""
+        from cdpr_design.jobs.report import DPI
 
         jobs = [(name, builder, tuple(args), DPI) for name, builder, args in jobs]
         if self.proc is not None:
@@ -263,7 +263,7 @@ def discard() -> None:
 
 def _warm_up() -> None:
     """Import matplotlib and load the font the pictures' text needs."""
-    from . import report
+    from cdpr_design.jobs import report
 
     plt = report._plt()
     fig = plt.figure(figsize=(1, 1))

@@ -30,9 +30,9 @@ from typing import Callable
 
 import numpy as np
 
-from . import sizing as sz
-from . import workspace as ws
-from .model import Design
+from cdpr_design.design import sizing as sz
+from cdpr_design.workspace import engine as ws
+from cdpr_design.model.design import Design
 
 CHECKS = ("task_box", "min_margin", "min_fraction", "motors")
 
@@ -100,13 +100,13 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: sz.Ca
     catalogue : Catalogue, optional
         Default: the shipped catalogue (``cdpr_design/data/motors.yaml``).
     samples : trajectory samples, optional
-        Duty cycle for the RMS torque (:func:`cdpr_design.trajectory.sample`).
-    safety_factor, motor : see :func:`cdpr_design.sizing.size_motors`.
+        Duty cycle for the RMS torque (:func:`cdpr_design.motion.trajectory.sample`).
+    safety_factor, motor : see :func:`cdpr_design.design.sizing.size_motors`.
     workspace_result : WorkspaceResult, optional
         A static sweep already made (``report`` writes the workspace files first).
     """
     if catalogue is None:
-        from .spec import load_catalogue  # reads the shipped data file only
+        from cdpr_design.model.spec import load_catalogue  # reads the shipped data file only
         catalogue = load_catalogue()
     wres = workspace_result if workspace_result is not None else ws.run(
         design, "static", step=step, keep_maps=keep_maps, progress=progress)

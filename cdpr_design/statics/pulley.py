@@ -288,7 +288,7 @@ def exit_point(outlet, axis, radius: float, point):
     """Tangent point C (3-tuple) [m] and wrap angle beta [rad] of one cable at one point.
 
     The scalar form of :func:`outlet_geometry` (no arrays: cheap enough to run
-    every physics step of :mod:`cdpr_design.simulation`).  ``axis`` must be a
+    every physics step of :mod:`cdpr_design.motion.simulation`).  ``axis`` must be a
     unit vector.  Returns (None, nan) when B is inside the pulley circle.
     """
     ax, ay, az = outlet

@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from .model import Design
+from cdpr_design.model.design import Design
 
 
 def rotation_matrix(rx: float = 0.0, ry: float = 0.0, rz: float = 0.0) -> np.ndarray:
@@ -55,7 +55,7 @@ class CableGeometry:
         p + R b_i, the attachment points in the frame [m].
     exits : (m, 3) array or None
         Where each free cable really leaves the frame [m]: the swivel-pulley
-        tangent point C_i (:mod:`cdpr_design.pulley`), a_i for a point outlet.
+        tangent point C_i (:mod:`cdpr_design.statics.pulley`), a_i for a point outlet.
     wrap : (m,) array or None
         Wrap angle on the pulley [rad] (0 for a point outlet).
 
@@ -85,7 +85,7 @@ def outlet_points(design: Design, anchors: np.ndarray):
     Returns (exits (k, m, 3), lengths (k, m), wrap (k, m)); cables without a
     pulley leave at a_i with length |a_i - anchor|.
     """
-    from . import pulley as pl
+    from cdpr_design.statics import pulley as pl
 
     anc = np.asarray(anchors, float)
     squeeze = anc.ndim == 2
@@ -112,7 +112,7 @@ def cable_geometry(design: Design, pose) -> CableGeometry:
     Point outlets: l_i = a_i - (p + R b_i) (paper eq. 1-3).  Swivel pulleys
     (``cables[i].pulley``): the free segment from the attachment to the
     pulley's tangent point and the total length arc + free segment
-    (:mod:`cdpr_design.pulley`).
+    (:mod:`cdpr_design.statics.pulley`).
     """
     full = design.full_pose(pose)
     R = rotation_matrix(*full[3:])

@@ -6,8 +6,8 @@ spec data (``effector.mass``, ``frame.upper.0``, ``cables.1.outlet.1``,
 ``cables.c2.outlet.0``).  Several keys make a full grid, the last key
 varying fastest; variant ``i`` is the i-th point of that grid (0-based).
 
-Every variant is rebuilt with :func:`cdpr_design.spec.from_dict` (so the spec
-rules apply to it) and evaluated by :func:`cdpr_design.evaluate.evaluate`, the
+Every variant is rebuilt with :func:`cdpr_design.model.spec.from_dict` (so the spec
+rules apply to it) and evaluated by :func:`cdpr_design.design.evaluate.evaluate`, the
 code behind ``report``'s ``design_report.csv``: a sweep row *is* the report
 row of that variant.
 
@@ -52,7 +52,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterable, Iterator, Sequence
 
-from .errors import InputError, SpecError
+from cdpr_design.errors import InputError, SpecError
 
 #: Figures where a larger value is better (ranking, regression checks).
 HIGHER_IS_BETTER = frozenset({
@@ -66,7 +66,7 @@ LOWER_IS_BETTER = frozenset({
     "max_tension", "peak_tension", "peak_cable_speed", "peak_motor_torque",
     "rms_motor_torque", "peak_motor_speed",
 })
-#: Every figure name of an :func:`~cdpr_design.evaluate.evaluate` row apart from
+#: Every figure name of an :func:`~cdpr_design.design.evaluate.evaluate` row apart from
 #: the per-cable ones (``peak_tension_<cable>``, ``motor_<cable>``).
 KNOWN_FIGURES = HIGHER_IS_BETTER | LOWER_IS_BETTER | frozenset({
     "name", "motion", "cables", "kind", "poses", "task_poses", "sizing_poses", "motor",
@@ -317,7 +317,7 @@ class Plan:
 
     def fingerprint(self, options: "Options") -> str:
         """A hash of everything that decides the rows (for resuming the right sweep)."""
-        from . import __version__
+        from cdpr_design import __version__
 
         blob = json.dumps({"base": self.base, "axes": [[a.key, list(a.values)] for a in self.axes],
                            "options": options.fingerprint(), "version": __version__},
@@ -341,7 +341,7 @@ def make_plan(design, vary: Sequence[tuple[str, Sequence]], max_problems: int = 
         An unknown key path, a key given twice, or a variant the spec format
         rejects; each message names the variant by index and varied values.
     """
-    from . import spec
+    from cdpr_design.model import spec
 
     base = design.raw
     if not vary:
@@ -397,7 +397,7 @@ def make_plan(design, vary: Sequence[tuple[str, Sequence]], max_problems: int = 
 
 @dataclass(frozen=True)
 class Options:
-    """What :func:`cdpr_design.evaluate.evaluate` is asked, besides the design."""
+    """What :func:`cdpr_design.design.evaluate.evaluate` is asked, besides the design."""
 
     step: float | None = None
     safety_factor: float | None = None
@@ -428,16 +428,16 @@ def record(index: int, values: Sequence, figures: dict | None = None, error: str
 
 def evaluate_variant(job: Job, index: int, values: Sequence) -> dict:
     """Build and evaluate one variant; an exception becomes the row's ``error``."""
-    from . import spec
+    from cdpr_design.model import spec
 
     # by module path: the package's lazy API also has a function named ``evaluate``
-    ev = importlib.import_module("cdpr_design.evaluate")
+    ev = importlib.import_module("cdpr_design.design.evaluate")
     opt = job.options
     try:
         design = spec.from_dict(job.plan.data(values), source=job.plan.source)
         samples = None
         if opt.trajectory is not None:
-            from . import trajectory as tr
+            from cdpr_design.motion import trajectory as tr
 
             samples = tr.sample(design, opt.trajectory)
         row = ev.evaluate(design, step=opt.step, catalogue=opt.catalogue, samples=samples,
@@ -474,7 +474,7 @@ def _single_thread_kernels() -> None:
 def _prepare_process(job: Job) -> None:
     """The kernels loaded if the sweep is big; one numba thread (parallelism is across variants)."""
     if job.kernels:
-        from . import workspace as ws
+        from cdpr_design.workspace import engine as ws
 
         ws.load_kernels()
     _single_thread_kernels()
@@ -485,7 +485,7 @@ def _init_worker(job: Job) -> None:
     _WORKER_JOB = job
     _prepare_process(job)
     if job.options.catalogue is None:
-        from . import spec
+        from cdpr_design.model import spec
 
         _WORKER_JOB = Job(job.plan, _with_catalogue(job.options, spec.load_catalogue()), job.kernels)
 
@@ -620,7 +620,7 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
     if progress is not None:
         progress(done[0], total)
     if options.catalogue is None:
-        from . import spec
+        from cdpr_design.model import spec
 
         options = _with_catalogue(options, spec.load_catalogue())
     job = Job(plan, options, kernels=_worth_kernels(plan, options, len(todo)))
@@ -642,8 +642,8 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
 def _worth_kernels(plan: Plan, options: Options, variants: int) -> bool:
     """Whether the sweep holds more grid poses than the numpy engine is worth (about
     ``workspace.NUMPY_MAX_POSES``): then every process loads the numba kernels first."""
-    from . import spec
-    from . import workspace as ws
+    from cdpr_design.model import spec
+    from cdpr_design.workspace import engine as ws
 
     try:
         poses = ws.make_grid(spec.from_dict(plan.base), options.step, force=True).size

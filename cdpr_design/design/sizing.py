@@ -25,7 +25,7 @@ maximum torque of the motors".  This module makes that translation, per cable:
 
    With swivel pulleys (``cables[i].pulley``) lengths are arc + free
    segment and u_i leaves from the pulley's tangent point
-   (:mod:`cdpr_design.pulley`); L'_i = -u_i . v still holds (|u_i| = 1) and
+   (:mod:`cdpr_design.statics.pulley`); L'_i = -u_i . v still holds (|u_i| = 1) and
    the curvature term is bounded by V^2 max(1 / l_f, |kappa_t|), the largest
    eigenvalue of the pulley-aware Hessian of L_i.
 
@@ -49,7 +49,7 @@ maximum torque of the motors".  This module makes that translation, per cable:
    t_max = tau_peak i eta / r (rated: tau_rated i eta / r).
 
 The core never reads files: the catalogue arrives as a :class:`Catalogue`
-(built by :func:`cdpr_design.spec.load_catalogue`).
+(built by :func:`cdpr_design.model.spec.load_catalogue`).
 """
 
 from __future__ import annotations
@@ -61,9 +61,9 @@ from typing import Callable
 
 import numpy as np
 
-from . import kinematics as kin
-from .errors import InputError
-from .model import Design, Grid
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.errors import InputError
+from cdpr_design.model.design import Design, Grid
 
 RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
 
@@ -258,15 +258,15 @@ def task_grid(design: Design, step: float | None = None) -> Grid | None:
 def _structure_many(design: Design, positions: np.ndarray, Rb: np.ndarray, curvature: bool = False):
     """Structure matrices (k, n, m) and lengths (k, m) at positions (k, 3), fixed orientation.
 
-    With swivel pulleys (:func:`cdpr_design.kinematics.has_pulleys`) the
+    With swivel pulleys (:func:`cdpr_design.statics.kinematics.has_pulleys`) the
     lengths are arc + free segment and u_i the free segment's unit vector
-    from the tangent point (:mod:`cdpr_design.pulley`).  With ``curvature``
+    from the tangent point (:mod:`cdpr_design.statics.pulley`).  With ``curvature``
     a third array (k, m) [1/m] bounds the length's second derivative,
     |v^T H_i v| <= kappa_i |v|^2: 1 / L_i for a point outlet,
     max(1 / l_f, |kappa_t|) with a pulley (:meth:`CablePaths.max_curvature`).
     """
     if kin.has_pulleys(design):
-        from . import pulley as pl
+        from cdpr_design.statics import pulley as pl
 
         paths = pl.design_cable_paths(design, positions[:, None, :] + Rb[None, :, :])
         L = paths.lengths
@@ -325,7 +325,7 @@ def min_norm_bounded(W, w, lo, hi):
     the equality as a heavily weighted block: min ||[rho W; I] t - [rho w; 0]||
     with rho = 1e6 / ||W||; the equality residual is then checked (1e-7
     relative).  ``hi`` may hold inf.  A slow, obvious reference path used
-    when :mod:`cdpr_design.tension` provides no solver.
+    when :mod:`cdpr_design.statics.tension` provides no solver.
     """
     from scipy.optimize import lsq_linear
 
@@ -345,12 +345,12 @@ def _min_norm_general(W, wreq, tmin, tmax):
 
     Bounded by [t_min, t_max] where that is feasible, otherwise by t_min only
     (the tension the winch must supply to hold the pose).  NaN where none.
-    Uses :mod:`cdpr_design.tension` (``min_norm_tensions``) when it exists,
+    Uses :mod:`cdpr_design.statics.tension` (``min_norm_tensions``) when it exists,
     else :func:`min_norm_bounded`.
     """
     solver = min_norm_bounded
     try:
-        from . import tension  # the per-pose QP solver, when available
+        from cdpr_design.statics import tension  # the per-pose QP solver, when available
         solver = getattr(tension, "min_norm_tensions", solver)
     except ImportError:
         pass
@@ -431,7 +431,7 @@ def task_envelope(design: Design, *, step: float | None = None, positions: np.nd
         orientation).  Without a task box and without positions the statically
         feasible poses of the workspace grid are used.
     """
-    from . import workspace  # core -> core (grid sweep driver)
+    from cdpr_design.workspace import engine as workspace  # core -> core (grid sweep driver)
 
     req = design.requirements
     A = float(req.max_acceleration or 0.0)
@@ -727,7 +727,7 @@ def size_motors(design: Design, catalogue: Catalogue, *, step: float | None = No
     step : float, optional
         Grid step [m] over the task box.
     samples : object with ``time, tensions, cable_speed, cable_accel``, optional
-        A sampled trajectory (:func:`cdpr_design.trajectory.sample`): its duty
+        A sampled trajectory (:func:`cdpr_design.motion.trajectory.sample`): its duty
         cycle gives the RMS torque, and its peaks join the envelope's.
     safety_factor : float, optional
         Factor >= 1 on the required torques and speed (default

@@ -22,8 +22,8 @@ from typing import Iterable, Sequence
 
 import numpy as np
 
-from ._picture_worker import PictureWorker
-from .errors import InputError
+from cdpr_design.plots.worker import PictureWorker
+from cdpr_design.errors import InputError
 
 MANIFEST = ".cdpr-design-outputs"
 #: Resolution of every PNG [dots per inch].
@@ -233,7 +233,7 @@ def workspace_header(design) -> list[str]:
 
 
 def workspace_rows(chunk, extra: dict[str, np.ndarray] | None = None) -> str:
-    """CSV text of one :class:`~cdpr_design.workspace.Chunk` (no header)."""
+    """CSV text of one :class:`~cdpr_design.workspace.engine.Chunk` (no header)."""
     cols = [chunk.poses[:, j] for j in range(chunk.poses.shape[1])]
     cols.append(chunk.feasible)
     cols.append(chunk.margin)
@@ -273,7 +273,7 @@ def _draw_robot(ax, design, pose, proj=(0, 1)):
     """Outlets, cables and the effector box at ``pose`` (motion coords), projected."""
     from matplotlib.patches import Polygon
 
-    from . import kinematics as kin
+    from cdpr_design.statics import kinematics as kin
 
     a, b = proj
     A = design.outlets
@@ -319,7 +319,7 @@ def workspace_figure(result, title_extra: str = ""):
     Planar motions: one panel.  Spatial motions: a stack of z-slices (x-y
     panels), each with the frame's footprint and the outlets.
     """
-    from . import workspace as wsmod
+    from cdpr_design.workspace import engine as wsmod
 
     plt = _plt()
     d = result.design
@@ -714,7 +714,7 @@ class SweepJournal:
     """The append-only journal of a sweep (``sweep.journal.jsonl`` in the output folder).
 
     Line 1 is a JSON object naming the sweep (``fingerprint``); every further
-    line is one finished variant (:func:`cdpr_design.sweep.record`), appended
+    line is one finished variant (:func:`cdpr_design.batch.sweep.record`), appended
     and flushed as it finishes, so an interrupted sweep loses at most the
     variants in flight.  A torn last line (the process was killed while
     writing it) is dropped when the journal is read back.
@@ -855,7 +855,7 @@ def sweep_figure(header: list[str], rows: list[list], keys: Sequence[str], title
     the varied keys and the figures, lines coloured by ``rank_by``, variants
     failing a requirement in grey.
     """
-    from . import sweep as sw
+    from cdpr_design.batch import sweep as sw
 
     plt = _plt()
     figs = [f for f in (figures or sw.HEADLINE) if f in header]

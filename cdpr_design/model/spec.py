@@ -24,8 +24,8 @@ import yaml
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
 from pydantic.types import FiniteFloat
 
-from .errors import SpecError
-from .model import (  # noqa: I001
+from cdpr_design.errors import SpecError
+from cdpr_design.model.design import (  # noqa: I001
     MOTIONS, Cable, CableProps, Design, Effector, Grid, OrientationRange, OrientationSet, Plc, Pulley, Requirements,
     Trajectory, Winch, WorkspaceSpec, WrenchBox, pad3,
 )
@@ -518,7 +518,7 @@ def _default_inertia(mass: float, size: np.ndarray, planar: bool) -> np.ndarray:
 
 
 def build(s: DesignSpec, raw: dict | None = None, source: str | None = None) -> Design:
-    """Build the frozen :class:`~cdpr_design.model.Design` from a validated spec."""
+    """Build the frozen :class:`~cdpr_design.model.design.Design` from a validated spec."""
     mot = MOTIONS[s.motion]
     d = mot.dim
     g = pad3(s.gravity) if s.gravity is not None else pad3([0.0] * (d - 1) + [-9.81])
@@ -716,11 +716,11 @@ def _check_catalogue(c: CatalogueSpec) -> list[tuple[str, str]]:
 
 
 def catalogue_from_dict(data: Any, source: str | None = None, base=None):
-    """Validate a catalogue document and build a :class:`~cdpr_design.sizing.Catalogue`.
+    """Validate a catalogue document and build a :class:`~cdpr_design.design.sizing.Catalogue`.
 
     Drives named by motors may also come from ``base`` (the shipped catalogue).
     """
-    from .sizing import Catalogue, Drive, Gearbox, Motor
+    from cdpr_design.design.sizing import Catalogue, Drive, Gearbox, Motor
 
     if not isinstance(data, dict):
         raise SpecError([("", f"expected a mapping with motors, drives, gearboxes, got {type(data).__name__}")], source)
@@ -748,7 +748,7 @@ def catalogue_from_dict(data: Any, source: str | None = None, base=None):
 
 
 def shipped_catalogue_path() -> Path:
-    return Path(__file__).resolve().parent / "data" / "motors.yaml"
+    return Path(__file__).resolve().parents[1] / "data" / "motors.yaml"
 
 
 def load_catalogue(path: str | Path | None = None):

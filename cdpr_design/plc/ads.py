@@ -1,6 +1,6 @@
 """PLC transports for the ``bridge`` gateway (the seed paper's loop A).
 
-The bridge loop (:mod:`cdpr_design.bridge`) talks to a controller only
+The bridge loop (:mod:`cdpr_design.plc.bridge`) talks to a controller only
 through the small :class:`Transport` interface: connect and check the
 symbols, read the axis set-points, write back the simulated state, raise a
 fault flag, close.  :class:`AdsTransport` implements it over Beckhoff's ADS
@@ -36,7 +36,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .errors import CdprError, InputError
+from cdpr_design.errors import CdprError, InputError
 
 #: ADS error code "symbol not found" (ADSERR_DEVICE_SYMBOLNOTFOUND).
 ADSERR_SYMBOLNOTFOUND = 0x710

@@ -14,7 +14,7 @@ The model, built from the design alone:
   stiffness k_i = EA / L0_i with L0_i the unstretched length paid out, updated
   every step, and its damping k_v,i = 2 zeta sqrt(k_i m) (``cable_damping`` =
   zeta).  Cable mass is not modelled.
-- **Swivel pulleys** (``cables[i].pulley``, :mod:`cdpr_design.pulley`): the
+- **Swivel pulleys** (``cables[i].pulley``, :mod:`cdpr_design.statics.pulley`): the
   arc wrapped on the pulley is not a MuJoCo wrapping object.  The tendon runs
   from a mocap site that the simulator moves, before every physics step, to
   the pulley's tangent point C_i for the current attachment point, and the
@@ -66,9 +66,9 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from . import kinematics as kin
-from . import pulley as pl
-from .model import Design
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics import pulley as pl
+from cdpr_design.model.design import Design
 
 DEFAULT_AXIAL_STIFFNESS = 1.0e5
 """EA [N] used when the spec gives no ``cable.axial_stiffness``."""
@@ -315,7 +315,7 @@ class Simulator:
 
     def static_tensions(self, pose) -> np.ndarray:
         """Tensions [N] holding the effector at rest at a pose (gravity only), NaN if singular."""
-        from .trajectory import states
+        from cdpr_design.motion.trajectory import states
 
         x = np.atleast_2d(np.asarray(pose, float))
         z = np.zeros_like(x)
@@ -583,7 +583,7 @@ class SimulationResult:
 
     def comparison(self, max_delay: float | None = None):
         """Delay, errors and the per-segment table of target vs simulated (see :mod:`compare`)."""
-        from .compare import compare
+        from cdpr_design.motion.compare import compare
 
         tgt, act = {}, {}
         for j, c in enumerate(self.coords):

@@ -53,7 +53,7 @@ from typing import Callable
 
 import numpy as np
 
-from .plc import PlcLinkError, SymbolError, Transport
+from cdpr_design.plc.ads import PlcLinkError, SymbolError, Transport
 
 # ----------------------------------------------------------------------------
 # Streaming statistics (bounded memory on runs of any length)
@@ -247,14 +247,14 @@ class DelayTrace:
         the PLC held at the read's time); the axis positions as the PLC sees
         them: each written value held until the next write (zero-order hold).
         The delay is the sub-sample cross-correlation lag between the two
-        (:func:`cdpr_design.compare.estimate_delay`) on a uniform grid of
+        (:func:`cdpr_design.motion.compare.estimate_delay`) on a uniform grid of
         cycle_time / 4 (at most 1 ms).  Positive: the axes lag the
         set-points.  It includes the model's own lag, the computation and the
         write, and the hold; it leaves out the time a set-point waited in the
         PLC before the read and an actual waited before the PLC's task read
         it (the test PLC's log, ``plc_delay``, sees those too).
         """
-        from .compare import estimate_delay
+        from cdpr_design.motion.compare import estimate_delay
 
         out = {f"length_{c}": None for c in names}
         if self.nr < 8 or self.nw < 8:
@@ -383,7 +383,7 @@ def run(transport: Transport, simulator, *, cycle_time: float, duration: float |
         ``advance(setpoint_lengths, duration, velocity=...)`` and ``state()``
         returning an object with ``time`` [s], ``pose``, ``lengths`` [m] and
         ``tensions`` [N]; ``timestep`` [s] when it steps in whole physics
-        steps (:class:`cdpr_design.simulation.Simulator`).
+        steps (:class:`cdpr_design.motion.simulation.Simulator`).
     cycle_time : float
         Period [s].
     duration : float, optional
@@ -644,7 +644,7 @@ class RowMaker:
     """
 
     def __init__(self, design, keep: int = 1 << 20):
-        from .kinematics import forward_kinematics
+        from cdpr_design.statics.kinematics import forward_kinematics
 
         self.design = design
         self._fk = forward_kinematics
@@ -687,7 +687,7 @@ class RowMaker:
         """Delay [s] of each simulated axis behind its set-point, keyed ``length_<cable>``.
 
         Cross-correlation of the logged set-point and actual length
-        (:func:`cdpr_design.compare.estimate_delay`); None where an axis did
+        (:func:`cdpr_design.motion.compare.estimate_delay`); None where an axis did
         not move.
         """
         return axis_delays(self.design.cable_names, self._buf[: self.n, 0],
@@ -697,7 +697,7 @@ class RowMaker:
 
 def axis_delays(names, t, target, actual, max_delay: float = 1.0) -> dict:
     """Per-axis delay [s] of ``actual`` behind ``target`` (NaN-free dict, None where unknown)."""
-    from .compare import estimate_delay, resample, uniform_grid
+    from cdpr_design.motion.compare import estimate_delay, resample, uniform_grid
 
     out = {f"length_{c}": None for c in names}
     t = np.asarray(t, float)
@@ -717,17 +717,17 @@ def axis_delays(names, t, target, actual, max_delay: float = 1.0) -> dict:
 
 
 def make_simulator(design, cycle_time: float, initial_lengths=None):
-    """The physics model the gateway drives (:class:`cdpr_design.simulation.Simulator`).
+    """The physics model the gateway drives (:class:`cdpr_design.motion.simulation.Simulator`).
 
     Started at rest at the forward kinematics of ``initial_lengths`` (the
     PLC's first set-points), so the first cycle does not jerk the robot.
     """
-    from .simulation import Simulator
+    from cdpr_design.motion.simulation import Simulator
 
     sim = Simulator(design)
     pose = None
     if initial_lengths is not None:
-        from .kinematics import forward_kinematics
+        from cdpr_design.statics.kinematics import forward_kinematics
 
         try:
             pose = forward_kinematics(design, initial_lengths).pose

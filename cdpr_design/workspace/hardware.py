@@ -1,8 +1,8 @@
 """Workspace sweeps with real hardware geometry and orientation sets.
 
-- :func:`run_hardware` is what :func:`cdpr_design.workspace.run` does when a
+- :func:`run_hardware` is what :func:`cdpr_design.workspace.engine.run` does when a
   design has swivel pulleys or interference is checked: the same chunked
-  grid sweep, through :func:`cdpr_design._kernels.sweep_points` (pulley-aware
+  grid sweep, through :func:`cdpr_design.kernels.sweep_points` (pulley-aware
   structure matrix, interference mask per pose).
 - :func:`run_orientations` sweeps orientation sets for the rotational motions
   (``1R2T``, ``3R3T``):
@@ -29,11 +29,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _kernels as K
-from . import kinematics as kin
-from .errors import SpecError
-from .interference import HIT_NAMES, hardware_arrays
-from .model import Design, Grid
+from cdpr_design import kernels as K
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.errors import SpecError
+from cdpr_design.statics.interference import HIT_NAMES, hardware_arrays
+from cdpr_design.model.design import Design, Grid
 
 #: Default total-orientation set: nominal +- 10 deg about the last rotation coordinate, 5 samples.
 DEFAULT_SET_HALF = math.radians(10.0)
@@ -48,7 +48,7 @@ class Evaluator:
     """Evaluates explicit positions at one orientation (pulleys and interference included)."""
 
     def __init__(self, design: Design, kind: str, interference: bool):
-        from . import workspace as ws
+        from cdpr_design.workspace import engine as ws
 
         self.design = design
         self.kind = kind
@@ -63,7 +63,7 @@ class Evaluator:
         self._wreq = {}
 
     def wrench(self, ori) -> np.ndarray:
-        from . import workspace as ws
+        from cdpr_design.workspace import engine as ws
 
         key = tuple(float(x) for x in ori)
         if key not in self._wreq:
@@ -97,7 +97,7 @@ class _Maps:
     """Streaming statistics and (subsampled) maps of a sweep, as in workspace.run."""
 
     def __init__(self, g: Grid, m: int, keep_maps: bool, extra_maps: tuple = ()):
-        from . import workspace as ws
+        from cdpr_design.workspace import engine as ws
 
         self.g, self.m, self.keep = g, m, keep_maps
         gshape = np.array(g.shape, dtype=np.int64)
@@ -139,7 +139,7 @@ class _Maps:
                 self.xmaps[name][msub] = v[keep]
 
     def result(self, design, kind, g, ori, t0, extra, cls=None, **more):
-        from . import workspace as ws
+        from cdpr_design.workspace import engine as ws
 
         tpeak = self.tpeak.copy()
         tpeak[~np.isfinite(tpeak)] = np.nan
@@ -155,7 +155,7 @@ class _Maps:
 
 
 def _positions3(g: Grid, start: int, cnt: int) -> np.ndarray:
-    from . import workspace as ws
+    from cdpr_design.workspace import engine as ws
 
     pos = ws.grid_positions(g, start, cnt)
     P = np.zeros((cnt, 3))
@@ -164,7 +164,7 @@ def _positions3(g: Grid, start: int, cnt: int) -> np.ndarray:
 
 
 def _setup(design, kind, step, grid, orientation, force):
-    from . import workspace as ws
+    from cdpr_design.workspace import engine as ws
 
     if kind not in ws.KINDS:
         raise SpecError([("--kind", f"expected one of {', '.join(ws.KINDS)}, got {kind!r}")])
@@ -176,7 +176,7 @@ def _setup(design, kind, step, grid, orientation, force):
 
 
 def _poses(design, P, ori):
-    from . import workspace as ws
+    from cdpr_design.workspace import engine as ws
 
     d = design.motion.dim
     poses = np.empty((P.shape[0], len(design.motion.coords)))
@@ -193,7 +193,7 @@ def _kind_counts(mask: np.ndarray, counts: dict) -> None:
 def run_hardware(design: Design, kind: str = "static", step=None, grid=None, orientation=None,
                  on_chunk=None, progress=None, force: bool = False, chunk: int | None = None,
                  keep_maps: bool = True, interference: bool = False):
-    """The grid sweep of :func:`cdpr_design.workspace.run` with pulleys and interference.
+    """The grid sweep of :func:`cdpr_design.workspace.engine.run` with pulleys and interference.
 
     With ``interference`` the ``feasible`` flag is statics-feasible and
     collision free; tensions are blanked (NaN) where a pose collides; the
@@ -202,7 +202,7 @@ def run_hardware(design: Design, kind: str = "static", step=None, grid=None, ori
     before the interference checks), ``collisions_by_kind`` (poses hit by
     each kind of interference), ``pulleys``.
     """
-    from . import workspace as ws
+    from cdpr_design.workspace import engine as ws
 
     t0 = time.perf_counter()
     g, ori = _setup(design, kind, step, grid, orientation, force)
@@ -378,12 +378,12 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
       ``collision_free``, ``feasible_statics`` and ``collisions_by_kind``
       count the nominal orientation's poses.
 
-    Returns a :class:`~cdpr_design.workspace.WorkspaceResult` whose maps are
+    Returns a :class:`~cdpr_design.workspace.engine.WorkspaceResult` whose maps are
     those of the swept workspace, with ``orientation_maps`` (an
     :class:`OrientationMaps`) set and summary extras ``orientation_mode``,
     ``orientation_count`` and (range) ``mean_range``, ``range_levels``.
     """
-    from . import workspace as ws
+    from cdpr_design.workspace import engine as ws
 
     if mode not in ("total", "range"):
         raise SpecError([("--orientations", f"expected total or range, got {mode!r}")])

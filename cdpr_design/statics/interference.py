@@ -6,7 +6,7 @@ after Pott 2018, ch. 6 "workspace", and Perreault, Cardou, Gosselin, Otis:
 "Geometric determination of the interference-free constant-orientation
 workspace of parallel cable-driven mechanisms", ASME J. Mech. Robotics 2(3), 2010).
 This module checks one pose; the grid sweeps use the same kernel
-(:func:`cdpr_design._kernels.interference_pose`).
+(:func:`cdpr_design.kernels.interference_pose`).
 
 What counts as a collision
 --------------------------
@@ -36,9 +36,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _kernels as K
-from . import kinematics as kin
-from .model import Design
+from cdpr_design import kernels as K
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.model.design import Design
 
 HIT_NAMES = {K.HIT_CABLE_CABLE: "cable-cable", K.HIT_CABLE_EFFECTOR: "cable-effector",
              K.HIT_EFFECTOR_FRAME: "effector-frame", K.HIT_CABLE_FRAME: "cable-frame"}
@@ -61,7 +61,7 @@ class HardwareArrays:
 
 def hardware_arrays(design: Design) -> HardwareArrays:
     """Pulley and interference arrays of ``design`` for the kernels."""
-    from .pulley import reference_perpendicular
+    from cdpr_design.statics.pulley import reference_perpendicular
 
     m = design.m
     axes = np.zeros((m, 3))

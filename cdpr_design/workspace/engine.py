@@ -18,9 +18,9 @@ from typing import Callable
 
 import numpy as np
 
-from . import kinematics as kin
-from .errors import InputError, SpecError
-from .model import Design, Grid
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.errors import InputError, SpecError
+from cdpr_design.model.design import Design, Grid
 
 #: workspace kinds and their kernel codes (= ``_kernels.KIND_*``; a test checks)
 KINDS = {"static": 0, "wrench-feasible": 1, "wrench-closure": 2}
@@ -31,7 +31,7 @@ MAX_POSES = 20_000_000
 CHUNK = 1 << 18
 #: Largest number of cells kept for the maps behind the pictures.
 MAP_CELLS = 4_000_000
-#: Engines: ``numba`` (the kernels of :mod:`cdpr_design._kernels`) or ``numpy``
+#: Engines: ``numba`` (the kernels of :mod:`cdpr_design.kernels`) or ``numpy``
 #: (the closed form of two cables and two wrench rows, vectorised).  ``auto``
 #: takes numpy for closed-form grids up to :data:`NUMPY_MAX_POSES` poses while
 #: the kernels are not loaded in this process: numba's start-up (import and
@@ -42,7 +42,7 @@ NUMPY_MAX_POSES = 2_000_000
 
 def _K():
     """The numba kernels, imported on first use (importing numba takes ~0.4 s)."""
-    from . import _kernels
+    from cdpr_design import kernels as _kernels
 
     return _kernels
 
@@ -268,7 +268,7 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         Called as ``progress(done, total)`` after each chunk.
     interference : bool
         Also check cable-cable, cable-effector, effector-frame and cable-frame
-        interference (:mod:`cdpr_design.interference`): ``feasible`` becomes
+        interference (:mod:`cdpr_design.statics.interference`): ``feasible`` becomes
         statics-feasible *and* collision free, chunks carry ``collision_free``,
         and the summary gains ``collision_free``, ``feasible_statics`` and
         ``collisions_by_kind``.
@@ -283,7 +283,7 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     if kind not in KINDS:
         raise SpecError([("--kind", f"expected one of {', '.join(KINDS)}, got {kind!r}")])
     if interference or kin.has_pulleys(design):
-        from .hardware import run_hardware  # pulleys and interference (real hardware geometry)
+        from cdpr_design.workspace.hardware import run_hardware  # pulleys and interference (real hardware geometry)
 
         return run_hardware(design, kind, step, grid, orientation, on_chunk, progress, force,
                             chunk, keep_maps, interference)
@@ -399,7 +399,7 @@ def _use_numpy(engine: str | None, planar2: bool, poses: int) -> bool:
         return True
     if engine == "numba":
         return False
-    return planar2 and poses <= NUMPY_MAX_POSES and "cdpr_design._kernels" not in sys.modules
+    return planar2 and poses <= NUMPY_MAX_POSES and "cdpr_design.kernels" not in sys.modules
 
 
 def _planar2_numpy(g: Grid, start, count, Rb, A, wreq, tmin, tmax, feasible, margin, tensions, lengths):
@@ -509,7 +509,7 @@ class PoseResult:
     margin: float
     W: np.ndarray
     wrench: np.ndarray
-    #: colliding pairs (cli.md names; :func:`cdpr_design.interference.check_pose`)
+    #: colliding pairs (cli.md names; :func:`cdpr_design.statics.interference.check_pose`)
     collisions: list = field(default_factory=list)
 
 
@@ -529,7 +529,7 @@ def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
     L = np.empty(design.m)
     K = _K()
     if kin.has_pulleys(design):
-        from .interference import hardware_arrays
+        from cdpr_design.statics.interference import hardware_arrays
 
         hw = hardware_arrays(design)
         ok = K.structure_matrix_pulley(full[0], full[1], full[2], Rb,
@@ -545,7 +545,7 @@ def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
                                        combinations(design.m, design.n), KINDS[kind], t)
     else:
         feasible, margin = False, np.nan
-    from .interference import collisions
+    from cdpr_design.statics.interference import collisions
 
     return PoseResult(np.asarray(pose, float), L, t, bool(feasible), float(margin), W, wreq[0],
                       collisions(design, pose))
@@ -554,10 +554,10 @@ def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
 def run_orientations(design: Design, mode: str = "total", **kwargs) -> WorkspaceResult:
     """Total orientation workspace or orientation range per position (1R2T, 3R3T).
 
-    See :func:`cdpr_design.hardware.run_orientations` for the parameters
+    See :func:`cdpr_design.workspace.hardware.run_orientations` for the parameters
     (``kind``, ``step``, ``grid``, ``orientation``, ``orientations``,
     ``on_chunk``, ``progress``, ``force``, ``interference``).
     """
-    from .hardware import run_orientations as _run
+    from cdpr_design.workspace.hardware import run_orientations as _run
 
     return _run(design, mode, **kwargs)

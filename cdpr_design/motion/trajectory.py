@@ -48,8 +48,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import pulley as pl
-from .model import Design, Trajectory
+from cdpr_design.statics import pulley as pl
+from cdpr_design.model.design import Design, Trajectory
 
 DEFAULT_CYCLE_TIME = 1e-3
 """Default sample period [s]: one PLC cycle."""
@@ -664,7 +664,7 @@ def solve_tensions(design: Design, W: np.ndarray, wreq: np.ndarray) -> np.ndarra
 
 def _min_norm_kernel():
     """(min_norm_tensions, make_scratch) of the compiled kernels, when they exist."""
-    from . import _kernels as K
+    from cdpr_design import kernels as K
 
     f, s = getattr(K, "min_norm_tensions", None), getattr(K, "make_scratch", None)
     return (f, s) if callable(f) and callable(s) else None
@@ -717,12 +717,12 @@ def states(design: Design, pose, velocity, acceleration, *, time=None, external=
     d'Alembert wrench w_inertial = -(m a_c, I alpha + w x I w) (paper eq. 6-9
     with the inertia added).
 
-    Swivel pulleys (``cables[i].pulley``, :mod:`cdpr_design.pulley`): L_i is
+    Swivel pulleys (``cables[i].pulley``, :mod:`cdpr_design.statics.pulley`): L_i is
     the arc + free length, u_i the free segment's unit vector from the
     attachment towards the pulley's tangent point (the gradient of L_i is
     -u_i, so dL/dt = -u . v_B still holds and W keeps its form), and
     d2L/dt2 = v_B^T H v_B - u . a_B with the pulley-aware Hessian H of
-    :func:`cdpr_design.pulley.cable_paths` (1 / l_f in the pulley plane,
+    :func:`cdpr_design.statics.pulley.cable_paths` (1 / l_f in the pulley plane,
     the swivel curvature across it).
     """
     x = np.atleast_2d(np.asarray(pose, float))

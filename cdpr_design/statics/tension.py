@@ -2,7 +2,7 @@
 
 Two layers:
 
-- the exact numba kernels of :mod:`cdpr_design._kernels` (hyperplane
+- the exact numba kernels of :mod:`cdpr_design.kernels` (hyperplane
   shifting on a basis factorisation of W, and the Goldfarb-Idnani active-set
   solution of the minimum 2-norm tension problem), wrapped here for one
   pose or one structure matrix;
@@ -27,9 +27,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _kernels as K
-from . import kinematics as kin
-from .model import Design
+from cdpr_design import kernels as K
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.model.design import Design
 
 KINDS = {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
          "wrench-closure": K.KIND_WRENCH_CLOSURE}
@@ -111,7 +111,7 @@ def min_norm(W, w, tmin, tmax, weights=None) -> np.ndarray | None:
     Weights c_i > 0 are handled by the change of variables t'_i = sqrt(c_i) t_i
     (W' = W diag(c)^-1/2, bounds scaled), which keeps the problem a projection.
     Returns None when no tensions within the bounds balance w, or rank W < n.
-    Solved by the Goldfarb-Idnani kernel (:func:`cdpr_design._kernels.min_norm_tensions`).
+    Solved by the Goldfarb-Idnani kernel (:func:`cdpr_design.kernels.min_norm_tensions`).
     """
     W = _arr(W)
     n, m = W.shape

@@ -21,7 +21,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
-from .errors import CheckFailed, InputError, SpecError
+from cdpr_design.errors import CheckFailed, InputError, SpecError
 
 app = typer.Typer(
     add_completion=False,
@@ -96,13 +96,13 @@ def command(fn):
 
 
 def load_design(path: Path):
-    from . import spec
+    from cdpr_design.model import spec
 
     return spec.load(path)
 
 
 def output_dir(design, out: Path | None, overwrite: bool = False):
-    from .report import OutputDir
+    from cdpr_design.jobs.report import OutputDir
 
     return OutputDir(out if out is not None else Path("out") / design.name, overwrite=overwrite)
 
@@ -127,7 +127,7 @@ def parse_pose(design, text: str, option: str = "--at") -> list[float]:
 
 
 def emit_json(data) -> None:
-    from .report import _json_default
+    from cdpr_design.jobs.report import _json_default
 
     sys.stdout.write(json.dumps(data, default=_json_default) + "\n")
     sys.stdout.flush()
@@ -201,8 +201,8 @@ def run_workspace(design, out_dir, kind: str, step, force: bool, quiet: bool,
     ``collision_free``); ``orientations``: ``total`` or ``range`` orientation
     workspace (rotational motions; extra columns, ``orientation_workspace.png``).
     """
-    from . import report
-    from . import workspace as ws
+    from cdpr_design.jobs import report
+    from cdpr_design.workspace import engine as ws
 
     grid = ws.make_grid(design, step, force)
     header = report.workspace_header(design) + ws.extra_columns(design, collisions, orientations)
@@ -251,7 +251,7 @@ def workspace(
                                "(workspace.orientation_range). 1R2T and 3R3T.")] = None,
 ):
     """Grid sweep of the workspace: workspace.csv, workspace.png, tension_map.png, summary.json."""
-    from . import _picture_worker
+    from cdpr_design.plots import worker as _picture_worker
 
     with _picture_worker.take() as pictures:  # matplotlib's import overlaps the spec and the sweep
         design = load_design(spec)
@@ -301,7 +301,7 @@ def _reobjective(design, result, objective: str, weights):
     """Tensions of a pose result for another objective or weights (tension.py)."""
     import numpy as np
 
-    from . import tension as T
+    from cdpr_design.statics import tension as T
 
     if not np.all(np.isfinite(result.tensions)):
         return result
@@ -325,7 +325,7 @@ def pose(
     json_: JsonOpt = False,
 ):
     """One pose: cable lengths, tensions, feasibility, margin, structure matrix."""
-    from . import workspace as ws
+    from cdpr_design.workspace import engine as ws
 
     design = load_design(spec)
     p = parse_pose(design, at)
@@ -363,7 +363,7 @@ def fk(
     json_: JsonOpt = False,
 ):
     """Forward kinematics: the pose for given cable lengths."""
-    from . import kinematics as kin
+    from cdpr_design.statics import kinematics as kin
 
     design = load_design(spec)
     L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)")
@@ -389,14 +389,14 @@ def fk(
 @command
 def schema():
     """Print the JSON Schema of the spec format (for editors' YAML validation)."""
-    from . import spec as spec_mod
+    from cdpr_design.model import spec as spec_mod
 
     sys.stdout.write(spec_mod.schema_text() + "\n")
 
 
 def main() -> None:
     """Console-script entry point (``cdpr_design.__main__.main`` starts the picture worker earlier)."""
-    from . import _picture_worker
+    from cdpr_design.plots import worker as _picture_worker
 
     if _picture_worker.wanted(sys.argv[1:]):
         _picture_worker.prestart()
@@ -425,7 +425,7 @@ StepOpt = Annotated[Optional[float], typer.Option("--step", help="Grid step [m] 
 
 
 def load_catalogue_opt(path: Path | None):
-    from . import spec
+    from cdpr_design.model import spec
 
     return spec.load_catalogue(path)
 
@@ -436,7 +436,7 @@ def trajectory_samples(design, name: str | None):
         return None
     import numpy as np
 
-    from . import trajectory as tr
+    from cdpr_design.motion import trajectory as tr
 
     traj = design.trajectories.get(name)
     if traj is None:
@@ -497,8 +497,8 @@ def size_motors(
     overwrite: OverwriteOpt = False,
 ):
     """Motor, gearbox and drum sizing over the task workspace: motor_sizing.csv."""
-    from . import report
-    from . import sizing as sz
+    from cdpr_design.jobs import report
+    from cdpr_design.design import sizing as sz
 
     design = load_design(spec)
     cat = load_catalogue_opt(catalogue)
@@ -517,7 +517,7 @@ def size_motors(
 
 
 def _evaluate(design, step, catalogue, trajectory, safety_factor, motor, quiet, workspace_result=None):
-    from . import evaluate as ev
+    from cdpr_design.design import evaluate as ev
 
     cat = load_catalogue_opt(catalogue)
     samples = trajectory_samples(design, trajectory)
@@ -552,10 +552,10 @@ def report(
     overwrite: OverwriteOpt = False,
 ):
     """Every artefact for one design (workspace, motor sizing) plus design_report.csv."""
-    from . import evaluate as ev
-    from . import report as rep
+    from cdpr_design.design import evaluate as ev
+    from cdpr_design.jobs import report as rep
 
-    from . import _picture_worker
+    from cdpr_design.plots import worker as _picture_worker
 
     with _picture_worker.take() as pictures:  # matplotlib's import overlaps the spec and the sweep
         design = load_design(spec)
@@ -592,7 +592,7 @@ def check(
     quiet: QuietOpt = False,
 ):
     """Test the spec's requirements: one line per requirement; exit 0 all pass, 1 otherwise."""
-    from . import evaluate as ev
+    from cdpr_design.design import evaluate as ev
 
     design = load_design(spec)
     e = _evaluate(design, step, catalogue, trajectory, safety_factor, motor, quiet or json_)
@@ -651,10 +651,10 @@ def bridge(
     """
     import signal
 
-    from . import bridge as br
-    from .plc import (LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, AdsTransport, PlcLayout,
+    from cdpr_design.plc import bridge as br
+    from cdpr_design.plc.ads import (LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, AdsTransport, PlcLayout,
                       PlcLinkError, TestPlc)
-    from .report import fmt
+    from cdpr_design.jobs.report import fmt
 
     design = load_design(spec)
     if design.plc is None:
@@ -803,8 +803,8 @@ CycleOpt = Annotated[Optional[float], typer.Option(
 
 def _sample_named(design, name: str, cycle_time: float | None, hold_end: float = 0.0):
     """Sample spec trajectory ``name`` (reading a csv path's poses); bad names/files are exit 2."""
-    from . import report
-    from . import trajectory as tr
+    from cdpr_design.jobs import report
+    from cdpr_design.motion import trajectory as tr
 
     traj = design.trajectories.get(name)
     if traj is None:
@@ -828,7 +828,7 @@ def _path_map(design):
     """A static workspace map for the path picture (planar designs; coarse enough to be quick)."""
     if not design.motion.planar:
         return None
-    from . import workspace as ws
+    from cdpr_design.workspace import engine as ws
 
     g = design.workspace.grid
     ext = max(h - l for l, h in zip(g.lower, g.upper))
@@ -853,7 +853,7 @@ def trajectory_cmd(
     overwrite: OverwriteOpt = False,
 ):
     """Sample a spec path at a fixed cycle: trajectory.csv, trajectory.png, trajectory_axes.png, trajectory.json."""
-    from . import report
+    from cdpr_design.jobs import report
 
     design = load_design(spec)
     samples = _sample_named(design, name, cycle_time)
@@ -922,8 +922,8 @@ def simulate(
     overwrite: OverwriteOpt = False,
 ):
     """Run a spec path on the MuJoCo model of the robot: simulation.csv, simulation.json, simulation.png."""
-    from . import report
-    from . import simulation as sim
+    from cdpr_design.jobs import report
+    from cdpr_design.motion import simulation as sim
 
     design = load_design(spec)
     checks = [("--delay", delay, 0.0, 10.0), ("--servo-bandwidth", servo_bandwidth, 1e-3, 1e6),
@@ -984,8 +984,8 @@ def compare(
     overwrite: OverwriteOpt = False,
 ):
     """Compare two logs of the same motion: delay per column, position errors, per-segment table."""
-    from . import compare as cmp
-    from . import report
+    from cdpr_design.motion import compare as cmp
+    from cdpr_design.jobs import report
 
     t_t, tgt = report.read_log(target, "TARGET")
     t_a, act = report.read_log(actual, "ACTUAL")
@@ -1016,7 +1016,7 @@ def compare(
     s = res.to_json()
     s["target"], s["actual"] = str(target), str(actual)
     if out is not None:
-        from .report import OutputDir
+        from cdpr_design.jobs.report import OutputDir
 
         OutputDir(out, overwrite=overwrite).write_json("comparison.json", s)
     if json_:
@@ -1085,8 +1085,8 @@ def sweep(
     overwrite: OverwriteOpt = False,
 ):
     """Batch parameter sweep: sweep.csv (one design_report.csv row per variant), sweep_best.csv, sweep.png."""
-    from . import report as rep
-    from . import sweep as sw
+    from cdpr_design.jobs import report as rep
+    from cdpr_design.batch import sweep as sw
 
     design = load_design(spec)
     section = design.sweep or {}

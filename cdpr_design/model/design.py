@@ -1,4 +1,4 @@
-"""The design model: frozen dataclasses built by :mod:`cdpr_design.spec`.
+"""The design model: frozen dataclasses built by :mod:`cdpr_design.model.spec`.
 
 Everything is stored in SI units and in *three-dimensional* form so that one
 code path serves every motion type: planar designs live in the z = 0 plane,
@@ -286,7 +286,7 @@ class Plc:
 
 @dataclass(frozen=True)
 class Design:
-    """A validated cable robot design. Build it with :func:`cdpr_design.spec.load`.
+    """A validated cable robot design. Build it with :func:`cdpr_design.model.spec.load`.
 
     ``raw`` keeps the validated spec as plain data (for sweeps, which vary keys
     of the spec and rebuild).

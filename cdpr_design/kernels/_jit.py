@@ -1,0 +1,16 @@
+"""The jit options of every kernel, set once.
+
+``cache=True`` so users pay the compile time once per machine (numba's on-disk
+cache), ``nogil`` so sweeps can run in threads, ``error_model='numpy'`` so a
+division by zero gives inf/NaN as in numpy instead of raising.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+
+JIT = dict(cache=True, nogil=True, error_model="numpy")
+njit = nb.njit(**JIT)
+njit_parallel = nb.njit(parallel=True, **JIT)
+#: Reassociation (vectorised reductions) without giving up NaN/inf semantics.
+njit_fast = nb.njit(fastmath={"reassoc", "contract", "arcp"}, **JIT)

@@ -1,0 +1,109 @@
+"""One pose: feasibility, capacity margin and min-norm tensions for any m, n."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels.hsm import basis_factor, hsm_factored, make_scratch, square_eval
+from cdpr_design.kernels.tension_qp import goldfarb_idnani, null_space_setup
+
+
+KIND_STATIC = 0
+
+
+KIND_WRENCH_FEASIBLE = 1
+
+
+KIND_WRENCH_CLOSURE = 2
+
+
+@njit
+def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr):
+    """:func:`eval_pose` for any m >= n with caller-provided scratch (no allocation).
+
+    ``scr`` comes from :func:`make_scratch` (n, m, wreq rows).  The margin is
+    the fast hyperplane-shifting one (:func:`hsm_factored`) over ``wreq[0]``
+    (static) or every row (wrench-feasible, wrench-closure); the tensions at
+    ``wreq[0]`` come from the exact QP (:func:`goldfarb_idnani`), run only
+    where the margin of ``wreq[0]`` is >= 0.  Static and wrench-feasible
+    poses are feasible when the margin is >= 0 *and* the QP found tensions,
+    so a feasible pose always has tensions; wrench-closure poses when W
+    positively spans R^n.  Rank W < n or a zero column (zero-length cable):
+    (False, NaN), tensions NaN.
+    """
+    n, m = W.shape
+    nv = wreq.shape[0] if kind != KIND_STATIC else 1
+    for i in range(m):
+        t_out[i] = np.nan
+    for j in range(m):
+        s = 0.0
+        for i in range(n):
+            s += W[i, j] * W[i, j]
+        if s == 0.0:
+            return False, np.nan
+    if not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+        return False, np.nan
+    margin0, margin, closure = hsm_factored(W, wreq, nv, tmin, tmax, scr)
+    qp_ok = False
+    if margin0 >= 0.0:
+        if m == n:
+            # unique tensions t = G w
+            tab = scr[0]
+            bcol = scr[20]
+            qp_ok = True
+            for s in range(n):
+                acc = 0.0
+                for i in range(n):
+                    acc += tab[s, m + i] * wreq[0, i]
+                t_out[bcol[s]] = min(max(acc, tmin[bcol[s]]), tmax[bcol[s]])
+        else:
+            null_space_setup(n, m, wreq[0], scr)
+            qp_ok = goldfarb_idnani(m, m - n, tmin, tmax, t_out, scr)
+    if kind == KIND_WRENCH_CLOSURE:
+        return closure and m > n, margin
+    return margin >= 0.0 and qp_ok, margin
+
+
+@njit
+def eval_pose(W, wreq, tmin, tmax, combos, kind, t_out):
+    """Feasibility, capacity margin and tensions of one pose.
+
+    Parameters
+    ----------
+    W : (n, m) structure matrix.
+    wreq : (nv, n) required-wrench vertices [N, N m]; row 0 is the nominal
+        wrench (gravity only), the one whose tensions are reported.
+    tmin, tmax : (m,) tension bounds [N].
+    combos : (C(m, n-1), n-1) int64, the column subsets of the HSM.
+    kind : KIND_STATIC (row 0 only), KIND_WRENCH_FEASIBLE (every row),
+        KIND_WRENCH_CLOSURE (positive spanning, bounds ignored).
+    t_out : (m,) receives the minimum 2-norm feasible tensions for row 0 [N]
+        (NaN where there are none).
+
+    Returns
+    -------
+    (feasible, margin) : margin is NaN where rank W < n.
+    """
+    n, m = W.shape
+    nv = wreq.shape[0] if kind == KIND_WRENCH_FEASIBLE else 1
+    for i in range(m):
+        t_out[i] = np.nan
+    if m == n:
+        rank_ok, margin = square_eval(W, wreq[:nv], tmin, tmax, t_out)
+        if not rank_ok:
+            return False, np.nan
+        # t = W^-1 w is unique: it is the tension distribution where it
+        # respects the bounds, and there is none otherwise
+        for i in range(m):
+            if not (tmin[i] <= t_out[i] <= tmax[i]):
+                for j in range(m):
+                    t_out[j] = np.nan
+                break
+        # m = n columns can never positively span R^n: no wrench closure
+        feasible = kind != KIND_WRENCH_CLOSURE and margin >= 0.0
+        return feasible, margin
+    # any m != n: basis-factored HSM + exact Goldfarb-Idnani min-norm QP
+    # (allocates its scratch: sweeps call eval_general with per-block scratch)
+    return eval_general(W, wreq, tmin, tmax, combos, kind, t_out,
+                        make_scratch(n, m, wreq.shape[0]))

@@ -1,0 +1,220 @@
+"""Exact minimum-2-norm cable tensions: Goldfarb-Idnani dual active set on the null space of W."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels.linalg import householder_qr
+from cdpr_design.kernels.hsm import basis_factor, make_scratch
+
+
+#: Relative tolerance (to the largest tension bound) of the QP's bound checks.
+QP_TOL = 1e-11
+
+
+@njit
+def null_space_setup(n, m, w, scr):
+    """Orthonormal null basis N (m, r) and t_p = W^+ w from the basis factorisation.
+
+    The columns of P [-F; I] span the null space of W; two passes of
+    classical Gram-Schmidt make them orthonormal (``scr[8]``).  The basic
+    solution t_b (t_B = G w, t_N = 0) projected off the null space is the
+    minimum-norm solution t_p = t_b - N N^T t_b (``scr[9]``).
+    """
+    tab, N, tp, tb = scr[0], scr[8], scr[9], scr[25]
+    nbc, bcol = scr[19], scr[20]
+    r = m - n
+    for k in range(r):
+        col = nbc[k]
+        for j in range(m):
+            N[j, k] = 0.0
+        N[col, k] = 1.0
+        for s in range(n):
+            N[bcol[s], k] = -tab[s, col]
+        for _ in range(2):
+            for p in range(k):
+                d = 0.0
+                for j in range(m):
+                    d += N[j, p] * N[j, k]
+                for j in range(m):
+                    N[j, k] -= d * N[j, p]
+        s = 0.0
+        for j in range(m):
+            s += N[j, k] * N[j, k]
+        s = 1.0 / math.sqrt(s)
+        for j in range(m):
+            N[j, k] *= s
+    for j in range(m):
+        tb[j] = 0.0
+    for s in range(n):
+        acc = 0.0
+        for i in range(n):
+            acc += tab[s, m + i] * w[i]
+        tb[bcol[s]] = acc
+    for j in range(m):
+        tp[j] = tb[j]
+    for k in range(r):
+        d = 0.0
+        for j in range(m):
+            d += N[j, k] * tb[j]
+        for j in range(m):
+            tp[j] -= d * N[j, k]
+
+
+@njit
+def _refactor(N, m, r, active, q, J, RA, NA, VA):
+    """QR of the active constraint normals N_A (r, q) = J [R; 0]."""
+    for a in range(q):
+        c = active[a]
+        j = c % m
+        sg = 1.0 if c < m else -1.0
+        for i in range(r):
+            NA[i, a] = sg * N[j, i]
+    householder_qr(NA, r, q, J, RA, VA)
+
+
+@njit
+def goldfarb_idnani(m, r, tmin, tmax, t, scr):
+    """Project the origin onto {z : t_min <= t_p + N z <= t_max}; t = t_p + N z.
+
+    The dual active-set method of Goldfarb & Idnani (Math. Programming 27,
+    1983) with G = I: start at the unconstrained minimum z = 0, add the most
+    violated bound, take the primal/dual step, drop a constraint whose
+    multiplier would turn negative.  A violated constraint whose normal lies
+    in the span of the active ones and whose dual step is unbounded proves
+    the bounds infeasible.  The active normals are re-factored by a
+    Householder QR at each change (r = m - n is small: cheaper and sturdier
+    than Givens bookkeeping).  Violations below ``QP_TOL`` times the largest
+    bound count as satisfied; the result is clipped into the bounds.
+    Returns False (``t`` NaN) when infeasible.
+    """
+    N, tp, J, RA, NA, VA = scr[8], scr[9], scr[10], scr[11], scr[12], scr[13]
+    z, d, rdir, u, active = scr[14], scr[15], scr[16], scr[17], scr[24]
+    scale = 1.0
+    for j in range(m):
+        scale = max(scale, max(abs(tmin[j]), abs(tmax[j])))
+    tol = QP_TOL * scale
+    for i in range(r):
+        z[i] = 0.0
+        for k in range(r):
+            J[i, k] = 1.0 if i == k else 0.0
+    q = 0
+    maxit = 20 * (2 * m + r) + 50
+    it = 0
+    feasible = True
+    while True:
+        # most violated bound: t_j - tmin_j (c < m) or tmax_j - t_j (c >= m)
+        p = -1
+        sp = -tol
+        for j in range(m):
+            tj = tp[j]
+            for i in range(r):
+                tj += N[j, i] * z[i]
+            sl = tj - tmin[j]
+            su = tmax[j] - tj
+            if sl < sp or su < sp:
+                c = j if sl < su else j + m
+                isact = False
+                for a in range(q):
+                    if active[a] == c:
+                        isact = True
+                        break
+                if not isact:
+                    sp = min(sl, su)
+                    p = c
+        if p < 0:
+            break
+        up = 0.0
+        jp = p % m
+        sg = 1.0 if p < m else -1.0
+        while True:
+            it += 1
+            if it > maxit:
+                feasible = False
+                break
+            # d = J^T a_p with a_p = sg N[jp, :]
+            for i in range(r):
+                s = 0.0
+                for k in range(r):
+                    s += J[k, i] * N[jp, k]
+                d[i] = sg * s
+            # dual direction R^-1 d[:q]
+            for i in range(q - 1, -1, -1):
+                s = d[i]
+                for k in range(i + 1, q):
+                    s -= RA[i, k] * rdir[k]
+                rdir[i] = s / RA[i, i]
+            dd = 0.0
+            for i in range(q, r):
+                dd += d[i] * d[i]
+            t1 = np.inf
+            ldrop = -1
+            for a in range(q):
+                if rdir[a] > 1e-14:
+                    ratio = u[a] / rdir[a]
+                    if ratio < t1:
+                        t1 = ratio
+                        ldrop = a
+            t2 = -sp / dd if dd > 1e-24 else np.inf
+            if t1 == np.inf and t2 == np.inf:
+                feasible = False
+                break
+            if t2 < np.inf:
+                step = min(t1, t2)
+                for i in range(r):
+                    s = 0.0
+                    for k in range(q, r):
+                        s += J[i, k] * d[k]
+                    z[i] += step * s
+                sp += step * dd
+            else:
+                step = t1
+            for a in range(q):
+                u[a] -= step * rdir[a]
+            up += step
+            if t2 <= t1:
+                active[q] = p
+                u[q] = up
+                q += 1
+                _refactor(N, m, r, active, q, J, RA, NA, VA)
+                break
+            for a in range(ldrop, q - 1):
+                active[a] = active[a + 1]
+                u[a] = u[a + 1]
+            q -= 1
+            _refactor(N, m, r, active, q, J, RA, NA, VA)
+        if not feasible:
+            break
+    if not feasible:
+        for j in range(m):
+            t[j] = np.nan
+        return False
+    for j in range(m):
+        s = tp[j]
+        for i in range(r):
+            s += N[j, i] * z[i]
+        t[j] = min(max(s, tmin[j]), tmax[j])
+    return True
+
+
+@njit
+def min_norm_tensions(W, w, tmin, tmax, t, scr):
+    """Minimum 2-norm tensions with bounds: min 1/2 |t|^2, W t = w, t_min <= t <= t_max.
+
+    The null-space reduction of algorithms.md: t = t_p + N z with t_p = W^+ w
+    and N an orthonormal null basis, so |t|^2 = |t_p|^2 + |z|^2 and the QP is
+    the projection of the origin onto an r-dimensional polytope, solved
+    exactly by :func:`goldfarb_idnani`.  Writes ``t`` (m) [N]; returns False
+    (``t`` NaN) when the bounds admit no solution or rank W < n.  ``scr``
+    from :func:`make_scratch`.
+    """
+    n, m = W.shape
+    for j in range(m):
+        t[j] = np.nan
+    if not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+        return False
+    null_space_setup(n, m, w, scr)
+    return goldfarb_idnani(m, m - n, tmin, tmax, t, scr)
