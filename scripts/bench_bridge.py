@@ -30,8 +30,11 @@ from cdpr_design.plc import bridge as br
 from cdpr_design.motion import simulation
 from cdpr_design.model import spec
 from cdpr_design.motion import trajectory
-from cdpr_design.plc.ads import (LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, AdsTransport,
-                             PlcLayout, TestPlc)
+from cdpr_design.plc.ads import AdsTransport
+from cdpr_design.plc.delay import axis_delays
+from cdpr_design.plc.rows import RowMaker
+from cdpr_design.plc.symbols import PlcLayout
+from cdpr_design.plc.testplc import LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, TestPlc
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -96,13 +99,13 @@ def main():
                               local_net_id=TEST_LOCAL_NET_ID)
             tr.connect()
             sim = br.make_simulator(d, dt, tr.read_setpoints())
-            rows = br.RowMaker(d)
+            rows = RowMaker(d)
             res = br.run(tr, sim, cycle_time=dt, duration=seconds,
                          on_row=lambda sp, st: rows.values(sp, st))
             log = plc.log()
             tr.close()
         s = res.summary()
-        plc_delay = br.axis_delays(d.cable_names, log[:, 0], log[:, 1:3], log[:, 3:5])
+        plc_delay = axis_delays(d.cable_names, log[:, 0], log[:, 1:3], log[:, 3:5])
         gw_delay = res.delay(d.cable_names)
         print(f"\ncycle {dt * 1e3:g} ms: {s['cycles']} cycles, {s['overruns']} overruns, "
               f"{s['elapsed_s']:.2f} s, model lag max {s['lag']['max'] * 1e3:.3f} ms, "

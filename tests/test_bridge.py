@@ -20,12 +20,13 @@ import pytest
 from typer.testing import CliRunner
 
 from cdpr_design.plc import bridge as br
+from cdpr_design.plc import delay, rows as plc_rows, stats, transport
 from cdpr_design.model import spec
 from cdpr_design.motion import trajectory
 from cdpr_design.cli.app import app
-from cdpr_design.plc.ads import (ADST_REAL64, LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID,
-                             AdsTransport, PlcLayout, TestPlc,
-                             check_symbol_info)
+from cdpr_design.plc.ads import AdsTransport
+from cdpr_design.plc.symbols import ADST_REAL64, PlcLayout, check_symbol_info
+from cdpr_design.plc.testplc import LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, TestPlc
 
 from .conftest import ROOT, write_spec
 
@@ -78,7 +79,7 @@ def _read_csv(path: Path):
 def test_stream_stats_match_numpy():
     rng = np.random.default_rng(1)
     x = rng.lognormal(mean=-7, sigma=1.0, size=20000)
-    s = br.StreamStats()
+    s = stats.StreamStats()
     for v in x:
         s.add(float(v))
     assert s.count == x.size
@@ -103,7 +104,7 @@ def test_layout_follows_the_spec(design):
 def test_symbol_type_check_names_expected_and_declared():
     lay_sym = PlcLayout((), ())
     del lay_sym
-    from cdpr_design.plc.ads import Symbol
+    from cdpr_design.plc.symbols import Symbol
 
     lreal = Symbol("MAIN.f", "LREAL", ADST_REAL64, 1, "setpoints")
     assert check_symbol_info(lreal, ADST_REAL64, 8, "LREAL") is None
@@ -133,7 +134,7 @@ class FakeClock:
         self.t += max(s, 0.0)
 
 
-class FakePlc(br.Transport):
+class FakePlc(transport.Transport):
     """Plays the trajectory by the fake clock; the write of the cycle at each stall time hangs."""
 
     def __init__(self, design, samples, clock, stalls=()):
@@ -160,7 +161,7 @@ def test_stalls_degrade_timing_not_the_path(design):
     clock = FakeClock()
     stalls = [(t, 0.12) for t in (0.3, 0.8, 0.95, 1.1, 1.5)]
     sim = br.make_simulator(design, 0.01, samples.lengths[0])
-    rows = br.RowMaker(design)
+    rows = plc_rows.RowMaker(design)
     log = []
     res = br.run(FakePlc(design, samples, clock, stalls), sim, cycle_time=0.01,
                  duration=samples.duration + 0.3, spin=0.0, clock=clock, sleep=clock.sleep,
@@ -222,7 +223,7 @@ def test_reference_is_continuous_and_never_overshoots(design, seed):
 
 def test_delay_trace_sees_the_hold_of_the_written_values():
     """Values written every 10 ms, each standing for 20 ms before: the PLC sees 20 + 5 ms."""
-    tr = br.DelayTrace()
+    tr = delay.DelayTrace()
     dt, lag = 0.01, 0.02
     f = lambda t: np.array([0.9 + 0.1 * np.sin(2 * t), 0.8 - 0.05 * t * t])  # noqa: E731
     for k in range(300):
@@ -251,7 +252,7 @@ def test_setpoints_from_the_test_plc_move_the_effector(design):
         sp0 = tr.read_setpoints()
         np.testing.assert_allclose(sp0, samples.lengths[0], atol=1e-12)
         sim = br.make_simulator(design, 0.01, sp0)
-        rows = br.RowMaker(design)
+        rows = plc_rows.RowMaker(design)
         log = []
         res = br.run(tr, sim, cycle_time=0.01, duration=samples.duration + 0.3,
                      on_row=lambda sp, st: log.append(rows.values(sp, st)))
@@ -269,7 +270,7 @@ def test_setpoints_from_the_test_plc_move_the_effector(design):
     np.testing.assert_allclose(pose, final.pose, atol=1e-12)
     np.testing.assert_allclose(act, final.lengths, atol=1e-12)
     log = np.array(log)
-    header = br.csv_header(design)
+    header = plc_rows.csv_header(design)
     col = {h: i for i, h in enumerate(header)}
     # the set-points the bridge read are the trajectory's lengths...
     tgt = log[:, [col["length_c1_target"], col["length_c2_target"]]]
@@ -284,7 +285,7 @@ def test_setpoints_from_the_test_plc_move_the_effector(design):
     assert off_path.max() < 0.01
     # the PLC saw the simulated axes follow its set-points
     assert plc_log.shape[0] > 100
-    d = br.axis_delays(design.cable_names, plc_log[:, 0], plc_log[:, 1:3], plc_log[:, 3:5])
+    d = delay.axis_delays(design.cable_names, plc_log[:, 0], plc_log[:, 1:3], plc_log[:, 3:5])
     assert all(v is not None and abs(v) < 0.1 for v in d.values())
     # the gateway's own estimate (read -> written and held) agrees with the PLC's scope; the
     # PLC also sees its 1 ms task and the wait of a set-point before the read (< 1 cycle)
@@ -435,6 +436,6 @@ def test_test_plc_run_writes_compare_ready_log(tmp_path, loop_data):
     assert set(summary["latency"]) == {"mean", "p99", "max"}
     assert summary["latency"]["mean"] < summary["cycle_time"]
     header, data = _read_csv(out / "bridge.csv")
-    assert header == br.csv_header(spec.from_dict(loop_data))
+    assert header == plc_rows.csv_header(spec.from_dict(loop_data))
     assert data.shape[0] == summary["cycles"]
     assert set(summary["delay"]) == {"length_c1", "length_c2"}

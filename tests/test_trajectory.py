@@ -10,6 +10,8 @@ from hypothesis import strategies as st
 
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.model import spec
+from cdpr_design.motion import paths
+from cdpr_design.motion import profile
 from cdpr_design.motion import trajectory as tr
 from cdpr_design.model.design import Trajectory
 
@@ -53,8 +55,8 @@ def point_mass(outlets, mass=1.0, tension=(0.0, 100.0), motion="2T", gravity=Non
 def test_profile_limits_and_exact_end(D, v, a, j, dt):
     """Speed and acceleration never exceed the limits; the profile ends at rest exactly at D,
     after a whole number of cycles."""
-    prof = tr.trapezoid(D, v, a) if j is None else tr.double_s(D, v, a, j)
-    prof = tr.fit_to_cycle(prof, dt)
+    prof = profile.trapezoid(D, v, a) if j is None else profile.double_s(D, v, a, j)
+    prof = profile.fit_to_cycle(prof, dt)
     n = prof.duration / dt
     assert abs(n - round(n)) < 1e-6
     t = dt * np.arange(int(round(n)) + 1)
@@ -72,16 +74,16 @@ def test_profile_limits_and_exact_end(D, v, a, j, dt):
 
 def test_trapezoid_minimum_time_closed_form():
     """Rest-to-rest minimum time: D/v + v/a when the cruise speed is reached, 2 sqrt(D/a) otherwise."""
-    assert tr.trapezoid(0.3, 1.0, 5.0).raw_duration == pytest.approx(0.3 / 1.0 + 1.0 / 5.0, rel=1e-12)
+    assert profile.trapezoid(0.3, 1.0, 5.0).raw_duration == pytest.approx(0.3 / 1.0 + 1.0 / 5.0, rel=1e-12)
     # the paper's 198 mm side at 1 m/s and 5 m/s^2 is just too short to cruise: v_peak = sqrt(a D)
-    p = tr.trapezoid(0.198, 1.0, 5.0)
+    p = profile.trapezoid(0.198, 1.0, 5.0)
     assert p.raw_duration == pytest.approx(2 * np.sqrt(0.198 / 5.0), rel=1e-12)
     assert p.evaluate([p.duration / 2])[1][0] == pytest.approx(np.sqrt(5.0 * 0.198), rel=1e-12)
-    assert tr.trapezoid(0.05, 1.0, 5.0).raw_duration == pytest.approx(2 * np.sqrt(0.05 / 5.0), rel=1e-12)
+    assert profile.trapezoid(0.05, 1.0, 5.0).raw_duration == pytest.approx(2 * np.sqrt(0.05 / 5.0), rel=1e-12)
     # double S with a huge jerk tends to the trapezoid
-    assert tr.double_s(0.3, 1.0, 5.0, 1e7).raw_duration == pytest.approx(0.5, rel=1e-4)
+    assert profile.double_s(0.3, 1.0, 5.0, 1e7).raw_duration == pytest.approx(0.5, rel=1e-4)
     # double S that never reaches amax: v = j Tj^2, D = v * 2 Tj  (no cruise)
-    p = tr.double_s(2 * 0.1 ** 3 * 10.0, 1.0, 100.0, 10.0)  # Tj = 0.1 s
+    p = profile.double_s(2 * 0.1 ** 3 * 10.0, 1.0, 100.0, 10.0)  # Tj = 0.1 s
     assert p.raw_duration == pytest.approx(0.4, rel=1e-9)
 
 
@@ -94,7 +96,7 @@ def test_trapezoid_minimum_time_closed_form():
 def test_square_hits_every_corner_within_limits(planar2, name):
     traj = planar2.trajectories[name]
     s = tr.sample(planar2, name)
-    corners = tr.path_waypoints(planar2, traj)
+    corners = paths.path_waypoints(planar2, traj)
     assert corners.shape == (5, 2)
     np.testing.assert_array_equal(s.pose[0], corners[0])
     for seg, corner in zip(s.segments, corners[1:]):
@@ -330,16 +332,11 @@ def redundant_4_cable():
     })
 
 
-@pytest.mark.parametrize("path", ["kernel", "slsqp"])
-def test_redundant_robot_min_norm_tensions_against_cvxpy(monkeypatch, path):
+def test_redundant_robot_min_norm_tensions_against_cvxpy():
     """m > n: the trajectory's tensions are the bounded minimum 2-norm ones (W t = w_req with
-    inertia), checked against cvxpy pose by pose; both the compiled and the slow path."""
+    inertia), checked against cvxpy pose by pose."""
     import cvxpy as cp
 
-    if path == "slsqp":
-        monkeypatch.setattr(tr, "_min_norm_kernel", lambda: None)
-    elif tr._min_norm_kernel() is None:
-        pytest.skip("the compiled min-norm kernel is not in _kernels yet")
     d = redundant_4_cable()
     traj = Trajectory(name="r", type="polyline", speed=0.5, acceleration=4.0,
                       waypoints=((0.8, 0.6, 0.0), (1.2, 0.9, 0.2)))

@@ -652,8 +652,12 @@ def bridge(
     import signal
 
     from cdpr_design.plc import bridge as br
-    from cdpr_design.plc.ads import (LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, AdsTransport, PlcLayout,
-                      PlcLinkError, TestPlc)
+    from cdpr_design.plc.ads import AdsTransport
+    from cdpr_design.plc.delay import axis_delays
+    from cdpr_design.plc.rows import RowMaker, csv_header
+    from cdpr_design.plc.symbols import PlcLayout
+    from cdpr_design.plc.testplc import LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, TestPlc
+    from cdpr_design.plc.transport import PlcLinkError
     from cdpr_design.jobs.report import fmt
 
     design = load_design(spec)
@@ -730,9 +734,9 @@ def bridge(
             err.print(f"[bold red]error:[/] {exc}", markup=True, soft_wrap=True)
             raise typer.Exit(EXIT_PLC_LOST) from None
         sim = br.make_simulator(design, dt, sp0)
-        rows = br.RowMaker(design)
+        rows = RowMaker(design)
         log = out_dir.stream("bridge.csv")
-        log.write(",".join(br.csv_header(design)) + "\n")
+        log.write(",".join(csv_header(design)) + "\n")
         last_flush = [0.0]
 
         def on_row(sp, state):
@@ -766,8 +770,8 @@ def bridge(
     summary["delay_model"] = rows.delay()  # bridge.csv: model time (what compare reports)
     if plc_log is not None and plc_log.shape[0] > 8:
         m = design.m
-        summary["plc_delay"] = br.axis_delays(design.cable_names, plc_log[:, 0],
-                                              plc_log[:, 1: 1 + m], plc_log[:, 1 + m: 1 + 2 * m])
+        summary["plc_delay"] = axis_delays(design.cable_names, plc_log[:, 0],
+                                           plc_log[:, 1: 1 + m], plc_log[:, 1 + m: 1 + 2 * m])
     summary["name"] = design.name
     summary["test_plc"] = test_plc
     out_dir.write_json("bridge.json", summary)

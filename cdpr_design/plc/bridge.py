@@ -36,68 +36,41 @@ command line exits with status 3 then (``cdpr-design bridge``: an addition
 to cli.md's 0/1/2/130, documented in ``bridge --help``; the log written so
 far is kept).  The core touches no file: logging is the caller's ``on_row``.
 
+Timing model.  Sample k of the set-points is read at wall time t_k
+(the middle of the read request), i.e. model time t_k - offset.  The
+reference is re-aimed from its current value to the set-point
+extrapolated with its velocity one cycle ahead, reached at model time
+t_k - offset + cycle_time, and the model is advanced there: the state
+written back in cycle k stands for the start of cycle k + 1, so the
+PLC, which keeps a written value until the next write, sees on average
+the gateway's computation time minus half a cycle of added delay
+instead of the computation time plus half a cycle.  A late cycle is an
+overrun (counted): the reference runs straight from where it was to
+the new goal, so a stall only cuts the path between two consecutive
+reads; it never extrapolates a stale ramp.
+
 Delays (the paper's Table 1 measures set-point to axis motion): the run's
-:class:`DelayTrace` gives the end-to-end delay as the PLC sees it (set-point
-read -> axis position written and held until the next write);
-:meth:`RowMaker.delay` the model's own lag in model time (``bridge.csv``,
-what ``compare`` reports); the test PLC's log the whole loop including the
-PLC's own sampling.
+:class:`~cdpr_design.plc.delay.DelayTrace` gives the end-to-end delay as the
+PLC sees it (set-point read -> axis position written and held until the next
+write); :meth:`cdpr_design.plc.rows.RowMaker.delay` the model's own lag in
+model time (``bridge.csv``, what ``compare`` reports); the test PLC's log the
+whole loop including the PLC's own sampling.
 """
 
 from __future__ import annotations
 
 import math
 import time
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 
-from cdpr_design.plc.ads import PlcLinkError, SymbolError, Transport
-
-# ----------------------------------------------------------------------------
-# Streaming statistics (bounded memory on runs of any length)
-# ----------------------------------------------------------------------------
-
-_EDGES = np.logspace(-7, 2, 901)  # 1e-7 .. 1e2 s, 1 % bins
-
-
-class StreamStats:
-    """Mean, max and p99 of a stream of durations [s] in bounded memory.
-
-    The percentile comes from a histogram with logarithmic bins 1 % wide
-    (1e-7 s to 100 s), so it is exact to within 1 %.
-    """
-
-    def __init__(self):
-        self.count = 0
-        self.total = 0.0
-        self.max = 0.0
-        self.hist = np.zeros(_EDGES.size + 1, dtype=np.int64)
-
-    def add(self, v: float) -> None:
-        self.count += 1
-        self.total += v
-        if v > self.max:
-            self.max = v
-        self.hist[int(np.searchsorted(_EDGES, v))] += 1
-
-    def percentile(self, q: float) -> float:
-        if not self.count:
-            return math.nan
-        k = int(np.searchsorted(np.cumsum(self.hist), math.ceil(q / 100 * self.count)))
-        if k == 0:
-            return float(_EDGES[0])
-        if k >= _EDGES.size:
-            return self.max
-        return float(min(_EDGES[k], self.max))  # upper edge of the bin
-
-    def summary(self) -> dict:
-        if not self.count:
-            return {"mean": None, "p99": None, "max": None, "count": 0}
-        return {"mean": self.total / self.count, "p99": self.percentile(99.0),
-                "max": self.max, "count": self.count}
-
+from cdpr_design.plc.delay import DelayTrace
+from cdpr_design.plc.stats import StreamStats
+from cdpr_design.plc.symbols import SymbolError
+from cdpr_design.plc.transport import PlcLinkError, Transport
 
 # ----------------------------------------------------------------------------
 # Result
@@ -208,74 +181,6 @@ def _strip(d: dict) -> dict:
     return {k: d[k] for k in ("mean", "p99", "max")}
 
 
-class DelayTrace:
-    """Wall-clock record of a bridged run: when each set-point was read, when each state was written.
-
-    Bounded memory: the first ``keep`` cycles.
-    """
-
-    def __init__(self, keep: int = 1 << 20):
-        self.keep = int(keep)
-        self._r = None
-        self._w = None
-        self.nr = 0
-        self.nw = 0
-
-    @staticmethod
-    def _put(buf, n, keep, row):
-        if buf is None:
-            buf = np.empty((64, len(row)))
-        if n >= keep:
-            return buf, n
-        if n == buf.shape[0]:
-            buf = np.concatenate([buf, np.empty_like(buf)])[:keep]
-        buf[n] = row
-        return buf, n + 1
-
-    def read(self, t: float, setpoints) -> None:
-        """Set-points [m] read at wall time ``t`` [s]."""
-        self._r, self.nr = self._put(self._r, self.nr, self.keep, [t, *setpoints])
-
-    def wrote(self, t: float, lengths, model_wall: float) -> None:
-        """Axis lengths [m] written at wall time ``t`` [s], standing for wall time ``model_wall``."""
-        self._w, self.nw = self._put(self._w, self.nw, self.keep, [t, model_wall, *lengths])
-
-    def delay(self, names, cycle_time: float, max_delay: float = 1.0) -> dict:
-        """End-to-end delay [s] of each axis as the PLC sees it, keyed ``length_<cable>``.
-
-        The set-points are taken as read (linear between reads: the value
-        the PLC held at the read's time); the axis positions as the PLC sees
-        them: each written value held until the next write (zero-order hold).
-        The delay is the sub-sample cross-correlation lag between the two
-        (:func:`cdpr_design.motion.compare.estimate_delay`) on a uniform grid of
-        cycle_time / 4 (at most 1 ms).  Positive: the axes lag the
-        set-points.  It includes the model's own lag, the computation and the
-        write, and the hold; it leaves out the time a set-point waited in the
-        PLC before the read and an actual waited before the PLC's task read
-        it (the test PLC's log, ``plc_delay``, sees those too).
-        """
-        from cdpr_design.motion.compare import estimate_delay
-
-        out = {f"length_{c}": None for c in names}
-        if self.nr < 8 or self.nw < 8:
-            return out
-        r, w = self._r[: self.nr], self._w[: self.nw]
-        t0, t1 = max(r[0, 0], w[0, 0]), min(r[-1, 0], w[-1, 0])
-        if not t1 > t0:
-            return out
-        g = min(cycle_time / 4, 1e-3)
-        g = max(g, (t1 - t0) / (1 << 20))
-        grid = t0 + g * np.arange(int((t1 - t0) / g) + 1)
-        idx = np.clip(np.searchsorted(w[:, 0], grid, side="right") - 1, 0, w.shape[0] - 1)
-        md = min(max_delay, 0.45 * (t1 - t0))
-        for j, c in enumerate(names):
-            x = np.interp(grid, r[:, 0], r[:, 1 + j])
-            y = w[idx, 2 + j]
-            d = estimate_delay(g, x, y, max_delay=md)
-            out[f"length_{c}"] = float(d) if np.isfinite(d) else None
-        return out
-
-
 # ----------------------------------------------------------------------------
 # The loop
 # ----------------------------------------------------------------------------
@@ -367,6 +272,179 @@ def _interp_setpoint(hist, t: float) -> np.ndarray:
     return hist[-1][1].copy()
 
 
+class _Gateway:
+    """The state of one bridged run between its cycles (see :func:`run`).
+
+    Each cycle: wait for its start, read the set-points, advance the model,
+    write the outputs, count it; when the PLC is lost, recover or stop.
+    """
+
+    def __init__(self, transport: Transport, simulator, dt: float, *, on_row, status, window: float,
+                 keep: int, spin: float, max_catchup: float, max_lag: float, clock, sleep):
+        self.transport, self.simulator, self.layout = transport, simulator, transport.layout
+        self.dt, self.window, self.spin = dt, window, spin
+        self.max_catchup, self.max_lag = max_catchup, max_lag
+        self.on_row, self.status, self.clock, self.sleep = on_row, status, clock, sleep
+        self.res = BridgeResult(cycle_time=dt, round_trips=transport.round_trips)
+        self.res.trace = DelayTrace(keep)
+        self.h = float(getattr(simulator, "timestep", 0.0) or 0.0)  # 0: advances by any span
+        self.state = simulator.state()
+        self.sim_time0 = float(self.state.time)
+        sp = np.asarray(getattr(self.state, "setpoints", self.state.lengths), dtype=float).copy()
+        if not np.all(np.isfinite(sp)):
+            sp = np.asarray(self.state.lengths, dtype=float).copy()
+        self.sp = sp                      # the last valid set-points [m]
+        self.ref = _Reference(sp, self.sim_time0)
+        self.hist: deque = deque(maxlen=max(4, int(math.ceil(window / dt)) + 3))
+        self.pending: deque = deque()     # states logged one cycle late
+        self.heartbeat = 0
+        self.missed = 0
+        self.last_err = ""
+        self.end_time = None
+        self.tol = 0.5 * self.h if self.h > 0 else 1e-9
+        self.t_wall0 = clock()
+        self.t0 = self.t_wall0            # schedule origin
+        self.k = 0                        # periods since the (re)started schedule
+        self.offset = None                # wall time - model time
+
+    def finished(self, should_stop) -> str | None:
+        """``stop`` when asked to, ``duration`` when the model reached the end time, else None."""
+        if should_stop is not None and should_stop():
+            return "stop"
+        if self.end_time is not None and float(self.state.time) >= self.end_time - self.tol:
+            return "duration"
+        return None
+
+    def cycle(self) -> None:
+        """One period: read, advance, write, count (the rows due are handed to ``on_row``)."""
+        deadline = self.t0 + self.k * self.dt
+        _wait_until(deadline, self.clock, self.sleep, self.spin)
+        start = self.clock()
+        self.res.jitter.add(abs(start - deadline))
+        goal, t_goal, t1, ts = self._read(start)
+        self.emit(self.hist[-1][0] if self.hist else None)
+        self._advance(goal, t_goal, ts)
+        link_ok = ts is not None and self._write(start, t1)
+        self._count(link_ok, start)
+
+    def _read(self, start: float):
+        """1. The set-points: (goal [m], goal time [s] in model time, end of the read, read time).
+
+        The goal is the set-point extrapolated one cycle ahead; the read time
+        (wall clock, the middle of the request) is None when the read failed:
+        the axes then hold where the reference is.
+        """
+        try:
+            new_sp = self.transport.read_setpoints()
+        except PlcLinkError as err:
+            t1 = self.clock()
+            self.last_err = str(err)
+            if self.offset is None:
+                self.offset = t1 - float(self.state.time)
+            return self.ref.value(float(self.state.time)), t1 - self.offset + self.dt, t1, None
+        t1 = self.clock()
+        self.res.latency.add(t1 - start)
+        ts = 0.5 * (start + t1)
+        if self.offset is None:   # the first read defines model time = now
+            self.offset = ts - float(self.state.time)
+        if new_sp.shape == self.sp.shape and np.all(np.isfinite(new_sp)):
+            self.sp = new_sp
+        if self.hist and ts - self.offset <= self.hist[-1][0]:
+            self.hist.pop()
+        self.hist.append((ts - self.offset, self.sp.copy()))
+        self.res.trace.read(ts, self.sp)
+        vel = _window_velocity(self.hist, self.window)
+        return self.sp + vel * self.dt, ts - self.offset + self.dt, t1, ts
+
+    def _advance(self, goal, t_goal: float, ts) -> None:
+        """2. The model: from the reference's current value to the goal (at most ``max_catchup``)."""
+        now = float(self.state.time)
+        if t_goal - now > self.max_lag + self.dt:
+            t_goal = self._slip(t_goal, now, ts)
+        self.ref.aim(now, goal, t_goal)
+        t_end = min(t_goal, now + self.max_catchup)
+        if self.end_time is not None:
+            t_end = min(t_end, self.end_time)
+        if t_end > now + self.tol:
+            self.state = self.ref.drive(self.simulator, t_end, self.h)
+        self.res.lag.add(max(t_goal - float(self.state.time), 0.0))
+
+    def _slip(self, t_goal: float, now: float, ts) -> float:
+        """Drop the model's lag behind real time (counted); the goal time moved back [s]."""
+        slip = t_goal - now - self.dt
+        self.offset += slip
+        t_goal -= slip
+        self.hist.clear()
+        if ts is not None:
+            self.hist.append((ts - self.offset, self.sp.copy()))
+        self.res.slips += 1
+        self.res.slipped += slip
+        self.status(f"the model fell {slip:.3g} s behind real time: skipped")
+        return t_goal
+
+    def _write(self, start: float, t1: float) -> bool:
+        """3. The outputs (lengths, tensions, pose, heartbeat); False when the write failed."""
+        self.heartbeat = (self.heartbeat + 1) & 0xFFFFFFFF
+        st = self.state
+        try:
+            t2 = self.clock()
+            self.transport.write_outputs(self.layout.pack_outputs(
+                st.lengths, st.tensions, st.pose, self.heartbeat, False))
+            t3 = self.clock()
+        except PlcLinkError as err:
+            self.last_err = str(err)
+            return False
+        self.res.latency.add(t3 - t2)
+        self.res.exchange.add((t1 - start) + (t3 - t2))
+        self.res.trace.wrote(0.5 * (t2 + t3), st.lengths, float(st.time) + self.offset)
+        return True
+
+    def _count(self, link_ok: bool, start: float) -> None:
+        """Count the cycle, queue its row and skip the periods it ran into (an overrun)."""
+        if link_ok:
+            self.missed = 0
+        else:
+            self.missed += 1
+            self.res.missed += 1
+        self.res.cycles += 1
+        self.pending.append(self.state)
+        end = self.clock()
+        self.res.work.add(end - start)
+        self.k += 1
+        if end > self.t0 + self.k * self.dt:
+            self.res.overruns += 1
+            self.k = int(math.floor((end - self.t0) / self.dt)) + 1
+
+    def emit(self, upto: float | None) -> None:
+        """4. Hand the queued states up to model time ``upto`` [s] (all: None) to ``on_row``.
+
+        With ``upto``, the set-point of a row is the PLC's, interpolated
+        between the reads around it; without, the reference the model followed.
+        """
+        while self.pending and (upto is None or float(self.pending[0].time) <= upto + 1e-12):
+            st = self.pending.popleft()
+            target = _interp_setpoint(self.hist, float(st.time)) if upto is not None \
+                else self.ref.value(float(st.time))
+            if self.on_row is not None:
+                self.on_row(target, st)
+
+    def recover(self, attempts: int, backoff, should_stop) -> bool:
+        """The PLC is lost: raise the fault flag, reconnect (True) or stop the run (False)."""
+        res = self.res
+        res.fault_raised = self.transport.raise_fault() or res.fault_raised
+        self.status(f"PLC lost after {self.missed} failed cycles: {self.last_err}")
+        if not _reconnect(self.transport, attempts, backoff, res, self.status, self.sleep, should_stop):
+            res.stopped = "plc_lost"
+            res.error = self.last_err
+            return False
+        self.missed = 0
+        self.t0, self.k = self.clock(), 0
+        self.emit(None)
+        self.offset = None   # model time goes on from where it is
+        self.hist.clear()
+        return True
+
+
 def run(transport: Transport, simulator, *, cycle_time: float, duration: float | None = None,
         on_row: Callable | None = None, should_stop: Callable[[], bool] | None = None,
         max_missed: int = 3, reconnect: int = 0, backoff: tuple[float, float] = (0.1, 2.0),
@@ -382,8 +460,9 @@ def run(transport: Transport, simulator, *, cycle_time: float, duration: float |
     simulator : object
         ``advance(setpoint_lengths, duration, velocity=...)`` and ``state()``
         returning an object with ``time`` [s], ``pose``, ``lengths`` [m] and
-        ``tensions`` [N]; ``timestep`` [s] when it steps in whole physics
-        steps (:class:`cdpr_design.motion.simulation.Simulator`).
+        ``tensions`` [N] (and ``setpoints`` [m], the reference the axes
+        follow, when it has them); ``timestep`` [s] when it steps in whole
+        physics steps (:class:`cdpr_design.motion.simulation.Simulator`).
     cycle_time : float
         Period [s].
     duration : float, optional
@@ -426,162 +505,36 @@ def run(transport: Transport, simulator, *, cycle_time: float, duration: float |
 
     Notes
     -----
-    Timing model.  Sample k of the set-points is read at wall time t_k
-    (the middle of the read request), i.e. model time t_k - offset.  The
-    reference is re-aimed from its current value to the set-point
-    extrapolated with its velocity one cycle ahead, reached at model time
-    t_k - offset + cycle_time, and the model is advanced there: the state
-    written back in cycle k stands for the start of cycle k + 1, so the
-    PLC, which keeps a written value until the next write, sees on average
-    the gateway's computation time minus half a cycle of added delay
-    instead of the computation time plus half a cycle.  A late cycle is an
-    overrun (counted): the reference runs straight from where it was to
-    the new goal, so a stall only cuts the path between two consecutive
-    reads; it never extrapolates a stale ramp.
+    The timing model is in the module notes.
     """
     dt = float(cycle_time)
     if not dt > 0:
         raise ValueError("cycle_time must be positive")
-    from collections import deque
-
-    res = BridgeResult(cycle_time=dt, round_trips=getattr(transport, "round_trips", 2))
-    res.trace = DelayTrace(keep)
-    h = float(getattr(simulator, "timestep", 0.0) or 0.0)
-    layout = transport.layout
-    state = simulator.state()
-    sim_time0 = float(state.time)
-    sp = np.asarray(getattr(state, "setpoints", state.lengths), dtype=float).copy()
-    if not np.all(np.isfinite(sp)):
-        sp = np.asarray(state.lengths, dtype=float).copy()
-    ref = _Reference(sp, sim_time0)
     window = float(velocity_window) if velocity_window is not None else max(2 * dt, 4e-3)
-    hist: deque = deque(maxlen=max(4, int(math.ceil(window / dt)) + 3))
-    pending: deque = deque()          # states logged one cycle late
-    heartbeat = 0
-    missed = 0
-    last_err = ""
-    t_wall0 = clock()
-    t0 = t_wall0                      # schedule origin
-    k = 0                             # periods since the (re)started schedule
-    offset = None                     # wall time - model time
-    end_time = None if duration is None else sim_time0 + float(duration)
-    tol = 0.5 * h if h > 0 else 1e-9
-    status = on_status or (lambda msg: None)
-
-    def emit(upto: float | None) -> None:
-        while pending and (upto is None or float(pending[0].time) <= upto + 1e-12):
-            st = pending.popleft()
-            target = _interp_setpoint(hist, float(st.time)) if upto is not None \
-                else ref.value(float(st.time))
-            if on_row is not None:
-                on_row(target, st)
-
+    gw = _Gateway(transport, simulator, dt, on_row=on_row, status=on_status or (lambda msg: None),
+                  window=window, keep=keep, spin=spin, max_catchup=max_catchup, max_lag=max_lag,
+                  clock=clock, sleep=sleep)
+    if duration is not None:
+        gw.end_time = gw.sim_time0 + float(duration)
+    res = gw.res
     try:
         while True:
-            if should_stop is not None and should_stop():
-                res.stopped = "stop"
+            stopped = gw.finished(should_stop)
+            if stopped is not None:
+                res.stopped = stopped
                 break
-            if end_time is not None and float(state.time) >= end_time - tol:
-                res.stopped = "duration"
+            gw.cycle()
+            if gw.missed >= max_missed and not gw.recover(reconnect, backoff, should_stop):
                 break
-            deadline = t0 + k * dt
-            _wait_until(deadline, clock, sleep, spin)
-            start = clock()
-            res.jitter.add(abs(start - deadline))
-            # 1. set-points
-            try:
-                new_sp = transport.read_setpoints()
-                t1 = clock()
-                res.latency.add(t1 - start)
-                link_ok = True
-                ts = 0.5 * (start + t1)
-                if offset is None:   # the first read defines model time = now
-                    offset = ts - float(state.time)
-                if new_sp.shape == sp.shape and np.all(np.isfinite(new_sp)):
-                    sp = new_sp
-                if hist and ts - offset <= hist[-1][0]:
-                    hist.pop()
-                hist.append((ts - offset, sp.copy()))
-                res.trace.read(ts, sp)
-                vel = _window_velocity(hist, window)
-                goal, t_goal = sp + vel * dt, ts - offset + dt
-            except PlcLinkError as err:
-                t1 = clock()
-                link_ok = False
-                last_err = str(err)
-                if offset is None:
-                    offset = t1 - float(state.time)
-                # no new set-point: the axes hold where the reference is
-                goal, t_goal = ref.value(float(state.time)), t1 - offset + dt
-            emit(hist[-1][0] if hist else None)
-            # 2. the model: from the reference's current value to the goal
-            now = float(state.time)
-            if t_goal - now > max_lag + dt:
-                slip = t_goal - now - dt
-                offset += slip
-                t_goal -= slip
-                hist.clear()
-                if link_ok:
-                    hist.append((ts - offset, sp.copy()))
-                res.slips += 1
-                res.slipped += slip
-                status(f"the model fell {slip:.3g} s behind real time: skipped")
-            ref.aim(now, goal, t_goal)
-            t_end = min(t_goal, now + max_catchup)
-            if end_time is not None:
-                t_end = min(t_end, end_time)
-            if t_end > now + tol:
-                state = ref.drive(simulator, t_end, h)
-            res.lag.add(max(t_goal - float(state.time), 0.0))
-            # 3. outputs
-            if link_ok:
-                heartbeat = (heartbeat + 1) & 0xFFFFFFFF
-                try:
-                    t2 = clock()
-                    transport.write_outputs(layout.pack_outputs(
-                        state.lengths, state.tensions, state.pose, heartbeat, False))
-                    t3 = clock()
-                    res.latency.add(t3 - t2)
-                    res.exchange.add((t1 - start) + (t3 - t2))
-                    res.trace.wrote(0.5 * (t2 + t3), state.lengths, float(state.time) + offset)
-                except PlcLinkError as err:
-                    link_ok = False
-                    last_err = str(err)
-            if link_ok:
-                missed = 0
-            else:
-                missed += 1
-                res.missed += 1
-            res.cycles += 1
-            pending.append(state)
-            end = clock()
-            res.work.add(end - start)
-            # pacing: skip the periods this cycle ran into
-            k += 1
-            if end > t0 + k * dt:
-                res.overruns += 1
-                k = int(math.floor((end - t0) / dt)) + 1
-            if missed >= max_missed:
-                res.fault_raised = transport.raise_fault() or res.fault_raised
-                status(f"PLC lost after {missed} failed cycles: {last_err}")
-                if not _reconnect(transport, reconnect, backoff, res, status, sleep, should_stop):
-                    res.stopped = "plc_lost"
-                    res.error = last_err
-                    break
-                missed = 0
-                t0, k = clock(), 0
-                emit(None)
-                offset = None   # model time goes on from where it is
-                hist.clear()
     except KeyboardInterrupt:
         res.stopped = "interrupted"
     finally:
         try:
-            emit(None)
+            gw.emit(None)
         except KeyboardInterrupt:
             pass
-        res.sim_time = float(state.time) - sim_time0
-        res.elapsed = clock() - t_wall0
+        res.sim_time = float(gw.state.time) - gw.sim_time0
+        res.elapsed = clock() - gw.t_wall0
     return res
 
 
@@ -609,113 +562,6 @@ def _reconnect(transport, attempts, backoff, res, status, sleep, should_stop) ->
     return False
 
 
-# ----------------------------------------------------------------------------
-# Rows of bridge.csv (the simulation.csv layout) and the delay of a run
-# ----------------------------------------------------------------------------
-
-
-def csv_header(design) -> list[str]:
-    """``bridge.csv`` columns: the ``simulation.csv`` layout (cli.md ``simulate``)."""
-    coords = list(design.motion.coords)
-    names = design.cable_names
-    return (["time"] + [f"{c}_target" for c in coords] + coords
-            + [f"length_{c}_target" for c in names] + [f"length_{c}" for c in names]
-            + [f"tension_{c}" for c in names])
-
-
-def motion_pose(design, pose) -> np.ndarray:
-    """A simulator pose (motion coordinates or the full 6-vector) in motion coordinates."""
-    p = np.asarray(pose, dtype=float).reshape(-1)
-    k = len(design.motion.coords)
-    if p.size == k:
-        return p
-    if p.size == 6:
-        return p[list(design.motion.pose_index)]
-    raise ValueError(f"simulator pose has {p.size} numbers, expected {k} or 6")
-
-
-class RowMaker:
-    """Turns (set-points, simulator state) into ``bridge.csv`` rows.
-
-    The target pose is the forward kinematics of the set-point lengths
-    (closed form for the paper's planar 2-cable robot, eq. 4-5), warm-started
-    from the previous target.  Keeps the last ``keep`` (time, target lengths,
-    actual lengths) in memory for :meth:`delay`.
-    """
-
-    def __init__(self, design, keep: int = 1 << 20):
-        from cdpr_design.statics.kinematics import forward_kinematics
-
-        self.design = design
-        self._fk = forward_kinematics
-        self._guess = None
-        self._last_sp = None
-        self._last_target = None
-        m = design.m
-        self.keep = int(keep)
-        self._buf = np.empty((min(self.keep, 4096), 1 + 2 * m))
-        self.n = 0
-
-    def target_pose(self, sp) -> np.ndarray:
-        if self._last_sp is not None and np.array_equal(sp, self._last_sp):
-            return self._last_target
-        try:
-            r = self._fk(self.design, sp, guess=self._guess)
-            p = np.asarray(r.pose, dtype=float)
-        except (ValueError, ArithmeticError):
-            p = np.full(len(self.design.motion.coords), np.nan)
-        if np.all(np.isfinite(p)):
-            self._guess = p
-        self._last_sp, self._last_target = np.array(sp, copy=True), p
-        return p
-
-    def values(self, sp, state) -> list[float]:
-        t = float(state.time)
-        sp = np.asarray(sp, dtype=float)
-        lengths = np.asarray(state.lengths, dtype=float)
-        row = [t, *self.target_pose(sp), *motion_pose(self.design, state.pose), *sp, *lengths,
-               *np.asarray(state.tensions, dtype=float)]
-        if self.n < self.keep:
-            if self.n == self._buf.shape[0]:
-                self._buf = np.concatenate([self._buf, np.empty_like(self._buf)])[: self.keep]
-            self._buf[self.n, 0] = t
-            self._buf[self.n, 1:] = np.concatenate([sp, lengths])
-            self.n += 1
-        return row
-
-    def delay(self) -> dict:
-        """Delay [s] of each simulated axis behind its set-point, keyed ``length_<cable>``.
-
-        Cross-correlation of the logged set-point and actual length
-        (:func:`cdpr_design.motion.compare.estimate_delay`); None where an axis did
-        not move.
-        """
-        return axis_delays(self.design.cable_names, self._buf[: self.n, 0],
-                           self._buf[: self.n, 1: 1 + self.design.m],
-                           self._buf[: self.n, 1 + self.design.m:])
-
-
-def axis_delays(names, t, target, actual, max_delay: float = 1.0) -> dict:
-    """Per-axis delay [s] of ``actual`` behind ``target`` (NaN-free dict, None where unknown)."""
-    from cdpr_design.motion.compare import estimate_delay, resample, uniform_grid
-
-    out = {f"length_{c}": None for c in names}
-    t = np.asarray(t, float)
-    if t.size < 8:
-        return out
-    grid = uniform_grid(t)
-    dt = float(grid[1] - grid[0]) if grid.size > 1 else 0.0
-    if not dt > 0:
-        return out
-    md = min(max_delay, 0.45 * (grid[-1] - grid[0]))
-    for j, c in enumerate(names):
-        x = resample(t, target[:, j], grid)
-        y = resample(t, actual[:, j], grid)
-        d = estimate_delay(dt, x, y, max_delay=md)
-        out[f"length_{c}"] = float(d) if np.isfinite(d) else None
-    return out
-
-
 def make_simulator(design, cycle_time: float, initial_lengths=None):
     """The physics model the gateway drives (:class:`cdpr_design.motion.simulation.Simulator`).
 
@@ -735,3 +581,6 @@ def make_simulator(design, cycle_time: float, initial_lengths=None):
             pose = None
     sim.reset(pose)
     return sim
+
+
+__all__ = ["BridgeResult", "make_simulator", "run"]
