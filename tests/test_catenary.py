@@ -222,7 +222,7 @@ def test_chain_matches_catenary(case):
     the error ratio between N = 200 and N = 400 is 4 (second order) wherever it
     is well above round-off, (ii) Richardson's extrapolation (4 F_400 - F_200)/3
     agrees to 1e-8 of the largest end force, (iii) the raw N = 200 error stays
-    below 5e-5 (4x the largest seen over these ranges: it grows with (w l / T)^2
+    below 5e-5 (3x the largest seen over these cases: it grows with (w l / T)^2
     divided by the strain, because a stiff cable turns a closure error into a
     large force error).
     """
