@@ -1,7 +1,8 @@
 """Elastic catenary kernels: one sagging, stretching cable in its vertical plane.
 
-Model (Irvine 1981, sec. 2.2; Kozak, Zhou, Wang 2006, eqs. 1-4; Gouttefarde,
-Collard, Riehl, Baradat 2015, eqs. 4-5).  A cable of unstretched length ``L0``
+Model: the elastic catenary of Irvine (1981), as used for cable
+robots by Kozak, Zhou, Wang (2006) and Gouttefarde, Collard, Riehl, Baradat
+(2015); equation numbers are not quoted here.  A cable of unstretched length ``L0``
 [m], weight per unstretched length ``w`` [N/m] (mass per length times g) and
 axial stiffness ``EA`` [N] hangs between its outlet A (frame/winch side) and its
 attachment B (effector).  In the vertical plane through A and B, x is horizontal
@@ -129,7 +130,7 @@ def catenary_ends(H, VB, L0, w, EA):
     ``H`` [N] >= 0 horizontal tension, ``VB`` [N] vertical force on the effector
     (positive up), ``L0`` [m] unstretched length, ``w`` [N/m] >= 0 weight per
     unstretched length, ``EA`` [N] > 0 axial stiffness (``inf``: inextensible).
-    Irvine (1981) eqs. 2.19-2.20 in a form without 1/w: ``w = 0`` is the straight
+    Irvine's (1981) closure in a form without 1/w: ``w = 0`` is the straight
     elastic cable, ``H = 0`` the vertical (or folded) one.  Returns (NaN, NaN)
     for a weightless cable without force (H = VB = w = 0): its shape is undefined.
     """
@@ -205,7 +206,7 @@ def catenary_jacobian(H, VB, L0, w, EA):
     """Analytic flexibility d(X, Z)/d(H, VB) [m/N]: (dX/dH, dX/dVB, dZ/dH, dZ/dVB).
 
     The matrix is symmetric (it is the Hessian of the complementary energy,
-    Irvine 1981 sec. 2.2) and positive definite for H > 0; its inverse is the
+    see docs/cable-models.md) and positive definite for H > 0; its inverse is the
     cable's 2x2 stiffness in its plane.  At H = 0 with VB < 0 < VA (folded
     vertical cable) dX/dH is +inf.
     """
@@ -606,7 +607,7 @@ def catenary_profile(H, VB, L0, w, EA, s):
     ``s`` (array, values in [0, L0]) is measured from B; x is horizontal from B
     towards A, z up, both relative to B.  The piece of cable between B and s is
     itself a catenary of length s with the same H and VB, so this is
-    :func:`catenary_ends` with L0 replaced by s (Irvine 1981 eq. 2.17-2.18).
+    :func:`catenary_ends` with L0 replaced by s.
     """
     n = s.shape[0]
     x = np.empty(n)
