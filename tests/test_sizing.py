@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cdpr_design.design import sizing as sz
+from cdpr_design.model import catalogue as cat
 from cdpr_design.model import spec
 from cdpr_design.errors import InputError, SpecError
 
@@ -213,7 +214,7 @@ def _exact_catalogue(peak, rms, rpm, shave=None):
             n = np.nextafter(rpm, 0)
         motors.append({"name": "under", "rated_torque": float(r_), "peak_torque": float(p), "max_speed": float(n),
                        "rotor_inertia": 0.0})
-    return spec.catalogue_from_dict({"motors": motors})
+    return cat.catalogue_from_dict({"motors": motors})
 
 
 @pytest.mark.parametrize("shave", ["peak", "rms", "speed"])

@@ -32,6 +32,8 @@ import numpy as np
 
 from cdpr_design.design import sizing as sz
 from cdpr_design.workspace import engine as ws
+from cdpr_design.model import spec
+from cdpr_design.model.catalogue import Catalogue
 from cdpr_design.model.design import Design
 
 CHECKS = ("task_box", "min_margin", "min_fraction", "motors")
@@ -86,7 +88,7 @@ def task_sweep(design: Design, step: float | None = None, progress=None):
     return res, least[0]
 
 
-def evaluate_full(design: Design, *, step: float | None = None, catalogue: sz.Catalogue | None = None,
+def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catalogue | None = None,
                   samples=None, safety_factor: float | None = None, motor: str | None = None,
                   workspace_result: ws.WorkspaceResult | None = None, keep_maps: bool = False,
                   progress: Callable[[int, int], None] | None = None) -> Evaluation:
@@ -106,8 +108,7 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: sz.Ca
         A static sweep already made (``report`` writes the workspace files first).
     """
     if catalogue is None:
-        from cdpr_design.model.spec import load_catalogue  # reads the shipped data file only
-        catalogue = load_catalogue()
+        catalogue = spec.load_catalogue()
     wres = workspace_result if workspace_result is not None else ws.run(
         design, "static", step=step, keep_maps=keep_maps, progress=progress)
     task, task_least = task_sweep(design, step)
@@ -171,7 +172,7 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: sz.Ca
     return Evaluation(row, wres, task, sizing)
 
 
-def evaluate(design: Design, *, step: float | None = None, catalogue: sz.Catalogue | None = None,
+def evaluate(design: Design, *, step: float | None = None, catalogue: Catalogue | None = None,
              samples=None, safety_factor: float | None = None, motor: str | None = None) -> dict:
     """The headline figures of one design: one ``design_report.csv`` row (plain, picklable values).
 

@@ -48,8 +48,9 @@ maximum torque of the motors".  This module makes that translation, per cable:
    The inverse, the tension limit a motor implies, is
    t_max = tau_peak i eta / r (rated: tau_rated i eta / r).
 
-The core never reads files: the catalogue arrives as a :class:`Catalogue`
-(built by :func:`cdpr_design.model.spec.load_catalogue`).
+The core never reads files: the catalogue arrives as a
+:class:`~cdpr_design.model.catalogue.Catalogue` (read by
+:func:`cdpr_design.model.spec.load_catalogue`).
 """
 
 from __future__ import annotations
@@ -63,6 +64,7 @@ import numpy as np
 
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.errors import InputError
+from cdpr_design.model.catalogue import Catalogue, Motor
 from cdpr_design.model.design import Design, Grid
 
 RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
@@ -76,117 +78,6 @@ RPM_PER_RAD_S = 60.0 / (2.0 * math.pi)
 DEFAULT_CYCLE = ("accelerate", "cruise", "decelerate", "dwell")
 DEFAULT_CYCLE_TEXT = ("default cycle at the worst task pose: accelerate at max_acceleration to "
                       "max_speed, cruise, decelerate, dwell; four phases of max_speed/max_acceleration each")
-
-
-# ----------------------------------------------------------------------------
-# Catalogue
-# ----------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class Drive:
-    """A servo drive (terminal): its current limits cap a motor's usable torque.
-
-    Attributes: name, rated_current [A rms], peak_current [A rms], source.
-    """
-
-    name: str
-    rated_current: float
-    peak_current: float
-    source: str = ""
-
-
-@dataclass(frozen=True)
-class Motor:
-    """A catalogue motor.
-
-    Attributes
-    ----------
-    rated_torque, peak_torque : float
-        Continuous (rated or standstill) and peak torque [N m].
-    max_speed : float
-        Speed limit checked by the sizing [rpm].
-    rotor_inertia : float
-        [kg m^2].
-    torque_constant : float, optional
-        [N m / A]; with ``drive`` it caps the usable torque.
-    drive : Drive, optional
-        The drive the motor runs on; usable torque = min(motor torque,
-        torque_constant x drive current).
-    """
-
-    name: str
-    rated_torque: float
-    peak_torque: float
-    max_speed: float
-    rotor_inertia: float
-    torque_constant: float | None = None
-    rated_current: float | None = None
-    peak_current: float | None = None
-    drive: Drive | None = None
-    source: str = ""
-
-    @property
-    def usable_peak_torque(self) -> float:
-        """Peak torque [N m] after the drive's peak current limit."""
-        t = self.peak_torque
-        if self.drive is not None and self.torque_constant is not None:
-            t = min(t, self.torque_constant * self.drive.peak_current)
-        return t
-
-    @property
-    def usable_rated_torque(self) -> float:
-        """Continuous torque [N m] after the drive's rated current limit."""
-        t = self.rated_torque
-        if self.drive is not None and self.torque_constant is not None:
-            t = min(t, self.torque_constant * self.drive.rated_current)
-        return t
-
-
-@dataclass(frozen=True)
-class Gearbox:
-    """A gearbox: ratio (motor turns per drum turn), efficiency (0, 1], inertia at the motor [kg m^2]."""
-
-    name: str
-    ratio: float
-    efficiency: float = 1.0
-    inertia: float = 0.0
-    source: str = ""
-
-
-@dataclass(frozen=True)
-class Catalogue:
-    """Motors, drives and gearboxes available to the sizing."""
-
-    motors: tuple[Motor, ...] = ()
-    gearboxes: tuple[Gearbox, ...] = ()
-    drives: tuple[Drive, ...] = ()
-
-    def motor(self, name: str) -> Motor | None:
-        for m in self.motors:
-            if m.name == name:
-                return m
-        return None
-
-    def gearbox(self, ratio: float) -> Gearbox | None:
-        """The gearbox with this ratio (relative tolerance 1e-9), or None."""
-        for g in self.gearboxes:
-            if abs(g.ratio - ratio) <= 1e-9 * max(1.0, abs(ratio)):
-                return g
-        return None
-
-    def by_size(self) -> list[Motor]:
-        """Motors from the smallest: usable rated torque, then usable peak torque, then inertia."""
-        return sorted(self.motors, key=lambda m: (m.usable_rated_torque, m.usable_peak_torque,
-                                                  m.rotor_inertia, m.name))
-
-    def merged(self, other: "Catalogue") -> "Catalogue":
-        """This catalogue extended by ``other``; entries of ``other`` replace same-named ones."""
-        def merge(a, b):
-            names = {x.name for x in b}
-            return tuple(x for x in a if x.name not in names) + tuple(b)
-        return Catalogue(merge(self.motors, other.motors), merge(self.gearboxes, other.gearboxes),
-                         merge(self.drives, other.drives))
 
 
 # ----------------------------------------------------------------------------
