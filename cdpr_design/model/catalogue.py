@@ -14,11 +14,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import Field, ValidationError
+from pydantic import Field
 from pydantic.types import FiniteFloat
 
 from cdpr_design.errors import SpecError
-from cdpr_design.model.schema import NonNegFloat, PosFloat, StrictModel, pydantic_problems
+from cdpr_design.model.schema import NonNegFloat, PosFloat, StrictModel, parse
 
 
 @dataclass(frozen=True)
@@ -204,10 +204,7 @@ def catalogue_from_dict(data: Any, source: str | None = None, base: Catalogue | 
     """
     if not isinstance(data, dict):
         raise SpecError([("", f"expected a mapping with motors, drives, gearboxes, got {type(data).__name__}")], source)
-    try:
-        c = CatalogueSpec.model_validate(data)
-    except ValidationError as err:
-        raise SpecError(pydantic_problems(err), source) from None
+    c = parse(CatalogueSpec, data, source)
     if base is not None:
         extra = [DriveEntry(name=d.name, rated_current=d.rated_current, peak_current=d.peak_current,
                             source=d.source) for d in base.drives if d.name not in {x.name for x in c.drives}]

@@ -10,10 +10,12 @@ keys (vector lengths for the motion type, min <= max, ...) is checked by
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
 from pydantic.types import FiniteFloat
+
+from cdpr_design.errors import SpecError
 
 
 def _as_list(v):
@@ -178,6 +180,17 @@ class DesignSpec(StrictModel):
 # ----------------------------------------------------------------------------
 # Error messages
 # ----------------------------------------------------------------------------
+
+
+M = TypeVar("M", bound=BaseModel)
+
+
+def parse(model: type[M], data: dict, source: str | None = None) -> M:
+    """``model`` validated from plain data; every problem in one :class:`SpecError` naming its key path."""
+    try:
+        return model.model_validate(data)
+    except ValidationError as err:
+        raise SpecError(pydantic_problems(err), source) from None
 
 
 def format_loc(loc) -> str:

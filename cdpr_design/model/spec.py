@@ -23,7 +23,6 @@ from typing import Any
 
 import numpy as np
 import yaml
-from pydantic import ValidationError
 
 from cdpr_design.errors import SpecError
 from cdpr_design.model.catalogue import Catalogue, catalogue_from_dict, shipped_catalogue_path
@@ -32,7 +31,7 @@ from cdpr_design.model.design import (  # noqa: I001
     Requirements, Trajectory, Winch, WorkspaceSpec, WrenchBox, pad3,
 )
 from cdpr_design.model.schema import (
-    CablePhysSpec, DesignSpec, GridSpec, RequirementsSpec, WinchSpec, WorkspaceSpecModel, pydantic_problems,
+    CablePhysSpec, DesignSpec, GridSpec, RequirementsSpec, WinchSpec, WorkspaceSpecModel, parse,
 )
 from cdpr_design.model.spec_checks import check_semantics
 
@@ -103,10 +102,7 @@ def validate(data: Any, source: str | None = None) -> DesignSpec:
     """Validate plain data (a parsed YAML document) against the spec format."""
     if not isinstance(data, dict):
         raise SpecError([("", f"expected a mapping of keys at the top of the spec, got {type(data).__name__}")], source)
-    try:
-        s = DesignSpec.model_validate(data)
-    except ValidationError as err:
-        raise SpecError(pydantic_problems(err), source) from None
+    s = parse(DesignSpec, data, source)
     problems = check_semantics(s)
     if problems:
         raise SpecError(problems, source)
