@@ -209,49 +209,22 @@ def _rotation_coords(design: Design, ori3) -> np.ndarray:
     return np.zeros(0)
 
 
-def min_norm_bounded(W, w, lo, hi):
-    """Minimum 2-norm t with W t = w and lo <= t <= hi, or None when there is none.
-
-    Solved as a bounded least-squares problem (BVLS, Stark & Parker 1995) with
-    the equality as a heavily weighted block: min ||[rho W; I] t - [rho w; 0]||
-    with rho = 1e6 / ||W||; the equality residual is then checked (1e-7
-    relative).  ``hi`` may hold inf.  A slow, obvious reference path used
-    when :mod:`cdpr_design.statics.tension` provides no solver.
-    """
-    from scipy.optimize import lsq_linear
-
-    n, m = W.shape
-    rho = 1e6 / max(np.linalg.norm(W), 1e-300)
-    A = np.vstack([rho * W, np.eye(m)])
-    b = np.concatenate([rho * np.asarray(w, float), np.zeros(m)])
-    res = lsq_linear(A, b, bounds=(lo, hi), method="bvls", tol=1e-14, lsmr_tol=None)
-    t = res.x
-    if np.linalg.norm(W @ t - w) > 1e-7 * (1.0 + np.linalg.norm(w)):
-        return None
-    return t
-
-
 def _min_norm_general(W, wreq, tmin, tmax):
-    """Minimum 2-norm tensions for m > n at one pose, one row of ``wreq`` each.
+    """Minimum 2-norm tensions [N] for m > n at one pose, one row of ``wreq`` each.
 
     Bounded by [t_min, t_max] where that is feasible, otherwise by t_min only
     (the tension the winch must supply to hold the pose).  NaN where none.
-    Uses :mod:`cdpr_design.statics.tension` (``min_norm_tensions``) when it exists,
-    else :func:`min_norm_bounded`.
+    Exact: the Goldfarb-Idnani kernel through
+    :func:`cdpr_design.statics.tension.min_norm_many` and
+    :func:`~cdpr_design.statics.tension.min_norm_above` (imported here:
+    they load numba, which the m = n designs never need).
     """
-    solver = min_norm_bounded
-    try:
-        from cdpr_design.statics import tension  # the per-pose QP solver, when available
-        solver = getattr(tension, "min_norm_tensions", solver)
-    except ImportError:
-        pass
-    out = np.full((wreq.shape[0], W.shape[1]), np.nan)
-    unbounded = np.full_like(tmax, np.inf)
-    for k in range(wreq.shape[0]):
-        t = solver(W, wreq[k], tmin, tmax)
-        if t is None or not np.all(np.isfinite(t)):
-            t = solver(W, wreq[k], tmin, unbounded)
-        if t is not None and np.all(np.isfinite(t)):
+    from cdpr_design.statics import tension
+
+    out = tension.min_norm_many(W, wreq, tmin, tmax)
+    for k in np.flatnonzero(~np.all(np.isfinite(out), axis=1)):
+        t = tension.min_norm_above(W, wreq[k], tmin, start=2.0 * float(np.max(tmax)))
+        if t is not None:
             out[k] = t
     return out
 
