@@ -14,7 +14,7 @@ import copy
 import numpy as np
 import pytest
 
-from cdpr_design.design import sizing as sz
+from cdpr_design.design import envelope as ev
 from cdpr_design.model import spec
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import tension as T
@@ -159,7 +159,7 @@ def test_sizing_calls_the_kernel(monkeypatch, tmax):
         return out
 
     monkeypatch.setattr(T, "min_norm_many", spy)
-    env = sz.task_envelope(d)
+    env = ev.task_envelope(d)
     assert len(calls) == env.poses == 25
     lo, inf = d.tension_min, np.full(d.m, np.inf)
     peak = np.full(d.m, -np.inf)
