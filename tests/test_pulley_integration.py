@@ -30,6 +30,7 @@ from typer.testing import CliRunner
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
 from cdpr_design.motion import simulation as sim
+from cdpr_design.design import envelope as ev
 from cdpr_design.design import sizing as sz
 from cdpr_design.model import spec
 from cdpr_design.motion import trajectory as tr
@@ -253,8 +254,8 @@ def test_sizing_radius_to_zero_is_point_outlet(make, catalogue):
 def test_sizing_radius_to_zero_is_point_outlet_spatial(catalogue):
     d0, d1 = ipanema3(None), ipanema3(1e-9)
     pos = np.array([[0.0, 0.0, 1.2], [1.5, -1.0, 1.8], [-2.0, 1.0, 0.8]])
-    e0 = sz.task_envelope(d0, positions=pos)
-    e1 = sz.task_envelope(d1, positions=pos)
+    e0 = ev.task_envelope(d0, positions=pos)
+    e1 = ev.task_envelope(d1, positions=pos)
     r0 = sz.size_motors(d0, catalogue, envelope=e0).rows()
     r1 = sz.size_motors(d1, catalogue, envelope=e1).rows()
     _rows_close(r0, r1, 1e-6)
@@ -269,12 +270,12 @@ def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
     if d.motion.name == "3R3T":
         pos = np.array([[0.0, 0.0, 1.2], [1.5, -1.0, 1.8], [-2.0, 1.0, 0.8], [0.5, 0.5, 1.0]])
     else:
-        g = sz.task_grid(d, 0.1)
+        g = ev.task_grid(d, 0.1)
         pos = ws.grid_positions(g, 0, g.size)
     ori = d.default_orientation_full()
-    e = sz.envelope_chunk(d, pos, ori, 0.0, 0.0)
-    e0 = sz.envelope_chunk(d0, pos, ori, 0.0, 0.0)
-    rot = sz._rotation_coords(d, ori)
+    e = ev.envelope_chunk(d, pos, ori, 0.0, 0.0)
+    e0 = ev.envelope_chunk(d0, pos, ori, 0.0, 0.0)
+    rot = ev.rotation_coords(d, ori)
     ref = np.full((pos.shape[0], d.m), np.nan)
     for j, p in enumerate(pos):
         r = ws.evaluate_pose(d, np.concatenate([p, rot]))
@@ -283,7 +284,7 @@ def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
     feas = np.all(np.isfinite(ref), axis=1)
     assert feas.sum() >= min(3, pos.shape[0])
     np.testing.assert_allclose(e["static"][feas], ref[feas], rtol=1e-6, atol=1e-6)
-    env = sz.task_envelope(d, positions=pos[feas])
+    env = ev.task_envelope(d, positions=pos[feas])
     assert env.static_tension == pytest.approx(ref[feas].max(axis=0), rel=1e-6, abs=1e-6)
     # not the point-outlet figures: the pulley changes the tensions
     assert np.nanmax(np.abs(e0["static"][feas] - ref[feas])) > 1e-4
@@ -296,9 +297,9 @@ def test_sizing_cable_acceleration_bound_with_pulleys():
     A, V = 2.0, 0.5
     pos = np.array([[0.7, 0.8], [1.2, 1.3], [1.0, 0.6]])
     ori = d.default_orientation_full()
-    e = sz.envelope_chunk(d, pos, ori, A, V)
+    e = ev.envelope_chunk(d, pos, ori, A, V)
     rng = np.random.default_rng(3)
-    rot = sz._rotation_coords(d, ori)
+    rot = ev.rotation_coords(d, ori)
     for j, p in enumerate(pos):
         pose = np.concatenate([p, rot])
         best = np.zeros(d.m)

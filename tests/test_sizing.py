@@ -11,7 +11,10 @@ import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from cdpr_design.design import envelope as ev
 from cdpr_design.design import sizing as sz
+from cdpr_design.design import winch as wn
+from cdpr_design.model import catalogue as cat
 from cdpr_design.model import spec
 from cdpr_design.errors import InputError, SpecError
 
@@ -90,8 +93,8 @@ def test_paper_tension_limit_from_the_motor(base, catalogue):
     res = sz.size_motors(d, catalogue)
     assert all(a.implied_tension_max == pytest.approx(20.0, rel=1e-12) for a in res.axes)
     assert all(a.tension_max == 20.0 for a in res.axes)
-    assert sz.drum_radius_for(20.0, catalogue.motor("AM8112-0F21-EL7211").usable_peak_torque) == pytest.approx(0.036)
-    assert sz.drum_radius_for(20.0, catalogue.motor("AM8112-0F21").usable_peak_torque) == pytest.approx(0.066)
+    assert wn.drum_radius_for(20.0, catalogue.motor("AM8112-0F21-EL7211").usable_peak_torque) == pytest.approx(0.036)
+    assert wn.drum_radius_for(20.0, catalogue.motor("AM8112-0F21").usable_peak_torque) == pytest.approx(0.066)
     # the peak tension over the task box with the acceleration requirement stays below it
     assert all(a.peak_tension < 20.0 and a.peak_torque_margin > 1.0 for a in res.axes)
 
@@ -128,7 +131,7 @@ def test_square_closed_form_matches_brute_force(seed):
     d = spec.from_dict(data)
     pos = np.array([[float(rng.uniform(0.6, 1.4)), float(rng.uniform(0.5, 1.2))]])
     A = float(rng.uniform(1, 8))
-    e = sz.envelope_chunk(d, pos, d.default_orientation_full(), A, 0.0)
+    e = ev.envelope_chunk(d, pos, d.default_orientation_full(), A, 0.0)
     pose = np.concatenate([pos[0], [0.0]]) if rigid else pos[0]
     brute = _brute_peak(d, pose, A)
     assert np.all(brute <= e["peak"][0] + 1e-9)
@@ -148,8 +151,8 @@ def test_redundant_envelope_against_cvxpy():
     d = spec.from_dict(data)
     A = 5.0
     pos = np.array([[0.7, 1.2], [1.3, 0.8]])
-    e = sz.envelope_chunk(d, pos, np.zeros(3), A, 0.0)
-    dirs = sz.acceleration_directions(2)
+    e = ev.envelope_chunk(d, pos, np.zeros(3), A, 0.0)
+    dirs = ev.acceleration_directions(2)
     for k, p in enumerate(pos):
         W = kin.structure_matrix(d, p)
         peaks = []
@@ -213,7 +216,7 @@ def _exact_catalogue(peak, rms, rpm, shave=None):
             n = np.nextafter(rpm, 0)
         motors.append({"name": "under", "rated_torque": float(r_), "peak_torque": float(p), "max_speed": float(n),
                        "rotor_inertia": 0.0})
-    return spec.catalogue_from_dict({"motors": motors})
+    return cat.catalogue_from_dict({"motors": motors})
 
 
 @pytest.mark.parametrize("shave", ["peak", "rms", "speed"])

@@ -31,7 +31,10 @@ from typing import Callable
 import numpy as np
 
 from cdpr_design.design import sizing as sz
+from cdpr_design.design.envelope import task_grid
 from cdpr_design.workspace import engine as ws
+from cdpr_design.model import spec
+from cdpr_design.model.catalogue import Catalogue
 from cdpr_design.model.design import Design
 
 CHECKS = ("task_box", "min_margin", "min_fraction", "motors")
@@ -69,7 +72,7 @@ def task_sweep(design: Design, step: float | None = None, progress=None):
     The least margin counts infeasible poses (negative margins) and is -inf
     when a task pose has a rank-deficient structure matrix.
     """
-    g = sz.task_grid(design, step)
+    g = task_grid(design, step)
     if g is None:
         return None, None
     least = [math.inf]
@@ -86,7 +89,7 @@ def task_sweep(design: Design, step: float | None = None, progress=None):
     return res, least[0]
 
 
-def evaluate_full(design: Design, *, step: float | None = None, catalogue: sz.Catalogue | None = None,
+def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catalogue | None = None,
                   samples=None, safety_factor: float | None = None, motor: str | None = None,
                   workspace_result: ws.WorkspaceResult | None = None, keep_maps: bool = False,
                   progress: Callable[[int, int], None] | None = None) -> Evaluation:
@@ -106,14 +109,25 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: sz.Ca
         A static sweep already made (``report`` writes the workspace files first).
     """
     if catalogue is None:
-        from cdpr_design.model.spec import load_catalogue  # reads the shipped data file only
-        catalogue = load_catalogue()
+        catalogue = spec.load_catalogue()
     wres = workspace_result if workspace_result is not None else ws.run(
         design, "static", step=step, keep_maps=keep_maps, progress=progress)
     task, task_least = task_sweep(design, step)
     sizing = sz.size_motors(design, catalogue, step=step, samples=samples,
                             safety_factor=safety_factor, motor=motor)
-    req = design.requirements
+    row = _workspace_figures(design, wres, task, task_least)
+    row.update(_sizing_figures(sizing))
+    row.update(_checks(design, wres, task, task_least, sizing, motor))
+    # per-cable figures last (their number depends on the design)
+    for a in sizing.axes:
+        row[f"peak_tension_{a.cable}"] = _f(a.peak_tension)
+        row[f"motor_{a.cable}"] = a.motor
+    return Evaluation(row, wres, task, sizing)
+
+
+def _workspace_figures(design: Design, wres: ws.WorkspaceResult, task: ws.WorkspaceResult | None,
+                       task_least: float | None) -> dict:
+    """The workspace's and the task box's figures (margins [N], tensions [N], fractions)."""
     row: dict = {
         "name": design.name, "motion": design.motion.name, "cables": design.m,
         "kind": wres.kind, "poses": int(wres.poses), "feasible": int(wres.feasible),
@@ -127,9 +141,14 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: sz.Ca
                    if task_least != -math.inf else None)
     else:
         row.update(task_poses=None, task_feasible=None, task_fraction=None, task_min_margin=None)
+    return row
+
+
+def _sizing_figures(sizing: sz.SizingResult) -> dict:
+    """The worst axis's sizing figures: peaks over the cables, least margins, the motors chosen."""
     axes = sizing.axes
     motors = sorted({a.motor for a in axes})
-    row.update(
+    return dict(
         sizing_poses=sizing.envelope.poses,
         peak_tension=_f(max(a.peak_tension for a in axes)),
         peak_cable_speed=_f(max(a.peak_cable_speed for a in axes)),
@@ -145,7 +164,13 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: sz.Ca
         gear_ratio=";".join(sorted({f"{a.gear_ratio:g}" for a in axes})),
         safety_factor=sizing.safety_factor, duty_cycle=sizing.cycle,
     )
-    # --- checks --------------------------------------------------------------
+
+
+def _checks(design: Design, wres: ws.WorkspaceResult, task: ws.WorkspaceResult | None,
+            task_least: float | None, sizing: sz.SizingResult, motor: str | None) -> dict:
+    """The requirement figures and limits, ``check_<name>`` (True, False, None) and ``checks_passed``."""
+    req = design.requirements
+    row: dict = {}
     checks: dict = {}
     checks["task_box"] = (task.feasible == task.poses) if task is not None else None
     if req.min_margin is not None:
@@ -164,14 +189,10 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: sz.Ca
     for name in CHECKS:
         row[f"check_{name}"] = None if checks[name] is None else bool(checks[name])
     row["checks_passed"] = all(v is not False for v in checks.values())
-    # per-cable figures last (their number depends on the design)
-    for a in axes:
-        row[f"peak_tension_{a.cable}"] = _f(a.peak_tension)
-        row[f"motor_{a.cable}"] = a.motor
-    return Evaluation(row, wres, task, sizing)
+    return row
 
 
-def evaluate(design: Design, *, step: float | None = None, catalogue: sz.Catalogue | None = None,
+def evaluate(design: Design, *, step: float | None = None, catalogue: Catalogue | None = None,
              samples=None, safety_factor: float | None = None, motor: str | None = None) -> dict:
     """The headline figures of one design: one ``design_report.csv`` row (plain, picklable values).
 

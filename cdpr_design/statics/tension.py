@@ -161,6 +161,53 @@ def wrench_closure(W) -> bool:
     return bool(closure)
 
 
+def min_norm_many(W, wrenches, tmin, tmax) -> np.ndarray:
+    """Exact minimum 2-norm tensions of one W for several wrenches: (k, n) -> (k, m) [N].
+
+    Row k solves min |t|^2, W t = wrenches[k], t_min <= t <= t_max with the
+    Goldfarb-Idnani kernel (:func:`cdpr_design.kernels.min_norm_tensions`,
+    one scratch for every row); NaN rows where the bounds admit none or
+    rank W < n.  The bounds must be finite (the kernel's tolerance scales
+    with them): see :func:`min_norm_above` for lower bounds only.
+    """
+    W = _arr(W)
+    n, m = W.shape
+    wrenches = _arr(wrenches).reshape(-1, n)
+    tmin, tmax = _arr(tmin, (m,)), _arr(tmax, (m,))
+    out = np.full((wrenches.shape[0], m), np.nan)
+    scr = K.make_scratch(n, m, 1)
+    t = np.empty(m)
+    for k in range(wrenches.shape[0]):
+        if K.min_norm_tensions(W, wrenches[k], tmin, tmax, t, scr):
+            out[k] = t
+    return out
+
+
+def min_norm_above(W, w, tmin, start: float) -> np.ndarray | None:
+    """Exact minimum 2-norm tensions with lower bounds only: min |t|^2, W t = w, t >= t_min [N].
+
+    The kernel needs finite upper bounds (its tolerance, 1e-11 times the
+    largest bound, would be infinite), so a common upper bound B is used,
+    starting at ``start`` [N] and multiplied by 4 until no tension reaches
+    it: the bound is then inactive, and by strict convexity the solution is
+    that of the problem without it, within 4e-11 of the largest tension.
+    None when rank W < n or no tensions above t_min balance w (B has grown
+    past 4^20 ``start`` without a solution that balances w).
+    """
+    W = _arr(W)
+    n, m = W.shape
+    w, tmin = _arr(w, (n,)), _arr(tmin, (m,))
+    bound = max(float(start), float(np.max(np.abs(tmin))), 1.0)
+    scr = K.make_scratch(n, m, 1)
+    t = np.empty(m)
+    for _ in range(21):
+        if (K.min_norm_tensions(W, w, tmin, np.full(m, bound), t, scr) and np.all(t < bound)
+                and np.linalg.norm(W @ t - w) <= 1e-9 * (1.0 + np.linalg.norm(w))):
+            return t.copy()
+        bound *= 4.0
+    return None
+
+
 # ----------------------------------------------------------------------------
 # cvxpy problem definitions (the reference, and the other objectives)
 # ----------------------------------------------------------------------------
