@@ -102,7 +102,7 @@ def load_design(path: Path):
 
 
 def output_dir(design, out: Path | None, overwrite: bool = False):
-    from cdpr_design.jobs.report import OutputDir
+    from cdpr_design.io.files import OutputDir
 
     return OutputDir(out if out is not None else Path("out") / design.name, overwrite=overwrite)
 
@@ -127,9 +127,9 @@ def parse_pose(design, text: str, option: str = "--at") -> list[float]:
 
 
 def emit_json(data) -> None:
-    from cdpr_design.jobs.report import _json_default
+    from cdpr_design.io.tables import json_default
 
-    sys.stdout.write(json.dumps(data, default=_json_default) + "\n")
+    sys.stdout.write(json.dumps(data, default=json_default) + "\n")
     sys.stdout.flush()
 
 
@@ -201,7 +201,7 @@ def run_workspace(design, out_dir, kind: str, step, force: bool, quiet: bool,
     ``collision_free``); ``orientations``: ``total`` or ``range`` orientation
     workspace (rotational motions; extra columns, ``orientation_workspace.png``).
     """
-    from cdpr_design.jobs import report
+    from cdpr_design.jobs import workspace as report
     from cdpr_design.workspace import engine as ws
 
     grid = ws.make_grid(design, step, force)
@@ -251,9 +251,10 @@ def workspace(
                                "(workspace.orientation_range). 1R2T and 3R3T.")] = None,
 ):
     """Grid sweep of the workspace: workspace.csv, workspace.png, tension_map.png, summary.json."""
+    from cdpr_design.cli import env
     from cdpr_design.plots import worker as _picture_worker
 
-    with _picture_worker.take() as pictures:  # matplotlib's import overlaps the spec and the sweep
+    with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:  # matplotlib's import overlaps the spec and the sweep
         design = load_design(spec)
         out_dir = output_dir(design, out, overwrite)
         result = run_workspace(design, out_dir, kind.value, step, force, quiet or json_, collisions,
@@ -396,10 +397,11 @@ def schema():
 
 def main() -> None:
     """Console-script entry point (``cdpr_design.__main__.main`` starts the picture worker earlier)."""
+    from cdpr_design.cli import env
     from cdpr_design.plots import worker as _picture_worker
 
     if _picture_worker.wanted(sys.argv[1:]):
-        _picture_worker.prestart()
+        _picture_worker.prestart(enabled=env.picture_worker_enabled())
     try:
         app()
     except KeyboardInterrupt:
@@ -497,7 +499,7 @@ def size_motors(
     overwrite: OverwriteOpt = False,
 ):
     """Motor, gearbox and drum sizing over the task workspace: motor_sizing.csv."""
-    from cdpr_design.jobs import report
+    from cdpr_design.jobs import sizing as report
     from cdpr_design.design import sizing as sz
 
     design = load_design(spec)
@@ -553,11 +555,12 @@ def report(
 ):
     """Every artefact for one design (workspace, motor sizing) plus design_report.csv."""
     from cdpr_design.design import evaluate as ev
-    from cdpr_design.jobs import report as rep
+    from cdpr_design.jobs import sizing as rep
 
+    from cdpr_design.cli import env
     from cdpr_design.plots import worker as _picture_worker
 
-    with _picture_worker.take() as pictures:  # matplotlib's import overlaps the spec and the sweep
+    with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:  # matplotlib's import overlaps the spec and the sweep
         design = load_design(spec)
         load_catalogue_opt(catalogue)  # bad catalogue: exit 2 before any work
         if trajectory is not None and trajectory not in design.trajectories:
@@ -654,7 +657,7 @@ def bridge(
     from cdpr_design.plc import bridge as br
     from cdpr_design.plc.ads import (LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, AdsTransport, PlcLayout,
                       PlcLinkError, TestPlc)
-    from cdpr_design.jobs.report import fmt
+    from cdpr_design.io.tables import fmt
 
     design = load_design(spec)
     if design.plc is None:
@@ -803,7 +806,7 @@ CycleOpt = Annotated[Optional[float], typer.Option(
 
 def _sample_named(design, name: str, cycle_time: float | None, hold_end: float = 0.0):
     """Sample spec trajectory ``name`` (reading a csv path's poses); bad names/files are exit 2."""
-    from cdpr_design.jobs import report
+    from cdpr_design.jobs import motion as report
     from cdpr_design.motion import trajectory as tr
 
     traj = design.trajectories.get(name)
@@ -853,18 +856,19 @@ def trajectory_cmd(
     overwrite: OverwriteOpt = False,
 ):
     """Sample a spec path at a fixed cycle: trajectory.csv, trajectory.png, trajectory_axes.png, trajectory.json."""
-    from cdpr_design.jobs import report
+    from cdpr_design.jobs.common import save_pictures
+    from cdpr_design.plots import motion as mp
 
     design = load_design(spec)
     samples = _sample_named(design, name, cycle_time)
     out_dir = output_dir(design, out, overwrite)
-    report.write_columns(out_dir, "trajectory.csv", samples.columns())
+    out_dir.write_columns("trajectory.csv", samples.columns())
     s = samples.summary()
     out_dir.write_json("trajectory.json", s)
-    report.save_figures(out_dir, {
-        "trajectory.png": report.trajectory_path_figure(design, samples, _path_map(design)),
-        "trajectory_axes.png": report.trajectory_axes_figure(samples),
-    })
+    save_pictures(out_dir, [
+        ("trajectory.png", mp.trajectory_path_figure, (design, samples, _path_map(design))),
+        ("trajectory_axes.png", mp.trajectory_axes_figure, (samples,)),
+    ])
     if json_:
         emit_json(s)
     else:
@@ -922,8 +926,9 @@ def simulate(
     overwrite: OverwriteOpt = False,
 ):
     """Run a spec path on the MuJoCo model of the robot: simulation.csv, simulation.json, simulation.png."""
-    from cdpr_design.jobs import report
+    from cdpr_design.jobs.common import save_pictures
     from cdpr_design.motion import simulation as sim
+    from cdpr_design.plots import motion as mp
 
     design = load_design(spec)
     checks = [("--delay", delay, 0.0, 10.0), ("--servo-bandwidth", servo_bandwidth, 1e-3, 1e6),
@@ -945,11 +950,11 @@ def simulate(
                                   compensate_stretch=compensate_stretch, progress=cb)
         except sim.SimulationError as exc:
             raise InputError(f"--timestep / --servo-bandwidth / --cable-damping: {exc}") from None
-    report.write_columns(out_dir, "simulation.csv", result.columns())
+    out_dir.write_columns("simulation.csv", result.columns())
     s = result.summary()
     s["trajectory_feasible"] = samples.all_feasible
     out_dir.write_json("simulation.json", s)
-    report.save_figures(out_dir, {"simulation.png": report.simulation_figure(result)})
+    save_pictures(out_dir, [("simulation.png", mp.simulation_figure, (result,))])
     if json_:
         emit_json(s)
         return
@@ -985,7 +990,7 @@ def compare(
 ):
     """Compare two logs of the same motion: delay per column, position errors, per-segment table."""
     from cdpr_design.motion import compare as cmp
-    from cdpr_design.jobs import report
+    from cdpr_design.io import tables as report
 
     t_t, tgt = report.read_log(target, "TARGET")
     t_a, act = report.read_log(actual, "ACTUAL")
@@ -1016,7 +1021,7 @@ def compare(
     s = res.to_json()
     s["target"], s["actual"] = str(target), str(actual)
     if out is not None:
-        from cdpr_design.jobs.report import OutputDir
+        from cdpr_design.io.files import OutputDir
 
         OutputDir(out, overwrite=overwrite).write_json("comparison.json", s)
     if json_:
@@ -1085,7 +1090,9 @@ def sweep(
     overwrite: OverwriteOpt = False,
 ):
     """Batch parameter sweep: sweep.csv (one design_report.csv row per variant), sweep_best.csv, sweep.png."""
-    from cdpr_design.jobs import report as rep
+    from cdpr_design.io import tables as rep
+    from cdpr_design.io.journal import SweepJournal
+    from cdpr_design.jobs.sweep import write_sweep
     from cdpr_design.batch import sweep as sw
 
     design = load_design(spec)
@@ -1116,7 +1123,7 @@ def sweep(
     out_dir = output_dir(design, out, overwrite)
     for name in ("sweep.csv", "sweep_best.csv", "sweep.png"):
         out_dir.target(name)  # refuse foreign files before any work
-    journal = rep.SweepJournal(out_dir)
+    journal = SweepJournal(out_dir)
     meta = {"journal": "cdpr-design sweep", "version": sw.JOURNAL_VERSION, "name": design.name,
             "keys": plan.keys, "variants": len(plan), "fingerprint": plan.fingerprint(options)}
     kept: list[dict] = []
@@ -1142,7 +1149,7 @@ def sweep(
     _, records = journal.read()
     header, rows = sw.table(plan, records)
     bh, brows = sw.best(header, rows, rank_name, descending)
-    rep.write_sweep(out_dir, header, rows, bh, brows, plan.keys,
+    write_sweep(out_dir, header, rows, bh, brows, plan.keys,
                     title=f"{design.name}: sweep of {', '.join(plan.keys)}", rank_by=rank_name,
                     picture=not no_picture)
     regressions, improvements = [], []
