@@ -32,17 +32,19 @@ class SizingRun(NamedTuple):
     out: OutputDir
 
 
-def size_motors(design, catalogue, trajectory: str | None = None, safety_factor: float | None = None,
+def size_motors(design, catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
                 motor: str | None = None, step: float | None = None, out: str | Path | None = None,
                 overwrite: bool = False) -> SizingRun:
     """The ``size-motors`` command: size motor, gearbox and drum over the task workspace
-    (grid ``step`` [m]; duty cycle of spec ``trajectory``, else a standard one) from
-    ``catalogue``; write motor_sizing.csv into ``out``."""
+    (grid ``step`` [m]; duty cycle of spec ``trajectory``, else a standard one) from the
+    shipped catalogue extended by the YAML file ``catalogue``; write motor_sizing.csv into ``out``."""
     from cdpr_design.design import sizing as sz
+    from cdpr_design.model import spec
 
+    cat = spec.load_catalogue(catalogue)
     samples = trajectory_samples(design, trajectory)
     out_dir = output_dir(design, out, overwrite)
-    result = sz.size_motors(design, catalogue, step=step, samples=samples, safety_factor=safety_factor, motor=motor)
+    result = sz.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor, motor=motor)
     write_motor_sizing(out_dir, result)
     return SizingRun(result, out_dir)
 
@@ -51,7 +53,8 @@ def evaluate(design, catalogue, trajectory: str | None = None, safety_factor: fl
              motor: str | None = None, step: float | None = None, workspace_result=None,
              progress: Progress | None = None):
     """Workspace, task box, motor sizing and checks of one design
-    (:func:`cdpr_design.design.evaluate.evaluate_full`; ``trajectory``: a spec trajectory's name)."""
+    (:func:`cdpr_design.design.evaluate.evaluate_full`; ``catalogue``: a loaded motor catalogue,
+    ``trajectory``: a spec trajectory's name, ``step`` [m])."""
     from cdpr_design.design import evaluate as ev
 
     samples = trajectory_samples(design, trajectory)
@@ -66,12 +69,14 @@ class CheckRun(NamedTuple):
     checks: list
 
 
-def check(design, catalogue, trajectory: str | None = None, safety_factor: float | None = None,
+def check(design, catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
           motor: str | None = None, step: float | None = None, progress: Progress | None = None) -> CheckRun:
-    """The ``check`` command: evaluate the design and tabulate its requirements (nothing written)."""
+    """The ``check`` command: evaluate the design and tabulate its requirements (nothing written);
+    ``catalogue``: YAML file extending the shipped motor catalogue."""
     from cdpr_design.design import evaluate as ev
+    from cdpr_design.model import spec
 
-    e = evaluate(design, catalogue, trajectory, safety_factor, motor, step, progress=progress)
+    e = evaluate(design, spec.load_catalogue(catalogue), trajectory, safety_factor, motor, step, progress=progress)
     return CheckRun(e, ev.check_table(e.row))
 
 
@@ -81,20 +86,23 @@ class ReportRun(NamedTuple):
     out: OutputDir
 
 
-def report(design, catalogue, trajectory: str | None = None, safety_factor: float | None = None,
+def report(design, catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
            motor: str | None = None, step: float | None = None, force: bool = False,
            out: str | Path | None = None, overwrite: bool = False, pictures: PictureWorker | None = None,
            engine: str = "auto", progress: Progress | None = None) -> ReportRun:
     """The ``report`` command: the static workspace (:func:`~cdpr_design.jobs.workspace.run_workspace`),
-    then motor_sizing.csv, design_report.csv and report.json of the evaluation."""
+    then motor_sizing.csv, design_report.csv and report.json of the evaluation; ``catalogue``:
+    YAML file extending the shipped motor catalogue."""
     from cdpr_design.design import evaluate as ev
+    from cdpr_design.model import spec
 
+    cat = spec.load_catalogue(catalogue)  # a bad catalogue: before any work
     if trajectory is not None:
         require_trajectory(design, trajectory, "--trajectory")  # unknown name: before any work
     out_dir = output_dir(design, out, overwrite)
     wres = run_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
                          progress=progress)
-    e = evaluate(design, catalogue, trajectory, safety_factor, motor, step, wres, progress)
+    e = evaluate(design, cat, trajectory, safety_factor, motor, step, wres, progress)
     write_motor_sizing(out_dir, e.sizing)
     write_design_report(out_dir, e.row)
     checks = ev.check_table(e.row)

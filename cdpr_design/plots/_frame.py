@@ -77,3 +77,34 @@ def pad_limits(ax, d) -> None:
     ax.set_xlim(lo[0] - pad[0], hi[0] + pad[0])
     ax.set_ylim(lo[1] - pad[1], hi[1] + pad[1])
 
+
+
+def used_panels(axs, n: int):
+    """(k, ax) of the first ``n`` panels of a grid of axes; the others are hidden, in turn."""
+    for k, ax in enumerate(axs.flat):
+        if k >= n:
+            ax.axis("off")
+        else:
+            yield k, ax
+
+
+def z_slices(axs, result, values, feas, zs, cmap, vmax: float):
+    """One x-y panel per z-slice index in ``zs``: ``values`` [nx, ny, nz] shaded, the frame's
+    footprint, the outlets and the feasible share in the title.  Returns the last image."""
+    d = result.design
+    ext = extent(result.map_axes[:2])
+    z_axis = result.map_axes[2]
+    im = None
+    for k, ax in used_panels(axs, len(zs)):
+        iz = zs[k]
+        im = ax.imshow(values[:, :, iz].T, origin="lower", extent=ext, cmap=cmap, vmin=0.0, vmax=vmax,
+                       interpolation="nearest", aspect="equal")
+        frac = feas[:, :, iz].mean() if feas[:, :, iz].size else 0.0
+        frame_rect(ax, d)
+        A = d.outlets
+        ax.plot(A[:, 0], A[:, 1], "v", ms=6, mfc="tab:red", mec="k")
+        pad_limits(ax, d)
+        ax.set_title(f"z = {z_axis[iz]:.3g} m  ({100 * frac:.0f} % feasible)", fontsize=9)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    return im

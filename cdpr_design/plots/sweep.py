@@ -12,6 +12,7 @@ from typing import Sequence
 
 import numpy as np
 
+from cdpr_design.plots._frame import used_panels
 from cdpr_design.plots._style import cmap_grey_bad, pyplot
 
 _FIG_LABELS = {
@@ -104,10 +105,7 @@ def _line_panels(header, rows, key, figs, ok):
     x = np.array(x, dtype=float)
     order = np.argsort(x, kind="stable")
     fig, axs = _panels(len(figs), 4.3, 3.4, left=0.08, right=0.98, bottom=0.12, top=0.86, wspace=0.35, hspace=0.5)
-    for k, ax in enumerate(axs.flat):
-        if k >= len(figs):
-            ax.axis("off")
-            continue
+    for k, ax in used_panels(axs, len(figs)):
         y = _figure_column(header, rows, figs[k])
         ax.plot(x[order], y[order], "-", color="0.5", lw=1.0, zorder=1)
         ax.plot(x[ok], y[ok], "o", ms=4, color="tab:green", label="passes", zorder=2)
@@ -131,10 +129,7 @@ def _heat_maps(header, rows, keys, figs, ok):
     xi = {v: i for i, v in enumerate(xs)}
     yi = {v: i for i, v in enumerate(ys)}
     fig, axs = _panels(len(figs), 4.6, 3.9, left=0.08, right=0.97, bottom=0.1, top=0.86, wspace=0.45, hspace=0.5)
-    for k, ax in enumerate(axs.flat):
-        if k >= len(figs):
-            ax.axis("off")
-            continue
+    for k, ax in used_panels(axs, len(figs)):
         col = _figure_column(header, rows, figs[k])
         img = np.full((len(ys), len(xs)), np.nan)
         fail = np.zeros_like(img, dtype=bool)

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from cdpr_design.plots._frame import (draw_robot, extent, frame_aspect, frame_rect, pad_limits, pose_txt,
-                                      slices)
+                                      slices, used_panels, z_slices)
 from cdpr_design.plots._style import cmap_grey_bad, pyplot
 
 _KIND_TEXT = {"static": "static-equilibrium", "wrench-feasible": "wrench-feasible",
@@ -102,25 +102,7 @@ def _spatial_workspace(result, feas, marg, vmax, title):
     fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, height), squeeze=False)
     fig.subplots_adjust(left=0.07, right=0.88, bottom=0.7 / height, top=1 - 0.8 / height,
                         wspace=0.3, hspace=0.9 / (3.9 * aspect))
-    ext = extent(result.map_axes[:2])
-    z_axis = result.map_axes[2]
-    cmap = cmap_grey_bad("viridis")
-    im = None
-    for k, ax in enumerate(axs.flat):
-        if k >= len(zs):
-            ax.axis("off")
-            continue
-        iz = zs[k]
-        im = ax.imshow(marg[:, :, iz].T, origin="lower", extent=ext, cmap=cmap, vmin=0.0, vmax=vmax,
-                       interpolation="nearest", aspect="equal")
-        frac = feas[:, :, iz].mean() if feas[:, :, iz].size else 0.0
-        frame_rect(ax, d)
-        A = d.outlets
-        ax.plot(A[:, 0], A[:, 1], "v", ms=6, mfc="tab:red", mec="k")
-        pad_limits(ax, d)
-        ax.set_title(f"z = {z_axis[iz]:.3g} m  ({100 * frac:.0f} % feasible)", fontsize=9)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+    im = z_slices(axs, result, marg, feas, zs, cmap_grey_bad("viridis"), vmax)
     fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label="capacity margin [N] (grey: infeasible)")
     fig.suptitle(title, fontsize=10)
     return fig
@@ -150,10 +132,7 @@ def tension_figure(result):
     cmap = cmap_grey_bad("magma")
     ext = extent(result.map_axes[:2])
     im = None
-    for i, ax in enumerate(axs.flat):
-        if i >= d.m:
-            ax.axis("off")
-            continue
+    for i, ax in used_panels(axs, d.m):
         im = ax.imshow(img[i].T, origin="lower", extent=ext, cmap=cmap, vmin=vmin, vmax=vmax,
                        interpolation="nearest", aspect="equal")
         frame_rect(ax, d)
@@ -238,29 +217,12 @@ def _planar_orientation(result, val, feas, title, label, ax):
 
 
 def _spatial_orientation(result, val, feas, title, label):
-    d = result.design
     zs = slices(result)
     ncol = min(3, len(zs))
     nrow = math.ceil(len(zs) / ncol)
     fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, 4.2 * nrow + 0.9), squeeze=False)
     fig.subplots_adjust(left=0.07, right=0.88, bottom=0.08, top=0.86, wspace=0.3, hspace=0.35)
-    ext = extent(result.map_axes[:2])
-    cmap = cmap_grey_bad("cividis")
-    im = None
-    for k, ax in enumerate(axs.flat):
-        if k >= len(zs):
-            ax.axis("off")
-            continue
-        iz = zs[k]
-        im = ax.imshow(val[:, :, iz].T, origin="lower", extent=ext, cmap=cmap, vmin=0.0, vmax=1.0,
-                       interpolation="nearest", aspect="equal")
-        frame_rect(ax, d)
-        ax.plot(d.outlets[:, 0], d.outlets[:, 1], "v", ms=6, mfc="tab:red", mec="k")
-        pad_limits(ax, d)
-        ax.set_title(f"z = {result.map_axes[2][iz]:.3g} m  ({100 * feas[:, :, iz].mean():.0f} % feasible)",
-                     fontsize=9)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+    im = z_slices(axs, result, val, feas, zs, cmap_grey_bad("cividis"), 1.0)
     fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label=label)
     fig.suptitle(title, fontsize=9)
     return fig
