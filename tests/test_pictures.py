@@ -9,8 +9,12 @@ from pathlib import Path
 
 import pytest
 
+from cdpr_design.cli import env
 from cdpr_design.plots import worker as pw
-from cdpr_design.jobs import report
+from cdpr_design.errors import InputError
+from cdpr_design.io.files import OutputDir
+from cdpr_design.jobs.workspace import save_workspace_pictures
+from cdpr_design.plots import workspace as wsplots
 from cdpr_design.model import spec
 from cdpr_design.workspace import engine as ws
 
@@ -25,8 +29,8 @@ def result():
 
 
 def jobs(result):
-    return [("workspace.png", report.workspace_figure, (result,)),
-            ("tension_map.png", report.tension_figure, (result,))]
+    return [("workspace.png", wsplots.workspace_figure, (result,)),
+            ("tension_map.png", wsplots.tension_figure, (result,))]
 
 
 def test_worker_draws_the_same_bytes(result):
@@ -45,7 +49,7 @@ def test_error_in_worker_is_raised_in_process():
     """A figure that fails in the child is drawn again here, so the real error surfaces."""
     with pw.PictureWorker(force=True) as worker:
         with pytest.raises(AttributeError):
-            worker.render([("x.png", report.workspace_figure, (None,))])
+            worker.render([("x.png", wsplots.workspace_figure, (None,))])
         assert worker.proc is None  # not trusted again
 
 
@@ -60,7 +64,7 @@ def test_dead_worker_falls_back(result):
 def test_disabled_by_environment(monkeypatch):
     monkeypatch.setenv("CDPR_DESIGN_PICTURE_WORKER", "0")
     monkeypatch.delitem(sys.modules, "matplotlib.pyplot", raising=False)
-    assert pw.PictureWorker().proc is None
+    assert pw.PictureWorker(enabled=env.picture_worker_enabled()).proc is None
 
 
 def test_prestart_take_discard(monkeypatch):
@@ -98,10 +102,10 @@ def test_command_output_identical_with_and_without_worker(tmp_path):
 
 
 def test_worker_refuses_foreign_file_before_drawing(tmp_path, result):
-    out = report.OutputDir(tmp_path)
+    out = OutputDir(tmp_path)
     (tmp_path / "tension_map.png").write_text("mine")
-    with pytest.raises(report.InputError, match="was not written by cdpr-design"):
-        report.save_workspace_pictures(out, result)
+    with pytest.raises(InputError, match="was not written by cdpr-design"):
+        save_workspace_pictures(out, result)
     assert not (tmp_path / "workspace.png").exists()
     assert (tmp_path / "tension_map.png").read_text() == "mine"
 

@@ -326,7 +326,8 @@ def test_resume_after_kill_gives_the_identical_csv(tmp_path):
 
 def test_resume_with_a_pool_in_another_order(tmp_path, small_plan, serial_records):
     """Journal rows arrive in completion order; the final table is sorted and identical."""
-    from cdpr_design.jobs.report import OutputDir, SweepJournal
+    from cdpr_design.io.files import OutputDir
+    from cdpr_design.io.journal import SweepJournal
 
     header, rows = sw.table(small_plan, serial_records)
     shuffled = [serial_records[i] for i in (5, 1, 7, 0, 3, 6, 2, 4)]

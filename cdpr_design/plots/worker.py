@@ -7,13 +7,14 @@ typical design.  A command that ends with pictures starts a
 core while the parent reads the spec and sweeps, then :meth:`PictureWorker.render`
 hands it the figure functions and their data and gets PNG bytes back.  The
 parent writes the files itself (atomic, manifest-checked, see
-:class:`cdpr_design.jobs.report.OutputDir`).
+:class:`cdpr_design.io.files.OutputDir`).
 
 Whenever the child cannot be used (it failed to start, died, or a figure
 raised there) ``render`` draws in-process instead, so errors surface exactly
 as without the worker.  No child is started when matplotlib is already
-imported in this process (nothing to hide) or when
-``CDPR_DESIGN_PICTURE_WORKER=0``.
+imported in this process (nothing to hide) or when the caller disables it
+(``enabled=False``; the command line does so for
+``CDPR_DESIGN_PICTURE_WORKER=0``).
 
 This module imports nothing heavy: the command line starts the worker
 (:func:`prestart`) before it imports numpy.
@@ -104,9 +105,9 @@ def draw_parallel(jobs) -> list[tuple[str, bytes]]:
 
 def draw(jobs) -> list[tuple[str, bytes]]:
     """PNG bytes of each job ``(name, builder, args, dpi)``; figures are closed."""
-    from cdpr_design.jobs import report
+    from cdpr_design.plots._style import pyplot
 
-    plt = report._plt()
+    plt = pyplot()
     out = []
     for name, builder, args, dpi in jobs:
         fig = builder(*args)
@@ -135,8 +136,7 @@ class PictureWorker:
 
     def __init__(self, enabled: bool = True, force: bool = False):
         self.proc = None
-        if not enabled or (not force and (os.environ.get("CDPR_DESIGN_PICTURE_WORKER", "1").strip() == "0"
-                                          or "matplotlib.pyplot" in sys.modules)):
+        if not enabled or (not force and "matplotlib.pyplot" in sys.modules):
             return
         # the child imports this very package, whatever the working folder holds
         pkg_root = str(Path(__file__).resolve().parents[2])
@@ -150,8 +150,8 @@ class PictureWorker:
 
     def render(self, jobs) -> list[tuple[str, bytes]]:
         """PNG bytes of each job ``(name, builder, args)``; builder: a figure function of
-        :mod:`cdpr_design.jobs.report` (or any importable function returning a figure)."""
-        from cdpr_design.jobs.report import DPI
+        :mod:`cdpr_design.plots` (or any importable function returning a figure)."""
+        from cdpr_design.plots._style import DPI
 
         jobs = [(name, builder, tuple(args), DPI) for name, builder, args in jobs]
         if self.proc is not None:
@@ -234,18 +234,20 @@ def wanted(argv) -> bool:
     return bool(argv) and argv[0] in PICTURE_COMMANDS and not {"-h", "--help"} & set(argv)
 
 
-def prestart() -> None:
-    """Start a worker now, for the command about to run (:func:`take` hands it over)."""
+def prestart(enabled: bool = True) -> None:
+    """Start a worker now, for the command about to run (:func:`take` hands it over).
+
+    ``enabled=False``: start none (the commands then draw in-process)."""
     global _prestarted
     if _prestarted is None:
-        _prestarted = PictureWorker()
+        _prestarted = PictureWorker(enabled=enabled)
 
 
-def take() -> PictureWorker:
-    """The worker :func:`prestart` started, else a new one."""
+def take(enabled: bool = True) -> PictureWorker:
+    """The worker :func:`prestart` started, else a new one (``enabled`` as for :class:`PictureWorker`)."""
     global _prestarted
     worker, _prestarted = _prestarted, None
-    return worker if worker is not None else PictureWorker()
+    return worker if worker is not None else PictureWorker(enabled=enabled)
 
 
 def discard() -> None:
@@ -263,9 +265,9 @@ def discard() -> None:
 
 def _warm_up() -> None:
     """Import matplotlib and load the font the pictures' text needs."""
-    from cdpr_design.jobs import report
+    from cdpr_design.plots._style import pyplot
 
-    plt = report._plt()
+    plt = pyplot()
     fig = plt.figure(figsize=(1, 1))
     fig.text(0.5, 0.5, "x [m]")
     fig.savefig(io.BytesIO(), format="png", dpi=20)

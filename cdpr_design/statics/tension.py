@@ -269,6 +269,19 @@ def solve_cvxpy(W, w, tmin, tmax, objective: str = "min-norm", weights=None,
     return np.clip(np.asarray(t.value, dtype=float), tmin, tmax)
 
 
+def tensions_for_objective(W, w, tmin, tmax, objective: str = "min-norm", weights=None,
+                           solver: str | None = None) -> np.ndarray | None:
+    """Tensions [N] balancing the wrench ``w`` within the bounds [N], optimal for ``objective``.
+
+    'min-norm': the exact (weighted) 2-norm kernel (:func:`min_norm`);
+    'min-max' / 'min-sum': the infinity- / 1-norm with cvxpy (:func:`solve_cvxpy`).
+    ``weights``: (m,) positive per-cable weights.  None when infeasible.
+    """
+    if objective == "min-norm":
+        return min_norm(W, w, tmin, tmax, weights=weights)
+    return solve_cvxpy(W, w, tmin, tmax, objective, weights, solver=solver)
+
+
 # ----------------------------------------------------------------------------
 # One pose of a design
 # ----------------------------------------------------------------------------

@@ -1,0 +1,176 @@
+"""What every command shares: options, loading the spec, number parsing, exit codes, JSON and tables.
+
+Exit status (cli.md): 0 done; 1 the design fails a check it was asked to
+pass; 2 bad input (spec, option, file); 130 interrupted.  Only the command
+line turns exceptions into exit codes.  ``--json`` prints one JSON object on
+stdout; progress and messages go to stderr.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import sys
+from contextlib import contextmanager
+from enum import Enum
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from cdpr_design.errors import CheckFailed, InputError, SpecError
+
+err = Console(stderr=True, highlight=False)
+out_console = Console(highlight=False)
+
+SpecArg = Annotated[Path, typer.Argument(help="Design spec (YAML).", show_default=False)]
+OutOpt = Annotated[Optional[Path], typer.Option("--out", help="Output folder (default out/<design name>/).")]
+JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout and nothing else there.")]
+QuietOpt = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bars or messages on stderr.")]
+OverwriteOpt = Annotated[bool, typer.Option(
+    "--overwrite", help="Replace files in --out that cdpr-design did not write.")]
+ForceOpt = Annotated[bool, typer.Option("--force", help="Allow grids larger than the sane-size limit.")]
+StepOpt = Annotated[Optional[float], typer.Option("--step", help="Grid step [m] (overrides workspace.grid.step).")]
+CatalogueOpt = Annotated[Optional[Path], typer.Option(
+    "--catalogue", help="Motor catalogue YAML extending the shipped one (same format as cdpr_design/data/motors.yaml).")]
+TrajectoryOpt = Annotated[Optional[str], typer.Option(
+    "--trajectory", help="Name of a spec trajectory whose duty cycle gives the RMS torque (default: a standard cycle).")]
+SafetyOpt = Annotated[Optional[float], typer.Option(
+    "--safety-factor", help="Factor >= 1 on required torque and speed (default requirements.safety_factor or 1).")]
+MotorOpt = Annotated[Optional[str], typer.Option(
+    "--motor", help="Evaluate this catalogue motor on every axis instead of the spec's or the smallest that fits.")]
+
+
+class Kind(str, Enum):
+    static = "static"
+    wrench_feasible = "wrench-feasible"
+    wrench_closure = "wrench-closure"
+
+
+KindOpt = Annotated[Kind, typer.Option("--kind", help="static | wrench-feasible | wrench-closure.")]
+
+
+def error(message: str) -> None:
+    """Print ``error: message`` on stderr."""
+    err.print(f"[bold red]error:[/] {message}", markup=True, soft_wrap=True)
+
+
+def command(fn):
+    """Turn the package's errors into exit codes and messages (no tracebacks for bad input)."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except (SpecError, InputError) as exc:
+            error(str(exc))
+            raise typer.Exit(2) from None
+        except CheckFailed as exc:
+            if str(exc):
+                err.print(f"[bold red]check failed:[/] {exc}", markup=True, soft_wrap=True)
+            raise typer.Exit(1) from None
+        except KeyboardInterrupt:
+            err.print("interrupted")
+            raise typer.Exit(130) from None
+
+    return wrapper
+
+
+def load_design(path: Path):
+    from cdpr_design.model import spec
+
+    return spec.load(path)
+
+
+def parse_numbers(text: str, option: str, count: int | None = None, what: str = "numbers") -> list[float]:
+    """Comma-separated numbers of an option (``--at 0.75,0.75``); bad text is exit 2."""
+    try:
+        vals = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
+    except ValueError:
+        raise InputError(f"{option}: expected comma-separated numbers, got {text!r}") from None
+    if not all(math.isfinite(v) for v in vals):
+        raise InputError(f"{option}: expected finite numbers, got {text!r}")
+    if count is not None and len(vals) != count:
+        raise InputError(f"{option}: expected {count} {what}, got {len(vals)}")
+    return vals
+
+
+def parse_pose(design, text: str, option: str = "--at") -> list[float]:
+    """The pose coordinates [m, rad] of an option, one per motion coordinate."""
+    coords = design.motion.coords
+    return parse_numbers(text, option, len(coords),
+                         f"numbers ({','.join(coords)}) for motion {design.motion.name}")
+
+
+def emit_json(data) -> None:
+    """``data`` as one line of JSON on stdout."""
+    from cdpr_design.io.tables import json_default
+
+    sys.stdout.write(json.dumps(data, default=json_default) + "\n")
+    sys.stdout.flush()
+
+
+def show_progress(quiet: bool) -> bool:
+    return not quiet and err.is_terminal
+
+
+@contextmanager
+def progress_bar(description: str, quiet: bool, min_total: int = 0):
+    """Yields a ``progress(done, total)`` callback drawing a rich bar on stderr.
+
+    Off when stderr is not a terminal, with ``--quiet``, or for work smaller
+    than ``min_total`` items (that finishes in well under a second).
+    """
+    if not show_progress(quiet):
+        yield None
+        return
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                  TimeRemainingColumn(), console=err, transient=True) as prog:
+        task = None
+
+        def cb(done, total):
+            nonlocal task
+            if total < min_total:
+                return
+            if task is None:
+                task = prog.add_task(description, total=total)
+            prog.update(task, completed=done)
+
+        yield cb
+
+
+def bars(quiet: bool, min_total: int = 0):
+    """The ``progress`` of a job (:mod:`cdpr_design.jobs.common`): a :func:`progress_bar` per stage."""
+    return lambda description: progress_bar(description, quiet, min_total)
+
+
+def info(quiet: bool, msg: str) -> None:
+    """A message on stderr unless ``quiet``."""
+    if not quiet:
+        err.print(msg, soft_wrap=True)
+
+
+def fmt(v, digits=4):
+    """A table cell: floats with ``digits`` significant digits, None and non-finite as a dash."""
+    if v is None:
+        return "—"
+    if isinstance(v, float):
+        if not math.isfinite(v):
+            return "—"
+        return f"{v:.{digits}g}"
+    return str(v)
+
+
+def summary_table(title: str, rows: list[tuple[str, object]]) -> Table:
+    """A two-column table of (name, value) rows."""
+    t = Table(title=title, show_header=False, title_justify="left")
+    t.add_column("", style="bold")
+    t.add_column("")
+    for k, v in rows:
+        t.add_row(k, fmt(v))
+    return t

@@ -1,0 +1,142 @@
+"""``size-motors``, ``report`` and ``check``: motor sizing, the design report, requirement checks."""
+
+from __future__ import annotations
+
+import typer
+from rich.table import Table
+
+from cdpr_design.cli.common import (CatalogueOpt, ForceOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt,
+                                    SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt,
+                                    info, load_design, out_console)
+from cdpr_design.errors import CheckFailed
+
+
+def sizing_table(design, result) -> Table:
+    """One row per cable: peak tension, motor torques and speed, the motor and its margins."""
+    t = Table(title=f"{design.name} — motor sizing ({result.envelope.poses:,} {result.envelope.source} poses, "
+                    f"safety factor {result.safety_factor:g})", title_justify="left")
+    cols = [("cable", "cable"), ("T \\[N]", "peak_tension"), ("τ pk", "peak_motor_torque"),
+            ("τ rms", "rms_motor_torque"), ("rpm", "peak_motor_speed"),
+            ("motor", "motor"), ("τ mrg", "torque_margin"), ("n mrg", "speed_margin"),
+            ("T lim \\[N]", "implied_tension_max")]
+    for head, key in cols:
+        t.add_column(head, no_wrap=key in ("motor", "cable"))
+    for row in result.rows():
+        cells = []
+        for _, key in cols:
+            v = row[key]
+            cells.append((v or "none fits") if key == "motor" else fmt(v, 3))
+        t.add_row(*cells)
+    r0 = result.axes[0] if result.axes else None
+    if r0 is not None:
+        t.caption = (f"drum radius {r0.drum_radius:g} m, gear ratio {r0.gear_ratio:g} (cable {r0.cable}); "
+                     "T: peak tension; τ [N m] at the motor; margins ≥ 1 pass; T lim = τ_peak i η / r")
+    return t
+
+
+def checks_table(design, rows: list[dict]) -> Table:
+    """One row per requirement: its figure, its limit, pass or FAIL."""
+    t = Table(title=f"{design.name} — requirements", title_justify="left")
+    for col in ("requirement", "figure", "limit", "result"):
+        t.add_column(col)
+    for r in rows:
+        t.add_row(r["requirement"], r["figure"], r["limit"], "pass" if r["passed"] else "FAIL")
+    return t
+
+
+@command
+def size_motors(
+    spec: SpecArg,
+    catalogue: CatalogueOpt = None,
+    trajectory: TrajectoryOpt = None,
+    safety_factor: SafetyOpt = None,
+    motor: MotorOpt = None,
+    step: StepOpt = None,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    overwrite: OverwriteOpt = False,
+):
+    """Motor, gearbox and drum sizing over the task workspace: motor_sizing.csv."""
+    from cdpr_design.jobs import sizing as job
+
+    design = load_design(spec)
+    result, out_dir = job.size_motors(design, catalogue, trajectory, safety_factor, motor, step, out, overwrite)
+    if json_:
+        emit_json(result.summary())
+        return
+    out_console.print(sizing_table(design, result))
+    info(quiet, f"duty cycle: {result.cycle}")
+    for note in result.notes:
+        info(quiet, f"note: {note}")
+    info(quiet, f"wrote {out_dir.path / 'motor_sizing.csv'}")
+
+
+@command
+def report(
+    spec: SpecArg,
+    catalogue: CatalogueOpt = None,
+    trajectory: TrajectoryOpt = None,
+    safety_factor: SafetyOpt = None,
+    motor: MotorOpt = None,
+    step: StepOpt = None,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    force: ForceOpt = False,
+    overwrite: OverwriteOpt = False,
+):
+    """Every artefact for one design (workspace, motor sizing) plus design_report.csv."""
+    from cdpr_design.cli import env
+    from cdpr_design.jobs import sizing as job
+    from cdpr_design.plots import worker as _picture_worker
+
+    with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:  # matplotlib's import overlaps the spec and the sweep
+        design = load_design(spec)
+        e, checks, out_dir = job.report(design, catalogue, trajectory, safety_factor, motor, step, force, out,
+                                        overwrite, pictures=pictures, engine=env.engine(),
+                                        progress=bars(quiet or json_, min_total=500_000))
+    if json_:
+        emit_json({**e.row, "checks": checks})
+        return
+    out_console.print(sizing_table(design, e.sizing))
+    if checks:
+        out_console.print(checks_table(design, checks))
+    info(quiet, f"wrote workspace.csv, workspace.png, tension_map.png, summary.json, motor_sizing.csv, "
+                f"design_report.csv, report.json to {out_dir.path}")
+
+
+@command
+def check(
+    spec: SpecArg,
+    catalogue: CatalogueOpt = None,
+    trajectory: TrajectoryOpt = None,
+    safety_factor: SafetyOpt = None,
+    motor: MotorOpt = None,
+    step: StepOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+):
+    """Test the spec's requirements: one line per requirement; exit 0 all pass, 1 otherwise."""
+    from cdpr_design.jobs import sizing as job
+
+    design = load_design(spec)
+    e, checks = job.check(design, catalogue, trajectory, safety_factor, motor, step,
+                          progress=bars(quiet or json_, min_total=500_000))
+    passed = e.passed
+    if json_:
+        emit_json({"name": design.name, "passed": passed, "checks": checks, "figures": e.row})
+    else:
+        if checks:
+            out_console.print(checks_table(design, checks))
+        else:
+            out_console.print(f"{design.name}: the spec's requirements section asks for nothing to check")
+    if not passed:
+        failed = [c["requirement"] for c in checks if not c["passed"]]
+        raise CheckFailed("" if json_ else f"{design.name}: {', '.join(failed)}")
+
+
+def register(app: typer.Typer) -> None:
+    app.command("size-motors")(size_motors)
+    app.command()(report)
+    app.command()(check)

@@ -1,0 +1,67 @@
+"""``workspace``: the grid sweep of a design's workspace."""
+
+from __future__ import annotations
+
+from enum import Enum
+from typing import Annotated, Optional
+
+import typer
+
+from cdpr_design.cli.common import (ForceOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg,
+                                    bars, command, emit_json, load_design, out_console, summary_table)
+
+
+class Orientations(str, Enum):
+    total = "total"
+    range = "range"
+
+
+@command
+def workspace(
+    spec: SpecArg,
+    kind: KindOpt = Kind.static,
+    step: Annotated[Optional[float], typer.Option("--step", help="Grid step [m] (overrides workspace.grid.step).")] = None,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    force: ForceOpt = False,
+    overwrite: OverwriteOpt = False,
+    collisions: Annotated[bool, typer.Option(
+        "--collisions", help="Also check cable-cable, cable-effector and effector-frame interference; "
+                             "feasible = statics feasible and collision free (column collision_free).")] = False,
+    orientations: Annotated[Optional[Orientations], typer.Option(
+        "--orientations", help="total: feasible for every orientation of workspace.orientation_set; "
+                               "range: largest feasible orientation range per position "
+                               "(workspace.orientation_range). 1R2T and 3R3T.")] = None,
+):
+    """Grid sweep of the workspace: workspace.csv, workspace.png, tension_map.png, summary.json."""
+    from cdpr_design.cli import env
+    from cdpr_design.jobs import workspace as job
+    from cdpr_design.plots import worker as _picture_worker
+
+    with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:  # matplotlib's import overlaps the spec and the sweep
+        design = load_design(spec)
+        result, out_dir = job.workspace(
+            design, out, overwrite, kind=kind.value, step=step, force=force, collisions=collisions,
+            orientations=orientations.value if orientations is not None else None, pictures=pictures,
+            engine=env.engine(), progress=bars(quiet or json_, min_total=500_000))
+    s = result.summary()
+    if json_:
+        emit_json(s)
+        return
+    unit = "m²" if design.motion.planar else "m³"
+    out_console.print(summary_table(
+        f"{design.name} — {s['kind']} workspace",
+        [("poses", f"{s['poses']:,}"), ("feasible", f"{s['feasible']:,}"),
+         ("fraction", f"{100 * s['fraction']:.2f} %"), ("measure", f"{s['measure']:.4g} {unit}"),
+         ("min margin \\[N]", s["min_margin"]), ("max margin \\[N]", s["max_margin"]),
+         ("max tension \\[N]", s["max_tension"]), ("elapsed \\[s]", s["elapsed_s"])]
+        + ([("collision free", f"{s['collision_free']:,}"),
+            ("feasible before interference", f"{s['feasible_statics']:,}")] if "collision_free" in s else [])
+        + ([("orientations", f"{s['orientation_mode']} ({s['orientation_count']} samples)")]
+           if "orientation_mode" in s else [])
+        + [("files", str(out_dir.path))]))
+
+
+def register(app: typer.Typer) -> None:
+    app.command()(workspace)

@@ -1,0 +1,142 @@
+"""CSV cells and blocks, CSV and log reading, and the JSON encoding of numpy values.
+
+Numbers are written with 10 significant digits, integers as integers,
+booleans as 1/0 and NaN/None as empty cells.  Readers raise
+:class:`~cdpr_design.errors.InputError` naming the file (and the option or
+argument it came from).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import re
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from cdpr_design.errors import InputError
+
+
+def json_default(o):
+    """``json.dumps(default=...)``: numpy scalars as Python numbers, arrays as lists."""
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def fmt(v) -> str:
+    """A CSV cell: numbers with 10 significant digits, NaN/None as empty."""
+    if v is None:
+        return ""
+    if isinstance(v, (bool, np.bool_)):
+        return "1" if v else "0"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    if isinstance(v, (float, np.floating)):
+        return "" if not math.isfinite(v) else format(float(v), ".10g")
+    return str(v)
+
+
+def text_rows(rows) -> list[list[str]]:
+    """The CSV cells (:func:`fmt`) of rows of values."""
+    return [[fmt(v) for v in r] for r in rows]
+
+
+_NONFINITE = re.compile(r"(?<![^,\n])-?(?:nan|inf)(?![^,\n])")
+
+
+def format_block(columns: list[np.ndarray], int_cols: Sequence[int] = ()) -> str:
+    """Rows of a numeric block as CSV text: NaN cells empty, floats with 10 digits.
+
+    ``columns`` are 1-D arrays of equal length; those listed in ``int_cols``
+    are written as integers.  Non-finite cells (NaN, inf) are written empty.
+    """
+    if not columns or not len(columns[0]):
+        return ""
+    ints = set(int_cols)
+    fmt = ",".join("%d" if j in ints else "%.10g" for j in range(len(columns)))
+    block = np.column_stack([np.asarray(c, dtype=float) for c in columns])
+    for j in ints:
+        if not np.isfinite(block[:, j]).all():
+            raise ValueError(f"integer column {j} holds a non-finite value")
+    text = "\n".join([fmt % row for row in map(tuple, block.tolist())]) + "\n"
+    return _NONFINITE.sub("", text) if "n" in text else text
+
+
+def columns_text(columns: dict) -> str:
+    """CSV text (header and rows) of named 1-D columns.
+
+    Integer columns are written as integers, NaN cells empty, floats with 10
+    significant digits.
+    """
+    names = list(columns)
+    cols = [np.asarray(columns[c]) for c in names]
+    ints = [j for j, c in enumerate(cols) if c.dtype.kind in "biu"]
+    return ",".join(names) + "\n" + format_block(cols, int_cols=ints)
+
+
+def read_csv_columns(path: str | Path, what: str = "CSV") -> dict[str, np.ndarray]:
+    """Numeric columns of a CSV log with a header row: name -> float array.
+
+    Empty or non-numeric cells become NaN; columns with no number at all are
+    dropped.  Bad files raise :class:`InputError` naming the file.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{what} {p}: cannot read: {exc}") from None
+    rows = list(csv.reader(io.StringIO(text)))
+    rows = [r for r in rows if r and any(c.strip() for c in r)]
+    if len(rows) < 2:
+        raise InputError(f"{what} {p}: expected a header row and at least one data row")
+    header = [h.strip() for h in rows[0]]
+    if len(set(header)) != len(header):
+        raise InputError(f"{what} {p}: duplicate column names in the header")
+    data = np.full((len(rows) - 1, len(header)), np.nan)
+    for i, r in enumerate(rows[1:]):
+        for j, cell in enumerate(r[: len(header)]):
+            try:
+                data[i, j] = float(cell)
+            except ValueError:
+                pass
+    out = {}
+    for j, h in enumerate(header):
+        if np.any(np.isfinite(data[:, j])):
+            out[h] = data[:, j]
+    return out
+
+
+def read_log(path: str | Path, what: str = "log") -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """A logged run: its time column [s] (``time`` or ``t``, increasing) and the other columns."""
+    cols = read_csv_columns(path, what)
+    tname = "time" if "time" in cols else ("t" if "t" in cols else None)
+    if tname is None:
+        raise InputError(f"{what} {path}: no time column (expected 'time' or 't'; found {', '.join(cols) or 'none'})")
+    t = cols.pop(tname)
+    ok = np.isfinite(t)
+    t = t[ok]
+    cols = {k: v[ok] for k, v in cols.items()}
+    if t.size < 4:
+        raise InputError(f"{what} {path}: expected at least 4 timed rows, got {t.size}")
+    if np.any(np.diff(t) <= 0):
+        raise InputError(f"{what} {path}: the time column must strictly increase")
+    return t, cols
+
+
+def read_csv_table(path: str | Path, what: str = "--check-against") -> tuple[list[str], list[list[str]]]:
+    """(header, rows) of a CSV file, cells as text; bad files raise :class:`InputError`."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{what}: cannot read {p}: {exc}") from None
+    rows = [r for r in csv.reader(io.StringIO(text)) if r]
+    if not rows:
+        raise InputError(f"{what}: {p} is empty (expected a header row)")
+    return rows[0], rows[1:]

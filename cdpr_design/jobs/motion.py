@@ -1,0 +1,238 @@
+"""The ``trajectory``, ``simulate`` and ``compare`` jobs, and sampling a spec trajectory by name."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from cdpr_design.errors import InputError
+from cdpr_design.io.files import OutputDir
+from cdpr_design.io.tables import read_csv_columns, read_log
+from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage
+from cdpr_design.plots import motion as motion_plots
+
+
+def require_trajectory(design, name: str, option: str):
+    """The spec trajectory ``name``; an unknown name is an :class:`InputError` naming ``option``."""
+    traj = design.trajectories.get(name)
+    if traj is None:
+        known = ", ".join(design.trajectories) or "none"
+        raise InputError(f"{option}: no trajectory named {name!r} in the spec (known: {known})")
+    return traj
+
+
+def read_poses(path: str | Path, design, what: str) -> np.ndarray:
+    """Poses of a ``csv`` trajectory: columns named after the motion's coordinates
+    (``x,y[,z][,phi|rx,ry,rz]``; orientation optional), or a header-less table
+    in that order.  Positions [m], angles [rad]."""
+    p = Path(path)
+    coords = list(design.motion.coords)
+    pos = coords[: design.motion.dim]
+    try:
+        first = p.read_text(encoding="utf-8-sig").splitlines()[0] if p.exists() else None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{what}: cannot read {p}: {exc}") from None
+    if first is None:
+        raise InputError(f"{what}: no such file {p}")
+    try:
+        [float(c) for c in first.split(",") if c.strip()]
+        has_header = False
+    except ValueError:
+        has_header = True
+    arr = _named_poses(p, coords, pos, what) if has_header else _bare_poses(p, coords, pos, what)
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{what}: {p} has empty or non-numeric cells")
+    if arr.shape[0] < 2:
+        raise InputError(f"{what}: {p} needs at least 2 poses, got {arr.shape[0]}")
+    return arr
+
+
+def _named_poses(p: Path, coords, pos, what: str) -> np.ndarray:
+    cols = read_csv_columns(p, what)
+    missing = [c for c in pos if c not in cols]
+    if missing:
+        raise InputError(f"{what}: {p} lacks column(s) {', '.join(missing)} (expected {','.join(coords)})")
+    use = coords if all(c in cols for c in coords) else pos
+    return np.stack([cols[c] for c in use], axis=1)
+
+
+def _bare_poses(p: Path, coords, pos, what: str) -> np.ndarray:
+    try:
+        arr = np.loadtxt(p, delimiter=",", ndmin=2)
+    except ValueError as exc:
+        raise InputError(f"{what}: {p}: {exc}") from None
+    if arr.shape[1] not in (len(pos), len(coords)):
+        raise InputError(f"{what}: {p} has {arr.shape[1]} columns; expected {len(pos)} or {len(coords)} "
+                         f"({','.join(coords)})")
+    return arr
+
+
+def sample_named(design, name: str, cycle_time: float | None = None, hold_end: float = 0.0,
+                 option: str = "NAME"):
+    """Sample spec trajectory ``name`` (reading a csv path's poses) every ``cycle_time`` [s],
+    holding the last set-point ``hold_end`` [s]; bad names, cycles and files are :class:`InputError`."""
+    from cdpr_design.motion import trajectory as tr
+
+    traj = require_trajectory(design, name, option)
+    if cycle_time is not None and not (math.isfinite(cycle_time) and 1e-5 <= cycle_time <= 1.0):
+        raise InputError(f"--cycle-time: expected 1e-5 to 1 s, got {cycle_time}")
+    poses = None
+    if traj.type == "csv":
+        p = Path(traj.file)
+        if not p.is_absolute() and design.source:
+            p = Path(design.source).resolve().parent / p
+        poses = read_poses(p, design, f"trajectories.{name}.file")
+    try:
+        return tr.sample(design, name, cycle_time, csv_poses=poses, hold_end=hold_end)
+    except (KeyError, ValueError) as exc:
+        raise InputError(f"trajectories.{name}: {exc}") from None
+
+
+def trajectory_samples(design, name: str | None):
+    """The spec trajectory ``name`` sampled at its own cycle (None: no trajectory), for ``--trajectory``."""
+    return None if name is None else sample_named(design, name, option="--trajectory")
+
+
+def path_map(design, engine: str = "auto"):
+    """A static workspace map for the path picture (planar designs; coarse enough to be quick)."""
+    if not design.motion.planar:
+        return None
+    from cdpr_design.workspace import engine as ws
+
+    g = design.workspace.grid
+    ext = max(h - l for l, h in zip(g.lower, g.upper))
+    step = max(max(g.step), ext / 200.0)
+    try:
+        return ws.run(design, kind="static", step=step, engine=engine)
+    except Exception:  # noqa: BLE001 - the picture is drawn without the map
+        return None
+
+
+class TrajectoryRun(NamedTuple):
+    samples: object  # motion.trajectory.Samples
+    summary: dict
+    out: OutputDir
+
+
+def trajectory(design, name: str, cycle_time: float | None = None, out: str | Path | None = None,
+               overwrite: bool = False, engine: str = "auto") -> TrajectoryRun:
+    """The ``trajectory`` command: sample ``name`` every ``cycle_time`` [s]; write trajectory.csv,
+    trajectory.json, trajectory.png and trajectory_axes.png into ``out``."""
+    samples = sample_named(design, name, cycle_time)
+    out_dir = output_dir(design, out, overwrite)
+    out_dir.write_columns("trajectory.csv", samples.columns())
+    s = samples.summary()
+    out_dir.write_json("trajectory.json", s)
+    save_pictures(out_dir, [
+        ("trajectory.png", motion_plots.trajectory_path_figure, (design, samples, path_map(design, engine))),
+        ("trajectory_axes.png", motion_plots.trajectory_axes_figure, (samples,)),
+    ])
+    return TrajectoryRun(samples, s, out_dir)
+
+
+#: Ranges of the ``simulate`` settings: (option, low, high).
+_SIM_RANGES = {"delay": ("--delay", 0.0, 10.0), "servo_bandwidth": ("--servo-bandwidth", 1e-3, 1e6),
+               "cable_damping": ("--cable-damping", 0.0, 100.0), "timestep": ("--timestep", 1e-6, 0.01)}
+
+
+def _check_simulation(settings: dict, hold: float | None) -> None:
+    for key, (opt, lo, hi) in _SIM_RANGES.items():
+        v = settings[key]
+        if not (math.isfinite(v) and lo <= v <= hi) or (opt in ("--servo-bandwidth", "--timestep") and v <= 0):
+            raise InputError(f"{opt}: expected a number in [{lo:g}, {hi:g}], got {v}")
+    if hold is not None and not (math.isfinite(hold) and 0 <= hold <= 60):
+        raise InputError(f"--hold: expected 0 to 60 s, got {hold}")
+
+
+class SimulationRun(NamedTuple):
+    result: object  # motion.simulation.SimulationResult
+    summary: dict
+    samples: object
+    out: OutputDir
+
+
+def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 300.0,
+             feedforward: bool = True, compensate_stretch: bool = True, cable_damping: float = 0.7,
+             timestep: float = 5e-4, hold: float | None = None, cycle_time: float | None = None,
+             out: str | Path | None = None, overwrite: bool = False,
+             progress: Progress | None = None) -> SimulationRun:
+    """The ``simulate`` command: run trajectory ``name`` on the MuJoCo model; write simulation.csv,
+    simulation.json and simulation.png.  ``delay``, ``timestep``, ``hold`` [s]; ``servo_bandwidth``
+    [rad/s]; ``hold`` default 0.5 s + the delay."""
+    from cdpr_design.motion import simulation as sim
+
+    settings = {"delay": delay, "servo_bandwidth": servo_bandwidth, "cable_damping": cable_damping,
+                "timestep": timestep}
+    _check_simulation(settings, hold)
+    samples = sample_named(design, name, cycle_time, hold_end=(0.5 + delay) if hold is None else hold)
+    if samples.cycle_time < timestep:
+        raise InputError(f"--timestep: {timestep} s is longer than the cycle time {samples.cycle_time} s")
+    out_dir = output_dir(design, out, overwrite)
+    out_dir.target("simulation.csv")
+    with stage(progress, f"simulate {name}") as cb:
+        try:
+            result = sim.simulate(design, samples, feedforward=feedforward, compensate_stretch=compensate_stretch,
+                                  progress=cb, **settings)
+        except sim.SimulationError as exc:
+            raise InputError(f"--timestep / --servo-bandwidth / --cable-damping: {exc}") from None
+    out_dir.write_columns("simulation.csv", result.columns())
+    s = result.summary()
+    s["trajectory_feasible"] = samples.all_feasible
+    out_dir.write_json("simulation.json", s)
+    save_pictures(out_dir, [("simulation.png", motion_plots.simulation_figure, (result,))])
+    return SimulationRun(result, s, samples, out_dir)
+
+
+def _compare_columns(tgt: dict, act: dict, columns: str | None, rename) -> list[str]:
+    """Apply ``--map`` renames to the ACTUAL columns; the columns to compare."""
+    for item in rename or []:
+        if item.count("=") != 1 or not all(item.split("=")):
+            raise InputError(f"--map: expected TARGET_COL=ACTUAL_COL, got {item!r}")
+        a, b = item.split("=")
+        if b not in act:
+            raise InputError(f"--map: ACTUAL has no column {b!r}")
+        act[a] = act.pop(b)
+    if columns is not None:
+        cols = [c.strip() for c in columns.split(",") if c.strip()]
+        for c in cols:
+            for what, d in (("TARGET", tgt), ("ACTUAL", act)):
+                if c not in d:
+                    raise InputError(f"--columns: {what} has no numeric column {c!r}")
+        return cols
+    cols = [c for c in tgt if c in act and c not in ("segment", "feasible")]
+    if not cols:
+        raise InputError(f"TARGET and ACTUAL have no value column in common "
+                         f"(TARGET: {', '.join(tgt)}; ACTUAL: {', '.join(act)}); use --map")
+    return cols
+
+
+class ComparisonRun(NamedTuple):
+    comparison: object  # motion.compare.Comparison
+    summary: dict
+    columns: list
+
+
+def compare(target: Path, actual: Path, columns: str | None = None, rename=None, max_delay: float | None = None,
+            out: str | Path | None = None, overwrite: bool = False) -> ComparisonRun:
+    """The ``compare`` command: two CSV logs of one motion; ``columns`` comma-separated (default
+    the common ones), ``rename`` TARGET_COL=ACTUAL_COL items, ``max_delay`` [s]; ``out``: write
+    comparison.json there (default: nothing written)."""
+    from cdpr_design.motion import compare as cmp
+
+    t_t, tgt = read_log(target, "TARGET")
+    t_a, act = read_log(actual, "ACTUAL")
+    cols = _compare_columns(tgt, act, columns, rename)
+    if max_delay is not None and not (math.isfinite(max_delay) and max_delay > 0):
+        raise InputError(f"--max-delay: expected a positive number of seconds, got {max_delay}")
+    try:
+        res = cmp.compare(t_t, tgt, t_a, act, columns=cols, max_delay=max_delay)
+    except ValueError as exc:
+        raise InputError(str(exc)) from None
+    s = res.to_json()
+    s["target"], s["actual"] = str(target), str(actual)
+    if out is not None:
+        OutputDir(out, overwrite=overwrite).write_json("comparison.json", s)
+    return ComparisonRun(res, s, cols)

@@ -1,0 +1,143 @@
+"""The ``sweep`` job: a parameter sweep with its journal, sweep.csv, sweep_best.csv and sweep.png."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Callable, NamedTuple, Sequence
+
+from cdpr_design.errors import InputError
+from cdpr_design.io.files import OutputDir
+from cdpr_design.io.journal import SweepJournal
+from cdpr_design.io.tables import read_csv_table, text_rows
+from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage
+from cdpr_design.jobs.motion import require_trajectory
+from cdpr_design.plots import sweep as sweep_plots
+
+
+def write_sweep(out: OutputDir, header: list[str], rows: list[list], best_header: list[str],
+                best_rows: list[list], keys: Sequence[str], title: str = "",
+                rank_by: str | None = None, picture: bool = True) -> list[Path]:
+    """``sweep.csv``, ``sweep_best.csv`` and ``sweep.png`` (atomically)."""
+    paths = [out.write_csv("sweep.csv", header, rows), out.write_csv("sweep_best.csv", best_header, best_rows)]
+    if picture and rows:
+        paths += save_pictures(out, [("sweep.png", sweep_plots.sweep_figure,
+                                      (header, rows, keys, title, None, rank_by))])
+    return paths
+
+
+class SweepRun(NamedTuple):
+    summary: dict  # the ``sweep --json`` object
+    plan: object  # batch.sweep.Plan
+    stats: object  # batch.sweep.Stats
+    header: list
+    rows: list
+    best_header: list
+    best_rows: list
+    failed: list  # rows that failed to evaluate
+    rank_by: str
+    descending: bool
+    regressions: list
+    improvements: list
+    out: OutputDir
+
+
+def _check_options(design, workers, step, tolerance, abs_tolerance, trajectory) -> int | None:
+    """Validate the options against the design; the number of workers (None: one per core)."""
+    if workers is None:
+        workers = (design.sweep or {}).get("workers")
+    if workers is not None and workers < 1:
+        raise InputError(f"--workers: expected at least 1, got {workers}")
+    if step is not None and not (math.isfinite(step) and step > 0):
+        raise InputError(f"--step: expected a positive number of metres, got {step}")
+    if not (math.isfinite(tolerance) and tolerance >= 0 and math.isfinite(abs_tolerance) and abs_tolerance >= 0):
+        raise InputError("--tolerance / --abs-tolerance: expected non-negative numbers")
+    if trajectory is not None and require_trajectory(design, trajectory, "--trajectory").type == "csv":
+        raise InputError(f"--trajectory {trajectory}: a csv trajectory cannot be swept (its poses "
+                         "do not follow the varied design); use a square, polyline or circle path")
+    return workers
+
+
+def _kept_records(journal: SweepJournal, meta: dict, plan, resume: bool, log: Callable[[str], None]) -> list[dict]:
+    """The journal's finished variants to keep (``resume``), after checking it is this sweep's."""
+    if not resume:
+        return []
+    old_meta, old = journal.read()
+    if old_meta is None:
+        log(f"--resume: no journal in {journal.out.path}; starting the sweep")
+        return []
+    if old_meta.get("fingerprint") != meta["fingerprint"]:
+        raise InputError(f"--resume: the journal in {journal.out.path} is from another sweep (other spec, "
+                         "keys, values or options); run without --resume to start over")
+    kept = [r for r in old if 0 <= int(r["variant"]) < len(plan)]
+    log(f"resuming: {len(kept)} of {len(plan)} variants already done")
+    return kept
+
+
+def _run_journalled(design, plan, options, out_dir, workers, scheduler, resume, log, progress):
+    """Run the variants not in the journal yet, appending each to it; (stats, every record)."""
+    from cdpr_design.batch import sweep as sw
+
+    journal = SweepJournal(out_dir)
+    meta = {"journal": "cdpr-design sweep", "version": sw.JOURNAL_VERSION, "name": design.name,
+            "keys": plan.keys, "variants": len(plan), "fingerprint": plan.fingerprint(options)}
+    kept = _kept_records(journal, meta, plan, resume, log)
+    journal.start(meta, kept)
+    done = {int(r["variant"]) for r in kept}
+    try:
+        with stage(progress, f"sweep {design.name}") as cb:
+            stats = sw.run(plan, options, workers=workers, scheduler=scheduler, skip=done,
+                           on_record=journal.append, progress=cb)
+    finally:
+        journal.close()
+    return stats, journal.read()[1]
+
+
+def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None, scheduler: str | None = None,
+          resume: bool = False, rank_by: str | None = None, check_against: Path | None = None,
+          tolerance: float = 1e-6, abs_tolerance: float = 1e-9, strict: bool = False,
+          catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
+          motor: str | None = None, step: float | None = None, top: int = 10, picture: bool = True,
+          out: str | Path | None = None, overwrite: bool = False, progress: Progress | None = None,
+          log: Callable[[str], None] | None = None) -> SweepRun:
+    """The ``sweep`` command: evaluate every variant (``vary``: KEY=VALUES items, default the
+    spec's sweep.vary), journalled in ``out`` (``resume`` continues it), then write sweep.csv,
+    sweep_best.csv and sweep.png and compare with the baseline ``check_against``.
+    ``step`` [m]; ``log`` receives messages (resuming)."""
+    from cdpr_design.batch import sweep as sw
+    from cdpr_design.model import spec
+
+    section = design.sweep or {}
+    plan = sw.make_plan(design, [sw.parse_vary(v) for v in vary] if vary else sw.vary_from_spec(section))
+    rank_name, descending = sw.parse_rank(rank_by or section.get("rank_by"))
+    workers = _check_options(design, workers, step, tolerance, abs_tolerance, trajectory)
+    baseline = read_csv_table(check_against) if check_against is not None else None
+    options = sw.Options(step=step, safety_factor=safety_factor, motor=motor, trajectory=trajectory,
+                         catalogue=spec.load_catalogue(catalogue))
+    out_dir = output_dir(design, out, overwrite)
+    for name in ("sweep.csv", "sweep_best.csv", "sweep.png"):
+        out_dir.target(name)  # refuse foreign files before any work
+    stats, records = _run_journalled(design, plan, options, out_dir, workers, scheduler, resume,
+                                     log or (lambda msg: None), progress)
+    header, rows = sw.table(plan, records)
+    bh, brows = sw.best(header, rows, rank_name, descending)
+    write_sweep(out_dir, header, rows, bh, brows, plan.keys,
+                title=f"{design.name}: sweep of {', '.join(plan.keys)}", rank_by=rank_name, picture=picture)
+    regressions, improvements = [], []
+    if baseline is not None:
+        regressions, improvements = sw.compare(header, text_rows(rows), baseline[0], baseline[1], plan.keys,
+                                               tolerance, abs_tolerance, strict)
+    failed = [r for r in rows if r[header.index("error")]]
+    summary = {
+        "name": design.name, "keys": plan.keys, "variants": len(plan), "evaluated": stats.evaluated,
+        "resumed": stats.skipped, "errors": len(failed), "passed": len(brows),
+        "rank_by": rank_name, "best": [dict(zip(bh, r)) for r in brows[:top]],
+        "backend": stats.backend, "workers": stats.workers, "chunk": stats.chunk,
+        "elapsed_s": stats.elapsed_s, "files": str(out_dir.path),
+    }
+    if baseline is not None:
+        summary["baseline"] = str(check_against)
+        summary["regressions"] = [d.as_dict() for d in regressions]
+        summary["improvements"] = [d.as_dict() for d in improvements]
+    return SweepRun(summary, plan, stats, header, rows, bh, brows, failed, rank_name, descending,
+                    regressions, improvements, out_dir)

@@ -1,0 +1,228 @@
+"""Workspace pictures: capacity-margin map, cable-tension maps, orientation workspace.
+
+Each function takes a :class:`~cdpr_design.workspace.engine.WorkspaceResult`
+and returns a matplotlib Figure; nothing is written.  Planar motions give one
+panel (drawn into ``ax`` when one is given), spatial motions a stack of
+z-slices on a figure of their own.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cdpr_design.plots._frame import (draw_robot, extent, frame_aspect, frame_rect, pad_limits, pose_txt,
+                                      slices, used_panels, z_slices)
+from cdpr_design.plots._style import cmap_grey_bad, pyplot
+
+_KIND_TEXT = {"static": "static-equilibrium", "wrench-feasible": "wrench-feasible",
+              "wrench-closure": "wrench-closure"}
+
+
+def _own_figure(ax, what: str) -> None:
+    if ax is not None:
+        raise ValueError(f"a spatial {what} is drawn as z-slices on a figure of its own (pass ax=None)")
+
+
+def workspace_figure(result, title_extra: str = "", ax=None):
+    """Feasible region shaded by capacity margin [N], with frame, outlets, cables and effector.
+
+    Planar motions: one panel.  Spatial motions: a stack of z-slices (x-y
+    panels), each with the frame's footprint and the outlets.
+    """
+    d = result.design
+    feas = result.feasible_map.astype(bool)
+    marg = np.where(feas, result.margin_map, np.nan)
+    finite = marg[np.isfinite(marg)]
+    vmax = float(finite.max()) if finite.size else 1.0
+    vmax = vmax if vmax > 0 else 1.0
+    title = _workspace_title(result, title_extra)
+    if d.motion.planar:
+        return _planar_workspace(result, feas, marg, vmax, title, ax)
+    _own_figure(ax, "workspace")
+    return _spatial_workspace(result, feas, marg, vmax, title)
+
+
+def _workspace_title(result, title_extra: str) -> str:
+    d = result.design
+    unit = "m²" if d.motion.planar else "m³"
+    title = (f"{d.name}: {_KIND_TEXT[result.kind]} workspace — {100 * result.fraction:.1f} % of "
+             f"{result.poses:,} poses feasible ({result.measure:.3g} {unit})")
+    ori = result.orientation_coords()
+    if ori:
+        title += "\norientation " + ", ".join(
+            f"{n} = {np.degrees(v):.3g}°" for n, v in zip(d.motion.rotation_coords, ori))
+    if title_extra:
+        title += "\n" + title_extra
+    return title
+
+
+def _planar_workspace(result, feas, marg, vmax, title, ax):
+    from matplotlib.patches import Rectangle
+
+    from cdpr_design.workspace import engine as wsmod
+
+    d = result.design
+    rep = wsmod.representative_pose(result)
+    if ax is None:
+        fig, ax = pyplot().subplots(figsize=(7.5, 6.6))
+        fig.subplots_adjust(left=0.09, right=0.97, bottom=0.08, top=0.90)
+    fig = ax.figure
+    im = ax.imshow(marg.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("viridis"),
+                   vmin=0.0, vmax=vmax, interpolation="nearest", aspect="equal", zorder=1)
+    ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
+               colors="k", linewidths=0.8, zorder=2)
+    frame_rect(ax, d)
+    draw_robot(ax, d, rep)
+    if d.requirements.task_box is not None:
+        lo, hi = d.requirements.task_box
+        ax.add_patch(Rectangle((lo[0], lo[1]), hi[0] - lo[0], hi[1] - lo[1], fill=False,
+                               ls="--", lw=1.5, ec="tab:blue", zorder=4, label="task box"))
+    pad_limits(ax, d)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    fig.colorbar(im, ax=ax, shrink=0.85, label="capacity margin [N] (grey: infeasible)")
+    ax.legend(loc="lower right", fontsize=8, framealpha=0.9)
+    ax.set_title(title, fontsize=10)
+    if rep is not None:
+        ax.text(0.01, 0.01, "drawn at the pose of largest margin " + pose_txt(d, rep),
+                transform=ax.transAxes, fontsize=7, va="bottom", zorder=8,
+                bbox=dict(fc="white", ec="none", alpha=0.7))
+    return fig
+
+
+def _spatial_workspace(result, feas, marg, vmax, title):
+    d = result.design
+    zs = slices(result)
+    ncol = min(3, len(zs))
+    nrow = math.ceil(len(zs) / ncol)
+    aspect = frame_aspect(d)
+    height = (3.9 * aspect + 0.9) * nrow + 0.9
+    fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, height), squeeze=False)
+    fig.subplots_adjust(left=0.07, right=0.88, bottom=0.7 / height, top=1 - 0.8 / height,
+                        wspace=0.3, hspace=0.9 / (3.9 * aspect))
+    im = z_slices(axs, result, marg, feas, zs, cmap_grey_bad("viridis"), vmax)
+    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label="capacity margin [N] (grey: infeasible)")
+    fig.suptitle(title, fontsize=10)
+    return fig
+
+
+def tension_figure(result):
+    """Tension [N] of each cable over the grid: one panel per cable, shared colour scale.
+
+    Infeasible poses are masked (grey).  Spatial motions show, for every
+    cable, the z-slice with the most feasible poses.
+    """
+    d = result.design
+    feas = result.feasible_map.astype(bool)
+    T = np.where(feas[None], result.tension_maps, np.nan)
+    finite = T[np.isfinite(T)]
+    vmin = 0.0
+    vmax = float(finite.max()) if finite.size else 1.0
+    if vmax <= vmin:
+        vmax = vmin + 1.0
+    if d.motion.planar:
+        img, sub = T, ""
+    else:
+        iz = int(np.argmax(feas.sum(axis=(0, 1))))
+        img = T[:, :, :, iz]
+        sub = f" at z = {result.map_axes[2][iz]:.3g} m (slice with the most feasible poses)"
+    fig, axs = _tension_panels(d)
+    cmap = cmap_grey_bad("magma")
+    ext = extent(result.map_axes[:2])
+    im = None
+    for i, ax in used_panels(axs, d.m):
+        im = ax.imshow(img[i].T, origin="lower", extent=ext, cmap=cmap, vmin=vmin, vmax=vmax,
+                       interpolation="nearest", aspect="equal")
+        frame_rect(ax, d)
+        A = d.outlets
+        ax.plot(A[i, 0], A[i, 1], "v", ms=9, mfc="tab:cyan", mec="k", zorder=6)
+        pad_limits(ax, d)
+        c = d.cables[i]
+        ax.set_title(f"{c.name}: {c.tension_min:g}–{c.tension_max:g} N", fontsize=9)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.85, label="cable tension [N] (grey: infeasible)")
+    fig.suptitle(f"{d.name}: minimum-norm cable tensions, {result.kind} workspace{sub}", fontsize=10)
+    return fig
+
+
+def _tension_panels(d):
+    """The figure and axes of :func:`tension_figure`: one panel per cable, up to 4 a row."""
+    m = d.m
+    ncol = min(4, m) if m > 2 else m
+    nrow = math.ceil(m / ncol)
+    aspect = frame_aspect(d)
+    height = (3.7 * aspect + 0.9) * nrow + 0.7
+    fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.0 * ncol + 1.4, height), squeeze=False)
+    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.6 / height, top=1 - 0.6 / height,
+                        wspace=0.3, hspace=0.9 / (3.7 * aspect))
+    return fig, axs
+
+
+def orientation_figure(result, ax=None):
+    """Orientation workspace picture: the fraction of the orientation set that is
+    feasible (``total``; the total orientation workspace outlined) or the
+    orientation range scale s (``range``: the largest feasible box is
+    nominal +- s * max) over the grid; a z-slice stack for spatial motions."""
+    d = result.design
+    om = result.orientation_maps
+    val = np.asarray(om.value, float)
+    feas = result.feasible_map.astype(bool)
+    title, label = _orientation_title(result)
+    if d.motion.planar:
+        return _planar_orientation(result, val, feas, title, label, ax)
+    _own_figure(ax, "orientation workspace")
+    return _spatial_orientation(result, val, feas, title, label)
+
+
+def _orientation_title(result) -> tuple[str, str]:
+    """(title, colour-bar label) of :func:`orientation_figure`."""
+    d = result.design
+    om = result.orientation_maps
+    rot = d.motion.rotation_coords
+    if om.mode == "total":
+        lo, hi = om.orientations.min(axis=0), om.orientations.max(axis=0)
+        idx = [i - 3 for i in d.motion.pose_index[d.motion.dim:]]
+        box = ", ".join(f"{c} ∈ [{np.degrees(lo[i]):.3g}°, {np.degrees(hi[i]):.3g}°]" for c, i in zip(rot, idx))
+        title = (f"{d.name}: total orientation workspace ({result.kind}) — {100 * result.fraction:.1f} % "
+                 f"of {result.poses:,} positions feasible for all {len(om.orientations)} orientations\n{box}")
+        return title, "fraction of the orientation set feasible"
+    mx = ", ".join(f"{c} ± {np.degrees(s):.3g}°" for c, s in zip(rot, om.scale))
+    title = (f"{d.name}: orientation range per position ({result.kind}) — largest feasible box "
+             f"s × ({mx})")
+    return title, "range scale s (grey: nominal orientation infeasible)"
+
+
+def _planar_orientation(result, val, feas, title, label, ax):
+    d = result.design
+    if ax is None:
+        fig, ax = pyplot().subplots(figsize=(7.5, 6.6))
+        fig.subplots_adjust(left=0.09, right=0.97, bottom=0.08, top=0.88)
+    fig = ax.figure
+    im = ax.imshow(val.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("cividis"),
+                   vmin=0.0, vmax=1.0, interpolation="nearest", aspect="equal", zorder=1)
+    if result.orientation_maps.mode == "total" and feas.any():
+        ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
+                   colors="k", linewidths=0.8, zorder=2)
+    frame_rect(ax, d)
+    ax.plot(d.outlets[:, 0], d.outlets[:, 1], "v", ms=7, mfc="tab:red", mec="k", zorder=5)
+    pad_limits(ax, d)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    fig.colorbar(im, ax=ax, shrink=0.85, label=label)
+    ax.set_title(title, fontsize=9)
+    return fig
+
+
+def _spatial_orientation(result, val, feas, title, label):
+    zs = slices(result)
+    ncol = min(3, len(zs))
+    nrow = math.ceil(len(zs) / ncol)
+    fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, 4.2 * nrow + 0.9), squeeze=False)
+    fig.subplots_adjust(left=0.07, right=0.88, bottom=0.08, top=0.86, wspace=0.3, hspace=0.35)
+    im = z_slices(axs, result, val, feas, zs, cmap_grey_bad("cividis"), 1.0)
+    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label=label)
+    fig.suptitle(title, fontsize=9)
+    return fig
