@@ -12,7 +12,7 @@ import pytest
 from cdpr_design.plots import worker as pw
 from cdpr_design.jobs import report
 from cdpr_design.model import spec
-from cdpr_design.workspace import engine as ws
+from cdpr_design import workspaces as ws
 
 from .conftest import PLANAR2
 

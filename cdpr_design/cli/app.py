@@ -202,7 +202,7 @@ def run_workspace(design, out_dir, kind: str, step, force: bool, quiet: bool,
     workspace (rotational motions; extra columns, ``orientation_workspace.png``).
     """
     from cdpr_design.jobs import report
-    from cdpr_design.workspace import engine as ws
+    from cdpr_design import workspaces as ws
 
     grid = ws.make_grid(design, step, force)
     header = report.workspace_header(design) + ws.extra_columns(design, collisions, orientations)
@@ -325,7 +325,7 @@ def pose(
     json_: JsonOpt = False,
 ):
     """One pose: cable lengths, tensions, feasibility, margin, structure matrix."""
-    from cdpr_design.workspace import engine as ws
+    from cdpr_design import workspaces as ws
 
     design = load_design(spec)
     p = parse_pose(design, at)
@@ -334,7 +334,9 @@ def pose(
         c = parse_numbers(weights, "--weights", design.m, "weights (one per cable)")
         if any(v <= 0 for v in c):
             raise InputError(f"--weights: expected positive numbers, got {weights!r}")
-    result = ws.evaluate_pose(design, p, kind.value)
+    from cdpr_design.statics import pose as sp
+
+    result = sp.evaluate_pose(design, p, kind.value)
     if objective is not Objective.min_norm or c is not None:
         result = _reobjective(design, result, objective.value, c)
     data = pose_data(design, result)
@@ -832,7 +834,7 @@ def _path_map(design):
     """A static workspace map for the path picture (planar designs; coarse enough to be quick)."""
     if not design.motion.planar:
         return None
-    from cdpr_design.workspace import engine as ws
+    from cdpr_design import workspaces as ws
 
     g = design.workspace.grid
     ext = max(h - l for l, h in zip(g.lower, g.upper))

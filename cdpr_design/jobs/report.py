@@ -233,7 +233,7 @@ def workspace_header(design) -> list[str]:
 
 
 def workspace_rows(chunk, extra: dict[str, np.ndarray] | None = None) -> str:
-    """CSV text of one :class:`~cdpr_design.workspace.engine.Chunk` (no header)."""
+    """CSV text of one :class:`~cdpr_design.workspaces.grid.Chunk` (no header)."""
     cols = [chunk.poses[:, j] for j in range(chunk.poses.shape[1])]
     cols.append(chunk.feasible)
     cols.append(chunk.margin)
@@ -319,7 +319,7 @@ def workspace_figure(result, title_extra: str = ""):
     Planar motions: one panel.  Spatial motions: a stack of z-slices (x-y
     panels), each with the frame's footprint and the outlets.
     """
-    from cdpr_design.workspace import engine as wsmod
+    from cdpr_design import workspaces as wsmod
 
     plt = _plt()
     d = result.design
