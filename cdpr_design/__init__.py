@@ -31,9 +31,9 @@ _LAZY = {
     "inverse_kinematics": ("statics.kinematics", "inverse_kinematics"),
     "forward_kinematics": ("statics.kinematics", "forward_kinematics"),
     "structure_matrix": ("statics.kinematics", "structure_matrix"),
-    "run_workspace": ("workspace.engine", "run"),
-    "evaluate_pose": ("workspace.engine", "evaluate_pose"),
-    "WorkspaceResult": ("workspace.engine", "WorkspaceResult"),
+    "run_workspace": ("workspaces", "run"),
+    "evaluate_pose": ("statics.pose", "evaluate_pose"),
+    "WorkspaceResult": ("workspaces", "WorkspaceResult"),
     "size_motors": ("design.sizing", "size_motors"),
     "evaluate_design": ("design.evaluate", "evaluate"),
 }

@@ -22,8 +22,9 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 from cdpr_design import kernels as K  # noqa: E402
 from cdpr_design.model import spec  # noqa: E402
-from cdpr_design.workspace import engine as ws  # noqa: E402
-from cdpr_design.workspace.hardware import Evaluator, _positions3  # noqa: E402
+from cdpr_design import workspaces as ws  # noqa: E402
+from cdpr_design.workspaces.hardware import Evaluator
+from cdpr_design.workspaces.grid import positions3 as _positions3  # noqa: E402
 from cdpr_design.statics.interference import HIT_NAMES  # noqa: E402
 
 

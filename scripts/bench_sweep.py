@@ -40,7 +40,7 @@ STARTUP = """
 import time; t0 = time.perf_counter()
 import importlib
 from cdpr_design.model import spec
-from cdpr_design.workspace import engine as ws
+from cdpr_design import workspaces as ws
 ev = importlib.import_module("cdpr_design.design.evaluate")
 d = spec.load({spec!r}); cat = spec.load_catalogue()
 ws.load_kernels()  # what a worker of a big sweep does first (sweep._prepare_process)

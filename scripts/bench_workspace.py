@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from cdpr_design.model import spec  # noqa: E402
-from cdpr_design.workspace import engine as ws  # noqa: E402
+from cdpr_design import workspaces as ws  # noqa: E402
 
 
 def rows_sweep(design, grid, engine):

@@ -34,13 +34,15 @@ t_import = time.perf_counter()
 import cdpr_design as cd  # noqa: E402
 from cdpr_design import kernels as K  # noqa: E402
 from cdpr_design.statics import kinematics as kin  # noqa: E402
-from cdpr_design.workspace import engine as ws  # noqa: E402
+from cdpr_design import workspaces as ws  # noqa: E402
+from cdpr_design.workspaces import grid as wsg
+from cdpr_design.statics import pose as sp
 t_import = time.perf_counter() - t_import
 
 
 def sample_poses(design, grid, count, rng):
     idx = np.sort(rng.choice(grid.size, size=min(count, grid.size), replace=False))
-    pos = np.vstack([ws.grid_positions(grid, int(i), 1) for i in idx])
+    pos = np.vstack([wsg.grid_positions(grid, int(i), 1) for i in idx])
     ori = list(design.workspace.orientation)
     return [list(p) + ori for p in pos]
 
@@ -78,7 +80,7 @@ def per_pose_cvxpy(design, poses):
 
 
 def per_pose_plain_hsm(design, poses):
-    combos = ws.combinations(design.m, design.n)
+    combos = sp.combinations(design.m, design.n)
     tmin, tmax = design.tension_min, design.tension_max
     Ws = [np.ascontiguousarray(kin.structure_matrix(design, p)) for p in poses]
     ws_ = [kin.required_wrench(design, p)[None, :] for p in poses]

@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from cdpr_design.workspace import hardware as hwm
+from cdpr_design.workspaces import orientation as hwm
 from cdpr_design.model import spec
-from cdpr_design.workspace import engine as ws
+from cdpr_design import workspaces as ws
+from cdpr_design.statics import pose as sp
 from cdpr_design.cli.app import app
 from cdpr_design.errors import SpecError
 
@@ -119,7 +120,7 @@ def brute_range(d, pose_pos, scale, levels, count, interference):
 
     def ok(o):
         pose = np.concatenate([pose_pos, o])[list(d.motion.pose_index)]
-        r = ws.evaluate_pose(d, pose)
+        r = sp.evaluate_pose(d, pose)
         return r.feasible and (not interference or r.collisions == [])
 
     if not ok(nominal):

@@ -16,7 +16,7 @@ from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.workspace import save_workspace_pictures
 from cdpr_design.plots import workspace as wsplots
 from cdpr_design.model import spec
-from cdpr_design.workspace import engine as ws
+from cdpr_design import workspaces as ws
 
 from .conftest import PLANAR2
 

@@ -8,7 +8,7 @@ free segment leaves the pulley's tangent point) must reach every analysis:
   derivatives (central finite differences) of the pulley-aware lengths of
   ``kinematics.inverse_kinematics`` (built on ``pulley.outlet_geometry``, an
   independent code path from the vectorised ``pulley.cable_paths``);
-- the sizing envelope's tensions are those of ``workspace.evaluate_pose``
+- the sizing envelope's tensions are those of ``statics.pose.evaluate_pose``
   (pulley-aware numba kernel) at the same poses;
 - the Hessian of the length used for the cable-acceleration terms matches
   finite differences (Pott 2018, pulley kinematics: the level sets of L in
@@ -34,8 +34,10 @@ from cdpr_design.design import envelope as ev
 from cdpr_design.design import sizing as sz
 from cdpr_design.model import spec
 from cdpr_design.motion import trajectory as tr
-from cdpr_design.workspace import hardware as hwm
-from cdpr_design.workspace import engine as ws
+from cdpr_design.workspaces import orientation as hwm
+from cdpr_design import workspaces as ws
+from cdpr_design.workspaces import grid as wsg
+from cdpr_design.statics import pose as sp
 from cdpr_design.cli.app import app
 from cdpr_design.statics.interference import HIT_NAMES, check_pose
 
@@ -263,7 +265,7 @@ def test_sizing_radius_to_zero_is_point_outlet_spatial(catalogue):
 
 @pytest.mark.parametrize("make,radius", [(planar2, 0.05), (planar4, 0.08), (ipanema3, 0.1)])
 def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
-    """Static tensions of the sizing envelope (A = V = 0) = workspace.evaluate_pose at every pose,
+    """Static tensions of the sizing envelope (A = V = 0) = statics.pose.evaluate_pose at every pose,
     and the envelope's peak is their maximum."""
     d = make(radius)
     d0 = make(None)
@@ -271,14 +273,14 @@ def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
         pos = np.array([[0.0, 0.0, 1.2], [1.5, -1.0, 1.8], [-2.0, 1.0, 0.8], [0.5, 0.5, 1.0]])
     else:
         g = ev.task_grid(d, 0.1)
-        pos = ws.grid_positions(g, 0, g.size)
+        pos = wsg.grid_positions(g, 0, g.size)
     ori = d.default_orientation_full()
     e = ev.envelope_chunk(d, pos, ori, 0.0, 0.0)
     e0 = ev.envelope_chunk(d0, pos, ori, 0.0, 0.0)
     rot = ev.rotation_coords(d, ori)
     ref = np.full((pos.shape[0], d.m), np.nan)
     for j, p in enumerate(pos):
-        r = ws.evaluate_pose(d, np.concatenate([p, rot]))
+        r = sp.evaluate_pose(d, np.concatenate([p, rot]))
         if r.feasible:
             ref[j] = r.tensions
     feas = np.all(np.isfinite(ref), axis=1)
@@ -381,7 +383,7 @@ def test_orientation_summary_has_collision_counts(mode):
         hit = {name: np.zeros(len(poses), bool) for name in kinds}
         for j, p in enumerate(poses):
             pose = np.r_[p[:2], o[2]]
-            st_[j] = ws.evaluate_pose(d, pose).feasible
+            st_[j] = sp.evaluate_pose(d, pose).feasible
             for name in check_pose(d, pose).kinds:
                 hit[name][j] = True
         np.testing.assert_array_equal(cf, ~np.any(list(hit.values()), axis=0))

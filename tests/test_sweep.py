@@ -258,7 +258,7 @@ def test_fork_after_openmp_is_unsafe(small_plan, serial_records, monkeypatch):
     import numba
     from concurrent.futures.process import BrokenProcessPool
 
-    from cdpr_design.workspace import engine as ws
+    from cdpr_design import workspaces as ws
 
     # a parallel kernel has run in this process, and the forked workers use the kernels too
     monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")

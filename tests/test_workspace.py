@@ -8,7 +8,12 @@ import pytest
 from cdpr_design import kernels as K
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.model import spec
-from cdpr_design.workspace import engine as ws
+from cdpr_design import workspaces as ws
+from cdpr_design.workspaces import grid as wsg
+from cdpr_design.statics import pose as sp
+from cdpr_design.workspaces import engine as eng
+from cdpr_design.errors import InputError
+from cdpr_design.model.design import Grid
 
 from .conftest import PLANAR2, random_planar_data
 
@@ -66,7 +71,7 @@ def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
     design = spec.from_dict(random_planar_data(rng, m=2))
     got = sweep_all(design, engine=engine)
     poses = got[0]
-    wreq = ws.wrench_vertices(design, "static")
+    wreq = sp.wrench_vertices(design, "static")
     ref = numpy_reference(design, poses, wreq)
     # feasibility identical except where the margin is within rounding of zero
     band = np.abs(ref[1]) < 1e-9
@@ -77,11 +82,11 @@ def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
 
     # the generic per-pose kernel gives the same numbers as the closed-form one
     g = design.workspace.grid
-    lower, step, shape = ws._grid3(g)
+    lower, step, shape = wsg.grid3(g)
     n = g.size
     f2, m2, T2, L2 = np.empty(n, np.uint8), np.empty(n), np.empty((n, 2)), np.empty((n, 2))
     K.sweep_grid(0, n, lower, step, shape, design.attachments.copy(), design.outlets, design.rows,
-                 wreq, design.tension_min, design.tension_max, ws.combinations(2, 2), K.KIND_STATIC,
+                 wreq, design.tension_min, design.tension_max, sp.combinations(2, 2), K.KIND_STATIC,
                  f2, m2, T2, L2)
     assert_same((f2, m2, T2, L2), got, design)
 
@@ -92,7 +97,7 @@ def test_planar2_wrench_feasible_matches_numpy(engine):
     data["workspace"]["external_wrench"] = {"lower": [-2.0, -1.0], "upper": [2.0, 1.0]}
     design = spec.from_dict(data)
     got = sweep_all(design, kind="wrench-feasible", step=0.03, engine=engine)
-    wreq = ws.wrench_vertices(design, "wrench-feasible")
+    wreq = sp.wrench_vertices(design, "wrench-feasible")
     assert wreq.shape == (5, 2)
     ref = numpy_reference(design, got[0], wreq)
     assert_same(ref, got, design)
@@ -139,7 +144,7 @@ def test_summary_figures_are_consistent():
 def test_large_grid_maps_are_subsampled(monkeypatch):
     design = spec.load(PLANAR2)
     full = ws.run(design, step=0.005)
-    monkeypatch.setattr(ws, "MAP_CELLS", 5000)
+    monkeypatch.setattr(wsg, "MAP_CELLS", 5000)
     small = ws.run(design, step=0.005)
     assert np.prod(small.feasible_map.shape) <= 5000
     sx, sy = small.map_stride
@@ -153,7 +158,7 @@ def test_large_grid_maps_are_subsampled(monkeypatch):
 def test_grid_and_positions():
     g = spec.load(PLANAR2).workspace.grid
     assert g.shape == (151, 151)
-    pos = ws.grid_positions(g, 150, 3)
+    pos = wsg.grid_positions(g, 150, 3)
     np.testing.assert_allclose(pos, [[0.0, 1.5], [0.01, 0.0], [0.01, 0.01]], atol=1e-12)
 
 
@@ -207,7 +212,7 @@ def test_numpy_engine_degenerate_poses():
         c["attachment"] = [0.0, 0.0]
     design = spec.from_dict(data)
     top = design.outlets[0, 1]
-    grid = ws.Grid((0.0, top - 0.5), (1.5, top), (0.05, 0.05))
+    grid = Grid((0.0, top - 0.5), (1.5, top), (0.05, 0.05))
     _, a = _sweep_engine(design, "numba", grid=grid)
     _, b = _sweep_engine(design, "numpy", grid=grid)
     on_line = np.isclose(a["poses"][:, 1], top)
@@ -223,29 +228,50 @@ def test_numpy_engine_degenerate_poses():
 
 def test_engine_choice(monkeypatch):
     design = spec.load(PLANAR2)
-    assert ws._use_numpy("numpy", True, 10)
-    assert not ws._use_numpy("numba", True, 10)
+    assert eng.use_numpy("numpy", True, 10)
+    assert not eng.use_numpy("numba", True, 10)
     # auto: numpy only while the kernels are not loaded, and only for grids numba would not repay
     monkeypatch.delitem(__import__("sys").modules, "cdpr_design.kernels")
-    assert ws._use_numpy("auto", True, ws.NUMPY_MAX_POSES)
-    assert not ws._use_numpy("auto", True, ws.NUMPY_MAX_POSES + 1)
-    assert not ws._use_numpy("auto", False, 10)
-    monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")
-    assert not ws._use_numpy(None, True, 10)
-    monkeypatch.setenv("CDPR_DESIGN_ENGINE", "fortran")
-    with pytest.raises(ws.InputError, match="CDPR_DESIGN_ENGINE: expected one of auto, numba, numpy"):
-        ws.run(design)
-    monkeypatch.delenv("CDPR_DESIGN_ENGINE")
+    assert eng.use_numpy("auto", True, eng.NUMPY_MAX_POSES)
+    assert not eng.use_numpy("auto", True, eng.NUMPY_MAX_POSES + 1)
+    assert not eng.use_numpy("auto", False, 10)
+    with pytest.raises(InputError, match="engine: expected one of auto, numba, numpy"):
+        ws.run(design, engine="fortran")
     ipanema = spec.load(PLANAR2.parent / "ipanema3.yaml")
-    with pytest.raises(ws.InputError, match="engine=numpy: the numpy engine covers two cables"):
+    with pytest.raises(InputError, match="engine=numpy: the numpy engine covers two cables"):
         ws.run(ipanema, step=0.5, engine="numpy")
+
+
+def test_engine_variable_is_read_by_the_command_line(tmp_path, monkeypatch):
+    """Only the command line reads CDPR_DESIGN_ENGINE: it forces the engine, and a bad value
+    is exit 2 naming the variable."""
+    from typer.testing import CliRunner
+
+    from cdpr_design.cli.app import app
+
+    calls = []
+    real = eng.sweep
+
+    def spy(*args, **kwargs):
+        calls.append(kwargs["engine"])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(ws, "straight_sweep", spy)
+    monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")
+    r = CliRunner().invoke(app, ["workspace", str(PLANAR2), "--out", str(tmp_path / "a"), "--json", "--quiet"])
+    assert r.exit_code == 0, r.output
+    assert calls == ["numba"]
+    monkeypatch.setenv("CDPR_DESIGN_ENGINE", "fortran")
+    r = CliRunner().invoke(app, ["workspace", str(PLANAR2), "--out", str(tmp_path / "b"), "--json", "--quiet"])
+    assert r.exit_code == 2
+    assert "CDPR_DESIGN_ENGINE: expected one of auto, numba, numpy" in r.output
 
 
 def test_kernel_codes_match():
     """workspace keeps copies of kernel constants so that it need not import numba."""
-    assert ws.KINDS == {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
+    assert sp.KINDS == {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
                         "wrench-closure": K.KIND_WRENCH_CLOSURE}
-    assert ws._RANK_TOL == K.RANK_TOL
+    assert eng._RANK_TOL == K.RANK_TOL
 
 
 def test_small_planar2_sweep_does_not_load_numba():
@@ -254,7 +280,7 @@ def test_small_planar2_sweep_does_not_load_numba():
     import sys
 
     # the sweep, and the evaluation behind report / check / size-motors
-    code = ("import sys, importlib; from cdpr_design.model import spec; from cdpr_design.workspace import engine as ws; "
+    code = ("import sys, importlib; from cdpr_design.model import spec; from cdpr_design import workspaces as ws; "
             f"d = spec.load({str(PLANAR2)!r}); r = ws.run(d); "
             "importlib.import_module('cdpr_design.design.evaluate').evaluate(d, catalogue=spec.load_catalogue()); "
             "print(r.feasible, 'numba' in sys.modules, 'cdpr_design.kernels' in sys.modules)")
@@ -276,7 +302,7 @@ def test_chunk_stats_parallel_matches_numpy(count):
     ten = rng.uniform(0, 20, size=(n, 3))
     tp_k, tp_n = np.full(3, -np.inf), np.full(3, -np.inf)
     got = K.chunk_stats(feas, marg, ten, count, tp_k)
-    ref = ws._chunk_stats_numpy(feas, marg, ten, count, tp_n)
+    ref = eng._chunk_stats_numpy(feas, marg, ten, count, tp_n)
     assert got[0] == ref[0] == int(feas[:count].sum())
     if ref[0]:
         assert got[1:] == ref[1:]

@@ -474,7 +474,7 @@ def _single_thread_kernels() -> None:
 def _prepare_process(job: Job) -> None:
     """The kernels loaded if the sweep is big; one numba thread (parallelism is across variants)."""
     if job.kernels:
-        from cdpr_design.workspace import engine as ws
+        from cdpr_design import workspaces as ws
 
         ws.load_kernels()
     _single_thread_kernels()
@@ -643,13 +643,14 @@ def _worth_kernels(plan: Plan, options: Options, variants: int) -> bool:
     """Whether the sweep holds more grid poses than the numpy engine is worth (about
     ``workspace.NUMPY_MAX_POSES``): then every process loads the numba kernels first."""
     from cdpr_design.model import spec
-    from cdpr_design.workspace import engine as ws
+    from cdpr_design import workspaces as ws
+    from cdpr_design.workspaces import engine as eng
 
     try:
         poses = ws.make_grid(spec.from_dict(plan.base), options.step, force=True).size
     except Exception:  # noqa: BLE001 - a bad base shows up as the variants' errors
         return True
-    return variants * poses > ws.NUMPY_MAX_POSES
+    return variants * poses > eng.NUMPY_MAX_POSES
 
 
 def _run_serial(job: Job, todo, emit) -> None:

@@ -3,7 +3,7 @@
 - ``CDPR_DESIGN_PICTURE_WORKER=0``: draw the pictures in-process instead of
   in a helper process (:class:`cdpr_design.plots.worker.PictureWorker`).
 - ``CDPR_DESIGN_ENGINE``: ``auto`` (default), ``numba`` or ``numpy``, the
-  engine of the workspace sweeps (:data:`cdpr_design.workspace.engine.ENGINES`).
+  engine of the workspace sweeps (:data:`cdpr_design.workspaces.engine.ENGINES`).
 
 This module imports nothing heavy: ``python -m cdpr_design`` reads it before
 anything else.
@@ -23,7 +23,7 @@ def picture_worker_enabled(environ=os.environ) -> bool:
 def engine(environ=os.environ) -> str:
     """The workspace engine ``CDPR_DESIGN_ENGINE`` asks for (default ``auto``); a bad value is an
     :class:`InputError` naming the variable."""
-    from cdpr_design.workspace.engine import ENGINES
+    from cdpr_design.workspaces.engine import ENGINES
 
     value = environ.get("CDPR_DESIGN_ENGINE", "").strip().lower() or "auto"
     if value not in ENGINES:

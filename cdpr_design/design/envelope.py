@@ -38,7 +38,8 @@ import numpy as np
 
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.workspace import engine as workspace
+from cdpr_design import workspaces as workspace
+from cdpr_design.workspaces import grid as wsg
 
 
 def acceleration_directions(dim: int) -> np.ndarray:
@@ -286,8 +287,8 @@ def _task_positions(design: Design, step: float | None, positions, chunk: int) -
         return "given poses", [np.atleast_2d(np.asarray(positions, float))[:, :d]]
     if design.requirements.task_box is not None:
         g = task_grid(design, step)
-        workspace.check_grid_size(g, False, "requirements.task_box")
-        return "task_box", (workspace.grid_positions(g, s, min(chunk, g.size - s)) for s in range(0, g.size, chunk))
+        wsg.check_grid_size(g, False, "requirements.task_box")
+        return "task_box", (wsg.grid_positions(g, s, min(chunk, g.size - s)) for s in range(0, g.size, chunk))
     feas: list[np.ndarray] = []
     workspace.run(design, "static", step=step, keep_maps=False,
                   on_chunk=lambda c: feas.append(c.poses[c.feasible.astype(bool), :d]))

@@ -32,7 +32,7 @@ import numpy as np
 
 from cdpr_design.design import sizing as sz
 from cdpr_design.design.envelope import task_grid
-from cdpr_design.workspace import engine as ws
+from cdpr_design import workspaces as ws
 from cdpr_design.model import spec
 from cdpr_design.model.catalogue import Catalogue
 from cdpr_design.model.design import Design

@@ -100,7 +100,7 @@ def path_map(design, engine: str = "auto"):
     """A static workspace map for the path picture (planar designs; coarse enough to be quick)."""
     if not design.motion.planar:
         return None
-    from cdpr_design.workspace import engine as ws
+    from cdpr_design import workspaces as ws
 
     g = design.workspace.grid
     ext = max(h - l for l, h in zip(g.lower, g.upper))

@@ -14,9 +14,9 @@ def evaluate_pose(design, pose, kind: str = "static", objective: str = "min-norm
     infeasible: NaN.
     """
     from cdpr_design.statics import tension as T
-    from cdpr_design.workspace import engine as ws
+    from cdpr_design.statics import pose as sp
 
-    result = ws.evaluate_pose(design, pose, kind)
+    result = sp.evaluate_pose(design, pose, kind)
     if (objective != "min-norm" or weights is not None) and np.all(np.isfinite(result.tensions)):
         t = T.tensions_for_objective(result.W, result.wrench, design.tension_min, design.tension_max,
                                      objective, weights)

@@ -21,7 +21,7 @@ def workspace_header(design) -> list[str]:
 
 
 def workspace_rows(chunk, extra: dict[str, np.ndarray] | None = None) -> str:
-    """CSV text of one :class:`~cdpr_design.workspace.engine.Chunk` (no header)."""
+    """CSV text of one :class:`~cdpr_design.workspaces.grid.Chunk` (no header)."""
     cols = [chunk.poses[:, j] for j in range(chunk.poses.shape[1])]
     cols.append(chunk.feasible)
     cols.append(chunk.margin)
@@ -66,7 +66,7 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
 
 def _stream_sweep(design, out, kind, step, force, collisions, orientations, engine, progress):
     """The grid sweep, its rows streamed into ``workspace.csv`` (kept only when complete)."""
-    from cdpr_design.workspace import engine as ws
+    from cdpr_design import workspaces as ws
 
     grid = ws.make_grid(design, step, force)
     header = workspace_header(design) + ws.extra_columns(design, collisions, orientations)

@@ -1,6 +1,6 @@
 """Workspace pictures: capacity-margin map, cable-tension maps, orientation workspace.
 
-Each function takes a :class:`~cdpr_design.workspace.engine.WorkspaceResult`
+Each function takes a :class:`~cdpr_design.workspaces.grid.WorkspaceResult`
 and returns a matplotlib Figure; nothing is written.  Planar motions give one
 panel (drawn into ``ax`` when one is given), spatial motions a stack of
 z-slices on a figure of their own.
@@ -61,7 +61,7 @@ def _workspace_title(result, title_extra: str) -> str:
 def _planar_workspace(result, feas, marg, vmax, title, ax):
     from matplotlib.patches import Rectangle
 
-    from cdpr_design.workspace import engine as wsmod
+    from cdpr_design import workspaces as wsmod
 
     d = result.design
     rep = wsmod.representative_pose(result)

@@ -30,9 +30,8 @@ import numpy as np
 from cdpr_design import kernels as K
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.model.design import Design
+from cdpr_design.statics.pose import KINDS, combinations
 
-KINDS = {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
-         "wrench-closure": K.KIND_WRENCH_CLOSURE}
 OBJECTIVES = ("min-norm", "min-max", "min-sum")
 
 
@@ -45,12 +44,6 @@ def _osqp_polish_key() -> str:
 
 
 _OSQP_POLISH = _osqp_polish_key()
-
-
-def combinations(m: int, n: int) -> np.ndarray:
-    """All subsets of n-1 of the m cables, a (C(m, n-1), n-1) int64 array."""
-    c = list(itertools.combinations(range(m), max(n - 1, 0)))
-    return np.array(c, dtype=np.int64).reshape(len(c), max(n - 1, 0))
 
 
 def _arr(x, shape=None) -> np.ndarray:

@@ -1,0 +1,128 @@
+"""One pose, evaluated exactly as a grid sweep would: the pose-level statics API.
+
+Every analysis that asks "what happens at this pose" (the ``pose`` command,
+a workspace sweep's required wrenches, the orientation workspaces) goes
+through this module, so a cable or effector model changes the answers here,
+once.
+
+Kinds of workspace (:data:`KINDS`):
+
+- ``static``: gravity only;
+- ``wrench-feasible``: gravity plus every vertex of ``workspace.external_wrench``;
+- ``wrench-closure``: tension bounds ignored; the cables positively span the
+  wrench space (rank n).
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cdpr_design.errors import SpecError
+from cdpr_design.model.design import Design
+from cdpr_design.statics import kinematics as kin
+
+#: workspace kinds and their kernel codes (= ``kernels.KIND_*``; a test checks)
+KINDS = {"static": 0, "wrench-feasible": 1, "wrench-closure": 2}
+
+
+def check_kind(kind: str) -> None:
+    """Raise a :class:`SpecError` naming ``--kind`` unless ``kind`` is one of :data:`KINDS`."""
+    if kind not in KINDS:
+        raise SpecError([("--kind", f"expected one of {', '.join(KINDS)}, got {kind!r}")])
+
+
+def pose_at(design: Design, position3, ori3) -> np.ndarray:
+    """The motion's pose coordinates of a full position (3,) [m] and orientation (3,) [rad]."""
+    full = np.concatenate([np.asarray(position3, float), np.asarray(ori3, float)])
+    return full[list(design.motion.pose_index)]
+
+
+def wrench_vertices(design: Design, kind: str, orientation=None) -> np.ndarray:
+    """Required-wrench vertices (nv, n) [N, N m] at a fixed orientation (3,) [rad].
+
+    Row 0 is the nominal wrench -gravity (the one whose tensions are
+    reported).  For ``wrench-feasible`` every vertex of the external wrench
+    box is added to gravity (dimensions where lower = upper contribute one value).
+    """
+    ori = design.default_orientation_full() if orientation is None else np.asarray(orientation, float)
+    g = kin.gravity_wrench(design, pose_at(design, np.zeros(3), ori))
+    rows = [-g]
+    box = design.workspace.external_wrench
+    if kind == "wrench-feasible" and box is not None:
+        lo, hi = np.asarray(box.lower), np.asarray(box.upper)
+        choices = [(lo[i],) if lo[i] == hi[i] else (lo[i], hi[i]) for i in range(lo.size)]
+        for v in itertools.product(*choices):
+            rows.append(-(g + np.asarray(v)))
+    return np.ascontiguousarray(np.array(rows, dtype=float))
+
+
+def combinations(m: int, n: int) -> np.ndarray:
+    """All subsets of n-1 of the m cables, as a (C(m, n-1), n-1) int64 array (hyperplane shifting)."""
+    k = max(n - 1, 0)
+    c = list(itertools.combinations(range(m), k))
+    return np.array(c, dtype=np.int64).reshape(len(c), k)
+
+
+@dataclass
+class PoseResult:
+    """One pose evaluated exactly as a grid sweep would (same kernel).
+
+    Attributes: pose (motion coords), lengths (m,) [m], tensions (m,) [N] (NaN
+    where infeasible), feasible, margin [N] (NaN where W is rank deficient),
+    W (n, m) structure matrix, wrench (n,) the nominal required wrench.
+    """
+
+    pose: np.ndarray
+    lengths: np.ndarray
+    tensions: np.ndarray
+    feasible: bool
+    margin: float
+    W: np.ndarray
+    wrench: np.ndarray
+    #: colliding pairs (cli.md names; :func:`cdpr_design.statics.interference.check_pose`)
+    collisions: list = field(default_factory=list)
+
+
+def _structure(design: Design, full: np.ndarray, K):
+    """(ok, W (n, m), lengths (m,) [m]) at a full pose, pulleys honoured."""
+    R = kin.rotation_matrix(*full[3:])
+    Rb = np.ascontiguousarray(design.attachments @ R.T)
+    A = np.ascontiguousarray(design.outlets)
+    W = np.empty((design.n, design.m))
+    L = np.empty(design.m)
+    if kin.has_pulleys(design):
+        from cdpr_design.statics.interference import hardware_arrays
+
+        hw = hardware_arrays(design)
+        ok = K.structure_matrix_pulley(full[0], full[1], full[2], Rb, A, hw.axes, hw.eref, hw.radii,
+                                       design.rows, W, L, np.empty((design.m, 3)))
+    else:
+        ok = K.structure_matrix(full[0], full[1], full[2], Rb, A, design.rows, W, L)
+    return ok, W, L
+
+
+def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
+    """Feasibility, capacity margin [N] and minimum 2-norm tensions [N] at one pose.
+
+    Swivel pulleys are honoured (true outlet points in W, arc + free lengths);
+    ``collisions`` lists the interfering pairs (``feasible`` is the statics
+    result, as in a sweep without interference).
+    """
+    from cdpr_design import kernels as K  # numba, on first use
+    from cdpr_design.statics.interference import collisions
+
+    check_kind(kind)
+    full = design.full_pose(pose)
+    ok, W, L = _structure(design, full, K)
+    wreq = wrench_vertices(design, kind, full[3:])
+    t = np.full(design.m, np.nan)
+    if ok:
+        feasible, margin = K.eval_pose(W, wreq, design.tension_min, design.tension_max,
+                                       combinations(design.m, design.n), KINDS[kind], t)
+    else:
+        feasible, margin = False, np.nan
+    return PoseResult(np.asarray(pose, float), L, t, bool(feasible), float(margin), W, wreq[0],
+                      collisions(design, pose))

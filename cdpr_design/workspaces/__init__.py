@@ -1,0 +1,116 @@
+"""Workspaces: sweeps of a design over a grid of poses, in bounded memory.
+
+:func:`run` sweeps the design's grid at one fixed orientation: straight
+cables from point outlets go to :mod:`~cdpr_design.workspaces.engine` (numpy
+closed form or numba kernels), swivel pulleys and interference checks to
+:mod:`~cdpr_design.workspaces.hardware`.  :func:`run_orientations` sweeps
+orientation sets (:mod:`~cdpr_design.workspaces.orientation`).  Both return
+a :class:`~cdpr_design.workspaces.grid.WorkspaceResult` and hand every chunk
+of rows to ``on_chunk``.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+from cdpr_design.model.design import Design, Grid
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.pose import KINDS, check_kind
+from cdpr_design.workspaces.engine import ENGINES, check_engine, load_kernels
+from cdpr_design.workspaces.engine import sweep as straight_sweep
+from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, chunk_extra,
+                                         extra_columns, make_grid, representative_pose)
+
+__all__ = ["CHUNK", "ENGINES", "KINDS", "MAX_POSES", "Chunk", "WorkspaceResult", "chunk_extra", "extra_columns",
+           "load_kernels", "make_grid", "representative_pose", "run", "run_orientations"]
+
+
+def _setup(design: Design, kind: str, step, grid: Grid | None, orientation, force: bool):
+    """The grid (size checked) and full orientation (3,) [rad] of a sweep."""
+    check_kind(kind)
+    g = grid if grid is not None else make_grid(design, step, force)
+    if grid is not None:
+        check_grid_size(g, force)
+    ori = design.default_orientation_full() if orientation is None else np.asarray(orientation, float)
+    return g, ori
+
+
+def run(design: Design, kind: str = "static", step: float | None = None, grid: Grid | None = None,
+        orientation=None, on_chunk: Callable[[Chunk], None] | None = None,
+        progress: Callable[[int, int], None] | None = None, force: bool = False,
+        chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False,
+        engine: str = "auto") -> WorkspaceResult:
+    """Sweep the workspace grid and return the summary and maps.
+
+    Parameters
+    ----------
+    design : Design
+    kind : {'static', 'wrench-feasible', 'wrench-closure'}
+        ``static``: gravity only; ``wrench-feasible``: gravity plus every vertex
+        of ``workspace.external_wrench``; ``wrench-closure``: tension bounds
+        ignored, the cables positively span the wrench space.
+    step : float, optional
+        Grid step [m] overriding ``workspace.grid.step``.
+    grid : Grid, optional
+        Sweep this grid instead of the design's (e.g. the task box).
+    orientation : (3,) array, optional
+        Fixed (rx, ry, rz) [rad]; default ``workspace.orientation``.
+    on_chunk : callable, optional
+        Called with each :class:`Chunk` in grid order (stream rows to a file).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each chunk.
+    force : bool
+        Sweep grids larger than :data:`MAX_POSES`.
+    chunk : int
+        Rows per chunk (bounded memory).
+    keep_maps : bool
+        Keep the (subsampled) maps behind the pictures.
+    interference : bool
+        Also check cable-cable, cable-effector, effector-frame and cable-frame
+        interference (:mod:`cdpr_design.statics.interference`): ``feasible`` becomes
+        statics-feasible *and* collision free, chunks carry ``collision_free``,
+        and the summary gains ``collision_free``, ``feasible_statics`` and
+        ``collisions_by_kind``.
+    engine : {'auto', 'numba', 'numpy'}
+        For straight cables from point outlets (:mod:`~cdpr_design.workspaces.engine`);
+        both engines give the same results (tested).
+
+    Swivel pulleys (``cables[i].pulley``) are honoured whenever present; a
+    design without pulleys and without ``interference`` takes the point-outlet
+    engines.
+    """
+    check_engine(engine)
+    g, ori = _setup(design, kind, step, grid, orientation, force)
+    if interference or kin.has_pulleys(design):
+        from cdpr_design.workspaces.hardware import run_hardware  # numba kernels, loaded on first use
+
+        return run_hardware(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
+                            chunk=chunk, keep_maps=keep_maps, interference=interference)
+    return straight_sweep(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
+                          chunk=chunk, keep_maps=keep_maps, engine=engine)
+
+
+def run_orientations(design: Design, mode: str = "total", kind: str = "static", step: float | None = None,
+                     grid: Grid | None = None, orientation=None, orientations=None,
+                     on_chunk: Callable[[Chunk], None] | None = None,
+                     progress: Callable[[int, int], None] | None = None, force: bool = False,
+                     chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False,
+                     engine: str = "auto") -> WorkspaceResult:
+    """Total orientation workspace (``mode='total'``) or orientation range per position (``'range'``).
+
+    ``orientation`` is the nominal orientation (3,) [rad] (default
+    ``workspace.orientation``); ``orientations`` the set (q, 3) [rad] of the
+    ``total`` mode (default ``workspace.orientation_set``).  The other
+    parameters are those of :func:`run`; ``engine`` is checked but every
+    orientation sweep runs the kernels (pulley- and interference-aware).
+    See :func:`cdpr_design.workspaces.orientation.sweep_orientations`.
+    """
+    check_engine(engine)
+    g, nominal = _setup(design, kind, step, grid, orientation, force)
+    from cdpr_design.workspaces.orientation import sweep_orientations  # numba kernels, loaded on first use
+
+    return sweep_orientations(design, mode, kind, g, nominal, orientations=orientations,
+                              on_chunk=on_chunk, progress=progress, chunk=chunk,
+                              keep_maps=keep_maps, interference=interference)

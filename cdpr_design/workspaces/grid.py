@@ -1,0 +1,308 @@
+"""Workspace grids: their size, their positions, chunks of rows, and the streamed result.
+
+A sweep visits a grid of platform positions at a fixed orientation in chunks
+of :data:`CHUNK` rows (bounded memory however large the grid), hands each
+:class:`Chunk` to an optional callback (the command line streams it to
+``workspace.csv``), and collects into :class:`Maps` the summary figures and
+the maps behind the pictures (subsampled for very large grids), which become
+a :class:`WorkspaceResult`.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cdpr_design.errors import SpecError
+from cdpr_design.model.design import Design, Grid
+from cdpr_design.statics.pose import pose_at
+
+#: Largest grid swept without ``force=True`` (poses).
+MAX_POSES = 20_000_000
+#: Rows evaluated per chunk (bounded memory: ~ CHUNK * (2 m + 2) * 8 bytes).
+CHUNK = 1 << 18
+#: Largest number of cells kept for the maps behind the pictures.
+MAP_CELLS = 4_000_000
+
+
+@dataclass
+class Chunk:
+    """One chunk of a sweep: rows ``start .. start + len`` of the grid (C order x, y, z).
+
+    ``poses`` are in the motion's coordinates (orientation columns hold the
+    sweep's fixed orientation).
+    """
+
+    start: int
+    poses: np.ndarray
+    feasible: np.ndarray
+    margin: np.ndarray
+    tensions: np.ndarray
+    lengths: np.ndarray
+    #: uint8 (count,), 1 where no interference (only when the sweep checks it)
+    collision_free: np.ndarray | None = None
+    #: further CSV columns after the contract's (name -> (count,) array)
+    extra: dict = field(default_factory=dict)
+
+
+@dataclass
+class WorkspaceResult:
+    """Result of a workspace sweep. Infeasible poses are flags and NaNs, never errors.
+
+    Attributes
+    ----------
+    poses, feasible : int
+        Grid poses evaluated and how many are feasible.
+    fraction : float
+        feasible / poses.
+    measure : float
+        Feasible area [m^2] (planar) or volume [m^3]: feasible count x cell size.
+    min_margin, max_margin : float or None
+        Extremes of the capacity margin [N] over the feasible poses.
+    max_tension : (m,) array
+        Largest tension [N] of each cable over the feasible poses (NaN if none).
+    feasible_map, margin_map : arrays of the grid's shape (nx, ny[, nz])
+        For the pictures; subsampled with ``map_stride`` when the grid is huge.
+    tension_maps : (m, nx, ny[, nz]) float32
+    map_axes : list of arrays, the coordinates of the map cells per axis.
+    """
+
+    design: Design
+    kind: str
+    grid: Grid
+    orientation: np.ndarray
+    poses: int
+    feasible: int
+    min_margin: float | None
+    max_margin: float | None
+    max_tension: np.ndarray
+    elapsed_s: float
+    feasible_map: np.ndarray
+    margin_map: np.ndarray
+    tension_maps: np.ndarray
+    map_axes: list
+    map_stride: tuple
+    extra: dict = field(default_factory=dict)
+    #: orientation sweeps only (:func:`run_orientations`): a hardware.OrientationMaps
+    orientation_maps: object = None
+
+    @property
+    def fraction(self) -> float:
+        return self.feasible / self.poses if self.poses else 0.0
+
+    @property
+    def measure(self) -> float:
+        return self.feasible * self.grid.cell
+
+    def summary(self) -> dict:
+        """The contract's ``summary.json`` / ``--json`` keys (cli.md), plus extras."""
+        mt = self.max_tension
+        finite = mt[np.isfinite(mt)]
+        out = {
+            "name": self.design.name,
+            "kind": self.kind,
+            "poses": int(self.poses),
+            "feasible": int(self.feasible),
+            "fraction": float(self.fraction),
+            "measure": float(self.measure),
+            "min_margin": _num(self.min_margin),
+            "max_margin": _num(self.max_margin),
+            "max_tension": float(finite.max()) if finite.size else None,
+            "elapsed_s": round(float(self.elapsed_s), 4),
+            "max_tension_per_cable": {c: _num(v) for c, v in zip(self.design.cable_names, mt)},
+            "grid": {"lower": list(self.grid.lower), "upper": list(self.grid.upper),
+                     "step": list(self.grid.step), "shape": list(self.grid.shape)},
+            "orientation": [float(x) for x in self.orientation_coords()],
+            "measure_unit": "m^2" if self.design.motion.planar else "m^3",
+        }
+        out.update(self.extra)
+        return out
+
+    def orientation_coords(self) -> list[float]:
+        """The fixed orientation in the motion's rotation coordinates."""
+        mot = self.design.motion
+        if mot.name == "1R2T":
+            return [float(self.orientation[2])]
+        if mot.name == "3R3T":
+            return [float(x) for x in self.orientation]
+        return []
+
+
+def _num(x):
+    if x is None:
+        return None
+    x = float(x) + 0.0  # + 0.0 turns -0.0 into 0.0
+    return x if np.isfinite(x) else None
+
+
+def make_grid(design: Design, step: float | None = None, force: bool = False) -> Grid:
+    """The design's workspace grid, with ``step`` [m] overriding ``workspace.grid.step``.
+
+    Raises
+    ------
+    SpecError
+        When the step is not positive, or the grid exceeds :data:`MAX_POSES`
+        poses without ``force`` (the message says how many it would be).
+    """
+    g = design.workspace.grid
+    if step is not None:
+        if not np.isfinite(step) or step <= 0:
+            raise SpecError([("--step", f"expected a positive number of metres, got {step}")])
+        g = Grid(g.lower, g.upper, (float(step),) * len(g.lower))
+    check_grid_size(g, force, path="--step" if step is not None else "workspace.grid.step")
+    return g
+
+
+def check_grid_size(g: Grid, force: bool, path: str = "workspace.grid.step") -> None:
+    if not force and g.size > MAX_POSES:
+        dims = " x ".join(str(s) for s in g.shape)
+        raise SpecError([(path, f"the grid would have {g.size:,} poses ({dims}), more than the "
+                                f"{MAX_POSES:,} swept without --force; raise the step or pass --force")])
+
+
+def grid3(g: Grid):
+    d = len(g.lower)
+    lower = np.zeros(3)
+    step = np.ones(3)
+    shape = np.ones(3, dtype=np.int64)
+    lower[:d] = g.lower
+    step[:d] = g.step
+    shape[:d] = g.shape
+    return lower, step, shape
+
+
+def grid_positions(g: Grid, start: int, count: int) -> np.ndarray:
+    """Positions (count, dim) of flat grid indices start .. start+count (C order)."""
+    lower, step, shape = grid3(g)
+    idx = np.arange(start, start + count, dtype=np.int64)
+    iz = idx % shape[2]
+    r = idx // shape[2]
+    iy = r % shape[1]
+    ix = r // shape[1]
+    pos = np.stack([lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2]], axis=1)
+    return pos[:, : len(g.lower)]
+
+
+def positions3(g: Grid, start: int, count: int) -> np.ndarray:
+    """Positions (count, 3) [m] of flat grid indices start .. start+count, zero-padded to 3-D."""
+    pos = grid_positions(g, start, count)
+    P = np.zeros((count, 3))
+    P[:, : pos.shape[1]] = pos
+    return P
+
+
+def chunk_poses(design: Design, P: np.ndarray, ori) -> np.ndarray:
+    """Poses in the motion's coordinates for positions ``P`` (k, 3) [m] at orientation ``ori`` [rad]."""
+    d = design.motion.dim
+    poses = np.empty((P.shape[0], len(design.motion.coords)))
+    poses[:, :d] = P[:, :d]
+    poses[:, d:] = pose_at(design, np.zeros(3), ori)[d:]
+    return poses
+
+
+class Maps:
+    """Streaming statistics and (subsampled) maps of a sweep.
+
+    ``add`` takes each chunk's rows with their statistics (feasible count,
+    least and largest margin, computed by the sweep's engine); ``result``
+    builds the :class:`WorkspaceResult`.  Maps are kept at full resolution
+    while the grid has at most :data:`MAP_CELLS` cells, else every
+    ``stride``-th cell per axis.
+    """
+
+    def __init__(self, g: Grid, m: int, keep_maps: bool, extra_maps: tuple = ()):
+        self.g, self.m, self.keep = g, m, keep_maps
+        gshape = np.array(g.shape, dtype=np.int64)
+        stride = np.ones_like(gshape)
+        if keep_maps:
+            while np.prod((gshape + stride - 1) // stride) > MAP_CELLS:
+                stride[np.argmax((gshape + stride - 1) // stride)] += 1
+        self.stride = stride
+        shp = tuple(int(x) for x in (gshape + stride - 1) // stride) if keep_maps else (0,) * len(gshape)
+        self.fmap = np.zeros(shp, dtype=np.uint8)
+        self.mmap = np.full(shp, np.nan, dtype=np.float32)
+        self.tmaps = np.full((m,) + shp, np.nan, dtype=np.float32)
+        self.xmaps = {name: np.full(shp, np.nan, dtype=np.float32) for name in extra_maps}
+        self.nfeas, self.mmin, self.mmax = 0, np.inf, -np.inf
+        #: largest tension [N] per cable over the feasible poses so far (the engines raise it)
+        self.tpeak = np.full(m, -np.inf)
+
+    def add(self, start: int, stats, feas, marg, ten, extra: dict | None = None) -> None:
+        """Rows ``start .. start + len(feas)``; ``stats`` = (feasible count, min margin, max margin)."""
+        nf, cmin, cmax = stats
+        self.nfeas += nf
+        if nf:
+            self.mmin, self.mmax = min(self.mmin, cmin), max(self.mmax, cmax)
+        if not self.keep:
+            return
+        cnt = feas.shape[0]
+        if not (self.stride > 1).any() and not self.xmaps:
+            # full resolution: the chunk is a contiguous run of the flat grid
+            self.fmap.reshape(-1)[start:start + cnt] = feas
+            self.mmap.reshape(-1)[start:start + cnt] = marg
+            self.tmaps.reshape(self.m, -1)[:, start:start + cnt] = ten.T
+            return
+        msub, keep = self._cells(start, cnt)
+        self.fmap[msub] = feas[keep]
+        self.mmap[msub] = marg[keep]
+        for i in range(self.m):
+            self.tmaps[(i,) + msub] = ten[keep, i]
+        for name, v in (extra or {}).items():
+            if name in self.xmaps:
+                self.xmaps[name][msub] = v[keep]
+
+    def _cells(self, start: int, cnt: int):
+        """Map cells of rows start .. start+cnt kept by the stride, and the mask of those rows."""
+        idx = np.arange(start, start + cnt, dtype=np.int64)
+        sub = np.unravel_index(idx, self.g.shape)
+        keep = np.ones(cnt, dtype=bool)
+        for ax, s in zip(sub, self.stride):
+            if s > 1:
+                keep &= ax % s == 0
+        return tuple(ax[keep] // s for ax, s in zip(sub, self.stride)), keep
+
+    def result(self, design: Design, kind: str, ori, t0: float, extra: dict | None = None) -> "WorkspaceResult":
+        """The :class:`WorkspaceResult`; ``t0`` is the sweep's start (``time.perf_counter()``)."""
+        tpeak = self.tpeak.copy()
+        tpeak[~np.isfinite(tpeak)] = np.nan
+        g = self.g
+        axes = [ax[::s] for ax, s in zip(g.axes(), self.stride)]
+        return WorkspaceResult(
+            design=design, kind=kind, grid=g, orientation=np.asarray(ori, float), poses=g.size,
+            feasible=self.nfeas, min_margin=self.mmin if self.nfeas else None,
+            max_margin=self.mmax if self.nfeas else None, max_tension=tpeak,
+            elapsed_s=time.perf_counter() - t0, feasible_map=self.fmap, margin_map=self.mmap,
+            tension_maps=self.tmaps, map_axes=axes,
+            map_stride=tuple(int(s) for s in self.stride), extra=dict(extra or {}))
+
+
+def extra_columns(design: Design, interference: bool, mode: str | None) -> list[str]:
+    """Names of the extra ``workspace.csv`` columns, in the order :func:`chunk_extra` gives them."""
+    cols = ["collision_free"] if interference else []
+    if mode == "total":
+        cols.append("orientations_feasible")
+    elif mode == "range":
+        cols += [f"range_{c}" for c in design.motion.rotation_coords]
+    return cols
+
+
+def chunk_extra(chunk) -> dict:
+    """The extra columns of a :class:`Chunk` (name -> array)."""
+    out = {}
+    cf = getattr(chunk, "collision_free", None)
+    if cf is not None:
+        out["collision_free"] = cf
+    out.update(getattr(chunk, "extra", None) or {})
+    return out
+
+
+def representative_pose(result: WorkspaceResult) -> np.ndarray | None:
+    """A feasible pose with the largest capacity margin (for drawing), or None."""
+    mm = np.where(result.feasible_map.astype(bool), result.margin_map, np.nan)
+    if not np.isfinite(mm).any():
+        return None
+    idx = np.unravel_index(int(np.nanargmax(mm)), mm.shape)
+    pos = np.array([ax[i] for ax, i in zip(result.map_axes, idx)])
+    return pose_at(result.design, np.pad(pos, (0, 3 - pos.size)), result.orientation)
