@@ -1,17 +1,20 @@
 """cdpr-design: workspace, sizing and simulation explorer for cable-driven parallel robots.
 
-The public Python API::
+The Python API (docs/api.md)::
 
     import cdpr_design as cd
     design = cd.load("designs/planar2.yaml")
-    result = cd.run_workspace(design, kind="static")      # WorkspaceResult
-    pose = cd.evaluate_pose(design, [0.75, 0.75])          # tensions, margin, W
-    lengths = cd.inverse_kinematics(design, [0.75, 0.75])
-    sizing = cd.size_motors(design, cd.load_catalogue())   # SizingResult
-    row = cd.evaluate_design(design)                       # design_report.csv figures
+    r = cd.workspace(design, kind="static")          # every grid pose: r.feasible, r.margin, r.tensions
+    p = cd.pose(design, [0.75, 0.75])                # lengths, tensions, margin, W at one pose
+    f = cd.fk(design, p.lengths)                     # the pose back from the lengths
+    s = cd.size_motors(design)                       # motors, gears and drums against the catalogue
+    t = cd.sweep(design, {"effector.mass": [0.5, 1, 2]})   # variants of the design
 
-Names are imported on first use, so ``import cdpr_design`` (and every
-command's start-up) stays fast: numba, scipy and cvxpy load only when needed.
+Results convert to tables (``to_dict()``, ``to_arrow()``).  Lower-level names
+(``run_workspace`` streams chunks in bounded memory, ``evaluate_pose``,
+``inverse_kinematics``, ``structure_matrix``, ``evaluate_design``) stay
+available.  Names are imported on first use, so ``import cdpr_design`` (and
+every command's start-up) stays fast: numba, scipy and cvxpy load only when needed.
 """
 
 from __future__ import annotations
@@ -24,7 +27,12 @@ __version__ = "0.1.0"
 
 _LAZY = {
     "Design": ("model.design", "Design"),
-    "load": ("model.spec", "load"),
+    "load": ("api", "load"),
+    "workspace": ("api", "workspace"),
+    "pose": ("api", "pose"),
+    "fk": ("api", "fk"),
+    "size_motors": ("api", "size_motors"),
+    "sweep": ("api", "sweep"),
     "from_dict": ("model.spec", "from_dict"),
     "load_catalogue": ("model.spec", "load_catalogue"),
     "json_schema": ("model.spec", "json_schema"),
@@ -34,7 +42,6 @@ _LAZY = {
     "run_workspace": ("workspaces", "run"),
     "evaluate_pose": ("statics.pose", "evaluate_pose"),
     "WorkspaceResult": ("workspaces", "WorkspaceResult"),
-    "size_motors": ("design.sizing", "size_motors"),
     "evaluate_design": ("design.evaluate", "evaluate"),
 }
 

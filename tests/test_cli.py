@@ -139,12 +139,14 @@ def test_python_dash_m(tmp_path):
 
 
 def test_lazy_api_never_shadows_a_module():
-    """``from . import evaluate`` must find the module, not a lazily bound function."""
+    """``from . import evaluate`` must find the module, not a lazily bound function; and no API
+    name may be a sub-package's (importing ``cdpr_design.workspaces`` would rebind it)."""
     from pathlib import Path
 
     import cdpr_design
 
-    modules = {p.stem for p in Path(cdpr_design.__file__).parent.glob("*.py")}
+    root = Path(cdpr_design.__file__).parent
+    modules = {p.stem for p in root.glob("*.py")} | {p.parent.name for p in root.glob("*/__init__.py")}
     assert not set(cdpr_design._LAZY) & modules
     for name in cdpr_design._LAZY:
         assert getattr(cdpr_design, name) is not None

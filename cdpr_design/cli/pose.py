@@ -48,11 +48,12 @@ def pose(
 ):
     """One pose: cable lengths, tensions, feasibility, margin, structure matrix."""
     from cdpr_design.jobs import pose as job
+    from cdpr_design.statics.pose import evaluate_pose
 
     design = load_design(spec)
     p = parse_pose(design, at)
     c = parse_weights(design, weights)
-    result = job.evaluate_pose(design, p, kind.value, objective.value, c)
+    result = evaluate_pose(design, p, kind.value, objective.value, c)
     data = job.pose_data(design, result)
     data["objective"] = objective.value
     if json_:

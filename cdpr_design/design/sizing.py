@@ -34,6 +34,7 @@ from cdpr_design.design.duty import DutyCycle, default_cycle, trajectory_cycle
 from cdpr_design.design.envelope import Envelope, task_envelope
 from cdpr_design.design.winch import WinchLoad, implied_tension, margins, winch_load
 from cdpr_design.errors import InputError
+from cdpr_design.io.tables import Table, rows_to_columns
 from cdpr_design.model.catalogue import Catalogue, Motor
 from cdpr_design.model.design import Cable, Design
 
@@ -87,11 +88,12 @@ class AxisSizing:
 
 
 @dataclass
-class SizingResult:
+class SizingResult(Table):
     """Motor sizing of every cable.
 
     ``axes`` one :class:`AxisSizing` per cable; ``envelope`` the worst cases;
     ``cycle`` what the RMS torque was computed over; ``ok`` every axis fits.
+    As a table: the ``motor_sizing.csv`` columns, one row per cable.
     """
 
     design_name: str
@@ -107,6 +109,10 @@ class SizingResult:
 
     def rows(self) -> list[dict]:
         return [a.row() for a in self.axes]
+
+    def columns(self) -> dict:
+        """The ``motor_sizing.csv`` columns (name -> list, one value per cable)."""
+        return rows_to_columns(self.rows())
 
     def summary(self) -> dict:
         env = self.envelope

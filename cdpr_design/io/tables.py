@@ -140,3 +140,31 @@ def read_csv_table(path: str | Path, what: str = "--check-against") -> tuple[lis
     if not rows:
         raise InputError(f"{what}: {p} is empty (expected a header row)")
     return rows[0], rows[1:]
+
+
+class Table:
+    """Mixin for results that are tables: ``columns()`` gives the named columns in order.
+
+    ``to_dict()`` returns them (name -> 1-D numpy array or list; hand it to
+    ``pandas.DataFrame`` or ``polars.DataFrame``), ``to_arrow()`` builds a
+    pyarrow Table (pyarrow imported on first use).
+    """
+
+    def columns(self) -> dict:  # pragma: no cover - every subclass defines it
+        raise NotImplementedError
+
+    def to_dict(self) -> dict:
+        """The columns, name -> array, in the order of the command's CSV."""
+        return dict(self.columns())
+
+    def to_arrow(self):
+        """A pyarrow ``Table`` of the columns."""
+        import pyarrow as pa
+
+        return pa.table({k: np.asarray(v) for k, v in self.columns().items()})
+
+
+def rows_to_columns(rows: Sequence[dict]) -> dict:
+    """Records (one dict per row, same keys) as columns: name -> list of the rows' values."""
+    names = list(rows[0]) if rows else []
+    return {k: [r.get(k) for r in rows] for k in names}

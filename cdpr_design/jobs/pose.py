@@ -1,27 +1,8 @@
-"""The ``pose`` job: one pose of a design, its tensions for a chosen objective, as plain data."""
+"""The ``pose`` job: one pose of a design as the ``pose --json`` object."""
 
 from __future__ import annotations
 
 import numpy as np
-
-
-def evaluate_pose(design, pose, kind: str = "static", objective: str = "min-norm", weights=None):
-    """Lengths [m], tensions [N], feasibility and capacity margin [N] at ``pose``.
-
-    The tensions are re-solved for ``objective`` ('min-norm', 'min-max',
-    'min-sum') and the per-cable ``weights`` when either differs from the
-    unweighted minimum norm (:func:`cdpr_design.statics.tension.tensions_for_objective`);
-    infeasible: NaN.
-    """
-    from cdpr_design.statics import tension as T
-    from cdpr_design.statics import pose as sp
-
-    result = sp.evaluate_pose(design, pose, kind)
-    if (objective != "min-norm" or weights is not None) and np.all(np.isfinite(result.tensions)):
-        t = T.tensions_for_objective(result.W, result.wrench, design.tension_min, design.tension_max,
-                                     objective, weights)
-        result.tensions = np.full(design.m, np.nan) if t is None else t
-    return result
 
 
 def pose_data(design, result) -> dict:

@@ -13,13 +13,6 @@ from cdpr_design.plots import workspace as wsplots
 from cdpr_design.plots.worker import PictureWorker
 
 
-def workspace_header(design) -> list[str]:
-    """``workspace.csv`` columns (cli.md): pose coords, feasible, margin, tensions, lengths."""
-    names = design.cable_names
-    return (list(design.motion.coords) + ["feasible", "margin"]
-            + [f"tension_{c}" for c in names] + [f"length_{c}" for c in names])
-
-
 def workspace_rows(chunk, extra: dict[str, np.ndarray] | None = None) -> str:
     """CSV text of one :class:`~cdpr_design.workspaces.grid.Chunk` (no header)."""
     cols = [chunk.poses[:, j] for j in range(chunk.poses.shape[1])]
@@ -69,7 +62,7 @@ def _stream_sweep(design, out, kind, step, force, collisions, orientations, engi
     from cdpr_design import workspaces as ws
 
     grid = ws.make_grid(design, step, force)
-    header = workspace_header(design) + ws.extra_columns(design, collisions, orientations)
+    header = ws.column_names(design) + ws.extra_columns(design, collisions, orientations)
     csv_file = out.stream("workspace.csv")
     try:
         csv_file.write(",".join(header) + "\n")

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cdpr_design.errors import SpecError
+from cdpr_design.io.tables import Table
 from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
 
@@ -67,12 +68,13 @@ def combinations(m: int, n: int) -> np.ndarray:
 
 
 @dataclass
-class PoseResult:
+class PoseResult(Table):
     """One pose evaluated exactly as a grid sweep would (same kernel).
 
     Attributes: pose (motion coords), lengths (m,) [m], tensions (m,) [N] (NaN
     where infeasible), feasible, margin [N] (NaN where W is rank deficient),
-    W (n, m) structure matrix, wrench (n,) the nominal required wrench.
+    W (n, m) structure matrix, wrench (n,) the nominal required wrench,
+    cables (m,) the cable names.  As a table: one row per cable.
     """
 
     pose: np.ndarray
@@ -84,6 +86,11 @@ class PoseResult:
     wrench: np.ndarray
     #: colliding pairs (cli.md names; :func:`cdpr_design.statics.interference.check_pose`)
     collisions: list = field(default_factory=list)
+    cables: tuple = ()
+
+    def columns(self) -> dict:
+        """One row per cable: ``cable``, ``length`` [m], ``tension`` [N]."""
+        return {"cable": list(self.cables), "length": self.lengths, "tension": self.tensions}
 
 
 def _structure(design: Design, full: np.ndarray, K):
@@ -104,15 +111,20 @@ def _structure(design: Design, full: np.ndarray, K):
     return ok, W, L
 
 
-def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
-    """Feasibility, capacity margin [N] and minimum 2-norm tensions [N] at one pose.
+def evaluate_pose(design: Design, pose, kind: str = "static", objective: str = "min-norm",
+                  weights=None) -> PoseResult:
+    """Feasibility, capacity margin [N] and tensions [N] at one pose.
 
-    Swivel pulleys are honoured (true outlet points in W, arc + free lengths);
-    ``collisions`` lists the interfering pairs (``feasible`` is the statics
-    result, as in a sweep without interference).
+    The tensions are the minimum 2-norm feasible ones (exact kernel) unless
+    ``objective`` ('min-max', 'min-sum') or per-cable ``weights`` ask for
+    another distribution (:func:`cdpr_design.statics.tension.tensions_for_objective`);
+    NaN where infeasible.  Swivel pulleys are honoured (true outlet points in
+    W, arc + free lengths); ``collisions`` lists the interfering pairs
+    (``feasible`` is the statics result, as in a sweep without interference).
     """
     from cdpr_design import kernels as K  # numba, on first use
     from cdpr_design.statics.interference import collisions
+    from cdpr_design.statics.tension import tensions_for_objective
 
     check_kind(kind)
     full = design.full_pose(pose)
@@ -124,5 +136,8 @@ def evaluate_pose(design: Design, pose, kind: str = "static") -> PoseResult:
                                        combinations(design.m, design.n), KINDS[kind], t)
     else:
         feasible, margin = False, np.nan
+    if (objective != "min-norm" or weights is not None) and np.all(np.isfinite(t)):
+        t2 = tensions_for_objective(W, wreq[0], design.tension_min, design.tension_max, objective, weights)
+        t = np.full(design.m, np.nan) if t2 is None else t2
     return PoseResult(np.asarray(pose, float), L, t, bool(feasible), float(margin), W, wreq[0],
-                      collisions(design, pose))
+                      collisions(design, pose), tuple(design.cable_names))

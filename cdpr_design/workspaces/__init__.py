@@ -21,9 +21,9 @@ from cdpr_design.statics.pose import KINDS, check_kind
 from cdpr_design.workspaces.engine import ENGINES, check_engine, load_kernels
 from cdpr_design.workspaces.engine import sweep as straight_sweep
 from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, chunk_extra,
-                                         extra_columns, make_grid, representative_pose)
+                                         column_names, extra_columns, make_grid, representative_pose)
 
-__all__ = ["CHUNK", "ENGINES", "KINDS", "MAX_POSES", "Chunk", "WorkspaceResult", "chunk_extra", "extra_columns",
+__all__ = ["CHUNK", "ENGINES", "KINDS", "MAX_POSES", "Chunk", "WorkspaceResult", "chunk_extra", "column_names", "extra_columns",
            "load_kernels", "make_grid", "representative_pose", "run", "run_orientations"]
 
 

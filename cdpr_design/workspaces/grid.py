@@ -278,6 +278,13 @@ class Maps:
             map_stride=tuple(int(s) for s in self.stride), extra=dict(extra or {}))
 
 
+def column_names(design: Design) -> list[str]:
+    """The ``workspace.csv`` contract columns: pose coords, feasible, margin, tensions, lengths."""
+    names = design.cable_names
+    return (list(design.motion.coords) + ["feasible", "margin"]
+            + [f"tension_{c}" for c in names] + [f"length_{c}" for c in names])
+
+
 def extra_columns(design: Design, interference: bool, mode: str | None) -> list[str]:
     """Names of the extra ``workspace.csv`` columns, in the order :func:`chunk_extra` gives them."""
     cols = ["collision_free"] if interference else []

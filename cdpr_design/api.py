@@ -1,0 +1,138 @@
+"""The Python API, for notebooks and scripts: load a design, analyse it, size it, sweep it.
+
+Every function takes and returns data: a design from :func:`load`, result
+objects whose fields are numpy arrays and numbers, convertible to a table
+(``to_dict()``, ``to_arrow()``).  Nothing here writes files; the command line
+(``cdpr-design ...``) is the same library plus the files and pictures.
+Units are SI throughout: m, kg, N, s, rad.
+
+    import cdpr_design as cd
+    d = cd.load("designs/planar2.yaml")
+    r = cd.workspace(d)                      # every grid pose
+    r.feasible.sum(), r.feasible.size        # (18421, 22801)
+    p = cd.pose(d, [0.75, 0.75])             # tensions, margin, W at one pose
+    f = cd.fk(d, p.lengths)                  # back to the pose
+    s = cd.size_motors(d)                    # motors, gears, drums
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from cdpr_design.model.design import Design
+
+
+def load(path: str | Path) -> Design:
+    """Read and validate a design spec (YAML); errors name the offending key (:class:`SpecError`)."""
+    from cdpr_design.model import spec
+
+    return spec.load(path)
+
+
+def workspace(design: Design, kind: str = "static", *, step: float | None = None, grid=None,
+              orientation=None, orientations: str | None = None, interference: bool = False,
+              engine: str = "auto", max_poses: int | None = None, force: bool = False):
+    """Sweep the workspace grid and keep every pose: a :class:`~cdpr_design.workspaces.table.WorkspaceTable`.
+
+    Parameters
+    ----------
+    design : Design
+    kind : {'static', 'wrench-feasible', 'wrench-closure'}
+    step : float, optional
+        Grid step [m] (default ``workspace.grid.step``).
+    grid : Grid, optional
+        Sweep this grid instead of the design's.
+    orientation : (3,) array, optional
+        Fixed orientation (rx, ry, rz) [rad] (default ``workspace.orientation``).
+    orientations : {'total', 'range'}, optional
+        Orientation workspaces of rotational motions (extra columns).
+    interference : bool
+        Intersect feasibility with the interference checks (column ``collision_free``).
+    engine : {'auto', 'numba', 'numpy'}
+    max_poses : int, optional
+        Refuse grids with more poses than this (default 5,000,000; each pose
+        holds about (k + 2 + 2 m) x 8 bytes); stream larger ones with
+        :func:`cdpr_design.workspaces.run` and ``on_chunk``.
+    force : bool
+        Allow grids over the command line's sane-size limit (20 M poses).
+
+    The result has ``feasible`` (bool, one per grid pose), ``margin`` [N],
+    ``tensions`` [N], ``lengths`` [m], ``poses``, ``shape`` (the grid's),
+    ``summary()`` and ``to_dict()`` / ``to_arrow()`` (the ``workspace.csv`` columns).
+    """
+    from cdpr_design.workspaces import table
+
+    options = dict(orientation=orientation, interference=interference, engine=engine, force=force)
+    if orientations is not None:
+        options["orientations"] = orientations
+    return table.collect(design, kind, step=step, grid=grid,
+                         max_poses=table.MAX_COLLECT if max_poses is None else max_poses, **options)
+
+
+def pose(design: Design, at, kind: str = "static", *, objective: str = "min-norm", weights=None):
+    """One pose ``at`` (the motion's coordinates [m, rad]): a :class:`~cdpr_design.statics.pose.PoseResult`.
+
+    Lengths [m], tensions [N] (minimum 2-norm, or ``objective`` 'min-max' /
+    'min-sum' with optional per-cable ``weights``; NaN where infeasible),
+    ``feasible``, capacity ``margin`` [N], structure matrix ``W``, ``collisions``.
+    """
+    from cdpr_design.statics.pose import evaluate_pose
+
+    return evaluate_pose(design, at, kind, objective, weights)
+
+
+def fk(design: Design, lengths, guess=None):
+    """Forward kinematics: the pose for cable ``lengths`` [m] (a ``FKResult``: ``pose``,
+    ``residual`` [m], ``method``).  Closed form for two planar cables, Levenberg-Marquardt
+    from ``guess`` otherwise."""
+    from cdpr_design.statics.kinematics import forward_kinematics
+
+    return forward_kinematics(design, lengths, guess=guess)
+
+
+def size_motors(design: Design, catalogue=None, *, step: float | None = None, trajectory: str | None = None,
+                safety_factor: float | None = None, motor: str | None = None):
+    """Motor, gearbox and drum sizing: a :class:`~cdpr_design.design.sizing.SizingResult`.
+
+    ``catalogue``: a ``Catalogue`` or the path of a catalogue YAML extending
+    the shipped one (default: the shipped one).  ``trajectory``: the name of a
+    spec trajectory whose duty cycle gives the RMS torque.  ``motor``: size
+    every axis with this catalogue motor.  ``to_dict()`` gives the
+    ``motor_sizing.csv`` columns.
+    """
+    from cdpr_design.design import sizing
+    from cdpr_design.model import spec
+    from cdpr_design.model.catalogue import Catalogue
+
+    cat = catalogue if isinstance(catalogue, Catalogue) else spec.load_catalogue(catalogue)
+    from cdpr_design.jobs.motion import trajectory_samples
+
+    samples = trajectory_samples(design, trajectory)  # None without a trajectory
+    return sizing.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor, motor=motor)
+
+
+def sweep(design: Design, vary: dict, *, step: float | None = None, workers: int = 1,
+          scheduler: str | None = None, trajectory: str | None = None, safety_factor: float | None = None,
+          motor: str | None = None, catalogue=None):
+    """Evaluate variants of ``design``: a :class:`~cdpr_design.batch.results.SweepTable`.
+
+    ``vary`` maps dotted spec keys to values, e.g. ``{"effector.mass": [0.5, 1, 2],
+    "cables.0.outlet.0": "0:0.3:4"}`` (a list, or the command line's text
+    ``a,b,c`` / ``start:stop:count``); every combination is one variant,
+    evaluated like ``cdpr-design report`` (``step``, ``trajectory``,
+    ``safety_factor``, ``motor``, ``catalogue`` as for :func:`size_motors`).
+    ``workers`` processes (1: in this process), or a Dask ``scheduler``
+    (``"local"`` or an address).  A variant that fails keeps its row with the
+    reason in ``error``.
+    """
+    from cdpr_design.batch import sweep as sw
+    from cdpr_design.batch.results import SweepTable
+    from cdpr_design.model import spec
+
+    pairs = [(k, sw.parse_values(v) if isinstance(v, str) else tuple(v)) for k, v in vary.items()]
+    plan = sw.make_plan(design, pairs)
+    cat = catalogue if catalogue is None or not isinstance(catalogue, (str, Path)) else spec.load_catalogue(catalogue)
+    options = sw.Options(step=step, safety_factor=safety_factor, motor=motor, trajectory=trajectory, catalogue=cat)
+    records: list[dict] = []
+    sw.run(plan, options, workers=workers, scheduler=scheduler, on_record=records.append)
+    return SweepTable(*sw.table(plan, records))
