@@ -403,7 +403,9 @@ class Options:
     safety_factor: float | None = None
     motor: str | None = None
     trajectory: str | None = None
-    catalogue: Any = None  # a sizing.Catalogue; None: the shipped one
+    catalogue: Any = None  # a model.catalogue.Catalogue; None: the shipped one
+    #: engine of every variant's grid sweeps (results are identical: not in the fingerprint)
+    engine: str = "auto"
 
     def fingerprint(self) -> dict:
         return {"step": self.step, "safety_factor": self.safety_factor, "motor": self.motor,
@@ -441,7 +443,7 @@ def evaluate_variant(job: Job, index: int, values: Sequence) -> dict:
 
             samples = tr.sample(design, opt.trajectory)
         row = ev.evaluate(design, step=opt.step, catalogue=opt.catalogue, samples=samples,
-                          safety_factor=opt.safety_factor, motor=opt.motor)
+                          safety_factor=opt.safety_factor, motor=opt.motor, engine=opt.engine)
     except Exception as exc:  # noqa: BLE001 - a failing variant is a row, the sweep goes on
         msg = " ".join(str(exc).split())
         return record(index, values, error=f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__)
@@ -505,7 +507,7 @@ def _dask_chunk(job: Job, items):
 
 
 def _with_catalogue(opt: Options, cat) -> Options:
-    return Options(opt.step, opt.safety_factor, opt.motor, opt.trajectory, cat)
+    return Options(opt.step, opt.safety_factor, opt.motor, opt.trajectory, cat, opt.engine)
 
 
 # ----------------------------------------------------------------------------

@@ -58,10 +58,12 @@ def size_motors(
     overwrite: OverwriteOpt = False,
 ):
     """Motor, gearbox and drum sizing over the task workspace: motor_sizing.csv."""
+    from cdpr_design.cli import env
     from cdpr_design.jobs import sizing as job
 
     design = load_design(spec)
-    result, out_dir = job.size_motors(design, catalogue, trajectory, safety_factor, motor, step, out, overwrite)
+    result, out_dir = job.size_motors(design, catalogue, trajectory, safety_factor, motor, step, out, overwrite,
+                                      engine=env.engine())
     if json_:
         emit_json(result.summary())
         return
@@ -118,11 +120,12 @@ def check(
     quiet: QuietOpt = False,
 ):
     """Test the spec's requirements: one line per requirement; exit 0 all pass, 1 otherwise."""
+    from cdpr_design.cli import env
     from cdpr_design.jobs import sizing as job
 
     design = load_design(spec)
     e, checks = job.check(design, catalogue, trajectory, safety_factor, motor, step,
-                          progress=bars(quiet or json_, min_total=500_000))
+                          progress=bars(quiet or json_, min_total=500_000), engine=env.engine())
     passed = e.passed
     if json_:
         emit_json({"name": design.name, "passed": passed, "checks": checks, "figures": e.row})

@@ -100,12 +100,13 @@ def sweep(
     overwrite: OverwriteOpt = False,
 ):
     """Batch parameter sweep: sweep.csv (one design_report.csv row per variant), sweep_best.csv, sweep.png."""
+    from cdpr_design.cli import env
     from cdpr_design.jobs import sweep as job
 
     design = load_design(spec)
     run = job.sweep(design, vary, workers, scheduler, resume, rank_by, check_against, tolerance, abs_tolerance,
                     strict, catalogue, trajectory, safety_factor, motor, step, top, not no_picture, out, overwrite,
-                    progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg))
+                    progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg), engine=env.engine())
     if json_:
         emit_json(run.summary)
     else:

@@ -250,7 +250,8 @@ def _redundant_chunk(design: Design, W, w0, M, A):
 
 
 def task_envelope(design: Design, *, step: float | None = None, positions: np.ndarray | None = None,
-                  chunk: int = 4096, progress: Callable[[int, int], None] | None = None) -> Envelope:
+                  chunk: int = 4096, progress: Callable[[int, int], None] | None = None,
+                  engine: str = "auto") -> Envelope:
     """Worst-case tensions, cable speeds and accelerations over the task poses.
 
     Parameters
@@ -265,12 +266,14 @@ def task_envelope(design: Design, *, step: float | None = None, positions: np.nd
     chunk : int
         Task-box grid poses evaluated at once.
     progress : callable(done, total), optional
+    engine : {'auto', 'numba', 'numpy'}
+        Engine of the workspace sweep used without a task box.
     """
     req = design.requirements
     A = float(req.max_acceleration or 0.0)
     V = float(req.max_speed or 0.0)
     ori = design.default_orientation_full()
-    source, blocks = _task_positions(design, step, positions, chunk)
+    source, blocks = _task_positions(design, step, positions, chunk, engine)
     worst = _Worst(design, rotation_coords(design, ori), A)
     for pos in blocks:
         if pos.shape[0] == 0:
@@ -280,7 +283,8 @@ def task_envelope(design: Design, *, step: float | None = None, positions: np.nd
     return worst.envelope(source, V)
 
 
-def _task_positions(design: Design, step: float | None, positions, chunk: int) -> tuple[str, Iterable[np.ndarray]]:
+def _task_positions(design: Design, step: float | None, positions, chunk: int,
+                    engine: str) -> tuple[str, Iterable[np.ndarray]]:
     """(source, blocks of (k, dim) positions [m]): the given ones, the task box grid or the feasible workspace."""
     d = design.motion.dim
     if positions is not None:
@@ -290,7 +294,7 @@ def _task_positions(design: Design, step: float | None, positions, chunk: int) -
         wsg.check_grid_size(g, False, "requirements.task_box")
         return "task_box", (wsg.grid_positions(g, s, min(chunk, g.size - s)) for s in range(0, g.size, chunk))
     feas: list[np.ndarray] = []
-    workspace.run(design, "static", step=step, keep_maps=False,
+    workspace.run(design, "static", step=step, keep_maps=False, engine=engine,
                   on_chunk=lambda c: feas.append(c.poses[c.feasible.astype(bool), :d]))
     return "feasible workspace", feas
 

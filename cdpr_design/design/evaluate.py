@@ -66,7 +66,7 @@ def _task_kind(design: Design) -> str:
     return "wrench-feasible" if design.workspace.external_wrench is not None else "static"
 
 
-def task_sweep(design: Design, step: float | None = None, progress=None):
+def task_sweep(design: Design, step: float | None = None, progress=None, engine: str = "auto"):
     """Sweep the task box: (result, least margin over every task pose).
 
     The least margin counts infeasible poses (negative margins) and is -inf
@@ -85,14 +85,14 @@ def task_sweep(design: Design, step: float | None = None, progress=None):
             least[0] = min(least[0], float(mg.min()))
 
     res = ws.run(design, kind=_task_kind(design), grid=g, on_chunk=on_chunk, progress=progress,
-                 keep_maps=False)
+                 keep_maps=False, engine=engine)
     return res, least[0]
 
 
 def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catalogue | None = None,
                   samples=None, safety_factor: float | None = None, motor: str | None = None,
                   workspace_result: ws.WorkspaceResult | None = None, keep_maps: bool = False,
-                  progress: Callable[[int, int], None] | None = None) -> Evaluation:
+                  progress: Callable[[int, int], None] | None = None, engine: str = "auto") -> Evaluation:
     """Workspace, task box, motor sizing and checks of one design.
 
     Parameters
@@ -107,14 +107,16 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catal
     safety_factor, motor : see :func:`cdpr_design.design.sizing.size_motors`.
     workspace_result : WorkspaceResult, optional
         A static sweep already made (``report`` writes the workspace files first).
+    engine : {'auto', 'numba', 'numpy'}
+        Engine of the grid sweeps (:func:`cdpr_design.workspaces.run`).
     """
     if catalogue is None:
         catalogue = spec.load_catalogue()
     wres = workspace_result if workspace_result is not None else ws.run(
-        design, "static", step=step, keep_maps=keep_maps, progress=progress)
-    task, task_least = task_sweep(design, step)
+        design, "static", step=step, keep_maps=keep_maps, progress=progress, engine=engine)
+    task, task_least = task_sweep(design, step, engine=engine)
     sizing = sz.size_motors(design, catalogue, step=step, samples=samples,
-                            safety_factor=safety_factor, motor=motor)
+                            safety_factor=safety_factor, motor=motor, engine=engine)
     row = _workspace_figures(design, wres, task, task_least)
     row.update(_sizing_figures(sizing))
     row.update(_checks(design, wres, task, task_least, sizing, motor))
@@ -193,14 +195,15 @@ def _checks(design: Design, wres: ws.WorkspaceResult, task: ws.WorkspaceResult |
 
 
 def evaluate(design: Design, *, step: float | None = None, catalogue: Catalogue | None = None,
-             samples=None, safety_factor: float | None = None, motor: str | None = None) -> dict:
+             samples=None, safety_factor: float | None = None, motor: str | None = None,
+             engine: str = "auto") -> dict:
     """The headline figures of one design: one ``design_report.csv`` row (plain, picklable values).
 
     See :func:`evaluate_full` for the parameters and the module docstring for
     the checks.
     """
     return evaluate_full(design, step=step, catalogue=catalogue, samples=samples,
-                         safety_factor=safety_factor, motor=motor).row
+                         safety_factor=safety_factor, motor=motor, engine=engine).row
 
 
 def check_table(row: dict) -> list[dict]:

@@ -153,7 +153,7 @@ def _efficiency_given(design: Design, index: int) -> bool:
 def size_motors(design: Design, catalogue: Catalogue, *, step: float | None = None,
                 samples=None, safety_factor: float | None = None, motor: str | None = None,
                 envelope: Envelope | None = None,
-                progress: Callable[[int, int], None] | None = None) -> SizingResult:
+                progress: Callable[[int, int], None] | None = None, engine: str = "auto") -> SizingResult:
     """Size every cable's winch and motor.
 
     Parameters
@@ -175,6 +175,8 @@ def size_motors(design: Design, catalogue: Catalogue, *, step: float | None = No
         Reuse a computed :func:`~cdpr_design.design.envelope.task_envelope`.
     progress : callable(done, total), optional
         Called as the task poses are evaluated.
+    engine : {'auto', 'numba', 'numpy'}
+        Engine of the workspace sweep behind the envelope (no task box).
 
     Returns
     -------
@@ -190,7 +192,7 @@ def size_motors(design: Design, catalogue: Catalogue, *, step: float | None = No
     if not math.isfinite(sf) or sf < 1.0:
         raise InputError(f"--safety-factor: expected a number >= 1, got {sf}")
     _check_motor_names(design, catalogue, motor)
-    env = envelope if envelope is not None else task_envelope(design, step=step, progress=progress)
+    env = envelope if envelope is not None else task_envelope(design, step=step, progress=progress, engine=engine)
     notes = []
     if samples is not None:
         cycle = trajectory_cycle(samples)

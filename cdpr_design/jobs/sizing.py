@@ -34,7 +34,7 @@ class SizingRun(NamedTuple):
 
 def size_motors(design, catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
                 motor: str | None = None, step: float | None = None, out: str | Path | None = None,
-                overwrite: bool = False) -> SizingRun:
+                overwrite: bool = False, engine: str = "auto") -> SizingRun:
     """The ``size-motors`` command: size motor, gearbox and drum over the task workspace
     (grid ``step`` [m]; duty cycle of spec ``trajectory``, else a standard one) from the
     shipped catalogue extended by the YAML file ``catalogue``; write motor_sizing.csv into ``out``."""
@@ -44,14 +44,15 @@ def size_motors(design, catalogue: Path | None = None, trajectory: str | None = 
     cat = spec.load_catalogue(catalogue)
     samples = trajectory_samples(design, trajectory)
     out_dir = output_dir(design, out, overwrite)
-    result = sz.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor, motor=motor)
+    result = sz.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor, motor=motor,
+                            engine=engine)
     write_motor_sizing(out_dir, result)
     return SizingRun(result, out_dir)
 
 
 def evaluate(design, catalogue, trajectory: str | None = None, safety_factor: float | None = None,
              motor: str | None = None, step: float | None = None, workspace_result=None,
-             progress: Progress | None = None):
+             progress: Progress | None = None, engine: str = "auto"):
     """Workspace, task box, motor sizing and checks of one design
     (:func:`cdpr_design.design.evaluate.evaluate_full`; ``catalogue``: a loaded motor catalogue,
     ``trajectory``: a spec trajectory's name, ``step`` [m])."""
@@ -61,7 +62,7 @@ def evaluate(design, catalogue, trajectory: str | None = None, safety_factor: fl
     with stage(progress, f"evaluate {design.name}") as cb:
         return ev.evaluate_full(design, step=step, catalogue=catalogue, samples=samples,
                                 safety_factor=safety_factor, motor=motor,
-                                workspace_result=workspace_result, progress=cb)
+                                workspace_result=workspace_result, progress=cb, engine=engine)
 
 
 class CheckRun(NamedTuple):
@@ -70,13 +71,15 @@ class CheckRun(NamedTuple):
 
 
 def check(design, catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
-          motor: str | None = None, step: float | None = None, progress: Progress | None = None) -> CheckRun:
+          motor: str | None = None, step: float | None = None, progress: Progress | None = None,
+          engine: str = "auto") -> CheckRun:
     """The ``check`` command: evaluate the design and tabulate its requirements (nothing written);
     ``catalogue``: YAML file extending the shipped motor catalogue."""
     from cdpr_design.design import evaluate as ev
     from cdpr_design.model import spec
 
-    e = evaluate(design, spec.load_catalogue(catalogue), trajectory, safety_factor, motor, step, progress=progress)
+    e = evaluate(design, spec.load_catalogue(catalogue), trajectory, safety_factor, motor, step, progress=progress,
+                 engine=engine)
     return CheckRun(e, ev.check_table(e.row))
 
 
@@ -102,7 +105,7 @@ def report(design, catalogue: Path | None = None, trajectory: str | None = None,
     out_dir = output_dir(design, out, overwrite)
     wres = run_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
                          progress=progress)
-    e = evaluate(design, cat, trajectory, safety_factor, motor, step, wres, progress)
+    e = evaluate(design, cat, trajectory, safety_factor, motor, step, wres, progress, engine)
     write_motor_sizing(out_dir, e.sizing)
     write_design_report(out_dir, e.row)
     checks = ev.check_table(e.row)

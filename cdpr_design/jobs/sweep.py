@@ -99,11 +99,11 @@ def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None,
           catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
           motor: str | None = None, step: float | None = None, top: int = 10, picture: bool = True,
           out: str | Path | None = None, overwrite: bool = False, progress: Progress | None = None,
-          log: Callable[[str], None] | None = None) -> SweepRun:
+          log: Callable[[str], None] | None = None, engine: str = "auto") -> SweepRun:
     """The ``sweep`` command: evaluate every variant (``vary``: KEY=VALUES items, default the
     spec's sweep.vary), journalled in ``out`` (``resume`` continues it), then write sweep.csv,
     sweep_best.csv and sweep.png and compare with the baseline ``check_against``.
-    ``step`` [m]; ``log`` receives messages (resuming)."""
+    ``step`` [m]; ``log`` receives messages (resuming); ``engine``: of every variant's grid sweeps."""
     from cdpr_design.batch import sweep as sw
     from cdpr_design.model import spec
 
@@ -113,7 +113,7 @@ def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None,
     workers = _check_options(design, workers, step, tolerance, abs_tolerance, trajectory)
     baseline = read_csv_table(check_against) if check_against is not None else None
     options = sw.Options(step=step, safety_factor=safety_factor, motor=motor, trajectory=trajectory,
-                         catalogue=spec.load_catalogue(catalogue))
+                         catalogue=spec.load_catalogue(catalogue), engine=engine)
     out_dir = output_dir(design, out, overwrite)
     for name in ("sweep.csv", "sweep_best.csv", "sweep.png"):
         out_dir.target(name)  # refuse foreign files before any work
