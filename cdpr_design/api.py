@@ -125,7 +125,7 @@ def sweep(design: Design, vary: dict, *, step: float | None = None, workers: int
     (``"local"`` or an address).  A variant that fails keeps its row with the
     reason in ``error``.
     """
-    from cdpr_design.batch import sweep as sw
+    from cdpr_design import batch as sw
     from cdpr_design.batch.results import SweepTable
     from cdpr_design.model import spec
 

@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from cdpr_design.model import spec  # noqa: E402
-from cdpr_design.batch import sweep as sw  # noqa: E402
+from cdpr_design import batch as sw  # noqa: E402
 
 STARTUP = """
 import time; t0 = time.perf_counter()

@@ -17,7 +17,9 @@ import pytest
 from typer.testing import CliRunner
 
 from cdpr_design.model import spec
-from cdpr_design.batch import sweep as sw
+from cdpr_design import batch as sw
+from cdpr_design.batch import dask as bdask
+from cdpr_design.batch import sweep as bsweep
 from cdpr_design.cli.app import app
 from cdpr_design.errors import InputError, SpecError
 
@@ -261,8 +263,7 @@ def test_fork_after_openmp_is_unsafe(small_plan, serial_records, monkeypatch):
     from cdpr_design import workspaces as ws
 
     # a parallel kernel has run in this process, and the forked workers use the kernels too
-    monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")
-    ws.run(spec.load(PLANAR2), step=0.05)
+    ws.run(spec.load(PLANAR2), step=0.05, engine="numba")
     if numba.threading_layer() != "omp":
         pytest.skip(f"threading layer {numba.threading_layer()} (the test is about OpenMP)")
     with pytest.raises(BrokenProcessPool):
@@ -472,9 +473,9 @@ def test_engines_give_the_identical_sweep_csv(tmp_path, monkeypatch):
 def test_big_sweeps_load_the_kernels():
     design_data = spec.read_yaml(PLANAR2)
     plan = sw.make_plan(spec.from_dict(design_data), [("effector.mass", sw.parse_values("0.5:2:3"))])
-    assert not sw._worth_kernels(plan, sw.Options(), len(plan))  # 3 x 22,801 poses
-    assert sw._worth_kernels(plan, sw.Options(), 1000)  # 22.8 M poses
-    assert sw._worth_kernels(plan, sw.Options(step=0.001), 3)  # 3 x 2.25 M poses
+    assert not bsweep._worth_kernels(plan, sw.Options(), len(plan))  # 3 x 22,801 poses
+    assert bsweep._worth_kernels(plan, sw.Options(), 1000)  # 22.8 M poses
+    assert bsweep._worth_kernels(plan, sw.Options(step=0.001), 3)  # 3 x 2.25 M poses
 
 
 def _worker_settings():
@@ -492,7 +493,7 @@ def test_local_cluster_workers_keep_glibc_malloc_defaults():
     from distributed import Client, LocalCluster
 
     before = dict(os.environ)
-    cluster = sw._start_local_cluster(LocalCluster, 1)
+    cluster = bdask.start_local_cluster(LocalCluster, 1)
     try:
         assert dict(os.environ) == before
         with Client(cluster) as client:

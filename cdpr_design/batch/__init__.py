@@ -1,1 +1,29 @@
-"""batch"""
+"""Batch parameter sweeps over copies of a design (``cdpr-design sweep``).
+
+=============  ==============================================================
+module         what
+=============  ==============================================================
+``variants``   --vary KEY=VALUES, dotted key paths, the grid of variants (Plan)
+``local``      one variant's evaluation, in this process or a process pool
+``dask``       the same on Dask (a LocalCluster or a running scheduler)
+``sweep``      :func:`run`: every variant of a plan, rows to a callback
+``table``      ``sweep.csv`` rows, the best variants, regression checks
+``results``    a finished sweep as a table (the Python API's result)
+=============  ==============================================================
+
+Nothing here touches files: the command line journals the rows and writes
+the tables (:mod:`cdpr_design.jobs.sweep`).
+"""
+
+from cdpr_design.batch.local import (JOURNAL_VERSION, Options, RunStats, chunk_size, chunks, default_workers,
+                                     guided_chunks, record, wait_closed)
+from cdpr_design.batch.sweep import run
+from cdpr_design.batch.table import (HEADLINE, HIGHER_IS_BETTER, KNOWN_FIGURES, LOWER_IS_BETTER, Difference, best,
+                                     compare, parse_rank, table)
+from cdpr_design.batch.variants import (Axis, Plan, make_plan, parse_path, parse_values, parse_vary, resolve,
+                                        vary_from_spec, with_value)
+
+__all__ = ["HEADLINE", "HIGHER_IS_BETTER", "JOURNAL_VERSION", "KNOWN_FIGURES", "LOWER_IS_BETTER", "Axis",
+           "Difference", "Options", "Plan", "RunStats", "best", "chunk_size", "chunks", "compare",
+           "default_workers", "guided_chunks", "make_plan", "parse_path", "parse_rank", "parse_values",
+           "parse_vary", "record", "resolve", "run", "table", "vary_from_spec", "wait_closed", "with_value"]

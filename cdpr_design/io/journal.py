@@ -14,7 +14,7 @@ class SweepJournal:
     """The append-only journal of a sweep (``sweep.journal.jsonl`` in the output folder).
 
     Line 1 is a JSON object naming the sweep (``fingerprint``); every further
-    line is one finished variant (:func:`cdpr_design.batch.sweep.record`), appended
+    line is one finished variant (:func:`cdpr_design.batch.local.record`), appended
     and flushed as it finishes, so an interrupted sweep loses at most the
     variants in flight.  A torn last line (the process was killed while
     writing it) is dropped when the journal is read back.

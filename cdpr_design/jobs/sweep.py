@@ -28,8 +28,8 @@ def write_sweep(out: OutputDir, header: list[str], rows: list[list], best_header
 
 class SweepRun(NamedTuple):
     summary: dict  # the ``sweep --json`` object
-    plan: object  # batch.sweep.Plan
-    stats: object  # batch.sweep.Stats
+    plan: object  # batch.variants.Plan
+    stats: object  # batch.local.RunStats
     header: list
     rows: list
     best_header: list
@@ -76,7 +76,7 @@ def _kept_records(journal: SweepJournal, meta: dict, plan, resume: bool, log: Ca
 
 def _run_journalled(design, plan, options, out_dir, workers, scheduler, resume, log, progress):
     """Run the variants not in the journal yet, appending each to it; (stats, every record)."""
-    from cdpr_design.batch import sweep as sw
+    from cdpr_design import batch as sw
 
     journal = SweepJournal(out_dir)
     meta = {"journal": "cdpr-design sweep", "version": sw.JOURNAL_VERSION, "name": design.name,
@@ -104,7 +104,7 @@ def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None,
     spec's sweep.vary), journalled in ``out`` (``resume`` continues it), then write sweep.csv,
     sweep_best.csv and sweep.png and compare with the baseline ``check_against``.
     ``step`` [m]; ``log`` receives messages (resuming); ``engine``: of every variant's grid sweeps."""
-    from cdpr_design.batch import sweep as sw
+    from cdpr_design import batch as sw
     from cdpr_design.model import spec
 
     section = design.sweep or {}

@@ -1,7 +1,7 @@
 """The picture of a parameter sweep: headline figures against the varied keys.
 
 :func:`sweep_figure` takes the sweep table (header and rows, as
-:func:`cdpr_design.batch.sweep.table` gives them) and returns a matplotlib
+:func:`cdpr_design.batch.table.table` gives them) and returns a matplotlib
 Figure; nothing is written.
 """
 
@@ -72,7 +72,7 @@ def sweep_figure(header: list[str], rows: list[list], keys: Sequence[str], title
     the varied keys and the figures, lines coloured by ``rank_by``, variants
     failing a requirement in grey.
     """
-    from cdpr_design.batch import sweep as sw
+    from cdpr_design import batch as sw
 
     figs = [f for f in (figures or sw.HEADLINE) if f in header]
     if not figs:

@@ -1,0 +1,231 @@
+"""A sweep's rows as tables: ``sweep.csv``, the best variants, regression checks against a baseline."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Iterable, Sequence
+
+from cdpr_design.batch.variants import Plan
+from cdpr_design.errors import InputError
+
+
+#: Figures where a larger value is better (ranking, regression checks).
+HIGHER_IS_BETTER = frozenset({
+    "feasible", "fraction", "measure", "min_margin", "max_margin", "task_feasible",
+    "task_fraction", "task_min_margin", "torque_margin", "speed_margin",
+    "implied_tension_max", "min_margin_figure", "checks_passed",
+    "check_task_box", "check_min_margin", "check_min_fraction", "check_motors",
+})
+
+
+#: Figures where a smaller value is better.
+LOWER_IS_BETTER = frozenset({
+    "max_tension", "peak_tension", "peak_cable_speed", "peak_motor_torque",
+    "rms_motor_torque", "peak_motor_speed",
+})
+
+
+#: Every figure name of an :func:`~cdpr_design.design.evaluate.evaluate` row apart from
+#: the per-cable ones (``peak_tension_<cable>``, ``motor_<cable>``).
+KNOWN_FIGURES = HIGHER_IS_BETTER | LOWER_IS_BETTER | frozenset({
+    "name", "motion", "cables", "kind", "poses", "task_poses", "sizing_poses", "motor",
+    "tension_max", "drum_radius", "gear_ratio", "safety_factor", "duty_cycle",
+    "req_min_margin", "req_min_fraction",
+})
+
+
+#: Figures drawn in the sweep pictures (when present).
+HEADLINE = ("fraction", "min_margin_figure", "peak_tension", "peak_motor_torque",
+            "torque_margin", "speed_margin")
+
+
+def table(plan: Plan, records: Iterable[dict]) -> tuple[list[str], list[list]]:
+    """``sweep.csv`` as (header, rows): variant, the varied keys, the figures, ``error``.
+
+    Rows are sorted by variant index (a variant recorded twice keeps its
+    first record); the figure columns are those of the rows in index order,
+    by first appearance, so the table does not depend on completion order.
+    """
+    by_index: dict[int, dict] = {}
+    for r in records:
+        by_index.setdefault(int(r["variant"]), r)
+    ordered = [by_index[i] for i in sorted(by_index)]
+    keys = plan.keys
+    figs: dict[str, None] = {}
+    for r in ordered:
+        for k in r["figures"]:
+            if k not in keys and k not in ("variant", "error"):
+                figs.setdefault(k, None)
+    header = ["variant"] + keys + list(figs) + ["error"]
+    rows = []
+    for r in ordered:
+        f = r["figures"]
+        rows.append([r["variant"]] + list(r["values"]) + [f.get(k) for k in figs] + [r["error"]])
+    return header, rows
+
+
+def parse_rank(text: str | None) -> tuple[str, bool]:
+    """``--rank-by FIGURE[:asc|:desc]`` -> (figure, descending).
+
+    Default direction: descending for figures where more is better, ascending
+    for tensions, torques and speeds.
+    """
+    text = (text or "fraction").strip()
+    name, _, direction = text.partition(":")
+    name = name.strip()
+    if direction not in ("", "asc", "desc"):
+        raise InputError(f"--rank-by {text!r}: expected FIGURE, FIGURE:asc or FIGURE:desc")
+    if not (name in KNOWN_FIGURES or name.startswith(("peak_tension_", "motor_"))):
+        known = ", ".join(sorted(HIGHER_IS_BETTER | LOWER_IS_BETTER))
+        raise InputError(f"--rank-by {name!r}: not a figure of design_report.csv (numbers: {known})")
+    if direction:
+        return name, direction == "desc"
+    return name, not (name in LOWER_IS_BETTER or name.startswith("peak_tension_"))
+
+
+def _num(v) -> float | None:
+    if v is None or v == "":
+        return None
+    if isinstance(v, bool):
+        return float(v)
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else None
+
+
+def best(header: list[str], rows: list[list], rank_by: str, descending: bool) -> tuple[list[str], list[list]]:
+    """The variants that pass every requirement, ranked by ``rank_by`` (missing figures last).
+
+    Returns (header, rows) with a ``rank`` column first.
+    """
+    if rank_by not in header:
+        return ["rank"] + header, []
+    ip = header.index("checks_passed") if "checks_passed" in header else None
+    ie = header.index("error")
+    ir = header.index(rank_by)
+    passing = [r for r in rows if not r[ie] and ip is not None and r[ip] in (True, 1, "1")]
+
+    def key(r):
+        v = _num(r[ir])
+        if v is None:
+            return (1, 0.0, r[0])
+        return (0, -v if descending else v, r[0])
+
+    ranked = sorted(passing, key=key)
+    return ["rank"] + header, [[k + 1] + r for k, r in enumerate(ranked)]
+
+
+@dataclass
+class Difference:
+    """One figure of one variant that moved against the baseline."""
+
+    variant: int
+    column: str
+    baseline: str
+    current: str
+    change: str  # "worse", "better", "changed", "missing"
+
+    def as_dict(self) -> dict:
+        return {"variant": self.variant, "column": self.column, "baseline": self.baseline,
+                "current": self.current, "change": self.change}
+
+
+def _direction(column: str) -> int:
+    if column in HIGHER_IS_BETTER:
+        return 1
+    if column in LOWER_IS_BETTER or column.startswith("peak_tension_"):
+        return -1
+    return 0
+
+
+def compare(header: list[str], rows: list[list[str]], base_header: list[str], base_rows: list[list[str]],
+            keys: Sequence[str], tolerance: float = 1e-6, abs_tolerance: float = 1e-9,
+            strict: bool = False) -> tuple[list[Difference], list[Difference]]:
+    """Compare a sweep table with a baseline table (cells as CSV text).
+
+    Variants are matched by index, and their varied values must agree.  A
+    number differs when |current - baseline| > tolerance * max(|baseline|,
+    |current|) + abs_tolerance.  For figures with a known direction a
+    difference is ``worse`` or ``better``; for the others (counts, names) any
+    difference is ``changed``.  A variant that fails now and did not fail in
+    the baseline is ``worse``; a baseline column missing now is ``missing``.
+
+    Returns
+    -------
+    regressions, improvements : lists of :class:`Difference`
+        Regressions are ``worse``, ``changed`` and ``missing`` (and, with
+        ``strict``, ``better`` too).
+
+    Raises
+    ------
+    InputError
+        The baseline is not a sweep table, or it is from another sweep
+        (other varied keys or values, or variants this sweep does not have).
+    """
+    if "variant" not in base_header:
+        raise InputError("--check-against: the baseline has no 'variant' column (not a sweep.csv)")
+    missing_keys = [k for k in keys if k not in base_header]
+    if missing_keys:
+        raise InputError(f"--check-against: the baseline does not vary {', '.join(missing_keys)} "
+                         "(it is from another sweep)")
+    cur = {str(r[0]): r for r in rows}
+    bi = {c: j for j, c in enumerate(base_header)}
+    ci = {c: j for j, c in enumerate(header)}
+    worse: list[Difference] = []
+    better: list[Difference] = []
+    for br in base_rows:
+        if len(br) != len(base_header):
+            raise InputError(f"--check-against: a baseline row has {len(br)} cells, the header {len(base_header)}")
+        v = br[bi["variant"]]
+        r = cur.get(v)
+        if r is None:
+            raise InputError(f"--check-against: the baseline has variant {v}, this sweep does not "
+                             "(it is from another sweep)")
+        for k in keys:
+            a, b = _num(br[bi[k]]), _num(r[ci[k]])
+            same = (a is not None and b is not None and math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12)) \
+                or br[bi[k]] == r[ci[k]]
+            if not same:
+                raise InputError(f"--check-against: variant {v} has {k}={br[bi[k]]} in the baseline, "
+                                 f"{r[ci[k]]} here (it is from another sweep)")
+        for col in base_header:
+            if col in keys or col == "variant":
+                continue
+            old = br[bi[col]]
+            if col not in ci:
+                worse.append(Difference(int(v), col, old, "", "missing"))
+                continue
+            new = r[ci[col]]
+            if old == new:
+                continue
+            if col == "error":
+                d = Difference(int(v), col, old, new, "worse" if new and not old else
+                               ("better" if old and not new else "changed"))
+                (better if d.change == "better" else worse).append(d)
+                continue
+            a, b = _num(old), _num(new)
+            direction = _direction(col)
+            if a is not None and b is not None:
+                if abs(b - a) <= tolerance * max(abs(a), abs(b)) + abs_tolerance:
+                    continue
+                if direction == 0:
+                    change = "changed"
+                else:
+                    change = "better" if (b - a) * direction > 0 else "worse"
+            elif direction != 0 and a is None and b is not None:
+                change = "better"
+            elif direction != 0 and a is not None and b is None:
+                change = "worse"
+            else:
+                change = "changed"
+            d = Difference(int(v), col, old, new, change)
+            if change == "better":
+                better.append(d)
+                if strict:
+                    worse.append(d)
+            else:
+                worse.append(d)
+    return worse, better
