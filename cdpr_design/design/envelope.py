@@ -181,7 +181,7 @@ def _min_norm_general(W, wreq, tmin, tmax):
 
     out = tension.min_norm_many(W, wreq, tmin, tmax)
     for k in np.flatnonzero(~np.all(np.isfinite(out), axis=1)):
-        t = tension.min_norm_above(W, wreq[k], tmin, start=2.0 * float(np.max(tmax)))
+        t = tension.min_norm_above(W, wreq[k], tmin)
         if t is not None:
             out[k] = t
     return out

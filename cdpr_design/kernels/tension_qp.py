@@ -88,14 +88,17 @@ def goldfarb_idnani(m, r, tmin, tmax, t, scr):
     the bounds infeasible.  The active normals are re-factored by a
     Householder QR at each change (r = m - n is small: cheaper and sturdier
     than Givens bookkeeping).  Violations below ``QP_TOL`` times the largest
-    bound count as satisfied; the result is clipped into the bounds.
+    finite bound count as satisfied (an infinite bound is no bound); the result is clipped into the bounds.
     Returns False (``t`` NaN) when infeasible.
     """
     N, tp, J, RA, NA, VA = scr[8], scr[9], scr[10], scr[11], scr[12], scr[13]
     z, d, rdir, u, active = scr[14], scr[15], scr[16], scr[17], scr[24]
     scale = 1.0
-    for j in range(m):
-        scale = max(scale, max(abs(tmin[j]), abs(tmax[j])))
+    for j in range(m):  # the finite bounds only: t_max = inf means no upper bound
+        if math.isfinite(tmin[j]):
+            scale = max(scale, abs(tmin[j]))
+        if math.isfinite(tmax[j]):
+            scale = max(scale, abs(tmax[j]))
     tol = QP_TOL * scale
     for i in range(r):
         z[i] = 0.0

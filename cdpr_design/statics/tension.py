@@ -176,29 +176,23 @@ def min_norm_many(W, wrenches, tmin, tmax) -> np.ndarray:
     return out
 
 
-def min_norm_above(W, w, tmin, start: float) -> np.ndarray | None:
+def min_norm_above(W, w, tmin) -> np.ndarray | None:
     """Exact minimum 2-norm tensions with lower bounds only: min |t|^2, W t = w, t >= t_min [N].
 
-    The kernel needs finite upper bounds (its tolerance, 1e-11 times the
-    largest bound, would be infinite), so a common upper bound B is used,
-    starting at ``start`` [N] and multiplied by 4 until no tension reaches
-    it: the bound is then inactive, and by strict convexity the solution is
-    that of the problem without it, within 4e-11 of the largest tension.
-    None when rank W < n or no tensions above t_min balance w (B has grown
-    past 4^20 ``start`` without a solution that balances w).
+    The Goldfarb-Idnani kernel with infinite upper bounds (its tolerance is
+    taken from the finite bounds).  None when rank W < n or no tensions above
+    t_min balance w; a result that does not balance w to 1e-9 (relative) is
+    never returned.
     """
     W = _arr(W)
     n, m = W.shape
     w, tmin = _arr(w, (n,)), _arr(tmin, (m,))
-    bound = max(float(start), float(np.max(np.abs(tmin))), 1.0)
-    scr = K.make_scratch(n, m, 1)
     t = np.empty(m)
-    for _ in range(21):
-        if (K.min_norm_tensions(W, w, tmin, np.full(m, bound), t, scr) and np.all(t < bound)
-                and np.linalg.norm(W @ t - w) <= 1e-9 * (1.0 + np.linalg.norm(w))):
-            return t.copy()
-        bound *= 4.0
-    return None
+    if not K.min_norm_tensions(W, w, tmin, np.full(m, np.inf), t, K.make_scratch(n, m, 1)):
+        return None
+    if np.linalg.norm(W @ t - w) > 1e-9 * (1.0 + np.linalg.norm(w)):
+        return None
+    return t
 
 
 # ----------------------------------------------------------------------------
