@@ -271,6 +271,7 @@ def test_rank_deficient_poses_are_infeasible(motion):
 def test_min_norm_kernel_detects_infeasibility_and_is_exact():
     """min_norm_tensions alone: infeasible <=> linprog infeasible; optimum = cvxpy's."""
     rng = np.random.default_rng(11)
+    outcomes = set()
     for _ in range(150):
         n = int(rng.choice([2, 3, 6]))
         m = n + int(rng.integers(1, 5))
@@ -284,8 +285,10 @@ def test_min_norm_kernel_detects_infeasibility_and_is_exact():
         if abs(ref) < 1e-7 * tmax.max():
             continue
         assert ok == lp_feasible(W, w, tmin, tmax)
+        outcomes.add(bool(ok))
         if ok:
             tref = MinNormOracle(n, m)(W, w, tmin, tmax)
             assert np.max(np.abs(t - tref)) <= 1e-6
         else:
             assert np.all(np.isnan(t))
+    assert outcomes == {True, False}, "both feasible and infeasible cases must be compared"

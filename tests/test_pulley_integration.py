@@ -41,7 +41,7 @@ from cdpr_design.statics import pose as sp
 from cdpr_design.cli.app import app
 from cdpr_design.statics.interference import HIT_NAMES, check_pose
 
-from .conftest import PLANAR2
+from .conftest import CROSSED4_CABLES, IP3, IP3_BODY, PLANAR2
 
 
 def planar2(radius=None):
@@ -58,10 +58,7 @@ def planar2(radius=None):
 
 def planar4(radius=None, axes=None):
     """A 1R2T robot with four cables (m > n), pulleys at the four corners."""
-    cables = [{"name": "c1", "outlet": [0, 2], "attachment": [-0.1, 0.05]},
-              {"name": "c2", "outlet": [2, 2], "attachment": [0.1, 0.05]},
-              {"name": "c3", "outlet": [2, 0], "attachment": [0.1, -0.05]},
-              {"name": "c4", "outlet": [0, 0], "attachment": [-0.1, -0.05]}]
+    cables = copy.deepcopy(CROSSED4_CABLES)
     axes = axes or [[0, 1, 0], [0, 1, 0], [0, -1, 0], [0, -1, 0]]
     if radius is not None:
         for c, k in zip(cables, axes):
@@ -83,14 +80,8 @@ def planar4(radius=None, axes=None):
     })
 
 
-IP3 = [((-8.544, 5.463, 3.202), (-0.07, 0.648, -0.26)), ((8.184, 5.692, 3.236), (0.06, 0.648, -0.262)),
-       ((8.224, -5.492, 3.25), (0.06, -0.651, -0.262)), ((-8.491, -5.322, 3.221), (-0.07, -0.651, -0.26)),
-       ((-8.192, 5.648, -0.589), (-0.085, 0.748, 0.261)), ((7.208, 6.463, -0.548), (0.095, 0.749, 0.26)),
-       ((7.869, -5.557, -0.527), (0.095, -0.745, 0.26)), ((-8.27, -5.545, -0.582), (-0.085, -0.746, 0.261))]
-
-
 def ipanema3(radius=None):
-    """IPAnema 3 (reference/robots.md, cdpyr sample); upper cables come up their posts (+z),
+    """IPAnema 3 (cdpyr sample, designs/ipanema3.yaml); upper cables come up their posts (+z),
     lower cables come down (-z)."""
     cables = []
     for i, (a, b) in enumerate(IP3):
@@ -99,10 +90,7 @@ def ipanema3(radius=None):
             c["pulley"] = {"radius": radius, "axis": [0.0, 0.0, 1.0 if i < 4 else -1.0]}
         cables.append(c)
     return spec.from_dict({
-        "name": "ip3", "motion": "3R3T", "gravity": [0, 0, -9.81],
-        "frame": {"lower": [-8.544, -5.557, -0.589], "upper": [8.224, 6.463, 3.25]},
-        "effector": {"mass": 30.0, "size": [0.19, 1.5, 0.53], "inertia": [5.226154, 0.637352, 4.723802]},
-        "tension": [100.0, 3000.0], "cables": cables,
+        **copy.deepcopy(IP3_BODY), "cables": cables,
         "winch": {"drum_radius": 0.05, "gear_ratio": 10.0},
         "workspace": {"grid": {"lower": [-2, -2, 0.8], "upper": [2, 2, 2.0], "step": 2.0}},
         "requirements": {"max_speed": 1.0, "max_acceleration": 2.0},

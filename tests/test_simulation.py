@@ -15,11 +15,6 @@ from cdpr_design.motion.compare import estimate_delay
 from .conftest import PLANAR2
 
 
-@pytest.fixture(scope="module")
-def planar2():
-    return spec.load(PLANAR2)
-
-
 def test_model_builds_with_tendons_that_only_pull(planar2):
     sim = S.Simulator(planar2)
     m = sim.model

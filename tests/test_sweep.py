@@ -14,33 +14,21 @@ import time
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
 
 from cdpr_design.model import spec
 from cdpr_design import batch as sw
 from cdpr_design.batch import dask as bdask
 from cdpr_design.batch import sweep as bsweep
-from cdpr_design.cli.app import app
 from cdpr_design.errors import InputError, SpecError
 
-from .conftest import PLANAR2, ROOT, write_spec
+from .conftest import PLANAR2, ROOT, invoke, write_spec
 
-runner = CliRunner()
 STEP = "0.05"  # coarse grids keep the sweeps fast; report runs use the same step
-
-
-def invoke(*args):
-    return runner.invoke(app, [str(a) for a in args])
 
 
 def read_csv(path: Path) -> tuple[list[str], list[list[str]]]:
     rows = list(csv.reader(io.StringIO(path.read_text())))
     return rows[0], rows[1:]
-
-
-@pytest.fixture(scope="module")
-def planar2():
-    return spec.load(PLANAR2)
 
 
 # ----------------------------------------------------------------------------

@@ -15,33 +15,9 @@ from cdpr_design.motion import profile
 from cdpr_design.motion import trajectory as tr
 from cdpr_design.model.design import Trajectory
 
-from .conftest import PLANAR2
+from .conftest import PLANAR2, point_mass
 
 REL = 1e-9
-
-
-@pytest.fixture(scope="module")
-def planar2():
-    return spec.load(PLANAR2)
-
-
-def point_mass(outlets, mass=1.0, tension=(0.0, 100.0), motion="2T", gravity=None, attachments=None,
-               size=None, inertia=None):
-    d = len(outlets[0])
-    data = {
-        "name": "pm", "motion": motion,
-        "frame": {"lower": [-5.0] * d, "upper": [5.0] * d},
-        "effector": {"mass": mass, "size": size or [0.1] * d},
-        "tension": list(tension),
-        "cables": [{"name": f"c{i}", "outlet": list(a),
-                    "attachment": list(attachments[i]) if attachments else [0.0] * d}
-                   for i, a in enumerate(outlets)],
-    }
-    if gravity is not None:
-        data["gravity"] = list(gravity)
-    if inertia is not None:
-        data["effector"]["inertia"] = inertia
-    return spec.from_dict(data)
 
 
 # ----------------------------------------------------------------------------
