@@ -120,12 +120,12 @@ def main():
 
     t0 = time.perf_counter()
     from cdpr_design.kernels import hanging as K
-    phi, t, h, status, nbal = K.hanging_tilt_batch(A, B, c, mass, g, P)
+    phi, _, _, status, _ = K.hanging_tilt_batch(A, B, c, mass, g, P)
     t_cold = time.perf_counter() - t0
     t_warm = math.inf
     for _ in range(args.repeat):
         t0 = time.perf_counter()
-        phi, t, h, status, nbal = K.hanging_tilt_batch(A, B, c, mass, g, P)
+        phi, _, _, status, _ = K.hanging_tilt_batch(A, B, c, mass, g, P)
         t_warm = min(t_warm, time.perf_counter() - t0)
 
     rng = np.random.default_rng(args.seed)

@@ -29,7 +29,6 @@ from cdpr_design.kernels import hanging as K
 from cdpr_design.model import spec
 from cdpr_design.statics import hanging as H
 from cdpr_design.statics import kinematics as kin
-
 from tests.conftest import DESIGNS
 
 G2 = np.array([0.0, -9.81, 0.0])
@@ -159,7 +158,7 @@ def test_kernel_status_reasons():
     d = spec.load(DESIGNS / "planar2.yaml")
     A, B, c, g = d.outlets, d.attachments, np.asarray(d.effector.center_of_mass), np.asarray(d.gravity)
     P = np.array([[0.75, 0.8], [0.75, 2.5], [3.0, 1.0], [0.2, 1.45]])
-    phi, t, h, st, nb = K.hanging_tilt_batch(A, B, c, 1.0, g, P)
+    phi, _, _, st, _ = K.hanging_tilt_batch(A, B, c, 1.0, g, P)
     assert st[0] == K.TILT_OK and abs(phi[0]) < 1e-12
     assert st[1] != K.TILT_OK and st[2] == K.TILT_PUSHING  # above the outlets / beyond them
     for s in st:
@@ -174,7 +173,7 @@ def test_statics_pose_at_matches_kernel():
     for _ in range(4):
         A, B, c, mass, W, Hh = random_planar2(rng)
         P = np.column_stack([rng.uniform(0, W, 30), rng.uniform(0, Hh - 0.1, 30)])
-        phi, t, h, st, nb = K.hanging_tilt_batch(A, B, c, mass, G2, P)
+        phi, t, _, st, _ = K.hanging_tilt_batch(A, B, c, mass, G2, P)
         for k in range(len(P)):
             r = H.pose_at_arrays(A, B, c, mass, G2, P[k], True)
             assert r.feasible == (st[k] == K.TILT_OK)
@@ -201,7 +200,7 @@ def test_instantaneous_centre():
     for _ in range(6):
         A, B, c, mass, W, Hh = random_planar2(rng)
         P = np.column_stack([rng.uniform(0.1 * W, 0.9 * W, 50), rng.uniform(0, Hh - 0.3, 50)])
-        phi, t, h, st, nb = K.hanging_tilt_batch(A, B, c, mass, G2, P)
+        phi, _, _, st, _ = K.hanging_tilt_batch(A, B, c, mass, G2, P)
         for k in np.flatnonzero(st == K.TILT_OK):
             assert instant_centre_offset(A, B, c, P[k], phi[k]) < 1e-9
             n += 1
@@ -247,7 +246,7 @@ def curve_minima(A2, B2, c2, mass, rho, n):
         for k in range(n):
             e0, em, ep = E[k], E[k - 1], E[(k + 1) % n]
             if np.isfinite(e0) and np.isfinite(em) and np.isfinite(ep) and e0 <= em and e0 <= ep:
-                r = minimize_scalar(lambda x: branch(np.array(x), s)[0], bounds=(th[k] - step, th[k] + step),
+                r = minimize_scalar(lambda x, s=s: branch(np.array(x), s)[0], bounds=(th[k] - step, th[k] + step),
                                     method="bounded", options={"xatol": 1e-13})
                 Ex, p, phi, P1, P2 = branch(np.array(r.x), s)
                 u = np.array([A2[0] - P1, A2[1] - P2])
@@ -558,6 +557,7 @@ def test_planar2_tilt_figures(planar2_maps, cy, origin_max, box_max):
     k = np.nanargmax(np.where(inside, tm.tilt_deg, np.nan))
     assert tm.tilt_deg.ravel()[k] == pytest.approx(box_max, abs=0.1)
     assert 0.94 < tm.feasible.mean() < 0.97
+    assert np.all(tm.feasible[tm.within_limits]) and 0.5 < tm.within_limits.mean() < tm.feasible.mean()
     # symmetric design: the map is mirror-symmetric, level on the centre line
     np.testing.assert_allclose(tm.phi[75][tm.feasible[75]], 0.0, atol=1e-12)
     np.testing.assert_allclose(tm.phi, -tm.phi[::-1], atol=1e-9, equal_nan=True)
@@ -571,7 +571,7 @@ def test_planar2_tilt_figures(planar2_maps, cy, origin_max, box_max):
 
 
 def test_planar2_tilt_is_larger_with_com_closer_to_the_line(planar2_maps):
-    (d0, t0), (d3, t3) = planar2_maps[0.0], planar2_maps[0.03]
+    t0, t3 = planar2_maps[0.0][1], planar2_maps[0.03][1]
     both = t0.feasible & t3.feasible
     assert np.all(t3.tilt_deg[both] >= t0.tilt_deg[both] - 1e-9)
 
@@ -627,6 +627,10 @@ def test_pose_at():
     assert r.feasible and r.tilt_deg == pytest.approx(math.degrees(abs(r.orientation)))
     back = H.fk(d, r.lengths)  # the lengths it reports put it there
     np.testing.assert_allclose(back.pose, [0.3, 0.5, r.orientation], atol=1e-9)
+    assert r.within_limits  # planar2: 0 <= t <= 20 N
+    high = H.pose_at(d, [0.75, 1.4])
+    assert high.feasible and high.tensions.max() > 20 and high.within_limits is False
+    assert H.fk(d, high.lengths).within_limits is False
     bad = H.pose_at(d, [3.0, 1.0])
     assert not bad.feasible and "pushing" in bad.reason and math.isnan(bad.tilt_deg)
     with pytest.raises(H.NotUnderconstrained):

@@ -47,6 +47,7 @@ Transactions on Robotics 31(2), 468-478, 2015.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -94,8 +95,14 @@ class Equilibrium:
         Largest | |l_i| - rho_i | over the taut cables [m].
     indeterminate : bool
         More taut cables than the pose has degrees of freedom and they lock
-        it: the tensions are not unique (the minimum-norm ones are reported).
+        it: the tensions are not unique (the minimum-norm non-negative ones
+        are reported, and ``slack`` lists the cables they leave at zero).
     planar : bool
+    up : tuple
+        -g / |g|, the frame's vertical (for ``tilt_deg``).
+    within_limits : bool or None
+        Tensions within the design's [tension_min, tension_max] (set by the
+        Design-level functions; None for plain arrays or indeterminate tensions).
     """
 
     position: np.ndarray
@@ -110,6 +117,7 @@ class Equilibrium:
     indeterminate: bool = False
     planar: bool = True
     up: tuple = (0.0, 0.0, 1.0)
+    within_limits: bool | None = None
 
     @property
     def orientation(self):
@@ -135,7 +143,7 @@ class Equilibrium:
                 "tilt_deg": self.tilt_deg, "tensions": self.tensions.tolist(),
                 "slack": list(self.slack), "energy": self.energy, "stable": self.stable,
                 "hessian_min": self.hessian_min, "residual": self.residual,
-                "indeterminate": self.indeterminate}
+                "indeterminate": self.indeterminate, "within_limits": self.within_limits}
 
 
 @dataclass(frozen=True)
@@ -165,7 +173,8 @@ class HangingAt:
     ``feasible`` False comes with ``reason``; then orientation fields are NaN.
     ``lengths`` [m] are the cable lengths that put the effector there;
     ``alternatives`` the other balanced orientations found, as
-    (orientation, tensions, stable) tuples.
+    (orientation, tensions, stable) tuples; ``within_limits`` as for
+    :class:`Equilibrium` (tension limits are not part of feasibility).
     """
 
     feasible: bool
@@ -179,6 +188,7 @@ class HangingAt:
     planar: bool = True
     alternatives: tuple = field(default=())
     up: tuple = (0.0, 0.0, 1.0)
+    within_limits: bool | None = None
 
     @property
     def orientation(self):
@@ -195,7 +205,8 @@ class HangingAt:
     def to_dict(self) -> dict:
         return {"feasible": self.feasible, "reason": self.reason, "position": self.position.tolist(),
                 "orientation": self.orientation, "tilt_deg": self.tilt_deg,
-                "tensions": self.tensions.tolist(), "stable": self.stable, "lengths": self.lengths.tolist()}
+                "tensions": self.tensions.tolist(), "stable": self.stable, "lengths": self.lengths.tolist(),
+                "within_limits": self.within_limits}
 
 
 def _tilt(R, up) -> float:
@@ -323,9 +334,10 @@ def _planar_starts(geo, rho, n_scan, nominal_phi, ltol):
     starts = []
     n = len(phis)
     for k in range(n):
-        if np.isfinite(E[k]) and E[k] <= E[k - 1] and E[k] <= E[(k + 1) % n]:
-            if not (E[k] == E[k - 1] and starts and starts[-1][0] == k - 1):
-                starts.append((k, np.r_[x[k], 0.0], hc.rot_z(phis[k])))
+        minimum = np.isfinite(E[k]) and E[k] <= E[k - 1] and E[k] <= E[(k + 1) % n]
+        plateau = E[k] == E[k - 1] and starts and starts[-1][0] == k - 1
+        if minimum and not plateau:
+            starts.append((k, np.r_[x[k], 0.0], hc.rot_z(phis[k])))
     if not starts:  # nothing feasible on the scan: try the least infeasible angles
         for k in np.argsort(viol)[:4]:
             starts.append((k, None, hc.rot_z(phis[k])))
@@ -441,7 +453,7 @@ def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: 
 
 def _is_minimum(geo, sol, dofs) -> bool:
     """A refined point that is a stable equilibrium (else it is polished by SLSQP first)."""
-    p, R, t, S, rb, indet, rl = sol
+    p, R, t, S, rb, _, _ = sol
     taut = [i for i in S if t[i] > 1e-9 * geo.weight]
     return rb <= 1e-8 * max(1.0, geo.weight) and geo.reduced_hessian_min(p, R, t, taut, dofs) > 0
 
@@ -463,82 +475,6 @@ def _infeasible(geo, p, planar, reason):
     d = 2 if planar else 3
     return HangingAt(False, reason, np.asarray(p, float)[:d].copy(), np.full((3, 3), np.nan),
                      np.full(geo.m, np.nan), False, math.nan, np.full(geo.m, np.nan), planar, (), _up(geo))
-
-
-def _planar_two_cables(geo, p):
-    """The two-cable planar body: every balanced orientation (roots of a degree-2
-    trigonometric polynomial; see :mod:`cdpr_design.kernels.hanging`), numpy."""
-    A2, B2, c2 = geo.A[:, :2], geo.B[:, :2], geo.c[:2]
-    f = -geo.mass * geo.g[:2]
-    cr = lambda a, b: a[0] * b[1] - a[1] * b[0]
-
-    def M(phi):
-        R = hc.rot_z(phi)[:2, :2]
-        v = A2 - p[:2] - B2 @ R.T
-        r = (B2 - c2) @ R.T
-        return cr(f, v[1]) * cr(r[0], v[0]) + cr(v[0], f) * cr(r[1], v[1])
-
-    ks = 2 * math.pi * np.arange(5) / 5
-    Ms = np.array([M(k) for k in ks])
-    a0 = Ms.mean()
-    a1, b1 = 0.4 * Ms @ np.cos(ks), 0.4 * Ms @ np.sin(ks)
-    a2, b2 = 0.4 * Ms @ np.cos(2 * ks), 0.4 * Ms @ np.sin(2 * ks)
-    scale = abs(a0) + abs(a1) + abs(b1) + abs(a2) + abs(b2)
-    if scale == 0:
-        return None
-    coeffs = np.array([(a2 - 1j * b2) / 2, (a1 - 1j * b1) / 2, a0, (a1 + 1j * b1) / 2, (a2 + 1j * b2) / 2])
-    while coeffs.size > 1 and abs(coeffs[0]) <= 1e-13 * scale:
-        coeffs = coeffs[1:]
-    dM = lambda x: -a1 * math.sin(x) + b1 * math.cos(x) - 2 * a2 * math.sin(2 * x) + 2 * b2 * math.cos(2 * x)
-    out = []
-    for z in np.roots(coeffs):
-        if abs(abs(z) - 1) > 1e-3:
-            continue
-        x = float(np.angle(z))
-        for _ in range(8):
-            dx = M(x) / dM(x) if dM(x) != 0 else 0.0
-            x -= dx
-            if abs(dx) < 1e-15:
-                break
-        x = math.atan2(math.sin(x), math.cos(x))
-        if abs(M(x)) <= 1e-9 * scale and not any(abs(x - y) < 1e-9 for y in out):
-            out.append(x)
-    return out
-
-
-def _balanced_general(geo, p, planar, dofs, nominal):
-    """Balanced orientations by least squares on the balance with the tensions
-    eliminated (one or three rotation unknowns; several starts)."""
-    from scipy.optimize import least_squares
-
-    rot = [5] if planar else [3, 4, 5]
-    rows = [k for k in (0, 1, 5)] if planar else list(range(6))
-    base = np.eye(3) if nominal is None else np.asarray(nominal, float)
-    starts = [0.0, math.pi / 2, math.pi, -math.pi / 2] if planar else None
-    if not planar:
-        rng = np.random.default_rng(1)
-        starts = [np.zeros(3)] + [rng.normal(size=3) * 0.8 for _ in range(7)]
-
-    def R_of(x):
-        w = np.zeros(3)
-        w[[k - 3 for k in rot]] = x
-        return hc.rotvec(w) @ base
-
-    def fun(x):
-        R = R_of(x)
-        W, wg = geo.wrenches(p, R)
-        t, *_ = np.linalg.lstsq(W[rows], -wg[rows], rcond=None)
-        return (W[rows] @ t + wg[rows]) / geo.weight
-
-    out = []
-    for s in starts:
-        sol = least_squares(fun, np.atleast_1d(s), xtol=1e-15, ftol=1e-15, gtol=1e-15)
-        if np.max(np.abs(sol.fun)) * geo.weight > 1e-8 * max(1.0, geo.weight):
-            continue
-        R = R_of(sol.x)
-        if not any(hc.rotation_angle(R @ Q.T) < 1e-7 for Q in out):
-            out.append(R)
-    return out
 
 
 def pose_at_arrays(A, B, c, mass, g, position, planar: bool, *, nominal=None) -> HangingAt:
@@ -566,12 +502,12 @@ def pose_at_arrays(A, B, c, mass, g, position, planar: bool, *, nominal=None) ->
         fk_like = _point_mass_at(geo, p, planar, nominal, dofs)
         return fk_like
     if planar and geo.m == 2:
-        phis = _planar_two_cables(geo, p)
+        phis = hc.planar_two_cable_roots(geo, p)
         if phis is None:
             return _infeasible(geo, p, planar, "degenerate geometry: every orientation is balanced")
         Rs = [hc.rot_z(x) for x in phis]
     else:
-        Rs = _balanced_general(geo, p, planar, dofs, nominal)
+        Rs = hc.balanced_orientations(geo, p, planar, nominal)
     rows = list(dofs)
     cands = []
     for R in Rs:
@@ -624,7 +560,8 @@ class TiltMap:
 
     ``axes`` the x and y samples [m]; ``phi`` [rad], ``tilt_deg`` [deg],
     ``tensions`` [N] (..., 2) and ``status`` (``kernels.hanging.TILT_*``) on the
-    grid (shape (nx, ny)); ``reasons`` the text of each status code.
+    grid (shape (nx, ny)); ``reasons`` the text of each status code;
+    ``within_limits`` where the hanging tensions respect the design's limits.
     """
 
     axes: tuple
@@ -632,6 +569,7 @@ class TiltMap:
     tensions: np.ndarray
     status: np.ndarray
     reasons: tuple
+    within_limits: np.ndarray | None = None
 
     @property
     def tilt_deg(self) -> np.ndarray:
@@ -661,16 +599,24 @@ def _design_arrays(design):
             float(design.effector.mass), np.asarray(design.gravity, float), planar)
 
 
+def _within(design, t) -> bool:
+    return bool(np.all(t >= design.tension_min - 1e-9) and np.all(t <= design.tension_max + 1e-9))
+
+
 def fk(design, lengths, **options) -> HangingFK:
-    """:func:`fk_arrays` for a design: where it hangs for cable ``lengths`` [m]."""
+    """:func:`fk_arrays` for a design: where it hangs for cable ``lengths`` [m], with
+    ``within_limits`` set from the design's tension limits."""
     A, B, c, mass, g, planar = _design_arrays(design)
-    return fk_arrays(A, B, c, mass, g, lengths, planar, **options)
+    r = fk_arrays(A, B, c, mass, g, lengths, planar, **options)
+    return dataclasses.replace(r, within_limits=None if r.indeterminate else _within(design, r.tensions))
 
 
 def pose_at(design, position, **options) -> HangingAt:
-    """:func:`pose_at_arrays` for a design: its hanging orientation at ``position`` [m]."""
+    """:func:`pose_at_arrays` for a design: its hanging orientation at ``position`` [m],
+    with ``within_limits`` set from the design's tension limits."""
     A, B, c, mass, g, planar = _design_arrays(design)
-    return pose_at_arrays(A, B, c, mass, g, position, planar, **options)
+    r = pose_at_arrays(A, B, c, mass, g, position, planar, **options)
+    return dataclasses.replace(r, within_limits=_within(design, r.tensions) if r.feasible else None)
 
 
 def underconstrained(design) -> bool:
@@ -692,10 +638,14 @@ def tilt_map(design, axes=None, *, step: float | None = None) -> TiltMap:
         raise InputError("the tilt map is for planar designs")
     if axes is None:
         st = 0.01 if step is None else float(step)
-        lo, hi = getattr(design, "frame_lower"), getattr(design, "frame_upper")
+        lo, hi = design.frame_lower, design.frame_upper
         axes = tuple(lo[k] + st * np.arange(int(np.floor((hi[k] - lo[k]) / st + 1e-9)) + 1) for k in range(2))
     X, Y = np.meshgrid(axes[0], axes[1], indexing="ij")
     phi, t, status = tilt_map_arrays(A, B, c, mass, g, np.column_stack([X.ravel(), Y.ravel()]))
     shape = X.shape
-    return TiltMap(tuple(np.asarray(a) for a in axes), phi.reshape(shape), t.reshape(shape + (2,)),
-                   status.reshape(shape), K.TILT_REASONS)
+    t = t.reshape(shape + (2,))
+    with np.errstate(invalid="ignore"):
+        within = (status.reshape(shape) == K.TILT_OK) & np.all(
+            (t >= design.tension_min - 1e-9) & (t <= design.tension_max + 1e-9), axis=2)
+    return TiltMap(tuple(np.asarray(a) for a in axes), phi.reshape(shape), t, status.reshape(shape),
+                   K.TILT_REASONS, within)

@@ -105,7 +105,7 @@ def align(v, target) -> np.ndarray:
 
 def _pairs(C, rho, down, tol):
     """Stationary points of the height on the intersection of two spheres (per pair)."""
-    N, m, d = C.shape
+    _, m, d = C.shape
     out = []
     for i, j in itertools.combinations(range(m), 2):
         e = C[:, j] - C[:, i]
@@ -133,7 +133,7 @@ def _pairs(C, rho, down, tol):
 
 def _triples(C, rho, tol):
     """The two points common to three spheres (3-D trilateration), per triple."""
-    N, m, _ = C.shape
+    m = C.shape[1]
     out = []
     for i, j, k in itertools.combinations(range(m), 3):
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -290,6 +290,91 @@ class Geometry:
         if N.shape[1] == 0:
             return math.inf
         return float(np.linalg.eigvalsh(N.T @ H @ N)[0])
+
+
+# ----------------------------------------------------------------------------
+# balanced orientations at a commanded position
+# ----------------------------------------------------------------------------
+
+def planar_two_cable_roots(geo, p):
+    """Every balanced orientation phi [rad] of a planar body on two taut cables at
+    position p: the roots of the degree-2 trigonometric polynomial M(phi) of
+    :mod:`cdpr_design.kernels.hanging` (same method, numpy; None when M vanishes
+    identically)."""
+    A2, B2, c2 = geo.A[:, :2], geo.B[:, :2], geo.c[:2]
+    f = -geo.mass * geo.g[:2]
+    cr = lambda a, b: a[0] * b[1] - a[1] * b[0]
+
+    def M(phi):
+        R = rot_z(phi)[:2, :2]
+        v = A2 - p[:2] - B2 @ R.T
+        r = (B2 - c2) @ R.T
+        return cr(f, v[1]) * cr(r[0], v[0]) + cr(v[0], f) * cr(r[1], v[1])
+
+    ks = 2 * math.pi * np.arange(5) / 5
+    Ms = np.array([M(k) for k in ks])
+    a0 = Ms.mean()
+    a1, b1 = 0.4 * Ms @ np.cos(ks), 0.4 * Ms @ np.sin(ks)
+    a2, b2 = 0.4 * Ms @ np.cos(2 * ks), 0.4 * Ms @ np.sin(2 * ks)
+    scale = abs(a0) + abs(a1) + abs(b1) + abs(a2) + abs(b2)
+    if scale == 0:
+        return None
+    coeffs = np.array([(a2 - 1j * b2) / 2, (a1 - 1j * b1) / 2, a0, (a1 + 1j * b1) / 2, (a2 + 1j * b2) / 2])
+    while coeffs.size > 1 and abs(coeffs[0]) <= 1e-13 * scale:
+        coeffs = coeffs[1:]
+    dM = lambda x: -a1 * math.sin(x) + b1 * math.cos(x) - 2 * a2 * math.sin(2 * x) + 2 * b2 * math.cos(2 * x)
+    out = []
+    for z in np.roots(coeffs):
+        if abs(abs(z) - 1) > 1e-3:
+            continue
+        x = float(np.angle(z))
+        for _ in range(8):
+            dx = M(x) / dM(x) if dM(x) != 0 else 0.0
+            x -= dx
+            if abs(dx) < 1e-15:
+                break
+        x = math.atan2(math.sin(x), math.cos(x))
+        if abs(M(x)) <= 1e-9 * scale and not any(abs(x - y) < 1e-9 for y in out):
+            out.append(x)
+    return out
+
+
+def balanced_orientations(geo, p, planar, nominal=None):
+    """Rotations R at which the cables, taut at position p, balance the weight:
+    least squares (scipy) on the balance with the tensions eliminated by linear
+    least squares, one (planar) or three rotation unknowns, several starts.
+    With more cables than position coordinates the balanced rotations form a
+    family; each start then lands on the member nearest to it."""
+    from scipy.optimize import least_squares
+
+    rot = [5] if planar else [3, 4, 5]
+    rows = [k for k in (0, 1, 5)] if planar else list(range(6))
+    base = np.eye(3) if nominal is None else np.asarray(nominal, float)
+    starts = [0.0, math.pi / 2, math.pi, -math.pi / 2] if planar else None
+    if not planar:
+        rng = np.random.default_rng(1)
+        starts = [np.zeros(3)] + [rng.normal(size=3) * 0.8 for _ in range(7)]
+
+    def R_of(x):
+        w = np.zeros(3)
+        w[[k - 3 for k in rot]] = x
+        return rotvec(w) @ base
+
+    def fun(x):
+        R = R_of(x)
+        W, wg = geo.wrenches(p, R)
+        t, *_ = np.linalg.lstsq(W[rows], -wg[rows], rcond=None)
+        return (W[rows] @ t + wg[rows]) / geo.weight
+
+    out = []
+    for s in starts:
+        sol = least_squares(fun, np.atleast_1d(s), xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        if np.max(np.abs(sol.fun)) * geo.weight > 1e-8 * max(1.0, geo.weight):
+            continue
+        R = R_of(sol.x)
+        if not any(rotation_angle(R @ Q.T) < 1e-7 for Q in out):
+            out.append(R)
+    return out
 
 
 # ----------------------------------------------------------------------------
@@ -476,7 +561,7 @@ def local_minimum(geo: Geometry, rho, p, R, dofs):
         return geo.energy(q, Q) / scale_u
 
     def df(x):
-        q, Q, w = unpack(x)
+        _, Q, w = unpack(x)
         fg = geo.mass * geo.g
         grad = np.concatenate([-fg, left_jacobian(w).T @ -np.cross(Q @ geo.c, fg)])
         return grad[dofs] / scale_u
