@@ -395,7 +395,7 @@ def check_equilibrium(A, B, c, mass, g, rho, e, planar):
     assert np.max(np.abs(f)) <= 1e-9 * scale + 1e-12
     if not np.allclose(B, B[0]):
         assert np.max(np.abs(mo if not planar else mo[2:])) <= 1e-9 * scale + 1e-12
-    assert e.stable
+    assert e.stable or abs(e.hessian_min) <= 1e-8 * scale  # stable, or neutral (a zero mode)
 
 
 @pytest.mark.parametrize("planar,m,trials", [(True, 1, 3), (True, 2, 4), (True, 3, 4), (True, 4, 3),

@@ -87,8 +87,12 @@ class Equilibrium:
         Potential energy -m g . (p + R c) [J].
     stable : bool
         Reduced Hessian positive definite (or the taut cables lock the pose).
+        False with ``hessian_min`` ~ 0 is a neutral equilibrium: a continuum
+        of poses of equal energy (e.g. a body free to turn about an axis
+        through its taut attachments and its centre of mass).
     hessian_min : float
-        Smallest eigenvalue of the reduced Hessian (inf when locked).
+        Smallest eigenvalue of the reduced Hessian (inf when locked) [N/m and
+        N m/rad mixed: the chart is (dp [m], w [rad])].
     residual : float
         Largest force [N] / moment [N m] imbalance after refinement.
     length_error : float
@@ -148,7 +152,7 @@ class Equilibrium:
 
 @dataclass(frozen=True)
 class HangingFK(Equilibrium):
-    """:func:`fk`: the lowest-energy stable equilibrium, plus every other one found.
+    """:func:`fk`: the lowest-energy equilibrium, plus every other stable one found.
 
     ``equilibria`` holds the other stable equilibria (each an
     :class:`Equilibrium` with its ``energy``), lowest energy first; ``model``
@@ -428,11 +432,14 @@ def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: 
                 continue
             p, R = conf
         feasible_seen = True
-        sol = hc.refine(geo, rho, p, R, dofs, tol_f, ltol)
-        if sol is None or not _is_minimum(geo, sol, dofs):
+        # Newton first where the start is already close to an equilibrium: the planar
+        # scan's minima, and configurations that as many taut cables as freedoms may lock
+        near = np.count_nonzero(geo.cables(p, R)[2] >= rho - 1e-7)
+        sol = hc.refine(geo, rho, p, R, dofs, tol_f, ltol) if planar or near >= len(dofs) else None
+        if sol is None or not _is_minimum(geo, sol, dofs, rho, ltol):
             p2, R2 = hc.local_minimum(geo, rho, p, R, dofs)
             sol = hc.refine(geo, rho, p2, R2, dofs, tol_f, ltol)
-        if sol is None:
+        if sol is None or np.any(geo.cables(sol[0], sol[1])[2] > rho + ltol):
             continue
         eq = _equilibrium(geo, rho, sol, dofs, planar)
         if not any(_same(eq, f, geo.size) for f in found):
@@ -443,19 +450,21 @@ def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: 
             f"(smallest excess found {vmin:.3g} m over {len(starts)} starts)")
     if not found:
         raise RuntimeError("the equilibrium refinement failed from every start")
+    # every candidate came out of a local minimisation: the lowest is where the effector
+    # rests, even when it is only neutrally stable (a zero mode of the reduced Hessian)
     found.sort(key=lambda e: e.energy)
-    stable = [e for e in found if e.stable]
-    best = stable[0] if stable else found[0]
-    others = tuple(e for e in stable if e is not best)
+    best = found[0]
+    others = tuple(e for e in found[1:] if e.stable)
     return HangingFK(**vars(best), equilibria=others, model="rigid",
                      underconstrained=is_underconstrained(geo.m, geo.B, planar))
 
 
-def _is_minimum(geo, sol, dofs) -> bool:
-    """A refined point that is a stable equilibrium (else it is polished by SLSQP first)."""
+def _is_minimum(geo, sol, dofs, rho, ltol) -> bool:
+    """A refined point that is a feasible, stable equilibrium (else SLSQP minimises first)."""
     p, R, t, S, rb, _, _ = sol
     taut = [i for i in S if t[i] > 1e-9 * geo.weight]
-    return rb <= 1e-8 * max(1.0, geo.weight) and geo.reduced_hessian_min(p, R, t, taut, dofs) > 0
+    return (rb <= 1e-8 * max(1.0, geo.weight) and np.all(geo.cables(p, R)[2] <= rho + ltol)
+            and geo.reduced_hessian_min(p, R, t, taut, dofs) > 0)
 
 
 # ----------------------------------------------------------------------------

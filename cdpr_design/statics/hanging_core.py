@@ -438,7 +438,7 @@ def newton(geo: Geometry, rho, p, R, t, S, dofs, tol_f, maxit=60):
         step, *_ = np.linalg.lstsq(J, -F, rcond=None)
         lam = 1.0
         improved = False
-        for _ in range(30):
+        for _ in range(16):
             dz = np.zeros(6)
             dz[dofs] = lam * step[: len(dofs)]
             p2 = p + dz[:3]
@@ -465,7 +465,8 @@ def refine(geo: Geometry, rho, p, R, dofs, tol_f, ltol, active_tol=1e-7):
     stretches beyond rho + ``ltol``, and repeats.  When more cables are taut
     than the pose has degrees of freedom and they lock it, the tensions are
     statically indeterminate: the minimum-norm non-negative ones are kept.
-    Returns (p, R, t, S, residual, indeterminate) or None.
+    Returns (p, R, t, S, balance residual, indeterminate, length residual), or
+    None when Newton's method does not converge (the caller then minimises first).
     """
     dofs = list(dofs)
     n = len(dofs)
@@ -504,6 +505,8 @@ def refine(geo: Geometry, rho, p, R, dofs, tol_f, ltol, active_tol=1e-7):
             S.sort()
             p, R = p1, R1
             continue
+        if rl > ltol or rb > 1e3 * tol_f:
+            return None  # Newton did not converge with this cable set (inconsistent lengths)
         t1[t1 < 0] = 0.0
         return p1, R1, t1, S, max(rb, 0.0), indeterminate, rl
     return None
