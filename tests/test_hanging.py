@@ -513,6 +513,43 @@ def test_planar2_equal_lengths_keep_it_level():
             assert r.slack == () and r.stable
 
 
+def planar2_level_scan(cy, margin=0.12, step=0.02):
+    """The tool's level lengths (inverse kinematics with R = I) for commanded positions
+    at least ``margin`` from every frame edge, and where planar2 really rests for them:
+    (max tilt [deg], its commanded position, max position error [m]).  The region's
+    boundary is scanned every ``step`` (its left half: the design is mirror-symmetric)
+    and its interior every 0.1 m."""
+    d = spec.load(DESIGNS / "planar2.yaml")
+    A, B, c = d.outlets, d.attachments, np.array([0.0, cy, 0.0])
+    edge = np.round(np.arange(margin, 1.5 - margin + 1e-9, step), 9)
+    inner = np.round(np.arange(margin + 0.05, 1.5 - margin, 0.1), 9)
+    pts = ([(margin, y) for y in edge] + [(1.5 - margin, y) for y in edge[:1]]
+           + [(x, y) for x in edge if x <= 0.75 for y in (margin, 1.5 - margin)]
+           + [(x, y) for x in inner for y in inner])
+    worst, where, err = 0.0, None, 0.0
+    for p in pts:
+        L = np.linalg.norm(A[:, :2] - np.array(p) - B[:, :2], axis=1)
+        r = H.fk_arrays(A, B, c, 1.0, d.gravity, L, True)
+        err = max(err, float(np.linalg.norm(r.position - p)))
+        if r.tilt_deg > worst:
+            worst, where = r.tilt_deg, p
+    return worst, where, err
+
+
+@pytest.mark.parametrize("cy,tilt,pos_err", [(0.0, 33.4, 0.043), (0.03, 45.3, 0.057)])
+def test_planar2_level_lengths_tilt(cy, tilt, pos_err):
+    """The issue's figures (~33 and ~44 deg), reproduced by this scan: the current tool
+    commands the level inverse kinematics; for commanded positions one effector width
+    (0.12 m) or more inside the frame, planar2 really rests tilted by up to 33.4 deg
+    (COM 0.06 m below the attachment line) and 45.3 deg (COM 0.03 m below), near the
+    lower corners (commanded (0.12, 0.16) and (0.12, 0.12)), and up to 4.3 and 5.7 cm away
+    from the commanded position."""
+    worst, where, err = planar2_level_scan(cy)
+    assert worst == pytest.approx(tilt, abs=0.3)
+    assert where[0] == pytest.approx(0.12) and where[1] < 0.3
+    assert err == pytest.approx(pos_err, abs=0.003)
+
+
 @pytest.fixture(scope="module")
 def planar2_maps():
     """The tilt map of planar2 over its frame, every 0.01 m (151 x 151 positions), for the
@@ -538,7 +575,8 @@ def box_inside(tm, half=0.06, lo=0.0, hi=1.5):
 
 @pytest.mark.parametrize("cy,origin_max,box_max", [(0.0, 45.0, 38.3), (0.03, 61.1, 52.9)])
 def test_planar2_tilt_figures(planar2_maps, cy, origin_max, box_max):
-    """What we measure (the issue quotes ~33 and ~44 deg from a scan it does not define).
+    """The hanging orientation at commanded positions (the tilt map; the issue's figures
+    come from the level-lengths scan above).
 
     Scan: every position of the 151 x 151 grid over the 1.5 m frame; at each,
     the stable hanging orientation with both cables taut (the lengths that put
@@ -617,6 +655,8 @@ def test_unreachable_lengths_raise():
         H.fk(d4, kin.inverse_kinematics(d4, [1.0, 0.75, 0.0]) - 0.01)
     with pytest.raises(ValueError):
         H.fk(d, [1.0, -1.0])
+    with pytest.raises(ValueError, match="pinned"):
+        H.fk(d, [0.0, 1.38])
 
 
 def test_pose_at():

@@ -271,6 +271,9 @@ def _check_pairs(geo, rho, ltol):
     """Raise :class:`UnreachableLengths` for a pair of cables that cannot both reach."""
     if np.any(~np.isfinite(rho)) or np.any(rho < 0):
         raise InputError("cable lengths must be finite and non-negative")
+    if np.any(rho < 1e-6):
+        raise InputError(f"cable {int(np.argmin(rho))} is shorter than 1 micrometre: its attachment would be "
+                         "pinned at its outlet, which the cable model does not cover")
     for i in range(geo.m):
         for j in range(i + 1, geo.m):
             d = float(np.linalg.norm(geo.A[i] - geo.A[j]))
@@ -423,6 +426,7 @@ def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: 
     else:
         starts, vmin = _spatial_starts(geo, rho, n_starts, nominal, ltol, seed)
     found: list[Equilibrium] = []
+    minimised = []  # SLSQP minima whose Newton refinement failed (fall-back)
     feasible_seen = False
     for p, R in starts:
         if p is None:
@@ -439,6 +443,10 @@ def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: 
         if sol is None or not _is_minimum(geo, sol, dofs, rho, ltol):
             p2, R2 = hc.local_minimum(geo, rho, p, R, dofs)
             sol = hc.refine(geo, rho, p2, R2, dofs, tol_f, ltol)
+            if sol is None and np.all(geo.cables(p2, R2)[2] <= rho + 1e3 * ltol):
+                fallback = _unrefined(geo, rho, p2, R2, dofs)
+                if fallback[4] <= 1e-6 * max(1.0, geo.weight):
+                    minimised.append(fallback)
         if sol is None or np.any(geo.cables(sol[0], sol[1])[2] > rho + ltol):
             continue
         eq = _equilibrium(geo, rho, sol, dofs, planar)
@@ -448,8 +456,10 @@ def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: 
         raise UnreachableLengths(
             "no configuration keeps every attachment within its cable length of its outlet "
             f"(smallest excess found {vmin:.3g} m over {len(starts)} starts)")
+    if not found:  # Newton failed everywhere (near-singular geometry): keep SLSQP's minima
+        found = [_equilibrium(geo, rho, sol, dofs, planar) for sol in minimised]
     if not found:
-        raise RuntimeError("the equilibrium refinement failed from every start")
+        raise RuntimeError("the equilibrium search failed from every start")
     # every candidate came out of a local minimisation: the lowest is where the effector
     # rests, even when it is only neutrally stable (a zero mode of the reduced Hessian)
     found.sort(key=lambda e: e.energy)
@@ -457,6 +467,20 @@ def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: 
     others = tuple(e for e in found[1:] if e.stable)
     return HangingFK(**vars(best), equilibria=others, model="rigid",
                      underconstrained=is_underconstrained(geo.m, geo.B, planar))
+
+
+def _unrefined(geo, rho, p, R, dofs):
+    """A minimiser that Newton's method could not polish, in ``refine``'s format:
+    non-negative least-squares tensions of the cables within 1e-7 m of their length."""
+    dofs = list(dofs)
+    L = geo.cables(p, R)[2]
+    S = [int(i) for i in np.flatnonzero(L >= rho - 1e-7)]
+    W, wg = geo.wrenches(p, R)
+    t = np.zeros(geo.m)
+    if S:
+        t[S], _ = hc.nonnegative_tensions(W[np.ix_(dofs, S)], -wg[dofs])
+    rb = float(np.max(np.abs(geo.balance(p, R, t)[dofs])))
+    return p, R, t, S, rb, False, float(np.max(np.abs(L[S] - rho[S]), initial=0.0))
 
 
 def _is_minimum(geo, sol, dofs, rho, ltol) -> bool:
