@@ -402,10 +402,11 @@ def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: 
     position is that exact convex problem, which gives the energy profile
     E(phi) = min_p U whose local minima are the stable equilibria.  A
     spatial rigid body evaluates E(R) on 2048 random rotations and starts
-    SLSQP from the ``n_starts`` lowest distinct ones.  Every candidate is
-    refined by Newton's method on force + moment balance and the taut
-    lengths with an active set of cables (residual ~1e-10 N), then tested for
-    stability.  Where no start is feasible, a least-squares feasibility phase
+    SLSQP from the ``n_starts`` lowest ones at least 30 deg apart.  Every
+    candidate is refined by Newton's method on force + moment balance and
+    the taut lengths with an active set of cables (residual ~1e-10 N; SLSQP
+    first where Newton alone does not reach a stable equilibrium), then
+    tested for stability.  Where no start is feasible, a least-squares feasibility phase
     looks for a configuration first (locked poses of fully constrained robots).
 
     Raises :class:`UnreachableLengths` when no configuration satisfies every
