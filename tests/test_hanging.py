@@ -666,7 +666,8 @@ def test_pose_at():
     r = H.pose_at(d, [0.3, 0.5])
     assert r.feasible and r.tilt_deg == pytest.approx(math.degrees(abs(r.orientation)))
     back = H.fk(d, r.lengths)  # the lengths it reports put it there
-    np.testing.assert_allclose(back.pose, [0.3, 0.5, r.orientation], atol=1e-9)
+    np.testing.assert_allclose(back.pose, r.pose, atol=1e-9)
+    np.testing.assert_allclose(r.pose[:2], [0.3, 0.5])
     assert r.within_limits  # planar2: 0 <= t <= 20 N
     high = H.pose_at(d, [0.75, 1.4])
     assert high.feasible and high.tensions.max() > 20 and high.within_limits is False

@@ -206,6 +206,12 @@ class HangingAt:
         """Tilt from level [deg] as :attr:`Equilibrium.tilt_deg`; NaN when infeasible."""
         return _tilt(self.rotation, self.up) if self.feasible else math.nan
 
+    @property
+    def pose(self) -> np.ndarray:
+        """[x, y, phi] (planar) or [x, y, z, rx, ry, rz] (spatial) [m, rad]."""
+        ori = self.orientation
+        return np.concatenate([self.position, [ori] if self.planar else ori])
+
     def to_dict(self) -> dict:
         return {"feasible": self.feasible, "reason": self.reason, "position": self.position.tolist(),
                 "orientation": self.orientation, "tilt_deg": self.tilt_deg,
