@@ -1,0 +1,691 @@
+"""Where an effector hangs: the geometrico-static problem of cable robots.
+
+A cable can pull but never push, and a cable of length rho_i only keeps its
+attachment within rho_i of its outlet.  For given cable lengths the effector
+therefore rests where its potential energy
+
+    U = -m g . (p + R c)            [J]
+
+is smallest among the configurations with every |a_i - p - R b_i| <= rho_i
+(Carricato & Merlet 2013; Abbasnejad & Carricato 2015).  At such a minimum
+the taut cables' tensions are the Lagrange multipliers of the length
+constraints: t_i >= 0, force and moment balance hold, and a slack cable
+carries nothing.  An equilibrium is *stable* when the Hessian of the
+Lagrangian U + sum t_i (|l_i| - rho_i) is positive definite on the tangent
+space of the taut cables' constraints (the reduced Hessian of Carricato &
+Merlet 2013).  A robot is *under-constrained* when its taut cables cannot
+fix every free degree of freedom: fewer than 3 cables for a planar rigid
+body, fewer than 6 for a spatial one, fewer than its dimension for a point
+mass (an effector whose attachments coincide); then its orientation is not
+commanded but follows from the lengths.
+
+Three questions are answered here, on plain arrays (``*_arrays``) and, thin
+on top, for a :class:`~cdpr_design.model.design.Design`:
+
+* :func:`fk` - the equilibrium for given lengths (forward geometrico-static
+  problem): pose, orientation, tensions, slack cables, stability and every
+  other stable equilibrium found;
+* :func:`pose_at` - the orientation an under-constrained effector takes at a
+  commanded position with its cables taut, or why it cannot hang there;
+* :func:`tilt_map` - the same over a workspace grid for a planar body on two
+  cables (batched numba kernel :mod:`cdpr_design.kernels.hanging`).
+
+Units: SI throughout (m, kg, N, rad; ``tilt_deg`` in degrees).  Frame and
+effector conventions as in docs/spec-format.md; planar designs live in the
+z = 0 plane with rotations about z.  Swivel pulleys are not modelled here
+(point outlets).
+
+References
+----------
+M. Carricato, J.-P. Merlet, "Stability analysis of underconstrained
+cable-driven parallel robots", IEEE Transactions on Robotics 29(1),
+288-296, 2013.
+G. Abbasnejad, M. Carricato, "Direct geometrico-static problem of
+underconstrained cable-driven parallel robots with n cables", IEEE
+Transactions on Robotics 31(2), 468-478, 2015.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cdpr_design.errors import InputError
+from cdpr_design.statics import hanging_core as hc
+
+
+class UnreachableLengths(InputError):
+    """No configuration has every |a_i - p - R b_i| <= rho_i (the reason is the message)."""
+
+
+class NotUnderconstrained(InputError):
+    """The design's cables can fix its orientation: it does not hang freely."""
+
+
+# ----------------------------------------------------------------------------
+# results
+# ----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """One equilibrium of the hanging effector.
+
+    Attributes
+    ----------
+    position : (d,) array
+        Platform origin p [m] (d = 2 planar, 3 spatial).
+    rotation : (3, 3) array
+        R (rotation about z for planar bodies).
+    tensions : (m,) array
+        Cable tensions [N]; 0 for a slack cable.
+    slack : tuple of int
+        Indices of the cables that carry no tension.
+    energy : float
+        Potential energy -m g . (p + R c) [J].
+    stable : bool
+        Reduced Hessian positive definite (or the taut cables lock the pose).
+        False with ``hessian_min`` ~ 0 is a neutral equilibrium: a continuum
+        of poses of equal energy (e.g. a body free to turn about an axis
+        through its taut attachments and its centre of mass).
+    hessian_min : float
+        Smallest eigenvalue of the reduced Hessian (inf when locked) [N/m and
+        N m/rad mixed: the chart is (dp [m], w [rad])].
+    residual : float
+        Largest force [N] / moment [N m] imbalance after refinement.
+    length_error : float
+        Largest | |l_i| - rho_i | over the taut cables [m].
+    indeterminate : bool
+        More taut cables than the pose has degrees of freedom and they lock
+        it: the tensions are not unique (the minimum-norm non-negative ones
+        are reported, and ``slack`` lists the cables they leave at zero).
+    planar : bool
+    up : tuple
+        -g / |g|, the frame's vertical (for ``tilt_deg``).
+    within_limits : bool or None
+        Tensions within the design's [tension_min, tension_max] (set by the
+        Design-level functions; None for plain arrays or indeterminate tensions).
+    """
+
+    position: np.ndarray
+    rotation: np.ndarray
+    tensions: np.ndarray
+    slack: tuple[int, ...]
+    energy: float
+    stable: bool
+    hessian_min: float
+    residual: float
+    length_error: float = 0.0
+    indeterminate: bool = False
+    planar: bool = True
+    up: tuple = (0.0, 0.0, 1.0)
+    within_limits: bool | None = None
+
+    @property
+    def orientation(self):
+        """phi [rad] about z (planar) or [rx, ry, rz] [rad], R = Rx Ry Rz (spatial)."""
+        if self.planar:
+            return float(math.atan2(self.rotation[1, 0], self.rotation[0, 0]))
+        return [float(a) for a in hc.euler_xyz(self.rotation)]
+
+    @property
+    def tilt_deg(self) -> float:
+        """Tilt away from level [deg]: the angle between the platform's vertical R up and
+        the frame's up = -g/|g| (|phi| for planar bodies; a turn about the vertical is no tilt)."""
+        return _tilt(self.rotation, self.up)
+
+    @property
+    def pose(self) -> np.ndarray:
+        """[x, y, phi] (planar) or [x, y, z, rx, ry, rz] (spatial) [m, rad]."""
+        ori = self.orientation
+        return np.concatenate([self.position, [ori] if self.planar else ori])
+
+    def to_dict(self) -> dict:
+        return {"position": self.position.tolist(), "orientation": self.orientation,
+                "tilt_deg": self.tilt_deg, "tensions": self.tensions.tolist(),
+                "slack": list(self.slack), "energy": self.energy, "stable": self.stable,
+                "hessian_min": self.hessian_min, "residual": self.residual,
+                "indeterminate": self.indeterminate, "within_limits": self.within_limits}
+
+
+@dataclass(frozen=True)
+class HangingFK(Equilibrium):
+    """:func:`fk`: the lowest-energy equilibrium, plus every other stable one found.
+
+    ``equilibria`` holds the other stable equilibria (each an
+    :class:`Equilibrium` with its ``energy``), lowest energy first; ``model``
+    is ``point`` or ``rigid``; ``underconstrained`` as in the module doc.
+    """
+
+    equilibria: tuple = ()
+    model: str = "rigid"
+    underconstrained: bool = True
+
+    def to_dict(self) -> dict:
+        d = super().to_dict()
+        d.update(model=self.model, underconstrained=self.underconstrained,
+                 equilibria=[e.to_dict() for e in self.equilibria])
+        return d
+
+
+@dataclass(frozen=True)
+class HangingAt:
+    """:func:`pose_at`: the hanging orientation at a commanded position.
+
+    ``feasible`` False comes with ``reason``; then orientation fields are NaN.
+    ``lengths`` [m] are the cable lengths that put the effector there;
+    ``alternatives`` the other balanced orientations found, as
+    (orientation, tensions, stable) tuples; ``within_limits`` as for
+    :class:`Equilibrium` (tension limits are not part of feasibility).
+    """
+
+    feasible: bool
+    reason: str
+    position: np.ndarray
+    rotation: np.ndarray
+    tensions: np.ndarray
+    stable: bool
+    hessian_min: float
+    lengths: np.ndarray
+    planar: bool = True
+    alternatives: tuple = field(default=())
+    up: tuple = (0.0, 0.0, 1.0)
+    within_limits: bool | None = None
+
+    @property
+    def orientation(self):
+        """phi [rad] (planar) or [rx, ry, rz] [rad] (spatial); NaN when infeasible."""
+        if not self.feasible:
+            return math.nan if self.planar else [math.nan] * 3
+        return Equilibrium.orientation.fget(self)
+
+    @property
+    def tilt_deg(self) -> float:
+        """Tilt from level [deg] as :attr:`Equilibrium.tilt_deg`; NaN when infeasible."""
+        return _tilt(self.rotation, self.up) if self.feasible else math.nan
+
+    @property
+    def pose(self) -> np.ndarray:
+        """[x, y, phi] (planar) or [x, y, z, rx, ry, rz] (spatial) [m, rad]."""
+        ori = self.orientation
+        return np.concatenate([self.position, [ori] if self.planar else ori])
+
+    def to_dict(self) -> dict:
+        return {"feasible": self.feasible, "reason": self.reason, "position": self.position.tolist(),
+                "orientation": self.orientation, "tilt_deg": self.tilt_deg,
+                "tensions": self.tensions.tolist(), "stable": self.stable, "lengths": self.lengths.tolist(),
+                "within_limits": self.within_limits}
+
+
+def _tilt(R, up) -> float:
+    up = np.asarray(up, float)
+    return math.degrees(math.acos(max(-1.0, min(1.0, float(up @ R @ up)))))
+
+
+# ----------------------------------------------------------------------------
+# classification
+# ----------------------------------------------------------------------------
+
+def _prepare(A, B, c, mass, g, planar):
+    A = np.atleast_2d(np.asarray(A, float))
+    B = np.atleast_2d(np.asarray(B, float))
+    pad = lambda X: np.hstack([X, np.zeros((X.shape[0], 3 - X.shape[1]))]) if X.shape[1] < 3 else X
+    A, B = pad(A), pad(B)
+    c = np.concatenate([np.asarray(c, float).ravel(), np.zeros(3)])[:3]
+    g = np.concatenate([np.asarray(g, float).ravel(), np.zeros(3)])[:3]
+    if A.shape != B.shape or A.shape[0] < 1:
+        raise InputError(f"outlets {A.shape} and attachments {B.shape} must both be (m, 3)")
+    if not (mass > 0 and np.linalg.norm(g) > 0):
+        raise InputError("the effector needs a positive mass and a non-zero gravity")
+    if planar and (np.any(A[:, 2] != 0) or np.any(B[:, 2] != 0) or c[2] != 0 or g[2] != 0):
+        raise InputError("a planar design lives in the z = 0 plane")
+    return hc.Geometry(A, B, c, mass, g)
+
+
+def is_point_mass(B, tol: float = 1e-12) -> bool:
+    """True when every attachment is the same point (rotations change no length)."""
+    B = np.atleast_2d(np.asarray(B, float))
+    return bool(np.all(np.linalg.norm(B - B[0], axis=1) <= tol))
+
+
+def is_underconstrained(m: int, B, planar: bool) -> bool:
+    """Fewer cables than the free degrees of freedom they would have to fix:
+    a planar rigid body < 3, a spatial one < 6, a point mass < its dimension."""
+    if is_point_mass(B):
+        return m < (2 if planar else 3)
+    return m < (3 if planar else 6)
+
+
+def _up(geo) -> tuple:
+    return tuple(float(v) for v in -geo.g / np.linalg.norm(geo.g))
+
+
+def _dofs(geo, planar):
+    if is_point_mass(geo.B):
+        return hc.DOFS_POINT2 if planar else hc.DOFS_POINT3
+    return hc.DOFS_PLANAR if planar else hc.DOFS_SPATIAL
+
+
+def _tolerances(geo, rho):
+    ltol = 1e-9 * max(1.0, float(np.max(rho)))
+    return ltol, 1e-10 * max(1.0, geo.weight)
+
+
+def _check_pairs(geo, rho, ltol):
+    """Raise :class:`UnreachableLengths` for a pair of cables that cannot both reach."""
+    if np.any(~np.isfinite(rho)) or np.any(rho < 0):
+        raise InputError("cable lengths must be finite and non-negative")
+    if np.any(rho < 1e-6):
+        raise InputError(f"cable {int(np.argmin(rho))} is shorter than 1 micrometre: its attachment would be "
+                         "pinned at its outlet, which the cable model does not cover")
+    for i in range(geo.m):
+        for j in range(i + 1, geo.m):
+            d = float(np.linalg.norm(geo.A[i] - geo.A[j]))
+            reach = rho[i] + rho[j] + float(np.linalg.norm(geo.B[i] - geo.B[j]))
+            if d > reach + ltol:
+                raise UnreachableLengths(
+                    f"cables {i} and {j} cannot both reach the effector: their outlets are {d:.6g} m "
+                    f"apart, more than the lengths {rho[i]:.6g} + {rho[j]:.6g} m plus the "
+                    f"{reach - rho[i] - rho[j]:.6g} m between their attachments")
+
+
+# ----------------------------------------------------------------------------
+# the forward geometrico-static problem
+# ----------------------------------------------------------------------------
+
+def _equilibrium(geo, rho, sol, dofs, planar) -> Equilibrium:
+    p, R, t, S, rb, indet, rl = sol
+    taut = [i for i in S if t[i] > 1e-9 * geo.weight]
+    hmin = geo.reduced_hessian_min(p, R, t, taut, dofs)
+    stable = bool(hmin > 1e-9 * geo.weight)
+    d = 2 if planar else 3
+    slack = tuple(i for i in range(geo.m) if t[i] <= 1e-9 * geo.weight)
+    t = np.where(np.isin(np.arange(geo.m), slack), 0.0, t)
+    return Equilibrium(p[:d].copy(), R, t, slack, geo.energy(p, R), stable, hmin, rb, rl, indet, planar,
+                       _up(geo))
+
+
+def _point_mass(geo, rho, planar, nominal, ltol, tol_f):
+    """The convex case: the attachment point is the lowest point of the balls."""
+    d = 2 if planar else 3
+    down = geo.g / np.linalg.norm(geo.g)
+    b0 = geo.B[0]
+    x, ok, viol = hc.lowest_points((geo.A[:, :d])[None], rho, down[:d], ltol)
+    if not ok[0]:
+        raise UnreachableLengths(
+            "the balls |a_i - P| <= rho_i have no common point: every pair meets, but no point is "
+            f"within reach of all cables (smallest excess {viol[0]:.3g} m)")
+    q = np.zeros(3)
+    q[:d] = x[0]
+    arm = geo.c - b0
+    if np.linalg.norm(arm) > 1e-12 * geo.size:  # the COM hangs straight below the attachment
+        R = hc.rot_z(math.atan2(down[1], down[0]) - math.atan2(arm[1], arm[0])) if planar else hc.align(arm, down)
+    else:
+        R = np.eye(3) if nominal is None else np.asarray(nominal, float)
+    dofs = hc.DOFS_POINT2 if planar else hc.DOFS_POINT3
+    sol = hc.refine(geo, rho, q - R @ b0, R, dofs, tol_f, ltol)
+    if sol is None:
+        raise RuntimeError("point-mass equilibrium: the active-set refinement failed")
+    return HangingFK(**vars(_equilibrium(geo, rho, sol, dofs, planar)), equilibria=(), model="point",
+                     underconstrained=geo.m < d)
+
+
+def _planar_starts(geo, rho, n_scan, nominal_phi, ltol):
+    """Local minima of the exact energy profile E(phi) = min_p U over a circle of phi."""
+    phis = np.sort(np.append(-math.pi + 2.0 * math.pi * np.arange(n_scan) / n_scan, nominal_phi))
+    co, si = np.cos(phis), np.sin(phis)
+    B2 = geo.B[:, :2]
+    Rb = np.stack([co[:, None] * B2[:, 0] - si[:, None] * B2[:, 1],
+                   si[:, None] * B2[:, 0] + co[:, None] * B2[:, 1]], axis=2)
+    C = geo.A[None, :, :2] - Rb
+    down = (geo.g / np.linalg.norm(geo.g))[:2]
+    x, ok, viol = hc.lowest_points(C, rho, down, ltol)
+    Rc = np.stack([co * geo.c[0] - si * geo.c[1], si * geo.c[0] + co * geo.c[1]], axis=1)
+    E = np.where(ok, -geo.mass * ((x + Rc) @ geo.g[:2]), np.inf)
+    starts = []
+    n = len(phis)
+    for k in range(n):
+        minimum = np.isfinite(E[k]) and E[k] <= E[k - 1] and E[k] <= E[(k + 1) % n]
+        plateau = E[k] == E[k - 1] and starts and starts[-1][0] == k - 1
+        if minimum and not plateau:
+            starts.append((k, np.r_[x[k], 0.0], hc.rot_z(phis[k])))
+    if not starts:  # nothing feasible on the scan: try the least infeasible angles
+        for k in np.argsort(viol)[:4]:
+            starts.append((k, None, hc.rot_z(phis[k])))
+    return [(p, R) for _, p, R in starts], float(np.min(viol))
+
+
+def _spatial_starts(geo, rho, n_starts, nominal, ltol, seed):
+    """Rotations sampled uniformly (plus identity and ``nominal``), the exact inner
+    problem at each, and the lowest ``n_starts`` of them at least 30 deg apart."""
+    rng = np.random.default_rng(seed)
+    q = rng.normal(size=(2048, 4))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    w, xq, yq, zq = q.T
+    Rs = np.stack([
+        np.stack([1 - 2 * (yq ** 2 + zq ** 2), 2 * (xq * yq - zq * w), 2 * (xq * zq + yq * w)], -1),
+        np.stack([2 * (xq * yq + zq * w), 1 - 2 * (xq ** 2 + zq ** 2), 2 * (yq * zq - xq * w)], -1),
+        np.stack([2 * (xq * zq - yq * w), 2 * (yq * zq + xq * w), 1 - 2 * (xq ** 2 + yq ** 2)], -1)], axis=1)
+    fixed = [np.eye(3)] + ([np.asarray(nominal, float)] if nominal is not None else [])
+    Rs = np.concatenate([np.array(fixed), Rs])
+    C = geo.A[None] - np.einsum("nij,mj->nmi", Rs, geo.B)
+    down = geo.g / np.linalg.norm(geo.g)
+    x, ok, viol = hc.lowest_points(C, rho, down, ltol)
+    E = np.where(ok, -geo.mass * ((x + Rs @ geo.c) @ geo.g), np.inf)
+    order = list(range(len(fixed))) + [k for k in np.argsort(E) if k >= len(fixed) and np.isfinite(E[k])]
+    if not np.any(ok):
+        order = list(range(len(fixed))) + list(np.argsort(viol)[:n_starts])
+    chosen = []
+    for k in order:
+        if len(chosen) >= n_starts:
+            break
+        if any(hc.rotation_angle(Rs[k] @ Rs[j].T) < math.radians(30) for j in chosen) and k >= len(fixed):
+            continue
+        chosen.append(k)
+    return [(x[k] if ok[k] else None, Rs[k]) for k in chosen], float(np.min(viol))
+
+
+def _same(a: Equilibrium, b: Equilibrium, ls) -> bool:
+    return (np.linalg.norm(a.position - b.position) < 1e-6 * (1 + ls)
+            and hc.rotation_angle(a.rotation @ b.rotation.T) < 1e-6)
+
+
+def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: int = 720,
+              n_starts: int = 12, seed: int = 0) -> HangingFK:
+    """The resting configuration for cable ``lengths`` [m] (forward geometrico-static problem).
+
+    ``A``, ``B`` (m, 2|3) outlets and attachments [m], ``c`` centre of mass in
+    platform coordinates [m], ``mass`` [kg], ``g`` gravity [m/s^2],
+    ``planar`` for designs in the z = 0 plane (rotation about z only).
+    ``nominal`` (3, 3) is an extra start rotation (and the orientation of a
+    point mass whose centre of mass is its attachment point).
+
+    Method: a point mass (coincident attachments) solves the convex problem
+    exactly (:func:`~cdpr_design.statics.hanging_core.lowest_points`).  A
+    planar rigid body scans ``n_scan`` orientations; at each the lowest
+    position is that exact convex problem, which gives the energy profile
+    E(phi) = min_p U whose local minima are the stable equilibria.  A
+    spatial rigid body evaluates E(R) on 2048 random rotations and starts
+    SLSQP from the ``n_starts`` lowest ones at least 30 deg apart.  Every
+    candidate is refined by Newton's method on force + moment balance and
+    the taut lengths with an active set of cables (residual ~1e-10 N; SLSQP
+    first where Newton alone does not reach a stable equilibrium), then
+    tested for stability.  Where no start is feasible, a least-squares feasibility phase
+    looks for a configuration first (locked poses of fully constrained robots).
+
+    Raises :class:`UnreachableLengths` when no configuration satisfies every
+    length (with the reason).
+    """
+    geo = _prepare(A, B, c, mass, g, planar)
+    rho = np.asarray(lengths, float).reshape(-1)
+    if rho.size != geo.m:
+        raise InputError(f"expected {geo.m} cable lengths, got {rho.size}")
+    ltol, tol_f = _tolerances(geo, rho)
+    _check_pairs(geo, rho, ltol)
+    if is_point_mass(geo.B):
+        return _point_mass(geo, rho, planar, nominal, ltol, tol_f)
+    dofs = _dofs(geo, planar)
+    if planar:
+        phi0 = 0.0 if nominal is None else math.atan2(nominal[1][0], nominal[0][0])
+        starts, vmin = _planar_starts(geo, rho, n_scan, phi0, ltol)
+    else:
+        starts, vmin = _spatial_starts(geo, rho, n_starts, nominal, ltol, seed)
+    found: list[Equilibrium] = []
+    minimised = []  # SLSQP minima whose Newton refinement failed (fall-back)
+    feasible_seen = False
+    for p, R in starts:
+        if p is None:
+            guess = geo.A.mean(0) - R @ geo.B.mean(0)
+            conf = hc.feasibility_phase(geo, rho, guess, R, dofs, ltol)
+            if conf is None:
+                continue
+            p, R = conf
+        feasible_seen = True
+        # Newton first where the start is already close to an equilibrium: the planar
+        # scan's minima, and configurations that as many taut cables as freedoms may lock
+        near = np.count_nonzero(geo.cables(p, R)[2] >= rho - 1e-7)
+        sol = hc.refine(geo, rho, p, R, dofs, tol_f, ltol) if planar or near >= len(dofs) else None
+        if sol is None or not _is_minimum(geo, sol, dofs, rho, ltol):
+            p2, R2 = hc.local_minimum(geo, rho, p, R, dofs)
+            sol = hc.refine(geo, rho, p2, R2, dofs, tol_f, ltol)
+            if sol is None and np.all(geo.cables(p2, R2)[2] <= rho + 1e3 * ltol):
+                fallback = _unrefined(geo, rho, p2, R2, dofs)
+                if fallback[4] <= 1e-6 * max(1.0, geo.weight):
+                    minimised.append(fallback)
+        if sol is None or np.any(geo.cables(sol[0], sol[1])[2] > rho + ltol):
+            continue
+        eq = _equilibrium(geo, rho, sol, dofs, planar)
+        if not any(_same(eq, f, geo.size) for f in found):
+            found.append(eq)
+    if not feasible_seen:
+        raise UnreachableLengths(
+            "no configuration keeps every attachment within its cable length of its outlet "
+            f"(smallest excess found {vmin:.3g} m over {len(starts)} starts)")
+    if not found:  # Newton failed everywhere (near-singular geometry): keep SLSQP's minima
+        found = [_equilibrium(geo, rho, sol, dofs, planar) for sol in minimised]
+    if not found:
+        raise RuntimeError("the equilibrium search failed from every start")
+    # every candidate came out of a local minimisation: the lowest is where the effector
+    # rests, even when it is only neutrally stable (a zero mode of the reduced Hessian)
+    found.sort(key=lambda e: e.energy)
+    best = found[0]
+    others = tuple(e for e in found[1:] if e.stable)
+    return HangingFK(**vars(best), equilibria=others, model="rigid",
+                     underconstrained=is_underconstrained(geo.m, geo.B, planar))
+
+
+def _unrefined(geo, rho, p, R, dofs):
+    """A minimiser that Newton's method could not polish, in ``refine``'s format:
+    non-negative least-squares tensions of the cables within 1e-7 m of their length."""
+    dofs = list(dofs)
+    L = geo.cables(p, R)[2]
+    S = [int(i) for i in np.flatnonzero(L >= rho - 1e-7)]
+    W, wg = geo.wrenches(p, R)
+    t = np.zeros(geo.m)
+    if S:
+        t[S], _ = hc.nonnegative_tensions(W[np.ix_(dofs, S)], -wg[dofs])
+    rb = float(np.max(np.abs(geo.balance(p, R, t)[dofs])))
+    return p, R, t, S, rb, False, float(np.max(np.abs(L[S] - rho[S]), initial=0.0))
+
+
+def _is_minimum(geo, sol, dofs, rho, ltol) -> bool:
+    """A refined point that is a feasible, stable equilibrium (else SLSQP minimises first)."""
+    p, R, t, S, rb, _, _ = sol
+    taut = [i for i in S if t[i] > 1e-9 * geo.weight]
+    return (rb <= 1e-8 * max(1.0, geo.weight) and np.all(geo.cables(p, R)[2] <= rho + ltol)
+            and geo.reduced_hessian_min(p, R, t, taut, dofs) > 0)
+
+
+# ----------------------------------------------------------------------------
+# the hanging orientation at a commanded position
+# ----------------------------------------------------------------------------
+
+def _at_result(geo, p, R, t, planar, dofs, alternatives=()):
+    _, _, L, _ = geo.cables(p, R)
+    taut = [i for i in range(geo.m) if t[i] > 1e-9 * geo.weight]
+    hmin = geo.reduced_hessian_min(p, R, t, taut, dofs)
+    d = 2 if planar else 3
+    return HangingAt(True, "ok", p[:d].copy(), R, np.maximum(t, 0.0), bool(hmin > 1e-9 * geo.weight),
+                     hmin, L, planar, tuple(alternatives), _up(geo))
+
+
+def _infeasible(geo, p, planar, reason):
+    d = 2 if planar else 3
+    return HangingAt(False, reason, np.asarray(p, float)[:d].copy(), np.full((3, 3), np.nan),
+                     np.full(geo.m, np.nan), False, math.nan, np.full(geo.m, np.nan), planar, (), _up(geo))
+
+
+def pose_at_arrays(A, B, c, mass, g, position, planar: bool, *, nominal=None) -> HangingAt:
+    """The orientation an under-constrained effector takes at ``position`` [m].
+
+    With the cables taut at that position, the orientation must balance the
+    moment (for a planar body on two cables: both cable lines and the
+    vertical through the centre of mass meet in one point) with tensions >= 0
+    and be stable; of several such orientations the one closest to level is
+    returned (the others are in ``alternatives``).  A position the effector
+    cannot hang at statically is ``feasible=False`` with the reason: every
+    balanced orientation needs a pushing cable, none is stable, or no
+    orientation balances the moment.  Raises :class:`NotUnderconstrained`
+    for a design whose cables fix its orientation.
+    """
+    geo = _prepare(A, B, c, mass, g, planar)
+    if not is_underconstrained(geo.m, geo.B, planar):
+        raise NotUnderconstrained(
+            f"{geo.m} cables can fix this effector's orientation: it is commanded, not free")
+    p = np.zeros(3)
+    pos = np.asarray(position, float).ravel()
+    p[: pos.size] = pos
+    dofs = _dofs(geo, planar)
+    if is_point_mass(geo.B):
+        fk_like = _point_mass_at(geo, p, planar, nominal, dofs)
+        return fk_like
+    if planar and geo.m == 2:
+        phis = hc.planar_two_cable_roots(geo, p)
+        if phis is None:
+            return _infeasible(geo, p, planar, "degenerate geometry: every orientation is balanced")
+        Rs = [hc.rot_z(x) for x in phis]
+    else:
+        Rs = hc.balanced_orientations(geo, p, planar, nominal)
+    rows = list(dofs)
+    cands = []
+    for R in Rs:
+        W, wg = geo.wrenches(p, R)
+        t, *_ = np.linalg.lstsq(W[rows], -wg[rows], rcond=None)
+        if np.any(~np.isfinite(t)) or np.linalg.matrix_rank(W[rows], tol=1e-10) < geo.m:
+            continue
+        cands.append(_at_result(geo, p, R, t, planar, dofs) if np.all(t >= -1e-9 * geo.weight)
+                     else (R, t))
+    good = [r for r in cands if isinstance(r, HangingAt) and r.stable]
+    if good:
+        good.sort(key=lambda r: r.tilt_deg)
+        alts = tuple((r.orientation, r.tensions, r.stable) for r in cands if isinstance(r, HangingAt)
+                     and r is not good[0])
+        best = good[0]
+        return HangingAt(**{**vars(best), "alternatives": alts})
+    if any(isinstance(r, HangingAt) for r in cands):
+        return _infeasible(geo, p, planar, "the moment-balanced orientations with pulling cables are unstable")
+    if cands:
+        pushing = sorted({int(i) for _, t in cands for i in np.flatnonzero(t < 0)})
+        return _infeasible(geo, p, planar, "every moment-balanced orientation needs a pushing cable "
+                           f"(cable {', '.join(map(str, pushing))})")
+    return _infeasible(geo, p, planar, "no orientation balances the moment with the cables taut")
+
+
+def _point_mass_at(geo, p, planar, nominal, dofs):
+    down = geo.g / np.linalg.norm(geo.g)
+    arm = geo.c - geo.B[0]
+    if np.linalg.norm(arm) > 1e-12 * geo.size:
+        R = hc.rot_z(math.atan2(down[1], down[0]) - math.atan2(arm[1], arm[0])) if planar else hc.align(arm, down)
+    else:
+        R = np.eye(3) if nominal is None else np.asarray(nominal, float)
+    W, wg = geo.wrenches(p, R)
+    rows = list(dofs)
+    t, *_ = np.linalg.lstsq(W[rows], -wg[rows], rcond=None)
+    if np.max(np.abs(W[rows] @ t + wg[rows])) > 1e-8 * geo.weight:
+        return _infeasible(geo, p, planar, "the cables cannot balance the weight here (it is not in their span)")
+    if np.any(t < -1e-9 * geo.weight):
+        return _infeasible(geo, p, planar, f"balancing the weight needs a pushing cable (cable {int(np.argmin(t))})")
+    return _at_result(geo, p, R, t, planar, dofs)
+
+
+# ----------------------------------------------------------------------------
+# the tilt map (batched kernel) and the Design-level wrappers
+# ----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class TiltMap:
+    """Hanging orientation over a grid of positions (planar body on two cables).
+
+    ``axes`` the x and y samples [m]; ``phi`` [rad], ``tilt_deg`` [deg],
+    ``tensions`` [N] (..., 2) and ``status`` (``kernels.hanging.TILT_*``) on the
+    grid (shape (nx, ny)); ``reasons`` the text of each status code;
+    ``within_limits`` where the hanging tensions respect the design's limits.
+    """
+
+    axes: tuple
+    phi: np.ndarray
+    tensions: np.ndarray
+    status: np.ndarray
+    reasons: tuple
+    within_limits: np.ndarray | None = None
+
+    @property
+    def tilt_deg(self) -> np.ndarray:
+        return np.degrees(np.abs(self.phi))
+
+    @property
+    def feasible(self) -> np.ndarray:
+        return self.status == 0
+
+
+def tilt_map_arrays(A, B, c, mass, g, positions):
+    """:func:`pose_at` for a planar two-cable body at many positions (k, 2) [m], batched
+    with numba.  Returns (phi (k,) [rad], tensions (k, 2) [N], status (k,))."""
+    from cdpr_design.kernels import hanging as K
+
+    geo = _prepare(A, B, c, mass, g, True)
+    if geo.m != 2 or is_point_mass(geo.B):
+        raise InputError("the batched tilt map is for a planar rigid body on two cables")
+    P = np.ascontiguousarray(np.asarray(positions, float)[:, :2])
+    phi, t, _, status, _ = K.hanging_tilt_batch(geo.A, geo.B, geo.c, geo.mass, geo.g, P)
+    return phi, t, status
+
+
+def _design_arrays(design):
+    planar = design.motion.name in ("2T", "1R2T")
+    return (design.outlets, design.attachments, np.asarray(design.effector.center_of_mass, float),
+            float(design.effector.mass), np.asarray(design.gravity, float), planar)
+
+
+def _within(design, t) -> bool:
+    return bool(np.all(t >= design.tension_min - 1e-9) and np.all(t <= design.tension_max + 1e-9))
+
+
+def fk(design, lengths, **options) -> HangingFK:
+    """:func:`fk_arrays` for a design: where it hangs for cable ``lengths`` [m], with
+    ``within_limits`` set from the design's tension limits."""
+    A, B, c, mass, g, planar = _design_arrays(design)
+    r = fk_arrays(A, B, c, mass, g, lengths, planar, **options)
+    return dataclasses.replace(r, within_limits=None if r.indeterminate else _within(design, r.tensions))
+
+
+def pose_at(design, position, **options) -> HangingAt:
+    """:func:`pose_at_arrays` for a design: its hanging orientation at ``position`` [m],
+    with ``within_limits`` set from the design's tension limits."""
+    A, B, c, mass, g, planar = _design_arrays(design)
+    r = pose_at_arrays(A, B, c, mass, g, position, planar, **options)
+    return dataclasses.replace(r, within_limits=_within(design, r.tensions) if r.feasible else None)
+
+
+def underconstrained(design) -> bool:
+    """Whether the design's orientation is free (see :func:`is_underconstrained`)."""
+    A, B, _, _, _, planar = _design_arrays(design)
+    return is_underconstrained(A.shape[0], B, planar)
+
+
+def tilt_map(design, axes=None, *, step: float | None = None) -> TiltMap:
+    """The hanging orientation over a grid for a planar design on two cables.
+
+    ``axes`` (xs, ys) [m], default the design's frame sampled every ``step``
+    [m] (default 0.01 m; planar2: 151 x 151 positions).
+    """
+    from cdpr_design.kernels import hanging as K
+
+    A, B, c, mass, g, planar = _design_arrays(design)
+    if not planar:
+        raise InputError("the tilt map is for planar designs")
+    if axes is None:
+        st = 0.01 if step is None else float(step)
+        lo, hi = design.frame_lower, design.frame_upper
+        axes = tuple(lo[k] + st * np.arange(int(np.floor((hi[k] - lo[k]) / st + 1e-9)) + 1) for k in range(2))
+    X, Y = np.meshgrid(axes[0], axes[1], indexing="ij")
+    phi, t, status = tilt_map_arrays(A, B, c, mass, g, np.column_stack([X.ravel(), Y.ravel()]))
+    shape = X.shape
+    t = t.reshape(shape + (2,))
+    with np.errstate(invalid="ignore"):
+        within = (status.reshape(shape) == K.TILT_OK) & np.all(
+            (t >= design.tension_min - 1e-9) & (t <= design.tension_max + 1e-9), axis=2)
+    return TiltMap(tuple(np.asarray(a) for a in axes), phi.reshape(shape), t, status.reshape(shape),
+                   K.TILT_REASONS, within)

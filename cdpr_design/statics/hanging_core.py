@@ -1,0 +1,587 @@
+"""Geometry, statics and local solvers of a hanging effector (plain arrays).
+
+The building blocks of :mod:`cdpr_design.statics.hanging`: rotations, the
+exact lowest point of an intersection of balls, force and moment balance with
+its Jacobian, the reduced Hessian (stability), Newton refinement of an
+equilibrium with an active set of taut cables, and two scipy helpers (a
+feasibility phase and a local constrained minimisation) used as fall-backs.
+
+Conventions (docs/spec-format.md): outlets A (m, 3) [m], attachments B (m, 3)
+in platform coordinates [m], centre of mass c (3,) [m], mass [kg], gravity g
+(3,) [m/s^2].  A configuration is the platform origin p (3,) [m] and the
+rotation R (3, 3); the cable vector is l_i = a_i - (p + R b_i) and a cable of
+length rho_i [m] allows |l_i| <= rho_i.  The potential energy is
+U = -m g . (p + R c) [J].  Small rotations act on the left, R <- exp([w]) R,
+with w [rad] in frame coordinates.  Degrees of freedom ("dofs") index the
+6-vector (dx, dy, dz, wx, wy, wz): (0, 1, 5) for a planar rigid body,
+(0, ..., 5) for a spatial one, (0, 1) or (0, 1, 2) for a point mass.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+DOFS_PLANAR = (0, 1, 5)
+DOFS_SPATIAL = (0, 1, 2, 3, 4, 5)
+DOFS_POINT2 = (0, 1)
+DOFS_POINT3 = (0, 1, 2)
+
+
+# ----------------------------------------------------------------------------
+# rotations
+# ----------------------------------------------------------------------------
+
+def skew(v) -> np.ndarray:
+    """[v]_x, the matrix of v x ."""
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def rotvec(w) -> np.ndarray:
+    """exp([w]_x): the rotation by |w| [rad] about w (Rodrigues)."""
+    w = np.asarray(w, float)
+    th = float(np.linalg.norm(w))
+    K = skew(w)
+    if th < 1e-8:
+        return np.eye(3) + K + 0.5 * K @ K
+    return np.eye(3) + math.sin(th) / th * K + (1.0 - math.cos(th)) / th ** 2 * K @ K
+
+
+def left_jacobian(w) -> np.ndarray:
+    """J with exp([w + dw]) = exp([J dw]) exp([w]) to first order."""
+    w = np.asarray(w, float)
+    th = float(np.linalg.norm(w))
+    K = skew(w)
+    if th < 1e-6:
+        return np.eye(3) + 0.5 * K + K @ K / 6.0
+    return np.eye(3) + (1.0 - math.cos(th)) / th ** 2 * K + (th - math.sin(th)) / th ** 3 * K @ K
+
+
+def rot_z(phi: float) -> np.ndarray:
+    co, si = math.cos(phi), math.sin(phi)
+    return np.array([[co, -si, 0.0], [si, co, 0.0], [0.0, 0.0, 1.0]])
+
+
+def euler_xyz(R) -> np.ndarray:
+    """(rx, ry, rz) [rad] with R = Rx(rx) Ry(ry) Rz(rz) (ry in [-pi/2, pi/2])."""
+    ry = math.asin(max(-1.0, min(1.0, R[0, 2])))
+    if abs(R[0, 2]) < 1.0 - 1e-12:
+        rx = math.atan2(-R[1, 2], R[2, 2])
+        rz = math.atan2(-R[0, 1], R[0, 0])
+    else:  # gimbal lock: put everything in rx
+        rx = math.atan2(R[2, 1], R[1, 1])
+        rz = 0.0
+    return np.array([rx, ry, rz])
+
+
+def from_euler_xyz(rx: float, ry: float, rz: float) -> np.ndarray:
+    return rotvec([rx, 0, 0]) @ rotvec([0, ry, 0]) @ rotvec([0, 0, rz])
+
+
+def rotation_angle(R) -> float:
+    """The angle [rad] of a rotation matrix."""
+    return math.acos(max(-1.0, min(1.0, 0.5 * (np.trace(R) - 1.0))))
+
+
+def align(v, target) -> np.ndarray:
+    """The smallest rotation taking direction v onto direction target (3-vectors)."""
+    a = np.asarray(v, float) / np.linalg.norm(v)
+    b = np.asarray(target, float) / np.linalg.norm(target)
+    axis = np.cross(a, b)
+    s, co = float(np.linalg.norm(axis)), float(a @ b)
+    if s < 1e-15:
+        if co > 0:
+            return np.eye(3)
+        perp = np.cross(a, [1.0, 0, 0]) if abs(a[0]) < 0.9 else np.cross(a, [0, 1.0, 0])
+        return rotvec(math.pi * perp / np.linalg.norm(perp))
+    return rotvec(axis / s * math.atan2(s, co))
+
+
+# ----------------------------------------------------------------------------
+# the convex inner problem: lowest point of an intersection of balls
+# ----------------------------------------------------------------------------
+
+def _pairs(C, rho, down, tol):
+    """Stationary points of the height on the intersection of two spheres (per pair)."""
+    _, m, d = C.shape
+    out = []
+    for i, j in itertools.combinations(range(m), 2):
+        e = C[:, j] - C[:, i]
+        D = np.linalg.norm(e, axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            e = e / D[:, None]
+            a = (rho[i] ** 2 - rho[j] ** 2 + D ** 2) / (2.0 * D)
+            h2 = rho[i] ** 2 - a ** 2
+            h = np.sqrt(np.where(h2 >= -2.0 * rho[i] * tol, np.maximum(h2, 0.0), np.nan))
+        o = C[:, i] + a[:, None] * e
+        if d == 2:
+            nrm = np.stack([-e[:, 1], e[:, 0]], axis=1)
+            out += [o + h[:, None] * nrm, o - h[:, None] * nrm]
+        else:
+            w = down[None, :] - (e @ down)[:, None] * e
+            wn = np.linalg.norm(w, axis=1)
+            flat = ~(wn > 1e-12)  # horizontal circle: every point is as low
+            alt = np.cross(e, np.where(np.abs(e[:, :1]) < 0.9, [[1.0, 0, 0]], [[0, 1.0, 0]]))
+            w = np.where(flat[:, None], alt, w)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                w = w / np.linalg.norm(w, axis=1)[:, None]
+            out.append(o + h[:, None] * w)
+    return out
+
+
+def _triples(C, rho, tol):
+    """The two points common to three spheres (3-D trilateration), per triple."""
+    m = C.shape[1]
+    out = []
+    for i, j, k in itertools.combinations(range(m), 3):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            dj = C[:, j] - C[:, i]
+            dk = C[:, k] - C[:, i]
+            D = np.linalg.norm(dj, axis=1)
+            ex = dj / D[:, None]
+            ii = np.einsum("nd,nd->n", ex, dk)
+            ey = dk - ii[:, None] * ex
+            jj = np.linalg.norm(ey, axis=1)
+            ey = ey / jj[:, None]
+            ez = np.cross(ex, ey)
+            x = (rho[i] ** 2 - rho[j] ** 2 + D ** 2) / (2.0 * D)
+            y = (rho[i] ** 2 - rho[k] ** 2 + ii ** 2 + jj ** 2) / (2.0 * jj) - ii * x / jj
+            z2 = rho[i] ** 2 - x ** 2 - y ** 2
+            z = np.sqrt(np.where(z2 >= -2.0 * rho[i] * tol, np.maximum(z2, 0.0), np.nan))
+            base = C[:, i] + x[:, None] * ex + y[:, None] * ey
+        out += [base + z[:, None] * ez, base - z[:, None] * ez]
+    return out
+
+
+def lowest_points(C, rho, down, tol):
+    """The lowest point of every intersection of balls |x - C[n, i]| <= rho_i.
+
+    ``C`` (N, m, d) centres [m] for N problems (d = 2 or 3), ``rho`` (m,)
+    radii [m], ``down`` (d,) unit vector along gravity, ``tol`` [m] the
+    feasibility tolerance.  Minimising a linear function over an intersection
+    of balls is a convex problem whose minimiser lies on at most d spheres
+    with non-negative multipliers (KKT; Caratheodory), so it is one of the
+    stationary points of the height on the spheres of some subset of at most
+    d balls: a ball's lowest point, the lowest point of two spheres'
+    intersection (two points in the plane) or a point common to three
+    spheres.  Enumerating those candidates and keeping the lowest feasible
+    one solves the problem exactly.
+
+    Returns (x (N, d), feasible (N,), violation (N,)): the minimiser (NaN
+    where the balls have no common point) and the smallest
+    max_i(|x - C_i| - rho_i) over the candidates (<= tol where feasible).
+    """
+    C = np.asarray(C, float)
+    N, m, d = C.shape
+    cand = [C[:, i] + rho[i] * down for i in range(m)]
+    cand += _pairs(C, rho, down, tol)
+    if d == 3:
+        cand += _triples(C, rho, tol)
+    X = np.stack(cand, axis=1)  # (N, K, d)
+    dist = np.linalg.norm(X[:, :, None, :] - C[:, None, :, :], axis=3)
+    viol = np.max(dist - rho, axis=2)
+    viol = np.where(np.isnan(viol), np.inf, viol)
+    feas = viol <= tol
+    depth = np.where(feas, X @ down, -np.inf)
+    k = np.argmax(depth, axis=1)
+    rows = np.arange(N)
+    ok = feas[rows, k]
+    x = np.where(ok[:, None], X[rows, k], np.nan)
+    return x, ok, viol.min(axis=1)
+
+
+# ----------------------------------------------------------------------------
+# statics at one configuration
+# ----------------------------------------------------------------------------
+
+class Geometry:
+    """One effector and its cables (plain arrays, 3-D form; see the module doc)."""
+
+    def __init__(self, A, B, c, mass, g):
+        self.A = np.ascontiguousarray(A, dtype=float)
+        self.B = np.ascontiguousarray(B, dtype=float)
+        self.c = np.asarray(c, float).reshape(3)
+        self.mass = float(mass)
+        self.g = np.asarray(g, float).reshape(3)
+        self.m = self.A.shape[0]
+        self.weight = self.mass * float(np.linalg.norm(self.g))
+        size = max(float(np.max(np.linalg.norm(self.B - self.B.mean(0), axis=1), initial=0.0)),
+                   float(np.linalg.norm(self.c - self.B.mean(0))), 1e-3)
+        self.size = size  # a length scale of the effector [m]
+
+    def energy(self, p, R) -> float:
+        """U = -m g . (p + R c) [J]."""
+        return float(-self.mass * self.g @ (p + R @ self.c))
+
+    def cables(self, p, R):
+        """(Rb (m, 3), l (m, 3), L (m,), u (m, 3)) at a configuration."""
+        Rb = self.B @ R.T
+        l = self.A - p - Rb
+        L = np.linalg.norm(l, axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            u = l / L[:, None]
+        return Rb, l, L, u
+
+    def wrenches(self, p, R):
+        """Cable wrenches (6, m) [u_i; R b_i x u_i] and the weight's (6,) [N, N m]."""
+        Rb, _, _, u = self.cables(p, R)
+        W = np.vstack([u.T, np.cross(Rb, u).T])
+        f = self.mass * self.g
+        return W, np.concatenate([f, np.cross(R @ self.c, f)])
+
+    def balance(self, p, R, t) -> np.ndarray:
+        """W t + w_gravity (6,): force [N] and moment about the origin [N m]."""
+        W, wg = self.wrenches(p, R)
+        return W @ t + wg
+
+    def jacobian(self, p, R, t, S):
+        """d(balance)/d(dp, w) (6, 6), d(balance)/dt_S (6, |S|) and d|l_S|/d(dp, w) (|S|, 6)."""
+        Rb, _, L, u = self.cables(p, R)
+        Jz = np.zeros((6, 6))
+        f = self.mass * self.g
+        Jz[3:, 3:] = skew(f) @ skew(R @ self.c)
+        for i in range(self.m):
+            if t[i] == 0.0:
+                continue
+            P = (np.eye(3) - np.outer(u[i], u[i])) / L[i]
+            Bx = skew(Rb[i])
+            Jz[:3, :3] -= t[i] * P
+            Jz[:3, 3:] += t[i] * P @ Bx
+            Jz[3:, :3] -= t[i] * Bx @ P
+            Jz[3:, 3:] += t[i] * (skew(u[i]) @ Bx + Bx @ P @ Bx)
+        Jt = np.vstack([u[S].T, np.cross(Rb[S], u[S]).T])
+        G = np.hstack([-u[S], -np.cross(Rb[S], u[S])])
+        return Jz, Jt, G
+
+    def lagrangian_hessian(self, p, R, t) -> np.ndarray:
+        """Hessian (6, 6) of U + sum t_i |l_i| in (dp, w) at a configuration."""
+        Rb, _, L, u = self.cables(p, R)
+        cR = R @ self.c
+        g = self.g
+        H = np.zeros((6, 6))
+        H[3:, 3:] = -0.5 * self.mass * (np.outer(g, cR) + np.outer(cR, g)) + self.mass * (g @ cR) * np.eye(3)
+        for i in range(self.m):
+            if t[i] == 0.0:
+                continue
+            J = np.hstack([-np.eye(3), skew(Rb[i])])
+            P = (np.eye(3) - np.outer(u[i], u[i])) / L[i]
+            Hi = J.T @ P @ J
+            Hi[3:, 3:] += -0.5 * (np.outer(u[i], Rb[i]) + np.outer(Rb[i], u[i])) + (u[i] @ Rb[i]) * np.eye(3)
+            H += t[i] * Hi
+        return H
+
+    def reduced_hessian_min(self, p, R, t, taut, dofs) -> float:
+        """Smallest eigenvalue of the Lagrangian's Hessian on the tangent space of the
+        taut cables' length constraints (restricted to ``dofs``); +inf when that
+        space is {0} (the taut cables lock the effector)."""
+        dofs = list(dofs)
+        H = self.lagrangian_hessian(p, R, t)[np.ix_(dofs, dofs)]
+        S = list(taut)
+        if S:
+            _, _, G = self.jacobian(p, R, np.zeros(self.m), S)
+            G = G[:, dofs]
+            _, sv, Vt = np.linalg.svd(G)
+            rank = int(np.sum(sv > 1e-10 * max(1.0, sv[0])))
+            N = Vt[rank:].T
+        else:
+            N = np.eye(len(dofs))
+        if N.shape[1] == 0:
+            return math.inf
+        return float(np.linalg.eigvalsh(N.T @ H @ N)[0])
+
+
+# ----------------------------------------------------------------------------
+# balanced orientations at a commanded position
+# ----------------------------------------------------------------------------
+
+def planar_two_cable_roots(geo, p):
+    """Every balanced orientation phi [rad] of a planar body on two taut cables at
+    position p: the roots of the degree-2 trigonometric polynomial M(phi) of
+    :mod:`cdpr_design.kernels.hanging` (same method, numpy; None when M vanishes
+    identically)."""
+    A2, B2, c2 = geo.A[:, :2], geo.B[:, :2], geo.c[:2]
+    f = -geo.mass * geo.g[:2]
+    cr = lambda a, b: a[0] * b[1] - a[1] * b[0]
+
+    def M(phi):
+        R = rot_z(phi)[:2, :2]
+        v = A2 - p[:2] - B2 @ R.T
+        r = (B2 - c2) @ R.T
+        return cr(f, v[1]) * cr(r[0], v[0]) + cr(v[0], f) * cr(r[1], v[1])
+
+    ks = 2 * math.pi * np.arange(5) / 5
+    Ms = np.array([M(k) for k in ks])
+    a0 = Ms.mean()
+    a1, b1 = 0.4 * Ms @ np.cos(ks), 0.4 * Ms @ np.sin(ks)
+    a2, b2 = 0.4 * Ms @ np.cos(2 * ks), 0.4 * Ms @ np.sin(2 * ks)
+    scale = abs(a0) + abs(a1) + abs(b1) + abs(a2) + abs(b2)
+    if scale == 0:
+        return None
+    coeffs = np.array([(a2 - 1j * b2) / 2, (a1 - 1j * b1) / 2, a0, (a1 + 1j * b1) / 2, (a2 + 1j * b2) / 2])
+    while coeffs.size > 1 and abs(coeffs[0]) <= 1e-13 * scale:
+        coeffs = coeffs[1:]
+    dM = lambda x: -a1 * math.sin(x) + b1 * math.cos(x) - 2 * a2 * math.sin(2 * x) + 2 * b2 * math.cos(2 * x)
+    out = []
+    for z in np.roots(coeffs):
+        if abs(abs(z) - 1) > 1e-3:
+            continue
+        x = float(np.angle(z))
+        for _ in range(8):
+            dx = M(x) / dM(x) if dM(x) != 0 else 0.0
+            x -= dx
+            if abs(dx) < 1e-15:
+                break
+        x = math.atan2(math.sin(x), math.cos(x))
+        if abs(M(x)) <= 1e-9 * scale and not any(abs(x - y) < 1e-9 for y in out):
+            out.append(x)
+    return out
+
+
+def balanced_orientations(geo, p, planar, nominal=None):
+    """Rotations R at which the cables, taut at position p, balance the weight:
+    least squares (scipy) on the balance with the tensions eliminated by linear
+    least squares, one (planar) or three rotation unknowns, several starts.
+    With more cables than position coordinates the balanced rotations form a
+    family; each start then lands on the member nearest to it."""
+    from scipy.optimize import least_squares
+
+    rot = [5] if planar else [3, 4, 5]
+    rows = [k for k in (0, 1, 5)] if planar else list(range(6))
+    base = np.eye(3) if nominal is None else np.asarray(nominal, float)
+    starts = [0.0, math.pi / 2, math.pi, -math.pi / 2] if planar else None
+    if not planar:
+        rng = np.random.default_rng(1)
+        starts = [np.zeros(3)] + [rng.normal(size=3) * 0.8 for _ in range(7)]
+
+    def R_of(x):
+        w = np.zeros(3)
+        w[[k - 3 for k in rot]] = x
+        return rotvec(w) @ base
+
+    def fun(x):
+        R = R_of(x)
+        W, wg = geo.wrenches(p, R)
+        t, *_ = np.linalg.lstsq(W[rows], -wg[rows], rcond=None)
+        return (W[rows] @ t + wg[rows]) / geo.weight
+
+    out = []
+    for s in starts:
+        sol = least_squares(fun, np.atleast_1d(s), xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        if np.max(np.abs(sol.fun)) * geo.weight > 1e-8 * max(1.0, geo.weight):
+            continue
+        R = R_of(sol.x)
+        if not any(rotation_angle(R @ Q.T) < 1e-7 for Q in out):
+            out.append(R)
+    return out
+
+
+# ----------------------------------------------------------------------------
+# local solvers
+# ----------------------------------------------------------------------------
+
+def nonnegative_tensions(W, w):
+    """Tensions t >= 0 with W t = w: the least-squares min-norm solution when it is
+    non-negative, else scipy's NNLS.  Returns (t, residual 2-norm)."""
+    t, *_ = np.linalg.lstsq(W, w, rcond=None)
+    if np.all(t >= 0):
+        return t, float(np.linalg.norm(W @ t - w))
+    from scipy.optimize import nnls
+    t, r = nnls(W, w)
+    return t, float(r)
+
+
+def min_norm_nonnegative(W, w):
+    """The minimum 2-norm t >= 0 with W t = w (a small QP; SLSQP)."""
+    t0, r = nonnegative_tensions(W, w)
+    from scipy.optimize import minimize
+    sol = minimize(lambda t: 0.5 * t @ t, t0, jac=lambda t: t, method="SLSQP",
+                   bounds=[(0.0, None)] * W.shape[1],
+                   constraints=[{"type": "eq", "fun": lambda t: W @ t - w, "jac": lambda t: W}],
+                   options={"ftol": 1e-14, "maxiter": 200})
+    t = np.maximum(sol.x, 0.0)
+    return (t, float(np.linalg.norm(W @ t - w))) if sol.success else (t0, r)
+
+
+def newton(geo: Geometry, rho, p, R, t, S, dofs, tol_f, maxit=60):
+    """Newton's method on force + moment balance (``dofs`` rows) and the taut
+    cables' lengths |l_i| = rho_i (i in S), unknowns the configuration and t_S.
+
+    Steps solve the linearised system in the least-squares sense (a cable set
+    that over-determines the pose gives the minimum-norm tension update) and
+    are halved until the scaled residual decreases.  Returns (p, R, t,
+    balance residual [N, N m], length residual [m]).
+    """
+    dofs = list(dofs)
+    S = list(S)
+    t = np.array(t, float)
+    ls = geo.size
+
+    def res(p, R, t):
+        b = geo.balance(p, R, t)[dofs]
+        L = geo.cables(p, R)[2]
+        return b, L[S] - rho[S]
+
+    def merit(b, e):
+        sc = np.array([1.0 if k < 3 else ls for k in dofs])
+        return float(np.linalg.norm(b / sc) / geo.weight + np.linalg.norm(e) / ls)
+
+    b, e = res(p, R, t)
+    cur = merit(b, e)
+    for _ in range(maxit):
+        if np.max(np.abs(b), initial=0.0) <= tol_f and np.max(np.abs(e), initial=0.0) <= 1e-13 * (1 + rho.max()):
+            break
+        Jz, Jt, G = geo.jacobian(p, R, t, S)
+        J = np.block([[Jz[np.ix_(dofs, dofs)], Jt[dofs]], [G[:, dofs], np.zeros((len(S), len(S)))]])
+        F = np.concatenate([b, e])
+        step, *_ = np.linalg.lstsq(J, -F, rcond=None)
+        lam = 1.0
+        improved = False
+        for _ in range(16):
+            dz = np.zeros(6)
+            dz[dofs] = lam * step[: len(dofs)]
+            p2 = p + dz[:3]
+            R2 = rotvec(dz[3:]) @ R
+            t2 = t.copy()
+            t2[S] += lam * step[len(dofs):]
+            b2, e2 = res(p2, R2, t2)
+            new = merit(b2, e2)
+            if new < cur or (new <= cur * (1 + 1e-12) and lam == 1.0):
+                p, R, t, b, e, cur = p2, R2, t2, b2, e2, new
+                improved = True
+                break
+            lam *= 0.5
+        if not improved:
+            break
+    return p, R, t, float(np.max(np.abs(b), initial=0.0)), float(np.max(np.abs(e), initial=0.0))
+
+
+def refine(geo: Geometry, rho, p, R, dofs, tol_f, ltol, active_tol=1e-7):
+    """An equilibrium near (p, R): Newton's method with an active set of taut cables.
+
+    Starts with the cables whose length is within ``active_tol`` [m] of rho;
+    drops a cable whose tension turns negative, adds one that the pose
+    stretches beyond rho + ``ltol``, and repeats.  When more cables are taut
+    than the pose has degrees of freedom and they lock it, the tensions are
+    statically indeterminate: the minimum-norm non-negative ones are kept.
+    Returns (p, R, t, S, balance residual, indeterminate, length residual), or
+    None when Newton's method does not converge (the caller then minimises first).
+    """
+    dofs = list(dofs)
+    n = len(dofs)
+    L = geo.cables(p, R)[2]
+    S = sorted(int(i) for i in np.flatnonzero(L >= rho - active_tol))
+    ttol = 1e-9 * geo.weight
+    seen = set()
+    for _ in range(3 * geo.m + 3):
+        key = tuple(S)
+        if key in seen:
+            break
+        seen.add(key)
+        t = np.zeros(geo.m)
+        W, wg = geo.wrenches(p, R)
+        if S:
+            t[S], _ = nonnegative_tensions(W[np.ix_(dofs, S)], -wg[dofs])
+        p1, R1, t1, rb, rl = newton(geo, rho, p, R, t, S, dofs, tol_f)
+        indeterminate = False
+        if len(S) > n:
+            _, _, G = geo.jacobian(p1, R1, t1, S)
+            if np.linalg.matrix_rank(G[:, dofs], tol=1e-9) == n:
+                indeterminate = True
+                W, wg = geo.wrenches(p1, R1)
+                tS, _ = min_norm_nonnegative(W[np.ix_(dofs, S)], -wg[dofs])
+                t1 = np.zeros(geo.m)
+                t1[S] = tS
+                rb = float(np.max(np.abs(geo.balance(p1, R1, t1)[dofs])))
+        L1 = geo.cables(p1, R1)[2]
+        neg = [i for i in S if t1[i] < -ttol]
+        over = [i for i in range(geo.m) if i not in S and L1[i] > rho[i] + ltol]
+        if neg:
+            S.remove(min(neg, key=lambda i: t1[i]))
+            continue
+        if over:
+            S.append(max(over, key=lambda i: L1[i] - rho[i]))
+            S.sort()
+            p, R = p1, R1
+            continue
+        if rl > ltol or rb > 1e3 * tol_f:
+            return None  # Newton did not converge with this cable set (inconsistent lengths)
+        t1[t1 < 0] = 0.0
+        return p1, R1, t1, S, max(rb, 0.0), indeterminate, rl
+    return None
+
+
+def feasibility_phase(geo: Geometry, rho, p, R, dofs, tol):
+    """Least squares on the stretches max(0, |l_i| - rho_i) from (p, R) (scipy).
+
+    Returns a configuration with every |l_i| <= rho_i + tol, or None.
+    """
+    from scipy.optimize import least_squares
+
+    dofs = list(dofs)
+
+    def unpack(x):
+        z = np.zeros(6)
+        z[dofs] = x
+        return p + z[:3], rotvec(z[3:]) @ R
+
+    def fun(x):
+        q, Q = unpack(x)
+        return np.maximum(geo.cables(q, Q)[2] - rho, 0.0)
+
+    def jac(x):
+        z = np.zeros(6)
+        z[dofs] = x
+        q, Q = p + z[:3], rotvec(z[3:]) @ R
+        Rb, _, L, u = geo.cables(q, Q)
+        G = np.hstack([-u, -np.cross(Rb, u)])
+        G[:, 3:] = G[:, 3:] @ left_jacobian(z[3:])
+        G[L <= rho] = 0.0
+        return G[:, dofs]
+
+    sol = least_squares(fun, np.zeros(len(dofs)), jac=jac, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=500)
+    if np.max(sol.fun, initial=0.0) > tol:
+        return None
+    return unpack(sol.x)
+
+
+def local_minimum(geo: Geometry, rho, p, R, dofs):
+    """Minimise U subject to |l_i|^2 <= rho_i^2 from a feasible (p, R) (scipy SLSQP,
+    rotation as exp([w]) R with analytic gradients).  Returns (p, R)."""
+    from scipy.optimize import minimize
+
+    dofs = list(dofs)
+    scale_u = geo.weight * (1.0 + float(np.max(rho)))
+
+    def unpack(x):
+        z = np.zeros(6)
+        z[dofs] = x
+        return p + z[:3], rotvec(z[3:]) @ R, z[3:]
+
+    def f(x):
+        q, Q, _ = unpack(x)
+        return geo.energy(q, Q) / scale_u
+
+    def df(x):
+        _, Q, w = unpack(x)
+        fg = geo.mass * geo.g
+        grad = np.concatenate([-fg, left_jacobian(w).T @ -np.cross(Q @ geo.c, fg)])
+        return grad[dofs] / scale_u
+
+    def cons(x):
+        q, Q, _ = unpack(x)
+        L = geo.cables(q, Q)[2]
+        return (rho ** 2 - L ** 2) / np.maximum(rho, 1e-9) ** 2
+
+    def dcons(x):
+        q, Q, w = unpack(x)
+        Rb, l, _, _ = geo.cables(q, Q)
+        G = np.hstack([2.0 * l, 2.0 * np.cross(Rb, l) @ left_jacobian(w)])
+        return G[:, dofs] / np.maximum(rho, 1e-9)[:, None] ** 2
+
+    sol = minimize(f, np.zeros(len(dofs)), jac=df, method="SLSQP",
+                   constraints=[{"type": "ineq", "fun": cons, "jac": dcons}],
+                   options={"ftol": 1e-14, "maxiter": 300})
+    q, Q, _ = unpack(sol.x)
+    return q, Q
