@@ -28,7 +28,7 @@ from cdpr_design.plc.ads import AdsTransport
 from cdpr_design.plc.symbols import ADST_REAL64, PlcLayout, check_symbol_info
 from cdpr_design.plc.testplc import LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, TestPlc
 
-from .conftest import ROOT, write_spec
+from .helpers import ROOT, write_spec
 
 PLC = {
     "ams_net_id": TEST_PLC_NET_ID, "port": 851, "host": LOOPBACK, "cycle_time": 0.01,

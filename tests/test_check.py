@@ -15,7 +15,7 @@ from cdpr_design.model import spec
 from cdpr_design.cli.app import app
 from cdpr_design.design.evaluate import check_table, evaluate
 
-from .conftest import PLANAR2, write_spec
+from .helpers import PLANAR2, write_spec
 
 CONTRACT = ["cable", "peak_tension", "peak_cable_speed", "drum_torque", "peak_motor_torque",
             "rms_motor_torque", "peak_motor_speed", "motor", "torque_margin", "speed_margin"]

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from cdpr_design.cli.app import app
 
-from .conftest import PLANAR2
+from .helpers import PLANAR2
 
 runner = CliRunner()
 

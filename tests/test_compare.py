@@ -12,7 +12,7 @@ from cdpr_design.motion import compare as C
 from cdpr_design.model import spec
 from cdpr_design.motion import trajectory as tr
 
-from .conftest import PLANAR2
+from .helpers import PLANAR2
 
 
 @pytest.fixture(scope="module")

@@ -15,24 +15,7 @@ from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
 from cdpr_design.statics import pose as sp
 
-from .conftest import PLANAR2
-
-
-@pytest.fixture(scope="module")
-def planar2():
-    return spec.load(PLANAR2)
-
-
-def point_mass(outlets, mass=1.0, tension=(0.0, 100.0), motion="2T"):
-    d = len(outlets[0])
-    return spec.from_dict({
-        "name": "pm", "motion": motion,
-        "frame": {"lower": [-5.0] * d, "upper": [5.0] * d},
-        "effector": {"mass": mass, "size": [0.0] * d},
-        "tension": list(tension),
-        "cables": [{"name": f"c{i}", "outlet": list(a), "attachment": [0.0] * d}
-                   for i, a in enumerate(outlets)],
-    })
+from .helpers import PLANAR2, point_mass
 
 
 @pytest.mark.parametrize("half_span,depth,mass", [(1.0, 1.0, 1.0), (0.75, 0.3, 2.5), (2.0, 3.0, 0.4)])

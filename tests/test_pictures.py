@@ -18,7 +18,7 @@ from cdpr_design.plots import workspace as wsplots
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
 
-from .conftest import PLANAR2
+from .helpers import PLANAR2
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -41,7 +41,7 @@ from cdpr_design.statics import pose as sp
 from cdpr_design.cli.app import app
 from cdpr_design.statics.interference import HIT_NAMES, check_pose
 
-from .conftest import PLANAR2
+from .helpers import PLANAR2
 
 
 def planar2(radius=None):

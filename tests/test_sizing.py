@@ -18,7 +18,7 @@ from cdpr_design.model import catalogue as cat
 from cdpr_design.model import spec
 from cdpr_design.errors import InputError, SpecError
 
-from .conftest import PLANAR2
+from .helpers import PLANAR2
 
 G = 9.81
 

@@ -12,7 +12,7 @@ from cdpr_design.model import spec
 from cdpr_design.cli.app import app
 from cdpr_design.errors import SpecError
 
-from .conftest import PLANAR2, write_spec
+from .helpers import PLANAR2, write_spec
 
 runner = CliRunner()
 
@@ -138,7 +138,7 @@ def test_defaults_and_overrides(planar2_data):
 
 
 def test_every_shipped_design_loads():
-    from .conftest import DESIGNS
+    from .helpers import DESIGNS
 
     files = sorted(DESIGNS.glob("*.yaml"))
     assert files

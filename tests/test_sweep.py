@@ -23,7 +23,7 @@ from cdpr_design.batch import sweep as bsweep
 from cdpr_design.cli.app import app
 from cdpr_design.errors import InputError, SpecError
 
-from .conftest import PLANAR2, ROOT, write_spec
+from .helpers import PLANAR2, ROOT, write_spec
 
 runner = CliRunner()
 STEP = "0.05"  # coarse grids keep the sweeps fast; report runs use the same step

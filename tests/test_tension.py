@@ -14,7 +14,7 @@ import cdpr_design as cd
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import tension as T
 
-from .conftest import DESIGNS
+from .helpers import DESIGNS
 
 IPANEMA1 = cd.load(DESIGNS / "ipanema1.yaml")
 PLANAR4 = cd.load(DESIGNS / "planar4.yaml")

@@ -15,7 +15,7 @@ from cdpr_design.workspaces import engine as eng
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Grid
 
-from .conftest import PLANAR2, random_planar_data
+from .helpers import PLANAR2, random_planar_data
 
 
 def numpy_reference(design, poses, wreq):
