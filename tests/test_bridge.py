@@ -8,7 +8,6 @@ Each bridged run lasts a few seconds.
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -17,18 +16,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
 from cdpr_design.plc import bridge as br
 from cdpr_design.plc import delay, rows as plc_rows, stats, transport
 from cdpr_design.model import spec
 from cdpr_design.motion import trajectory
-from cdpr_design.cli.app import app
 from cdpr_design.plc.ads import AdsTransport
 from cdpr_design.plc.symbols import ADST_REAL64, PlcLayout, check_symbol_info
 from cdpr_design.plc.testplc import LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, TestPlc
 
-from .helpers import ROOT, write_spec
+from .helpers import invoke, subprocess_env, write_spec
 
 PLC = {
     "ams_net_id": TEST_PLC_NET_ID, "port": 851, "host": LOOPBACK, "cycle_time": 0.01,
@@ -54,12 +51,6 @@ def loop_data(planar2_data) -> dict:
 @pytest.fixture
 def design(loop_data):
     return spec.from_dict(loop_data)
-
-
-def _env():
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
-    return env
 
 
 def _read_csv(path: Path):
@@ -304,8 +295,7 @@ def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, c
         kw, name = {"retype": {"MAIN.nSimHeartbeat": ("LREAL", ADST_REAL64, 1)}}, "MAIN.nSimHeartbeat"
     p = write_spec(tmp_path, loop_data)
     with TestPlc(lay, **kw):
-        r = CliRunner().invoke(app, ["bridge", str(p), "--duration", "0.5", "--local-net-id",
-                                     TEST_LOCAL_NET_ID, "--out", str(tmp_path / "o")])
+        r = invoke("bridge", p, "--duration", "0.5", "--local-net-id", TEST_LOCAL_NET_ID, "--out", tmp_path / "o")
     assert r.exit_code == 2, r.output
     assert name in r.output
     assert "Traceback" not in r.output
@@ -318,8 +308,8 @@ def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, c
 def test_no_plc_at_all_is_a_clean_error(tmp_path, loop_data):
     p = write_spec(tmp_path, loop_data)
     t = time.monotonic()
-    r = CliRunner().invoke(app, ["bridge", str(p), "--duration", "0.5", "--timeout", "0.05",
-                                 "--local-net-id", TEST_LOCAL_NET_ID, "--out", str(tmp_path / "o")])
+    r = invoke("bridge", p, "--duration", "0.5", "--timeout", "0.05", "--local-net-id", TEST_LOCAL_NET_ID,
+               "--out", tmp_path / "o")
     assert r.exit_code == 3, r.output
     assert "Traceback" not in r.output
     assert time.monotonic() - t < 10
@@ -330,7 +320,7 @@ def _start_bridge(tmp_path, spec_path, *extra):
     cmd = [sys.executable, "-m", "cdpr_design", "bridge", str(spec_path), "--out", str(out),
            "--json", *extra]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=_env(), cwd=tmp_path)
+                            env=subprocess_env(), cwd=tmp_path)
     return proc, out
 
 
@@ -427,8 +417,7 @@ def test_test_plc_run_writes_compare_ready_log(tmp_path, loop_data):
     """--test-plc: bridge.csv has the simulation.csv columns; compare reads it."""
     p = write_spec(tmp_path, loop_data)
     out = tmp_path / "o"
-    r = CliRunner().invoke(app, ["bridge", str(p), "--test-plc", "probe", "--duration", "2.5",
-                                 "--out", str(out), "--json"])
+    r = invoke("bridge", p, "--test-plc", "probe", "--duration", "2.5", "--out", out, "--json")
     assert r.exit_code == 0, r.output
     summary = json.loads(r.stdout.strip().splitlines()[-1])
     for key in ("cycles", "overruns", "cycle_time", "latency", "delay"):

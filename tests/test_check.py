@@ -8,43 +8,30 @@ import json
 import pickle
 
 import pytest
-import yaml
-from typer.testing import CliRunner
 
 from cdpr_design.model import spec
-from cdpr_design.cli.app import app
 from cdpr_design.design.evaluate import check_table, evaluate
 
-from .helpers import PLANAR2, write_spec
+from .helpers import invoke, write_spec
 
 CONTRACT = ["cable", "peak_tension", "peak_cable_speed", "drum_torque", "peak_motor_torque",
             "rms_motor_torque", "peak_motor_speed", "motor", "torque_margin", "speed_margin"]
 
 
 @pytest.fixture
-def runner():
-    return CliRunner()
+def data(planar2_data) -> dict:
+    planar2_data["workspace"]["grid"]["step"] = 0.05  # fast
+    return planar2_data
 
 
-@pytest.fixture
-def data() -> dict:
-    d = yaml.safe_load(PLANAR2.read_text())
-    d["workspace"]["grid"]["step"] = 0.05  # fast
-    return d
-
-
-def run(runner, args):
-    return runner.invoke(app, [str(a) for a in args])
-
-
-def test_check_passes_and_fails_by_requirement(runner, tmp_path, data):
+def test_check_passes_and_fails_by_requirement(tmp_path, data):
     # the paper's motors hold the task box's upper corners only briefly: the default
     # cycle (half the time at the worst pose) overheats them, the square trajectory does not
     p = write_spec(tmp_path, data)
-    r = run(runner, ["check", p])
+    r = invoke("check", p)
     assert r.exit_code == 1, r.output
     assert "motors" in r.output and "FAIL" in r.output
-    r = run(runner, ["check", p, "--trajectory", "square_fast", "--json"])
+    r = invoke("check", p, "--trajectory", "square_fast", "--json")
     assert r.exit_code == 0, r.output
     out = json.loads(r.stdout)
     assert out["passed"] is True
@@ -54,7 +41,7 @@ def test_check_passes_and_fails_by_requirement(runner, tmp_path, data):
     # a task box reaching the frame's bottom corners is not fully feasible
     bad = copy.deepcopy(data)
     bad["requirements"] = {"task_box": {"lower": [0.0, 0.0], "upper": [1.5, 0.5]}}
-    r = run(runner, ["check", write_spec(tmp_path, bad, "bad.yaml"), "--json"])
+    r = invoke("check", write_spec(tmp_path, bad, "bad.yaml"), "--json")
     assert r.exit_code == 1
     out = json.loads(r.stdout)
     res = {c["requirement"]: c["passed"] for c in out["checks"]}
@@ -65,35 +52,35 @@ def test_check_passes_and_fails_by_requirement(runner, tmp_path, data):
     hard = copy.deepcopy(data)
     hard["requirements"] = {"task_box": data["requirements"]["task_box"], "min_margin": 50.0, "min_fraction": 0.99}
     hard["winch"].pop("motor")  # no motor named, no speed/acceleration asked: no motor check
-    r = run(runner, ["check", write_spec(tmp_path, hard, "hard.yaml"), "--json"])
+    r = invoke("check", write_spec(tmp_path, hard, "hard.yaml"), "--json")
     assert r.exit_code == 1
     res = {c["requirement"]: c["passed"] for c in json.loads(r.stdout)["checks"]}
     assert res == {"task_box": True, "min_margin": False, "min_fraction": False}
 
     easy = copy.deepcopy(hard)
     easy["requirements"].update(min_margin=0.5, min_fraction=0.5)
-    assert run(runner, ["check", write_spec(tmp_path, easy, "easy.yaml")]).exit_code == 0
+    assert invoke("check", write_spec(tmp_path, easy, "easy.yaml")).exit_code == 0
 
 
-def test_check_bad_input_is_exit_2(runner, tmp_path, data):
+def test_check_bad_input_is_exit_2(tmp_path, data):
     p = write_spec(tmp_path, data)
-    r = run(runner, ["check", p, "--trajectory", "nope"])
+    r = invoke("check", p, "--trajectory", "nope")
     assert r.exit_code == 2 and "nope" in r.output
     cat = tmp_path / "cat.yaml"
     cat.write_text("motors:\n  - {name: x, rated_torque: -1, peak_torque: 1, max_speed: 1, rotor_inertia: 0}\n")
-    r = run(runner, ["check", p, "--catalogue", cat])
+    r = invoke("check", p, "--catalogue", cat)
     assert r.exit_code == 2 and "motors[0].rated_torque" in r.output
     d = copy.deepcopy(data)
     d["winch"]["motor"] = "NoSuchMotor"
-    r = run(runner, ["check", write_spec(tmp_path, d, "m.yaml")])
+    r = invoke("check", write_spec(tmp_path, d, "m.yaml"))
     assert r.exit_code == 2 and "winch.motor" in r.output
     assert "Traceback" not in r.output
 
 
-def test_size_motors_writes_contract_columns(runner, tmp_path, data):
+def test_size_motors_writes_contract_columns(tmp_path, data):
     p = write_spec(tmp_path, data)
     out = tmp_path / "out"
-    r = run(runner, ["size-motors", p, "--out", out, "--json"])
+    r = invoke("size-motors", p, "--out", out, "--json")
     assert r.exit_code == 0, r.output
     js = json.loads(r.stdout)
     assert [a["cable"] for a in js["axes"]] == ["c1", "c2"]
@@ -105,15 +92,15 @@ def test_size_motors_writes_contract_columns(runner, tmp_path, data):
     assert float(rows[1][rows[0].index("implied_tension_max")]) == pytest.approx(20.0)
     assert js["axes"][0]["peak_motor_torque"] == pytest.approx(float(rows[1][4]), rel=1e-9)
     # a user catalogue and --motor: evaluate a bigger motor on every axis
-    r = run(runner, ["size-motors", p, "--out", out, "--motor", "AM8121-0F00", "--json"])
+    r = invoke("size-motors", p, "--out", out, "--motor", "AM8121-0F00", "--json")
     assert r.exit_code == 0
     assert {a["motor"] for a in json.loads(r.stdout)["axes"]} == {"AM8121-0F00"}
 
 
-def test_report_writes_every_artefact(runner, tmp_path, data):
+def test_report_writes_every_artefact(tmp_path, data):
     p = write_spec(tmp_path, data)
     out = tmp_path / "rep"
-    r = run(runner, ["report", p, "--out", out, "--quiet"])
+    r = invoke("report", p, "--out", out, "--quiet")
     assert r.exit_code == 0, r.output  # report writes; only check fails on requirements
     for name in ("workspace.csv", "workspace.png", "tension_map.png", "summary.json", "motor_sizing.csv",
                  "design_report.csv", "report.json"):

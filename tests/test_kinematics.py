@@ -12,7 +12,6 @@ from hypothesis import strategies as st
 from cdpr_design import kernels as K
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.model import spec
-from cdpr_design import workspaces as ws
 from cdpr_design.statics import pose as sp
 
 from .helpers import PLANAR2, point_mass

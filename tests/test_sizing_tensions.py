@@ -9,7 +9,6 @@ exact to round-off and independent of the kernel.
 
 from __future__ import annotations
 
-import copy
 
 import numpy as np
 import pytest

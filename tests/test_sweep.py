@@ -11,36 +11,18 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
 
 from cdpr_design.model import spec
 from cdpr_design import batch as sw
 from cdpr_design.batch import dask as bdask
 from cdpr_design.batch import sweep as bsweep
-from cdpr_design.cli.app import app
 from cdpr_design.errors import InputError, SpecError
 
-from .helpers import PLANAR2, ROOT, write_spec
+from .helpers import PLANAR2, ROOT, invoke, planar2_raw, read_csv, subprocess_env, write_spec
 
-runner = CliRunner()
 STEP = "0.05"  # coarse grids keep the sweeps fast; report runs use the same step
-
-
-def invoke(*args):
-    return runner.invoke(app, [str(a) for a in args])
-
-
-def read_csv(path: Path) -> tuple[list[str], list[list[str]]]:
-    rows = list(csv.reader(io.StringIO(path.read_text())))
-    return rows[0], rows[1:]
-
-
-@pytest.fixture(scope="module")
-def planar2():
-    return spec.load(PLANAR2)
 
 
 # ----------------------------------------------------------------------------
@@ -285,7 +267,7 @@ def test_resume_after_kill_gives_the_identical_csv(tmp_path):
 
     part = tmp_path / "part"
     journal = part / "sweep.journal.jsonl"
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env = subprocess_env()
     # the step is fine (slow variants) so the kill lands mid-sweep
     cmd = [sys.executable, "-m", "cdpr_design", "sweep", str(PLANAR2), *RESUME_VARY, "--workers", "1",
            "--out", str(part), "--quiet", "--no-picture"]
@@ -471,7 +453,7 @@ def test_engines_give_the_identical_sweep_csv(tmp_path, monkeypatch):
 
 
 def test_big_sweeps_load_the_kernels():
-    design_data = spec.read_yaml(PLANAR2)
+    design_data = planar2_raw()
     plan = sw.make_plan(spec.from_dict(design_data), [("effector.mass", sw.parse_values("0.5:2:3"))])
     assert not bsweep._worth_kernels(plan, sw.Options(), len(plan))  # 3 x 22,801 poses
     assert bsweep._worth_kernels(plan, sw.Options(), 1000)  # 22.8 M poses
