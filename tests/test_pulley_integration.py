@@ -17,15 +17,12 @@ free segment leaves the pulley's tangent point) must reach every analysis:
 
 from __future__ import annotations
 
-import copy
 import json
 
 import numpy as np
 import pytest
-import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
@@ -38,34 +35,22 @@ from cdpr_design.workspaces import orientation as hwm
 from cdpr_design import workspaces as ws
 from cdpr_design.workspaces import grid as wsg
 from cdpr_design.statics import pose as sp
-from cdpr_design.cli.app import app
 from cdpr_design.statics.interference import HIT_NAMES, check_pose
 
-from .helpers import PLANAR2
+from .helpers import add_pulleys, invoke, ipanema3_data, planar2_raw, planar4_cables, planar4_orient, write_spec
 
 
 def planar2(radius=None):
     """The seed paper's planar robot; pulleys at the top corners fed up the posts (axis +y)."""
-    with open(PLANAR2) as f:
-        d = yaml.safe_load(f)
-    d = copy.deepcopy(d)
+    d = planar2_raw()
     d.pop("plc", None)
-    if radius is not None:
-        for c in d["cables"]:
-            c["pulley"] = {"radius": radius, "axis": [0.0, 1.0, 0.0]}
+    add_pulleys(d["cables"], radius, [[0.0, 1.0, 0.0]] * len(d["cables"]))
     return spec.from_dict(d)
 
 
 def planar4(radius=None, axes=None):
     """A 1R2T robot with four cables (m > n), pulleys at the four corners."""
-    cables = [{"name": "c1", "outlet": [0, 2], "attachment": [-0.1, 0.05]},
-              {"name": "c2", "outlet": [2, 2], "attachment": [0.1, 0.05]},
-              {"name": "c3", "outlet": [2, 0], "attachment": [0.1, -0.05]},
-              {"name": "c4", "outlet": [0, 0], "attachment": [-0.1, -0.05]}]
-    axes = axes or [[0, 1, 0], [0, 1, 0], [0, -1, 0], [0, -1, 0]]
-    if radius is not None:
-        for c, k in zip(cables, axes):
-            c["pulley"] = {"radius": radius, "axis": k}
+    cables = add_pulleys(planar4_cables(), radius, axes or [[0, 1, 0], [0, 1, 0], [0, -1, 0], [0, -1, 0]])
     return spec.from_dict({
         "name": "p4", "motion": "1R2T", "gravity": [0, -9.81],
         "frame": {"lower": [0, 0], "upper": [2, 2]},
@@ -83,38 +68,18 @@ def planar4(radius=None, axes=None):
     })
 
 
-IP3 = [((-8.544, 5.463, 3.202), (-0.07, 0.648, -0.26)), ((8.184, 5.692, 3.236), (0.06, 0.648, -0.262)),
-       ((8.224, -5.492, 3.25), (0.06, -0.651, -0.262)), ((-8.491, -5.322, 3.221), (-0.07, -0.651, -0.26)),
-       ((-8.192, 5.648, -0.589), (-0.085, 0.748, 0.261)), ((7.208, 6.463, -0.548), (0.095, 0.749, 0.26)),
-       ((7.869, -5.557, -0.527), (0.095, -0.745, 0.26)), ((-8.27, -5.545, -0.582), (-0.085, -0.746, 0.261))]
-
-
 def ipanema3(radius=None):
     """IPAnema 3 (reference/robots.md, cdpyr sample); upper cables come up their posts (+z),
     lower cables come down (-z)."""
-    cables = []
-    for i, (a, b) in enumerate(IP3):
-        c = {"name": f"c{i + 1}", "outlet": list(a), "attachment": list(b)}
-        if radius is not None:
-            c["pulley"] = {"radius": radius, "axis": [0.0, 0.0, 1.0 if i < 4 else -1.0]}
-        cables.append(c)
-    return spec.from_dict({
-        "name": "ip3", "motion": "3R3T", "gravity": [0, 0, -9.81],
-        "frame": {"lower": [-8.544, -5.557, -0.589], "upper": [8.224, 6.463, 3.25]},
-        "effector": {"mass": 30.0, "size": [0.19, 1.5, 0.53], "inertia": [5.226154, 0.637352, 4.723802]},
-        "tension": [100.0, 3000.0], "cables": cables,
-        "winch": {"drum_radius": 0.05, "gear_ratio": 10.0},
-        "workspace": {"grid": {"lower": [-2, -2, 0.8], "upper": [2, 2, 2.0], "step": 2.0}},
-        "requirements": {"max_speed": 1.0, "max_acceleration": 2.0},
-        "trajectories": {"swing": {"type": "polyline", "speed": 1.0, "acceleration": 2.0,
-                                   "waypoints": [[0, 0, 1.2, 0, 0, 0], [1.0, 0.5, 1.5, 0.1, -0.08, 0.2],
-                                                 [-0.5, 0.8, 1.0, -0.1, 0.1, -0.15]]}},
-    })
-
-
-@pytest.fixture(scope="module")
-def catalogue():
-    return spec.load_catalogue()
+    return spec.from_dict(ipanema3_data(
+        "ip3", radius,
+        winch={"drum_radius": 0.05, "gear_ratio": 10.0},
+        workspace={"grid": {"lower": [-2, -2, 0.8], "upper": [2, 2, 2.0], "step": 2.0}},
+        requirements={"max_speed": 1.0, "max_acceleration": 2.0},
+        trajectories={"swing": {"type": "polyline", "speed": 1.0, "acceleration": 2.0,
+                                "waypoints": [[0, 0, 1.2, 0, 0, 0], [1.0, 0.5, 1.5, 0.1, -0.08, 0.2],
+                                              [-0.5, 0.8, 1.0, -0.1, 0.1, -0.15]]}},
+    ))
 
 
 def _rows_close(a, b, rtol):
@@ -350,16 +315,7 @@ def test_simulation_uses_pulley_lengths():
 def _orient_design(**wsx):
     """A 1R2T robot whose grid (the frame box) reaches the frame: effector-frame hits at the
     border, cable-effector hits where the platform turns against its cables."""
-    return spec.from_dict({
-        "name": "p4c", "motion": "1R2T", "gravity": [0, -9.81],
-        "frame": {"lower": [0, 0], "upper": [2, 2]}, "effector": {"mass": 1.0, "size": [0.2, 0.1]},
-        "tension": [1, 60], "cable": {"diameter": 0.004},
-        "cables": [{"name": "c1", "outlet": [0, 2], "attachment": [-0.1, 0.05]},
-                   {"name": "c2", "outlet": [2, 2], "attachment": [0.1, 0.05]},
-                   {"name": "c3", "outlet": [2, 0], "attachment": [0.1, -0.05]},
-                   {"name": "c4", "outlet": [0, 0], "attachment": [-0.1, -0.05]}],
-        "workspace": {"grid": {"step": 0.1}, "orientation": [0.05], **wsx},
-    })
+    return planar4_orient("p4c", **wsx)
 
 
 @pytest.mark.parametrize("mode", ["total", "range"])
@@ -401,11 +357,9 @@ def test_orientation_summary_has_collision_counts(mode):
 
 def test_cli_orientations_collisions_json(tmp_path):
     d = _orient_design(orientation_set={"lower": [-0.3], "upper": [0.3], "count": 3})
-    path = tmp_path / "p4c.yaml"
-    path.write_text(yaml.safe_dump(d.raw))
+    path = write_spec(tmp_path, d.raw, "p4c.yaml")
     out = tmp_path / "out"
-    r = CliRunner().invoke(app, ["workspace", str(path), "--orientations", "total", "--collisions",
-                                 "--json", "--quiet", "--out", str(out)])
+    r = invoke("workspace", path, "--orientations", "total", "--collisions", "--json", "--quiet", "--out", out)
     assert r.exit_code == 0, r.output
     s = json.loads(r.stdout)
     for key in ("collision_free", "feasible_statics", "collisions_by_kind"):

@@ -18,19 +18,14 @@ from cdpr_design.model import catalogue as cat
 from cdpr_design.model import spec
 from cdpr_design.errors import InputError, SpecError
 
-from .helpers import PLANAR2
+from .helpers import planar2_raw
 
 G = 9.81
 
 
 @pytest.fixture(scope="module")
 def base() -> dict:
-    return yaml.safe_load(PLANAR2.read_text())
-
-
-@pytest.fixture(scope="module")
-def catalogue():
-    return spec.load_catalogue()
+    return planar2_raw()
 
 
 def one_pose(data: dict, x=0.75, y=0.75, **winch) -> dict:
