@@ -271,6 +271,7 @@ def test_sweep_collision_free_column_matches_pose_checks():
     plain = []
     ws.run(d, on_chunk=plain.append, chunk=97)
     n_free = n_stat = 0
+    assert len(chunks) == len(plain) > 0
     for c, p in zip(chunks, plain):
         assert c.collision_free is not None
         np.testing.assert_array_equal(c.feasible, p.feasible & c.collision_free)
