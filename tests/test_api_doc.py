@@ -5,7 +5,7 @@ from __future__ import annotations
 import doctest
 import os
 
-from .conftest import ROOT
+from .helpers import ROOT
 
 
 def test_api_doc_example_runs(monkeypatch):

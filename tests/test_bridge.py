@@ -8,7 +8,6 @@ Each bridged run lasts a few seconds.
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
@@ -17,18 +16,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
 from cdpr_design.plc import bridge as br
 from cdpr_design.plc import delay, rows as plc_rows, stats, transport
 from cdpr_design.model import spec
 from cdpr_design.motion import trajectory
-from cdpr_design.cli.app import app
 from cdpr_design.plc.ads import AdsTransport
 from cdpr_design.plc.symbols import ADST_REAL64, PlcLayout, check_symbol_info
 from cdpr_design.plc.testplc import LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, TestPlc
 
-from .conftest import ROOT, write_spec
+from .helpers import invoke, subprocess_env, write_spec
 
 PLC = {
     "ams_net_id": TEST_PLC_NET_ID, "port": 851, "host": LOOPBACK, "cycle_time": 0.01,
@@ -54,12 +51,6 @@ def loop_data(planar2_data) -> dict:
 @pytest.fixture
 def design(loop_data):
     return spec.from_dict(loop_data)
-
-
-def _env():
-    env = dict(os.environ)
-    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
-    return env
 
 
 def _read_csv(path: Path):
@@ -214,6 +205,7 @@ def test_reference_is_continuous_and_never_overshoots(design, seed):
                  duration=samples.duration + 0.2, spin=0.0, clock=clock, sleep=clock.sleep)
     assert res.overruns >= 1 and res.cycles > 50
     ends = [sp + v * d for _, sp, v, d in sim.calls]
+    assert len(sim.calls) > 50  # the continuity check below runs over many steps
     for (t, sp, v, d), prev in zip(sim.calls[1:], ends[:-1]):
         np.testing.assert_allclose(sp, prev, atol=1e-9)  # no step
     lo = samples.lengths.min(axis=0) - 1e-3   # extrapolation by one cycle stays within 1 mm
@@ -231,6 +223,7 @@ def test_delay_trace_sees_the_hold_of_the_written_values():
         tr.read(t, f(t))
         tr.wrote(t + 0.004, f(t + 0.004 - lag), t)
     d = tr.delay(("c1", "c2"), dt)
+    assert set(d) == {"length_c1", "length_c2"}  # the loop below checks every column
     for v in d.values():
         assert v == pytest.approx(lag + dt / 2, abs=5e-4)
 
@@ -286,6 +279,7 @@ def test_setpoints_from_the_test_plc_move_the_effector(design):
     # the PLC saw the simulated axes follow its set-points
     assert plc_log.shape[0] > 100
     d = delay.axis_delays(design.cable_names, plc_log[:, 0], plc_log[:, 1:3], plc_log[:, 3:5])
+    assert len(d) == design.m  # one delay per axis: the checks below are not vacuous
     assert all(v is not None and abs(v) < 0.1 for v in d.values())
     # the gateway's own estimate (read -> written and held) agrees with the PLC's scope; the
     # PLC also sees its 1 ms task and the wait of a set-point before the read (< 1 cycle)
@@ -304,8 +298,7 @@ def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, c
         kw, name = {"retype": {"MAIN.nSimHeartbeat": ("LREAL", ADST_REAL64, 1)}}, "MAIN.nSimHeartbeat"
     p = write_spec(tmp_path, loop_data)
     with TestPlc(lay, **kw):
-        r = CliRunner().invoke(app, ["bridge", str(p), "--duration", "0.5", "--local-net-id",
-                                     TEST_LOCAL_NET_ID, "--out", str(tmp_path / "o")])
+        r = invoke("bridge", p, "--duration", "0.5", "--local-net-id", TEST_LOCAL_NET_ID, "--out", tmp_path / "o")
     assert r.exit_code == 2, r.output
     assert name in r.output
     assert "Traceback" not in r.output
@@ -318,8 +311,8 @@ def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, c
 def test_no_plc_at_all_is_a_clean_error(tmp_path, loop_data):
     p = write_spec(tmp_path, loop_data)
     t = time.monotonic()
-    r = CliRunner().invoke(app, ["bridge", str(p), "--duration", "0.5", "--timeout", "0.05",
-                                 "--local-net-id", TEST_LOCAL_NET_ID, "--out", str(tmp_path / "o")])
+    r = invoke("bridge", p, "--duration", "0.5", "--timeout", "0.05", "--local-net-id", TEST_LOCAL_NET_ID,
+               "--out", tmp_path / "o")
     assert r.exit_code == 3, r.output
     assert "Traceback" not in r.output
     assert time.monotonic() - t < 10
@@ -330,7 +323,7 @@ def _start_bridge(tmp_path, spec_path, *extra):
     cmd = [sys.executable, "-m", "cdpr_design", "bridge", str(spec_path), "--out", str(out),
            "--json", *extra]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env=_env(), cwd=tmp_path)
+                            env=subprocess_env(), cwd=tmp_path)
     return proc, out
 
 
@@ -427,8 +420,7 @@ def test_test_plc_run_writes_compare_ready_log(tmp_path, loop_data):
     """--test-plc: bridge.csv has the simulation.csv columns; compare reads it."""
     p = write_spec(tmp_path, loop_data)
     out = tmp_path / "o"
-    r = CliRunner().invoke(app, ["bridge", str(p), "--test-plc", "probe", "--duration", "2.5",
-                                 "--out", str(out), "--json"])
+    r = invoke("bridge", p, "--test-plc", "probe", "--duration", "2.5", "--out", out, "--json")
     assert r.exit_code == 0, r.output
     summary = json.loads(r.stdout.strip().splitlines()[-1])
     for key in ("cycles", "overruns", "cycle_time", "latency", "delay"):

@@ -8,22 +8,20 @@ import json
 import pickle
 
 import pytest
-import yaml
 
 from cdpr_design.model import spec
 from cdpr_design.design.evaluate import check_table, evaluate
 
-from .conftest import PLANAR2, invoke, write_spec
+from .helpers import invoke, write_spec
 
 CONTRACT = ["cable", "peak_tension", "peak_cable_speed", "drum_torque", "peak_motor_torque",
             "rms_motor_torque", "peak_motor_speed", "motor", "torque_margin", "speed_margin"]
 
 
 @pytest.fixture
-def data() -> dict:
-    d = yaml.safe_load(PLANAR2.read_text())
-    d["workspace"]["grid"]["step"] = 0.05  # fast
-    return d
+def data(planar2_data) -> dict:
+    planar2_data["workspace"]["grid"]["step"] = 0.05  # fast
+    return planar2_data
 
 
 def test_check_passes_and_fails_by_requirement(tmp_path, data):

@@ -9,16 +9,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cdpr_design.motion import compare as C
-from cdpr_design.model import spec
 from cdpr_design.motion import trajectory as tr
 
-from .conftest import PLANAR2
+from .helpers import invoke
 
 
 @pytest.fixture(scope="module")
-def fast():
-    d = spec.load(PLANAR2)
-    return tr.sample(d, "square_fast", hold_start=0.3, hold_end=0.5)
+def fast(planar2):
+    return tr.sample(planar2, "square_fast", hold_start=0.3, hold_end=0.5)
 
 
 def smooth(t):
@@ -137,10 +135,6 @@ def test_cli_compare_scope_export(tmp_path, fast):
     """A prototype-like log: 't' time column, its own names (--map), 30 ms late, 1 mm low."""
     import json
 
-    from typer.testing import CliRunner
-
-    from cdpr_design.cli.app import app
-
     t = fast.time
     tgt = tmp_path / "target.csv"
     tgt.write_text("time,x,y\n" + "\n".join(f"{a:.17g},{b:.17g},{c:.17g}" for a, b, c in zip(t, fast.pose[:, 0], fast.pose[:, 1])))
@@ -149,20 +143,18 @@ def test_cli_compare_scope_export(tmp_path, fast):
     ya = np.interp(ta - 0.03, t, fast.pose[:, 1]) - 0.001
     act = tmp_path / "scope.csv"
     act.write_text("t,PosX,PosY\n" + "\n".join(f"{a:.17g},{b:.17g},{c:.17g}" for a, b, c in zip(ta, xa, ya)))
-    r = CliRunner()
-    res = r.invoke(app, ["compare", str(tgt), str(act), "--map", "x=PosX", "--map", "y=PosY", "--json",
-                         "--out", str(tmp_path / "o")])
+    res = invoke("compare", tgt, act, "--map", "x=PosX", "--map", "y=PosY", "--json", "--out", tmp_path / "o")
     assert res.exit_code == 0, res.output
     s = json.loads(res.stdout)
     assert s["delay"]["x"] == pytest.approx(0.03, abs=1e-3)
     assert s["delay"]["y"] == pytest.approx(0.03, abs=1e-3)
     assert len(s["segments"]) == 4
     assert (tmp_path / "o" / "comparison.json").exists()
-    res = r.invoke(app, ["compare", str(tgt), str(act)])
+    res = invoke("compare", tgt, act)
     assert res.exit_code == 2 and "--map" in res.output  # no common column
-    res = r.invoke(app, ["compare", str(tgt), str(tmp_path / "nothere.csv")])
+    res = invoke("compare", tgt, tmp_path / "nothere.csv")
     assert res.exit_code == 2 and "Traceback" not in res.output
     bad = tmp_path / "bad.csv"
     bad.write_text("a,b\n1,2\n3,4\n")
-    res = r.invoke(app, ["compare", str(tgt), str(bad)])
+    res = invoke("compare", tgt, bad)
     assert res.exit_code == 2 and "time" in res.output

@@ -10,7 +10,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import minimize
-from typer.testing import CliRunner
 
 from cdpr_design import kernels as K
 from cdpr_design.statics import interference as itf
@@ -18,7 +17,8 @@ from cdpr_design.statics import kinematics as kin
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
 from cdpr_design.statics import pose as sp
-from cdpr_design.cli.app import app
+
+from .helpers import PLANAR2, invoke
 
 
 def seg_dist_slow(p0, p1, q0, q1):
@@ -134,7 +134,7 @@ def test_effector_leaving_the_frame():
     assert itf.collisions(d, [2.95, 0, 0]) == [("effector", "frame")]
     assert ("effector", "frame") not in itf.collisions(d, [2.9, 0, 0])
     # planar: only x, y count
-    p = spec.load("designs/planar2.yaml")
+    p = spec.load(PLANAR2)
     assert itf.collisions(p, [0.75, 0.75]) == []
     assert ("effector", "frame") in itf.collisions(p, [0.05, 0.75])
 
@@ -271,6 +271,7 @@ def test_sweep_collision_free_column_matches_pose_checks():
     plain = []
     ws.run(d, on_chunk=plain.append, chunk=97)
     n_free = n_stat = 0
+    assert len(chunks) == len(plain) > 0
     for c, p in zip(chunks, plain):
         assert c.collision_free is not None
         np.testing.assert_array_equal(c.feasible, p.feasible & c.collision_free)
@@ -286,15 +287,13 @@ def test_sweep_collision_free_column_matches_pose_checks():
 
 
 def test_cli_pose_collisions_and_workspace_flag(tmp_path):
-    runner = CliRunner()
-    r = runner.invoke(app, ["pose", "designs/planar2.yaml", "--at", "0.05,0.75", "--json"])
+    r = invoke("pose", PLANAR2, "--at", "0.05,0.75", "--json")
     assert r.exit_code == 0, r.output
     data = json.loads(r.stdout)
     assert ["effector", "frame"] in data["collisions"] and ["c1", "frame"] in data["collisions"]
-    r = runner.invoke(app, ["pose", "designs/planar2.yaml", "--at", "0.75,0.75", "--json"])
+    r = invoke("pose", PLANAR2, "--at", "0.75,0.75", "--json")
     assert json.loads(r.stdout)["collisions"] == []
-    r = runner.invoke(app, ["workspace", "designs/planar2.yaml", "--step", "0.05", "--collisions",
-                            "--json", "--out", str(tmp_path)])
+    r = invoke("workspace", PLANAR2, "--step", "0.05", "--collisions", "--json", "--out", tmp_path)
     assert r.exit_code == 0, r.output
     s = json.loads(r.stdout)
     assert s["feasible"] <= s["feasible_statics"] and s["interference"] is True

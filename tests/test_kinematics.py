@@ -14,13 +14,7 @@ from cdpr_design.statics import kinematics as kin
 from cdpr_design.model import spec
 from cdpr_design.statics import pose as sp
 
-from .conftest import point_mass as shared_point_mass
-from .conftest import PLANAR2
-
-
-def point_mass(outlets, mass=1.0, tension=(0.0, 100.0), motion="2T"):
-    """The shared point-mass design with a zero-size effector (every cable meets at its origin)."""
-    return shared_point_mass(outlets, mass, tension, motion, size=[0.0] * len(outlets[0]))
+from .helpers import PLANAR2, point_mass
 
 
 @pytest.mark.parametrize("half_span,depth,mass", [(1.0, 1.0, 1.0), (0.75, 0.3, 2.5), (2.0, 3.0, 0.4)])

@@ -3,46 +3,35 @@ the fixed-orientation ones; the orientation range per position against brute for
 
 from __future__ import annotations
 
-import copy
 import itertools
 import json
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
 from cdpr_design.workspaces import orientation as hwm
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
 from cdpr_design.statics import pose as sp
-from cdpr_design.cli.app import app
 from cdpr_design.errors import SpecError
 
-from .conftest import CROSSED4_CABLES, IP3, IP3_BODY
+from .helpers import PLANAR2, collect_chunks, invoke, ipanema3_data, planar4_orient
 
 
 def planar4(**wsx):
-    return spec.from_dict({
-        "name": "p4", "motion": "1R2T", "gravity": [0, -9.81],
-        "frame": {"lower": [0, 0], "upper": [2, 2]}, "effector": {"mass": 1.0, "size": [0.2, 0.1]},
-        "tension": [1, 60], "cable": {"diameter": 0.004}, "cables": copy.deepcopy(CROSSED4_CABLES),
-        "workspace": {"grid": {"step": 0.1}, "orientation": [0.05], **wsx},
-    })
+    return planar4_orient("p4", **wsx)
 
 
 def ipanema3(**wsx):
-    """IPAnema 3 (cdpyr sample, designs/ipanema3.yaml) on a coarse grid."""
-    return spec.from_dict({
-        **copy.deepcopy(IP3_BODY), "cable": {"diameter": 0.006},
-        "cables": [{"name": f"c{i + 1}", "outlet": list(a), "attachment": list(b)} for i, (a, b) in enumerate(IP3)],
-        "workspace": {"grid": {"lower": [-7, -4.5, 0], "upper": [7, 4.5, 2.5], "step": [2.0, 1.5, 1.25]},
-                      "orientation": [0, 0, 0], **wsx},
-    })
+    """IPAnema 3 (reference/robots.md, cdpyr sample) on a coarse grid."""
+    return spec.from_dict(ipanema3_data(
+        "ip3", cable={"diameter": 0.006},
+        workspace={"grid": {"lower": [-7, -4.5, 0], "upper": [7, 4.5, 2.5], "step": [2.0, 1.5, 1.25]},
+                   "orientation": [0, 0, 0], **wsx}))
 
 
 def _collect(fn, *a, **kw):
-    chunks = []
-    res = fn(*a, on_chunk=chunks.append, **kw)
+    res, chunks = collect_chunks(fn, *a, **kw)
     cat = {k: np.concatenate([getattr(c, k) for c in chunks]) for k in ("feasible", "margin")}
     cat["tensions"] = np.vstack([c.tensions for c in chunks])
     cat["poses"] = np.vstack([c.poses for c in chunks])
@@ -166,14 +155,11 @@ def test_spec_and_cli(tmp_path):
     with pytest.raises(SpecError) as e:
         planar4(orientation_range={"max": 0.0})
     assert e.value.problems[0][0] == "workspace.orientation_range.max"
-    runner = CliRunner()
-    r = runner.invoke(app, ["workspace", "designs/planar2.yaml", "--orientations", "total", "--json",
-                            "--out", str(tmp_path / "a")])
+    r = invoke("workspace", PLANAR2, "--orientations", "total", "--json", "--out", tmp_path / "a")
     assert r.exit_code == 2 and "fixed orientation" in r.output and "Traceback" not in r.output
     p = tmp_path / "p4.yaml"
     p.write_text(json.dumps(planar4().raw))
-    r = runner.invoke(app, ["workspace", str(p), "--orientations", "range", "--collisions", "--json",
-                            "--out", str(tmp_path / "b")])
+    r = invoke("workspace", p, "--orientations", "range", "--collisions", "--json", "--out", tmp_path / "b")
     assert r.exit_code == 0, r.output
     s = json.loads(r.stdout)
     assert s["orientation_mode"] == "range" and s["interference"] is True

@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
@@ -18,9 +17,7 @@ from cdpr_design.plots import workspace as wsplots
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
 
-from .conftest import PLANAR2
-
-ROOT = Path(__file__).resolve().parents[1]
+from .helpers import PLANAR2
 
 
 @pytest.fixture(scope="module")

@@ -17,15 +17,12 @@ free segment leaves the pulley's tangent point) must reach every analysis:
 
 from __future__ import annotations
 
-import copy
 import json
 
 import numpy as np
 import pytest
-import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from typer.testing import CliRunner
 
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
@@ -38,31 +35,22 @@ from cdpr_design.workspaces import orientation as hwm
 from cdpr_design import workspaces as ws
 from cdpr_design.workspaces import grid as wsg
 from cdpr_design.statics import pose as sp
-from cdpr_design.cli.app import app
 from cdpr_design.statics.interference import HIT_NAMES, check_pose
 
-from .conftest import CROSSED4_CABLES, IP3, IP3_BODY, PLANAR2
+from .helpers import add_pulleys, invoke, ipanema3_data, planar2_raw, planar4_cables, planar4_orient, write_spec
 
 
 def planar2(radius=None):
     """The seed paper's planar robot; pulleys at the top corners fed up the posts (axis +y)."""
-    with open(PLANAR2) as f:
-        d = yaml.safe_load(f)
-    d = copy.deepcopy(d)
+    d = planar2_raw()
     d.pop("plc", None)
-    if radius is not None:
-        for c in d["cables"]:
-            c["pulley"] = {"radius": radius, "axis": [0.0, 1.0, 0.0]}
+    add_pulleys(d["cables"], radius, [[0.0, 1.0, 0.0]] * len(d["cables"]))
     return spec.from_dict(d)
 
 
 def planar4(radius=None, axes=None):
     """A 1R2T robot with four cables (m > n), pulleys at the four corners."""
-    cables = copy.deepcopy(CROSSED4_CABLES)
-    axes = axes or [[0, 1, 0], [0, 1, 0], [0, -1, 0], [0, -1, 0]]
-    if radius is not None:
-        for c, k in zip(cables, axes):
-            c["pulley"] = {"radius": radius, "axis": k}
+    cables = add_pulleys(planar4_cables(), radius, axes or [[0, 1, 0], [0, 1, 0], [0, -1, 0], [0, -1, 0]])
     return spec.from_dict({
         "name": "p4", "motion": "1R2T", "gravity": [0, -9.81],
         "frame": {"lower": [0, 0], "upper": [2, 2]},
@@ -81,31 +69,21 @@ def planar4(radius=None, axes=None):
 
 
 def ipanema3(radius=None):
-    """IPAnema 3 (cdpyr sample, designs/ipanema3.yaml); upper cables come up their posts (+z),
+    """IPAnema 3 (reference/robots.md, cdpyr sample); upper cables come up their posts (+z),
     lower cables come down (-z)."""
-    cables = []
-    for i, (a, b) in enumerate(IP3):
-        c = {"name": f"c{i + 1}", "outlet": list(a), "attachment": list(b)}
-        if radius is not None:
-            c["pulley"] = {"radius": radius, "axis": [0.0, 0.0, 1.0 if i < 4 else -1.0]}
-        cables.append(c)
-    return spec.from_dict({
-        **copy.deepcopy(IP3_BODY), "cables": cables,
-        "winch": {"drum_radius": 0.05, "gear_ratio": 10.0},
-        "workspace": {"grid": {"lower": [-2, -2, 0.8], "upper": [2, 2, 2.0], "step": 2.0}},
-        "requirements": {"max_speed": 1.0, "max_acceleration": 2.0},
-        "trajectories": {"swing": {"type": "polyline", "speed": 1.0, "acceleration": 2.0,
-                                   "waypoints": [[0, 0, 1.2, 0, 0, 0], [1.0, 0.5, 1.5, 0.1, -0.08, 0.2],
-                                                 [-0.5, 0.8, 1.0, -0.1, 0.1, -0.15]]}},
-    })
-
-
-@pytest.fixture(scope="module")
-def catalogue():
-    return spec.load_catalogue()
+    return spec.from_dict(ipanema3_data(
+        "ip3", radius,
+        winch={"drum_radius": 0.05, "gear_ratio": 10.0},
+        workspace={"grid": {"lower": [-2, -2, 0.8], "upper": [2, 2, 2.0], "step": 2.0}},
+        requirements={"max_speed": 1.0, "max_acceleration": 2.0},
+        trajectories={"swing": {"type": "polyline", "speed": 1.0, "acceleration": 2.0,
+                                "waypoints": [[0, 0, 1.2, 0, 0, 0], [1.0, 0.5, 1.5, 0.1, -0.08, 0.2],
+                                              [-0.5, 0.8, 1.0, -0.1, 0.1, -0.15]]}},
+    ))
 
 
 def _rows_close(a, b, rtol):
+    assert len(a) == len(b) > 0  # zip() would compare nothing, or stop at the shorter
     for ra, rb in zip(a, b):
         assert ra.keys() == rb.keys()
         for k in ra:
@@ -338,16 +316,7 @@ def test_simulation_uses_pulley_lengths():
 def _orient_design(**wsx):
     """A 1R2T robot whose grid (the frame box) reaches the frame: effector-frame hits at the
     border, cable-effector hits where the platform turns against its cables."""
-    return spec.from_dict({
-        "name": "p4c", "motion": "1R2T", "gravity": [0, -9.81],
-        "frame": {"lower": [0, 0], "upper": [2, 2]}, "effector": {"mass": 1.0, "size": [0.2, 0.1]},
-        "tension": [1, 60], "cable": {"diameter": 0.004},
-        "cables": [{"name": "c1", "outlet": [0, 2], "attachment": [-0.1, 0.05]},
-                   {"name": "c2", "outlet": [2, 2], "attachment": [0.1, 0.05]},
-                   {"name": "c3", "outlet": [2, 0], "attachment": [0.1, -0.05]},
-                   {"name": "c4", "outlet": [0, 0], "attachment": [-0.1, -0.05]}],
-        "workspace": {"grid": {"step": 0.1}, "orientation": [0.05], **wsx},
-    })
+    return planar4_orient("p4c", **wsx)
 
 
 @pytest.mark.parametrize("mode", ["total", "range"])
@@ -389,11 +358,9 @@ def test_orientation_summary_has_collision_counts(mode):
 
 def test_cli_orientations_collisions_json(tmp_path):
     d = _orient_design(orientation_set={"lower": [-0.3], "upper": [0.3], "count": 3})
-    path = tmp_path / "p4c.yaml"
-    path.write_text(yaml.safe_dump(d.raw))
+    path = write_spec(tmp_path, d.raw, "p4c.yaml")
     out = tmp_path / "out"
-    r = CliRunner().invoke(app, ["workspace", str(path), "--orientations", "total", "--collisions",
-                                 "--json", "--quiet", "--out", str(out)])
+    r = invoke("workspace", path, "--orientations", "total", "--collisions", "--json", "--quiet", "--out", out)
     assert r.exit_code == 0, r.output
     s = json.loads(r.stdout)
     for key in ("collision_free", "feasible_statics", "collisions_by_kind"):

@@ -12,7 +12,7 @@ from cdpr_design.model import spec
 from cdpr_design.motion import trajectory as tr
 from cdpr_design.motion.compare import estimate_delay
 
-from .conftest import PLANAR2
+from .helpers import PLANAR2, csv_header, invoke, static_tensions
 
 
 def test_model_builds_with_tendons_that_only_pull(planar2):
@@ -31,8 +31,7 @@ def test_rest_at_symmetric_pose_matches_static_tensions(planar2):
     pose = [0.75, 0.8486]
     st = sim.reset(pose)
     st = sim.advance(kin.inverse_kinematics(planar2, pose), 1.0)
-    W = kin.structure_matrix(planar2, pose)
-    t_static = np.linalg.solve(W, kin.required_wrench(planar2, pose))
+    t_static = static_tensions(planar2, pose)
     np.testing.assert_allclose(st.tensions, t_static, rtol=1e-2)
     np.testing.assert_allclose(st.tensions, t_static, rtol=1e-6)
     np.testing.assert_allclose(st.pose, pose, atol=1e-6)
@@ -46,7 +45,7 @@ def test_rest_off_centre_tilts_and_balances(planar2, pose):
     sim = S.Simulator(planar2)
     sim.reset(pose, settle=4.0)
     st = sim.advance(kin.inverse_kinematics(planar2, pose), 0.5)
-    t_static = np.linalg.solve(kin.structure_matrix(planar2, pose), kin.required_wrench(planar2, pose))
+    t_static = static_tensions(planar2, pose)
     assert abs(st.orientation[2]) > 1e-3  # it does tilt
     # statics of the tilted rigid body, forces and moment (1R2T rows) at the simulated pose
     rigid = spec.from_dict({**planar2.raw, "motion": "1R2T", "trajectories": None, "requirements": None})
@@ -81,8 +80,7 @@ def test_cable_commanded_too_long_goes_slack(planar2):
     assert st.axis[0] == pytest.approx(L[0] + 2.0, abs=1e-6)
     assert st.lengths[0] < st.axis[0] - 0.1
     # while both were taut (before the ramp) the tensions were the static ones
-    W = kin.structure_matrix(planar2, pose)
-    np.testing.assert_allclose(tens[0], np.linalg.solve(W, kin.required_wrench(planar2, pose)), rtol=1e-2)
+    np.testing.assert_allclose(tens[0], static_tensions(planar2, pose), rtol=1e-2)
 
 
 def test_servo_without_feedforward_lags_by_one_over_bandwidth(planar2):
@@ -144,7 +142,7 @@ def test_spatial_point_mass_at_rest():
     pose = [0.2, -0.1, 1.5]
     sim.reset(pose)
     st = sim.advance(kin.inverse_kinematics(d, pose), 1.0)
-    t_static = np.linalg.solve(kin.structure_matrix(d, pose), kin.required_wrench(d, pose))
+    t_static = static_tensions(d, pose)
     np.testing.assert_allclose(st.tensions, t_static, rtol=1e-2)
     np.testing.assert_allclose(st.pose, pose, atol=1e-4)
 
@@ -159,30 +157,21 @@ def test_bad_arguments(planar2):
 
 
 def test_cli_simulate(tmp_path):
-    import csv
     import json
 
-    from typer.testing import CliRunner
-
-    from cdpr_design.cli.app import app
-
-    r = CliRunner()
-    res = r.invoke(app, ["simulate", str(PLANAR2), "square_fast", "--delay", "0.05", "--out", str(tmp_path),
-                         "--json"])
+    res = invoke("simulate", PLANAR2, "square_fast", "--delay", "0.05", "--out", tmp_path, "--json")
     assert res.exit_code == 0, res.output
     s = json.loads(res.stdout)
     assert set(s) >= {"rms_error", "max_error", "delay", "segments"}
     assert s["delay"]["length_c1"] == pytest.approx(0.05, abs=2e-3)
     assert [row["axis"] for row in s["segments"]] == ["y", "x", "y", "x"]
-    with open(tmp_path / "simulation.csv") as fh:
-        header = next(csv.reader(fh))
+    header = csv_header(tmp_path / "simulation.csv")
     assert header[:11] == ["time", "x_target", "y_target", "x", "y", "length_c1_target", "length_c2_target",
                            "length_c1", "length_c2", "tension_c1", "tension_c2"]
     assert (tmp_path / "simulation.png").stat().st_size > 0
     # compare reads what simulate wrote
-    res = r.invoke(app, ["compare", str(tmp_path / "simulation.csv"), str(tmp_path / "simulation.csv"),
-                         "--columns", "x,y", "--json"])
+    res = invoke("compare", tmp_path / "simulation.csv", tmp_path / "simulation.csv", "--columns", "x,y", "--json")
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout)["max_error"] == 0.0
-    res = r.invoke(app, ["simulate", str(PLANAR2), "square_fast", "--delay", "-1", "--out", str(tmp_path)])
+    res = invoke("simulate", PLANAR2, "square_fast", "--delay", "-1", "--out", tmp_path)
     assert res.exit_code == 2

@@ -18,19 +18,14 @@ from cdpr_design.model import catalogue as cat
 from cdpr_design.model import spec
 from cdpr_design.errors import InputError, SpecError
 
-from .conftest import PLANAR2
+from .helpers import planar2_raw
 
 G = 9.81
 
 
 @pytest.fixture(scope="module")
 def base() -> dict:
-    return yaml.safe_load(PLANAR2.read_text())
-
-
-@pytest.fixture(scope="module")
-def catalogue():
-    return spec.load_catalogue()
+    return planar2_raw()
 
 
 def one_pose(data: dict, x=0.75, y=0.75, **winch) -> dict:
@@ -179,6 +174,7 @@ def test_heavier_effector_needs_no_less_torque(base, catalogue, m1, dm, x, y):
     d2["effector"]["mass"] = m1 + dm
     a = sz.size_motors(spec.from_dict(d1), catalogue).axes
     b = sz.size_motors(spec.from_dict(d2), catalogue).axes
+    assert len(a) == len(b) == 2
     for p, q in zip(a, b):
         assert q.peak_tension >= p.peak_tension - 1e-12
         assert q.peak_motor_torque >= p.peak_motor_torque - 1e-12
@@ -191,6 +187,7 @@ def test_larger_drum_more_torque_less_speed(base, catalogue, r, f, x, y):
     """With a light drum the load term T r / (i eta) dominates the inertia term."""
     a = sz.size_motors(spec.from_dict(one_pose(base, x, y, drum_radius=r, drum_inertia=0.0)), catalogue).axes
     b = sz.size_motors(spec.from_dict(one_pose(base, x, y, drum_radius=r * f, drum_inertia=0.0)), catalogue).axes
+    assert len(a) == len(b) == 2
     for p, q in zip(a, b):
         assert q.drum_torque > p.drum_torque
         assert q.peak_motor_speed < p.peak_motor_speed

@@ -18,7 +18,7 @@ from cdpr_design.model import spec
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import tension as T
 
-from .conftest import DESIGNS, random_planar_data
+from .helpers import DESIGNS, random_planar_data
 
 RTOL = 1e-9  # relative to the largest tension (at least 1 N)
 

@@ -6,15 +6,11 @@ import copy
 import json
 
 import pytest
-from typer.testing import CliRunner
 
 from cdpr_design.model import spec
-from cdpr_design.cli.app import app
 from cdpr_design.errors import SpecError
 
-from .conftest import PLANAR2, write_spec
-
-runner = CliRunner()
+from .helpers import DESIGNS, PLANAR2, invoke, write_spec
 
 
 def _set(data, path, value):
@@ -69,7 +65,7 @@ def test_bad_spec_exit_2_names_key(tmp_path, planar2_data, path, value, message)
     data = copy.deepcopy(planar2_data)
     _set(data, path, value)
     p = write_spec(tmp_path, data)
-    res = runner.invoke(app, ["workspace", str(p), "--out", str(tmp_path / "o")])
+    res = invoke("workspace", p, "--out", tmp_path / "o")
     assert res.exit_code == 2, res.output
     assert message in res.output, res.output
     assert "Traceback" not in res.output
@@ -89,13 +85,13 @@ def test_several_problems_are_all_reported(tmp_path, planar2_data):
 
 
 def test_huge_grid_needs_force(tmp_path):
-    res = runner.invoke(app, ["workspace", str(PLANAR2), "--step", "0.0001", "--out", str(tmp_path)])
+    res = invoke("workspace", PLANAR2, "--step", "0.0001", "--out", tmp_path)
     assert res.exit_code == 2
     assert "225,030,001 poses" in res.output and "--force" in res.output
 
 
 def test_bad_step_option(tmp_path):
-    res = runner.invoke(app, ["workspace", str(PLANAR2), "--step", "-1", "--out", str(tmp_path)])
+    res = invoke("workspace", PLANAR2, "--step", "-1", "--out", tmp_path)
     assert res.exit_code == 2 and "--step" in res.output
 
 
@@ -108,14 +104,14 @@ def test_bad_step_option(tmp_path):
 def test_bad_yaml(tmp_path, text, message):
     p = tmp_path / "bad.yaml"
     p.write_text(text)
-    res = runner.invoke(app, ["workspace", str(p), "--out", str(tmp_path / "o")])
+    res = invoke("workspace", p, "--out", tmp_path / "o")
     assert res.exit_code == 2
     assert message in res.output
     assert "Traceback" not in res.output
 
 
 def test_missing_file(tmp_path):
-    res = runner.invoke(app, ["pose", str(tmp_path / "nope.yaml"), "--at", "1,1"])
+    res = invoke("pose", tmp_path / "nope.yaml", "--at", "1,1")
     assert res.exit_code == 2 and "no such file" in res.output
 
 
@@ -138,8 +134,6 @@ def test_defaults_and_overrides(planar2_data):
 
 
 def test_every_shipped_design_loads():
-    from .conftest import DESIGNS
-
     files = sorted(DESIGNS.glob("*.yaml"))
     assert files
     for f in files:
@@ -148,7 +142,7 @@ def test_every_shipped_design_loads():
 
 
 def test_schema_command():
-    res = runner.invoke(app, ["schema"])
+    res = invoke("schema")
     assert res.exit_code == 0
     schema = json.loads(res.stdout)
     assert schema["title"] == "cdpr-design spec"

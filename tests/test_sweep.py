@@ -11,7 +11,6 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
@@ -21,14 +20,9 @@ from cdpr_design.batch import dask as bdask
 from cdpr_design.batch import sweep as bsweep
 from cdpr_design.errors import InputError, SpecError
 
-from .conftest import PLANAR2, ROOT, invoke, write_spec
+from .helpers import PLANAR2, ROOT, invoke, planar2_raw, read_csv, subprocess_env, write_spec
 
 STEP = "0.05"  # coarse grids keep the sweeps fast; report runs use the same step
-
-
-def read_csv(path: Path) -> tuple[list[str], list[list[str]]]:
-    rows = list(csv.reader(io.StringIO(path.read_text())))
-    return rows[0], rows[1:]
 
 
 # ----------------------------------------------------------------------------
@@ -273,7 +267,7 @@ def test_resume_after_kill_gives_the_identical_csv(tmp_path):
 
     part = tmp_path / "part"
     journal = part / "sweep.journal.jsonl"
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env = subprocess_env()
     # the step is fine (slow variants) so the kill lands mid-sweep
     cmd = [sys.executable, "-m", "cdpr_design", "sweep", str(PLANAR2), *RESUME_VARY, "--workers", "1",
            "--out", str(part), "--quiet", "--no-picture"]
@@ -459,7 +453,7 @@ def test_engines_give_the_identical_sweep_csv(tmp_path, monkeypatch):
 
 
 def test_big_sweeps_load_the_kernels():
-    design_data = spec.read_yaml(PLANAR2)
+    design_data = planar2_raw()
     plan = sw.make_plan(spec.from_dict(design_data), [("effector.mass", sw.parse_values("0.5:2:3"))])
     assert not bsweep._worth_kernels(plan, sw.Options(), len(plan))  # 3 x 22,801 poses
     assert bsweep._worth_kernels(plan, sw.Options(), 1000)  # 22.8 M poses

@@ -14,7 +14,7 @@ import cdpr_design as cd
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import tension as T
 
-from .conftest import DESIGNS
+from .helpers import DESIGNS, invoke
 
 IPANEMA1 = cd.load(DESIGNS / "ipanema1.yaml")
 PLANAR4 = cd.load(DESIGNS / "planar4.yaml")
@@ -191,16 +191,12 @@ def test_planar_invariance(x, y, phi, sx, sy, ang):
 def test_cli_pose_objective_and_weights():
     import json
 
-    from typer.testing import CliRunner
-
-    from cdpr_design.cli.app import app
-
     spec = str(DESIGNS / "ipanema1.yaml")
     at = "0.5,0.3,1,0,0,0"
-    base = json.loads(CliRunner().invoke(app, ["pose", spec, "--at", at, "--json"]).stdout)
+    base = json.loads(invoke("pose", spec, "--at", at, "--json").stdout)
     assert base["objective"] == "min-norm"
     for obj in ("min-max", "min-sum"):
-        res = CliRunner().invoke(app, ["pose", spec, "--at", at, "--objective", obj, "--json"])
+        res = invoke("pose", spec, "--at", at, "--objective", obj, "--json")
         assert res.exit_code == 0, res.output
         data = json.loads(res.stdout)
         assert data["objective"] == obj and data["feasible"] and data["margin"] == base["margin"]
@@ -210,9 +206,9 @@ def test_cli_pose_objective_and_weights():
             assert t.max() <= t0.max() + 1e-6
         else:
             assert t.sum() <= t0.sum() + 1e-6
-    res = CliRunner().invoke(app, ["pose", spec, "--at", at, "--weights", "1,2"])
+    res = invoke("pose", spec, "--at", at, "--weights", "1,2")
     assert res.exit_code == 2 and "--weights" in res.output
-    res = CliRunner().invoke(app, ["pose", spec, "--at", at, "--weights", "1,1,1,1,1,1,1,-1"])
+    res = invoke("pose", spec, "--at", at, "--weights", "1,1,1,1,1,1,1,-1")
     assert res.exit_code == 2 and "positive" in res.output
-    res = CliRunner().invoke(app, ["pose", spec, "--at", at, "--objective", "min-foo"])
+    res = invoke("pose", spec, "--at", at, "--objective", "min-foo")
     assert res.exit_code == 2

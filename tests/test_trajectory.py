@@ -15,7 +15,7 @@ from cdpr_design.motion import profile
 from cdpr_design.motion import trajectory as tr
 from cdpr_design.model.design import Trajectory
 
-from .conftest import PLANAR2, point_mass
+from .helpers import PLANAR2, csv_header, invoke, point_mass, static_tensions, write_spec
 
 REL = 1e-9
 
@@ -125,17 +125,12 @@ def test_motor_angle_sign_and_zero(planar2):
 def test_static_tensions_reference_point():
     """algorithms.md: outlets (0,2),(3,2), point mass at (1,1), m g = 9.81 N:
     t = (9.2489567, 7.3119423) N.  At rest the trajectory's tensions are these."""
-    d = point_mass([(0.0, 2.0), (3.0, 2.0)], 1.0, (1.0, 40.0))
+    d = point_mass([(0.0, 2.0), (3.0, 2.0)], 1.0, (1.0, 40.0), size=[0.1, 0.1])
     traj = Trajectory(name="t", type="polyline", speed=0.5, acceleration=2.0,
                       waypoints=((1.0, 1.0), (1.5, 1.0)))
     s = tr.sample(d, traj)
     np.testing.assert_allclose(s.tensions[0], [9.2489567, 7.3119423], atol=5e-8)
-    np.testing.assert_allclose(s.tensions[-1], kin_static(d, [1.5, 1.0]), rtol=1e-12)
-
-
-def kin_static(d, pose):
-    W = kin.structure_matrix(d, pose)
-    return np.linalg.solve(W, kin.required_wrench(d, pose))
+    np.testing.assert_allclose(s.tensions[-1], static_tensions(d, [1.5, 1.0]), rtol=1e-12)
 
 
 @settings(max_examples=25, deadline=None)
@@ -143,11 +138,11 @@ def kin_static(d, pose):
 def test_inertial_tension_equals_static_under_shifted_gravity(ax, ay, x, y):
     """d'Alembert: a point mass accelerating by a needs the tensions of a mass at rest under g - a."""
     outlets = [(0.0, 2.0), (3.0, 2.0)]
-    d = point_mass(outlets, 1.3)
+    d = point_mass(outlets, 1.3, size=[0.1, 0.1])
     g = np.array([0.0, -9.81])
-    dg = point_mass(outlets, 1.3, gravity=list(g - [ax, ay]))
+    dg = point_mass(outlets, 1.3, gravity=list(g - [ax, ay]), size=[0.1, 0.1])
     st_ = tr.states(d, [[x, y]], [[0.3, -0.2]], [[ax, ay]])
-    np.testing.assert_allclose(st_["tensions"][0], kin_static(dg, [x, y]), rtol=1e-10, atol=1e-10)
+    np.testing.assert_allclose(st_["tensions"][0], static_tensions(dg, [x, y]), rtol=1e-10, atol=1e-10)
 
 
 def rigid_1r2t():
@@ -247,19 +242,13 @@ def test_spatial_3r3t_speeds_match_per_pose():
 
 
 def test_cli_trajectory_writes_contract_columns(tmp_path):
-    import csv
     import json
 
-    from typer.testing import CliRunner
-
-    from cdpr_design.cli.app import app
-
-    res = CliRunner().invoke(app, ["trajectory", str(PLANAR2), "square_fast", "--out", str(tmp_path), "--json"])
+    res = invoke("trajectory", PLANAR2, "square_fast", "--out", tmp_path, "--json")
     assert res.exit_code == 0, res.output
     summ = json.loads(res.stdout)
     assert summ["feasible"] is True and summ["samples"] > 1000
-    with open(tmp_path / "trajectory.csv") as fh:
-        header = next(csv.reader(fh))
+    header = csv_header(tmp_path / "trajectory.csv")
     assert header[:14] == ["time", "x", "y", "x_vel", "y_vel",
                            "length_c1", "cable_speed_c1", "motor_angle_c1", "tension_c1",
                            "length_c2", "cable_speed_c2", "motor_angle_c2", "tension_c2", "feasible"]
@@ -268,15 +257,9 @@ def test_cli_trajectory_writes_contract_columns(tmp_path):
 
 
 def test_cli_trajectory_bad_input_and_check(tmp_path, planar2_data):
-    import yaml
-    from typer.testing import CliRunner
-
-    from cdpr_design.cli.app import app
-
-    r = CliRunner()
-    res = r.invoke(app, ["trajectory", str(PLANAR2), "nope", "--out", str(tmp_path)])
+    res = invoke("trajectory", PLANAR2, "nope", "--out", tmp_path)
     assert res.exit_code == 2 and "square_fast" in res.output and "Traceback" not in res.output
-    res = r.invoke(app, ["trajectory", str(PLANAR2), "square_fast", "--cycle-time", "-1", "--out", str(tmp_path)])
+    res = invoke("trajectory", PLANAR2, "square_fast", "--cycle-time", "-1", "--out", tmp_path)
     assert res.exit_code == 2
     data = dict(planar2_data)
     data["trajectories"] = {
@@ -284,14 +267,13 @@ def test_cli_trajectory_bad_input_and_check(tmp_path, planar2_data):
         "fromfile": {"type": "csv", "file": "poses.csv", "speed": 0.5, "acceleration": 2.0},
         "missing": {"type": "csv", "file": "nothere.csv", "speed": 0.5, "acceleration": 2.0},
     }
-    p = tmp_path / "spec.yaml"
-    p.write_text(yaml.safe_dump(data))
+    p = write_spec(tmp_path, data)
     (tmp_path / "poses.csv").write_text("x,y\n0.6,0.7\n0.9,0.7\n0.9,0.9\n")
-    res = r.invoke(app, ["trajectory", str(p), "drop", "--out", str(tmp_path / "o"), "--check", "--quiet"])
+    res = invoke("trajectory", p, "drop", "--out", tmp_path / "o", "--check", "--quiet")
     assert res.exit_code == 1
-    res = r.invoke(app, ["trajectory", str(p), "fromfile", "--out", str(tmp_path / "o"), "--json"])
+    res = invoke("trajectory", p, "fromfile", "--out", tmp_path / "o", "--json")
     assert res.exit_code == 0, res.output
-    res = r.invoke(app, ["trajectory", str(p), "missing", "--out", str(tmp_path / "o")])
+    res = invoke("trajectory", p, "missing", "--out", tmp_path / "o")
     assert res.exit_code == 2 and "nothere.csv" in res.output
 
 

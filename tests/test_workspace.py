@@ -15,7 +15,7 @@ from cdpr_design.workspaces import engine as eng
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Grid
 
-from .conftest import PLANAR2, random_planar_data
+from .helpers import PLANAR2, collect_chunks, invoke, planar2_raw, random_planar_data
 
 
 def numpy_reference(design, poses, wreq):
@@ -42,11 +42,18 @@ def numpy_reference(design, poses, wreq):
     return feas, margin, T, L
 
 
+COLUMNS = ("poses", "feasible", "margin", "tensions", "lengths")
+
+
+def sweep_columns(design, kind="static", **kw):
+    """ws.run's result and its chunks' columns (poses, feasible, margin, tensions, lengths) joined."""
+    r, rows = collect_chunks(ws.run, design, kind=kind, **kw)
+    return r, {name: np.concatenate([getattr(c, name) for c in rows]) for name in COLUMNS}
+
+
 def sweep_all(design, kind="static", **kw):
-    rows = []
-    ws.run(design, kind=kind, on_chunk=rows.append, **kw)
-    cat = lambda name: np.concatenate([getattr(c, name) for c in rows])  # noqa: E731
-    return cat("poses"), cat("feasible"), cat("margin"), cat("tensions"), cat("lengths")
+    cols = sweep_columns(design, kind, **kw)[1]
+    return tuple(cols[name] for name in COLUMNS)
 
 
 def assert_same(ref, got, design):
@@ -93,7 +100,7 @@ def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
 
 @pytest.mark.parametrize("engine", ["numba", "numpy"])
 def test_planar2_wrench_feasible_matches_numpy(engine):
-    data = spec.read_yaml(PLANAR2)
+    data = planar2_raw()
     data["workspace"]["external_wrench"] = {"lower": [-2.0, -1.0], "upper": [2.0, 1.0]}
     design = spec.from_dict(data)
     got = sweep_all(design, kind="wrench-feasible", step=0.03, engine=engine)
@@ -173,11 +180,7 @@ def test_unknown_kind_is_spec_error():
 
 
 def _sweep_engine(design, engine, kind="static", **kw):
-    rows = []
-    r = ws.run(design, kind=kind, on_chunk=rows.append, engine=engine, **kw)
-    cols = {name: np.concatenate([getattr(c, name) for c in rows])
-            for name in ("poses", "feasible", "margin", "tensions", "lengths")}
-    return r, cols
+    return sweep_columns(design, kind, engine=engine, **kw)
 
 
 @pytest.mark.parametrize("seed", range(25))
@@ -206,7 +209,7 @@ def test_numpy_engine_equals_numba_kernel(seed):
 def test_numpy_engine_degenerate_poses():
     """A grid through an outlet (zero-length cable) and along the line between the outlets
     (parallel cables, rank deficient): infeasible with NaN margin in both engines."""
-    data = spec.read_yaml(PLANAR2)
+    data = planar2_raw()
     data["effector"]["size"] = [0.0, 0.0]
     for c in data["cables"]:
         c["attachment"] = [0.0, 0.0]
@@ -245,10 +248,6 @@ def test_engine_choice(monkeypatch):
 def test_engine_variable_is_read_by_the_command_line(tmp_path, monkeypatch):
     """Only the command line reads CDPR_DESIGN_ENGINE: it forces the engine, and a bad value
     is exit 2 naming the variable."""
-    from typer.testing import CliRunner
-
-    from cdpr_design.cli.app import app
-
     calls = []
     real = eng.sweep
 
@@ -258,11 +257,11 @@ def test_engine_variable_is_read_by_the_command_line(tmp_path, monkeypatch):
 
     monkeypatch.setattr(ws, "straight_sweep", spy)
     monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")
-    r = CliRunner().invoke(app, ["workspace", str(PLANAR2), "--out", str(tmp_path / "a"), "--json", "--quiet"])
+    r = invoke("workspace", PLANAR2, "--out", tmp_path / "a", "--json", "--quiet")
     assert r.exit_code == 0, r.output
     assert calls == ["numba"]
     monkeypatch.setenv("CDPR_DESIGN_ENGINE", "fortran")
-    r = CliRunner().invoke(app, ["workspace", str(PLANAR2), "--out", str(tmp_path / "b"), "--json", "--quiet"])
+    r = invoke("workspace", PLANAR2, "--out", tmp_path / "b", "--json", "--quiet")
     assert r.exit_code == 2
     assert "CDPR_DESIGN_ENGINE: expected one of auto, numba, numpy" in r.output
 
