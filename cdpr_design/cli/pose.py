@@ -9,7 +9,7 @@ from typing import Annotated, Optional
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (JsonOpt, Kind, KindOpt, SpecArg, command, emit_json, fmt, load_design,
+from cdpr_design.cli.common import (CableModelOpt, JsonOpt, Kind, KindOpt, SpecArg, command, emit_json, fmt, load_design,
                                     out_console, parse_numbers, parse_pose, summary_table)
 from cdpr_design.errors import InputError
 
@@ -45,12 +45,13 @@ def pose(
     objective: ObjectiveOpt = Objective.min_norm,
     weights: WeightsOpt = None,
     json_: JsonOpt = False,
+    cable_model: CableModelOpt = None,
 ):
     """One pose: cable lengths, tensions, feasibility, margin, structure matrix."""
     from cdpr_design.jobs import pose as job
     from cdpr_design.statics.pose import evaluate_pose
 
-    design = load_design(spec)
+    design = load_design(spec, cable_model)
     p = parse_pose(design, at)
     c = parse_weights(design, weights)
     result = evaluate_pose(design, p, kind.value, objective.value, c)
@@ -61,12 +62,18 @@ def pose(
         return
     t = Table(title=f"{design.name} at ({at}) — {'feasible' if data['feasible'] else 'infeasible'}, "
                     f"margin {fmt(data['margin'])} N", title_justify="left")
-    for col in ("cable", "length [m]", "tension [N]", "bounds [N]"):
+    model = data.get("cable_model")
+    extra = [("outlet tension [N]", "outlet_tensions"), ("unstretched [m]", "unstretched_lengths"),
+             ("sag [m]", "sag")] if model else []
+    for col in ("cable", "length [m]", "tension [N]") + tuple(c for c, _ in extra) + ("bounds [N]",):
         t.add_column(col)
     for cable in design.cables:
         t.add_row(cable.name, fmt(data["lengths"][cable.name], 6), fmt(data["tensions"][cable.name], 6),
+                  *(fmt(data[k][cable.name], 6) for _, k in extra),
                   f"{cable.tension_min:g} – {cable.tension_max:g}")
     out_console.print(t)
+    if model:
+        out_console.print(f"cable model: {model} (tensions at the effector end; status {data['cable_status']})")
     if data["collisions"]:
         out_console.print("collisions: " + ", ".join(" – ".join(p) for p in data["collisions"]))
 
@@ -77,11 +84,12 @@ def fk(
     lengths: Annotated[str, typer.Option("--lengths", help="Cable lengths [m], comma-separated, in cable order.")],
     guess: Annotated[Optional[str], typer.Option("--guess", help="Starting pose for the numerical solver.")] = None,
     json_: JsonOpt = False,
+    cable_model: CableModelOpt = None,
 ):
     """Forward kinematics: the pose for given cable lengths."""
     from cdpr_design.statics import kinematics as kin
 
-    design = load_design(spec)
+    design = load_design(spec, cable_model)
     L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)")
     if any(v < 0 for v in L):
         raise InputError("--lengths: cable lengths must be non-negative")

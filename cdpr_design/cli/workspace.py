@@ -7,7 +7,7 @@ from typing import Annotated, Optional
 
 import typer
 
-from cdpr_design.cli.common import (ForceOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg,
+from cdpr_design.cli.common import (CableModelOpt, ForceOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg,
                                     bars, command, emit_json, load_design, out_console, summary_table)
 
 
@@ -33,6 +33,7 @@ def workspace(
         "--orientations", help="total: feasible for every orientation of workspace.orientation_set; "
                                "range: largest feasible orientation range per position "
                                "(workspace.orientation_range). 1R2T and 3R3T.")] = None,
+    cable_model: CableModelOpt = None,
 ):
     """Grid sweep of the workspace: workspace.csv, workspace.png, tension_map.png, summary.json."""
     from cdpr_design.cli import env
@@ -40,7 +41,7 @@ def workspace(
     from cdpr_design.plots import worker as _picture_worker
 
     with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:  # matplotlib's import overlaps the spec and the sweep
-        design = load_design(spec)
+        design = load_design(spec, cable_model)
         result, out_dir = job.workspace(
             design, out, overwrite, kind=kind.value, step=step, force=force, collisions=collisions,
             orientations=orientations.value if orientations is not None else None, pictures=pictures,

@@ -16,4 +16,19 @@ def pose_data(design, result) -> dict:
         "margin": float(result.margin) if np.isfinite(result.margin) else None,
         "structure_matrix": [[float(x) for x in row] for row in result.W],
         "collisions": [list(p) for p in result.collisions],
-    }
+    } | cable_model_data(design, result)
+
+
+def cable_model_data(design, result) -> dict:
+    """The keys a non-ideal cable model adds to ``pose --json`` (none for ideal cables)."""
+    st = result.cable_state
+    if st is None:
+        return {}
+    names = design.cable_names
+
+    def per_cable(values):
+        return {c: (float(v) if np.isfinite(v) else None) for c, v in zip(names, values)}
+
+    return {"cable_model": result.cable_model, "outlet_tensions": per_cable(st.outlet_tensions),
+            "unstretched_lengths": per_cable(st.unstretched_lengths), "sag": per_cable(st.sag),
+            "cable_status": st.status}

@@ -16,8 +16,10 @@ from typing import Callable
 import numpy as np
 
 from cdpr_design.model.design import Design, Grid
+from cdpr_design.statics import cables as cable_models
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.pose import KINDS, check_kind
+from cdpr_design.workspaces.cables import ElasticColumns, cable_summary, sweep_sagging
 from cdpr_design.workspaces.engine import ENGINES, check_engine, load_kernels
 from cdpr_design.workspaces.engine import sweep as straight_sweep
 from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, chunk_extra,
@@ -77,19 +79,35 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         For straight cables from point outlets (:mod:`~cdpr_design.workspaces.engine`);
         both engines give the same results (tested).
 
+    The design's cable model (:mod:`cdpr_design.statics.cables`) picks the
+    engine: ideal and elastic cables take the straight-cable sweeps (elastic
+    adds the unstretched lengths to each chunk), sagging cables the catenary
+    sweep of :mod:`~cdpr_design.workspaces.cables`.
+
     Swivel pulleys (``cables[i].pulley``) are honoured whenever present; a
     design without pulleys and without ``interference`` takes the point-outlet
     engines.
     """
     check_engine(engine)
     g, ori = _setup(design, kind, step, grid, orientation, force)
+    model = cable_models.design_model(design)
+    cable_models.check_supported(design, pulleys=kin.has_pulleys(design), interference=interference)
+    if model == "sagging" and kind != "wrench-closure":
+        return sweep_sagging(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
+                             chunk=chunk, keep_maps=keep_maps)
+    if model != "ideal":
+        on_chunk = ElasticColumns(design, on_chunk)
     if interference or kin.has_pulleys(design):
         from cdpr_design.workspaces.hardware import run_hardware  # numba kernels, loaded on first use
 
-        return run_hardware(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
-                            chunk=chunk, keep_maps=keep_maps, interference=interference)
-    return straight_sweep(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
-                          chunk=chunk, keep_maps=keep_maps, engine=engine)
+        res = run_hardware(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
+                           chunk=chunk, keep_maps=keep_maps, interference=interference)
+    else:
+        res = straight_sweep(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
+                             chunk=chunk, keep_maps=keep_maps, engine=engine)
+    if model != "ideal":
+        res.extra.update(cable_summary(design, None, res.max_tension))
+    return res
 
 
 def run_orientations(design: Design, mode: str = "total", kind: str = "static", step: float | None = None,

@@ -17,6 +17,7 @@ import numpy as np
 
 from cdpr_design.errors import SpecError
 from cdpr_design.model.design import Design, Grid
+from cdpr_design.statics import cables
 from cdpr_design.statics.pose import pose_at
 
 #: Largest grid swept without ``force=True`` (poses).
@@ -288,6 +289,7 @@ def column_names(design: Design) -> list[str]:
 def extra_columns(design: Design, interference: bool, mode: str | None) -> list[str]:
     """Names of the extra ``workspace.csv`` columns, in the order :func:`chunk_extra` gives them."""
     cols = ["collision_free"] if interference else []
+    cols += cables.column_names(design)
     if mode == "total":
         cols.append("orientations_feasible")
     elif mode == "range":
