@@ -433,3 +433,40 @@ def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA,
                 outlet[k, i] = ta[i]
                 L0[k, i] = l0[i]
                 sag[k, i] = sg[i]
+
+
+@njit_parallel
+def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
+               feasible, Ws, tensions, outlet, status):
+    """:func:`sag_pose` at positions ``P`` (k, 3) [m] (one orientation, in ``Rb``).
+
+    Outputs: ``feasible`` (k,) uint8, ``Ws`` (k, n, m) the converged structure
+    matrices (from the end-force directions), ``tensions`` and ``outlet``
+    (k, m) [N], ``status`` (k,) int8.  For the sizing, which needs the
+    structure matrix of each task pose.
+    """
+    n = rows.shape[0]
+    m = A.shape[0]
+    k = P.shape[0]
+    nblocks = min(k, 256)
+    if nblocks == 0:
+        return
+    bsize = (k + nblocks - 1) // nblocks
+    for b in nb.prange(nblocks):
+        Wb, cw, lo, hi, inf_hi, tq, scr = make_sag_scratch(n, m, wreq.shape[0])
+        t = np.empty(m)
+        ta = np.empty(m)
+        l0 = np.empty(m)
+        sg = np.empty(m)
+        L = np.empty(m)
+        for j in range(b * bsize, min(k, (b + 1) * bsize)):
+            st, f, mg, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rb, A, rows, up, w, EA, wreq, tmin, tmax,
+                                    combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr)
+            status[j] = st
+            feasible[j] = 1 if f else 0
+            for r in range(n):
+                for i in range(m):
+                    Ws[j, r, i] = Wb[r, i]
+            for i in range(m):
+                tensions[j, i] = t[i]
+                outlet[j, i] = ta[i]

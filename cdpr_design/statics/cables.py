@@ -144,6 +144,29 @@ def sagging_pose(design: Design, full: np.ndarray, wreq: np.ndarray, combos: np.
     return bool(feas), float(margin), t, L, W, CableState(ta, l0, sg, STATUS[st])
 
 
+def sagging_structures(design: Design, positions3: np.ndarray, orientation) -> tuple:
+    """Sagging statics at many positions (k, 3) [m] at one orientation (3,) [rad], static load.
+
+    Returns (ok (k,) bool: converged and feasible, W (k, n, m) from the
+    end-force directions, tensions (k, m) at the effector end [N], outlet
+    tensions (k, m) [N]).  For the sizing: the winch sees the outlet tension.
+    """
+    from cdpr_design.kernels import sagging as KS
+    from cdpr_design.statics import kinematics as kin
+    from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices
+
+    arr = cable_arrays(design)
+    k, m, n = positions3.shape[0], design.m, design.n
+    Rb = np.ascontiguousarray(design.attachments @ kin.rotation_matrix(*orientation).T)
+    wreq = wrench_vertices(design, "static", orientation)
+    feas, status = np.zeros(k, dtype=np.uint8), np.zeros(k, dtype=np.int8)
+    W, t, ta = np.full((k, n, m), np.nan), np.full((k, m), np.nan), np.full((k, m), np.nan)
+    KS.sag_points(np.ascontiguousarray(positions3, dtype=float), Rb, np.ascontiguousarray(design.outlets),
+                  design.rows, arr.up, arr.w, arr.EA, wreq, design.tension_min, design.tension_max,
+                  combinations(m, n), KINDS["static"], MAX_ITERATIONS, feas, W, t, ta, status)
+    return feas.astype(bool), W, t, ta
+
+
 def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, objective: str, weights):
     """Tensions [N] of another objective (min-max, min-sum, weighted) with sagging cables.
 
