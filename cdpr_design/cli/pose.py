@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from types import SimpleNamespace
 from enum import Enum
 from typing import Annotated, Optional
 
@@ -86,7 +87,8 @@ def fk(
     json_: JsonOpt = False,
     cable_model: CableModelOpt = None,
 ):
-    """Forward kinematics: the pose for given cable lengths."""
+    """Forward kinematics: the pose for given cable lengths (unstretched lengths with elastic or sagging cables)."""
+    from cdpr_design.jobs import pose as job
     from cdpr_design.statics import kinematics as kin
 
     design = load_design(spec, cable_model)
@@ -94,14 +96,20 @@ def fk(
     if any(v < 0 for v in L):
         raise InputError("--lengths: cable lengths must be non-negative")
     g = parse_pose(design, guess, "--guess") if guess is not None else None
-    res = kin.forward_kinematics(design, L, guess=g)
-    data = {"pose": [float(v) for v in res.pose], "residual": float(res.residual), "method": res.method}
+    if job.cable_model_name(design) != "ideal":
+        data = job.cable_fk_data(design, L, g)  # --lengths are unstretched lengths
+        res = SimpleNamespace(pose=data["pose"], residual=data["residual"], method=data["method"])
+    else:
+        res = kin.forward_kinematics(design, L, guess=g)
+        data = {"pose": [float(v) for v in res.pose], "residual": float(res.residual), "method": res.method}
     if json_:
         emit_json(data)
         return
     out_console.print(summary_table(
         f"{design.name} — forward kinematics ({res.method})",
-        [(c, float(v)) for c, v in zip(design.motion.coords, res.pose)] + [("residual \\[m]", res.residual)]))
+        [(c, float(v)) for c, v in zip(design.motion.coords, res.pose)] + [("residual \\[m]", res.residual)]
+        + [(f"tension {c} \\[N]", v) for c, v in data.get("tensions", {}).items()]
+        + ([("within tension bounds", "yes" if data["within_bounds"] else "no")] if "within_bounds" in data else [])))
 
 
 @command

@@ -61,6 +61,9 @@ def workspace(
             ("feasible before interference", f"{s['feasible_statics']:,}")] if "collision_free" in s else [])
         + ([("orientations", f"{s['orientation_mode']} ({s['orientation_count']} samples)")]
            if "orientation_mode" in s else [])
+        + ([("cable model", s["cable_model"])] if "cable_model" in s else [])
+        + ([("cable status", ", ".join(f"{k} {v:,}" for k, v in s["cable_status"].items() if v))]
+           if "cable_status" in s else [])
         + [("files", str(out_dir.path))]))
 
 

@@ -253,8 +253,9 @@ def cable_model_figure(result, ideal):
     title = (f"{d.name}: feasible poses with {model} and ideal cables "
              f"({_KIND_TEXT[result.kind]}, map cells)")
     if d.motion.planar:
-        fig, ax = pyplot().subplots(figsize=(7.5, 6.6))
-        fig.subplots_adjust(left=0.09, right=0.97, bottom=0.08, top=0.92)
+        height = 6.4 * frame_aspect(d) + 1.4
+        fig, ax = pyplot().subplots(figsize=(7.5, height))
+        fig.subplots_adjust(left=0.09, right=0.97, bottom=0.75 / height, top=1 - 0.55 / height)
         ax.imshow(code.T, origin="lower", extent=extent(result.map_axes), cmap=cmap, vmin=0.0, vmax=3.0,
                   interpolation="nearest", aspect="equal", zorder=1)
         frame_rect(ax, d)
