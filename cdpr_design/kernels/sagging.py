@@ -11,7 +11,7 @@ fixed point:
    (:func:`cable_for_tension`: the end-force angle and the unstretched length
    by Newton's method) and build the structure matrix W(t) from the end-force
    directions;
-3. stop when W(t) t balances the required wrench to 1e-13 of the forces involved
+3. stop when W(t) t balances the required wrench to 1e-12 of the forces involved
    and t no longer changes;
    otherwise take the minimum-norm tensions of W(t) under the bounds shifted
    so that they hold along the whole cable (the largest tension, at the outlet
@@ -59,7 +59,7 @@ SAG_SINGULAR = 4
 #: (a zero lower bound reached): it exerts no force and its length is undetermined.
 SLACK = 1e-9
 #: Equilibrium tolerance of the fixed point: |W t - w| <= SAG_TOL (1 + |w| + max t) [N].
-SAG_TOL = 1e-13
+SAG_TOL = 1e-12
 
 # per-cable work columns (array ``cw`` (m, NCW))
 _X, _Z, _UX, _UY, _UZ, _TH, _L0, _H, _VB, _LO, _HI, _TA = range(12)
@@ -307,7 +307,7 @@ def _distribute(W, w0, lo, hi, inf_hi, t, scr):
 
 @njit
 def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-             t, outlet, L0, sag, lengths, W, cw, lo, hi, inf_hi, tq, scr):
+             t, outlet, L0, sag, lengths, W, cw, lo, hi, inf_hi, tq, scr, work):
     """One pose with sagging cables: (status, feasible, margin, iterations).
 
     Inputs as :func:`cdpr_design.kernels.sweep.sweep_grid` plus ``up`` (3,)
@@ -316,7 +316,8 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     effector-end tensions [N], ``outlet`` outlet tensions [N], ``L0``
     unstretched lengths [m], ``sag`` largest distance from the chord [m] (all
     NaN unless the pose is feasible), ``lengths`` chord lengths [m].  ``W``,
-    ``cw``, ``lo``, ``hi``, ``inf_hi`` (all inf), ``tq``, ``scr`` are scratch.
+    ``cw``, ``lo``, ``hi``, ``inf_hi`` (all inf), ``tq``, ``scr``, ``work`` are
+    scratch (:func:`make_sag_scratch`).
     A slack cable (tension at or below :data:`SLACK` of the largest, where its
     lower bound is 0) pulls along its chord with no force; its outlet tension,
     unstretched length and sag are NaN (undetermined) in a feasible pose.
@@ -332,37 +333,12 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     if not _span(px, py, pz, Rb, A, up, cw, lengths):
         return SAG_SINGULAR, False, math.nan, 0
     _straight_columns(Rb, A, px, py, pz, rows, W)
-    bounded = _distribute(W, wreq[0], tmin, tmax, inf_hi, tq, scr)
-    if bounded == 0:
+    if _distribute(W, wreq[0], tmin, tmax, inf_hi, tq, scr) == 0:
         return SAG_NO_TENSIONS, False, math.nan, 0
-    tprev = outlet  # scratch until the end
-    tscale = 1.0
-    for i in range(m):
-        tscale = max(tscale, abs(tq[i]))
-    converged = False
-    it = 0
-    while it < maxit:
-        it += 1
-        if not shapes_for(tq, Rb, up, w, EA, tmin, tmax, rows, cw, W, 60):
-            return SAG_NO_CATENARY, False, math.nan, it
-        if it > 1 and _balanced(W, tq, wreq[0]):
-            dt = 0.0
-            for i in range(m):
-                dt = max(dt, abs(tq[i] - tprev[i]))
-            if dt <= 1e-9 * tscale:
-                converged = True
-                break
-        for i in range(m):
-            lo[i] = cw[i, _LO]
-            hi[i] = cw[i, _HI]
-            tprev[i] = tq[i]
-        bounded = _distribute(W, wreq[0], lo, hi, inf_hi, tq, scr)
-        if bounded == 0:
-            return SAG_NO_TENSIONS, False, math.nan, it
-    for i in range(m):
-        outlet[i] = math.nan
-    if not converged:
-        return SAG_NOT_CONVERGED, False, math.nan, it
+    status, bounded, it = _iterate(tq, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi, inf_hi,
+                                   scr, work, maxit)
+    if status != SAG_OK:
+        return status, False, math.nan, it
     for i in range(m):
         lo[i] = cw[i, _LO]
         hi[i] = cw[i, _HI]
@@ -382,11 +358,128 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
 
 
 @njit
+def _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr):
+    """q = the minimum-norm tensions for the shapes of t (W, cw, lo, hi follow t).
+
+    Returns 2 (within the shifted bounds), 1 (lower bounds only), 0 (no
+    tensions balance the load) or -1 (a cable has no shape with its tension).
+    """
+    if not shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, 60):
+        return -1
+    for i in range(t.shape[0]):
+        lo[i] = cw[i, _LO]
+        hi[i] = cw[i, _HI]
+    return _distribute(W, w0, lo, hi, inf_hi, q, scr)
+
+
+@njit
+def _gap(t, q):
+    g = 0.0
+    for i in range(t.shape[0]):
+        g = max(g, abs(q[i] - t[i]))
+    return g
+
+
+@njit
+def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh):
+    """One damped Newton step on G(t) = Q(t) - t (finite-difference Jacobian, one column
+    per cable); t is updated in place.  Returns the map's code at the new t (-2: no step)."""
+    m = t.shape[0]
+    r0 = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+    if r0 <= 0:
+        return -2
+    g0 = _gap(t, q)
+    J = np.empty((m, m))
+    rhs = np.empty(m)
+    th = t.copy()
+    for j in range(m):
+        h = 1e-7 * (1.0 + abs(t[j]))
+        th[j] = t[j] + h
+        rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        if rj <= 0:
+            h = -h
+            th[j] = t[j] + h
+            rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+            if rj <= 0:
+                return -2
+        th[j] = t[j]
+        for i in range(m):
+            J[i, j] = (1.0 if i == j else 0.0) - (qh[i] - q[i]) / h
+    for i in range(m):
+        rhs[i] = q[i] - t[i]
+    d = np.linalg.solve(J, rhs)
+    alpha = 1.0
+    for _ in range(12):
+        for i in range(m):
+            th[i] = max(t[i] + alpha * d[i], 0.0)
+        r = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        if r > 0 and _gap(th, qh) < g0:
+            for i in range(m):
+                t[i] = th[i]
+                q[i] = qh[i]
+            return r
+        alpha *= 0.5
+    return -2
+
+
+@njit
+def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit):
+    """Solve t = Q(t) from the straight tensions ``t`` (in place): fixed-point steps while they
+    contract by half or better, damped Newton steps otherwise.  Returns (status, code, iterations);
+    on SAG_OK, W, cw, lo, hi hold the shapes of the final t and code is the map's (2 or 1)."""
+    m = t.shape[0]
+    q, qh = work[0], work[1]
+    r = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+    bump = 0
+    while r == -1 and bump < 8:
+        # a heavy cable asked for less tension than its shape can have: start higher
+        for i in range(m):
+            t[i] = 1.5 * t[i] + 0.5 * w[i] * math.hypot(cw[i, _X], cw[i, _Z])
+            cw[i, _TH] = math.nan
+            cw[i, _L0] = math.nan
+        r = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        bump += 1
+    if r == -1:
+        return SAG_NO_CATENARY, 0, 0
+    if r == 0:
+        return SAG_NO_TENSIONS, 0, 0
+    g = _gap(t, q)
+    for it in range(1, maxit + 1):
+        tscale = 1.0
+        for i in range(m):
+            tscale = max(tscale, abs(t[i]))
+        if g <= 1e-9 * tscale and _balanced(W, t, w0):
+            return SAG_OK, r, it
+        r2 = _fixed_map(q, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        if r2 > 0:
+            g2 = _gap(q, qh)
+            if g2 <= 0.5 * g or g2 <= 1e-13 * tscale:
+                for i in range(m):
+                    t[i] = q[i]
+                    q[i] = qh[i]
+                r, g = r2, g2
+                continue
+        r = _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh)
+        if r == -2:
+            # a damped fixed-point step: half way to the map's tensions
+            for i in range(m):
+                qh[i] = 0.5 * (t[i] + q[i])
+            r = _fixed_map(qh, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+            if r > 0:
+                for i in range(m):
+                    t[i] = qh[i]
+        if r <= 0:
+            return SAG_NOT_CONVERGED, 0, it
+        g = _gap(t, q)
+    return SAG_NOT_CONVERGED, 0, maxit
+
+
+@njit
 def make_sag_scratch(n, m, nv):
-    """Scratch for :func:`sag_pose`: (W, cw, lo, hi, inf_hi, tq, scr)."""
+    """Scratch for :func:`sag_pose`: (W, cw, lo, hi, inf_hi, tq, scr, work)."""
     inf_hi = np.full(m, np.inf)
     return (np.empty((n, m)), np.empty((m, NCW)), np.empty(m), np.empty(m), inf_hi, np.empty(m),
-            make_scratch(n, m, nv))
+            make_scratch(n, m, nv), np.empty((4, m)))
 
 
 @njit_parallel
@@ -407,7 +500,7 @@ def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA,
     ny = shape[1]
     nz = shape[2]
     for b in nb.prange(nblocks):
-        Wb, cw, lo, hi, inf_hi, tq, scr = make_sag_scratch(n, m, wreq.shape[0])
+        Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
         t = np.empty(m)
         ta = np.empty(m)
         l0 = np.empty(m)
@@ -423,7 +516,7 @@ def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA,
             ix = r // ny
             st, f, mg, _ = sag_pose(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2],
                                     Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-                                    t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr)
+                                    t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)
             status[k] = st
             feasible[k] = 1 if f else 0
             margin[k] = mg
@@ -453,7 +546,7 @@ def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
         return
     bsize = (k + nblocks - 1) // nblocks
     for b in nb.prange(nblocks):
-        Wb, cw, lo, hi, inf_hi, tq, scr = make_sag_scratch(n, m, wreq.shape[0])
+        Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
         t = np.empty(m)
         ta = np.empty(m)
         l0 = np.empty(m)
@@ -461,7 +554,7 @@ def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
         L = np.empty(m)
         for j in range(b * bsize, min(k, (b + 1) * bsize)):
             st, f, mg, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rb, A, rows, up, w, EA, wreq, tmin, tmax,
-                                    combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr)
+                                    combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)
             status[j] = st
             feasible[j] = 1 if f else 0
             for r in range(n):

@@ -135,12 +135,12 @@ def sagging_pose(design: Design, full: np.ndarray, wreq: np.ndarray, combos: np.
     m, n = design.m, design.n
     R = kin.rotation_matrix(*full[3:])
     Rb = np.ascontiguousarray(design.attachments @ R.T)
-    W, cw, lo, hi, inf_hi, tq, scr = KS.make_sag_scratch(n, m, wreq.shape[0])
+    W, cw, lo, hi, inf_hi, tq, scr, work = KS.make_sag_scratch(n, m, wreq.shape[0])
     t, ta, l0, sg, L = (np.empty(m) for _ in range(5))
     st, feas, margin, _ = KS.sag_pose(full[0], full[1], full[2], Rb, np.ascontiguousarray(design.outlets),
                                       design.rows, arr.up, arr.w, arr.EA, wreq, design.tension_min,
                                       design.tension_max, combos, kcode, MAX_ITERATIONS,
-                                      t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr)
+                                      t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work)
     return bool(feas), float(margin), t, L, W, CableState(ta, l0, sg, STATUS[st])
 
 
