@@ -482,6 +482,12 @@ def make_sag_scratch(n, m, nv):
             make_scratch(n, m, nv), np.empty((4, m)))
 
 
+@njit
+def make_pose_outputs(m):
+    """The per-cable outputs of :func:`sag_pose`: (tensions, outlet, L0, sag, lengths), each (m,)."""
+    return np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+
+
 @njit_parallel
 def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
                        combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status):
@@ -501,11 +507,7 @@ def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA,
     nz = shape[2]
     for b in nb.prange(nblocks):
         Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
-        t = np.empty(m)
-        ta = np.empty(m)
-        l0 = np.empty(m)
-        sg = np.empty(m)
-        L = np.empty(m)
+        t, ta, l0, sg, L = make_pose_outputs(m)
         k0 = b * bsize
         k1 = min(count, k0 + bsize)
         for k in range(k0, k1):
@@ -547,11 +549,7 @@ def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
     bsize = (k + nblocks - 1) // nblocks
     for b in nb.prange(nblocks):
         Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
-        t = np.empty(m)
-        ta = np.empty(m)
-        l0 = np.empty(m)
-        sg = np.empty(m)
-        L = np.empty(m)
+        t, ta, l0, sg, L = make_pose_outputs(m)
         for j in range(b * bsize, min(k, (b + 1) * bsize)):
             st, f, mg, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rb, A, rows, up, w, EA, wreq, tmin, tmax,
                                     combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)

@@ -136,7 +136,7 @@ def sagging_pose(design: Design, full: np.ndarray, wreq: np.ndarray, combos: np.
     R = kin.rotation_matrix(*full[3:])
     Rb = np.ascontiguousarray(design.attachments @ R.T)
     W, cw, lo, hi, inf_hi, tq, scr, work = KS.make_sag_scratch(n, m, wreq.shape[0])
-    t, ta, l0, sg, L = (np.empty(m) for _ in range(5))
+    t, ta, l0, sg, L = KS.make_pose_outputs(m)
     st, feas, margin, _ = KS.sag_pose(full[0], full[1], full[2], Rb, np.ascontiguousarray(design.outlets),
                                       design.rows, arr.up, arr.w, arr.EA, wreq, design.tension_min,
                                       design.tension_max, combos, kcode, MAX_ITERATIONS,
