@@ -10,7 +10,10 @@ fixed point:
 2. for every cable, find the shape whose effector-end tension is t_i
    (:func:`cable_for_tension`: the end-force angle and the unstretched length
    by Newton's method) and build the structure matrix W(t) from the end-force
-   directions;
+   directions.  A heavy cable cannot pull with less than its least tension
+   (:func:`least_tension`, the tension of a cable paid out until it pulls
+   least; it is never slack with zero force): asked for less, it takes that
+   shape, and its lower bound becomes that tension;
 3. stop when W(t) t balances the required wrench to 1e-13 of the forces involved
    and t no longer changes;
    otherwise take the minimum-norm tensions of W(t) under the bounds shifted
@@ -36,7 +39,7 @@ import numba as nb
 import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_parallel
-from cdpr_design.kernels.catenary import _closure_jac, catenary_sag
+from cdpr_design.kernels.catenary import CAT_CONVERGED, _closure_jac, catenary_inverse, catenary_sag
 from cdpr_design.kernels.geometry import fill_column
 from cdpr_design.kernels.hsm import make_scratch
 from cdpr_design.kernels.pose import eval_general, eval_pose
@@ -47,8 +50,9 @@ from cdpr_design.kernels.tension_qp import min_norm_tensions
 SAG_OK = 0
 #: No tensions >= t_min balance the load (with the cables' shapes): infeasible, margin NaN.
 SAG_NO_TENSIONS = 1
-#: A cable has no shape with the required effector-end tension at its span
-#: (e.g. below what its own weight needs): infeasible, margin NaN.
+#: No catenary: the load needs a heavy cable to pull with less than its least tension
+#: (:func:`least_tension`; no tensions balance the load once it is held there), or a
+#: cable's shape could not be found: infeasible, margin NaN.
 SAG_NO_CATENARY = 2
 #: The fixed point did not converge in the iterations allowed: infeasible, margin NaN.
 SAG_NOT_CONVERGED = 3
@@ -56,14 +60,18 @@ SAG_NOT_CONVERGED = 3
 SAG_SINGULAR = 4
 
 #: An effector-end tension at or below SLACK times the largest is a slack cable
-#: (a zero lower bound reached): it exerts no force and its length is undetermined.
+#: (a zero lower bound reached) if it is weightless or hangs straight down from its
+#: outlet: it exerts no force and its length is undetermined.  A heavy cable is
+#: never slack: it holds at least its least tension (:func:`least_tension`).
 SLACK = 1e-9
 #: Equilibrium tolerance of the fixed point: |W t - w| <= SAG_TOL (1 + |w| + max t) [N].
 SAG_TOL = 1e-13
 
 # per-cable work columns (array ``cw`` (m, NCW))
 _X, _Z, _UX, _UY, _UZ, _TH, _L0, _H, _VB, _LO, _HI, _TA = range(12)
-NCW = 12
+# the cable's least tension and its shape (:func:`least_tension`; NaN until needed)
+_TM, _HM, _VM, _LM = range(12, 16)
+NCW = 16
 
 
 @njit
@@ -87,6 +95,87 @@ def _vertical_length(Z, tau, w, EA):
     if w * L0 > tau:
         return math.nan
     return L0
+
+
+@njit
+def _fold_slope(X, Z, L0, w, EA, H0, VB0):
+    """(g, H, VB) of the cable of length L0 [m] spanning X, Z: g = (H, VB) . J^-1 (H, VA), J the
+    flexibility d(X, Z)/d(H, VB), has the sign of -dT_B/dL0 (> 0: the taut side); NaN: no shape."""
+    H, VB, st, _ = catenary_inverse(X, Z, L0, w, EA, H0, VB0, 1e-15, 100)
+    if st != CAT_CONVERGED or not (H > 0.0):
+        return math.nan, math.nan, math.nan
+    a, b, c, d = _closure_jac(H, VB, L0, w, EA)[2:]
+    VA = VB + w * L0
+    det = a * d - b * c
+    return (H * (d * H - b * VA) + VB * (a * VA - c * H)) / det, H, VB
+
+
+@njit
+def least_tension(X, Z, w, EA):
+    """The least effector-end tension [N] of a heavy cable (w > 0) spanning X, Z [m], and its shape.
+
+    Paying out cable first relieves the effector end, then, once the cable hangs
+    deeply, loads it again: over the unstretched lengths L0 the tension T_B has
+    one minimum, the "slack" state of a heavy cable, which cannot pull with less
+    (about 0.75 w X for a horizontal span).  Found where dT_B/dL0 = 0, i.e.
+    (H, VB) . J^-1 (H, VA) = 0 (J the flexibility; d(H, VB)/dL0 = -J^-1 (H, VA)
+    (1/T_A + 1/EA)), by regula falsi (Illinois) on ln L0 from a bracket.
+    Returns (tau_min, H, VB, L0); a vertical cable hanging from its outlet (X = 0,
+    Z > 0) returns 0 (it may be slack); NaN when the bracket is not found.
+    """
+    nan = math.nan
+    c = math.hypot(X, Z)
+    if X <= 1e-14 * c:
+        if Z > 0.0:
+            return 0.0, 0.0, 0.0, nan
+        # hanging from B down to A, no force at A: -Z = L0 + w L0^2 / (2 EA)
+        L0 = 2.0 * (-Z) / (1.0 + math.sqrt(1.0 + 2.0 * w * (-Z) / EA))
+        return w * L0, 0.0, -w * L0, L0
+    inext = math.isinf(EA)
+    la = c * (1.0 + 1e-6) if inext else c
+    ga, ha, va = _fold_slope(X, Z, la, w, EA, nan, nan)
+    k = 0
+    while not (ga > 0.0) and k < 60 and not inext:
+        la *= 0.5
+        ga, ha, va = _fold_slope(X, Z, la, w, EA, nan, nan)
+        k += 1
+    lb = 2.0 * c
+    gb, hb, vb = _fold_slope(X, Z, lb, w, EA, nan, nan)
+    k = 0
+    while not (gb < 0.0) and k < 60 and math.isfinite(gb):
+        lb *= 2.0
+        gb, hb, vb = _fold_slope(X, Z, lb, w, EA, hb, vb)
+        k += 1
+    if not (ga > 0.0 and gb < 0.0):
+        return nan, nan, nan, nan
+    xa, xb = math.log(la), math.log(lb)
+    side = 0
+    for _ in range(200):
+        if xb - xa <= 1e-13:
+            break
+        x = (xa * gb - xb * ga) / (gb - ga)
+        if not (xa < x < xb):
+            x = 0.5 * (xa + xb)
+        g, h, v = _fold_slope(X, Z, math.exp(x), w, EA, ha if side <= 0 else hb, va if side <= 0 else vb)
+        if not math.isfinite(g):
+            return nan, nan, nan, nan
+        if g > 0.0:
+            xa, ga, ha, va = x, g, h, v
+            if side == 1:
+                gb *= 0.5
+            side = 1
+        elif g < 0.0:
+            xb, gb, hb, vb = x, g, h, v
+            if side == -1:
+                ga *= 0.5
+            side = -1
+        else:
+            return math.hypot(h, v), h, v, math.exp(x)
+    ta = math.hypot(ha, va)
+    tb = math.hypot(hb, vb)
+    if ta <= tb:
+        return ta, ha, va, math.exp(xa)
+    return tb, hb, vb, math.exp(xb)
 
 
 @njit
@@ -202,7 +291,37 @@ def _span(px, py, pz, Rb, A, up, cw, lengths):
             cw[i, _UX], cw[i, _UY], cw[i, _UZ] = 0.0, 0.0, 0.0
         cw[i, _TH] = math.nan
         cw[i, _L0] = math.nan
+        cw[i, _TM] = math.nan
     return ok
+
+
+@njit
+def _least_shape(i, X, Z, w, EA, cw):
+    """Cable i's least tension (:func:`least_tension`), computed once per pose into ``cw``."""
+    if math.isnan(cw[i, _TM]):
+        cw[i, _TM], cw[i, _HM], cw[i, _VM], cw[i, _LM] = least_tension(X, Z, w, EA)
+    return cw[i, _TM]
+
+
+@njit
+def _slack_column(i, X, Z, up, tmin, tmax, Rb, rows, cw, W):
+    """A slack cable: no force, shape and length undetermined; column along the chord."""
+    cw[i, _TH] = math.nan
+    cw[i, _L0] = math.nan
+    cw[i, _H] = 0.0
+    cw[i, _VB] = 0.0
+    cw[i, _TA] = math.nan
+    cw[i, _LO] = tmin[i]
+    cw[i, _HI] = tmax[i]
+    c = math.hypot(X, Z)
+    if X > 0.0:
+        dx = (X * cw[i, _UX] + Z * up[0]) / c
+        dy = (X * cw[i, _UY] + Z * up[1]) / c
+        dz = (X * cw[i, _UZ] + Z * up[2]) / c
+    else:
+        s = 1.0 if Z > 0.0 else -1.0
+        dx, dy, dz = s * up[0], s * up[1], s * up[2]
+    fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
 
 
 @njit
@@ -211,37 +330,36 @@ def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
     from the end-force directions, and in ``cw`` each cable's (th, L0, H, VB), the
     bounds shifted to hold along the whole cable (lo, hi) and the outlet tension.
     ``cw`` must hold the spans from :func:`_span` (and the previous th, L0 as a start).
-    Returns False when a cable has no such shape.
+
+    A heavy cable cannot pull with less than its least tension (:func:`least_tension`):
+    asked for less, it takes that least-tension shape, and from then on its lower bound
+    is at least that tension.  Only a weightless cable, or one hanging straight down
+    from its outlet, is slack at (near) zero tension.
+    Returns 1; 2 when a cable was raised to its least tension (``t`` is then not
+    consistent with ``W``); 0 when a cable has no shape.
     """
     tscale = 1.0
     for i in range(t.shape[0]):
         tscale = max(tscale, abs(t[i]))
+    out = 1
     for i in range(t.shape[0]):
         X = cw[i, _X]
         Z = cw[i, _Z]
-        if t[i] <= SLACK * tscale:
-            # slack (a zero lower bound reached): no force, shape and length undetermined
-            cw[i, _TH] = math.nan
-            cw[i, _L0] = math.nan
-            cw[i, _H] = 0.0
-            cw[i, _VB] = 0.0
-            cw[i, _TA] = math.nan
-            cw[i, _LO] = tmin[i]
-            cw[i, _HI] = tmax[i]
-            c = math.hypot(X, Z)
-            if X > 0.0:
-                dx = (X * cw[i, _UX] + Z * up[0]) / c
-                dy = (X * cw[i, _UY] + Z * up[1]) / c
-                dz = (X * cw[i, _UZ] + Z * up[2]) / c
-            else:
-                s = 1.0 if Z > 0.0 else -1.0
-                dx, dy, dz = s * up[0], s * up[1], s * up[2]
-            fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
+        can_slack = w[i] == 0.0 or (X <= 0.0 and Z > 0.0)
+        if t[i] <= SLACK * tscale and can_slack:
+            _slack_column(i, X, Z, up, tmin, tmax, Rb, rows, cw, W)
             continue
-        H, VB, L0, ok = cable_for_tension(X, Z, t[i], w[i], EA[i], cw[i, _TH], cw[i, _L0], maxit)
-        if not ok:
-            return False
         tau = t[i]
+        ok = False
+        if tau > 0.0:
+            H, VB, L0, ok = cable_for_tension(X, Z, tau, w[i], EA[i], cw[i, _TH], cw[i, _L0], maxit)
+        if not ok:
+            tm = _least_shape(i, X, Z, w[i], EA[i], cw)
+            if not (tau <= tm * (1.0 + 1e-12)):
+                return 0  # above the least tension (or NaN), and yet no shape
+            if tau < tm * (1.0 - 1e-12):
+                out = 2
+            tau, H, VB, L0 = tm, cw[i, _HM], cw[i, _VM], cw[i, _LM]
         th = math.atan2(VB, H)
         cw[i, _TH] = th
         cw[i, _L0] = L0
@@ -253,6 +371,8 @@ def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
         tmin_along = H if (VB < 0.0 < VA) else min(TA, tau)
         cw[i, _TA] = TA
         cw[i, _LO] = tmin[i] + (tau - tmin_along)
+        if not math.isnan(cw[i, _TM]):
+            cw[i, _LO] = max(cw[i, _LO], cw[i, _TM])
         cw[i, _HI] = tmax[i] - (tmax_along - tau)
         if X > 0.0:
             ch = H / tau
@@ -264,7 +384,7 @@ def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
             s = 1.0 if VB > 0.0 else -1.0
             dx, dy, dz = s * up[0], s * up[1], s * up[2]
         fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
-    return True
+    return out
 
 
 @njit
@@ -293,6 +413,16 @@ def _balanced(W, t, w0):
         if abs(acc - w0[k]) > SAG_TOL * (1.0 + wn):
             return False
     return True
+
+
+@njit
+def _no_tensions(cw, lo):
+    """The status of a pose whose bounds admit no tensions: :data:`SAG_NO_CATENARY` when a
+    cable's lower bound is its least tension, else :data:`SAG_NO_TENSIONS`."""
+    for i in range(lo.shape[0]):
+        if lo[i] == cw[i, _TM]:
+            return SAG_NO_CATENARY
+    return SAG_NO_TENSIONS
 
 
 @njit
@@ -343,9 +473,11 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     it = 0
     while it < maxit:
         it += 1
-        if not shapes_for(tq, Rb, up, w, EA, tmin, tmax, rows, cw, W, 60):
+        fit = shapes_for(tq, Rb, up, w, EA, tmin, tmax, rows, cw, W, 60)
+        if fit == 0:
+            outlet[:] = math.nan
             return SAG_NO_CATENARY, False, math.nan, it
-        if it > 1 and _balanced(W, tq, wreq[0]):
+        if it > 1 and fit == 1 and _balanced(W, tq, wreq[0]):
             dt = 0.0
             for i in range(m):
                 dt = max(dt, abs(tq[i] - tprev[i]))
@@ -358,7 +490,8 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
             tprev[i] = tq[i]
         bounded = _distribute(W, wreq[0], lo, hi, inf_hi, tq, scr)
         if bounded == 0:
-            return SAG_NO_TENSIONS, False, math.nan, it
+            outlet[:] = math.nan
+            return _no_tensions(cw, lo), False, math.nan, it
     for i in range(m):
         outlet[i] = math.nan
     if not converged:
