@@ -459,6 +459,30 @@ def least_tension_reference(X, Z, w, EA):
     return r.fun, math.exp(r.x)
 
 
+def test_least_tension_matches_scipy():
+    """The kernel's least tension and its length against a bounded Brent search with scipy, on
+    random cables: spans 0.5-20 m, slopes -80..80 degrees, strains of the least-tension
+    shape from 1e-6 to 1e-2, inextensible ones; and the kernel's shape closes."""
+    from cdpr_design.kernels.sagging import least_tension
+
+    rng = np.random.default_rng(5)
+    for k in range(12):
+        X = 10 ** rng.uniform(-0.3, 1.3)
+        Z = X * math.tan(math.radians(rng.uniform(-80, 80)))
+        w = 10 ** rng.uniform(-1.5, 1)
+        EA = math.inf if k % 4 == 3 else w * X * 10 ** rng.uniform(2, 6)
+        tau, H, VB, L0 = least_tension(X, Z, w, EA)
+        ref, L0_ref = least_tension_reference(X, Z, w, EA)
+        assert tau == pytest.approx(ref, rel=1e-10)
+        assert L0 == pytest.approx(L0_ref, rel=1e-5)  # the minimum is flat: L0 is known to sqrt(eps)
+        assert tau == pytest.approx(math.hypot(H, VB), rel=1e-15)
+        np.testing.assert_allclose(C.catenary_ends(H, VB, L0, w, EA), (X, Z), rtol=0, atol=1e-12 * (X + abs(Z)))
+    # a cable hanging straight down from its outlet may be slack; one hanging below the effector
+    # carries its own weight
+    assert least_tension(0.0, 3.0, 1.0, 1e6)[0] == 0.0
+    assert least_tension(0.0, -3.0, 2.0, math.inf)[0] == pytest.approx(6.0, rel=1e-15)
+
+
 def planar3(tension_min: float, model: str = "sagging"):
     """planar10 with a third cable from the effector down to the lower right corner."""
     raw = dict(planar10(model=model).raw, tension=[tension_min, 5000.0])
