@@ -211,10 +211,12 @@ def cable_for_tension(X, Z, tau, w, EA, th0, L00, maxit):
         L0 = c / (1.0 + tau / EA)
     floor = (64.0 * 2.220446049250313e-16 * c) ** 2
     phi = math.inf
+    # the closure and its Jacobian at (th, L0): the accepted trial point's, or evaluated here
+    cj = _closure_jac(tau * math.cos(th), tau * math.sin(th), L0, w, EA)
     for _ in range(maxit):
         H = tau * math.cos(th)
         VB = tau * math.sin(th)
-        Xc, Zc, a, b, cc, d = _closure_jac(H, VB, L0, w, EA)
+        Xc, Zc, a, b, cc, d = cj
         rx = Xc - X
         rz = Zc - Z
         phi = rx * rx + rz * rz
@@ -241,10 +243,10 @@ def cable_for_tension(X, Z, tau, w, EA, th0, L00, maxit):
         for _ in range(40):
             th1 = th + step * dth
             L1 = L0 + step * dL
-            x1, z1 = _closure_jac(tau * math.cos(th1), tau * math.sin(th1), L1, w, EA)[:2]
-            p1 = (x1 - X) ** 2 + (z1 - Z) ** 2
+            cj1 = _closure_jac(tau * math.cos(th1), tau * math.sin(th1), L1, w, EA)
+            p1 = (cj1[0] - X) ** 2 + (cj1[1] - Z) ** 2
             if p1 < phi or p1 <= floor:
-                th, L0 = th1, L1
+                th, L0, cj = th1, L1, cj1
                 accepted = True
                 break
             step *= 0.5
