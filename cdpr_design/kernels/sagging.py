@@ -10,8 +10,12 @@ fixed point:
 2. for every cable, find the shape whose effector-end tension is t_i
    (:func:`cable_for_tension`: the end-force angle and the unstretched length
    by Newton's method) and build the structure matrix W(t) from the end-force
-   directions;
-3. stop when W(t) t balances the required wrench to 1e-12 of the forces involved
+   directions.  A heavy cable cannot pull with less than its least tension
+   (:func:`least_tension`, the tension of a cable paid out until it pulls
+   least; it is never slack with zero force): asked for less, it takes that
+   shape, and its lower bound becomes that tension;
+3. stop when W(t) t balances the required wrench to 1e-13 of the forces involved
+   (1e-12 where round-off stalls the Newton steps)
    and t no longer changes;
    otherwise take the minimum-norm tensions of W(t) under the bounds shifted
    so that they hold along the whole cable (the largest tension, at the outlet
@@ -36,7 +40,8 @@ import numba as nb
 import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_parallel
-from cdpr_design.kernels.catenary import _closure_jac, catenary_sag
+from cdpr_design.kernels.cable_shape import cable_for_tension, least_tension
+from cdpr_design.kernels.catenary import catenary_sag
 from cdpr_design.kernels.geometry import fill_column
 from cdpr_design.kernels.hsm import make_scratch
 from cdpr_design.kernels.pose import eval_general, eval_pose
@@ -47,8 +52,9 @@ from cdpr_design.kernels.tension_qp import min_norm_tensions
 SAG_OK = 0
 #: No tensions >= t_min balance the load (with the cables' shapes): infeasible, margin NaN.
 SAG_NO_TENSIONS = 1
-#: A cable has no shape with the required effector-end tension at its span
-#: (e.g. below what its own weight needs): infeasible, margin NaN.
+#: No catenary: the load needs a heavy cable to pull with less than its least tension
+#: (:func:`least_tension`; no tensions balance the load once it is held there), or a
+#: cable's shape could not be found: infeasible, margin NaN.
 SAG_NO_CATENARY = 2
 #: The fixed point did not converge in the iterations allowed: infeasible, margin NaN.
 SAG_NOT_CONVERGED = 3
@@ -56,124 +62,18 @@ SAG_NOT_CONVERGED = 3
 SAG_SINGULAR = 4
 
 #: An effector-end tension at or below SLACK times the largest is a slack cable
-#: (a zero lower bound reached): it exerts no force and its length is undetermined.
+#: (a zero lower bound reached) if it is weightless or hangs straight down from its
+#: outlet: it exerts no force and its length is undetermined.  A heavy cable is
+#: never slack: it holds at least its least tension (:func:`least_tension`).
 SLACK = 1e-9
 #: Equilibrium tolerance of the fixed point: |W t - w| <= SAG_TOL (1 + |w| + max t) [N].
-SAG_TOL = 1e-12
+SAG_TOL = 1e-13
 
 # per-cable work columns (array ``cw`` (m, NCW))
 _X, _Z, _UX, _UY, _UZ, _TH, _L0, _H, _VB, _LO, _HI, _TA = range(12)
-NCW = 12
-
-
-@njit
-def _vertical_length(Z, tau, w, EA):
-    """Unstretched length [m] of a vertical cable of height Z (A above B if > 0) whose
-    effector-end tension is tau; NaN when none (a cable below B heavier than tau)."""
-    k = 1.0 / EA
-    if Z > 0.0:
-        # Z = L0 (1 + tau/EA) + w L0^2 / (2 EA)
-        a = 0.5 * w * k
-        b = 1.0 + tau * k
-        L0 = Z / b if a == 0.0 else 2.0 * Z / (b + math.sqrt(b * b + 4.0 * a * Z))
-        return L0
-    # A below B: the cable hangs from B; -Z = L0 (1 + tau/EA) - w L0^2 / (2 EA), V <= 0 needs tau >= w L0
-    a = 0.5 * w * k
-    b = 1.0 + tau * k
-    disc = b * b - 4.0 * a * (-Z)
-    if disc < 0.0:
-        return math.nan
-    L0 = -Z / b if a == 0.0 else 2.0 * (-Z) / (b + math.sqrt(disc))
-    if w * L0 > tau:
-        return math.nan
-    return L0
-
-
-@njit
-def cable_for_tension(X, Z, tau, w, EA, th0, L00, maxit):
-    """The shape of a cable spanning X, Z [m] whose tension at the effector is tau [N].
-
-    Unknowns: the angle th [rad] of the end force at B above the horizontal
-    (H = tau cos th, VB = tau sin th) and the unstretched length L0 [m];
-    equations: the catenary closure X(H, VB, L0) = X, Z(H, VB, L0) = Z.  Newton's
-    method with the analytic Jacobian (d(X, Z)/d(H, VB) from the catenary kernel,
-    d(X, Z)/dL0 = (H, VA) (1/T_A + 1/EA)) and backtracking on the residual,
-    started from (th0, L00) (NaN: the chord angle lowered by w c cos(chord)/(2 tau),
-    and the chord shortened by the stretch).  This finds the taut branch, the one
-    that tends to the straight cable as w -> 0.  Returns (H, VB, L0, ok).
-    """
-    nan = math.nan
-    c = math.hypot(X, Z)
-    if not (tau > 0.0) or not (c > 0.0):
-        return nan, nan, nan, False
-    if w == 0.0:
-        return tau * X / c, tau * Z / c, c / (1.0 + tau / EA), True
-    if X <= 1e-14 * c:
-        L0 = _vertical_length(Z, tau, w, EA)
-        if not (L0 > 0.0):
-            return nan, nan, nan, False
-        return 0.0, (tau if Z > 0.0 else -tau), L0, True
-    if math.isfinite(th0) and math.isfinite(L00) and L00 > 0.0:
-        th, L0 = th0, L00
-    else:
-        alpha = math.atan2(Z, X)
-        th = alpha - w * c * math.cos(alpha) / (2.0 * tau)
-        th = max(min(th, 1.5), -1.5)
-        L0 = c / (1.0 + tau / EA)
-    floor = (64.0 * 2.220446049250313e-16 * c) ** 2
-    phi = math.inf
-    for _ in range(maxit):
-        H = tau * math.cos(th)
-        VB = tau * math.sin(th)
-        Xc, Zc, a, b, cc, d = _closure_jac(H, VB, L0, w, EA)
-        rx = Xc - X
-        rz = Zc - Z
-        phi = rx * rx + rz * rz
-        if phi <= floor:
-            return H, VB, L0, True
-        VA = VB + w * L0
-        k = 1.0 / math.hypot(H, VA) + 1.0 / EA
-        j11 = -VB * a + H * b
-        j21 = -VB * cc + H * d
-        j12 = H * k
-        j22 = VA * k
-        det = j11 * j22 - j12 * j21
-        if not (det != 0.0 and math.isfinite(det)):
-            return nan, nan, nan, False
-        dth = -(j22 * rx - j12 * rz) / det
-        dL = -(-j21 * rx + j11 * rz) / det
-        # damped: |th| < pi/2 (H > 0), L0 > 0, residual decreasing
-        step = 1.0
-        if abs(dth) > 0.5:
-            step = 0.5 / abs(dth)
-        while L0 + step * dL <= 0.0 or abs(th + step * dth) >= 0.5 * math.pi:
-            step *= 0.5
-        accepted = False
-        for _ in range(40):
-            th1 = th + step * dth
-            L1 = L0 + step * dL
-            x1, z1 = _closure_jac(tau * math.cos(th1), tau * math.sin(th1), L1, w, EA)[:2]
-            p1 = (x1 - X) ** 2 + (z1 - Z) ** 2
-            if p1 < phi or p1 <= floor:
-                th, L0 = th1, L1
-                accepted = True
-                break
-            step *= 0.5
-        if not accepted:
-            break
-        if abs(step * dth) <= 1e-15 and abs(step * dL) <= 1e-15 * L0:
-            H = tau * math.cos(th)
-            VB = tau * math.sin(th)
-            Xc, Zc = _closure_jac(H, VB, L0, w, EA)[:2]
-            if math.hypot(Xc - X, Zc - Z) <= 1e-11 * c:
-                return H, VB, L0, True
-            break
-    H = tau * math.cos(th)
-    VB = tau * math.sin(th)
-    Xc, Zc = _closure_jac(H, VB, L0, w, EA)[:2]
-    if math.hypot(Xc - X, Zc - Z) <= 1e-11 * c:
-        return H, VB, L0, True
-    return nan, nan, nan, False
+# the cable's least tension and its shape (:func:`least_tension`; NaN until needed)
+_TM, _HM, _VM, _LM = range(12, 16)
+NCW = 16
 
 
 @njit
@@ -202,7 +102,37 @@ def _span(px, py, pz, Rb, A, up, cw, lengths):
             cw[i, _UX], cw[i, _UY], cw[i, _UZ] = 0.0, 0.0, 0.0
         cw[i, _TH] = math.nan
         cw[i, _L0] = math.nan
+        cw[i, _TM] = math.nan
     return ok
+
+
+@njit
+def _least_shape(i, X, Z, w, EA, cw):
+    """Cable i's least tension (:func:`least_tension`), computed once per pose into ``cw``."""
+    if math.isnan(cw[i, _TM]):
+        cw[i, _TM], cw[i, _HM], cw[i, _VM], cw[i, _LM] = least_tension(X, Z, w, EA)
+    return cw[i, _TM]
+
+
+@njit
+def _slack_column(i, X, Z, up, tmin, tmax, Rb, rows, cw, W):
+    """A slack cable: no force, shape and length undetermined; column along the chord."""
+    cw[i, _TH] = math.nan
+    cw[i, _L0] = math.nan
+    cw[i, _H] = 0.0
+    cw[i, _VB] = 0.0
+    cw[i, _TA] = math.nan
+    cw[i, _LO] = tmin[i]
+    cw[i, _HI] = tmax[i]
+    c = math.hypot(X, Z)
+    if X > 0.0:
+        dx = (X * cw[i, _UX] + Z * up[0]) / c
+        dy = (X * cw[i, _UY] + Z * up[1]) / c
+        dz = (X * cw[i, _UZ] + Z * up[2]) / c
+    else:
+        s = 1.0 if Z > 0.0 else -1.0
+        dx, dy, dz = s * up[0], s * up[1], s * up[2]
+    fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
 
 
 @njit
@@ -211,37 +141,39 @@ def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
     from the end-force directions, and in ``cw`` each cable's (th, L0, H, VB), the
     bounds shifted to hold along the whole cable (lo, hi) and the outlet tension.
     ``cw`` must hold the spans from :func:`_span` (and the previous th, L0 as a start).
-    Returns False when a cable has no such shape.
+
+    A heavy cable cannot pull with less than its least tension (:func:`least_tension`):
+    asked for less, it takes that least-tension shape, and from then on its lower bound
+    is at least that tension.  Only a weightless cable, or one hanging straight down
+    from its outlet, is slack at (near) zero tension.
+    Returns 1; 2 when a cable was raised to its least tension (``t`` is then not
+    consistent with ``W``); 0 when a cable has no shape.
     """
     tscale = 1.0
     for i in range(t.shape[0]):
         tscale = max(tscale, abs(t[i]))
+    out = 1
     for i in range(t.shape[0]):
         X = cw[i, _X]
         Z = cw[i, _Z]
-        if t[i] <= SLACK * tscale:
-            # slack (a zero lower bound reached): no force, shape and length undetermined
-            cw[i, _TH] = math.nan
-            cw[i, _L0] = math.nan
-            cw[i, _H] = 0.0
-            cw[i, _VB] = 0.0
-            cw[i, _TA] = math.nan
-            cw[i, _LO] = tmin[i]
-            cw[i, _HI] = tmax[i]
-            c = math.hypot(X, Z)
-            if X > 0.0:
-                dx = (X * cw[i, _UX] + Z * up[0]) / c
-                dy = (X * cw[i, _UY] + Z * up[1]) / c
-                dz = (X * cw[i, _UZ] + Z * up[2]) / c
-            else:
-                s = 1.0 if Z > 0.0 else -1.0
-                dx, dy, dz = s * up[0], s * up[1], s * up[2]
-            fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
+        can_slack = w[i] == 0.0 or (X <= 0.0 and Z > 0.0)
+        if t[i] <= SLACK * tscale and can_slack:
+            _slack_column(i, X, Z, up, tmin, tmax, Rb, rows, cw, W)
             continue
-        H, VB, L0, ok = cable_for_tension(X, Z, t[i], w[i], EA[i], cw[i, _TH], cw[i, _L0], maxit)
-        if not ok:
-            return False
         tau = t[i]
+        ok = False
+        if tau > 0.0:
+            H, VB, L0, ok = cable_for_tension(X, Z, tau, w[i], EA[i], cw[i, _TH], cw[i, _L0], maxit)
+            if not ok and not math.isnan(cw[i, _TH]):
+                # the previous shape can be a poor start after a long step: start afresh
+                H, VB, L0, ok = cable_for_tension(X, Z, tau, w[i], EA[i], math.nan, math.nan, maxit)
+        if not ok:
+            tm = _least_shape(i, X, Z, w[i], EA[i], cw)
+            if not (tau <= tm * (1.0 + 1e-12)):
+                return 0  # above the least tension (or NaN), and yet no shape
+            if tau < tm * (1.0 - 1e-12):
+                out = 2
+            tau, H, VB, L0 = tm, cw[i, _HM], cw[i, _VM], cw[i, _LM]
         th = math.atan2(VB, H)
         cw[i, _TH] = th
         cw[i, _L0] = L0
@@ -253,6 +185,8 @@ def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
         tmin_along = H if (VB < 0.0 < VA) else min(TA, tau)
         cw[i, _TA] = TA
         cw[i, _LO] = tmin[i] + (tau - tmin_along)
+        if not math.isnan(cw[i, _TM]):
+            cw[i, _LO] = max(cw[i, _LO], cw[i, _TM])
         cw[i, _HI] = tmax[i] - (tmax_along - tau)
         if X > 0.0:
             ch = H / tau
@@ -264,7 +198,7 @@ def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
             s = 1.0 if VB > 0.0 else -1.0
             dx, dy, dz = s * up[0], s * up[1], s * up[2]
         fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
-    return True
+    return out
 
 
 @njit
@@ -278,8 +212,8 @@ def _straight_columns(Rb, A, px, py, pz, rows, W):
 
 
 @njit
-def _balanced(W, t, w0):
-    """Whether W t = w0 to SAG_TOL (1 + |w0| + max t) [N]."""
+def _balanced(W, t, w0, tol):
+    """Whether W t = w0 to tol (1 + |w0| + max t) [N]."""
     n, m = W.shape
     wn = 0.0
     for k in range(n):
@@ -290,9 +224,19 @@ def _balanced(W, t, w0):
         acc = 0.0
         for i in range(m):
             acc += W[k, i] * t[i]
-        if abs(acc - w0[k]) > SAG_TOL * (1.0 + wn):
+        if abs(acc - w0[k]) > tol * (1.0 + wn):
             return False
     return True
+
+
+@njit
+def _no_tensions(cw, lo):
+    """The status of a pose whose bounds admit no tensions: :data:`SAG_NO_CATENARY` when a
+    cable's lower bound is its least tension, else :data:`SAG_NO_TENSIONS`."""
+    for i in range(lo.shape[0]):
+        if lo[i] == cw[i, _TM]:
+            return SAG_NO_CATENARY
+    return SAG_NO_TENSIONS
 
 
 @njit
@@ -361,15 +305,18 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
 def _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr):
     """q = the minimum-norm tensions for the shapes of t (W, cw, lo, hi follow t).
 
-    Returns 2 (within the shifted bounds), 1 (lower bounds only), 0 (no
-    tensions balance the load) or -1 (a cable has no shape with its tension).
+    Returns (code, fit): code 2 (within the shifted bounds), 1 (lower bounds
+    only), 0 (no tensions balance the load) or -1 (a cable has no shape with
+    its tension); fit is :func:`shapes_for`'s (2: a cable was raised to its
+    least tension, so t is not yet consistent with W).
     """
-    if not shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, 60):
-        return -1
+    fit = shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, 60)
+    if fit == 0:
+        return -1, fit
     for i in range(t.shape[0]):
         lo[i] = cw[i, _LO]
         hi[i] = cw[i, _HI]
-    return _distribute(W, w0, lo, hi, inf_hi, q, scr)
+    return _distribute(W, w0, lo, hi, inf_hi, q, scr), fit
 
 
 @njit
@@ -381,13 +328,45 @@ def _gap(t, q):
 
 
 @njit
+def _solve_in_place(J, b):
+    """Solve J x = b by Gaussian elimination with partial pivoting (x in b); False if singular."""
+    m = b.shape[0]
+    scale = 0.0
+    for i in range(m):
+        for j in range(m):
+            scale = max(scale, abs(J[i, j]))
+    for k in range(m):
+        p = k
+        for i in range(k + 1, m):
+            if abs(J[i, k]) > abs(J[p, k]):
+                p = i
+        if not (abs(J[p, k]) > 1e-14 * scale):
+            return False
+        if p != k:
+            for j in range(m):
+                J[k, j], J[p, j] = J[p, j], J[k, j]
+            b[k], b[p] = b[p], b[k]
+        for i in range(k + 1, m):
+            f = J[i, k] / J[k, k]
+            for j in range(k, m):
+                J[i, j] -= f * J[k, j]
+            b[i] -= f * b[k]
+    for k in range(m - 1, -1, -1):
+        acc = b[k]
+        for j in range(k + 1, m):
+            acc -= J[k, j] * b[j]
+        b[k] = acc / J[k, k]
+    return True
+
+
+@njit
 def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh):
     """One damped Newton step on G(t) = Q(t) - t (finite-difference Jacobian, one column
-    per cable); t is updated in place.  Returns the map's code at the new t (-2: no step)."""
+    per cable); t is updated in place.  Returns the map's (code, fit) at the new t (code -2: no step)."""
     m = t.shape[0]
-    r0 = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+    r0 = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)[0]
     if r0 <= 0:
-        return -2
+        return -2, 0
     g0 = _gap(t, q)
     J = np.empty((m, m))
     rhs = np.empty(m)
@@ -395,31 +374,33 @@ def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_h
     for j in range(m):
         h = 1e-7 * (1.0 + abs(t[j]))
         th[j] = t[j] + h
-        rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)[0]
         if rj <= 0:
             h = -h
             th[j] = t[j] + h
-            rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+            rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)[0]
             if rj <= 0:
-                return -2
+                return -2, 0
         th[j] = t[j]
         for i in range(m):
             J[i, j] = (1.0 if i == j else 0.0) - (qh[i] - q[i]) / h
     for i in range(m):
         rhs[i] = q[i] - t[i]
-    d = np.linalg.solve(J, rhs)
+    if not _solve_in_place(J, rhs):
+        return -2, 0
+    d = rhs
     alpha = 1.0
     for _ in range(12):
         for i in range(m):
             th[i] = max(t[i] + alpha * d[i], 0.0)
-        r = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        r, fit = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
         if r > 0 and _gap(th, qh) < g0:
             for i in range(m):
                 t[i] = th[i]
                 q[i] = qh[i]
-            return r
+            return r, fit
         alpha *= 0.5
-    return -2
+    return -2, 0
 
 
 @njit
@@ -429,46 +410,52 @@ def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr,
     on SAG_OK, W, cw, lo, hi hold the shapes of the final t and code is the map's (2 or 1)."""
     m = t.shape[0]
     q, qh = work[0], work[1]
-    r = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+    r, fit = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
     bump = 0
     while r == -1 and bump < 8:
-        # a heavy cable asked for less tension than its shape can have: start higher
+        # a cable has no shape at its starting tension: start higher
         for i in range(m):
             t[i] = 1.5 * t[i] + 0.5 * w[i] * math.hypot(cw[i, _X], cw[i, _Z])
             cw[i, _TH] = math.nan
             cw[i, _L0] = math.nan
-        r = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        r, fit = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
         bump += 1
     if r == -1:
         return SAG_NO_CATENARY, 0, 0
     if r == 0:
-        return SAG_NO_TENSIONS, 0, 0
+        return _no_tensions(cw, lo), 0, 0
     g = _gap(t, q)
     for it in range(1, maxit + 1):
         tscale = 1.0
         for i in range(m):
             tscale = max(tscale, abs(t[i]))
-        if g <= 1e-9 * tscale and _balanced(W, t, w0):
+        if fit == 1 and g <= 1e-9 * tscale and _balanced(W, t, w0, SAG_TOL):
             return SAG_OK, r, it
-        r2 = _fixed_map(q, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        r2, fit2 = _fixed_map(q, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
         if r2 > 0:
             g2 = _gap(q, qh)
-            if g2 <= 0.5 * g or g2 <= 1e-13 * tscale:
+            if g2 <= 0.5 * g or g2 <= 1e-13 * tscale or fit2 == 2:
                 for i in range(m):
                     t[i] = q[i]
                     q[i] = qh[i]
-                r, g = r2, g2
+                r, fit, g = r2, fit2, g2
                 continue
-        r = _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh)
+        r, fit = _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh)
         if r == -2:
             # a damped fixed-point step: half way to the map's tensions
             for i in range(m):
                 qh[i] = 0.5 * (t[i] + q[i])
-            r = _fixed_map(qh, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+            r, fit = _fixed_map(qh, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
             if r > 0:
                 for i in range(m):
                     t[i] = qh[i]
-        if r <= 0:
+        if r == 0:
+            return _no_tensions(cw, lo), 0, it
+        if r < 0:
+            # round-off stalls the steps: accept a balance ten times looser, else give up
+            r, fit = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+            if r > 0 and fit == 1 and _gap(t, q) <= 1e-9 * tscale and _balanced(W, t, w0, 10.0 * SAG_TOL):
+                return SAG_OK, r, it
             return SAG_NOT_CONVERGED, 0, it
         g = _gap(t, q)
     return SAG_NOT_CONVERGED, 0, maxit
