@@ -96,22 +96,36 @@ def _tolerances(geo, rho):
     return ltol, 1e-10 * max(1.0, geo.weight)
 
 
-def _check_pairs(geo, rho, ltol):
+def _name(names, i) -> str:
+    return str(names[i]) if names is not None else str(i)
+
+
+def _check_pairs(geo, rho, ltol, names=None):
     """Raise :class:`UnreachableLengths` for a pair of cables that cannot both reach."""
     if np.any(~np.isfinite(rho)) or np.any(rho < 0):
         raise InputError("cable lengths must be finite and non-negative")
     if np.any(rho < 1e-6):
-        raise InputError(f"cable {int(np.argmin(rho))} is shorter than 1 micrometre: its attachment would be "
-                         "pinned at its outlet, which the cable model does not cover")
+        raise InputError(f"cable {_name(names, int(np.argmin(rho)))} is shorter than 1 micrometre: its "
+                         "attachment would be pinned at its outlet, which the cable model does not cover")
     for i in range(geo.m):
         for j in range(i + 1, geo.m):
             d = float(np.linalg.norm(geo.A[i] - geo.A[j]))
             reach = rho[i] + rho[j] + float(np.linalg.norm(geo.B[i] - geo.B[j]))
             if d > reach + ltol:
                 raise UnreachableLengths(
-                    f"cables {i} and {j} cannot both reach the effector: their outlets are {d:.6g} m "
-                    f"apart, more than the lengths {rho[i]:.6g} + {rho[j]:.6g} m plus the "
-                    f"{reach - rho[i] - rho[j]:.6g} m between their attachments")
+                    f"cables {_name(names, i)} and {_name(names, j)} cannot both reach the effector: their "
+                    f"outlets are {d:.6g} m apart, more than the lengths {rho[i]:.6g} + {rho[j]:.6g} m plus the "
+                    f"{reach - rho[i] - rho[j]:.6g} m between their attachments (short by {d - reach:.3g} m)")
+
+
+def _lengths(geo, lengths, names):
+    """The lengths as an (m,) array, checked; with the tolerances (length [m], force [N])."""
+    rho = np.asarray(lengths, float).reshape(-1)
+    if rho.size != geo.m:
+        raise InputError(f"expected {geo.m} cable lengths, got {rho.size}")
+    ltol, tol_f = _tolerances(geo, rho)
+    _check_pairs(geo, rho, ltol, names)
+    return rho, ltol, tol_f
 
 
 # ----------------------------------------------------------------------------
@@ -130,29 +144,35 @@ def _equilibrium(geo, rho, sol, dofs, planar) -> Equilibrium:
                        _up(geo))
 
 
-def _point_mass(geo, rho, planar, nominal, ltol, tol_f):
-    """The convex case: the attachment point is the lowest point of the balls."""
+def _held(geo, rho, planar, R, ltol, tol_f, model):
+    """The convex case, orientation R held (or irrelevant: a point mass): the platform
+    origin is the lowest point of the balls |a_i - R b_i - p| <= rho_i."""
     d = 2 if planar else 3
     down = geo.g / np.linalg.norm(geo.g)
-    b0 = geo.B[0]
-    x, ok, viol = hc.lowest_points((geo.A[:, :d])[None], rho, down[:d], ltol)
+    C = (geo.A - geo.B @ R.T)[:, :d]
+    x, ok, viol = hc.lowest_points(C[None], rho, down[:d], ltol)
     if not ok[0]:
         raise UnreachableLengths(
             "the balls |a_i - P| <= rho_i have no common point: every pair meets, but no point is "
             f"within reach of all cables (smallest excess {viol[0]:.3g} m)")
     q = np.zeros(3)
     q[:d] = x[0]
-    arm = geo.c - b0
-    if np.linalg.norm(arm) > 1e-12 * geo.size:  # the COM hangs straight below the attachment
-        R = hc.rot_z(math.atan2(down[1], down[0]) - math.atan2(arm[1], arm[0])) if planar else hc.align(arm, down)
-    else:
-        R = np.eye(3) if nominal is None else np.asarray(nominal, float)
     dofs = hc.DOFS_POINT2 if planar else hc.DOFS_POINT3
-    sol = hc.refine(geo, rho, q - R @ b0, R, dofs, tol_f, ltol)
+    sol = hc.refine(geo, rho, q, R, dofs, tol_f, ltol)
     if sol is None:
-        raise RuntimeError("point-mass equilibrium: the active-set refinement failed")
-    return HangingFK(**vars(_equilibrium(geo, rho, sol, dofs, planar)), equilibria=(), model="point",
-                     underconstrained=geo.m < d)
+        raise RuntimeError("held-orientation equilibrium: the active-set refinement failed")
+    return HangingFK(**vars(_equilibrium(geo, rho, sol, dofs, planar)), equilibria=(), model=model,
+                     underconstrained=is_underconstrained(geo.m, geo.B, planar))
+
+
+def fk_held_arrays(A, B, c, mass, g, lengths, planar: bool, rotation, *, names=None) -> HangingFK:
+    """:func:`fk_arrays` with the orientation held at ``rotation`` (3, 3): the translational
+    geometrico-static problem, exact (the lowest point of an intersection of balls), then
+    refined; tensions balance the force only (``model='held'``).  ``names`` label the
+    cables in error messages."""
+    geo = _prepare(A, B, c, mass, g, planar)
+    rho, ltol, tol_f = _lengths(geo, lengths, names)
+    return _held(geo, rho, planar, np.asarray(rotation, float), ltol, tol_f, "held")
 
 
 def _planar_starts(geo, rho, n_scan, nominal_phi, ltol):
@@ -216,7 +236,7 @@ def _same(a: Equilibrium, b: Equilibrium, ls) -> bool:
 
 
 def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: int = 720,
-              n_starts: int = 12, seed: int = 0) -> HangingFK:
+              n_starts: int = 12, seed: int = 0, names=None) -> HangingFK:
     """The resting configuration for cable ``lengths`` [m] (forward geometrico-static problem).
 
     ``A``, ``B`` (m, 2|3) outlets and attachments [m], ``c`` centre of mass in
@@ -239,16 +259,12 @@ def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: 
     looks for a configuration first (locked poses of fully constrained robots).
 
     Raises :class:`UnreachableLengths` when no configuration satisfies every
-    length (with the reason).
+    length (with the reason); ``names`` label the cables in the messages.
     """
     geo = _prepare(A, B, c, mass, g, planar)
-    rho = np.asarray(lengths, float).reshape(-1)
-    if rho.size != geo.m:
-        raise InputError(f"expected {geo.m} cable lengths, got {rho.size}")
-    ltol, tol_f = _tolerances(geo, rho)
-    _check_pairs(geo, rho, ltol)
+    rho, ltol, tol_f = _lengths(geo, lengths, names)
     if is_point_mass(geo.B):
-        return _point_mass(geo, rho, planar, nominal, ltol, tol_f)
+        return _held(geo, rho, planar, ha.point_mass_rotation(geo, planar, nominal), ltol, tol_f, "point")
     dofs = _dofs(geo, planar)
     if planar:
         phi0 = 0.0 if nominal is None else math.atan2(nominal[1][0], nominal[0][0])
@@ -409,9 +425,59 @@ def pose_at(design, position, **options) -> HangingAt:
 
 
 def underconstrained(design) -> bool:
-    """Whether the design's orientation is free (see :func:`is_underconstrained`)."""
+    """Whether the design's cables leave its orientation free (see :func:`is_underconstrained`)."""
     A, B, _, _, _, planar = _design_arrays(design)
     return is_underconstrained(A.shape[0], B, planar)
+
+
+def hangs_freely(design) -> bool:
+    """``effector.orientation: free`` on an under-constrained design: its orientation is not
+    commanded but follows from the cables and gravity (every analysis uses the hanging pose)."""
+    return design.effector.orientation == "free" and underconstrained(design)
+
+
+def nominal_rotation(design) -> np.ndarray:
+    """The rotation of ``workspace.orientation`` (identity for 2T and 3T)."""
+    from cdpr_design.statics.kinematics import rotation_matrix
+
+    return rotation_matrix(*design.default_orientation_full())
+
+
+def held_rotation(design) -> np.ndarray | None:
+    """The rotation the spec holds the effector at for the forward problem, or None when
+    the orientation is among its unknowns: ``effector.orientation: fixed`` on a translational
+    motion (2T, 3T) holds it at the identity, the spec's model; rotational motions (1R2T, 3R3T)
+    find it from the lengths, and ``free`` lets it hang."""
+    if design.effector.orientation == "fixed" and not design.motion.rotational:
+        return np.eye(3)
+    return None
+
+
+def point_outlets(design, what: str) -> None:
+    """Raise an :class:`InputError` for a design with swivel pulleys (the hanging solvers
+    model point outlets); ``what`` names the analysis."""
+    from cdpr_design.statics.kinematics import has_pulleys
+
+    if has_pulleys(design):
+        raise InputError(f"{what}: the geometrico-static solver models point outlets, and this design has "
+                         "swivel pulleys (cables[i].pulley)")
+
+
+def equilibrium(design, lengths, **options) -> HangingFK:
+    """Where the design's effector rests for cable ``lengths`` [m] under its spec (the ``fk``
+    command): :func:`fk_held_arrays` at :func:`held_rotation` when the spec holds the
+    orientation, else :func:`fk_arrays` started about :func:`nominal_rotation`.  Errors name
+    the cables; ``within_limits`` from the design's tension limits."""
+    point_outlets(design, "fk")
+    A, B, c, mass, g, planar = _design_arrays(design)
+    held = held_rotation(design)
+    names = design.cable_names
+    if held is not None:
+        r = fk_held_arrays(A, B, c, mass, g, lengths, planar, held, names=names)
+    else:
+        options.setdefault("nominal", nominal_rotation(design))
+        r = fk_arrays(A, B, c, mass, g, lengths, planar, names=names, **options)
+    return dataclasses.replace(r, within_limits=None if r.indeterminate else _within(design, r.tensions))
 
 
 def tilt_map(design, axes=None, *, step: float | None = None) -> TiltMap:

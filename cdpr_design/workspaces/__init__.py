@@ -18,6 +18,7 @@ import numpy as np
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.pose import KINDS, check_kind
+from cdpr_design.workspaces import hanging
 from cdpr_design.workspaces.engine import ENGINES, check_engine, load_kernels
 from cdpr_design.workspaces.engine import sweep as straight_sweep
 from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, chunk_extra,
@@ -41,7 +42,7 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         orientation=None, on_chunk: Callable[[Chunk], None] | None = None,
         progress: Callable[[int, int], None] | None = None, force: bool = False,
         chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False,
-        engine: str = "auto") -> WorkspaceResult:
+        engine: str = "auto", max_tilt: float | None = None) -> WorkspaceResult:
     """Sweep the workspace grid and return the summary and maps.
 
     Parameters
@@ -76,13 +77,30 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     engine : {'auto', 'numba', 'numpy'}
         For straight cables from point outlets (:mod:`~cdpr_design.workspaces.engine`);
         both engines give the same results (tested).
+    max_tilt : float, optional
+        Largest hanging tilt [deg] of a feasible pose (under-constrained designs
+        with ``effector.orientation: free``; default ``requirements.max_tilt``).
 
-    Swivel pulleys (``cables[i].pulley``) are honoured whenever present; a
+    Under-constrained designs (:mod:`~cdpr_design.workspaces.hanging`) add the
+    tilt their effector hangs with; with ``effector.orientation: free`` their
+    feasibility is judged at that hanging orientation.  Swivel pulleys (``cables[i].pulley``) are honoured whenever present; a
     design without pulleys and without ``interference`` takes the point-outlet
     engines.
     """
     check_engine(engine)
     g, ori = _setup(design, kind, step, grid, orientation, force)
+    if hanging.applies(design):  # under-constrained: the tilt it hangs with (`free`: its statics there)
+        return hanging.sweep(design, kind, g, ori, lambda oc: _fixed(design, kind, g, ori, oc, progress, chunk,
+                                                                     keep_maps, interference, engine),
+                             on_chunk=on_chunk, progress=progress, chunk=chunk, keep_maps=keep_maps,
+                             interference=interference, engine=engine, max_tilt=max_tilt)
+    if max_tilt is not None:
+        hanging.tilt_limit(design, max_tilt)  # refused: the design does not hang
+    return _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interference, engine)
+
+
+def _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interference, engine):
+    """The sweep at the fixed orientation ``ori`` (3,) [rad]: pulley- and interference-aware, or straight."""
     if interference or kin.has_pulleys(design):
         from cdpr_design.workspaces.hardware import run_hardware  # numba kernels, loaded on first use
 
