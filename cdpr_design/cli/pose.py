@@ -40,33 +40,60 @@ def parse_weights(design, text: str | None) -> list[float] | None:
 @command
 def pose(
     spec: SpecArg,
-    at: Annotated[str, typer.Option("--at", help="Pose coordinates, comma-separated (e.g. 0.75,0.75).")],
+    at: Annotated[str, typer.Option("--at", help="Pose coordinates, comma-separated (e.g. 0.75,0.75); "
+                                                 "the position only when effector.orientation is free.")],
     kind: KindOpt = Kind.static,
     objective: ObjectiveOpt = Objective.min_norm,
     weights: WeightsOpt = None,
     json_: JsonOpt = False,
 ):
-    """One pose: cable lengths, tensions, feasibility, margin, structure matrix."""
+    """One pose: cable lengths, tensions, feasibility, margin, structure matrix (and the hanging tilt)."""
+    from cdpr_design.jobs import hanging as hjob
     from cdpr_design.jobs import pose as job
+    from cdpr_design.statics import hanging as H
+    from cdpr_design.statics.kinematics import has_pulleys
     from cdpr_design.statics.pose import evaluate_pose
 
     design = load_design(spec)
-    p = parse_pose(design, at)
-    c = parse_weights(design, weights)
-    result = evaluate_pose(design, p, kind.value, objective.value, c)
-    data = job.pose_data(design, result)
+    if H.hangs_freely(design):
+        coords = design.motion.position_coords
+        position = parse_numbers(at, "--at", len(coords), f"numbers ({','.join(coords)}): effector.orientation "
+                                 "is free, so the position alone is commanded and the orientation hangs")
+        if objective != Objective.min_norm or weights is not None:
+            raise InputError(f"{'--weights' if weights is not None else '--objective'}: a hanging effector's "
+                             "tensions are unique (they balance its weight, force and moment)")
+        data = hjob.free_pose_data(design, position, kind.value)
+    else:
+        p = parse_pose(design, at)
+        c = parse_weights(design, weights)
+        data = job.pose_data(design, evaluate_pose(design, p, kind.value, objective.value, c))
+        if H.underconstrained(design) and not has_pulleys(design):
+            data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     data["objective"] = objective.value
     if json_:
         emit_json(data)
         return
-    t = Table(title=f"{design.name} at ({at}) — {'feasible' if data['feasible'] else 'infeasible'}, "
-                    f"margin {fmt(data['margin'])} N", title_justify="left")
+    _pose_table(design, at, data)
+
+
+def _pose_table(design, at: str, data: dict) -> None:
+    verdict = "feasible" if data["feasible"] else "infeasible"
+    if "reason" in data and not data["feasible"]:
+        verdict += f" ({data['reason']})"
+    t = Table(title=f"{design.name} at ({at}) — {verdict}, margin {fmt(data['margin'])} N", title_justify="left")
     for col in ("cable", "length [m]", "tension [N]", "bounds [N]"):
         t.add_column(col)
     for cable in design.cables:
         t.add_row(cable.name, fmt(data["lengths"][cable.name], 6), fmt(data["tensions"][cable.name], 6),
                   f"{cable.tension_min:g} – {cable.tension_max:g}")
     out_console.print(t)
+    if data.get("effector_orientation") == "free" and data["orientation"] is not None:
+        out_console.print(f"hangs with orientation {fmt(data['orientation'])}, tilt {fmt(data['tilt'])}°")
+    elif "hanging" in data:
+        h = data["hanging"]
+        out_console.print(f"hanging: the free body would tilt by {fmt(h['tilt'])}° here"
+                          + ("" if h["feasible"] else f" — it cannot hang here: {h['reason']}")
+                          + " (effector.orientation: fixed holds it at the commanded orientation)")
     if data["collisions"]:
         out_console.print("collisions: " + ", ".join(" – ".join(p) for p in data["collisions"]))
 
@@ -75,25 +102,30 @@ def pose(
 def fk(
     spec: SpecArg,
     lengths: Annotated[str, typer.Option("--lengths", help="Cable lengths [m], comma-separated, in cable order.")],
-    guess: Annotated[Optional[str], typer.Option("--guess", help="Starting pose for the numerical solver.")] = None,
+    guess: Annotated[Optional[str], typer.Option(
+        "--guess", help="A pose whose orientation also starts the search (rotational motions; the starting "
+                        "pose of the kinematic solve with swivel pulleys).")] = None,
     json_: JsonOpt = False,
 ):
-    """Forward kinematics: the pose for given cable lengths."""
-    from cdpr_design.statics import kinematics as kin
+    """Where the effector rests for given cable lengths (geometrico-static forward problem)."""
+    from cdpr_design.jobs import hanging as hjob
 
     design = load_design(spec)
     L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)")
     if any(v < 0 for v in L):
         raise InputError("--lengths: cable lengths must be non-negative")
     g = parse_pose(design, guess, "--guess") if guess is not None else None
-    res = kin.forward_kinematics(design, L, guess=g)
-    data = {"pose": [float(v) for v in res.pose], "residual": float(res.residual), "method": res.method}
+    data = hjob.fk_data(design, L, guess=g)
     if json_:
         emit_json(data)
         return
-    out_console.print(summary_table(
-        f"{design.name} — forward kinematics ({res.method})",
-        [(c, float(v)) for c, v in zip(design.motion.coords, res.pose)] + [("residual \\[m]", res.residual)]))
+    rows = [(c, v) for c, v in zip(design.motion.coords, data["pose"])]
+    if data["tensions"] is not None:
+        rows += [("tilt \\[deg]", data["tilt"])] + [(f"tension {c} \\[N]", v) for c, v in data["tensions"].items()]
+        rows += [("slack", ", ".join(data["slack"]) or "none"), ("stable", str(data["stable"])),
+                 ("other stable equilibria", str(len(data["equilibria"])))]
+    rows += [("residual \\[m]", data["residual"])]
+    out_console.print(summary_table(f"{design.name} — where it rests ({data['method']})", rows))
 
 
 @command
