@@ -68,8 +68,9 @@ def fk_data(design, lengths, guess=None) -> dict:
         options["nominal"] = kin.pose_rotation(design, guess)
     try:
         e = H.equilibrium(design, rho, **options)
-    except H.UnreachableLengths as exc:
-        raise InputError(f"--lengths: {exc}") from None
+    except InputError as exc:  # unreachable, too short or miscounted lengths
+        raise (H.UnreachableLengths if isinstance(exc, H.UnreachableLengths) else InputError)(
+            f"--lengths: {exc}") from None
     p = np.zeros(3)
     p[: e.position.size] = e.position
     L = np.linalg.norm(design.outlets - p - design.attachments @ e.rotation.T, axis=1)

@@ -113,10 +113,12 @@ class Hanging:
 
 
 def tilt_many(R, up) -> np.ndarray:
-    """Angles [deg] between R up and up for rotations R (..., 3, 3)."""
+    """Angles [deg] between R up and up for rotations R (..., 3, 3) (atan2 of the sine and
+    cosine: accurate near level too, where acos loses half the digits)."""
     up = np.asarray(up, float)
-    c = np.einsum("i,...ij,j->...", up, R, up)
-    return np.degrees(np.arccos(np.clip(c, -1.0, 1.0)))
+    v = np.einsum("...ij,j->...i", R, up)
+    s = np.linalg.norm(np.cross(v, up), axis=-1)
+    return np.degrees(np.arctan2(s, v @ up))
 
 
 def _cr(ax, ay, bx, by):

@@ -186,8 +186,9 @@ def orientation_of(R, planar: bool):
 
 def tilt_of(R, up) -> float:
     """The angle [deg] between R up and up (up a unit vector): the tilt from level."""
-    up = np.asarray(up, float)
-    return math.degrees(math.acos(max(-1.0, min(1.0, float(up @ R @ up)))))
+    from cdpr_design.statics.hanging_at import tilt_many
+
+    return float(tilt_many(np.asarray(R, float), up))
 
 
 @dataclass(frozen=True)
