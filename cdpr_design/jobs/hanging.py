@@ -17,7 +17,7 @@ from cdpr_design.errors import InputError
 
 
 def _num(x):
-    x = float(x)
+    x = float(x) + 0.0  # + 0.0 turns -0.0 into 0.0
     return x if math.isfinite(x) else None
 
 
