@@ -30,6 +30,7 @@ from cdpr_design.statics import hanging as H
 from cdpr_design.statics import hanging_at as ha
 from cdpr_design.statics import hanging_core as hc
 from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.pose import evaluate_pose
 from tests.helpers import DESIGNS
 from tests.test_hanging import G2, G3, check_equilibrium, random_planar2
 
@@ -125,7 +126,7 @@ def ref_is_local_minimum(A, B, c, mass, g, p, R, rng, tries=4, size=0.02):
 
 def crane():
     d = spec.load(DESIGNS / "crane4.yaml")
-    return d, H._design_arrays(d)
+    return d, H.design_arrays(d)
 
 
 @pytest.mark.parametrize("case", ["three", "crane"])
@@ -276,3 +277,44 @@ def test_held_point_mass_fk_equals_the_free_one():
     held = H.fk_held_arrays(A, np.zeros((3, 3)), np.zeros(3), 1.0, G3, rho, False, np.eye(3))
     np.testing.assert_allclose(held.position, free.position, atol=1e-12)
     assert held.slack == free.slack == (2,)
+
+
+# ---------------------------------------------------------------------------
+# the statics at per-pose orientations (kernels.hanging.eval_rotated)
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["planar4.yaml", "ipanema3.yaml"])
+def test_eval_rotated_equals_evaluate_pose(name):
+    """Each pose at its own rotation gives what evaluate_pose gives at that pose (the
+    workspace kernels, themselves tested against scipy and cvxpy)."""
+    from cdpr_design.statics.pose import combinations, wrench_vertices
+
+    d = spec.load(DESIGNS / name)
+    rng = np.random.default_rng(9)
+    k = 12
+    lo, hi = np.array(d.workspace.grid.lower), np.array(d.workspace.grid.upper)
+    P = np.zeros((k, 3))
+    P[:, : d.motion.dim] = rng.uniform(lo + 0.2 * (hi - lo), hi - 0.2 * (hi - lo), (k, d.motion.dim))
+    ori = np.zeros((k, 3))
+    if d.motion.planar:
+        ori[:, 2] = rng.uniform(-0.2, 0.2, k)
+    else:
+        ori[:] = rng.uniform(-0.1, 0.1, (k, 3))
+    R = np.array([kin.rotation_matrix(*o) for o in ori])
+    wreq = np.array([wrench_vertices(d, "static", o) for o in ori])
+    m = d.m
+    feas, marg, ten, L = np.empty(k, np.uint8), np.empty(k), np.empty((k, m)), np.empty((k, m))
+    R[3] = np.nan  # a pose where the effector cannot hang
+    K.eval_rotated(P, R, d.outlets, np.ascontiguousarray(d.attachments), d.rows, wreq, d.tension_min,
+                   d.tension_max, combinations(m, d.n), 0, feas, marg, ten, L)
+    assert feas[3] == 0 and np.isnan(marg[3]) and np.all(np.isnan(L[3]))
+    n_feasible = 0
+    for i in set(range(k)) - {3}:
+        pose = np.concatenate([P[i], ori[i]])[list(d.motion.pose_index)]
+        ref = evaluate_pose(d, pose)
+        assert bool(feas[i]) == ref.feasible
+        n_feasible += ref.feasible
+        assert marg[i] == pytest.approx(ref.margin, rel=1e-9, abs=1e-9)
+        np.testing.assert_allclose(L[i], ref.lengths, rtol=1e-12)
+        np.testing.assert_allclose(ten[i], ref.tensions, rtol=1e-9, atol=1e-9)
+    assert n_feasible >= 3

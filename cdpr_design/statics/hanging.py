@@ -398,7 +398,8 @@ def tilt_map_arrays(A, B, c, mass, g, positions):
     return phi, t, status
 
 
-def _design_arrays(design):
+def design_arrays(design):
+    """(outlets, attachments, centre of mass, mass, gravity, planar) of a design [m, kg, m/s^2]."""
     planar = design.motion.name in ("2T", "1R2T")
     return (design.outlets, design.attachments, np.asarray(design.effector.center_of_mass, float),
             float(design.effector.mass), np.asarray(design.gravity, float), planar)
@@ -411,7 +412,7 @@ def _within(design, t) -> bool:
 def fk(design, lengths, **options) -> HangingFK:
     """:func:`fk_arrays` for a design: where it hangs for cable ``lengths`` [m], with
     ``within_limits`` set from the design's tension limits."""
-    A, B, c, mass, g, planar = _design_arrays(design)
+    A, B, c, mass, g, planar = design_arrays(design)
     r = fk_arrays(A, B, c, mass, g, lengths, planar, **options)
     return dataclasses.replace(r, within_limits=None if r.indeterminate else _within(design, r.tensions))
 
@@ -419,14 +420,14 @@ def fk(design, lengths, **options) -> HangingFK:
 def pose_at(design, position, **options) -> HangingAt:
     """:func:`pose_at_arrays` for a design: its hanging orientation at ``position`` [m],
     with ``within_limits`` set from the design's tension limits."""
-    A, B, c, mass, g, planar = _design_arrays(design)
+    A, B, c, mass, g, planar = design_arrays(design)
     r = pose_at_arrays(A, B, c, mass, g, position, planar, **options)
     return dataclasses.replace(r, within_limits=_within(design, r.tensions) if r.feasible else None)
 
 
 def underconstrained(design) -> bool:
     """Whether the design's cables leave its orientation free (see :func:`is_underconstrained`)."""
-    A, B, _, _, _, planar = _design_arrays(design)
+    A, B, _, _, _, planar = design_arrays(design)
     return is_underconstrained(A.shape[0], B, planar)
 
 
@@ -469,7 +470,7 @@ def equilibrium(design, lengths, **options) -> HangingFK:
     orientation, else :func:`fk_arrays` started about :func:`nominal_rotation`.  Errors name
     the cables; ``within_limits`` from the design's tension limits."""
     point_outlets(design, "fk")
-    A, B, c, mass, g, planar = _design_arrays(design)
+    A, B, c, mass, g, planar = design_arrays(design)
     held = held_rotation(design)
     names = design.cable_names
     if held is not None:
@@ -488,7 +489,7 @@ def tilt_map(design, axes=None, *, step: float | None = None) -> TiltMap:
     """
     from cdpr_design.kernels import hanging as K
 
-    A, B, c, mass, g, planar = _design_arrays(design)
+    A, B, c, mass, g, planar = design_arrays(design)
     if not planar:
         raise InputError("the tilt map is for planar designs")
     if axes is None:

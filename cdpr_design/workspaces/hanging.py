@@ -93,7 +93,7 @@ class _Hanger:
     """The hanging orientation at a chunk's positions, for one design."""
 
     def __init__(self, design: Design, ori, engine: str, poses: int):
-        A, B, c, mass, g, planar = H._design_arrays(design)
+        A, B, c, mass, g, planar = H.design_arrays(design)
         self.geo = hc.Geometry(A, B, c, mass, g)
         self.planar = planar
         self.design = design
@@ -180,8 +180,7 @@ class FreeRows:
     ``hanging`` the :class:`~cdpr_design.statics.hanging_at.Hanging`; ``extra`` the
     :func:`columns` (name -> (k,)); ``feasible`` uint8, ``margin`` [N], ``tensions``
     (k, m) [N] (NaN where infeasible), ``lengths`` (k, m) [m] (NaN where it cannot hang);
-    ``within`` where it hangs within the tension bounds (before the tilt limit);
-    ``structure`` (k, n, m) the structure matrices at the hanging poses.
+    ``within`` where it hangs within the tension bounds (before the tilt limit).
     """
 
     hanging: ha.Hanging
