@@ -217,6 +217,7 @@ def test_max_tilt_makes_larger_tilts_infeasible(free_rows, tmp_path):
     (["--max-tilt", "200"], "--max-tilt: expected an angle in [0, 180] degrees"),
     (["--kind", "wrench-feasible"], "--kind wrench-feasible"),
     (["--collisions"], "--collisions"),
+    (["--orientations", "total"], "--orientations: an under-constrained design with effector.orientation: free"),
 ])
 def test_free_workspace_bad_options_exit_2(tmp_path, args, message):
     res = invoke("workspace", free_planar2(tmp_path), "--step", "0.1", "--out", tmp_path / "o", *args)

@@ -126,6 +126,7 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     See :func:`cdpr_design.workspaces.orientation.sweep_orientations`.
     """
     check_engine(engine)
+    hanging.refuse_commanded_orientations(design)
     g, nominal = _setup(design, kind, step, grid, orientation, force)
     from cdpr_design.workspaces.orientation import sweep_orientations  # numba kernels, loaded on first use
 

@@ -69,6 +69,14 @@ def applies(design: Design) -> bool:
     return True
 
 
+def refuse_commanded_orientations(design: Design) -> None:
+    """Orientation workspaces sweep commanded orientations: refused when the effector hangs freely."""
+    if H.hangs_freely(design):
+        raise InputError("--orientations: an under-constrained design with effector.orientation: free does "
+                         "not command its orientation (it hangs); use effector.orientation: fixed to sweep "
+                         "commanded orientations")
+
+
 def columns(design: Design) -> list[str]:
     """The extra ``workspace.csv`` columns of an under-constrained design: ``tilt`` [deg] and
     the hanging orientation per rotation axis [rad] (``orientation_phi``, or ``orientation_rx``,
