@@ -44,6 +44,17 @@ MotorOpt = Annotated[Optional[str], typer.Option(
     "--motor", help="Evaluate this catalogue motor on every axis instead of the spec's or the smallest that fits.")]
 
 
+class CableModel(str, Enum):
+    ideal = "ideal"
+    elastic = "elastic"
+    sagging = "sagging"
+
+
+CableModelOpt = Annotated[Optional[CableModel], typer.Option(
+    "--cable-model", help="ideal | elastic | sagging: overrides the spec's cable.model for every cable "
+                          "(elastic needs cable.axial_stiffness, sagging also cable.mass_per_length).")]
+
+
 class Kind(str, Enum):
     static = "static"
     wrench_feasible = "wrench-feasible"
@@ -79,10 +90,12 @@ def command(fn):
     return wrapper
 
 
-def load_design(path: Path):
+def load_design(path: Path, cable_model: CableModel | None = None):
+    """The design of a spec file, with ``--cable-model`` applied when given."""
     from cdpr_design.model import spec
 
-    return spec.load(path)
+    design = spec.load(path)
+    return spec.with_cable_model(design, cable_model.value) if cable_model is not None else design
 
 
 def parse_numbers(text: str, option: str, count: int | None = None, what: str = "numbers") -> list[float]:

@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (JsonOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg, bars, command, emit_json,
+from cdpr_design.cli.common import (CableModelOpt, JsonOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg, bars, command, emit_json,
                                     fmt, info, load_design, out_console, summary_table)
 from cdpr_design.errors import CheckFailed
 
@@ -49,12 +49,13 @@ def trajectory_cmd(
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
     overwrite: OverwriteOpt = False,
+    cable_model: CableModelOpt = None,
 ):
     """Sample a spec path at a fixed cycle: trajectory.csv, trajectory.png, trajectory_axes.png, trajectory.json."""
     from cdpr_design.cli import env
     from cdpr_design.jobs import motion as job
 
-    design = load_design(spec)
+    design = load_design(spec, cable_model)
     samples, s, out_dir = job.trajectory(design, name, cycle_time, out, overwrite, engine=env.engine())
     if json_:
         emit_json(s)
@@ -94,11 +95,12 @@ def simulate(
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
     overwrite: OverwriteOpt = False,
+    cable_model: CableModelOpt = None,
 ):
     """Run a spec path on the MuJoCo model of the robot: simulation.csv, simulation.json, simulation.png."""
     from cdpr_design.jobs import motion as job
 
-    design = load_design(spec)
+    design = load_design(spec, cable_model)
     result, s, samples, out_dir = job.simulate(
         design, name, delay=delay, servo_bandwidth=servo_bandwidth, feedforward=feedforward,
         compensate_stretch=compensate_stretch, cable_damping=cable_damping, timestep=timestep, hold=hold,

@@ -9,7 +9,7 @@ from typing import Annotated, Optional
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (JsonOpt, Kind, KindOpt, SpecArg, command, emit_json, fmt, load_design,
+from cdpr_design.cli.common import (CableModelOpt, JsonOpt, Kind, KindOpt, SpecArg, command, emit_json, fmt, load_design,
                                     out_console, parse_numbers, parse_pose, summary_table)
 from cdpr_design.errors import InputError
 
@@ -46,6 +46,7 @@ def pose(
     objective: ObjectiveOpt = Objective.min_norm,
     weights: WeightsOpt = None,
     json_: JsonOpt = False,
+    cable_model: CableModelOpt = None,
 ):
     """One pose: cable lengths, tensions, feasibility, margin, structure matrix (and the hanging tilt)."""
     from cdpr_design.jobs import hanging as hjob
@@ -54,8 +55,12 @@ def pose(
     from cdpr_design.statics.kinematics import has_pulleys
     from cdpr_design.statics.pose import evaluate_pose
 
-    design = load_design(spec)
+    design = load_design(spec, cable_model)
+    ideal = job.cable_model_name(design) == "ideal"
     if H.hangs_freely(design):
+        if not ideal:
+            raise InputError("--cable-model: an effector with effector.orientation: free hangs on ideal cables "
+                             "(the hanging solver models rigid, weightless cables)")
         coords = design.motion.position_coords
         position = parse_numbers(at, "--at", len(coords), f"numbers ({','.join(coords)}): effector.orientation "
                                  "is free, so the position alone is commanded and the orientation hangs")
@@ -67,7 +72,7 @@ def pose(
         p = parse_pose(design, at)
         c = parse_weights(design, weights)
         data = job.pose_data(design, evaluate_pose(design, p, kind.value, objective.value, c))
-        if H.underconstrained(design) and not has_pulleys(design):
+        if ideal and H.underconstrained(design) and not has_pulleys(design):
             data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     data["objective"] = objective.value
     if json_:
@@ -81,12 +86,18 @@ def _pose_table(design, at: str, data: dict) -> None:
     if "reason" in data and not data["feasible"]:
         verdict += f" ({data['reason']})"
     t = Table(title=f"{design.name} at ({at}) — {verdict}, margin {fmt(data['margin'])} N", title_justify="left")
-    for col in ("cable", "length [m]", "tension [N]", "bounds [N]"):
+    model = data.get("cable_model")
+    extra = [("outlet tension [N]", "outlet_tensions"), ("unstretched [m]", "unstretched_lengths"),
+             ("sag [m]", "sag")] if model else []
+    for col in ("cable", "length [m]", "tension [N]") + tuple(c for c, _ in extra) + ("bounds [N]",):
         t.add_column(col)
     for cable in design.cables:
         t.add_row(cable.name, fmt(data["lengths"][cable.name], 6), fmt(data["tensions"][cable.name], 6),
+                  *(fmt(data[k][cable.name], 6) for _, k in extra),
                   f"{cable.tension_min:g} – {cable.tension_max:g}")
     out_console.print(t)
+    if model:
+        out_console.print(f"cable model: {model} (tensions at the effector end; status {data['cable_status']})")
     if data.get("effector_orientation") == "free" and data["orientation"] is not None:
         out_console.print(f"hangs with orientation {fmt(data['orientation'])}, tilt {fmt(data['tilt'])}°")
     elif "hanging" in data:
@@ -106,15 +117,29 @@ def fk(
         "--guess", help="A pose whose orientation also starts the search (rotational motions; the starting "
                         "pose of the kinematic solve with swivel pulleys).")] = None,
     json_: JsonOpt = False,
+    cable_model: CableModelOpt = None,
 ):
-    """Where the effector rests for given cable lengths (geometrico-static forward problem)."""
+    """Where the effector rests for given cable lengths (geometrico-static forward problem; unstretched
+    lengths with elastic or sagging cables)."""
     from cdpr_design.jobs import hanging as hjob
+    from cdpr_design.jobs import pose as job
 
-    design = load_design(spec)
+    design = load_design(spec, cable_model)
     L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)")
     if any(v < 0 for v in L):
         raise InputError("--lengths: cable lengths must be non-negative")
     g = parse_pose(design, guess, "--guess") if guess is not None else None
+    if job.cable_model_name(design) != "ideal":
+        data = job.cable_fk_data(design, L, g)  # --lengths are unstretched lengths
+        if json_:
+            emit_json(data)
+            return
+        out_console.print(summary_table(
+            f"{design.name} — forward kinematics ({data['method']})",
+            [(c, float(v)) for c, v in zip(design.motion.coords, data["pose"])] + [("residual \\[m]", data["residual"])]
+            + [(f"tension {c} \\[N]", v) for c, v in data.get("tensions", {}).items()]
+            + [("within tension bounds", "yes" if data["within_bounds"] else "no")]))
+        return
     data = hjob.fk_data(design, L, guess=g)
     if json_:
         emit_json(data)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (CatalogueOpt, ForceOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt,
+from cdpr_design.cli.common import (CableModelOpt, CatalogueOpt, ForceOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt,
                                     SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt,
                                     info, load_design, out_console)
 from cdpr_design.errors import CheckFailed
@@ -56,12 +56,13 @@ def size_motors(
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
     overwrite: OverwriteOpt = False,
+    cable_model: CableModelOpt = None,
 ):
     """Motor, gearbox and drum sizing over the task workspace: motor_sizing.csv."""
     from cdpr_design.cli import env
     from cdpr_design.jobs import sizing as job
 
-    design = load_design(spec)
+    design = load_design(spec, cable_model)
     result, out_dir = job.size_motors(design, catalogue, trajectory, safety_factor, motor, step, out, overwrite,
                                       engine=env.engine())
     if json_:
@@ -87,6 +88,7 @@ def report(
     quiet: QuietOpt = False,
     force: ForceOpt = False,
     overwrite: OverwriteOpt = False,
+    cable_model: CableModelOpt = None,
 ):
     """Every artefact for one design (workspace, motor sizing) plus design_report.csv."""
     from cdpr_design.cli import env
@@ -94,7 +96,7 @@ def report(
     from cdpr_design.plots import worker as _picture_worker
 
     with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:  # matplotlib's import overlaps the spec and the sweep
-        design = load_design(spec)
+        design = load_design(spec, cable_model)
         e, checks, out_dir = job.report(design, catalogue, trajectory, safety_factor, motor, step, force, out,
                                         overwrite, pictures=pictures, engine=env.engine(),
                                         progress=bars(quiet or json_, min_total=500_000))
@@ -118,12 +120,13 @@ def check(
     step: StepOpt = None,
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
+    cable_model: CableModelOpt = None,
 ):
     """Test the spec's requirements: one line per requirement; exit 0 all pass, 1 otherwise."""
     from cdpr_design.cli import env
     from cdpr_design.jobs import sizing as job
 
-    design = load_design(spec)
+    design = load_design(spec, cable_model)
     e, checks = job.check(design, catalogue, trajectory, safety_factor, motor, step,
                           progress=bars(quiet or json_, min_total=500_000), engine=env.engine())
     passed = e.passed

@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 import typer
 
 from cdpr_design.errors import InputError
-from cdpr_design.cli.common import (ForceOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg,
+from cdpr_design.cli.common import (CableModelOpt, ForceOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg,
                                     bars, command, emit_json, load_design, out_console, summary_table)
 
 
@@ -37,6 +37,7 @@ def workspace(
     max_tilt: Annotated[Optional[float], typer.Option(
         "--max-tilt", help="Largest tilt [deg] a feasible pose may hang with (under-constrained designs with "
                            "effector.orientation: free; default requirements.max_tilt).")] = None,
+    cable_model: CableModelOpt = None,
 ):
     """Grid sweep of the workspace: workspace.csv, workspace.png, tension_map.png, summary.json."""
     from cdpr_design.cli import env
@@ -44,7 +45,7 @@ def workspace(
     from cdpr_design.plots import worker as _picture_worker
 
     with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:  # matplotlib's import overlaps the spec and the sweep
-        design = load_design(spec)
+        design = load_design(spec, cable_model)
         result, out_dir = job.workspace(
             design, out, overwrite, kind=kind.value, step=step, force=force, collisions=collisions,
             orientations=orientations.value if orientations is not None else None, pictures=pictures,
@@ -66,6 +67,9 @@ def workspace(
            if "orientation_mode" in s else [])
         + ([("effector orientation", s["effector_orientation"]), ("hangs at", f"{s['hangs']:,} positions"),
             ("max tilt (feasible) \\[deg]", s["max_tilt"])] if "effector_orientation" in s else [])
+        + ([("cable model", s["cable_model"])] if "cable_model" in s else [])
+        + ([("cable status", ", ".join(f"{k} {v:,}" for k, v in s["cable_status"].items() if v))]
+           if "cable_status" in s else [])
         + [("files", str(out_dir.path))]))
 
 

@@ -20,6 +20,13 @@ given:
 - cable acceleration L''_i = -u_i . a - |v_perp|^2 / L_i, bounded by
   A + V^2 / L_i over the task poses.
 
+With sagging cables (:mod:`cdpr_design.statics.cables`) W is built from
+each catenary's end-force directions at the static solution, and the static
+and peak tensions are those the winch holds: the effector-end tension plus the
+static difference between the outlet and the effector end (the cable's share
+of its own weight).  The dynamic part keeps the static cable shapes (a
+linearisation: the shapes change little over the acceleration set).
+
 With swivel pulleys (``cables[i].pulley``) lengths are arc + free
 segment and u_i leaves from the pulley's tangent point
 (:mod:`cdpr_design.statics.pulley`); L'_i = -u_i . v still holds (|u_i| = 1) and
@@ -37,6 +44,7 @@ from typing import Callable, Iterable
 import numpy as np
 
 from cdpr_design.model.design import Design, Grid
+from cdpr_design.statics import cables as cable_models
 from cdpr_design.statics import kinematics as kin
 from cdpr_design import workspaces as workspace
 from cdpr_design.workspaces import grid as wsg
@@ -202,11 +210,20 @@ def envelope_chunk(design: Design, positions: np.ndarray, orientation, A: float,
     R = kin.rotation_matrix(*orientation)
     Rb = design.attachments @ R.T
     W, L, kappa = _structure_many(design, pos3, Rb, curvature=True)
+    sag_ok, offset = None, 0.0
+    if cable_models.design_model(design) == "sagging":
+        sag_ok, Ws, t_eff, t_out = cable_models.sagging_structures(design, pos3, orientation)
+        W[sag_ok] = Ws[sag_ok]
+        offset = np.where(sag_ok[:, None], np.nan_to_num(t_out - t_eff), 0.0)
     w0, M = wrench_model(design, orientation)
     if design.m == design.n:
         static, peak, low, ok = _square_chunk(W, w0, M, A)
     else:
         static, peak, low, ok = _redundant_chunk(design, W, w0, M, A)
+    if sag_ok is not None:
+        # the winch holds the outlet tension: the effector's plus the cable's share of its weight
+        ok &= sag_ok
+        static, peak = static + offset, peak + offset
     with np.errstate(divide="ignore", invalid="ignore"):
         accel = A + V * V * kappa  # kappa = 1 / L for a point outlet
     accel[:, :] = np.where(L > 1e-12, accel, np.nan)

@@ -16,4 +16,41 @@ def pose_data(design, result) -> dict:
         "margin": float(result.margin) if np.isfinite(result.margin) else None,
         "structure_matrix": [[float(x) for x in row] for row in result.W],
         "collisions": [list(p) for p in result.collisions],
-    }
+    } | cable_model_data(design, result)
+
+
+def cable_model_data(design, result) -> dict:
+    """The keys a non-ideal cable model adds to ``pose --json`` (none for ideal cables)."""
+    st = result.cable_state
+    if st is None:
+        return {}
+    names = design.cable_names
+
+    def per_cable(values):
+        return {c: (float(v) if np.isfinite(v) else None) for c, v in zip(names, values)}
+
+    return {"cable_model": result.cable_model, "outlet_tensions": per_cable(st.outlet_tensions),
+            "unstretched_lengths": per_cable(st.unstretched_lengths), "sag": per_cable(st.sag),
+            "cable_status": st.status}
+
+
+def cable_model_name(design) -> str:
+    """The design's cable model (:func:`cdpr_design.statics.cables.design_model`)."""
+    from cdpr_design.statics.cables import design_model
+
+    return design_model(design)
+
+
+def cable_fk_data(design, unstretched, guess=None) -> dict:
+    """The ``fk --json`` object with elastic or sagging cables (``unstretched`` lengths [m])."""
+    from cdpr_design.statics.cable_fk import forward
+
+    res = forward(design, unstretched, guess)
+    names = design.cable_names
+    return {"pose": [float(v) for v in res.pose], "residual": res.length_residual, "method": res.method,
+            "cable_model": cable_model_name(design), "force_residual": res.force_residual,
+            "tensions": {c: float(v) for c, v in zip(names, res.tensions)},
+            "outlet_tensions": {c: float(v) for c, v in zip(names, res.outlet_tensions)},
+            "slack": res.slack,
+            "within_bounds": bool(np.all((res.tensions >= design.tension_min - 1e-9)
+                                         & (np.maximum(res.tensions, res.outlet_tensions) <= design.tension_max + 1e-9)))}

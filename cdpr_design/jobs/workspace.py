@@ -55,6 +55,8 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
     result = _stream_sweep(design, out, kind, step, force, collisions, orientations, engine, progress, max_tilt)
     out.write_json("summary.json", result.summary())
     save_workspace_pictures(out, result, pictures)
+    if result.extra.get("cable_model") == "sagging" and not orientations:
+        save_cable_model_picture(out, result, engine, collisions, pictures)
     if result.orientation_maps is not None:
         save_orientation_picture(out, result)
     return result
@@ -95,6 +97,18 @@ def save_workspace_pictures(out: OutputDir, result, worker: PictureWorker | None
     if getattr(result, "hanging", None) is not None:
         pictures.append(("tilt_map.png", tilt_figure, (result,)))
     return save_pictures(out, pictures, worker)
+
+
+def save_cable_model_picture(out: OutputDir, result, engine: str = "auto", collisions: bool = False,
+                             worker: PictureWorker | None = None) -> Path:
+    """``cable_models.png``: the same grid swept with ideal cables, compared with ``result``
+    (:func:`~cdpr_design.plots.workspace.cable_model_figure`)."""
+    from cdpr_design import workspaces as ws
+    from cdpr_design.model.spec import with_cable_model
+
+    ideal = ws.run(with_cable_model(result.design, "ideal"), kind=result.kind, grid=result.grid,
+                   orientation=result.orientation, force=True, interference=collisions, engine=engine)
+    return save_pictures(out, [("cable_models.png", wsplots.cable_model_figure, (result, ideal))], worker)[0]
 
 
 def save_orientation_picture(out: OutputDir, result) -> Path:

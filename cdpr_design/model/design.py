@@ -128,8 +128,13 @@ class Pulley:
 
 @dataclass(frozen=True)
 class CableProps:
-    """Physical cable: diameter [m], axial stiffness EA [N], mass per length [kg/m]."""
+    """Physical cable: model, diameter [m], axial stiffness EA [N], mass per length [kg/m].
 
+    ``model``: ``ideal`` (massless, inextensible, straight), ``elastic``
+    (straight, stretched by T/EA) or ``sagging`` (elastic catenary).
+    """
+
+    model: str = "ideal"
     diameter: float = 0.0
     axial_stiffness: float | None = None
     mass_per_length: float = 0.0

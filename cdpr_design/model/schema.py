@@ -50,7 +50,14 @@ class PulleySpec(StrictModel):
     axis: Vec = Field([0.0, 0.0, 1.0], description="Swivel axis (frame coordinates)")
 
 
+CableModelName = Literal["ideal", "elastic", "sagging"]
+
+
 class CablePhysSpec(StrictModel):
+    model: CableModelName | None = Field(
+        None, description="ideal (massless, inextensible, straight; the default), elastic (straight, stretches "
+                          "by T/EA: needs axial_stiffness) or sagging (Irvine's elastic catenary: needs "
+                          "axial_stiffness and mass_per_length)")
     diameter: NonNegFloat | None = Field(None, description="Cable diameter [m]")
     axial_stiffness: PosFloat | None = Field(None, description="Axial stiffness EA [N]")
     mass_per_length: NonNegFloat | None = Field(None, description="Linear density [kg/m]")
@@ -63,6 +70,7 @@ class CableSpec(StrictModel):
     tension: Vec | None = Field(None, description="[min, max] tension [N]; overrides the design-wide bounds")
     winch: WinchSpec | None = None
     pulley: PulleySpec | None = None
+    model: CableModelName | None = None
     diameter: NonNegFloat | None = None
     axial_stiffness: PosFloat | None = None
     mass_per_length: NonNegFloat | None = None

@@ -17,6 +17,7 @@ format and the catalogue's dataclasses are :mod:`cdpr_design.model.catalogue`.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any
@@ -33,7 +34,7 @@ from cdpr_design.model.design import (  # noqa: I001
 from cdpr_design.model.schema import (
     CablePhysSpec, DesignSpec, GridSpec, RequirementsSpec, WinchSpec, WorkspaceSpecModel, parse,
 )
-from cdpr_design.model.spec_checks import check_semantics
+from cdpr_design.model.spec_checks import MODEL_NEEDS, cable_model_problems, check_semantics
 
 
 # ----------------------------------------------------------------------------
@@ -96,6 +97,30 @@ def from_dict(data: Any, source: str | None = None) -> Design:
     """Validate plain data and build the design."""
     s = validate(data, source)
     return build(s, raw=data, source=source)
+
+
+def with_cable_model(design: Design, model: str | None, option: str = "--cable-model") -> Design:
+    """``design`` with every cable's model replaced by ``model`` (``None``: unchanged).
+
+    The spec's ``cable.model`` and per-cable ``model`` keys are overridden (in
+    ``design.raw`` too, so sweeps that rebuild the spec keep the override).
+    Raises a :class:`SpecError` naming ``option`` for an unknown model, and the
+    missing property's key when a cable lacks what the model needs.
+    """
+    if model is None:
+        return design
+    if model not in MODEL_NEEDS:
+        raise SpecError([(option, f"expected one of {', '.join(MODEL_NEEDS)}, got {model!r}")], design.source)
+    raw = copy.deepcopy(design.raw)
+    raw["cable"] = dict(raw.get("cable") or {}, model=model)
+    for c in raw.get("cables", []):
+        if isinstance(c, dict):
+            c.pop("model", None)
+    problems = cable_model_problems(parse(DesignSpec, design.raw, design.source), model, option)
+    if problems:
+        raise SpecError(problems, design.source)
+    cables = tuple(dataclasses.replace(c, props=dataclasses.replace(c.props, model=model)) for c in design.cables)
+    return dataclasses.replace(design, cables=cables, raw=raw)
 
 
 def validate(data: Any, source: str | None = None) -> DesignSpec:
@@ -213,6 +238,7 @@ def _cables(s: DesignSpec) -> tuple[Cable, ...]:
     for c in s.cables:
         t = c.tension if c.tension is not None else s.tension
         props = CableProps(
+            model=next(v for v in (c.model, phys.model, "ideal") if v is not None),
             diameter=next(v for v in (c.diameter, phys.diameter, 0.0) if v is not None),
             axial_stiffness=c.axial_stiffness if c.axial_stiffness is not None else phys.axial_stiffness,
             mass_per_length=next(v for v in (c.mass_per_length, phys.mass_per_length, 0.0) if v is not None),

@@ -146,9 +146,47 @@ def _check_cables(p: Problems, s: DesignSpec) -> None:
             elif dim == 2 and c.pulley.radius > 0 and c.pulley.axis[2] != 0:
                 p.append((f"{base}.pulley.axis", "a planar design needs a swivel axis in the x-y plane "
                           f"(z = 0; the direction the cable runs into the pulley), got {list(c.pulley.axis)}"))
+    _check_cable_models(p, s)
     for path, w in [("winch", s.winch)] + [(f"cables[{i}].winch", c.winch) for i, c in enumerate(s.cables)]:
         if w is not None and w.motor is not None and not w.motor.strip():
             p.append((f"{path}.motor", "expected a motor name, got an empty string"))
+
+
+#: What each cable model needs (docs/cable-models.md).
+MODEL_NEEDS = {"ideal": (), "elastic": ("axial_stiffness",), "sagging": ("axial_stiffness", "mass_per_length")}
+
+
+def cable_model_problems(s: DesignSpec, override: str | None = None, option: str | None = None) -> Problems:
+    """The properties each cable's model needs and does not have.
+
+    ``override`` replaces every cable's model (the ``--cable-model`` option,
+    named ``option`` in the messages).  ``mass_per_length`` must be > 0 for a
+    sagging cable.
+    """
+    phys = s.cable
+    out: Problems = []
+    seen = set()
+    for i, c in enumerate(s.cables):
+        model = override or next((v for v in (c.model, phys.model if phys else None) if v is not None), "ideal")
+        for key in MODEL_NEEDS[model]:
+            own, shared = getattr(c, key), getattr(phys, key) if phys else None
+            value = own if own is not None else shared
+            path = f"cables[{i}].{key}" if own is not None else f"cable.{key}"
+            why = f"cable model {model!r}" + (f" (from {option})" if override else "")
+            if path in seen:
+                continue
+            if value is None:
+                seen.add(path)
+                out.append((path, f"required by {why}: give cable.{key} (or {key} on each cable)"))
+            elif key == "mass_per_length" and value <= 0:
+                seen.add(path)
+                out.append((path, f"expected a positive mass per length [kg/m] for {why}, got {value}"))
+    return out
+
+
+def _check_cable_models(p: Problems, s: DesignSpec) -> None:
+    """Each cable's model has the properties it needs."""
+    p.extend(cable_model_problems(s))
 
 
 def _check_workspace(p: Problems, s: DesignSpec, ws: WorkspaceSpecModel) -> None:

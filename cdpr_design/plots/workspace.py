@@ -226,3 +226,53 @@ def _spatial_orientation(result, val, feas, title, label):
     fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label=label)
     fig.suptitle(title, fontsize=9)
     return fig
+
+
+#: Okabe-Ito colours (safe for colour-blind readers): neither, ideal only, model only, both.
+_COMPARE = ("#e8e8e8", "#E69F00", "#0072B2", "#009E73")
+
+
+def cable_model_figure(result, ideal):
+    """Where the design's cable model and ideal cables agree: feasible under both, one, or neither.
+
+    ``result`` is the sweep with the design's cable model, ``ideal`` the same
+    grid with ideal cables (same map cells).  Planar: one panel; spatial: z-slices.
+    """
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    d = result.design
+    model = result.extra.get("cable_model", "model")
+    a, b = ideal.feasible_map.astype(bool), result.feasible_map.astype(bool)
+    code = (a & ~b) * 1.0 + (~a & b) * 2.0 + (a & b) * 3.0
+    cmap = ListedColormap(_COMPARE)
+    counts = [int(((code == k)).sum()) for k in range(4)]
+    labels = [f"neither ({counts[0]:,})", f"ideal only ({counts[1]:,})", f"{model} only ({counts[2]:,})",
+              f"both ({counts[3]:,})"]
+    handles = [Patch(fc=c, ec="k", lw=0.5, label=lab) for c, lab in zip(_COMPARE, labels)]
+    title = (f"{d.name}: feasible poses with {model} and ideal cables "
+             f"({_KIND_TEXT[result.kind]}, map cells)")
+    if d.motion.planar:
+        height = 6.4 * frame_aspect(d) + 1.4
+        fig, ax = pyplot().subplots(figsize=(7.5, height))
+        fig.subplots_adjust(left=0.09, right=0.97, bottom=0.75 / height, top=1 - 0.55 / height)
+        ax.imshow(code.T, origin="lower", extent=extent(result.map_axes), cmap=cmap, vmin=0.0, vmax=3.0,
+                  interpolation="nearest", aspect="equal", zorder=1)
+        frame_rect(ax, d)
+        ax.plot(d.outlets[:, 0], d.outlets[:, 1], "v", ms=7, mfc="tab:red", mec="k", zorder=5)
+        pad_limits(ax, d)
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.legend(handles=handles, loc="lower right", fontsize=8, framealpha=0.9)
+        ax.set_title(title, fontsize=10)
+        return fig
+    zs = slices(result)
+    ncol = min(3, len(zs))
+    nrow = math.ceil(len(zs) / ncol)
+    height = (3.9 * frame_aspect(d) + 0.9) * nrow + 1.3
+    fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, height), squeeze=False)
+    fig.subplots_adjust(left=0.07, right=0.97, bottom=1.1 / height, top=1 - 0.8 / height, wspace=0.3)
+    z_slices(axs, result, code, b, zs, cmap, 3.0)
+    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
+    fig.suptitle(title, fontsize=10)
+    return fig

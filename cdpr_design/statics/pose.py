@@ -23,6 +23,7 @@ import numpy as np
 from cdpr_design.errors import SpecError
 from cdpr_design.io.tables import Table
 from cdpr_design.model.design import Design
+from cdpr_design.statics import cables
 from cdpr_design.statics import kinematics as kin
 
 #: workspace kinds and their kernel codes (= ``kernels.KIND_*``; a test checks)
@@ -74,7 +75,9 @@ class PoseResult(Table):
     Attributes: pose (motion coords), lengths (m,) [m], tensions (m,) [N] (NaN
     where infeasible), feasible, margin [N] (NaN where W is rank deficient),
     W (n, m) structure matrix, wrench (n,) the nominal required wrench,
-    cables (m,) the cable names.  As a table: one row per cable.
+    cables (m,) the cable names.  With elastic or sagging cables, ``tensions``
+    are at the effector end and ``cable_state`` holds the outlet tensions,
+    unstretched lengths and sag.  As a table: one row per cable.
     """
 
     pose: np.ndarray
@@ -87,10 +90,18 @@ class PoseResult(Table):
     #: colliding pairs (cli.md names; :func:`cdpr_design.statics.interference.check_pose`)
     collisions: list = field(default_factory=list)
     cables: tuple = ()
+    #: the design's cable model (:mod:`cdpr_design.statics.cables`)
+    cable_model: str = "ideal"
+    #: outlet tensions, unstretched lengths, sag and status (None for ideal cables)
+    cable_state: object = None
 
     def columns(self) -> dict:
-        """One row per cable: ``cable``, ``length`` [m], ``tension`` [N]."""
-        return {"cable": list(self.cables), "length": self.lengths, "tension": self.tensions}
+        """One row per cable: ``cable``, ``length`` [m], ``tension`` [N] (and the cable model's columns)."""
+        out = {"cable": list(self.cables), "length": self.lengths, "tension": self.tensions}
+        if self.cable_state is not None:
+            out.update(outlet_tension=self.cable_state.outlet_tensions,
+                       unstretched_length=self.cable_state.unstretched_lengths, sag=self.cable_state.sag)
+        return out
 
 
 def _structure(design: Design, full: np.ndarray, K):
@@ -121,6 +132,13 @@ def evaluate_pose(design: Design, pose, kind: str = "static", objective: str = "
     NaN where infeasible.  Swivel pulleys are honoured (true outlet points in
     W, arc + free lengths); ``collisions`` lists the interfering pairs
     (``feasible`` is the statics result, as in a sweep without interference).
+
+    With elastic cables the tensions are the ideal ones and ``cable_state``
+    adds the unstretched lengths; with sagging cables the tensions are at the
+    effector end of each catenary, the bounds hold along the whole cable and
+    ``cable_state`` says whether the shapes converged (``wrench-closure``
+    ignores tensions, so it takes the chords: as tensions grow without bound
+    every cable straightens onto its chord).
     """
     from cdpr_design import kernels as K  # numba, on first use
     from cdpr_design.statics.interference import collisions
@@ -128,8 +146,12 @@ def evaluate_pose(design: Design, pose, kind: str = "static", objective: str = "
 
     check_kind(kind)
     full = design.full_pose(pose)
-    ok, W, L = _structure(design, full, K)
+    model = cables.design_model(design)
+    cables.check_supported(design, pulleys=kin.has_pulleys(design))
     wreq = wrench_vertices(design, kind, full[3:])
+    if model == "sagging" and kind != "wrench-closure":
+        return _sagging_pose(design, pose, full, kind, wreq, objective, weights)
+    ok, W, L = _structure(design, full, K)
     t = np.full(design.m, np.nan)
     if ok:
         feasible, margin = K.eval_pose(W, wreq, design.tension_min, design.tension_max,
@@ -139,5 +161,19 @@ def evaluate_pose(design: Design, pose, kind: str = "static", objective: str = "
     if (objective != "min-norm" or weights is not None) and np.all(np.isfinite(t)):
         t2 = tensions_for_objective(W, wreq[0], design.tension_min, design.tension_max, objective, weights)
         t = np.full(design.m, np.nan) if t2 is None else t2
+    state = None if model == "ideal" else cables.straight_state(design, L, t)
     return PoseResult(np.asarray(pose, float), L, t, bool(feasible), float(margin), W, wreq[0],
-                      collisions(design, pose), tuple(design.cable_names))
+                      collisions(design, pose), tuple(design.cable_names), model, state)
+
+
+def _sagging_pose(design: Design, pose, full, kind: str, wreq, objective: str, weights) -> PoseResult:
+    """:func:`evaluate_pose` with sagging cables (:mod:`cdpr_design.statics.cables`)."""
+    from cdpr_design.statics.interference import collisions
+
+    feasible, margin, t, L, W, state = cables.sagging_pose(design, full, wreq, combinations(design.m, design.n),
+                                                           KINDS[kind])
+    if (objective != "min-norm" or weights is not None) and feasible:
+        t2, W, state = cables.sagging_for_objective(design, full, wreq[0], objective, weights)
+        t = np.full(design.m, np.nan) if t2 is None else t2
+    return PoseResult(np.asarray(pose, float), L, t, bool(feasible), float(margin), W, wreq[0],
+                      collisions(design, pose), tuple(design.cable_names), "sagging", state)

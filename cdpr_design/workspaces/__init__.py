@@ -16,9 +16,11 @@ from typing import Callable
 import numpy as np
 
 from cdpr_design.model.design import Design, Grid
+from cdpr_design.statics import cables as cable_models
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.pose import KINDS, check_kind
 from cdpr_design.workspaces import hanging
+from cdpr_design.workspaces.cables import ElasticColumns, cable_summary, sweep_sagging
 from cdpr_design.workspaces.engine import ENGINES, check_engine, load_kernels
 from cdpr_design.workspaces.engine import sweep as straight_sweep
 from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, chunk_extra,
@@ -81,9 +83,16 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         Largest hanging tilt [deg] of a feasible pose (under-constrained designs
         with ``effector.orientation: free``; default ``requirements.max_tilt``).
 
-    Under-constrained designs (:mod:`~cdpr_design.workspaces.hanging`) add the
-    tilt their effector hangs with; with ``effector.orientation: free`` their
-    feasibility is judged at that hanging orientation.  Swivel pulleys (``cables[i].pulley``) are honoured whenever present; a
+    Under-constrained designs with ideal cables (:mod:`~cdpr_design.workspaces.hanging`)
+    add the tilt their effector hangs with; with ``effector.orientation: free`` their
+    feasibility is judged at that hanging orientation.
+
+    The design's cable model (:mod:`cdpr_design.statics.cables`) picks the
+    engine: ideal and elastic cables take the straight-cable sweeps (elastic
+    adds the unstretched lengths to each chunk), sagging cables the catenary
+    sweep of :mod:`~cdpr_design.workspaces.cables`.
+
+    Swivel pulleys (``cables[i].pulley``) are honoured whenever present; a
     design without pulleys and without ``interference`` takes the point-outlet
     engines.
     """
@@ -100,14 +109,26 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
 
 
 def _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interference, engine):
-    """The sweep at the fixed orientation ``ori`` (3,) [rad]: pulley- and interference-aware, or straight."""
+    """The sweep at the fixed orientation ``ori`` (3,) [rad], by cable model: pulley- and
+    interference-aware, straight, or sagging."""
+    model = cable_models.design_model(design)
+    cable_models.check_supported(design, pulleys=kin.has_pulleys(design), interference=interference)
+    if model == "sagging" and kind != "wrench-closure":
+        return sweep_sagging(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
+                             chunk=chunk, keep_maps=keep_maps)
+    if model != "ideal":
+        on_chunk = ElasticColumns(design, on_chunk)
     if interference or kin.has_pulleys(design):
         from cdpr_design.workspaces.hardware import run_hardware  # numba kernels, loaded on first use
 
-        return run_hardware(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
-                            chunk=chunk, keep_maps=keep_maps, interference=interference)
-    return straight_sweep(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
-                          chunk=chunk, keep_maps=keep_maps, engine=engine)
+        res = run_hardware(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
+                           chunk=chunk, keep_maps=keep_maps, interference=interference)
+    else:
+        res = straight_sweep(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
+                             chunk=chunk, keep_maps=keep_maps, engine=engine)
+    if model != "ideal":
+        res.extra.update(cable_summary(design, None, res.max_tension))
+    return res
 
 
 def run_orientations(design: Design, mode: str = "total", kind: str = "static", step: float | None = None,

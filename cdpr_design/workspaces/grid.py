@@ -17,6 +17,7 @@ import numpy as np
 
 from cdpr_design.errors import SpecError
 from cdpr_design.model.design import Design, Grid
+from cdpr_design.statics import cables
 from cdpr_design.statics.pose import pose_at
 
 #: Largest grid swept without ``force=True`` (poses).
@@ -292,6 +293,7 @@ def extra_columns(design: Design, interference: bool, mode: str | None) -> list[
     from cdpr_design.workspaces import hanging
 
     cols = ["collision_free"] if interference else []
+    cols += cables.column_names(design)
     if mode == "total":
         cols.append("orientations_feasible")
     elif mode == "range":

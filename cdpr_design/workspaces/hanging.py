@@ -41,6 +41,7 @@ from cdpr_design.statics import hanging as H
 from cdpr_design.statics import hanging_at as ha
 from cdpr_design.statics import hanging_core as hc
 from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.cables import is_ideal
 from cdpr_design.statics.pose import combinations
 from cdpr_design.workspaces.engine import use_numpy
 from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, chunk_poses, positions3
@@ -59,14 +60,23 @@ class HangingMaps:
 
 def applies(design: Design) -> bool:
     """Whether a sweep of ``design`` goes through :func:`sweep`: under-constrained, with point
-    outlets (the hanging solvers do not model swivel pulleys; ``free`` with pulleys is refused)."""
+    outlets and ideal cables (the hanging solvers model neither swivel pulleys nor elastic or
+    sagging cables; ``free`` with either is refused)."""
     if not H.underconstrained(design):
         return False
-    if kin.has_pulleys(design):
+    if kin.has_pulleys(design) or not is_ideal(design):
         if H.hangs_freely(design):
-            H.point_outlets(design, "effector.orientation: free")
+            hanging_model(design)
         return False
     return True
+
+
+def hanging_model(design: Design) -> None:
+    """Refuse what the hanging solvers do not model: swivel pulleys, elastic or sagging cables."""
+    H.point_outlets(design, "effector.orientation: free")
+    if not is_ideal(design):
+        raise InputError("cable model: an effector with effector.orientation: free hangs on ideal cables "
+                         "(the hanging solver models rigid, weightless cables); use --cable-model ideal")
 
 
 def refuse_commanded_orientations(design: Design) -> None:
@@ -257,7 +267,7 @@ def free_pose(design: Design, position, max_tilt: float | None = None) -> FreeRo
     ``workspace.orientation``, with the sweep's tilt limit (``max_tilt``, else the requirement)."""
     if not H.hangs_freely(design):
         raise InputError("free_pose: the design's orientation is commanded (not free and under-constrained)")
-    H.point_outlets(design, "effector.orientation: free")
+    hanging_model(design)
     P = np.zeros((1, 3))
     pos = np.asarray(position, float).ravel()
     P[0, : pos.size] = pos

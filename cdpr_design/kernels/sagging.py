@@ -1,0 +1,563 @@
+"""Inverse statics with heavy, elastic cables: one pose and batched grids.
+
+Each cable is Irvine's elastic catenary (:mod:`cdpr_design.kernels.catenary`)
+in the vertical plane through its outlet A and its attachment B.  Its force on
+the effector is along the cable's tangent at B, which lies below the chord, so
+the structure matrix depends on the tensions.  The tensions are found as a
+fixed point:
+
+1. start from the straight-cable minimum-norm tensions t;
+2. for every cable, find the shape whose effector-end tension is t_i
+   (:func:`cable_for_tension`: the end-force angle and the unstretched length
+   by Newton's method) and build the structure matrix W(t) from the end-force
+   directions;
+3. stop when W(t) t balances the required wrench to 1e-12 of the forces involved
+   and t no longer changes;
+   otherwise take the minimum-norm tensions of W(t) under the bounds shifted
+   so that they hold along the whole cable (the largest tension, at the outlet
+   for a hanging cable, <= t_max; the smallest >= t_min) and go to 2.
+
+The map t -> t' contracts with a factor of about w L / (2 T) (a cable's weight
+over twice its tension), so a few iterations suffice for taut cables.  The
+result is the minimum-norm distribution for the cables' own equilibrium
+shapes (for m = n the only one).  Every pose ends with a status
+(:data:`SAG_OK` ...): a pose whose shapes did not converge is never reported
+with numbers.
+
+Vertical: ``up`` is the unit vector against gravity; for a planar robot it
+lies in the plane of motion, so every cable plane is that plane.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from cdpr_design.kernels._jit import njit, njit_parallel
+from cdpr_design.kernels.catenary import _closure_jac, catenary_sag
+from cdpr_design.kernels.geometry import fill_column
+from cdpr_design.kernels.hsm import make_scratch
+from cdpr_design.kernels.pose import eval_general, eval_pose
+from cdpr_design.kernels.tension_qp import min_norm_tensions
+
+#: Status of a pose (``status`` column of a sagging sweep).
+#: Converged: feasible or not by its margin and tensions.
+SAG_OK = 0
+#: No tensions >= t_min balance the load (with the cables' shapes): infeasible, margin NaN.
+SAG_NO_TENSIONS = 1
+#: A cable has no shape with the required effector-end tension at its span
+#: (e.g. below what its own weight needs): infeasible, margin NaN.
+SAG_NO_CATENARY = 2
+#: The fixed point did not converge in the iterations allowed: infeasible, margin NaN.
+SAG_NOT_CONVERGED = 3
+#: A zero-length cable or a rank-deficient structure matrix: infeasible, margin NaN.
+SAG_SINGULAR = 4
+
+#: An effector-end tension at or below SLACK times the largest is a slack cable
+#: (a zero lower bound reached): it exerts no force and its length is undetermined.
+SLACK = 1e-9
+#: Equilibrium tolerance of the fixed point: |W t - w| <= SAG_TOL (1 + |w| + max t) [N].
+SAG_TOL = 1e-12
+
+# per-cable work columns (array ``cw`` (m, NCW))
+_X, _Z, _UX, _UY, _UZ, _TH, _L0, _H, _VB, _LO, _HI, _TA = range(12)
+NCW = 12
+
+
+@njit
+def _vertical_length(Z, tau, w, EA):
+    """Unstretched length [m] of a vertical cable of height Z (A above B if > 0) whose
+    effector-end tension is tau; NaN when none (a cable below B heavier than tau)."""
+    k = 1.0 / EA
+    if Z > 0.0:
+        # Z = L0 (1 + tau/EA) + w L0^2 / (2 EA)
+        a = 0.5 * w * k
+        b = 1.0 + tau * k
+        L0 = Z / b if a == 0.0 else 2.0 * Z / (b + math.sqrt(b * b + 4.0 * a * Z))
+        return L0
+    # A below B: the cable hangs from B; -Z = L0 (1 + tau/EA) - w L0^2 / (2 EA), V <= 0 needs tau >= w L0
+    a = 0.5 * w * k
+    b = 1.0 + tau * k
+    disc = b * b - 4.0 * a * (-Z)
+    if disc < 0.0:
+        return math.nan
+    L0 = -Z / b if a == 0.0 else 2.0 * (-Z) / (b + math.sqrt(disc))
+    if w * L0 > tau:
+        return math.nan
+    return L0
+
+
+@njit
+def cable_for_tension(X, Z, tau, w, EA, th0, L00, maxit):
+    """The shape of a cable spanning X, Z [m] whose tension at the effector is tau [N].
+
+    Unknowns: the angle th [rad] of the end force at B above the horizontal
+    (H = tau cos th, VB = tau sin th) and the unstretched length L0 [m];
+    equations: the catenary closure X(H, VB, L0) = X, Z(H, VB, L0) = Z.  Newton's
+    method with the analytic Jacobian (d(X, Z)/d(H, VB) from the catenary kernel,
+    d(X, Z)/dL0 = (H, VA) (1/T_A + 1/EA)) and backtracking on the residual,
+    started from (th0, L00) (NaN: the chord angle lowered by w c cos(chord)/(2 tau),
+    and the chord shortened by the stretch).  This finds the taut branch, the one
+    that tends to the straight cable as w -> 0.  Returns (H, VB, L0, ok).
+    """
+    nan = math.nan
+    c = math.hypot(X, Z)
+    if not (tau > 0.0) or not (c > 0.0):
+        return nan, nan, nan, False
+    if w == 0.0:
+        return tau * X / c, tau * Z / c, c / (1.0 + tau / EA), True
+    if X <= 1e-14 * c:
+        L0 = _vertical_length(Z, tau, w, EA)
+        if not (L0 > 0.0):
+            return nan, nan, nan, False
+        return 0.0, (tau if Z > 0.0 else -tau), L0, True
+    if math.isfinite(th0) and math.isfinite(L00) and L00 > 0.0:
+        th, L0 = th0, L00
+    else:
+        alpha = math.atan2(Z, X)
+        th = alpha - w * c * math.cos(alpha) / (2.0 * tau)
+        th = max(min(th, 1.5), -1.5)
+        L0 = c / (1.0 + tau / EA)
+    floor = (64.0 * 2.220446049250313e-16 * c) ** 2
+    phi = math.inf
+    for _ in range(maxit):
+        H = tau * math.cos(th)
+        VB = tau * math.sin(th)
+        Xc, Zc, a, b, cc, d = _closure_jac(H, VB, L0, w, EA)
+        rx = Xc - X
+        rz = Zc - Z
+        phi = rx * rx + rz * rz
+        if phi <= floor:
+            return H, VB, L0, True
+        VA = VB + w * L0
+        k = 1.0 / math.hypot(H, VA) + 1.0 / EA
+        j11 = -VB * a + H * b
+        j21 = -VB * cc + H * d
+        j12 = H * k
+        j22 = VA * k
+        det = j11 * j22 - j12 * j21
+        if not (det != 0.0 and math.isfinite(det)):
+            return nan, nan, nan, False
+        dth = -(j22 * rx - j12 * rz) / det
+        dL = -(-j21 * rx + j11 * rz) / det
+        # damped: |th| < pi/2 (H > 0), L0 > 0, residual decreasing
+        step = 1.0
+        if abs(dth) > 0.5:
+            step = 0.5 / abs(dth)
+        while L0 + step * dL <= 0.0 or abs(th + step * dth) >= 0.5 * math.pi:
+            step *= 0.5
+        accepted = False
+        for _ in range(40):
+            th1 = th + step * dth
+            L1 = L0 + step * dL
+            x1, z1 = _closure_jac(tau * math.cos(th1), tau * math.sin(th1), L1, w, EA)[:2]
+            p1 = (x1 - X) ** 2 + (z1 - Z) ** 2
+            if p1 < phi or p1 <= floor:
+                th, L0 = th1, L1
+                accepted = True
+                break
+            step *= 0.5
+        if not accepted:
+            break
+        if abs(step * dth) <= 1e-15 and abs(step * dL) <= 1e-15 * L0:
+            H = tau * math.cos(th)
+            VB = tau * math.sin(th)
+            Xc, Zc = _closure_jac(H, VB, L0, w, EA)[:2]
+            if math.hypot(Xc - X, Zc - Z) <= 1e-11 * c:
+                return H, VB, L0, True
+            break
+    H = tau * math.cos(th)
+    VB = tau * math.sin(th)
+    Xc, Zc = _closure_jac(H, VB, L0, w, EA)[:2]
+    if math.hypot(Xc - X, Zc - Z) <= 1e-11 * c:
+        return H, VB, L0, True
+    return nan, nan, nan, False
+
+
+@njit
+def _span(px, py, pz, Rb, A, up, cw, lengths):
+    """Per-cable chord length, span X, height Z and horizontal unit vector; False if a length is 0."""
+    ok = True
+    for i in range(A.shape[0]):
+        lx = A[i, 0] - px - Rb[i, 0]
+        ly = A[i, 1] - py - Rb[i, 1]
+        lz = A[i, 2] - pz - Rb[i, 2]
+        li = math.sqrt(lx * lx + ly * ly + lz * lz)
+        lengths[i] = li
+        if li <= 1e-12:
+            ok = False
+        Z = lx * up[0] + ly * up[1] + lz * up[2]
+        hx = lx - Z * up[0]
+        hy = ly - Z * up[1]
+        hz = lz - Z * up[2]
+        X = math.sqrt(hx * hx + hy * hy + hz * hz)
+        cw[i, _X] = X
+        cw[i, _Z] = Z
+        if X > 1e-14 * li:
+            cw[i, _UX], cw[i, _UY], cw[i, _UZ] = hx / X, hy / X, hz / X
+        else:
+            cw[i, _X] = 0.0
+            cw[i, _UX], cw[i, _UY], cw[i, _UZ] = 0.0, 0.0, 0.0
+        cw[i, _TH] = math.nan
+        cw[i, _L0] = math.nan
+    return ok
+
+
+@njit
+def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
+    """Cable shapes for effector-end tensions ``t`` (m) [N]: the structure matrix ``W``
+    from the end-force directions, and in ``cw`` each cable's (th, L0, H, VB), the
+    bounds shifted to hold along the whole cable (lo, hi) and the outlet tension.
+    ``cw`` must hold the spans from :func:`_span` (and the previous th, L0 as a start).
+    Returns False when a cable has no such shape.
+    """
+    tscale = 1.0
+    for i in range(t.shape[0]):
+        tscale = max(tscale, abs(t[i]))
+    for i in range(t.shape[0]):
+        X = cw[i, _X]
+        Z = cw[i, _Z]
+        if t[i] <= SLACK * tscale:
+            # slack (a zero lower bound reached): no force, shape and length undetermined
+            cw[i, _TH] = math.nan
+            cw[i, _L0] = math.nan
+            cw[i, _H] = 0.0
+            cw[i, _VB] = 0.0
+            cw[i, _TA] = math.nan
+            cw[i, _LO] = tmin[i]
+            cw[i, _HI] = tmax[i]
+            c = math.hypot(X, Z)
+            if X > 0.0:
+                dx = (X * cw[i, _UX] + Z * up[0]) / c
+                dy = (X * cw[i, _UY] + Z * up[1]) / c
+                dz = (X * cw[i, _UZ] + Z * up[2]) / c
+            else:
+                s = 1.0 if Z > 0.0 else -1.0
+                dx, dy, dz = s * up[0], s * up[1], s * up[2]
+            fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
+            continue
+        H, VB, L0, ok = cable_for_tension(X, Z, t[i], w[i], EA[i], cw[i, _TH], cw[i, _L0], maxit)
+        if not ok:
+            return False
+        tau = t[i]
+        th = math.atan2(VB, H)
+        cw[i, _TH] = th
+        cw[i, _L0] = L0
+        cw[i, _H] = H
+        cw[i, _VB] = VB
+        VA = VB + w[i] * L0
+        TA = math.hypot(H, VA)
+        tmax_along = max(TA, tau)
+        tmin_along = H if (VB < 0.0 < VA) else min(TA, tau)
+        cw[i, _TA] = TA
+        cw[i, _LO] = tmin[i] + (tau - tmin_along)
+        cw[i, _HI] = tmax[i] - (tmax_along - tau)
+        if X > 0.0:
+            ch = H / tau
+            sv = VB / tau
+            dx = ch * cw[i, _UX] + sv * up[0]
+            dy = ch * cw[i, _UY] + sv * up[1]
+            dz = ch * cw[i, _UZ] + sv * up[2]
+        else:
+            s = 1.0 if VB > 0.0 else -1.0
+            dx, dy, dz = s * up[0], s * up[1], s * up[2]
+        fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
+    return True
+
+
+@njit
+def _straight_columns(Rb, A, px, py, pz, rows, W):
+    for i in range(A.shape[0]):
+        lx = A[i, 0] - px - Rb[i, 0]
+        ly = A[i, 1] - py - Rb[i, 1]
+        lz = A[i, 2] - pz - Rb[i, 2]
+        li = math.sqrt(lx * lx + ly * ly + lz * lz)
+        fill_column(W, i, rows, lx / li, ly / li, lz / li, Rb[i, 0], Rb[i, 1], Rb[i, 2])
+
+
+@njit
+def _balanced(W, t, w0):
+    """Whether W t = w0 to SAG_TOL (1 + |w0| + max t) [N]."""
+    n, m = W.shape
+    wn = 0.0
+    for k in range(n):
+        wn = max(wn, abs(w0[k]))
+    for i in range(m):
+        wn = max(wn, abs(t[i]))
+    for k in range(n):
+        acc = 0.0
+        for i in range(m):
+            acc += W[k, i] * t[i]
+        if abs(acc - w0[k]) > SAG_TOL * (1.0 + wn):
+            return False
+    return True
+
+
+@njit
+def _distribute(W, w0, lo, hi, inf_hi, t, scr):
+    """Minimum-norm tensions under (lo, hi); failing that under (lo, inf). Returns 2, 1 or 0."""
+    if min_norm_tensions(W, w0, lo, hi, t, scr):
+        return 2
+    if min_norm_tensions(W, w0, lo, inf_hi, t, scr):
+        return 1
+    return 0
+
+
+@njit
+def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
+             t, outlet, L0, sag, lengths, W, cw, lo, hi, inf_hi, tq, scr, work):
+    """One pose with sagging cables: (status, feasible, margin, iterations).
+
+    Inputs as :func:`cdpr_design.kernels.sweep.sweep_grid` plus ``up`` (3,)
+    (unit vector against gravity), ``w`` (m,) [N/m] cable weight per length
+    (0: a straight elastic cable) and ``EA`` (m,) [N].  Outputs: ``t``
+    effector-end tensions [N], ``outlet`` outlet tensions [N], ``L0``
+    unstretched lengths [m], ``sag`` largest distance from the chord [m] (all
+    NaN unless the pose is feasible), ``lengths`` chord lengths [m].  ``W``,
+    ``cw``, ``lo``, ``hi``, ``inf_hi`` (all inf), ``tq``, ``scr``, ``work`` are
+    scratch (:func:`make_sag_scratch`).
+    A slack cable (tension at or below :data:`SLACK` of the largest, where its
+    lower bound is 0) pulls along its chord with no force; its outlet tension,
+    unstretched length and sag are NaN (undetermined) in a feasible pose.
+    The margin is the capacity margin of the converged structure matrix under
+    the shifted bounds (NaN unless the status is :data:`SAG_OK`).
+    """
+    m = A.shape[0]
+    for i in range(m):
+        t[i] = math.nan
+        outlet[i] = math.nan
+        L0[i] = math.nan
+        sag[i] = math.nan
+    if not _span(px, py, pz, Rb, A, up, cw, lengths):
+        return SAG_SINGULAR, False, math.nan, 0
+    _straight_columns(Rb, A, px, py, pz, rows, W)
+    if _distribute(W, wreq[0], tmin, tmax, inf_hi, tq, scr) == 0:
+        return SAG_NO_TENSIONS, False, math.nan, 0
+    status, bounded, it = _iterate(tq, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi, inf_hi,
+                                   scr, work, maxit)
+    if status != SAG_OK:
+        return status, False, math.nan, it
+    for i in range(m):
+        lo[i] = cw[i, _LO]
+        hi[i] = cw[i, _HI]
+    n = W.shape[0]
+    if m == n:
+        feasible, margin = eval_pose(W, wreq, lo, hi, combos, kind, t)
+    else:
+        feasible, margin = eval_general(W, wreq, lo, hi, combos, kind, t, scr)
+    feasible = feasible and bounded == 2
+    for i in range(m):
+        t[i] = tq[i] if feasible else math.nan
+        if feasible and not math.isnan(cw[i, _L0]):
+            outlet[i] = cw[i, _TA]
+            L0[i] = cw[i, _L0]
+            sag[i] = catenary_sag(cw[i, _H], cw[i, _VB], cw[i, _L0], w[i], EA[i])[0]
+    return SAG_OK, feasible, margin + 0.0, it
+
+
+@njit
+def _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr):
+    """q = the minimum-norm tensions for the shapes of t (W, cw, lo, hi follow t).
+
+    Returns 2 (within the shifted bounds), 1 (lower bounds only), 0 (no
+    tensions balance the load) or -1 (a cable has no shape with its tension).
+    """
+    if not shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, 60):
+        return -1
+    for i in range(t.shape[0]):
+        lo[i] = cw[i, _LO]
+        hi[i] = cw[i, _HI]
+    return _distribute(W, w0, lo, hi, inf_hi, q, scr)
+
+
+@njit
+def _gap(t, q):
+    g = 0.0
+    for i in range(t.shape[0]):
+        g = max(g, abs(q[i] - t[i]))
+    return g
+
+
+@njit
+def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh):
+    """One damped Newton step on G(t) = Q(t) - t (finite-difference Jacobian, one column
+    per cable); t is updated in place.  Returns the map's code at the new t (-2: no step)."""
+    m = t.shape[0]
+    r0 = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+    if r0 <= 0:
+        return -2
+    g0 = _gap(t, q)
+    J = np.empty((m, m))
+    rhs = np.empty(m)
+    th = t.copy()
+    for j in range(m):
+        h = 1e-7 * (1.0 + abs(t[j]))
+        th[j] = t[j] + h
+        rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        if rj <= 0:
+            h = -h
+            th[j] = t[j] + h
+            rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+            if rj <= 0:
+                return -2
+        th[j] = t[j]
+        for i in range(m):
+            J[i, j] = (1.0 if i == j else 0.0) - (qh[i] - q[i]) / h
+    for i in range(m):
+        rhs[i] = q[i] - t[i]
+    d = np.linalg.solve(J, rhs)
+    alpha = 1.0
+    for _ in range(12):
+        for i in range(m):
+            th[i] = max(t[i] + alpha * d[i], 0.0)
+        r = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        if r > 0 and _gap(th, qh) < g0:
+            for i in range(m):
+                t[i] = th[i]
+                q[i] = qh[i]
+            return r
+        alpha *= 0.5
+    return -2
+
+
+@njit
+def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit):
+    """Solve t = Q(t) from the straight tensions ``t`` (in place): fixed-point steps while they
+    contract by half or better, damped Newton steps otherwise.  Returns (status, code, iterations);
+    on SAG_OK, W, cw, lo, hi hold the shapes of the final t and code is the map's (2 or 1)."""
+    m = t.shape[0]
+    q, qh = work[0], work[1]
+    r = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+    bump = 0
+    while r == -1 and bump < 8:
+        # a heavy cable asked for less tension than its shape can have: start higher
+        for i in range(m):
+            t[i] = 1.5 * t[i] + 0.5 * w[i] * math.hypot(cw[i, _X], cw[i, _Z])
+            cw[i, _TH] = math.nan
+            cw[i, _L0] = math.nan
+        r = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        bump += 1
+    if r == -1:
+        return SAG_NO_CATENARY, 0, 0
+    if r == 0:
+        return SAG_NO_TENSIONS, 0, 0
+    g = _gap(t, q)
+    for it in range(1, maxit + 1):
+        tscale = 1.0
+        for i in range(m):
+            tscale = max(tscale, abs(t[i]))
+        if g <= 1e-9 * tscale and _balanced(W, t, w0):
+            return SAG_OK, r, it
+        r2 = _fixed_map(q, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        if r2 > 0:
+            g2 = _gap(q, qh)
+            if g2 <= 0.5 * g or g2 <= 1e-13 * tscale:
+                for i in range(m):
+                    t[i] = q[i]
+                    q[i] = qh[i]
+                r, g = r2, g2
+                continue
+        r = _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh)
+        if r == -2:
+            # a damped fixed-point step: half way to the map's tensions
+            for i in range(m):
+                qh[i] = 0.5 * (t[i] + q[i])
+            r = _fixed_map(qh, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+            if r > 0:
+                for i in range(m):
+                    t[i] = qh[i]
+        if r <= 0:
+            return SAG_NOT_CONVERGED, 0, it
+        g = _gap(t, q)
+    return SAG_NOT_CONVERGED, 0, maxit
+
+
+@njit
+def make_sag_scratch(n, m, nv):
+    """Scratch for :func:`sag_pose`: (W, cw, lo, hi, inf_hi, tq, scr, work)."""
+    inf_hi = np.full(m, np.inf)
+    return (np.empty((n, m)), np.empty((m, NCW)), np.empty(m), np.empty(m), inf_hi, np.empty(m),
+            make_scratch(n, m, nv), np.empty((4, m)))
+
+
+@njit
+def make_pose_outputs(m):
+    """The per-cable outputs of :func:`sag_pose`: (tensions, outlet, L0, sag, lengths), each (m,)."""
+    return np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+
+
+@njit_parallel
+def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
+                       combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status):
+    """:func:`cdpr_design.kernels.sweep.sweep_grid` with sagging cables (:func:`sag_pose`).
+
+    Extra outputs (count, m): ``outlet`` tensions [N], unstretched lengths
+    ``L0`` [m], ``sag`` [m]; ``status`` (count,) int8.  Every pose starts from
+    its own straight-cable solution, so rows do not depend on the chunking.
+    """
+    n = rows.shape[0]
+    m = A.shape[0]
+    nblocks = min(count, 256)
+    if nblocks == 0:
+        return
+    bsize = (count + nblocks - 1) // nblocks
+    ny = shape[1]
+    nz = shape[2]
+    for b in nb.prange(nblocks):
+        Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
+        t, ta, l0, sg, L = make_pose_outputs(m)
+        k0 = b * bsize
+        k1 = min(count, k0 + bsize)
+        for k in range(k0, k1):
+            idx = start + k
+            iz = idx % nz
+            r = idx // nz
+            iy = r % ny
+            ix = r // ny
+            st, f, mg, _ = sag_pose(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2],
+                                    Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
+                                    t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)
+            status[k] = st
+            feasible[k] = 1 if f else 0
+            margin[k] = mg
+            for i in range(m):
+                tensions[k, i] = t[i]
+                lengths[k, i] = L[i]
+                outlet[k, i] = ta[i]
+                L0[k, i] = l0[i]
+                sag[k, i] = sg[i]
+
+
+@njit_parallel
+def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
+               feasible, Ws, tensions, outlet, status):
+    """:func:`sag_pose` at positions ``P`` (k, 3) [m] (one orientation, in ``Rb``).
+
+    Outputs: ``feasible`` (k,) uint8, ``Ws`` (k, n, m) the converged structure
+    matrices (from the end-force directions), ``tensions`` and ``outlet``
+    (k, m) [N], ``status`` (k,) int8.  For the sizing, which needs the
+    structure matrix of each task pose.
+    """
+    n = rows.shape[0]
+    m = A.shape[0]
+    k = P.shape[0]
+    nblocks = min(k, 256)
+    if nblocks == 0:
+        return
+    bsize = (k + nblocks - 1) // nblocks
+    for b in nb.prange(nblocks):
+        Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
+        t, ta, l0, sg, L = make_pose_outputs(m)
+        for j in range(b * bsize, min(k, (b + 1) * bsize)):
+            st, f, mg, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rb, A, rows, up, w, EA, wreq, tmin, tmax,
+                                    combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)
+            status[j] = st
+            feasible[j] = 1 if f else 0
+            for r in range(n):
+                for i in range(m):
+                    Ws[j, r, i] = Wb[r, i]
+            for i in range(m):
+                tensions[j, i] = t[i]
+                outlet[j, i] = ta[i]

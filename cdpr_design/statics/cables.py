@@ -1,0 +1,207 @@
+"""Cable models: the one seam through which every analysis sees its cables.
+
+Three models (``cable.model`` in the spec, ``--cable-model`` on the command
+line; docs/cable-models.md):
+
+- ``ideal``: massless, inextensible, straight; the tension is the same at
+  both ends and the unstretched length is the chord.  Every analysis's
+  historical answer.
+- ``elastic``: straight and massless, stretched by T/EA: the tensions are the
+  ideal ones, the winch pays out L0 = L / (1 + T/EA).
+- ``sagging``: Irvine's elastic catenary (weight and stretch): the end force
+  at the effector is along the cable's tangent there, the outlet sees a larger
+  tension than the effector, and the unstretched length is the catenary's
+  (:mod:`cdpr_design.kernels.sagging`).
+
+A design's model (:func:`design_model`) is the heaviest of its cables'
+(``sagging`` if any cable sags).  Swivel pulleys, interference checks and
+orientation sweeps take straight cables: with ``sagging`` they are refused
+(:func:`check_supported`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from cdpr_design.errors import InputError
+from cdpr_design.model.design import Design
+
+#: Cable models, lightest first.
+MODELS = ("ideal", "elastic", "sagging")
+#: Status names of a sagging pose, by the kernel's code (``cable_status`` column).
+STATUS = ("ok", "no-tensions", "no-catenary", "not-converged", "singular")
+#: Fixed-point iterations allowed per pose (it converges in 3-10 on the shipped designs).
+MAX_ITERATIONS = 60
+
+
+def design_model(design: Design) -> str:
+    """The design's cable model: the heaviest of its cables' models."""
+    return MODELS[max(MODELS.index(c.props.model) for c in design.cables)]
+
+
+def is_ideal(design: Design) -> bool:
+    """Whether every cable is ideal (every historical output, unchanged)."""
+    return design_model(design) == "ideal"
+
+
+@dataclass(frozen=True)
+class CableArrays:
+    """What the kernels need: ``w`` (m,) weight per length [N/m] (0 unless the
+    cable sags), ``EA`` (m,) [N] (inf for an ideal cable), ``up`` (3,) unit
+    vector against gravity."""
+
+    w: np.ndarray
+    EA: np.ndarray
+    up: np.ndarray
+
+
+def cable_arrays(design: Design) -> CableArrays:
+    """The :class:`CableArrays` of a design (gravity from ``design.gravity`` [m/s^2])."""
+    g = np.asarray(design.gravity, float)
+    gn = float(np.linalg.norm(g))
+    up = -g / gn if gn > 0 else np.array([0.0, 0.0, 1.0])
+    w = np.array([c.props.mass_per_length * gn if c.props.model == "sagging" else 0.0 for c in design.cables])
+    EA = np.array([np.inf if c.props.model == "ideal" else float(c.props.axial_stiffness)
+                   for c in design.cables])
+    return CableArrays(np.ascontiguousarray(w), np.ascontiguousarray(EA), np.ascontiguousarray(up))
+
+
+def check_supported(design: Design, *, pulleys: bool = False, interference: bool = False,
+                    orientations: bool = False) -> None:
+    """Refuse what the sagging model does not cover (InputError naming the cause)."""
+    if design_model(design) != "sagging":
+        return
+    what = [name for name, on in (("swivel pulleys", pulleys), ("interference checks", interference),
+                                  ("orientation workspaces", orientations)) if on]
+    if what:
+        raise InputError(f"cable model 'sagging': {', '.join(what)} assume straight cables; "
+                         "use --cable-model elastic or ideal for this analysis")
+
+
+def column_names(design: Design) -> list[str]:
+    """The per-pose table columns the design's cable model adds (none for ideal cables).
+
+    Per cable c: ``outlet_tension_<c>`` [N], ``unstretched_length_<c>`` [m],
+    ``sag_<c>`` [m]; sagging adds ``cable_status`` (index into :data:`STATUS`).
+    """
+    model = design_model(design)
+    if model == "ideal":
+        return []
+    names = design.cable_names
+    cols = ([f"outlet_tension_{c}" for c in names] + [f"unstretched_length_{c}" for c in names]
+            + [f"sag_{c}" for c in names])
+    return cols + (["cable_status"] if model == "sagging" else [])
+
+
+def elastic_unstretched(lengths: np.ndarray, tensions: np.ndarray, EA: np.ndarray) -> np.ndarray:
+    """Unstretched lengths [m] of straight elastic cables: L0 = L / (1 + T/EA) (NaN where T is)."""
+    return np.asarray(lengths, float) / (1.0 + np.asarray(tensions, float) / EA)
+
+
+@dataclass
+class CableState:
+    """Per-cable results of a non-ideal model at one pose (NaN where infeasible).
+
+    ``outlet_tensions`` [N], ``unstretched_lengths`` [m], ``sag`` [m] (largest
+    distance of the cable from its chord), ``status`` (one of :data:`STATUS`).
+    """
+
+    outlet_tensions: np.ndarray
+    unstretched_lengths: np.ndarray
+    sag: np.ndarray
+    status: str = "ok"
+
+
+def straight_state(design: Design, lengths: np.ndarray, tensions: np.ndarray) -> CableState:
+    """The :class:`CableState` of straight cables (ideal or elastic): outlet = effector tension, no sag."""
+    arr = cable_arrays(design)
+    t = np.asarray(tensions, float)
+    sag = np.where(np.isfinite(t), 0.0, np.nan)
+    return CableState(t.copy(), elastic_unstretched(lengths, t, arr.EA), sag)
+
+
+def sagging_pose(design: Design, full: np.ndarray, wreq: np.ndarray, combos: np.ndarray, kcode: int):
+    """One pose (full [x, y, z, rx, ry, rz] [m, rad]) with sagging cables, min-norm tensions.
+
+    Returns (feasible, margin [N], tensions (m,) [N], lengths (m,) [m], W (n, m),
+    CableState).  The margin is NaN unless the shapes converged.
+    """
+    from cdpr_design.kernels import sagging as KS
+    from cdpr_design.statics import kinematics as kin
+
+    arr = cable_arrays(design)
+    m, n = design.m, design.n
+    R = kin.rotation_matrix(*full[3:])
+    Rb = np.ascontiguousarray(design.attachments @ R.T)
+    W, cw, lo, hi, inf_hi, tq, scr, work = KS.make_sag_scratch(n, m, wreq.shape[0])
+    t, ta, l0, sg, L = KS.make_pose_outputs(m)
+    st, feas, margin, _ = KS.sag_pose(full[0], full[1], full[2], Rb, np.ascontiguousarray(design.outlets),
+                                      design.rows, arr.up, arr.w, arr.EA, wreq, design.tension_min,
+                                      design.tension_max, combos, kcode, MAX_ITERATIONS,
+                                      t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work)
+    return bool(feas), float(margin), t, L, W, CableState(ta, l0, sg, STATUS[st])
+
+
+def sagging_structures(design: Design, positions3: np.ndarray, orientation) -> tuple:
+    """Sagging statics at many positions (k, 3) [m] at one orientation (3,) [rad], static load.
+
+    Returns (ok (k,) bool: converged and feasible, W (k, n, m) from the
+    end-force directions, tensions (k, m) at the effector end [N], outlet
+    tensions (k, m) [N]).  For the sizing: the winch sees the outlet tension.
+    """
+    from cdpr_design.kernels import sagging as KS
+    from cdpr_design.statics import kinematics as kin
+    from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices
+
+    arr = cable_arrays(design)
+    k, m, n = positions3.shape[0], design.m, design.n
+    Rb = np.ascontiguousarray(design.attachments @ kin.rotation_matrix(*orientation).T)
+    wreq = wrench_vertices(design, "static", orientation)
+    feas, status = np.zeros(k, dtype=np.uint8), np.zeros(k, dtype=np.int8)
+    W, t, ta = np.full((k, n, m), np.nan), np.full((k, m), np.nan), np.full((k, m), np.nan)
+    KS.sag_points(np.ascontiguousarray(positions3, dtype=float), Rb, np.ascontiguousarray(design.outlets),
+                  design.rows, arr.up, arr.w, arr.EA, wreq, design.tension_min, design.tension_max,
+                  combinations(m, n), KINDS["static"], MAX_ITERATIONS, feas, W, t, ta, status)
+    return feas.astype(bool), W, t, ta
+
+
+def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, objective: str, weights):
+    """Tensions [N] of another objective (min-max, min-sum, weighted) with sagging cables.
+
+    The same fixed point as the kernel's, with the objective's distribution
+    (:func:`cdpr_design.statics.tension.tensions_for_objective`) in place of
+    the minimum-norm one.  Returns (tensions or None, W, CableState).
+    """
+    from cdpr_design.kernels import sagging as KS
+    from cdpr_design.statics import kinematics as kin
+    from cdpr_design.statics.tension import tensions_for_objective
+
+    arr = cable_arrays(design)
+    m, n = design.m, design.n
+    R = kin.rotation_matrix(*full[3:])
+    Rb = np.ascontiguousarray(design.attachments @ R.T)
+    A = np.ascontiguousarray(design.outlets)
+    W, cw = np.empty((n, m)), np.empty((m, KS.NCW))
+    L = np.empty(m)
+    nan = np.full(m, np.nan)
+    if not KS._span(full[0], full[1], full[2], Rb, A, arr.up, cw, L):
+        return None, W, CableState(nan, nan.copy(), nan.copy(), "singular")
+    KS._straight_columns(Rb, A, full[0], full[1], full[2], design.rows, W)
+    lo, hi = design.tension_min, design.tension_max
+    t = tensions_for_objective(W.copy(), wreq0, lo, hi, objective, weights)
+    for _ in range(MAX_ITERATIONS):
+        if t is None:
+            return None, W, CableState(nan, nan.copy(), nan.copy(), "no-tensions")
+        if not KS.shapes_for(t, Rb, arr.up, arr.w, arr.EA, design.tension_min, design.tension_max,
+                             design.rows, cw, W, 60):
+            return None, W, CableState(nan, nan.copy(), nan.copy(), "no-catenary")
+        lo, hi = cw[:, KS._LO].copy(), cw[:, KS._HI].copy()
+        t2 = tensions_for_objective(W.copy(), wreq0, lo, hi, objective, weights)
+        if t2 is not None and np.max(np.abs(t2 - t)) <= 1e-9 * max(1.0, np.max(np.abs(t))):
+            sag = np.array([KS.catenary_sag(cw[i, KS._H], cw[i, KS._VB], cw[i, KS._L0], arr.w[i], arr.EA[i])[0]
+                            for i in range(m)])
+            return t, W, CableState(cw[:, KS._TA].copy(), cw[:, KS._L0].copy(), sag)
+        t = t2
+    return None, W, CableState(nan, nan.copy(), nan.copy(), "not-converged")
