@@ -327,3 +327,15 @@ def test_pose_free(tmp_path):
     assert res.exit_code == 2 and "--objective" in res.output
     res = invoke("pose", path, "--at", "0.3,0.5", "--kind", "wrench-closure")
     assert res.exit_code == 2 and "--kind wrench-closure" in res.output
+
+
+def test_free_needs_ideal_cables(tmp_path):
+    """The hanging solvers model rigid weightless cables: a free design with another cable model is
+    refused; under fixed the other models' outputs come without the tilt."""
+    path = free_planar2(tmp_path)
+    res = invoke("workspace", path, "--step", "0.1", "--out", tmp_path / "o", "--cable-model", "elastic")
+    assert res.exit_code == 2 and "ideal cables" in res.output
+    res = invoke("pose", path, "--at", "0.3,0.5", "--cable-model", "elastic")
+    assert res.exit_code == 2 and "--cable-model" in res.output
+    res = invoke("workspace", PLANAR2, "--step", "0.1", "--out", tmp_path / "e", "--cable-model", "elastic")
+    assert res.exit_code == 0 and "tilt" not in read_csv(tmp_path / "e" / "workspace.csv")[0]
