@@ -24,9 +24,13 @@ on top, for a :class:`~cdpr_design.model.design.Design`:
 
 * :func:`fk` - the equilibrium for given lengths (forward geometrico-static
   problem): pose, orientation, tensions, slack cables, stability and every
-  other stable equilibrium found;
+  other stable equilibrium found; :func:`fk_held_arrays` the same with the
+  orientation held, and :func:`equilibrium` whichever of the two the spec's
+  ``effector.orientation`` and motion ask for (the ``fk`` command);
 * :func:`pose_at` - the orientation an under-constrained effector takes at a
-  commanded position with its cables taut, or why it cannot hang there;
+  commanded position with its cables taut, or why it cannot hang there
+  (:mod:`cdpr_design.statics.hanging_at`, which also runs it over many
+  positions for the workspaces);
 * :func:`tilt_map` - the same over a workspace grid for a planar body on two
   cables (batched numba kernel :mod:`cdpr_design.kernels.hanging`).
 
