@@ -31,6 +31,8 @@ _LAZY = {
     "workspace": ("api", "workspace"),
     "pose": ("api", "pose"),
     "fk": ("api", "fk"),
+    "equilibrium": ("statics.hanging", "equilibrium"),
+    "hanging_pose": ("api", "hanging_pose"),
     "size_motors": ("api", "size_motors"),
     "sweep": ("api", "sweep"),
     "from_dict": ("model.spec", "from_dict"),

@@ -31,7 +31,8 @@ def load(path: str | Path) -> Design:
 
 def workspace(design: Design, kind: str = "static", *, step: float | None = None, grid=None,
               orientation=None, orientations: str | None = None, interference: bool = False,
-              engine: str = "auto", max_poses: int | None = None, force: bool = False):
+              engine: str = "auto", max_poses: int | None = None, force: bool = False,
+              max_tilt: float | None = None):
     """Sweep the workspace grid and keep every pose: a :class:`~cdpr_design.workspaces.table.WorkspaceTable`.
 
     Parameters
@@ -55,7 +56,12 @@ def workspace(design: Design, kind: str = "static", *, step: float | None = None
         :func:`cdpr_design.workspaces.run` and ``on_chunk``.
     force : bool
         Allow grids over the command line's sane-size limit (20 M poses).
+    max_tilt : float, optional
+        Largest hanging tilt [deg] of a feasible pose (an under-constrained design with
+        ``effector.orientation: free``; default ``requirements.max_tilt``).
 
+    Under-constrained designs add the columns ``tilt`` [deg] and ``orientation_*`` [rad]
+    (``extra``): the orientation their effector hangs in (:mod:`cdpr_design.workspaces.hanging`).
     The result has ``feasible`` (bool, one per grid pose), ``margin`` [N],
     ``tensions`` [N], ``lengths`` [m], ``poses``, ``shape`` (the grid's),
     ``summary()`` and ``to_dict()`` / ``to_arrow()`` (the ``workspace.csv`` columns).
@@ -65,6 +71,8 @@ def workspace(design: Design, kind: str = "static", *, step: float | None = None
     options = dict(orientation=orientation, interference=interference, engine=engine, force=force)
     if orientations is not None:
         options["orientations"] = orientations
+    if max_tilt is not None:
+        options["max_tilt"] = max_tilt
     return table.collect(design, kind, step=step, grid=grid,
                          max_poses=table.MAX_COLLECT if max_poses is None else max_poses, **options)
 
@@ -88,6 +96,16 @@ def fk(design: Design, lengths, guess=None):
     from cdpr_design.statics.kinematics import forward_kinematics
 
     return forward_kinematics(design, lengths, guess=guess)
+
+
+def hanging_pose(design: Design, position):
+    """The orientation an under-constrained design's effector hangs in at ``position`` [m]
+    (a :class:`~cdpr_design.statics.hanging.HangingAt`: ``feasible``, ``reason``,
+    ``orientation`` [rad], ``tilt_deg``, ``tensions`` [N], ``lengths`` [m], ``stable``),
+    searched about ``workspace.orientation``."""
+    from cdpr_design.statics import hanging
+
+    return hanging.pose_at(design, position, nominal=hanging.nominal_rotation(design))
 
 
 def size_motors(design: Design, catalogue=None, *, step: float | None = None, trajectory: str | None = None,

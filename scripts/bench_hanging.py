@@ -13,8 +13,15 @@ subsample in the same process, scaled per pose:
     (second difference of the energy along the constant-length curve) decide;
     the stable one closest to level wins - the kernel's rule.
 
-Prints both per-pose times, their ratio (cold and warm) and how well the two
-agree (orientation and status on the subsample).
+The same map is also timed through the library's two other paths: the numpy
+twin of the kernel (:func:`cdpr_design.statics.hanging_at.planar_two_cable`,
+what a ``fixed`` design's workspace uses while numba is not loaded) and the
+whole ``free`` workspace sweep (:func:`cdpr_design.workspaces.run`: the
+hanging orientation, then feasibility, margin and tensions there, streamed
+in chunks), cold (first call in this process) and warm.
+
+Prints the per-pose times, their ratios to scipy (cold and warm) and how
+well the kernel and scipy agree (orientation and status on the subsample).
 
 Usage:  python scripts/bench_hanging.py [--n-scipy 400] [--com-y 0.0] [--fresh-cache]
 """
@@ -128,6 +135,28 @@ def main():
         phi, _, _, status, _ = K.hanging_tilt_batch(A, B, c, mass, g, P)
         t_warm = min(t_warm, time.perf_counter() - t0)
 
+    import dataclasses
+
+    from cdpr_design import workspaces as ws
+    from cdpr_design.statics import hanging_at as ha
+    from cdpr_design.statics import hanging_core as hc
+
+    geo = hc.Geometry(A, B, c, mass, g)
+    t_numpy = math.inf
+    for _ in range(args.repeat):
+        t0 = time.perf_counter()
+        ha.hang(geo, P, True, engine="numpy")
+        t_numpy = min(t_numpy, time.perf_counter() - t0)
+    free = d.replace(effector=dataclasses.replace(d.effector, orientation="free", center_of_mass=tuple(c)))
+    t0 = time.perf_counter()
+    res = ws.run(free)
+    t_ws_cold = time.perf_counter() - t0
+    t_ws = math.inf
+    for _ in range(args.repeat):
+        t0 = time.perf_counter()
+        res = ws.run(free)
+        t_ws = min(t_ws, time.perf_counter() - t0)
+
     rng = np.random.default_rng(args.seed)
     idx = rng.choice(n, size=min(args.n_scipy, n), replace=False)
     t0 = time.perf_counter()
@@ -150,7 +179,12 @@ def main():
     print(f"scipy least_squares x 8 starts: {idx.size} positions, {t_scipy:.3f} s = {per_scipy * 1e6:9.1f} us/pose; "
           f"status agrees on {np.count_nonzero(ok_k == ok_s)}/{idx.size}, "
           f"max |dphi| {diff.max() if diff.size else float('nan'):.1e} rad")
+    print(f"  numpy twin  {t_numpy:8.3f} s  = {t_numpy / n * 1e6:9.3f} us/pose (warm)")
+    print(f"  free workspace sweep (tilt + statics at the hanging pose, {res.feasible} feasible): "
+          f"cold {t_ws_cold:.3f} s, warm {t_ws:.3f} s = {t_ws / n * 1e6:.3f} us/pose")
     print(f"ratio scipy / kernel per pose: cold {per_scipy / per_cold:8.1f}x   warm {per_scipy / per_warm:8.1f}x")
+    print(f"ratio scipy / numpy twin: {per_scipy * n / t_numpy:8.1f}x   scipy / free workspace sweep: "
+          f"cold {per_scipy * n / t_ws_cold:8.1f}x   warm {per_scipy * n / t_ws:8.1f}x")
     print(f"estimated full map with scipy: {per_scipy * n:.1f} s")
 
 

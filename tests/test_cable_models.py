@@ -93,8 +93,9 @@ def test_sagging_refuses_pulleys_and_interference(tmp_path, planar2_data):
 def test_ideal_pose_json_is_unchanged():
     r = invoke("pose", PLANAR2, "--at", "0.3,0.9", "--json")
     data = json.loads(r.output)
+    # planar2 is under-constrained: the tilt its free body would hang with comes beside (issue 16)
     assert set(data) == {"pose", "lengths", "tensions", "feasible", "margin", "structure_matrix",
-                         "collisions", "objective"}
+                         "collisions", "objective", "tilt", "hanging"}
 
 
 def test_elastic_pose_is_the_ideal_one_with_stretch(planar2):
@@ -145,7 +146,9 @@ def test_ideal_workspace_columns_unchanged(tmp_path):
     r = invoke("workspace", PLANAR2, "--out", tmp_path, "-q")
     assert r.exit_code == 0
     header, _ = read_csv(tmp_path / "workspace.csv")
-    assert header == ["x", "y", "feasible", "margin", "tension_c1", "tension_c2", "length_c1", "length_c2"]
+    # planar2 is under-constrained: its hanging tilt follows the contract's columns (issue 16)
+    assert header == ["x", "y", "feasible", "margin", "tension_c1", "tension_c2", "length_c1", "length_c2",
+                      "tilt", "orientation_phi"]
     assert "cable_model" not in json.loads((tmp_path / "summary.json").read_text())
     assert not (tmp_path / "cable_models.png").exists()
 

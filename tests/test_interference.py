@@ -298,4 +298,6 @@ def test_cli_pose_collisions_and_workspace_flag(tmp_path):
     s = json.loads(r.stdout)
     assert s["feasible"] <= s["feasible_statics"] and s["interference"] is True
     header = (tmp_path / "workspace.csv").read_text().splitlines()[0].split(",")
-    assert header[-1] == "collision_free" and header[:4] == ["x", "y", "feasible", "margin"]
+    # after the contract's columns; planar2 is under-constrained, so its hanging tilt follows
+    assert header[:4] == ["x", "y", "feasible", "margin"]
+    assert header[8:] == ["collision_free", "tilt", "orientation_phi"]

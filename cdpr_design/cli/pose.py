@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import sys
-from types import SimpleNamespace
 from enum import Enum
 from typing import Annotated, Optional
 
@@ -41,28 +40,52 @@ def parse_weights(design, text: str | None) -> list[float] | None:
 @command
 def pose(
     spec: SpecArg,
-    at: Annotated[str, typer.Option("--at", help="Pose coordinates, comma-separated (e.g. 0.75,0.75).")],
+    at: Annotated[str, typer.Option("--at", help="Pose coordinates, comma-separated (e.g. 0.75,0.75); "
+                                                 "the position only when effector.orientation is free.")],
     kind: KindOpt = Kind.static,
     objective: ObjectiveOpt = Objective.min_norm,
     weights: WeightsOpt = None,
     json_: JsonOpt = False,
     cable_model: CableModelOpt = None,
 ):
-    """One pose: cable lengths, tensions, feasibility, margin, structure matrix."""
+    """One pose: cable lengths, tensions, feasibility, margin, structure matrix (and the hanging tilt)."""
+    from cdpr_design.jobs import hanging as hjob
     from cdpr_design.jobs import pose as job
+    from cdpr_design.statics import hanging as H
+    from cdpr_design.statics.kinematics import has_pulleys
     from cdpr_design.statics.pose import evaluate_pose
 
     design = load_design(spec, cable_model)
-    p = parse_pose(design, at)
-    c = parse_weights(design, weights)
-    result = evaluate_pose(design, p, kind.value, objective.value, c)
-    data = job.pose_data(design, result)
+    ideal = job.cable_model_name(design) == "ideal"
+    if H.hangs_freely(design):
+        if not ideal:
+            raise InputError("--cable-model: an effector with effector.orientation: free hangs on ideal cables "
+                             "(the hanging solver models rigid, weightless cables)")
+        coords = design.motion.position_coords
+        position = parse_numbers(at, "--at", len(coords), f"numbers ({','.join(coords)}): effector.orientation "
+                                 "is free, so the position alone is commanded and the orientation hangs")
+        if objective != Objective.min_norm or weights is not None:
+            raise InputError(f"{'--weights' if weights is not None else '--objective'}: a hanging effector's "
+                             "tensions are unique (they balance its weight, force and moment)")
+        data = hjob.free_pose_data(design, position, kind.value)
+    else:
+        p = parse_pose(design, at)
+        c = parse_weights(design, weights)
+        data = job.pose_data(design, evaluate_pose(design, p, kind.value, objective.value, c))
+        if ideal and H.underconstrained(design) and not has_pulleys(design):
+            data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     data["objective"] = objective.value
     if json_:
         emit_json(data)
         return
-    t = Table(title=f"{design.name} at ({at}) — {'feasible' if data['feasible'] else 'infeasible'}, "
-                    f"margin {fmt(data['margin'])} N", title_justify="left")
+    _pose_table(design, at, data)
+
+
+def _pose_table(design, at: str, data: dict) -> None:
+    verdict = "feasible" if data["feasible"] else "infeasible"
+    if "reason" in data and not data["feasible"]:
+        verdict += f" ({data['reason']})"
+    t = Table(title=f"{design.name} at ({at}) — {verdict}, margin {fmt(data['margin'])} N", title_justify="left")
     model = data.get("cable_model")
     extra = [("outlet tension [N]", "outlet_tensions"), ("unstretched [m]", "unstretched_lengths"),
              ("sag [m]", "sag")] if model else []
@@ -75,6 +98,13 @@ def pose(
     out_console.print(t)
     if model:
         out_console.print(f"cable model: {model} (tensions at the effector end; status {data['cable_status']})")
+    if data.get("effector_orientation") == "free" and data["orientation"] is not None:
+        out_console.print(f"hangs with orientation {fmt(data['orientation'])}, tilt {fmt(data['tilt'])}°")
+    elif "hanging" in data:
+        h = data["hanging"]
+        out_console.print(f"hanging: the free body would tilt by {fmt(h['tilt'])}° here"
+                          + ("" if h["feasible"] else f" — it cannot hang here: {h['reason']}")
+                          + " (effector.orientation: fixed holds it at the commanded orientation)")
     if data["collisions"]:
         out_console.print("collisions: " + ", ".join(" – ".join(p) for p in data["collisions"]))
 
@@ -83,13 +113,16 @@ def pose(
 def fk(
     spec: SpecArg,
     lengths: Annotated[str, typer.Option("--lengths", help="Cable lengths [m], comma-separated, in cable order.")],
-    guess: Annotated[Optional[str], typer.Option("--guess", help="Starting pose for the numerical solver.")] = None,
+    guess: Annotated[Optional[str], typer.Option(
+        "--guess", help="A pose whose orientation also starts the search (rotational motions; the starting "
+                        "pose of the kinematic solve with swivel pulleys).")] = None,
     json_: JsonOpt = False,
     cable_model: CableModelOpt = None,
 ):
-    """Forward kinematics: the pose for given cable lengths (unstretched lengths with elastic or sagging cables)."""
+    """Where the effector rests for given cable lengths (geometrico-static forward problem; unstretched
+    lengths with elastic or sagging cables)."""
+    from cdpr_design.jobs import hanging as hjob
     from cdpr_design.jobs import pose as job
-    from cdpr_design.statics import kinematics as kin
 
     design = load_design(spec, cable_model)
     L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)")
@@ -98,18 +131,26 @@ def fk(
     g = parse_pose(design, guess, "--guess") if guess is not None else None
     if job.cable_model_name(design) != "ideal":
         data = job.cable_fk_data(design, L, g)  # --lengths are unstretched lengths
-        res = SimpleNamespace(pose=data["pose"], residual=data["residual"], method=data["method"])
-    else:
-        res = kin.forward_kinematics(design, L, guess=g)
-        data = {"pose": [float(v) for v in res.pose], "residual": float(res.residual), "method": res.method}
+        if json_:
+            emit_json(data)
+            return
+        out_console.print(summary_table(
+            f"{design.name} — forward kinematics ({data['method']})",
+            [(c, float(v)) for c, v in zip(design.motion.coords, data["pose"])] + [("residual \\[m]", data["residual"])]
+            + [(f"tension {c} \\[N]", v) for c, v in data.get("tensions", {}).items()]
+            + [("within tension bounds", "yes" if data["within_bounds"] else "no")]))
+        return
+    data = hjob.fk_data(design, L, guess=g)
     if json_:
         emit_json(data)
         return
-    out_console.print(summary_table(
-        f"{design.name} — forward kinematics ({res.method})",
-        [(c, float(v)) for c, v in zip(design.motion.coords, res.pose)] + [("residual \\[m]", res.residual)]
-        + [(f"tension {c} \\[N]", v) for c, v in data.get("tensions", {}).items()]
-        + ([("within tension bounds", "yes" if data["within_bounds"] else "no")] if "within_bounds" in data else [])))
+    rows = [(c, v) for c, v in zip(design.motion.coords, data["pose"])]
+    if data["tensions"] is not None:
+        rows += [("tilt \\[deg]", data["tilt"])] + [(f"tension {c} \\[N]", v) for c, v in data["tensions"].items()]
+        rows += [("slack", ", ".join(data["slack"]) or "none"), ("stable", str(data["stable"])),
+                 ("other stable equilibria", str(len(data["equilibria"])))]
+    rows += [("residual \\[m]", data["residual"])]
+    out_console.print(summary_table(f"{design.name} — where it rests ({data['method']})", rows))
 
 
 @command

@@ -7,6 +7,7 @@ from typing import Annotated, Optional
 
 import typer
 
+from cdpr_design.errors import InputError
 from cdpr_design.cli.common import (CableModelOpt, ForceOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg,
                                     bars, command, emit_json, load_design, out_console, summary_table)
 
@@ -33,6 +34,9 @@ def workspace(
         "--orientations", help="total: feasible for every orientation of workspace.orientation_set; "
                                "range: largest feasible orientation range per position "
                                "(workspace.orientation_range). 1R2T and 3R3T.")] = None,
+    max_tilt: Annotated[Optional[float], typer.Option(
+        "--max-tilt", help="Largest tilt [deg] a feasible pose may hang with (under-constrained designs with "
+                           "effector.orientation: free; default requirements.max_tilt).")] = None,
     cable_model: CableModelOpt = None,
 ):
     """Grid sweep of the workspace: workspace.csv, workspace.png, tension_map.png, summary.json."""
@@ -45,7 +49,7 @@ def workspace(
         result, out_dir = job.workspace(
             design, out, overwrite, kind=kind.value, step=step, force=force, collisions=collisions,
             orientations=orientations.value if orientations is not None else None, pictures=pictures,
-            engine=env.engine(), progress=bars(quiet or json_, min_total=500_000))
+            engine=env.engine(), progress=bars(quiet or json_, min_total=500_000), max_tilt=_max_tilt(design, max_tilt))
     s = result.summary()
     if json_:
         emit_json(s)
@@ -61,10 +65,26 @@ def workspace(
             ("feasible before interference", f"{s['feasible_statics']:,}")] if "collision_free" in s else [])
         + ([("orientations", f"{s['orientation_mode']} ({s['orientation_count']} samples)")]
            if "orientation_mode" in s else [])
+        + ([("effector orientation", s["effector_orientation"]), ("hangs at", f"{s['hangs']:,} positions"),
+            ("max tilt (feasible) \\[deg]", s["max_tilt"])] if "effector_orientation" in s else [])
         + ([("cable model", s["cable_model"])] if "cable_model" in s else [])
         + ([("cable status", ", ".join(f"{k} {v:,}" for k, v in s["cable_status"].items() if v))]
            if "cable_status" in s else [])
         + [("files", str(out_dir.path))]))
+
+
+def _max_tilt(design, value: float | None) -> float | None:
+    """``--max-tilt``: an angle in [0, 180] degrees, for a design whose effector hangs freely."""
+    if value is None:
+        return None
+    from cdpr_design.statics.hanging import hangs_freely
+
+    if not (0.0 <= value <= 180.0):
+        raise InputError(f"--max-tilt: expected an angle in [0, 180] degrees, got {value:g}")
+    if not hangs_freely(design):
+        raise InputError("--max-tilt: a tilt limit applies to an under-constrained design with "
+                         "effector.orientation: free (this one's orientation is commanded or held)")
+    return value
 
 
 def register(app: typer.Typer) -> None:

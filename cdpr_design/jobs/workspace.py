@@ -10,6 +10,7 @@ from cdpr_design.io.files import OutputDir
 from cdpr_design.io.tables import format_block
 from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage
 from cdpr_design.plots import workspace as wsplots
+from cdpr_design.plots.hanging import tilt_figure
 from cdpr_design.plots.worker import PictureWorker
 
 
@@ -39,7 +40,7 @@ def workspace(design, out: str | Path | None = None, overwrite: bool = False, **
 def run_workspace(design, out: OutputDir, kind: str = "static", step: float | None = None, force: bool = False,
                   collisions: bool = False, orientations: str | None = None,
                   pictures: PictureWorker | None = None, engine: str = "auto",
-                  progress: Progress | None = None):
+                  progress: Progress | None = None, max_tilt: float | None = None):
     """Sweep, stream ``workspace.csv``, write pictures and ``summary.json``; return the result.
 
     ``step`` [m] overrides the spec's grid step; ``force`` allows grids past
@@ -47,9 +48,11 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
     interference checks (column ``collision_free``); ``orientations``:
     ``total`` or ``range`` orientation workspace (rotational motions; extra
     columns, ``orientation_workspace.png``).  ``pictures``: the worker drawing
-    the PNGs (None: in-process); ``engine``: ``auto``, ``numba`` or ``numpy``.
+    the PNGs (None: in-process); ``engine``: ``auto``, ``numba`` or ``numpy``;
+    ``max_tilt`` [deg]: the tilt limit of an under-constrained design with
+    ``effector.orientation: free`` (its sweeps add ``tilt_map.png``).
     """
-    result = _stream_sweep(design, out, kind, step, force, collisions, orientations, engine, progress)
+    result = _stream_sweep(design, out, kind, step, force, collisions, orientations, engine, progress, max_tilt)
     out.write_json("summary.json", result.summary())
     save_workspace_pictures(out, result, pictures)
     if result.extra.get("cable_model") == "sagging" and not orientations:
@@ -59,7 +62,7 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
     return result
 
 
-def _stream_sweep(design, out, kind, step, force, collisions, orientations, engine, progress):
+def _stream_sweep(design, out, kind, step, force, collisions, orientations, engine, progress, max_tilt=None):
     """The grid sweep, its rows streamed into ``workspace.csv`` (kept only when complete)."""
     from cdpr_design import workspaces as ws
 
@@ -78,7 +81,7 @@ def _stream_sweep(design, out, kind, step, force, collisions, orientations, engi
                                              progress=cb, force=True, interference=collisions, engine=engine)
             else:
                 result = ws.run(design, kind=kind, grid=grid, on_chunk=on_chunk, progress=cb, force=True,
-                                interference=collisions, engine=engine)
+                                interference=collisions, engine=engine, max_tilt=max_tilt)
         csv_file.commit()
     except BaseException:
         csv_file.abort()
@@ -87,9 +90,13 @@ def _stream_sweep(design, out, kind, step, force, collisions, orientations, engi
 
 
 def save_workspace_pictures(out: OutputDir, result, worker: PictureWorker | None = None) -> list[Path]:
-    """``workspace.png`` and ``tension_map.png`` of a workspace result (drawn by ``worker`` if given)."""
-    return save_pictures(out, [("workspace.png", wsplots.workspace_figure, (result,)),
-                               ("tension_map.png", wsplots.tension_figure, (result,))], worker)
+    """``workspace.png``, ``tension_map.png`` (and ``tilt_map.png`` for an under-constrained
+    design) of a workspace result (drawn by ``worker`` if given)."""
+    pictures = [("workspace.png", wsplots.workspace_figure, (result,)),
+                ("tension_map.png", wsplots.tension_figure, (result,))]
+    if getattr(result, "hanging", None) is not None:
+        pictures.append(("tilt_map.png", tilt_figure, (result,)))
+    return save_pictures(out, pictures, worker)
 
 
 def save_cable_model_picture(out: OutputDir, result, engine: str = "auto", collisions: bool = False,

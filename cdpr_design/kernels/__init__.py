@@ -15,6 +15,7 @@ module             what
 ``pose``           one pose for any m, n: feasibility, margin, tensions
 ``interference``   cable / effector / frame contacts
 ``sweep``          grid and point sweeps, per-chunk statistics
+``hanging``        hanging orientation of a planar two-cable body; statics at per-pose orientations
 =================  ==========================================================
 """
 

@@ -51,6 +51,9 @@ import numba as nb
 import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_parallel
+from cdpr_design.kernels.geometry import rotate_attachments, structure_matrix
+from cdpr_design.kernels.hsm import make_scratch
+from cdpr_design.kernels.pose import eval_general, eval_pose
 
 #: A stable equilibrium with both tensions >= 0 was found.
 TILT_OK = 0
@@ -313,3 +316,55 @@ def hanging_tilt_batch(A, B, c, mass, g, P):
         status[i] = st
         nbal[i] = nb_
     return phi, t, h, status, nbal
+
+
+@njit_parallel
+def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths):
+    """Feasibility, capacity margin and tensions at positions each with its own orientation.
+
+    :func:`cdpr_design.kernels.sweep.sweep_grid` for explicit positions ``P``
+    (k, 3) [m] at rotations ``R`` (k, 3, 3) (a hanging effector's), with the
+    required wrenches ``wreq`` (k, nv, n) [N, N m] of each pose; ``B`` (m, 3)
+    the attachments in platform coordinates.  A pose whose rotation is NaN
+    (the effector cannot hang there) gets feasible 0 and NaN margin, tensions
+    and lengths.  Outputs as :func:`~cdpr_design.kernels.sweep.sweep_grid`.
+    """
+    count = P.shape[0]
+    n = rows.shape[0]
+    m = A.shape[0]
+    nblocks = min(count, 256)
+    if nblocks == 0:
+        return
+    bsize = (count + nblocks - 1) // nblocks
+    for b in nb.prange(nblocks):
+        W = np.empty((n, m))
+        t = np.empty(m)
+        L = np.empty(m)
+        Rb = np.empty((m, 3))
+        scr = make_scratch(n, m, wreq.shape[1])
+        for k in range(b * bsize, min(count, (b + 1) * bsize)):
+            if not np.isfinite(R[k, 0, 0]):
+                feasible[k] = 0
+                margin[k] = np.nan
+                for i in range(m):
+                    tensions[k, i] = np.nan
+                    lengths[k, i] = np.nan
+                continue
+            rotate_attachments(R[k], B, Rb)
+            ok = structure_matrix(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
+            for i in range(m):
+                lengths[k, i] = L[i]
+            if not ok:
+                feasible[k] = 0
+                margin[k] = np.nan
+                for i in range(m):
+                    tensions[k, i] = np.nan
+                continue
+            if m == n:
+                f, mg = eval_pose(W, wreq[k], tmin, tmax, combos, kind, t)
+            else:
+                f, mg = eval_general(W, wreq[k], tmin, tmax, combos, kind, t, scr)
+            feasible[k] = 1 if f else 0
+            margin[k] = mg + 0.0
+            for i in range(m):
+                tensions[k, i] = t[i]

@@ -156,12 +156,17 @@ class Cable:
 
 @dataclass(frozen=True)
 class Effector:
-    """Rigid end effector: mass [kg], box size [m], COM and inertia about the COM."""
+    """Rigid end effector: mass [kg], box size [m], COM and inertia about the COM.
+
+    ``orientation``: ``fixed`` (held at the commanded orientation) or ``free``
+    (hangs where gravity puts it; :mod:`cdpr_design.statics.hanging`).
+    """
 
     mass: float
     size: tuple[float, float, float]
     center_of_mass: tuple[float, float, float] = (0.0, 0.0, 0.0)
     inertia: tuple[tuple[float, float, float], ...] = ((0.0,) * 3,) * 3
+    orientation: str = "fixed"
 
     @property
     def inertia_matrix(self) -> np.ndarray:
@@ -246,6 +251,8 @@ class Requirements:
     min_margin: float | None = None
     min_fraction: float | None = None
     safety_factor: float = 1.0
+    #: largest hanging tilt [deg] of an under-constrained effector at a feasible pose
+    max_tilt: float | None = None
 
 
 @dataclass(frozen=True)

@@ -82,6 +82,9 @@ class EffectorSpec(StrictModel):
     center_of_mass: Vec | None = Field(None, description="Platform coordinates [m]")
     inertia: FiniteFloat | list[FiniteFloat] | list[list[FiniteFloat]] | None = Field(
         None, description="Inertia about the COM [kg m^2]: 3x3 (spatial) or Izz (planar)")
+    orientation: Literal["fixed", "free"] = Field(
+        "fixed", description="fixed: the effector is held at the commanded orientation; free: the cables do "
+                             "not hold it and it hangs where gravity puts it (under-constrained robots)")
 
 
 class FrameSpec(StrictModel):
@@ -133,6 +136,8 @@ class RequirementsSpec(StrictModel):
         None, description="Least feasible fraction of the workspace grid")
     safety_factor: Annotated[FiniteFloat, Field(ge=1)] | None = Field(
         None, description="Factor on required motor torque and speed when sizing")
+    max_tilt: Annotated[FiniteFloat, Field(ge=0, le=180)] | None = Field(
+        None, description="Largest tilt [deg] an under-constrained effector may hang with at a feasible pose")
 
 
 class TrajectorySpec(StrictModel):

@@ -211,7 +211,7 @@ def _effector(s: DesignSpec, mot: Motion) -> Effector:
         if I.shape == (3,):
             I = np.diag(I)
     return Effector(mass=s.effector.mass, size=_t3(size), center_of_mass=_t3(com),
-                    inertia=tuple(tuple(float(x) for x in row) for row in I))
+                    inertia=tuple(tuple(float(x) for x in row) for row in I), orientation=s.effector.orientation)
 
 
 def _winch(default: WinchSpec | None, override: WinchSpec | None) -> Winch:
@@ -297,7 +297,7 @@ def _requirements(s: DesignSpec) -> Requirements:
         task_box=(tuple(req.task_box.lower), tuple(req.task_box.upper)) if req.task_box else None,
         max_speed=req.max_speed, max_acceleration=req.max_acceleration,
         min_margin=req.min_margin, min_fraction=req.min_fraction,
-        safety_factor=req.safety_factor if req.safety_factor is not None else 1.0,
+        safety_factor=req.safety_factor if req.safety_factor is not None else 1.0, max_tilt=req.max_tilt,
     )
 
 

@@ -32,6 +32,9 @@ def check_semantics(s: DesignSpec) -> Problems:
         b = _motion_vec(p, s, "requirements.task_box.upper", r.task_box.upper)
         if a and b:
             _check_ordered(p, "requirements.task_box", r.task_box.lower, r.task_box.upper)
+    if r is not None and r.max_tilt is not None and s.effector.orientation != "free":
+        p.append(("requirements.max_tilt", "a tilt limit needs effector.orientation: free (a fixed effector is "
+                                           "held at its commanded orientation and does not tilt)"))
     _check_trajectories(p, s)
     if s.plc is not None:
         m = len(s.cables)

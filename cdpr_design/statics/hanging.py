@@ -24,9 +24,13 @@ on top, for a :class:`~cdpr_design.model.design.Design`:
 
 * :func:`fk` - the equilibrium for given lengths (forward geometrico-static
   problem): pose, orientation, tensions, slack cables, stability and every
-  other stable equilibrium found;
+  other stable equilibrium found; :func:`fk_held_arrays` the same with the
+  orientation held, and :func:`equilibrium` whichever of the two the spec's
+  ``effector.orientation`` and motion ask for (the ``fk`` command);
 * :func:`pose_at` - the orientation an under-constrained effector takes at a
-  commanded position with its cables taut, or why it cannot hang there;
+  commanded position with its cables taut, or why it cannot hang there
+  (:mod:`cdpr_design.statics.hanging_at`, which also runs it over many
+  positions for the workspaces);
 * :func:`tilt_map` - the same over a workspace grid for a planar body on two
   cables (batched numba kernel :mod:`cdpr_design.kernels.hanging`).
 
@@ -49,179 +53,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from cdpr_design.errors import InputError
+from cdpr_design.statics import hanging_at as ha
 from cdpr_design.statics import hanging_core as hc
-
-
-class UnreachableLengths(InputError):
-    """No configuration has every |a_i - p - R b_i| <= rho_i (the reason is the message)."""
-
-
-class NotUnderconstrained(InputError):
-    """The design's cables can fix its orientation: it does not hang freely."""
-
-
-# ----------------------------------------------------------------------------
-# results
-# ----------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Equilibrium:
-    """One equilibrium of the hanging effector.
-
-    Attributes
-    ----------
-    position : (d,) array
-        Platform origin p [m] (d = 2 planar, 3 spatial).
-    rotation : (3, 3) array
-        R (rotation about z for planar bodies).
-    tensions : (m,) array
-        Cable tensions [N]; 0 for a slack cable.
-    slack : tuple of int
-        Indices of the cables that carry no tension.
-    energy : float
-        Potential energy -m g . (p + R c) [J].
-    stable : bool
-        Reduced Hessian positive definite (or the taut cables lock the pose).
-        False with ``hessian_min`` ~ 0 is a neutral equilibrium: a continuum
-        of poses of equal energy (e.g. a body free to turn about an axis
-        through its taut attachments and its centre of mass).
-    hessian_min : float
-        Smallest eigenvalue of the reduced Hessian (inf when locked) [N/m and
-        N m/rad mixed: the chart is (dp [m], w [rad])].
-    residual : float
-        Largest force [N] / moment [N m] imbalance after refinement.
-    length_error : float
-        Largest | |l_i| - rho_i | over the taut cables [m].
-    indeterminate : bool
-        More taut cables than the pose has degrees of freedom and they lock
-        it: the tensions are not unique (the minimum-norm non-negative ones
-        are reported, and ``slack`` lists the cables they leave at zero).
-    planar : bool
-    up : tuple
-        -g / |g|, the frame's vertical (for ``tilt_deg``).
-    within_limits : bool or None
-        Tensions within the design's [tension_min, tension_max] (set by the
-        Design-level functions; None for plain arrays or indeterminate tensions).
-    """
-
-    position: np.ndarray
-    rotation: np.ndarray
-    tensions: np.ndarray
-    slack: tuple[int, ...]
-    energy: float
-    stable: bool
-    hessian_min: float
-    residual: float
-    length_error: float = 0.0
-    indeterminate: bool = False
-    planar: bool = True
-    up: tuple = (0.0, 0.0, 1.0)
-    within_limits: bool | None = None
-
-    @property
-    def orientation(self):
-        """phi [rad] about z (planar) or [rx, ry, rz] [rad], R = Rx Ry Rz (spatial)."""
-        if self.planar:
-            return float(math.atan2(self.rotation[1, 0], self.rotation[0, 0]))
-        return [float(a) for a in hc.euler_xyz(self.rotation)]
-
-    @property
-    def tilt_deg(self) -> float:
-        """Tilt away from level [deg]: the angle between the platform's vertical R up and
-        the frame's up = -g/|g| (|phi| for planar bodies; a turn about the vertical is no tilt)."""
-        return _tilt(self.rotation, self.up)
-
-    @property
-    def pose(self) -> np.ndarray:
-        """[x, y, phi] (planar) or [x, y, z, rx, ry, rz] (spatial) [m, rad]."""
-        ori = self.orientation
-        return np.concatenate([self.position, [ori] if self.planar else ori])
-
-    def to_dict(self) -> dict:
-        return {"position": self.position.tolist(), "orientation": self.orientation,
-                "tilt_deg": self.tilt_deg, "tensions": self.tensions.tolist(),
-                "slack": list(self.slack), "energy": self.energy, "stable": self.stable,
-                "hessian_min": self.hessian_min, "residual": self.residual,
-                "indeterminate": self.indeterminate, "within_limits": self.within_limits}
-
-
-@dataclass(frozen=True)
-class HangingFK(Equilibrium):
-    """:func:`fk`: the lowest-energy equilibrium, plus every other stable one found.
-
-    ``equilibria`` holds the other stable equilibria (each an
-    :class:`Equilibrium` with its ``energy``), lowest energy first; ``model``
-    is ``point`` or ``rigid``; ``underconstrained`` as in the module doc.
-    """
-
-    equilibria: tuple = ()
-    model: str = "rigid"
-    underconstrained: bool = True
-
-    def to_dict(self) -> dict:
-        d = super().to_dict()
-        d.update(model=self.model, underconstrained=self.underconstrained,
-                 equilibria=[e.to_dict() for e in self.equilibria])
-        return d
-
-
-@dataclass(frozen=True)
-class HangingAt:
-    """:func:`pose_at`: the hanging orientation at a commanded position.
-
-    ``feasible`` False comes with ``reason``; then orientation fields are NaN.
-    ``lengths`` [m] are the cable lengths that put the effector there;
-    ``alternatives`` the other balanced orientations found, as
-    (orientation, tensions, stable) tuples; ``within_limits`` as for
-    :class:`Equilibrium` (tension limits are not part of feasibility).
-    """
-
-    feasible: bool
-    reason: str
-    position: np.ndarray
-    rotation: np.ndarray
-    tensions: np.ndarray
-    stable: bool
-    hessian_min: float
-    lengths: np.ndarray
-    planar: bool = True
-    alternatives: tuple = field(default=())
-    up: tuple = (0.0, 0.0, 1.0)
-    within_limits: bool | None = None
-
-    @property
-    def orientation(self):
-        """phi [rad] (planar) or [rx, ry, rz] [rad] (spatial); NaN when infeasible."""
-        if not self.feasible:
-            return math.nan if self.planar else [math.nan] * 3
-        return Equilibrium.orientation.fget(self)
-
-    @property
-    def tilt_deg(self) -> float:
-        """Tilt from level [deg] as :attr:`Equilibrium.tilt_deg`; NaN when infeasible."""
-        return _tilt(self.rotation, self.up) if self.feasible else math.nan
-
-    @property
-    def pose(self) -> np.ndarray:
-        """[x, y, phi] (planar) or [x, y, z, rx, ry, rz] (spatial) [m, rad]."""
-        ori = self.orientation
-        return np.concatenate([self.position, [ori] if self.planar else ori])
-
-    def to_dict(self) -> dict:
-        return {"feasible": self.feasible, "reason": self.reason, "position": self.position.tolist(),
-                "orientation": self.orientation, "tilt_deg": self.tilt_deg,
-                "tensions": self.tensions.tolist(), "stable": self.stable, "lengths": self.lengths.tolist(),
-                "within_limits": self.within_limits}
-
-
-def _tilt(R, up) -> float:
-    up = np.asarray(up, float)
-    return math.degrees(math.acos(max(-1.0, min(1.0, float(up @ R @ up)))))
+from cdpr_design.statics.hanging_core import is_point_mass, is_underconstrained  # noqa: F401 - re-exported
+from cdpr_design.statics.hanging_results import (  # noqa: F401 - re-exported
+    Equilibrium, HangingAt, HangingFK, NotUnderconstrained, TiltMap, UnreachableLengths, orientation_of, tilt_of,
+)
 
 
 # ----------------------------------------------------------------------------
@@ -244,20 +85,6 @@ def _prepare(A, B, c, mass, g, planar):
     return hc.Geometry(A, B, c, mass, g)
 
 
-def is_point_mass(B, tol: float = 1e-12) -> bool:
-    """True when every attachment is the same point (rotations change no length)."""
-    B = np.atleast_2d(np.asarray(B, float))
-    return bool(np.all(np.linalg.norm(B - B[0], axis=1) <= tol))
-
-
-def is_underconstrained(m: int, B, planar: bool) -> bool:
-    """Fewer cables than the free degrees of freedom they would have to fix:
-    a planar rigid body < 3, a spatial one < 6, a point mass < its dimension."""
-    if is_point_mass(B):
-        return m < (2 if planar else 3)
-    return m < (3 if planar else 6)
-
-
 def _up(geo) -> tuple:
     return tuple(float(v) for v in -geo.g / np.linalg.norm(geo.g))
 
@@ -273,22 +100,36 @@ def _tolerances(geo, rho):
     return ltol, 1e-10 * max(1.0, geo.weight)
 
 
-def _check_pairs(geo, rho, ltol):
+def _name(names, i) -> str:
+    return str(names[i]) if names is not None else str(i)
+
+
+def _check_pairs(geo, rho, ltol, names=None):
     """Raise :class:`UnreachableLengths` for a pair of cables that cannot both reach."""
     if np.any(~np.isfinite(rho)) or np.any(rho < 0):
         raise InputError("cable lengths must be finite and non-negative")
     if np.any(rho < 1e-6):
-        raise InputError(f"cable {int(np.argmin(rho))} is shorter than 1 micrometre: its attachment would be "
-                         "pinned at its outlet, which the cable model does not cover")
+        raise InputError(f"cable {_name(names, int(np.argmin(rho)))} is shorter than 1 micrometre: its "
+                         "attachment would be pinned at its outlet, which the cable model does not cover")
     for i in range(geo.m):
         for j in range(i + 1, geo.m):
             d = float(np.linalg.norm(geo.A[i] - geo.A[j]))
             reach = rho[i] + rho[j] + float(np.linalg.norm(geo.B[i] - geo.B[j]))
             if d > reach + ltol:
                 raise UnreachableLengths(
-                    f"cables {i} and {j} cannot both reach the effector: their outlets are {d:.6g} m "
-                    f"apart, more than the lengths {rho[i]:.6g} + {rho[j]:.6g} m plus the "
-                    f"{reach - rho[i] - rho[j]:.6g} m between their attachments")
+                    f"cables {_name(names, i)} and {_name(names, j)} cannot both reach the effector: their "
+                    f"outlets are {d:.6g} m apart, more than the lengths {rho[i]:.6g} + {rho[j]:.6g} m plus the "
+                    f"{reach - rho[i] - rho[j]:.6g} m between their attachments (short by {d - reach:.3g} m)")
+
+
+def _lengths(geo, lengths, names):
+    """The lengths as an (m,) array, checked; with the tolerances (length [m], force [N])."""
+    rho = np.asarray(lengths, float).reshape(-1)
+    if rho.size != geo.m:
+        raise InputError(f"expected {geo.m} cable lengths, got {rho.size}")
+    ltol, tol_f = _tolerances(geo, rho)
+    _check_pairs(geo, rho, ltol, names)
+    return rho, ltol, tol_f
 
 
 # ----------------------------------------------------------------------------
@@ -307,29 +148,35 @@ def _equilibrium(geo, rho, sol, dofs, planar) -> Equilibrium:
                        _up(geo))
 
 
-def _point_mass(geo, rho, planar, nominal, ltol, tol_f):
-    """The convex case: the attachment point is the lowest point of the balls."""
+def _held(geo, rho, planar, R, ltol, tol_f, model):
+    """The convex case, orientation R held (or irrelevant: a point mass): the platform
+    origin is the lowest point of the balls |a_i - R b_i - p| <= rho_i."""
     d = 2 if planar else 3
     down = geo.g / np.linalg.norm(geo.g)
-    b0 = geo.B[0]
-    x, ok, viol = hc.lowest_points((geo.A[:, :d])[None], rho, down[:d], ltol)
+    C = (geo.A - geo.B @ R.T)[:, :d]
+    x, ok, viol = hc.lowest_points(C[None], rho, down[:d], ltol)
     if not ok[0]:
         raise UnreachableLengths(
             "the balls |a_i - P| <= rho_i have no common point: every pair meets, but no point is "
             f"within reach of all cables (smallest excess {viol[0]:.3g} m)")
     q = np.zeros(3)
     q[:d] = x[0]
-    arm = geo.c - b0
-    if np.linalg.norm(arm) > 1e-12 * geo.size:  # the COM hangs straight below the attachment
-        R = hc.rot_z(math.atan2(down[1], down[0]) - math.atan2(arm[1], arm[0])) if planar else hc.align(arm, down)
-    else:
-        R = np.eye(3) if nominal is None else np.asarray(nominal, float)
     dofs = hc.DOFS_POINT2 if planar else hc.DOFS_POINT3
-    sol = hc.refine(geo, rho, q - R @ b0, R, dofs, tol_f, ltol)
+    sol = hc.refine(geo, rho, q, R, dofs, tol_f, ltol)
     if sol is None:
-        raise RuntimeError("point-mass equilibrium: the active-set refinement failed")
-    return HangingFK(**vars(_equilibrium(geo, rho, sol, dofs, planar)), equilibria=(), model="point",
-                     underconstrained=geo.m < d)
+        raise RuntimeError("held-orientation equilibrium: the active-set refinement failed")
+    return HangingFK(**vars(_equilibrium(geo, rho, sol, dofs, planar)), equilibria=(), model=model,
+                     underconstrained=is_underconstrained(geo.m, geo.B, planar))
+
+
+def fk_held_arrays(A, B, c, mass, g, lengths, planar: bool, rotation, *, names=None) -> HangingFK:
+    """:func:`fk_arrays` with the orientation held at ``rotation`` (3, 3): the translational
+    geometrico-static problem, exact (the lowest point of an intersection of balls), then
+    refined; tensions balance the force only (``model='held'``).  ``names`` label the
+    cables in error messages."""
+    geo = _prepare(A, B, c, mass, g, planar)
+    rho, ltol, tol_f = _lengths(geo, lengths, names)
+    return _held(geo, rho, planar, np.asarray(rotation, float), ltol, tol_f, "held")
 
 
 def _planar_starts(geo, rho, n_scan, nominal_phi, ltol):
@@ -393,7 +240,7 @@ def _same(a: Equilibrium, b: Equilibrium, ls) -> bool:
 
 
 def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: int = 720,
-              n_starts: int = 12, seed: int = 0) -> HangingFK:
+              n_starts: int = 12, seed: int = 0, names=None) -> HangingFK:
     """The resting configuration for cable ``lengths`` [m] (forward geometrico-static problem).
 
     ``A``, ``B`` (m, 2|3) outlets and attachments [m], ``c`` centre of mass in
@@ -416,16 +263,12 @@ def fk_arrays(A, B, c, mass, g, lengths, planar: bool, *, nominal=None, n_scan: 
     looks for a configuration first (locked poses of fully constrained robots).
 
     Raises :class:`UnreachableLengths` when no configuration satisfies every
-    length (with the reason).
+    length (with the reason); ``names`` label the cables in the messages.
     """
     geo = _prepare(A, B, c, mass, g, planar)
-    rho = np.asarray(lengths, float).reshape(-1)
-    if rho.size != geo.m:
-        raise InputError(f"expected {geo.m} cable lengths, got {rho.size}")
-    ltol, tol_f = _tolerances(geo, rho)
-    _check_pairs(geo, rho, ltol)
+    rho, ltol, tol_f = _lengths(geo, lengths, names)
     if is_point_mass(geo.B):
-        return _point_mass(geo, rho, planar, nominal, ltol, tol_f)
+        return _held(geo, rho, planar, ha.point_mass_rotation(geo, planar, nominal), ltol, tol_f, "point")
     dofs = _dofs(geo, planar)
     if planar:
         phi0 = 0.0 if nominal is None else math.atan2(nominal[1][0], nominal[0][0])
@@ -502,33 +345,28 @@ def _is_minimum(geo, sol, dofs, rho, ltol) -> bool:
 # the hanging orientation at a commanded position
 # ----------------------------------------------------------------------------
 
-def _at_result(geo, p, R, t, planar, dofs, alternatives=()):
-    _, _, L, _ = geo.cables(p, R)
-    taut = [i for i in range(geo.m) if t[i] > 1e-9 * geo.weight]
-    hmin = geo.reduced_hessian_min(p, R, t, taut, dofs)
-    d = 2 if planar else 3
-    return HangingAt(True, "ok", p[:d].copy(), R, np.maximum(t, 0.0), bool(hmin > 1e-9 * geo.weight),
-                     hmin, L, planar, tuple(alternatives), _up(geo))
-
-
-def _infeasible(geo, p, planar, reason):
+def _infeasible(geo, p, planar, reason, alternatives=()):
     d = 2 if planar else 3
     return HangingAt(False, reason, np.asarray(p, float)[:d].copy(), np.full((3, 3), np.nan),
-                     np.full(geo.m, np.nan), False, math.nan, np.full(geo.m, np.nan), planar, (), _up(geo))
+                     np.full(geo.m, np.nan), False, math.nan, np.full(geo.m, np.nan), planar, alternatives,
+                     _up(geo))
 
 
 def pose_at_arrays(A, B, c, mass, g, position, planar: bool, *, nominal=None) -> HangingAt:
     """The orientation an under-constrained effector takes at ``position`` [m].
 
     With the cables taut at that position, the orientation must balance the
-    moment (for a planar body on two cables: both cable lines and the
-    vertical through the centre of mass meet in one point) with tensions >= 0
-    and be stable; of several such orientations the one closest to level is
-    returned (the others are in ``alternatives``).  A position the effector
-    cannot hang at statically is ``feasible=False`` with the reason: every
-    balanced orientation needs a pushing cable, none is stable, or no
-    orientation balances the moment.  Raises :class:`NotUnderconstrained`
-    for a design whose cables fix its orientation.
+    weight, force and moment (for a planar body on two cables: both cable
+    lines and the vertical through the centre of mass meet in one point),
+    with tensions >= 0, and be stable; of several such orientations the least
+    tilted is returned (the others are in ``alternatives``).  A spatial body
+    on four or five cables may hang from three of them, the others slack
+    (:func:`~cdpr_design.statics.hanging_at.taut_sets`).  The search is
+    :func:`cdpr_design.statics.hanging_at.hang`, the same as the workspace's.
+    A position the effector cannot hang at statically is ``feasible=False``
+    with the reason: every balanced orientation needs a pushing cable, none is
+    stable, or no orientation balances the weight.  Raises
+    :class:`NotUnderconstrained` for a design whose cables fix its orientation.
     """
     geo = _prepare(A, B, c, mass, g, planar)
     if not is_underconstrained(geo.m, geo.B, planar):
@@ -537,88 +375,19 @@ def pose_at_arrays(A, B, c, mass, g, position, planar: bool, *, nominal=None) ->
     p = np.zeros(3)
     pos = np.asarray(position, float).ravel()
     p[: pos.size] = pos
-    dofs = _dofs(geo, planar)
-    if is_point_mass(geo.B):
-        fk_like = _point_mass_at(geo, p, planar, nominal, dofs)
-        return fk_like
-    if planar and geo.m == 2:
-        phis = hc.planar_two_cable_roots(geo, p)
-        if phis is None:
-            return _infeasible(geo, p, planar, "degenerate geometry: every orientation is balanced")
-        Rs = [hc.rot_z(x) for x in phis]
-    else:
-        Rs = hc.balanced_orientations(geo, p, planar, nominal)
-    rows = list(dofs)
-    cands = []
-    for R in Rs:
-        W, wg = geo.wrenches(p, R)
-        t, *_ = np.linalg.lstsq(W[rows], -wg[rows], rcond=None)
-        if np.any(~np.isfinite(t)) or np.linalg.matrix_rank(W[rows], tol=1e-10) < geo.m:
-            continue
-        cands.append(_at_result(geo, p, R, t, planar, dofs) if np.all(t >= -1e-9 * geo.weight)
-                     else (R, t))
-    good = [r for r in cands if isinstance(r, HangingAt) and r.stable]
-    if good:
-        good.sort(key=lambda r: r.tilt_deg)
-        alts = tuple((r.orientation, r.tensions, r.stable) for r in cands if isinstance(r, HangingAt)
-                     and r is not good[0])
-        best = good[0]
-        return HangingAt(**{**vars(best), "alternatives": alts})
-    if any(isinstance(r, HangingAt) for r in cands):
-        return _infeasible(geo, p, planar, "the moment-balanced orientations with pulling cables are unstable")
-    if cands:
-        pushing = sorted({int(i) for _, t in cands for i in np.flatnonzero(t < 0)})
-        return _infeasible(geo, p, planar, "every moment-balanced orientation needs a pushing cable "
-                           f"(cable {', '.join(map(str, pushing))})")
-    return _infeasible(geo, p, planar, "no orientation balances the moment with the cables taut")
-
-
-def _point_mass_at(geo, p, planar, nominal, dofs):
-    down = geo.g / np.linalg.norm(geo.g)
-    arm = geo.c - geo.B[0]
-    if np.linalg.norm(arm) > 1e-12 * geo.size:
-        R = hc.rot_z(math.atan2(down[1], down[0]) - math.atan2(arm[1], arm[0])) if planar else hc.align(arm, down)
-    else:
-        R = np.eye(3) if nominal is None else np.asarray(nominal, float)
-    W, wg = geo.wrenches(p, R)
-    rows = list(dofs)
-    t, *_ = np.linalg.lstsq(W[rows], -wg[rows], rcond=None)
-    if np.max(np.abs(W[rows] @ t + wg[rows])) > 1e-8 * geo.weight:
-        return _infeasible(geo, p, planar, "the cables cannot balance the weight here (it is not in their span)")
-    if np.any(t < -1e-9 * geo.weight):
-        return _infeasible(geo, p, planar, f"balancing the weight needs a pushing cable (cable {int(np.argmin(t))})")
-    return _at_result(geo, p, R, t, planar, dofs)
+    h = ha.hang(geo, p[None], planar, nominal=nominal, alternatives=True)
+    alts = tuple((orientation_of(R, planar), t, st) for R, t, st in h.alternatives[0])
+    if h.status[0] != ha.OK:
+        return _infeasible(geo, p, planar, ha.REASONS[h.status[0]], alts)
+    R = h.rotation[0]
+    d = 2 if planar else 3
+    return HangingAt(True, "ok", p[:d].copy(), R, h.tensions[0], True, float(h.hessian_min[0]),
+                     geo.cables(p, R)[2], planar, alts, _up(geo))
 
 
 # ----------------------------------------------------------------------------
 # the tilt map (batched kernel) and the Design-level wrappers
 # ----------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class TiltMap:
-    """Hanging orientation over a grid of positions (planar body on two cables).
-
-    ``axes`` the x and y samples [m]; ``phi`` [rad], ``tilt_deg`` [deg],
-    ``tensions`` [N] (..., 2) and ``status`` (``kernels.hanging.TILT_*``) on the
-    grid (shape (nx, ny)); ``reasons`` the text of each status code;
-    ``within_limits`` where the hanging tensions respect the design's limits.
-    """
-
-    axes: tuple
-    phi: np.ndarray
-    tensions: np.ndarray
-    status: np.ndarray
-    reasons: tuple
-    within_limits: np.ndarray | None = None
-
-    @property
-    def tilt_deg(self) -> np.ndarray:
-        return np.degrees(np.abs(self.phi))
-
-    @property
-    def feasible(self) -> np.ndarray:
-        return self.status == 0
-
 
 def tilt_map_arrays(A, B, c, mass, g, positions):
     """:func:`pose_at` for a planar two-cable body at many positions (k, 2) [m], batched
@@ -633,7 +402,8 @@ def tilt_map_arrays(A, B, c, mass, g, positions):
     return phi, t, status
 
 
-def _design_arrays(design):
+def design_arrays(design):
+    """(outlets, attachments, centre of mass, mass, gravity, planar) of a design [m, kg, m/s^2]."""
     planar = design.motion.name in ("2T", "1R2T")
     return (design.outlets, design.attachments, np.asarray(design.effector.center_of_mass, float),
             float(design.effector.mass), np.asarray(design.gravity, float), planar)
@@ -646,7 +416,7 @@ def _within(design, t) -> bool:
 def fk(design, lengths, **options) -> HangingFK:
     """:func:`fk_arrays` for a design: where it hangs for cable ``lengths`` [m], with
     ``within_limits`` set from the design's tension limits."""
-    A, B, c, mass, g, planar = _design_arrays(design)
+    A, B, c, mass, g, planar = design_arrays(design)
     r = fk_arrays(A, B, c, mass, g, lengths, planar, **options)
     return dataclasses.replace(r, within_limits=None if r.indeterminate else _within(design, r.tensions))
 
@@ -654,15 +424,65 @@ def fk(design, lengths, **options) -> HangingFK:
 def pose_at(design, position, **options) -> HangingAt:
     """:func:`pose_at_arrays` for a design: its hanging orientation at ``position`` [m],
     with ``within_limits`` set from the design's tension limits."""
-    A, B, c, mass, g, planar = _design_arrays(design)
+    A, B, c, mass, g, planar = design_arrays(design)
     r = pose_at_arrays(A, B, c, mass, g, position, planar, **options)
     return dataclasses.replace(r, within_limits=_within(design, r.tensions) if r.feasible else None)
 
 
 def underconstrained(design) -> bool:
-    """Whether the design's orientation is free (see :func:`is_underconstrained`)."""
-    A, B, _, _, _, planar = _design_arrays(design)
+    """Whether the design's cables leave its orientation free (see :func:`is_underconstrained`)."""
+    A, B, _, _, _, planar = design_arrays(design)
     return is_underconstrained(A.shape[0], B, planar)
+
+
+def hangs_freely(design) -> bool:
+    """``effector.orientation: free`` on an under-constrained design: its orientation is not
+    commanded but follows from the cables and gravity (every analysis uses the hanging pose)."""
+    return design.effector.orientation == "free" and underconstrained(design)
+
+
+def nominal_rotation(design) -> np.ndarray:
+    """The rotation of ``workspace.orientation`` (identity for 2T and 3T)."""
+    from cdpr_design.statics.kinematics import rotation_matrix
+
+    return rotation_matrix(*design.default_orientation_full())
+
+
+def held_rotation(design) -> np.ndarray | None:
+    """The rotation the spec holds the effector at for the forward problem, or None when
+    the orientation is among its unknowns: ``effector.orientation: fixed`` on a translational
+    motion (2T, 3T) holds it at the identity, the spec's model; rotational motions (1R2T, 3R3T)
+    find it from the lengths, and ``free`` lets it hang."""
+    if design.effector.orientation == "fixed" and not design.motion.rotational:
+        return np.eye(3)
+    return None
+
+
+def point_outlets(design, what: str) -> None:
+    """Raise an :class:`InputError` for a design with swivel pulleys (the hanging solvers
+    model point outlets); ``what`` names the analysis."""
+    from cdpr_design.statics.kinematics import has_pulleys
+
+    if has_pulleys(design):
+        raise InputError(f"{what}: the geometrico-static solver models point outlets, and this design has "
+                         "swivel pulleys (cables[i].pulley)")
+
+
+def equilibrium(design, lengths, **options) -> HangingFK:
+    """Where the design's effector rests for cable ``lengths`` [m] under its spec (the ``fk``
+    command): :func:`fk_held_arrays` at :func:`held_rotation` when the spec holds the
+    orientation, else :func:`fk_arrays` started about :func:`nominal_rotation`.  Errors name
+    the cables; ``within_limits`` from the design's tension limits."""
+    point_outlets(design, "fk")
+    A, B, c, mass, g, planar = design_arrays(design)
+    held = held_rotation(design)
+    names = design.cable_names
+    if held is not None:
+        r = fk_held_arrays(A, B, c, mass, g, lengths, planar, held, names=names)
+    else:
+        options.setdefault("nominal", nominal_rotation(design))
+        r = fk_arrays(A, B, c, mass, g, lengths, planar, names=names, **options)
+    return dataclasses.replace(r, within_limits=None if r.indeterminate else _within(design, r.tensions))
 
 
 def tilt_map(design, axes=None, *, step: float | None = None) -> TiltMap:
@@ -673,7 +493,7 @@ def tilt_map(design, axes=None, *, step: float | None = None) -> TiltMap:
     """
     from cdpr_design.kernels import hanging as K
 
-    A, B, c, mass, g, planar = _design_arrays(design)
+    A, B, c, mass, g, planar = design_arrays(design)
     if not planar:
         raise InputError("the tilt map is for planar designs")
     if axes is None:

@@ -35,28 +35,38 @@ DOFS_POINT3 = (0, 1, 2)
 # ----------------------------------------------------------------------------
 
 def skew(v) -> np.ndarray:
-    """[v]_x, the matrix of v x ."""
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+    """[v]_x, the matrix of v x ; for v (..., 3) a stack (..., 3, 3)."""
+    v = np.asarray(v, float)
+    K = np.zeros(v.shape + (3,))
+    K[..., 0, 1], K[..., 0, 2], K[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    K[..., 1, 0], K[..., 2, 0], K[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
+    return K
+
+
+def _series(th, small, exact, taylor):
+    """exact(th) where th >= small, taylor(th) below (no division by ~0)."""
+    safe = np.where(th < small, 1.0, th)
+    return np.where(th < small, taylor(th), exact(safe))
 
 
 def rotvec(w) -> np.ndarray:
-    """exp([w]_x): the rotation by |w| [rad] about w (Rodrigues)."""
+    """exp([w]_x): the rotation by |w| [rad] about w (Rodrigues); w (..., 3) -> (..., 3, 3)."""
     w = np.asarray(w, float)
-    th = float(np.linalg.norm(w))
+    th = np.linalg.norm(w, axis=-1)[..., None, None]
     K = skew(w)
-    if th < 1e-8:
-        return np.eye(3) + K + 0.5 * K @ K
-    return np.eye(3) + math.sin(th) / th * K + (1.0 - math.cos(th)) / th ** 2 * K @ K
+    a = _series(th, 1e-8, lambda x: np.sin(x) / x, lambda x: 1.0 - x * x / 6.0)
+    b = _series(th, 1e-8, lambda x: (1.0 - np.cos(x)) / x ** 2, lambda x: 0.5 + 0.0 * x)
+    return np.eye(3) + a * K + b * (K @ K)
 
 
 def left_jacobian(w) -> np.ndarray:
-    """J with exp([w + dw]) = exp([J dw]) exp([w]) to first order."""
+    """J with exp([w + dw]) = exp([J dw]) exp([w]) to first order; w (..., 3) -> (..., 3, 3)."""
     w = np.asarray(w, float)
-    th = float(np.linalg.norm(w))
+    th = np.linalg.norm(w, axis=-1)[..., None, None]
     K = skew(w)
-    if th < 1e-6:
-        return np.eye(3) + 0.5 * K + K @ K / 6.0
-    return np.eye(3) + (1.0 - math.cos(th)) / th ** 2 * K + (th - math.sin(th)) / th ** 3 * K @ K
+    a = _series(th, 1e-6, lambda x: (1.0 - np.cos(x)) / x ** 2, lambda x: 0.5 + 0.0 * x)
+    b = _series(th, 1e-6, lambda x: (x - np.sin(x)) / x ** 3, lambda x: 1.0 / 6.0 + 0.0 * x)
+    return np.eye(3) + a * K + b * (K @ K)
 
 
 def rot_z(phi: float) -> np.ndarray:
@@ -65,15 +75,13 @@ def rot_z(phi: float) -> np.ndarray:
 
 
 def euler_xyz(R) -> np.ndarray:
-    """(rx, ry, rz) [rad] with R = Rx(rx) Ry(ry) Rz(rz) (ry in [-pi/2, pi/2])."""
-    ry = math.asin(max(-1.0, min(1.0, R[0, 2])))
-    if abs(R[0, 2]) < 1.0 - 1e-12:
-        rx = math.atan2(-R[1, 2], R[2, 2])
-        rz = math.atan2(-R[0, 1], R[0, 0])
-    else:  # gimbal lock: put everything in rx
-        rx = math.atan2(R[2, 1], R[1, 1])
-        rz = 0.0
-    return np.array([rx, ry, rz])
+    """(rx, ry, rz) [rad] with R = Rx(rx) Ry(ry) Rz(rz) (ry in [-pi/2, pi/2]); R (..., 3, 3) -> (..., 3)."""
+    R = np.asarray(R, float)
+    s02 = np.clip(R[..., 0, 2], -1.0, 1.0)
+    lock = np.abs(R[..., 0, 2]) >= 1.0 - 1e-12  # gimbal lock: everything in rx
+    rx = np.where(lock, np.arctan2(R[..., 2, 1], R[..., 1, 1]), np.arctan2(-R[..., 1, 2], R[..., 2, 2]))
+    rz = np.where(lock, 0.0, np.arctan2(-R[..., 0, 1], R[..., 0, 0]))
+    return np.stack([rx, np.arcsin(s02), rz], axis=-1)
 
 
 def from_euler_xyz(rx: float, ry: float, rz: float) -> np.ndarray:
@@ -193,6 +201,24 @@ def lowest_points(C, rho, down, tol):
 
 
 # ----------------------------------------------------------------------------
+# classification
+# ----------------------------------------------------------------------------
+
+def is_point_mass(B, tol: float = 1e-12) -> bool:
+    """True when every attachment is the same point (rotations change no length)."""
+    B = np.atleast_2d(np.asarray(B, float))
+    return bool(np.all(np.linalg.norm(B - B[0], axis=1) <= tol))
+
+
+def is_underconstrained(m: int, B, planar: bool) -> bool:
+    """Fewer cables than the free degrees of freedom they would have to fix:
+    a planar rigid body < 3, a spatial one < 6, a point mass < its dimension."""
+    if is_point_mass(B):
+        return m < (2 if planar else 3)
+    return m < (3 if planar else 6)
+
+
+# ----------------------------------------------------------------------------
 # statics at one configuration
 # ----------------------------------------------------------------------------
 
@@ -290,91 +316,6 @@ class Geometry:
         if N.shape[1] == 0:
             return math.inf
         return float(np.linalg.eigvalsh(N.T @ H @ N)[0])
-
-
-# ----------------------------------------------------------------------------
-# balanced orientations at a commanded position
-# ----------------------------------------------------------------------------
-
-def planar_two_cable_roots(geo, p):
-    """Every balanced orientation phi [rad] of a planar body on two taut cables at
-    position p: the roots of the degree-2 trigonometric polynomial M(phi) of
-    :mod:`cdpr_design.kernels.hanging` (same method, numpy; None when M vanishes
-    identically)."""
-    A2, B2, c2 = geo.A[:, :2], geo.B[:, :2], geo.c[:2]
-    f = -geo.mass * geo.g[:2]
-    cr = lambda a, b: a[0] * b[1] - a[1] * b[0]
-
-    def M(phi):
-        R = rot_z(phi)[:2, :2]
-        v = A2 - p[:2] - B2 @ R.T
-        r = (B2 - c2) @ R.T
-        return cr(f, v[1]) * cr(r[0], v[0]) + cr(v[0], f) * cr(r[1], v[1])
-
-    ks = 2 * math.pi * np.arange(5) / 5
-    Ms = np.array([M(k) for k in ks])
-    a0 = Ms.mean()
-    a1, b1 = 0.4 * Ms @ np.cos(ks), 0.4 * Ms @ np.sin(ks)
-    a2, b2 = 0.4 * Ms @ np.cos(2 * ks), 0.4 * Ms @ np.sin(2 * ks)
-    scale = abs(a0) + abs(a1) + abs(b1) + abs(a2) + abs(b2)
-    if scale == 0:
-        return None
-    coeffs = np.array([(a2 - 1j * b2) / 2, (a1 - 1j * b1) / 2, a0, (a1 + 1j * b1) / 2, (a2 + 1j * b2) / 2])
-    while coeffs.size > 1 and abs(coeffs[0]) <= 1e-13 * scale:
-        coeffs = coeffs[1:]
-    dM = lambda x: -a1 * math.sin(x) + b1 * math.cos(x) - 2 * a2 * math.sin(2 * x) + 2 * b2 * math.cos(2 * x)
-    out = []
-    for z in np.roots(coeffs):
-        if abs(abs(z) - 1) > 1e-3:
-            continue
-        x = float(np.angle(z))
-        for _ in range(8):
-            dx = M(x) / dM(x) if dM(x) != 0 else 0.0
-            x -= dx
-            if abs(dx) < 1e-15:
-                break
-        x = math.atan2(math.sin(x), math.cos(x))
-        if abs(M(x)) <= 1e-9 * scale and not any(abs(x - y) < 1e-9 for y in out):
-            out.append(x)
-    return out
-
-
-def balanced_orientations(geo, p, planar, nominal=None):
-    """Rotations R at which the cables, taut at position p, balance the weight:
-    least squares (scipy) on the balance with the tensions eliminated by linear
-    least squares, one (planar) or three rotation unknowns, several starts.
-    With more cables than position coordinates the balanced rotations form a
-    family; each start then lands on the member nearest to it."""
-    from scipy.optimize import least_squares
-
-    rot = [5] if planar else [3, 4, 5]
-    rows = [k for k in (0, 1, 5)] if planar else list(range(6))
-    base = np.eye(3) if nominal is None else np.asarray(nominal, float)
-    starts = [0.0, math.pi / 2, math.pi, -math.pi / 2] if planar else None
-    if not planar:
-        rng = np.random.default_rng(1)
-        starts = [np.zeros(3)] + [rng.normal(size=3) * 0.8 for _ in range(7)]
-
-    def R_of(x):
-        w = np.zeros(3)
-        w[[k - 3 for k in rot]] = x
-        return rotvec(w) @ base
-
-    def fun(x):
-        R = R_of(x)
-        W, wg = geo.wrenches(p, R)
-        t, *_ = np.linalg.lstsq(W[rows], -wg[rows], rcond=None)
-        return (W[rows] @ t + wg[rows]) / geo.weight
-
-    out = []
-    for s in starts:
-        sol = least_squares(fun, np.atleast_1d(s), xtol=1e-15, ftol=1e-15, gtol=1e-15)
-        if np.max(np.abs(sol.fun)) * geo.weight > 1e-8 * max(1.0, geo.weight):
-            continue
-        R = R_of(sol.x)
-        if not any(rotation_angle(R @ Q.T) < 1e-7 for Q in out):
-            out.append(R)
-    return out
 
 
 # ----------------------------------------------------------------------------

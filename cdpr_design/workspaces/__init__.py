@@ -19,6 +19,7 @@ from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics import cables as cable_models
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.pose import KINDS, check_kind
+from cdpr_design.workspaces import hanging
 from cdpr_design.workspaces.cables import ElasticColumns, cable_summary, sweep_sagging
 from cdpr_design.workspaces.engine import ENGINES, check_engine, load_kernels
 from cdpr_design.workspaces.engine import sweep as straight_sweep
@@ -43,7 +44,7 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         orientation=None, on_chunk: Callable[[Chunk], None] | None = None,
         progress: Callable[[int, int], None] | None = None, force: bool = False,
         chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False,
-        engine: str = "auto") -> WorkspaceResult:
+        engine: str = "auto", max_tilt: float | None = None) -> WorkspaceResult:
     """Sweep the workspace grid and return the summary and maps.
 
     Parameters
@@ -78,6 +79,13 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     engine : {'auto', 'numba', 'numpy'}
         For straight cables from point outlets (:mod:`~cdpr_design.workspaces.engine`);
         both engines give the same results (tested).
+    max_tilt : float, optional
+        Largest hanging tilt [deg] of a feasible pose (under-constrained designs
+        with ``effector.orientation: free``; default ``requirements.max_tilt``).
+
+    Under-constrained designs with ideal cables (:mod:`~cdpr_design.workspaces.hanging`)
+    add the tilt their effector hangs with; with ``effector.orientation: free`` their
+    feasibility is judged at that hanging orientation.
 
     The design's cable model (:mod:`cdpr_design.statics.cables`) picks the
     engine: ideal and elastic cables take the straight-cable sweeps (elastic
@@ -90,6 +98,19 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     """
     check_engine(engine)
     g, ori = _setup(design, kind, step, grid, orientation, force)
+    if hanging.applies(design):  # under-constrained: the tilt it hangs with (`free`: its statics there)
+        return hanging.sweep(design, kind, g, ori, lambda oc: _fixed(design, kind, g, ori, oc, progress, chunk,
+                                                                     keep_maps, interference, engine),
+                             on_chunk=on_chunk, progress=progress, chunk=chunk, keep_maps=keep_maps,
+                             interference=interference, engine=engine, max_tilt=max_tilt)
+    if max_tilt is not None:
+        hanging.tilt_limit(design, max_tilt)  # refused: the design does not hang
+    return _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interference, engine)
+
+
+def _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interference, engine):
+    """The sweep at the fixed orientation ``ori`` (3,) [rad], by cable model: pulley- and
+    interference-aware, straight, or sagging."""
     model = cable_models.design_model(design)
     cable_models.check_supported(design, pulleys=kin.has_pulleys(design), interference=interference)
     if model == "sagging" and kind != "wrench-closure":
@@ -126,6 +147,7 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     See :func:`cdpr_design.workspaces.orientation.sweep_orientations`.
     """
     check_engine(engine)
+    hanging.refuse_commanded_orientations(design)
     g, nominal = _setup(design, kind, step, grid, orientation, force)
     from cdpr_design.workspaces.orientation import sweep_orientations  # numba kernels, loaded on first use
 

@@ -88,6 +88,8 @@ class WorkspaceResult:
     extra: dict = field(default_factory=dict)
     #: orientation sweeps only (:func:`run_orientations`): a hardware.OrientationMaps
     orientation_maps: object = None
+    #: under-constrained designs only: the hanging tilt map (a workspaces.hanging.HangingMaps)
+    hanging: object = None
 
     @property
     def fraction(self) -> float:
@@ -288,12 +290,16 @@ def column_names(design: Design) -> list[str]:
 
 def extra_columns(design: Design, interference: bool, mode: str | None) -> list[str]:
     """Names of the extra ``workspace.csv`` columns, in the order :func:`chunk_extra` gives them."""
+    from cdpr_design.workspaces import hanging
+
     cols = ["collision_free"] if interference else []
     cols += cables.column_names(design)
     if mode == "total":
         cols.append("orientations_feasible")
     elif mode == "range":
         cols += [f"range_{c}" for c in design.motion.rotation_coords]
+    elif hanging.applies(design):  # under-constrained: the tilt it hangs with
+        cols += hanging.columns(design)
     return cols
 
 

@@ -1,0 +1,137 @@
+"""The hanging effector in the ``pose`` and ``fk`` commands: their JSON objects (cli.md keys).
+
+``fk`` is the geometrico-static forward problem for every design
+(:func:`cdpr_design.statics.hanging.equilibrium`); ``pose --at`` of an
+under-constrained design reports the orientation its effector hangs in
+(``free``: and judges the pose there, :func:`cdpr_design.workspaces.hanging.free_pose`;
+``fixed``: beside the held model's answer, under ``hanging``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cdpr_design.errors import InputError
+
+
+def _num(x):
+    x = float(x) + 0.0  # + 0.0 turns -0.0 into 0.0
+    return x if math.isfinite(x) else None
+
+
+def _by_cable(design, values) -> dict:
+    return {c: _num(v) for c, v in zip(design.cable_names, values)}
+
+
+def _orientation(value):
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_num(v) for v in value]
+    return _num(value)
+
+
+def _motion_pose(design, position, orientation) -> list:
+    """The pose in the motion's coordinates: the position, then the orientation if the motion has it."""
+    pose = [float(v) for v in position]
+    if design.motion.rotational:
+        pose += [orientation] if design.motion.planar else list(orientation)
+    return pose
+
+
+def _equilibrium_data(design, e) -> dict:
+    return {"pose": _motion_pose(design, e.position, e.orientation), "orientation": _orientation(e.orientation),
+            "tilt": _num(e.tilt_deg), "tensions": _by_cable(design, e.tensions),
+            "slack": [design.cable_names[i] for i in e.slack], "energy": float(e.energy), "stable": bool(e.stable)}
+
+
+def fk_data(design, lengths, guess=None) -> dict:
+    """The ``fk --json`` object: where the effector rests for cable ``lengths`` [m].
+
+    ``guess`` (motion coordinates) adds its orientation as a start of the
+    search (rotational motions).  Designs with swivel pulleys take the
+    kinematic solve (:func:`cdpr_design.statics.kinematics.forward_kinematics`):
+    the geometrico-static solver models point outlets.
+    """
+    from cdpr_design.statics import hanging as H
+    from cdpr_design.statics import kinematics as kin
+
+    rho = np.asarray(lengths, float)
+    if kin.has_pulleys(design):
+        res = kin.forward_kinematics(design, rho, guess=guess)
+        return {"pose": [float(v) for v in res.pose], "residual": float(res.residual),
+                "method": f"{res.method} (swivel pulleys: kinematic solution, tensions not solved)",
+                "orientation": None, "tilt": None, "tensions": None, "slack": None, "stable": None,
+                "equilibria": [], "effector_orientation": design.effector.orientation}
+    options = {}
+    if guess is not None and design.motion.rotational:
+        options["nominal"] = kin.pose_rotation(design, guess)
+    try:
+        e = H.equilibrium(design, rho, **options)
+    except InputError as exc:  # unreachable, too short or miscounted lengths
+        raise (H.UnreachableLengths if isinstance(exc, H.UnreachableLengths) else InputError)(
+            f"--lengths: {exc}") from None
+    p = np.zeros(3)
+    p[: e.position.size] = e.position
+    L = np.linalg.norm(design.outlets - p - design.attachments @ e.rotation.T, axis=1)
+    taut = np.zeros(design.m, bool)
+    taut[[i for i in range(design.m) if i not in e.slack]] = True
+    miss = np.where(taut, L - rho, np.maximum(L - rho, 0.0))
+    data = _equilibrium_data(design, e)
+    data.update(
+        residual=float(np.linalg.norm(miss)), balance_residual=float(e.residual), method="geometrico-static",
+        model=e.model, effector_orientation=design.effector.orientation, underconstrained=bool(e.underconstrained),
+        indeterminate=bool(e.indeterminate), within_limits=e.within_limits,
+        equilibria=[_equilibrium_data(design, q) for q in e.equilibria])
+    return data
+
+
+def hanging_fields(design, position) -> dict:
+    """``pose --json``'s ``tilt`` and ``hanging`` keys for a ``fixed`` under-constrained design:
+    the orientation the free body would hang in at ``position`` [m] (:func:`statics.hanging.pose_at`)."""
+    from cdpr_design.statics import hanging as H
+
+    at = H.pose_at(design, position, nominal=H.nominal_rotation(design))
+    return {"tilt": _num(at.tilt_deg), "hanging": {
+        "feasible": bool(at.feasible), "reason": at.reason, "orientation": _orientation(at.orientation),
+        "tilt": _num(at.tilt_deg), "tensions": _by_cable(design, at.tensions), "lengths": _by_cable(design, at.lengths),
+        "stable": bool(at.stable), "within_limits": at.within_limits}}
+
+
+def free_pose_data(design, position, kind: str = "static") -> dict:
+    """The ``pose --json`` object of a ``free`` under-constrained design at ``position`` [m]:
+    the hanging orientation and the statics there (the workspace's rows; cli.md keys)."""
+    from cdpr_design.statics.hanging_at import REASONS, OK
+    from cdpr_design.workspaces.hanging import free_pose
+
+    if kind != "static":
+        raise InputError(f"--kind {kind}: an under-constrained design with effector.orientation: free hangs "
+                         "under gravity alone (static only)")
+    r = free_pose(design, position)
+    h = r.hanging
+    ok = h.status[0] == OK
+    reason = REASONS[h.status[0]]
+    if ok and not r.within[0]:
+        reason = "the hanging tensions are outside their bounds"
+    elif ok and not r.feasible[0]:
+        reason = f"it hangs tilted by {h.tilt_deg[0]:.4g} deg, more than max_tilt"
+    ori = _orientation(h.orientation[0]) if ok else None
+    W = None
+    if ok:
+        from cdpr_design.statics.hanging_core import euler_xyz
+        from cdpr_design.statics.pose import _structure
+        from cdpr_design import kernels as K
+
+        full = np.concatenate([np.pad(np.asarray(position, float), (0, 3 - len(position))), euler_xyz(h.rotation[0])])
+        W = [[float(x) for x in row] for row in _structure(design, full, K)[1]]
+    if ok:
+        pose = _motion_pose(design, position, ori)
+    else:
+        pose = [float(v) for v in position] + [None] * len(design.motion.rotation_coords)
+    return {
+        "pose": pose,
+        "orientation": ori, "tilt": _num(h.tilt_deg[0]), "lengths": _by_cable(design, r.lengths[0]),
+        "tensions": _by_cable(design, r.tensions[0]), "feasible": bool(r.feasible[0]), "reason": reason,
+        "stable": bool(ok), "margin": _num(r.margin[0]), "structure_matrix": W, "collisions": None,
+        "effector_orientation": "free", "hanging_tensions": _by_cable(design, h.tensions[0]),
+    }

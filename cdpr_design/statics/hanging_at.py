@@ -1,0 +1,569 @@
+"""The orientation an under-constrained effector hangs in at commanded positions, batched.
+
+At a commanded position p its cables are taut (their lengths are what put the
+effector there) but its orientation R is not commanded: the effector turns
+until the cable forces balance its weight, force *and* moment, with every
+tension >= 0, and it rests there when that equilibrium is stable (the
+reduced-Hessian test of Carricato & Merlet 2013).  :func:`hang` answers this
+for many positions at once, with numpy:
+
+* a planar rigid body on two cables: every balanced orientation is a root of a
+  degree-2 trigonometric polynomial, the method of
+  :mod:`cdpr_design.kernels.hanging`; :func:`planar_two_cable` runs it with
+  numpy, vectorised over the positions with the kernel's formulas, tolerances
+  and choice (the numba kernel is its fast twin; the tests hold them equal);
+* a point mass (every attachment at one point): the orientation changes no
+  cable, and the centre of mass hangs straight below the attachment point;
+* any other rigid body (a planar one on one cable, a spatial one on one to
+  five): damped Newton's method on force and moment balance, unknowns the
+  rotation and the tensions, from the starting orientations
+  :data:`PLANAR_STARTS` / :data:`SPATIAL_STARTS` about the nominal one.  On
+  four or five cables a spatial body's balanced orientations at one position
+  form a family (m - 3 parameters: the lengths can still choose among them);
+  there each step is the minimum-norm Newton step plus a pull along the
+  family towards the nominal orientation, so the iteration ends at the member
+  nearest to the nominal orientation (the KKT point of min |w|^2 subject to
+  balance, R = exp([w]) R_nominal).
+
+Of the balanced orientations found with tensions >= 0 and stable, the least
+tilted one is the answer (``tilt`` = angle between the platform's vertical and
+the frame's, |phi| for planar bodies).  Status codes (:data:`OK`, ...) say why
+a position has none; they equal the kernel's ``TILT_*`` codes (a test checks).
+
+Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging_core`.
+
+References
+----------
+M. Carricato, J.-P. Merlet, "Stability analysis of underconstrained
+cable-driven parallel robots", IEEE Trans. Robotics 29(1), 288-296, 2013.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cdpr_design.statics import hanging_core as hc
+
+#: A stable equilibrium with every tension >= 0 was found.
+OK = 0
+#: Balanced orientations exist, but each needs a pushing (negative) cable.
+PUSHING = 1
+#: Balanced orientations with tensions >= 0 exist, but none is stable.
+UNSTABLE = 2
+#: No orientation balances the weight with the cables taut.
+NO_BALANCE = 3
+#: Degenerate input: a zero-length cable, or every orientation balances.
+DEGENERATE = 4
+
+#: Why a position has no hanging orientation, indexed by status code.
+REASONS = (
+    "ok",
+    "every balanced orientation needs a pushing cable",
+    "the balanced orientations with pulling cables are unstable",
+    "no orientation balances the weight with the cables taut",
+    "degenerate geometry (zero-length cable or indifferent balance)",
+)
+
+#: Starting rotation angles [rad] about z of the planar Newton search.
+PLANAR_STARTS = (0.0, math.pi / 2, math.pi, -math.pi / 2)
+#: Starting rotation vectors [rad] (frame axes) of the spatial Newton search.
+SPATIAL_STARTS = ((0.0, 0.0, 0.0), (0.7, 0.0, 0.0), (-0.7, 0.0, 0.0), (0.0, 0.7, 0.0), (0.0, -0.7, 0.0),
+                  (0.0, 0.0, math.pi))
+
+
+@dataclass
+class Hanging:
+    """The hanging orientation at k positions.
+
+    ``rotation`` (k, 3, 3) and ``tensions`` (k, m) [N] are NaN where
+    ``status`` (k,) is not :data:`OK`; ``hessian_min`` (k,) the smallest
+    eigenvalue of the reduced Hessian there; ``up`` the frame's unit vertical
+    (-g/|g|).  ``alternatives`` (when asked for) holds, per position, the
+    other balanced orientations found with tensions >= 0, as (rotation,
+    tensions, stable) tuples.
+    """
+
+    rotation: np.ndarray
+    tensions: np.ndarray
+    status: np.ndarray
+    hessian_min: np.ndarray
+    planar: bool
+    up: np.ndarray
+    alternatives: list = field(default_factory=list)
+
+    @property
+    def feasible(self) -> np.ndarray:
+        return self.status == OK
+
+    @property
+    def tilt_deg(self) -> np.ndarray:
+        """Angle [deg] between the platform's vertical R up and up; NaN where it cannot hang."""
+        return tilt_many(self.rotation, self.up)
+
+    @property
+    def orientation(self) -> np.ndarray:
+        """phi (k,) [rad] about z (planar) or (k, 3) [rx, ry, rz] [rad], R = Rx Ry Rz (spatial)."""
+        if self.planar:
+            return np.arctan2(self.rotation[:, 1, 0], self.rotation[:, 0, 0])
+        return hc.euler_xyz(self.rotation)
+
+
+def tilt_many(R, up) -> np.ndarray:
+    """Angles [deg] between R up and up for rotations R (..., 3, 3) (atan2 of the sine and
+    cosine: accurate near level too, where acos loses half the digits)."""
+    up = np.asarray(up, float)
+    v = np.einsum("...ij,j->...i", R, up)
+    s = np.linalg.norm(np.cross(v, up), axis=-1)
+    return np.degrees(np.arctan2(s, v @ up))
+
+
+def _cr(ax, ay, bx, by):
+    return ax * by - ay * bx
+
+
+# ----------------------------------------------------------------------------
+# planar rigid body on two cables (numpy twin of kernels.hanging)
+# ----------------------------------------------------------------------------
+
+def _geometry2(phi, A, B, c, px, py):
+    """v_1, v_2, R b_1, R b_2, R c at angles phi (broadcast with px, py)."""
+    co, si = np.cos(phi), np.sin(phi)
+    rb1 = (co * B[0, 0] - si * B[0, 1], si * B[0, 0] + co * B[0, 1])
+    rb2 = (co * B[1, 0] - si * B[1, 1], si * B[1, 0] + co * B[1, 1])
+    rc = (co * c[0] - si * c[1], si * c[0] + co * c[1])
+    v1 = (A[0, 0] - px - rb1[0], A[0, 1] - py - rb1[1])
+    v2 = (A[1, 0] - px - rb2[0], A[1, 1] - py - rb2[1])
+    return v1, v2, rb1, rb2, rc
+
+
+def _moment2(phi, A, B, c, fx, fy, px, py):
+    """M(phi) of kernels.hanging.moment_residual, broadcast over arrays."""
+    v1, v2, rb1, rb2, rc = _geometry2(phi, A, B, c, px, py)
+    m1 = _cr(rb1[0] - rc[0], rb1[1] - rc[1], v1[0], v1[1])
+    m2 = _cr(rb2[0] - rc[0], rb2[1] - rc[1], v2[0], v2[1])
+    return _cr(fx, fy, v2[0], v2[1]) * m1 + _cr(v1[0], v1[1], fx, fy) * m2
+
+
+def _trig_roots(coef):
+    """Roots phi (k, 4) (NaN padded) of the trigonometric polynomial with coefficients
+    ``coef`` (5, k) and a flag (k,) where M vanishes identically (kernels.hanging.trig_roots)."""
+    k = coef.shape[1]
+    scale = np.abs(coef).sum(axis=0)
+    c4 = 0.5 * (coef[3] - 1j * coef[4])
+    c3 = 0.5 * (coef[1] - 1j * coef[2])
+    c2 = coef[0] + 0j
+    c1, c0 = np.conj(c3), np.conj(c4)
+    tiny = 1e-13 * scale
+    quart = np.abs(c4) > tiny
+    quad = ~quart & (np.abs(c3) > tiny)
+    degenerate = ~(scale > 0) | ~np.isfinite(scale) | ~(quart | quad)
+    z = np.full((k, 4), np.nan + 0j)
+    q = np.flatnonzero(quart & ~degenerate)
+    if q.size:
+        C = np.zeros((q.size, 4, 4), complex)
+        C[:, 0] = -np.stack([c3[q], c2[q], c1[q], c0[q]], axis=1) / c4[q, None]
+        C[:, 1, 0] = C[:, 2, 1] = C[:, 3, 2] = 1.0
+        z[q] = np.linalg.eigvals(C)
+    q = np.flatnonzero(quad & ~degenerate)
+    if q.size:
+        C = np.zeros((q.size, 2, 2), complex)
+        C[:, 0] = -np.stack([c2[q], c1[q]], axis=1) / c3[q, None]
+        C[:, 1, 0] = 1.0
+        z[q, :2] = np.linalg.eigvals(C)
+    near = np.abs(np.abs(z) - 1.0) < 1e-3
+    return np.where(near, np.arctan2(z.imag, z.real), np.nan), degenerate
+
+
+def _polish2(phi, coef, A, B, c, fx, fy, px, py):
+    """Eight Newton steps on M at most (kernels.hanging.polish_root); (phi, |M(phi)|)."""
+    active = np.isfinite(phi)
+    for _ in range(8):
+        if not active.any():
+            break
+        f = _moment2(phi, A, B, c, fx, fy, px, py)
+        d = (-coef[1] * np.sin(phi) + coef[2] * np.cos(phi) - 2.0 * coef[3] * np.sin(2.0 * phi)
+             + 2.0 * coef[4] * np.cos(2.0 * phi))
+        active &= d != 0.0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(active, f / d, 0.0)
+        phi = phi - step
+        active &= np.abs(step) >= 1e-15
+    phi = np.arctan2(np.sin(phi), np.cos(phi))
+    return phi, np.abs(_moment2(phi, A, B, c, fx, fy, px, py))
+
+
+def _equilibrium2(phi, A, B, c, mass, gx, gy, px, py):
+    """Tensions, reduced Hessian h and a geometry flag (kernels.hanging.equilibrium_at)."""
+    fx, fy = -mass * gx, -mass * gy
+    v1, v2, rb1, rb2, rc = _geometry2(phi, A, B, c, px, py)
+    L1, L2 = np.hypot(*v1), np.hypot(*v2)
+    D = _cr(v1[0], v1[1], v2[0], v2[1])
+    ok = (L1 > 1e-12) & (L2 > 1e-12) & (np.abs(D) > 1e-12 * L1 * L2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = _cr(fx, fy, v2[0], v2[1]) / D * L1
+        t2 = _cr(v1[0], v1[1], fx, fy) / D * L2
+        u1, u2 = (v1[0] / L1, v1[1] / L1), (v2[0] / L2, v2[1] / L2)
+        g1 = (-u1[0], -u1[1], -_cr(rb1[0], rb1[1], u1[0], u1[1]))
+        g2 = (-u2[0], -u2[1], -_cr(rb2[0], rb2[1], u2[0], u2[1]))
+        nx = g1[1] * g2[2] - g1[2] * g2[1]
+        ny = g1[2] * g2[0] - g1[0] * g2[2]
+        nt = g1[0] * g2[1] - g1[1] * g2[0]
+        nn = nx * nx + ny * ny + nt * nt
+        h = (mass * (gx * rc[0] + gy * rc[1])) * nt * nt
+        q1 = u1[1] * nx - u1[0] * ny - (rb1[0] * u1[0] + rb1[1] * u1[1]) * nt
+        q2 = u2[1] * nx - u2[0] * ny - (rb2[0] * u2[0] + rb2[1] * u2[1]) * nt
+        h = h + t1 * (q1 * q1 / L1 + (u1[0] * rb1[0] + u1[1] * rb1[1]) * nt * nt)
+        h = h + t2 * (q2 * q2 / L2 + (u2[0] * rb2[0] + u2[1] * rb2[1]) * nt * nt)
+        h = h / nn
+    return t1, t2, h, ok
+
+
+def planar_two_cable(A, B, c, mass, g, P):
+    """Every balanced orientation of a planar body on two taut cables at positions P (k, >=2) [m].
+
+    ``A``, ``B`` (2, >=2) outlets and attachments [m], ``c`` centre of mass
+    (platform) [m], ``mass`` [kg], ``g`` gravity [m/s^2].  Returns (phi (k, 4)
+    [rad], tensions (k, 4, 2) [N], h (k, 4) reduced Hessian, ok (k, 4): a real
+    root with a proper geometry, degenerate (k,)).  Same formulas, order and
+    tolerances as :func:`cdpr_design.kernels.hanging.hanging_tilt`.
+    """
+    A, B, c, g, P = (np.asarray(x, float) for x in (A, B, c, g, P))
+    px, py = P[:, 0], P[:, 1]
+    fx, fy = -mass * g[0], -mass * g[1]
+    coef = np.zeros((5, P.shape[0]))
+    for k in range(5):
+        t = 2.0 * math.pi * k / 5.0
+        mk = _moment2(t, A, B, c, fx, fy, px, py)
+        coef += np.array([mk / 5.0, 0.4 * mk * math.cos(t), 0.4 * mk * math.sin(t),
+                          0.4 * mk * math.cos(2.0 * t), 0.4 * mk * math.sin(2.0 * t)])
+    phi0, degenerate = _trig_roots(coef)
+    X = lambda v: v[:, None]  # noqa: E731 - broadcast per-position values over the roots
+    phi, res = _polish2(phi0, X(coef.T).transpose(2, 0, 1), A, B, c, fx, fy, X(px), X(py))
+    scale = np.abs(coef).sum(axis=0)
+    real = res <= 1e-9 * X(scale)
+    t1, t2, h, ok = _equilibrium2(phi, A, B, c, mass, g[0], g[1], X(px), X(py))
+    ok &= real
+    return phi, np.stack([t1, t2], axis=-1), h, ok, degenerate
+
+
+def _choose_planar2(phi, t, h, ok, degenerate, weight):
+    """The kernel's choice: of the stable roots with t >= 0, the one closest to level."""
+    ttol = 1e-9 * weight
+    pull = ok & np.all(t >= -ttol, axis=-1)
+    stable = pull & (h > 1e-10 * weight)
+    key = np.where(stable, np.abs(phi), np.inf)
+    j = np.argmin(key, axis=1)
+    rows = np.arange(phi.shape[0])
+    found = np.isfinite(key[rows, j])
+    status = np.where(found, OK, np.where(pull.any(1), UNSTABLE, np.where(ok.any(1), PUSHING, NO_BALANCE)))
+    status = np.where(degenerate, DEGENERATE, status).astype(np.int8)
+    return j, status, pull, stable
+
+
+# ----------------------------------------------------------------------------
+# other rigid bodies: batched Newton from several starts
+# ----------------------------------------------------------------------------
+
+def _cross(a, b):
+    """a x b over the last axis (broadcast), without np.cross's overhead."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+class _Balance:
+    """Force and moment balance at many (position, rotation) pairs, scaled: forces by the
+    weight, moments by the weight times the effector's length scale."""
+
+    def __init__(self, geo: hc.Geometry, planar: bool):
+        self.geo = geo
+        self.rows = [0, 1, 5] if planar else list(range(6))
+        self.rot = [2] if planar else [0, 1, 2]
+        sc = np.array([1.0, 1.0, 1.0, geo.size, geo.size, geo.size]) * geo.weight
+        self.scale = sc[self.rows]
+
+    def parts(self, P, R):
+        """W (N, 6, m), gravity wrench (N, 6), Rb, L, u of the cables."""
+        geo = self.geo
+        Rb = np.einsum("nij,mj->nmi", R, geo.B)
+        l = geo.A[None] - P[:, None, :] - Rb
+        L = np.sqrt(np.einsum("nmi,nmi->nm", l, l))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            u = l / L[..., None]
+        W = np.concatenate([u, _cross(Rb, u)], axis=2).transpose(0, 2, 1)
+        f = geo.mass * geo.g
+        wg = np.concatenate([np.broadcast_to(f, (len(P), 3)), _cross(R @ geo.c, f)], axis=1)
+        return W, wg, Rb, L, u
+
+    def residual(self, P, R, t):
+        W, wg, *_ = self.parts(P, R)
+        F = np.einsum("nrm,nm->nr", W, t) + wg
+        return F[:, self.rows] / self.scale
+
+    def jacobian(self, P, R, t, w):
+        """d(scaled residual)/d(rotation coordinates, tensions / weight) (N, r, nr + m)."""
+        geo = self.geo
+        W, wg, Rb, L, u = self.parts(P, R)
+        Pm = (np.eye(3) - u[..., :, None] * u[..., None, :]) / L[..., None, None]
+        Bx = hc.skew(Rb)
+        tt = t[..., None, None]
+        Jf = np.sum(tt * Pm @ Bx, axis=1)
+        Jm = np.sum(tt * (hc.skew(u) @ Bx + Bx @ Pm @ Bx), axis=1)
+        Jm = Jm + hc.skew(geo.mass * geo.g) @ hc.skew(R @ geo.c)
+        Jw = np.concatenate([Jf, Jm], axis=1) @ hc.left_jacobian(w)
+        J = np.concatenate([Jw[:, :, self.rot], W * geo.weight], axis=2)[:, self.rows]
+        return J / self.scale[:, None]
+
+
+def _solve_sym(G, b):
+    """G x = b for symmetric positive semi-definite stacks, with a tiny ridge (never singular)."""
+    n = G.shape[-1]
+    ridge = 1e-14 * (np.trace(G, axis1=-2, axis2=-1)[..., None, None] / n + 1e-300)
+    return np.linalg.solve(G + ridge * np.eye(n), b[..., None])[..., 0]
+
+
+def _step(J, F, w, nr):
+    """Newton step (N, nr + m): Gauss-Newton where the rows outnumber the unknowns, else the
+    minimum-norm step plus, near balance, a pull along the family towards w = 0."""
+    N, r, c = J.shape
+    JT = J.transpose(0, 2, 1)
+    if c <= r:
+        return -_solve_sym(JT @ J, np.einsum("nrc,nr->nc", J, F))
+    G = J @ JT
+    dz = -np.einsum("ncr,nr->nc", JT, _solve_sym(G, F))
+    v = np.zeros((N, c))
+    v[:, :nr] = w
+    pull = v - np.einsum("ncr,nr->nc", JT, _solve_sym(G, np.einsum("nrc,nc->nr", J, v)))
+    size = np.linalg.norm(pull, axis=1, keepdims=True)
+    pull = pull * np.minimum(1.0, 0.3 / np.maximum(size, 1e-300))
+    near = (np.abs(F).max(axis=1) <= 1e-8)[:, None]
+    return dz - np.where(near, pull, 0.0)
+
+
+def newton_many(geo: hc.Geometry, P, planar: bool, R0, starts, iterations: int = 40):
+    """Balanced orientations from each start: (R (k, S, 3, 3), t (k, S, m) [N], balanced (k, S)).
+
+    ``P`` (k, 3) positions [m]; ``R0`` the nominal rotation; ``starts`` (S, 3)
+    rotation vectors [rad] (frame axes) about it.  A pair is balanced when the
+    largest force / moment imbalance is at most 1e-8 max(1, weight) [N, N m].
+    Each iteration works on the pairs not yet converged; a pair whose step
+    the line search cannot accept twice in a row is given up.
+    """
+    bal = _Balance(geo, planar)
+    k, S = len(P), len(starts)
+    nr = len(bal.rot)
+    Pn = np.repeat(np.asarray(P, float), S, axis=0)
+    full = np.tile(np.asarray(starts, float), (k, 1))
+    R = hc.rotvec(full) @ R0
+    W, wg, *_ = bal.parts(Pn, R)
+    Wr = W[:, bal.rows] / bal.scale[:, None]
+    t = -_solve_sym(Wr.transpose(0, 2, 1) @ Wr, np.einsum("nrm,nr->nm", Wr, wg[:, bal.rows] / bal.scale))
+    t = np.nan_to_num(t) * geo.weight
+    F = np.nan_to_num(bal.residual(Pn, R, t), nan=np.inf)
+    active = np.ones(len(Pn), bool)
+    fails = np.zeros(len(Pn), int)
+    for _ in range(iterations):
+        idx = np.flatnonzero(active)
+        if not idx.size:
+            break
+        Pa, Ra, ta, wa, Fa = Pn[idx], R[idx], t[idx], full[idx], F[idx]
+        merit = np.abs(Fa).max(axis=1)
+        dz = _step(np.nan_to_num(bal.jacobian(Pa, Ra, ta, wa)), np.where(np.isfinite(Fa), Fa, 0.0),
+                   wa[:, bal.rot], nr)
+        near = merit <= 1e-8
+        done = (merit <= 1e-14) & (np.abs(dz).max(axis=1) <= 1e-12)
+        lam = np.ones(len(idx))
+        pending = ~done
+        for _ in range(8):
+            sub = np.flatnonzero(pending)
+            if not sub.size:
+                break
+            w2 = wa[sub].copy()
+            w2[:, bal.rot] += lam[sub, None] * dz[sub, :nr]
+            t2 = ta[sub] + lam[sub, None] * dz[sub, nr:] * geo.weight
+            R2 = hc.rotvec(w2) @ R0
+            F2 = np.nan_to_num(bal.residual(Pa[sub], R2, t2), nan=np.inf)
+            ok = (np.abs(F2).max(axis=1) < merit[sub]) | near[sub]
+            g = idx[sub[ok]]
+            full[g], t[g], R[g], F[g] = w2[ok], t2[ok], R2[ok], F2[ok]
+            pending[sub[ok]] = False
+            lam[sub] *= 0.5
+        fails[idx] = np.where(pending, fails[idx] + 1, 0)
+        active[idx[done]] = False
+        active &= fails < 2
+    unscaled = np.abs(F * bal.scale).max(axis=1)
+    ok = unscaled <= 1e-8 * max(1.0, geo.weight)
+    return R.reshape(k, S, 3, 3), t.reshape(k, S, geo.m), ok.reshape(k, S)
+
+
+def point_mass_many(geo: hc.Geometry, P, planar: bool, R):
+    """A point mass at positions P (k, 3): tensions (k, m) [N] balancing its weight with the
+    cables from the common attachment (least squares) and whether they do (k,)."""
+    W, wg, *_ = _Balance(geo, planar).parts(np.asarray(P, float), np.broadcast_to(R, (len(P), 3, 3)))
+    d = 2 if planar else 3
+    Wf, f = W[:, :d], -wg[:, :d]
+    t = _solve_sym(Wf.transpose(0, 2, 1) @ Wf, np.einsum("ndm,nd->nm", Wf, f))
+    res = np.abs(np.einsum("ndm,nm->nd", Wf, t) - f).max(axis=1)
+    return t, res <= 1e-8 * max(1.0, geo.weight)
+
+
+def point_mass_rotation(geo: hc.Geometry, planar: bool, nominal=None) -> np.ndarray:
+    """The rotation that puts a point mass's centre of mass straight below its attachment
+    point (the smallest such rotation; ``nominal`` when they coincide)."""
+    down = geo.g / np.linalg.norm(geo.g)
+    arm = geo.c - geo.B[0]
+    if np.linalg.norm(arm) > 1e-12 * geo.size:
+        if planar:
+            return hc.rot_z(math.atan2(down[1], down[0]) - math.atan2(arm[1], arm[0]))
+        return hc.align(arm, down)
+    return np.eye(3) if nominal is None else np.asarray(nominal, float)
+
+
+# ----------------------------------------------------------------------------
+# the hanging orientation: dispatch and choice
+# ----------------------------------------------------------------------------
+
+def rot_z_many(phi) -> np.ndarray:
+    """Rotations (k, 3, 3) about z by angles phi (k,) [rad]."""
+    co, si = np.cos(phi), np.sin(phi)
+    R = np.zeros(np.shape(phi) + (3, 3))
+    R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1], R[..., 2, 2] = co, -si, si, co, 1.0
+    return R
+
+
+def hang(geo: hc.Geometry, P, planar: bool, *, nominal=None, engine: str = "numpy",
+         alternatives: bool = False) -> Hanging:
+    """The hanging orientation at positions ``P`` (k, 2|3) [m] (see the module doc).
+
+    ``nominal`` (3, 3): the orientation the Newton search starts about and is
+    pulled towards (default level, R = I).  ``engine``: ``numpy``, or
+    ``numba`` for the planar two-cable kernel (same answers; the other
+    bodies are always numpy).  ``alternatives``: also list, per position, the
+    other balanced orientations with tensions >= 0 (small k only).
+    """
+    P = np.asarray(P, float).reshape(len(P), -1)
+    P3 = np.zeros((len(P), 3))
+    P3[:, : P.shape[1]] = P[:, :3]
+    up = -geo.g / np.linalg.norm(geo.g)
+    if hc.is_point_mass(geo.B):
+        out = _hang_point(geo, P3, planar, nominal, alternatives)
+    elif planar and geo.m == 2:
+        out = _hang_planar2(geo, P3, engine, alternatives)
+    else:
+        out = _hang_general(geo, P3, planar, nominal, alternatives)
+    R, t, status, hmin, alts = out
+    bad = status != OK
+    R[bad], t[bad], hmin[bad] = np.nan, np.nan, np.nan
+    return Hanging(R, t, status, hmin, planar, up, alts)
+
+
+def _statuses(found, pull, balanced):
+    return np.where(found, OK, np.where(pull, UNSTABLE, np.where(balanced, PUSHING, NO_BALANCE))).astype(np.int8)
+
+
+def _hang_planar2(geo, P, engine, alternatives):
+    k = len(P)
+    if engine == "numba" and not alternatives:
+        from cdpr_design.kernels import hanging as K  # numba, on first use
+
+        phi, t, h, status, _ = K.hanging_tilt_batch(geo.A, geo.B, geo.c, geo.mass, geo.g,
+                                                    np.ascontiguousarray(P[:, :2]))
+        return rot_z_many(phi), t, status.astype(np.int8), h, []
+    phis, ts, hs, ok, degenerate = planar_two_cable(geo.A, geo.B, geo.c, geo.mass, geo.g, P)
+    j, status, pull, stable = _choose_planar2(phis, ts, hs, ok, degenerate, geo.weight)
+    rows = np.arange(k)
+    alts = []
+    if alternatives:
+        for i in range(k):
+            alts.append([(hc.rot_z(phis[i, s]), np.maximum(ts[i, s], 0.0), bool(stable[i, s]))
+                         for s in range(phis.shape[1]) if pull[i, s] and not (status[i] == OK and s == j[i])])
+    return rot_z_many(phis[rows, j]), np.maximum(ts[rows, j], 0.0), status, hs[rows, j].copy(), alts
+
+
+def _stable(geo, p, R, t, dofs):
+    """(stable, smallest reduced-Hessian eigenvalue) of a balanced pose with tensions t."""
+    taut = [i for i in range(geo.m) if t[i] > 1e-9 * geo.weight]
+    h = geo.reduced_hessian_min(p, R, np.maximum(t, 0.0), taut, dofs)
+    return bool(h > 1e-9 * geo.weight), h
+
+
+def taut_sets(m: int, planar: bool) -> list[tuple[int, ...]]:
+    """The sets of taut cables searched: every cable, and for a spatial body on four or
+    five cables also every three of them (the others slack: such a body generally hangs
+    from three cables; with all taut its balanced orientations form a family)."""
+    sets = [tuple(range(m))]
+    if not planar and m > 3:
+        sets += list(itertools.combinations(range(m), 3))
+    return sets
+
+
+def _hang_general(geo, P, planar, nominal, alternatives):
+    """Newton from the nominal orientation for every taut set, then from the other starts
+    where nothing was found; the least tilted stable pulling answer."""
+    R0 = np.eye(3) if nominal is None else np.asarray(nominal, float)
+    starts = [(0.0, 0.0, a) for a in PLANAR_STARTS] if planar else list(SPATIAL_STARTS)
+    k = len(P)
+    R, t, hmin = np.full((k, 3, 3), np.nan), np.full((k, geo.m), np.nan), np.full(k, np.nan)
+    found, pull_any, bal_any = np.zeros(k, bool), np.zeros(k, bool), np.zeros(k, bool)
+    seen = [[] for _ in range(k)]  # distinct candidates per position: (R, t, stable, tilt)
+    for first, stage in ((True, starts[:1]), (False, starts[1:])):
+        todo = np.arange(k) if first else np.flatnonzero(~found)
+        if not todo.size or not stage:
+            continue
+        cands = []
+        for S in taut_sets(geo.m, planar):
+            sub = hc.Geometry(geo.A[list(S)], geo.B[list(S)], geo.c, geo.mass, geo.g)
+            Rs, tS, ok = newton_many(sub, P[todo], planar, R0, stage)
+            ts = np.zeros(tS.shape[:2] + (geo.m,))
+            ts[:, :, list(S)] = tS
+            cands.append((Rs, ts, ok))
+        Rs = np.concatenate([c[0] for c in cands], axis=1)
+        ts = np.concatenate([c[1] for c in cands], axis=1)
+        balanced = np.concatenate([c[2] for c in cands], axis=1)
+        _choose_general(geo, P, planar, todo, Rs, ts, balanced, seen, found, alternatives)
+        pull_any[todo] |= (balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)).any(1)
+        bal_any[todo] |= balanced.any(1)
+    alts = []
+    for i in range(k):
+        best = min((c for c in seen[i] if c[2]), key=lambda c: c[3], default=None)
+        if best is not None:
+            R[i], t[i], hmin[i] = best[0], best[1], best[4]
+        if alternatives:
+            alts.append([c[:3] for c in seen[i] if c is not best])
+    return R, t, _statuses(found, pull_any, bal_any), hmin, alts
+
+
+def _choose_general(geo, P, planar, todo, Rs, ts, balanced, seen, found, alternatives):
+    """Stability of the pulling candidates in order of tilt, until a stable one (all of
+    them with ``alternatives``); appends (R, t, stable, tilt, h) to ``seen``."""
+    dofs = hc.DOFS_PLANAR if planar else hc.DOFS_SPATIAL
+    pull = balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)
+    tilt = tilt_many(Rs, -geo.g / np.linalg.norm(geo.g))
+    for n, i in enumerate(todo):
+        for s in np.argsort(np.where(pull[n], tilt[n], np.inf), kind="stable"):
+            if not pull[n, s] or (found[i] and not alternatives):
+                break
+            if any(hc.rotation_angle(Rs[n, s] @ c[0].T) < 1e-7 for c in seen[i]):
+                continue
+            st, h = _stable(geo, P[i], Rs[n, s], ts[n, s], dofs)
+            seen[i].append((Rs[n, s], np.maximum(ts[n, s], 0.0), st, tilt[n, s], h))
+            found[i] |= st
+
+
+def _hang_point(geo, P, planar, nominal, alternatives):
+    R0 = point_mass_rotation(geo, planar, nominal)
+    t, balanced = point_mass_many(geo, P, planar, R0)
+    pull = balanced & np.all(t >= -1e-9 * geo.weight, axis=1)
+    dofs = hc.DOFS_POINT2 if planar else hc.DOFS_POINT3
+    k = len(P)
+    found, hmin = np.zeros(k, bool), np.full(k, np.nan)
+    for i in np.flatnonzero(pull):
+        found[i], hmin[i] = _stable(geo, P[i], R0, t[i], dofs)
+    alts = [[(R0, np.maximum(t[i], 0.0), False)] if pull[i] and not found[i] else [] for i in range(k)] \
+        if alternatives else []
+    R = np.broadcast_to(R0, (k, 3, 3)).copy()
+    return R, np.maximum(t, 0.0), _statuses(found, pull, balanced), hmin, alts

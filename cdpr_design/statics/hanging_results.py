@@ -1,0 +1,217 @@
+"""The results of the hanging-effector solvers (:mod:`cdpr_design.statics.hanging`).
+
+:class:`Equilibrium` and :class:`HangingFK` (where the effector rests for
+given cable lengths), :class:`HangingAt` (its hanging orientation at a
+commanded position), :class:`TiltMap` (that orientation over a planar grid),
+and the two errors.  Units: SI (m, N, J, rad); ``tilt_deg`` in degrees.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cdpr_design.errors import InputError
+from cdpr_design.statics import hanging_core as hc
+
+
+class UnreachableLengths(InputError):
+    """No configuration has every |a_i - p - R b_i| <= rho_i (the reason is the message)."""
+
+
+class NotUnderconstrained(InputError):
+    """The design's cables can fix its orientation: it does not hang freely."""
+
+
+# ----------------------------------------------------------------------------
+# results
+# ----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """One equilibrium of the hanging effector.
+
+    Attributes
+    ----------
+    position : (d,) array
+        Platform origin p [m] (d = 2 planar, 3 spatial).
+    rotation : (3, 3) array
+        R (rotation about z for planar bodies).
+    tensions : (m,) array
+        Cable tensions [N]; 0 for a slack cable.
+    slack : tuple of int
+        Indices of the cables that carry no tension.
+    energy : float
+        Potential energy -m g . (p + R c) [J].
+    stable : bool
+        Reduced Hessian positive definite (or the taut cables lock the pose).
+        False with ``hessian_min`` ~ 0 is a neutral equilibrium: a continuum
+        of poses of equal energy (e.g. a body free to turn about an axis
+        through its taut attachments and its centre of mass).
+    hessian_min : float
+        Smallest eigenvalue of the reduced Hessian (inf when locked) [N/m and
+        N m/rad mixed: the chart is (dp [m], w [rad])].
+    residual : float
+        Largest force [N] / moment [N m] imbalance after refinement.
+    length_error : float
+        Largest | |l_i| - rho_i | over the taut cables [m].
+    indeterminate : bool
+        More taut cables than the pose has degrees of freedom and they lock
+        it: the tensions are not unique (the minimum-norm non-negative ones
+        are reported, and ``slack`` lists the cables they leave at zero).
+    planar : bool
+    up : tuple
+        -g / |g|, the frame's vertical (for ``tilt_deg``).
+    within_limits : bool or None
+        Tensions within the design's [tension_min, tension_max] (set by the
+        Design-level functions; None for plain arrays or indeterminate tensions).
+    """
+
+    position: np.ndarray
+    rotation: np.ndarray
+    tensions: np.ndarray
+    slack: tuple[int, ...]
+    energy: float
+    stable: bool
+    hessian_min: float
+    residual: float
+    length_error: float = 0.0
+    indeterminate: bool = False
+    planar: bool = True
+    up: tuple = (0.0, 0.0, 1.0)
+    within_limits: bool | None = None
+
+    @property
+    def orientation(self):
+        """phi [rad] about z (planar) or [rx, ry, rz] [rad], R = Rx Ry Rz (spatial)."""
+        return orientation_of(self.rotation, self.planar)
+
+    @property
+    def tilt_deg(self) -> float:
+        """Tilt away from level [deg]: the angle between the platform's vertical R up and
+        the frame's up = -g/|g| (|phi| for planar bodies; a turn about the vertical is no tilt)."""
+        return tilt_of(self.rotation, self.up)
+
+    @property
+    def pose(self) -> np.ndarray:
+        """[x, y, phi] (planar) or [x, y, z, rx, ry, rz] (spatial) [m, rad]."""
+        ori = self.orientation
+        return np.concatenate([self.position, [ori] if self.planar else ori])
+
+    def to_dict(self) -> dict:
+        return {"position": self.position.tolist(), "orientation": self.orientation,
+                "tilt_deg": self.tilt_deg, "tensions": self.tensions.tolist(),
+                "slack": list(self.slack), "energy": self.energy, "stable": self.stable,
+                "hessian_min": self.hessian_min, "residual": self.residual,
+                "indeterminate": self.indeterminate, "within_limits": self.within_limits}
+
+
+@dataclass(frozen=True)
+class HangingFK(Equilibrium):
+    """:func:`fk`: the lowest-energy equilibrium, plus every other stable one found.
+
+    ``equilibria`` holds the other stable equilibria (each an
+    :class:`Equilibrium` with its ``energy``), lowest energy first; ``model``
+    is ``point`` or ``rigid``; ``underconstrained`` as in the module doc.
+    """
+
+    equilibria: tuple = ()
+    model: str = "rigid"
+    underconstrained: bool = True
+
+    def to_dict(self) -> dict:
+        d = super().to_dict()
+        d.update(model=self.model, underconstrained=self.underconstrained,
+                 equilibria=[e.to_dict() for e in self.equilibria])
+        return d
+
+
+@dataclass(frozen=True)
+class HangingAt:
+    """:func:`pose_at`: the hanging orientation at a commanded position.
+
+    ``feasible`` False comes with ``reason``; then orientation fields are NaN.
+    ``lengths`` [m] are the cable lengths that put the effector there;
+    ``alternatives`` the other balanced orientations found, as
+    (orientation, tensions, stable) tuples; ``within_limits`` as for
+    :class:`Equilibrium` (tension limits are not part of feasibility).
+    """
+
+    feasible: bool
+    reason: str
+    position: np.ndarray
+    rotation: np.ndarray
+    tensions: np.ndarray
+    stable: bool
+    hessian_min: float
+    lengths: np.ndarray
+    planar: bool = True
+    alternatives: tuple = field(default=())
+    up: tuple = (0.0, 0.0, 1.0)
+    within_limits: bool | None = None
+
+    @property
+    def orientation(self):
+        """phi [rad] (planar) or [rx, ry, rz] [rad] (spatial); NaN when infeasible."""
+        if not self.feasible:
+            return math.nan if self.planar else [math.nan] * 3
+        return Equilibrium.orientation.fget(self)
+
+    @property
+    def tilt_deg(self) -> float:
+        """Tilt from level [deg] as :attr:`Equilibrium.tilt_deg`; NaN when infeasible."""
+        return tilt_of(self.rotation, self.up) if self.feasible else math.nan
+
+    @property
+    def pose(self) -> np.ndarray:
+        """[x, y, phi] (planar) or [x, y, z, rx, ry, rz] (spatial) [m, rad]."""
+        ori = self.orientation
+        return np.concatenate([self.position, [ori] if self.planar else ori])
+
+    def to_dict(self) -> dict:
+        return {"feasible": self.feasible, "reason": self.reason, "position": self.position.tolist(),
+                "orientation": self.orientation, "tilt_deg": self.tilt_deg,
+                "tensions": self.tensions.tolist(), "stable": self.stable, "lengths": self.lengths.tolist(),
+                "within_limits": self.within_limits}
+
+
+def orientation_of(R, planar: bool):
+    """phi [rad] about z (planar) or [rx, ry, rz] [rad] with R = Rx Ry Rz (spatial)."""
+    if planar:
+        return float(math.atan2(R[1, 0], R[0, 0]))
+    return [float(a) for a in hc.euler_xyz(R)]
+
+
+def tilt_of(R, up) -> float:
+    """The angle [deg] between R up and up (up a unit vector): the tilt from level."""
+    from cdpr_design.statics.hanging_at import tilt_many
+
+    return float(tilt_many(np.asarray(R, float), up))
+
+
+@dataclass(frozen=True)
+class TiltMap:
+    """Hanging orientation over a grid of positions (planar body on two cables).
+
+    ``axes`` the x and y samples [m]; ``phi`` [rad], ``tilt_deg`` [deg],
+    ``tensions`` [N] (..., 2) and ``status`` (``kernels.hanging.TILT_*``) on the
+    grid (shape (nx, ny)); ``reasons`` the text of each status code;
+    ``within_limits`` where the hanging tensions respect the design's limits.
+    """
+
+    axes: tuple
+    phi: np.ndarray
+    tensions: np.ndarray
+    status: np.ndarray
+    reasons: tuple
+    within_limits: np.ndarray | None = None
+
+    @property
+    def tilt_deg(self) -> np.ndarray:
+        return np.degrees(np.abs(self.phi))
+
+    @property
+    def feasible(self) -> np.ndarray:
+        return self.status == 0

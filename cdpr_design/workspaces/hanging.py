@@ -1,0 +1,275 @@
+"""Workspaces of under-constrained designs: the tilt the effector hangs with, and its statics there.
+
+An under-constrained design (:func:`cdpr_design.statics.hanging.underconstrained`)
+cannot hold its effector's orientation; at each grid position the effector
+turns until the cables balance its weight, force and moment
+(:func:`cdpr_design.statics.hanging_at.hang`).  :func:`sweep` is what
+:func:`cdpr_design.workspaces.run` does for such a design:
+
+- ``effector.orientation: fixed`` (the default, the spec's model of an
+  effector held at the commanded orientation): the usual sweep, untouched,
+  with the hanging tilt added beside it, so that the held model's
+  feasibility is never read without the tilt the real body would take;
+- ``free``: feasibility judged at the hanging orientation - the effector
+  hangs there stably with every cable pulling, its tensions are within their
+  bounds (and the capacity margin below is >= 0 where the motion's rows
+  define one), and its tilt is at most ``max_tilt`` (``--max-tilt``, default
+  ``requirements.max_tilt``).  The tensions are the hanging ones (unique:
+  they balance force and moment), the lengths those that put it there, the
+  margin the capacity margin of the motion's wrench rows at the hanging
+  orientation (:func:`cdpr_design.kernels.hanging.eval_rotated`); where it
+  cannot hang the lengths, tensions and margin are empty.
+
+Both add the CSV columns :func:`columns` to every chunk (``tilt`` [deg] and
+the orientation per rotation axis [rad]), keep the tilt map for the
+``tilt_map.png`` picture (:class:`HangingMaps`) and add the summary keys
+``effector_orientation``, ``hangs``, ``max_tilt``, ``max_tilt_hanging`` (and
+``tilt_limit``, ``tilt_limited`` under ``free``).  Rows stream in chunks: the
+grid is never held in memory.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from cdpr_design.errors import InputError
+from cdpr_design.model.design import Design
+from cdpr_design.statics import hanging as H
+from cdpr_design.statics import hanging_at as ha
+from cdpr_design.statics import hanging_core as hc
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.cables import is_ideal
+from cdpr_design.statics.pose import combinations
+from cdpr_design.workspaces.engine import use_numpy
+from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, chunk_poses, positions3
+
+
+@dataclass
+class HangingMaps:
+    """The hanging tilt behind ``tilt_map.png``: ``tilt`` [deg] on the result's map cells
+    (NaN where the effector cannot hang), the design's ``orientation_mode`` and, under
+    ``free``, the ``tilt_limit`` [deg] in force (None: no limit)."""
+
+    tilt: np.ndarray
+    orientation_mode: str
+    tilt_limit: float | None = None
+
+
+def applies(design: Design) -> bool:
+    """Whether a sweep of ``design`` goes through :func:`sweep`: under-constrained, with point
+    outlets and ideal cables (the hanging solvers model neither swivel pulleys nor elastic or
+    sagging cables; ``free`` with either is refused)."""
+    if not H.underconstrained(design):
+        return False
+    if kin.has_pulleys(design) or not is_ideal(design):
+        if H.hangs_freely(design):
+            hanging_model(design)
+        return False
+    return True
+
+
+def hanging_model(design: Design) -> None:
+    """Refuse what the hanging solvers do not model: swivel pulleys, elastic or sagging cables."""
+    H.point_outlets(design, "effector.orientation: free")
+    if not is_ideal(design):
+        raise InputError("cable model: an effector with effector.orientation: free hangs on ideal cables "
+                         "(the hanging solver models rigid, weightless cables); use --cable-model ideal")
+
+
+def refuse_commanded_orientations(design: Design) -> None:
+    """Orientation workspaces sweep commanded orientations: refused when the effector hangs freely."""
+    if H.hangs_freely(design):
+        raise InputError("--orientations: an under-constrained design with effector.orientation: free does "
+                         "not command its orientation (it hangs); use effector.orientation: fixed to sweep "
+                         "commanded orientations")
+
+
+def columns(design: Design) -> list[str]:
+    """The extra ``workspace.csv`` columns of an under-constrained design: ``tilt`` [deg] and
+    the hanging orientation per rotation axis [rad] (``orientation_phi``, or ``orientation_rx``,
+    ``orientation_ry``, ``orientation_rz``)."""
+    axes = ["phi"] if design.motion.planar else ["rx", "ry", "rz"]
+    return ["tilt"] + [f"orientation_{a}" for a in axes]
+
+
+def tilt_limit(design: Design, max_tilt: float | None) -> float | None:
+    """The tilt limit [deg] of a sweep: ``max_tilt``, else ``requirements.max_tilt`` (free designs)."""
+    if max_tilt is not None:
+        if not H.hangs_freely(design):
+            raise InputError("max_tilt: a tilt limit applies to an under-constrained design with "
+                             "effector.orientation: free (a fixed effector is held at its commanded orientation)")
+        if not (0.0 <= max_tilt <= 180.0):
+            raise InputError(f"max_tilt: expected an angle in [0, 180] degrees, got {max_tilt}")
+        return float(max_tilt)
+    return design.requirements.max_tilt if H.hangs_freely(design) else None
+
+
+class _Hanger:
+    """The hanging orientation at a chunk's positions, for one design."""
+
+    def __init__(self, design: Design, ori, engine: str, poses: int):
+        A, B, c, mass, g, planar = H.design_arrays(design)
+        self.geo = hc.Geometry(A, B, c, mass, g)
+        self.planar = planar
+        self.design = design
+        self.nominal = kin.rotation_matrix(*ori)
+        # the planar two-cable kernel where numba is (or will be) loaded: numba asked for, a
+        # free design (its statics run the kernels), or a sweep the engines give to numba
+        two = planar and design.m == 2 and not hc.is_point_mass(B)
+        numba = engine == "numba" or (engine == "auto" and (H.hangs_freely(design) or not use_numpy(engine, True, poses)))
+        self.engine = "numba" if two and numba else "numpy"
+
+    def __call__(self, P3):
+        h = ha.hang(self.geo, P3, self.planar, nominal=self.nominal, engine=self.engine)
+        ori = h.orientation.reshape(len(P3), -1)
+        extra = {"tilt": h.tilt_deg}
+        for j, name in enumerate(columns(self.design)[1:]):
+            extra[name] = ori[:, j]
+        return h, extra
+
+
+class _Stats:
+    """Streaming summary figures of the hanging tilt."""
+
+    def __init__(self):
+        self.hangs, self.max_hanging, self.max_feasible, self.limited = 0, -np.inf, -np.inf, 0
+
+    def add(self, tilt, feasible):
+        ok = np.isfinite(tilt)
+        self.hangs += int(np.count_nonzero(ok))
+        if ok.any():
+            self.max_hanging = max(self.max_hanging, float(tilt[ok].max()))
+        f = feasible.astype(bool) & ok
+        if f.any():
+            self.max_feasible = max(self.max_feasible, float(tilt[f].max()))
+
+    def summary(self, design, limit) -> dict:
+        num = lambda x: float(x) if np.isfinite(x) else None  # noqa: E731
+        out = {"effector_orientation": design.effector.orientation, "underconstrained": True,
+               "hangs": self.hangs, "max_tilt": num(self.max_feasible), "max_tilt_hanging": num(self.max_hanging)}
+        if design.effector.orientation == "free":
+            out.update(tilt_limit=limit, tilt_limited=self.limited if limit is not None else None)
+        return out
+
+
+def sweep(design: Design, kind: str, g, ori, fixed_sweep, *, on_chunk=None, progress=None,
+          chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False, engine: str = "auto",
+          max_tilt: float | None = None):
+    """Sweep grid ``g`` of an under-constrained design (see the module doc).
+
+    ``fixed_sweep(on_chunk)`` runs the design's usual sweep (the caller's, at
+    orientation ``ori`` (3,) [rad]); the other parameters are those of
+    :func:`cdpr_design.workspaces.run`.  ``max_tilt`` [deg] applies to ``free``
+    designs only.
+    """
+    limit = tilt_limit(design, max_tilt)
+    hanger = _Hanger(design, ori, engine, g.size)
+    tilt_maps = Maps(g, 0, keep_maps, extra_maps=("tilt",))
+    stats = _Stats()
+    if H.hangs_freely(design):
+        if kind != "static" or interference:
+            what = "--collisions" if interference else f"--kind {kind}"
+            raise InputError(f"{what}: an under-constrained design with effector.orientation: free is swept "
+                             "statically only (it hangs under gravity; interference at the hanging pose is "
+                             "not modelled)")
+        result = _free_sweep(design, g, ori, hanger, limit, stats, tilt_maps, on_chunk, progress, chunk, keep_maps)
+    else:
+        def add_tilt(c):
+            h, extra = hanger(positions3(g, c.start, len(c.feasible)))
+            c.extra.update(extra)
+            stats.add(extra["tilt"], c.feasible)
+            tilt_maps.add(c.start, (0, np.inf, -np.inf), c.feasible, c.margin, c.tensions[:, :0], extra)
+            if on_chunk is not None:
+                on_chunk(c)
+
+        result = fixed_sweep(add_tilt)
+    result.extra.update(stats.summary(design, limit))
+    result.hanging = HangingMaps(tilt_maps.xmaps["tilt"], design.effector.orientation, limit)
+    return result
+
+
+@dataclass
+class FreeRows:
+    """The statics of a ``free`` design at k positions, at its hanging orientations.
+
+    ``hanging`` the :class:`~cdpr_design.statics.hanging_at.Hanging`; ``extra`` the
+    :func:`columns` (name -> (k,)); ``feasible`` uint8, ``margin`` [N], ``tensions``
+    (k, m) [N] (NaN where infeasible), ``lengths`` (k, m) [m] (NaN where it cannot hang);
+    ``within`` where it hangs within the tension bounds (before the tilt limit).
+    """
+
+    hanging: ha.Hanging
+    extra: dict
+    feasible: np.ndarray
+    margin: np.ndarray
+    tensions: np.ndarray
+    lengths: np.ndarray
+    within: np.ndarray
+
+
+def free_rows(design: Design, P, hanger: "_Hanger", limit: float | None) -> FreeRows:
+    """Hanging orientation, then feasibility, margin, tensions and lengths there, at positions
+    ``P`` (k, 3) [m] (see the module doc; the workspace's rows and ``pose --at``'s)."""
+    from cdpr_design.kernels import hanging as K  # numba, on first use
+
+    k, m = len(P), design.m
+    h, extra = hanger(P)
+    R = np.ascontiguousarray(h.rotation)
+    f = design.effector.mass * np.asarray(design.gravity, float)
+    wg = np.concatenate([np.broadcast_to(f, (k, 3)), np.cross(R @ design.effector.center_of_mass, f)], axis=1)
+    wreq = np.ascontiguousarray(-wg[:, design.rows][:, None, :])
+    feas, marg = np.empty(k, np.uint8), np.empty(k)
+    ten, L = np.empty((k, m)), np.empty((k, m))
+    K.eval_rotated(np.ascontiguousarray(P, dtype=float), R, design.outlets,
+                   np.ascontiguousarray(design.attachments), design.rows, wreq, design.tension_min,
+                   design.tension_max, combinations(m, design.n), 0, feas, marg, ten, L)
+    t, tol = h.tensions, 1e-9 * max(1.0, hanger.geo.weight)
+    with np.errstate(invalid="ignore"):
+        within = h.feasible & np.all((t >= design.tension_min - tol) & (t <= design.tension_max + tol), axis=1)
+        within &= (feas == 1) | ~np.isfinite(marg)  # the margin's verdict where the motion's rows have one
+        upright = within if limit is None else within & (extra["tilt"] <= limit)
+    return FreeRows(h, extra, upright.astype(np.uint8), marg, np.where(upright[:, None], t, np.nan), L, within)
+
+
+def _free_sweep(design, g, ori, hanger, limit, stats, tilt_maps, on_chunk, progress, chunk, keep_maps):
+    """The grid at the hanging orientations, chunk by chunk (see the module doc)."""
+    from cdpr_design.workspaces.hardware import chunk_stats
+
+    t0 = time.perf_counter()
+    total = g.size
+    maps = Maps(g, design.m, keep_maps)
+    chunk = max(1, min(chunk, total))
+    done = 0
+    while done < total:
+        cnt = min(chunk, total - done)
+        P = positions3(g, done, cnt)
+        r = free_rows(design, P, hanger, limit)
+        stats.limited += int(np.count_nonzero(r.within & (r.feasible == 0)))
+        stats.add(r.extra["tilt"], r.feasible)
+        maps.add(done, chunk_stats(r.feasible, r.margin, r.tensions, maps.tpeak), r.feasible, r.margin, r.tensions)
+        tilt_maps.add(done, (0, np.inf, -np.inf), r.feasible, r.margin, r.tensions[:, :0], {"tilt": r.extra["tilt"]})
+        if on_chunk is not None:
+            poses = chunk_poses(design, P, ori)
+            if design.motion.rotational:  # the orientation columns hold the hanging orientation
+                poses[:, design.motion.dim:] = r.hanging.orientation.reshape(cnt, -1)
+            on_chunk(Chunk(done, poses, r.feasible, r.margin, r.tensions, r.lengths, extra=r.extra))
+        done += cnt
+        if progress is not None:
+            progress(done, total)
+    return maps.result(design, "static", ori, t0)
+
+
+def free_pose(design: Design, position, max_tilt: float | None = None) -> FreeRows:
+    """:func:`free_rows` at one position [m] of a ``free`` under-constrained design, about
+    ``workspace.orientation``, with the sweep's tilt limit (``max_tilt``, else the requirement)."""
+    if not H.hangs_freely(design):
+        raise InputError("free_pose: the design's orientation is commanded (not free and under-constrained)")
+    hanging_model(design)
+    P = np.zeros((1, 3))
+    pos = np.asarray(position, float).ravel()
+    P[0, : pos.size] = pos
+    hanger = _Hanger(design, design.default_orientation_full(), "numpy", 1)
+    return free_rows(design, P, hanger, tilt_limit(design, max_tilt))

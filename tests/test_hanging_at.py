@@ -1,0 +1,320 @@
+"""The hanging orientation at commanded positions (statics.hanging_at) and the held-orientation
+forward problem, against slow independent references.
+
+References (none shares code with the implementation):
+
+* the numba kernel ``kernels.hanging.hanging_tilt_batch`` for the numpy twin (and, in
+  test_hanging.py, the kernel against a brute-force instantaneous-centre scan);
+* scipy ``least_squares`` on force and moment balance from many random starts, per set of
+  taut cables, with its own rotations (scipy's Rotation) and cross products; stability by
+  scipy SLSQP energy minimisation started from perturbed poses under the same lengths
+  (a stable equilibrium is a strict local minimum: every run comes back);
+* scipy SLSQP on min |w|^2 subject to balance for the family of a spatial body on four taut
+  cables;
+* scipy SLSQP energy minimisation with the orientation held, for the held forward problem.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import least_squares, minimize
+from scipy.spatial.transform import Rotation
+
+from cdpr_design.kernels import hanging as K
+from cdpr_design.model import spec
+from cdpr_design.statics import hanging as H
+from cdpr_design.statics import hanging_at as ha
+from cdpr_design.statics import hanging_core as hc
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.pose import evaluate_pose
+from tests.helpers import DESIGNS
+from tests.test_hanging import G2, G3, check_equilibrium, random_planar2
+
+UP3 = np.array([0.0, 0.0, 1.0])
+
+
+def test_status_codes_match_the_kernel():
+    assert (ha.OK, ha.PUSHING, ha.UNSTABLE, ha.NO_BALANCE, ha.DEGENERATE) == (
+        K.TILT_OK, K.TILT_PUSHING, K.TILT_UNSTABLE, K.TILT_NO_BALANCE, K.TILT_DEGENERATE)
+    assert len(ha.REASONS) == len(K.TILT_REASONS)
+
+
+def test_numpy_twin_equals_the_kernel():
+    """Same roots, tensions, stability and choice on random designs, positions inside and
+    outside their frames (the kernel is tested against a brute-force scan in test_hanging)."""
+    rng = np.random.default_rng(21)
+    compared = 0
+    for _ in range(20):
+        A, B, c, mass, W, Hh = random_planar2(rng)
+        P = np.column_stack([rng.uniform(-0.2 * W, 1.2 * W, 300), rng.uniform(-0.2 * Hh, 1.1 * Hh, 300)])
+        phi, t, h, status, nbal = K.hanging_tilt_batch(A, B, c, mass, G2, P)
+        geo = hc.Geometry(A, B, c, mass, G2)
+        got = ha.hang(geo, P, True, engine="numpy")
+        assert np.array_equal(got.status, status)
+        ok = status == K.TILT_OK
+        compared += int(ok.sum())
+        np.testing.assert_allclose(got.orientation[ok], phi[ok], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(got.tensions[ok], t[ok], rtol=1e-10, atol=1e-10 * mass)
+        np.testing.assert_allclose(got.hessian_min[ok], h[ok], rtol=1e-8)
+        # the numba engine of hang() is the kernel itself
+        nb = ha.hang(geo, P, True, engine="numba")
+        assert np.array_equal(nb.status, status)
+        np.testing.assert_allclose(nb.orientation[ok], phi[ok], rtol=0, atol=1e-15)
+    assert compared > 2000
+
+
+# ---------------------------------------------------------------------------
+# reference: balance by scipy from many starts, stability by energy minimisation
+# ---------------------------------------------------------------------------
+
+def ref_balanced(A, B, c, mass, g, p, S, starts):
+    """Balanced rotations of the cables S taut at position p with tensions >= 0 (distinct)."""
+    f = mass * g
+    weight = mass * np.linalg.norm(g)
+
+    def residual(x):
+        R = Rotation.from_rotvec(x[:3]).as_matrix()
+        Rb = B[S] @ R.T
+        l = A[S] - p - Rb
+        u = l / np.linalg.norm(l, axis=1)[:, None]
+        force = u.T @ x[3:] + f
+        moment = np.cross(Rb, u).T @ x[3:] + np.cross(R @ c, f)
+        return np.concatenate([force, moment / 0.3]) / weight
+
+    out = []
+    for w0 in starts:
+        s = least_squares(residual, np.concatenate([w0, np.full(len(S), weight / len(S))]),
+                          xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        if np.max(np.abs(s.fun)) > 1e-10 or s.x[3:].min() < -1e-9 * weight:
+            continue
+        R = Rotation.from_rotvec(s.x[:3]).as_matrix()
+        if not any(np.linalg.norm(R - Q) < 1e-6 for Q, _ in out):
+            out.append((R, s.x[3:]))
+    return out
+
+
+def ref_is_local_minimum(A, B, c, mass, g, p, R, rng, tries=4, size=0.02):
+    """SLSQP energy minimisation under the lengths |a_i - p - R b_i| from perturbed poses
+    comes back to (p, R): a strict local minimum (a stable equilibrium)."""
+    rho = np.linalg.norm(A - p - B @ R.T, axis=1)
+
+    def conf(x):
+        return p + x[:3], Rotation.from_rotvec(x[3:]).as_matrix() @ R
+
+    def energy(x):
+        q, Q = conf(x)
+        return -mass * g @ (q + Q @ c)
+
+    def cons(x):
+        q, Q = conf(x)
+        return rho ** 2 - np.sum((A - q - B @ Q.T) ** 2, axis=1)
+
+    e0 = energy(np.zeros(6))
+    for _ in range(tries):
+        x0 = rng.normal(size=6) * size
+        s = minimize(energy, x0, method="SLSQP", constraints=[{"type": "ineq", "fun": cons}],
+                     options={"ftol": 1e-15, "maxiter": 500})
+        # back within 1e-3 (m, rad); SLSQP's last iterate may overstep the lengths by ~1e-6 m
+        if np.linalg.norm(s.x) > 1e-3 or (cons(s.x).min() > -1e-9 and energy(s.x) < e0 - 1e-7 * mass):
+            return False
+    return True
+
+
+def crane():
+    d = spec.load(DESIGNS / "crane4.yaml")
+    return d, H.design_arrays(d)
+
+
+@pytest.mark.parametrize("case", ["three", "crane"])
+def test_spatial_hanging_against_scipy(case):
+    """The least tilted stable pulling orientation at random positions: nothing the reference
+    finds (12 starts per set of taut cables) is both stable and less tilted, and the answer
+    itself is a balanced, stable pose (reference minimisation comes back to it)."""
+    rng = np.random.default_rng(3 if case == "three" else 4)
+    if case == "three":
+        ang = np.array([0.0, 2.1, 4.2])
+        A = np.column_stack([2 * np.cos(ang), 2 * np.sin(ang), np.full(3, 3.0)])
+        B = np.column_stack([0.2 * np.cos(ang + 0.3), 0.2 * np.sin(ang + 0.3), np.full(3, 0.05)])
+        c, mass, sets = np.array([0.02, -0.01, -0.1]), 2.0, [(0, 1, 2)]
+        P = np.column_stack([rng.uniform(-0.8, 0.8, 4), rng.uniform(-0.8, 0.8, 4), rng.uniform(0.8, 2.2, 4)])
+    else:
+        _, (A, B, c, mass, _, _) = crane()
+        sets = [tuple(s) for s in itertools.combinations(range(4), 3)]
+        P = np.column_stack([rng.uniform(1.0, 4.0, 3), rng.uniform(0.8, 3.2, 3), rng.uniform(0.8, 3.3, 3)])
+    geo = hc.Geometry(A, B, c, mass, G3)
+    got = ha.hang(geo, P, False)
+    starts = [np.zeros(3)] + [rng.normal(size=3) * 0.7 for _ in range(11)]
+    for k, p in enumerate(P):
+        assert got.status[k] == ha.OK
+        R = got.rotation[k]
+        assert ref_is_local_minimum(A, B, c, mass, G3, p, R, rng)
+        e = H.Equilibrium(p, R, got.tensions[k], (), 0.0, True, 0.0, 0.0, planar=False)
+        check_equilibrium(A, B, c, mass, G3, np.linalg.norm(A - p - B @ R.T, axis=1), e, False)
+        better = []
+        for S in sets:
+            for Q, _ in ref_balanced(A, B, c, mass, G3, p, list(S), starts):
+                tilt = math.degrees(math.acos(np.clip(UP3 @ Q @ UP3, -1, 1)))
+                if tilt < got.tilt_deg[k] - 1e-6 and ref_is_local_minimum(A, B, c, mass, G3, p, Q, rng):
+                    better.append(tilt)
+        assert not better, (p, got.tilt_deg[k], better)
+
+
+def test_four_taut_cables_take_the_family_member_nearest_level():
+    """With all four cables of crane4 taut, the balanced orientations at a position form a
+    family; the answer is its member of smallest rotation from level (scipy SLSQP on
+    min |w|^2 subject to force and moment balance, its own kinematics)."""
+    d, (A, B, c, mass, _, _) = crane()
+    geo = hc.Geometry(A, B, c, mass, G3)
+    f = mass * G3
+    checked = 0
+    for p in ([2.5, 3.0, 3.5], [3.3, 2.0, 1.0], [1.8, 2.0, 3.0]):
+        p = np.array(p)
+        got = ha.hang(geo, p[None], False)
+        assert got.status[0] == ha.OK and np.all(got.tensions[0] > 1.0)  # all four taut
+
+        def balance(x):
+            R = Rotation.from_rotvec(x[:3]).as_matrix()
+            Rb = B @ R.T
+            l = A - p - Rb
+            u = l / np.linalg.norm(l, axis=1)[:, None]
+            return np.concatenate([u.T @ x[3:] + f, (np.cross(Rb, u).T @ x[3:] + np.cross(R @ c, f)) / 0.3])
+
+        s = minimize(lambda x: x[:3] @ x[:3], np.concatenate([np.zeros(3), np.full(4, 150.0)]), method="SLSQP",
+                     constraints=[{"type": "eq", "fun": balance}], options={"ftol": 1e-13, "maxiter": 300})
+        assert np.abs(balance(s.x)).max() < 1e-7
+        R_ref = Rotation.from_rotvec(s.x[:3]).as_matrix()
+        np.testing.assert_allclose(got.rotation[0], R_ref, atol=1e-6)
+        np.testing.assert_allclose(got.tensions[0], s.x[3:], rtol=1e-5)
+        checked += 1
+    assert checked == 3
+
+
+def test_crane_hangs_from_three_cables_off_centre():
+    """Off its symmetry planes crane4 cannot hang with all four cables pulling: it hangs from
+    three, the fourth slack (zero tension, its length exactly the distance), and those
+    lengths bring it back there (fk: the pose is where it rests)."""
+    d, _ = crane()
+    at = H.pose_at(d, [1.5, 1.5, 2.0])
+    assert at.feasible and at.tilt_deg == pytest.approx(14.457, abs=0.01)
+    assert np.count_nonzero(at.tensions == 0) == 1
+    back = H.fk(d, at.lengths)
+    np.testing.assert_allclose(back.position, [1.5, 1.5, 2.0], atol=1e-8)
+    np.testing.assert_allclose(back.rotation, at.rotation, atol=1e-8)
+    assert back.slack == (int(np.flatnonzero(at.tensions == 0)[0]),)
+
+
+def test_point_mass_positions():
+    """A point mass on two cables in space hangs only in the vertical plane of its outlets
+    (where the weight is in the cables' span), straight below them on one."""
+    A = np.array([[0.0, 0.0, 3.0], [2.0, 0.0, 3.0]])
+    geo = hc.Geometry(A, np.zeros((2, 3)), np.array([0.0, 0.0, -0.1]), 2.0, G3)
+    P = np.array([[1.0, 0.0, 1.0], [1.0, 0.3, 1.0], [3.0, 0.0, 1.0]])
+    h = ha.hang(geo, P, False)
+    assert h.status.tolist() == [ha.OK, ha.NO_BALANCE, ha.PUSHING]
+    u = (A - P[0]) / np.linalg.norm(A - P[0], axis=1)[:, None]
+    np.testing.assert_allclose(u.T @ h.tensions[0], [0, 0, 2 * 9.81], atol=1e-9)
+    assert h.tilt_deg[0] == 0.0  # the centre of mass is straight below the attachment
+
+
+# ---------------------------------------------------------------------------
+# the held-orientation forward problem (the fk of `fixed` 2T / 3T designs)
+# ---------------------------------------------------------------------------
+
+def ref_held(A, B, c, mass, g, rho, d, rng, starts=12):
+    """Lowest energy over SLSQP runs, orientation held at identity (translation only)."""
+    Ad, Bd = A[:, :d], B[:, :d]
+    cons = lambda x: rho ** 2 - np.sum((Ad - x - Bd) ** 2, axis=1)  # noqa: E731
+    best = None
+    for _ in range(starts):
+        x0 = rng.uniform(Ad.min(0) - rho.max(), Ad.max(0))
+        s = minimize(lambda x: -mass * g[:d] @ x, x0, method="SLSQP", constraints=[{"type": "ineq", "fun": cons}],
+                     options={"ftol": 1e-14, "maxiter": 500})
+        if cons(s.x).min() > -1e-9 and (best is None or s.fun < best.fun):
+            best = s
+    return best
+
+
+def test_held_fk_against_slsqp_and_the_closed_form():
+    """planar-two-cable designs with the orientation held: the lowest point of the two discs
+    (SLSQP reference), the paper's closed form wherever both cables pull, a slack cable
+    otherwise - never a pushing one."""
+    rng = np.random.default_rng(8)
+    slack = both = 0
+    for _ in range(30):
+        A, B, c, mass, W, Hh = random_planar2(rng)
+        p = np.array([rng.uniform(-0.3 * W, 1.3 * W), rng.uniform(0.0, 0.9 * Hh), 0.0])
+        rho = np.linalg.norm(A - p - B, axis=1) + (rng.uniform(0, 0.3, 2) if rng.uniform() < 0.3 else 0.0)
+        r = H.fk_held_arrays(A, B, c, mass, G2, rho, True, np.eye(3))
+        ref = ref_held(A, B, c, mass, G2, rho, 2, rng)
+        assert -mass * G2[:2] @ r.position == pytest.approx(ref.fun, abs=1e-7 * mass)
+        assert np.all(r.tensions >= 0) and r.stable and r.model == "held" and r.orientation == 0.0
+        taut = r.tensions > 0
+        L = np.linalg.norm(A - np.r_[r.position, 0] - B, axis=1)
+        np.testing.assert_allclose(L[taut], rho[taut], atol=1e-12)
+        u = (A - np.r_[r.position, 0] - B) / L[:, None]
+        np.testing.assert_allclose(u[:, :2].T @ r.tensions, [0, 9.81 * mass], atol=1e-9 * mass)
+        if r.slack:
+            slack += 1
+        else:
+            both += 1
+            d = spec.from_dict({"name": "r", "motion": "2T", "frame": {"lower": [0, 0], "upper": [W, Hh]},
+                                "effector": {"mass": mass, "size": [0.1, 0.1]}, "tension": [0, 1e3],
+                                "cables": [{"name": f"c{i}", "outlet": A[i, :2].tolist(),
+                                            "attachment": B[i, :2].tolist()} for i in range(2)]})
+            np.testing.assert_allclose(r.position, kin.forward_kinematics(d, rho).pose, atol=1e-9)
+    assert slack >= 3 and both >= 10
+
+
+def test_held_point_mass_fk_equals_the_free_one():
+    """A point mass's orientation changes no cable: held and free give the same position."""
+    A = np.array([[0.0, 0.0, 3.0], [2.0, 0.0, 3.0], [1.0, 1.5, 3.0]])
+    rho = np.linalg.norm(A - [1.0, -1.0, 1.0], axis=1)
+    free = H.fk_arrays(A, np.zeros((3, 3)), np.zeros(3), 1.0, G3, rho, False)
+    held = H.fk_held_arrays(A, np.zeros((3, 3)), np.zeros(3), 1.0, G3, rho, False, np.eye(3))
+    np.testing.assert_allclose(held.position, free.position, atol=1e-12)
+    assert held.slack == free.slack == (2,)
+
+
+# ---------------------------------------------------------------------------
+# the statics at per-pose orientations (kernels.hanging.eval_rotated)
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["planar4.yaml", "ipanema3.yaml"])
+def test_eval_rotated_equals_evaluate_pose(name):
+    """Each pose at its own rotation gives what evaluate_pose gives at that pose (the
+    workspace kernels, themselves tested against scipy and cvxpy)."""
+    from cdpr_design.statics.pose import combinations, wrench_vertices
+
+    d = spec.load(DESIGNS / name)
+    rng = np.random.default_rng(9)
+    k = 12
+    lo, hi = np.array(d.workspace.grid.lower), np.array(d.workspace.grid.upper)
+    P = np.zeros((k, 3))
+    P[:, : d.motion.dim] = rng.uniform(lo + 0.2 * (hi - lo), hi - 0.2 * (hi - lo), (k, d.motion.dim))
+    ori = np.zeros((k, 3))
+    if d.motion.planar:
+        ori[:, 2] = rng.uniform(-0.2, 0.2, k)
+    else:
+        ori[:] = rng.uniform(-0.1, 0.1, (k, 3))
+    R = np.array([kin.rotation_matrix(*o) for o in ori])
+    wreq = np.array([wrench_vertices(d, "static", o) for o in ori])
+    m = d.m
+    feas, marg, ten, L = np.empty(k, np.uint8), np.empty(k), np.empty((k, m)), np.empty((k, m))
+    R[3] = np.nan  # a pose where the effector cannot hang
+    K.eval_rotated(P, R, d.outlets, np.ascontiguousarray(d.attachments), d.rows, wreq, d.tension_min,
+                   d.tension_max, combinations(m, d.n), 0, feas, marg, ten, L)
+    assert feas[3] == 0 and np.isnan(marg[3]) and np.all(np.isnan(L[3]))
+    n_feasible = 0
+    for i in set(range(k)) - {3}:
+        pose = np.concatenate([P[i], ori[i]])[list(d.motion.pose_index)]
+        ref = evaluate_pose(d, pose)
+        assert bool(feas[i]) == ref.feasible
+        n_feasible += ref.feasible
+        assert marg[i] == pytest.approx(ref.margin, rel=1e-9, abs=1e-9)
+        np.testing.assert_allclose(L[i], ref.lengths, rtol=1e-12)
+        np.testing.assert_allclose(ten[i], ref.tensions, rtol=1e-9, atol=1e-9)
+    assert n_feasible >= 3
