@@ -71,7 +71,11 @@ SAG_TOL = 1e-13
 _X, _Z, _UX, _UY, _UZ, _TH, _L0, _H, _VB, _LO, _HI, _TA = range(12)
 # the cable's least tension and its shape (:func:`least_tension`; NaN until needed)
 _TM, _HM, _VM, _LM = range(12, 16)
-NCW = 16
+# the fixed point's previous residual g - x and unrelaxed iterate g (for the relaxation)
+_RP, _GP = 16, 17
+# the tension of the shape in (th, L0), and the previous shape's (tension, th, L0): a secant start
+_TAU, _TP, _THP, _LP = range(18, 22)
+NCW = 22
 
 
 @njit
@@ -294,6 +298,8 @@ def _span(px, py, pz, Rb, A, up, cw, lengths):
         cw[i, _TH] = math.nan
         cw[i, _L0] = math.nan
         cw[i, _TM] = math.nan
+        cw[i, _TAU] = math.nan
+        cw[i, _TP] = math.nan
     return ok
 
 
@@ -306,10 +312,27 @@ def _least_shape(i, X, Z, w, EA, cw):
 
 
 @njit
+def _secant_start(i, tau, cw):
+    """A start (th, L0) for cable i at tension tau: the last shape, moved along the secant
+    through the last two shapes when they are at distinct tensions and tau is not far off."""
+    th, L0 = cw[i, _TH], cw[i, _L0]
+    d = cw[i, _TAU] - cw[i, _TP]
+    if d != 0.0 and math.isfinite(d) and math.isfinite(cw[i, _THP]) and math.isfinite(cw[i, _LP]):
+        s = (tau - cw[i, _TAU]) / d
+        if abs(s) <= 4.0:
+            th1 = th + s * (th - cw[i, _THP])
+            L1 = L0 + s * (L0 - cw[i, _LP])
+            if abs(th1) < 1.5 and L1 > 0.0:
+                return th1, L1
+    return th, L0
+
+
+@njit
 def _slack_column(i, X, Z, up, tmin, tmax, Rb, rows, cw, W):
     """A slack cable: no force, shape and length undetermined; column along the chord."""
     cw[i, _TH] = math.nan
     cw[i, _L0] = math.nan
+    cw[i, _TAU] = math.nan
     cw[i, _H] = 0.0
     cw[i, _VB] = 0.0
     cw[i, _TA] = math.nan
@@ -354,7 +377,10 @@ def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
         tau = t[i]
         ok = False
         if tau > 0.0:
-            H, VB, L0, ok = cable_for_tension(X, Z, tau, w[i], EA[i], cw[i, _TH], cw[i, _L0], maxit)
+            th0, L00 = _secant_start(i, tau, cw)
+            H, VB, L0, ok = cable_for_tension(X, Z, tau, w[i], EA[i], th0, L00, maxit)
+        cw[i, _TP], cw[i, _THP], cw[i, _LP] = cw[i, _TAU], cw[i, _TH], cw[i, _L0]
+        cw[i, _TAU] = tau if ok else math.nan
         if not ok:
             tm = _least_shape(i, X, Z, w[i], EA[i], cw)
             if not (tau <= tm * (1.0 + 1e-12)):
@@ -418,6 +444,42 @@ def _balanced(W, t, w0):
 
 
 @njit
+def _relax(g, x, cw, omega, again, tscale):
+    """Aitken's dynamic relaxation of the fixed point x -> g (Irons & Tuck): the next iterate
+    x + omega (g - x), written into ``g``, with omega = -omega' r'.(r - r') / |r - r'|^2 from
+    this residual r = g - x and the previous one r' (``cw``), kept within [1/16, 16].  Plain
+    steps (omega = 1) when ``again`` is False (first step, or a cable was just raised to its
+    least tension) and once the residual is below 1e-11 ``tscale``, so that convergence is
+    always judged on a plain step.  Returns omega."""
+    num = 0.0
+    den = 0.0
+    rmax = 0.0
+    for i in range(g.shape[0]):
+        r = g[i] - x[i]
+        dr = r - cw[i, _RP]
+        num += cw[i, _RP] * dr
+        den += dr * dr
+        rmax = max(rmax, abs(r))
+        cw[i, _RP] = r
+    if not again or not (den > 0.0) or rmax <= 1e-11 * tscale:
+        return 1.0
+    omega = min(max(-omega * num / den, 0.0625), 16.0)
+    for i in range(g.shape[0]):
+        cw[i, _GP] = g[i]
+        g[i] = x[i] + omega * cw[i, _RP]
+    return omega
+
+
+@njit
+def _retreat(t, cw):
+    """A relaxed iterate overshot (no shape, or no tensions within the bounds): back to the
+    unrelaxed one, and plain steps from there on.  Returns (plain, relax) = (True, False)."""
+    for i in range(t.shape[0]):
+        t[i] = cw[i, _GP]
+    return True, False
+
+
+@njit
 def _no_tensions(cw, lo):
     """The status of a pose whose bounds admit no tensions: :data:`SAG_NO_CATENARY` when a
     cable's lower bound is its least tension, else :data:`SAG_NO_TENSIONS`."""
@@ -473,13 +535,19 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
         tscale = max(tscale, abs(tq[i]))
     converged = False
     it = 0
+    omega = 1.0
+    plain = True  # tq is the distribution of the previous shapes, not a relaxed iterate
+    relax = True
     while it < maxit:
         it += 1
         fit = shapes_for(tq, Rb, up, w, EA, tmin, tmax, rows, cw, W, 60)
+        if fit == 0 and not plain:
+            plain, relax = _retreat(tq, cw)
+            continue
         if fit == 0:
             outlet[:] = math.nan
             return SAG_NO_CATENARY, False, math.nan, it
-        if it > 1 and fit == 1 and _balanced(W, tq, wreq[0]):
+        if it > 1 and fit == 1 and plain and _balanced(W, tq, wreq[0]):
             dt = 0.0
             for i in range(m):
                 dt = max(dt, abs(tq[i] - tprev[i]))
@@ -491,9 +559,14 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
             hi[i] = cw[i, _HI]
             tprev[i] = tq[i]
         bounded = _distribute(W, wreq[0], lo, hi, inf_hi, tq, scr)
+        if bounded == 0 and not plain:
+            plain, relax = _retreat(tq, cw)
+            continue
         if bounded == 0:
             outlet[:] = math.nan
             return _no_tensions(cw, lo), False, math.nan, it
+        omega = _relax(tq, tprev, cw, omega, relax and it > 1 and fit == 1, tscale)
+        plain = omega == 1.0
     for i in range(m):
         outlet[i] = math.nan
     if not converged:
