@@ -21,8 +21,7 @@ behind ``cdpr-design workspace`` (the batched numba kernel
   bounds), timed per pose, in the same process: the ratio
   scipy / kernel per pose (conservative: the kernel's whole sweep time divided
   by its converged poses only, though the infeasible ones cost it time too),
-  and how well the two agree where the kernel's
-  tensions have no active bound (the reference has no bounds).
+  and how well the two agree.
 
 poses/s are wall-clock with numba's threads (2 on the reference machine); as
 the machine may be shared, the CPU time of the sweep is printed too, and

@@ -678,3 +678,21 @@ def test_workspace_rows_carry_the_cable_status(tmp_path):
             assert r[col["feasible"]] == "0" and all(r[col[c]] == "" for c in values), r
     summary = json.loads(res.output)
     assert summary["cable_status"]["no-catenary"] == int(np.sum(status == 2))
+
+
+def test_sagging_rows_do_not_depend_on_the_chunking():
+    """Every pose starts from its own straight solution: the same rows, bit for bit, whatever
+    the chunk size (the relaxation and the Newton starts keep no state from pose to pose)."""
+    from cdpr_design import workspaces
+
+    from .helpers import collect_chunks
+
+    design = spec.from_dict(nocat_data(0.2, 5.0))
+    rows = []
+    for chunk in (7, 10_000):
+        _, chunks = collect_chunks(workspaces.run, design, step=0.5, chunk=chunk)
+        rows.append({k: np.concatenate([c.extra[k] if k in c.extra else getattr(c, k) for c in chunks])
+                     for k in ("tensions", "margin", "outlet_tension_right", "unstretched_length_left", "cable_status")})
+    assert np.any(rows[0]["cable_status"] == 0) and np.any(rows[0]["cable_status"] != 0)
+    for k in rows[0]:
+        np.testing.assert_array_equal(rows[0][k], rows[1][k], err_msg=k)
