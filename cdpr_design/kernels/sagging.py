@@ -73,7 +73,11 @@ SAG_TOL = 1e-13
 _X, _Z, _UX, _UY, _UZ, _TH, _L0, _H, _VB, _LO, _HI, _TA = range(12)
 # the cable's least tension and its shape (:func:`least_tension`; NaN until needed)
 _TM, _HM, _VM, _LM = range(12, 16)
-NCW = 16
+# the fixed point's previous residual g - x and unrelaxed iterate g (for the relaxation)
+_RP, _GP = 16, 17
+# the tension of the shape in (th, L0), and the previous shape's (tension, th, L0): a secant start
+_TAU, _TP, _THP, _LP = range(18, 22)
+NCW = 22
 
 
 @njit
@@ -103,6 +107,8 @@ def _span(px, py, pz, Rb, A, up, cw, lengths):
         cw[i, _TH] = math.nan
         cw[i, _L0] = math.nan
         cw[i, _TM] = math.nan
+        cw[i, _TAU] = math.nan
+        cw[i, _TP] = math.nan
     return ok
 
 
@@ -115,10 +121,27 @@ def _least_shape(i, X, Z, w, EA, cw):
 
 
 @njit
+def _secant_start(i, tau, cw):
+    """A start (th, L0) for cable i at tension tau: the last shape, moved along the secant
+    through the last two shapes when they are at distinct tensions and tau is not far off."""
+    th, L0 = cw[i, _TH], cw[i, _L0]
+    d = cw[i, _TAU] - cw[i, _TP]
+    if d != 0.0 and math.isfinite(d) and math.isfinite(cw[i, _THP]) and math.isfinite(cw[i, _LP]):
+        s = (tau - cw[i, _TAU]) / d
+        if abs(s) <= 4.0:
+            th1 = th + s * (th - cw[i, _THP])
+            L1 = L0 + s * (L0 - cw[i, _LP])
+            if abs(th1) < 1.5 and L1 > 0.0:
+                return th1, L1
+    return th, L0
+
+
+@njit
 def _slack_column(i, X, Z, up, tmin, tmax, Rb, rows, cw, W):
     """A slack cable: no force, shape and length undetermined; column along the chord."""
     cw[i, _TH] = math.nan
     cw[i, _L0] = math.nan
+    cw[i, _TAU] = math.nan
     cw[i, _H] = 0.0
     cw[i, _VB] = 0.0
     cw[i, _TA] = math.nan
@@ -163,10 +186,13 @@ def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
         tau = t[i]
         ok = False
         if tau > 0.0:
-            H, VB, L0, ok = cable_for_tension(X, Z, tau, w[i], EA[i], cw[i, _TH], cw[i, _L0], maxit)
-            if not ok and not math.isnan(cw[i, _TH]):
-                # the previous shape can be a poor start after a long step: start afresh
+            th0, L00 = _secant_start(i, tau, cw)
+            H, VB, L0, ok = cable_for_tension(X, Z, tau, w[i], EA[i], th0, L00, maxit)
+            if not ok and not math.isnan(th0):
+                # the previous shapes can be a poor start after a long step: start afresh
                 H, VB, L0, ok = cable_for_tension(X, Z, tau, w[i], EA[i], math.nan, math.nan, maxit)
+        cw[i, _TP], cw[i, _THP], cw[i, _LP] = cw[i, _TAU], cw[i, _TH], cw[i, _L0]
+        cw[i, _TAU] = tau if ok else math.nan
         if not ok:
             tm = _least_shape(i, X, Z, w[i], EA[i], cw)
             if not (tau <= tm * (1.0 + 1e-12)):
