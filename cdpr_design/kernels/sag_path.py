@@ -10,6 +10,8 @@ infeasible, as the straight model reports tensions outside the bounds).
 
 from __future__ import annotations
 
+import math
+
 import numba as nb
 import numpy as np
 
@@ -55,17 +57,20 @@ def sag_samples(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
             Rj = Rb[j]
             st, ok, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, tmin, tmax,
                                     combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr)
+            solved = ok
             if st == SAG_OK and not ok:
                 # converged but outside the bounds: the same pose under [0, inf)
-                st, ok2, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, zero, inf_hi,
-                                       combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr)
-                if st == SAG_OK and not ok2:
+                st, solved, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, zero,
+                                            inf_hi, combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi,
+                                            tq, scr)
+                if st == SAG_OK and not solved:
                     st = SAG_NO_TENSIONS
             status[j] = st
             feasible[j] = 1 if ok else 0
             for i in range(m):
-                tensions[j, i] = t[i]
-                outlet[j, i] = ta[i]
-                L0[j, i] = l0[i]
-                sag[j, i] = sg[i]
+                # sag_pose may leave its scratch in the outputs when it gives up: NaN unless solved
+                tensions[j, i] = t[i] if solved else math.nan
+                outlet[j, i] = ta[i] if solved else math.nan
+                L0[j, i] = l0[i] if solved else math.nan
+                sag[j, i] = sg[i] if solved else math.nan
                 lengths[j, i] = L[i]

@@ -118,7 +118,10 @@ class SimulationResult:
 
 
 def _setpoints(samples, compensate_stretch: bool):
-    """(set-points (k, m) [m], their speeds (k, m) [m/s], real-cable model or None) of a sampled path.
+    """(set-points (k, m) [m], speeds (k, m) [m/s], real-cable model or None) of a sampled path.
+
+    The speeds are the chord speeds in every case: the unstretched lengths follow them but for
+    their stretch and sag, which step with the tensions where the path's acceleration does.
 
     Raises ValueError when a sample has no set-point (its cable model has no solution).
     """
@@ -131,8 +134,7 @@ def _setpoints(samples, compensate_stretch: bool):
         j = int(np.argmax(bad))
         raise ValueError(f"{int(bad.sum())} samples have no {cs.model} cable set-points (the cable model has "
                          f"no solution there), the first at t = {samples.time[j]:.6g} s")
-    vel = np.gradient(sp, samples.time, axis=0) if sp.shape[0] > 1 else np.zeros_like(sp)
-    return sp, vel, cs
+    return sp, samples.cable_speed, cs
 
 
 def simulate(design: Design, samples, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,

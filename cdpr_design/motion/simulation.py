@@ -209,8 +209,10 @@ class Simulator:
         self.data = mujoco.MjData(self.model)
         self.model.dof_damping[:] = self.joint_damping
         self._chains = Chains(self.model, design, self.cable_segments, self.EA, cable_damping) if massive else None
+        self._rest_damping()
         # stretch taken up by T/k on ideal cables only (real cables are commanded unstretched lengths)
-        self._comp = np.array([c.props.model == "ideal" for c in design.cables]) & self.compensate_stretch
+        self._real = np.array([c.props.model != "ideal" for c in design.cables])
+        self._comp = ~self._real & self.compensate_stretch
         self.m = design.m
         self._planar = design.motion.planar
         self._fifo: deque[_Entry] = deque()
@@ -376,7 +378,7 @@ class Simulator:
             if j >= min_steps and j % 50 == 0 and np.max(np.abs(self.data.qvel)) < 1e-6:
                 break
         self._check_stable()
-        self.model.dof_damping[:] = self.joint_damping
+        self._rest_damping()
         self.data.qvel[:] = 0.0
         mujoco.mj_forward(self.model, self.data)
 
@@ -407,28 +409,51 @@ class Simulator:
         self.q = q_new
         k = self.EA / np.maximum(q_new, 1e-6)
         c = self._kv_per_sqrt_k / np.sqrt(k)  # kv / k
-        ctrl = q_new + c * self.qdot
+        # the damper acts relative to the winch; on real cables relative to the commanded cable
+        # speed, so that the steps of their set-points (stretch and sag follow the tensions, which
+        # jump with the path's acceleration) are not damped away
+        rate = np.where(self._real, e.vel, self.qdot) if self._real.any() else self.qdot
+        ctrl = q_new + c * rate
         if self._pulley is not None:
             # the tendon spans the free segment only: the winch's length minus the wrapped arc
             self._update_pulleys()
             ctrl -= self._arc
         if self.compensate_stretch:
             ctrl -= e.tension / k  # e.tension is 0 where the set-points are unstretched lengths
-        if self._chains is not None:
-            # a massive cable pulls through its flex; its actuator only measures the chord
-            sub = self._chains.update(self.model, self.data, q_new, self.qdot, dt)
-            k[self._chains.idx] = 0.0
         gp, bp = self._gainprm, self._biasprm
         gp[:, 0] = k
         bp[:, 1] = -k
         bp[:, 2] = -c * k
-        self.data.ctrl[:] = ctrl
         if self._chains is None:
+            self.data.ctrl[:] = ctrl
             mujoco.mj_step(self.model, self.data)
         else:
+            sub = self._drive_chains(q_new, rate, c * k, ctrl)
+            self.data.ctrl[:] = ctrl
             for _ in range(sub):
                 mujoco.mj_step(self.model, self.data)
         self.time += dt
+
+    def _drive_chains(self, q, rate, kv, ctrl) -> int:
+        """Massive cables for axes at ``q`` [m] paying out at ``rate`` [m/s]: the flexes
+        (:meth:`Chains.update`), and each cable's actuator as a dashpot on its chord relative to the
+        winch, force kv (rate - dL/dt) with kv [N s/m] as for straight cables (integrated implicitly,
+        unlike the flex's own dampers), pulling only like every cable actuator.
+        Returns the physics sub-steps."""
+        ch = self._chains
+        sub = ch.update(self.model, self.data, q, rate, self.timestep)
+        i = ch.idx
+        self._gainprm[i, 0] = kv[i]
+        self._biasprm[i, 1] = 0.0
+        self._biasprm[i, 2] = -kv[i]
+        ctrl[i] = rate[i]
+        return sub
+
+    def _rest_damping(self) -> None:
+        """``joint_damping`` on the effector; none on the massive cables' vertices (their flex damps them)."""
+        self.model.dof_damping[:] = self.joint_damping
+        if self._chains is not None:
+            self.model.dof_damping[self._chains.dofs.ravel()] = 0.0
 
     def _check_stable(self) -> None:
         if self._unstable():
@@ -532,7 +557,10 @@ class Simulator:
         tensions = -np.asarray(self.data.actuator_force, float) + 0.0
         outlet = tensions.copy()
         if self._chains is not None:
-            tensions[self._chains.idx], outlet[self._chains.idx] = self._chains.end_tensions(self.model, self.data)
+            # the flex's end forces plus the pull of the chord's dashpot (0 at rest)
+            i = self._chains.idx
+            tB, tA = self._chains.end_tensions(self.model, self.data)
+            tensions[i], outlet[i] = tB + tensions[i], tA + tensions[i]
         sp = self._current.sp if self._current is not None else np.full(self.m, np.nan)
         return SimState(self.time, pose, full[3:].copy(), vel,
                         np.array(self.data.ten_length, float) + self._arc, tensions, self.q.copy(), sp.copy(),
