@@ -51,8 +51,8 @@ import numpy as np
 from cdpr_design.model.design import Design
 
 
-#: Largest segment frequency times sub-step (stable explicit springs need < 2).
-SUBSTEP_OMEGA_DT = 0.5
+#: Largest segment frequency times sub-step (explicit springs are stable below 2; half that).
+SUBSTEP_OMEGA_DT = 1.0
 #: Largest segment damping times sub-step over a vertex's mass (a vertex between two edges moving
 #: against its neighbours feels 4 c: stable explicit dampers need 4 c h / m < 2).
 MAX_DAMPING_STEP = 0.1

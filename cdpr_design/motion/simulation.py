@@ -430,8 +430,7 @@ class Simulator:
         else:
             sub = self._drive_chains(q_new, rate, c * k, ctrl)
             self.data.ctrl[:] = ctrl
-            for _ in range(sub):
-                mujoco.mj_step(self.model, self.data)
+            mujoco.mj_step(self.model, self.data, sub)
         self.time += dt
 
     def _drive_chains(self, q, rate, kv, ctrl) -> int:
