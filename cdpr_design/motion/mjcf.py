@@ -23,14 +23,17 @@ length q.  A chain of capsule bodies on ball joints cannot change its length
 without a slide joint and a spring in every link, which the flex edge already
 is.  The flex has no bending stiffness, like the elastic catenary.
 
-Per step (:meth:`Chains.update`), for an axis at q [m] moving at dq/dt:
+Per step (:meth:`Chains.update`), for an axis at q [m] paying out at dq/dt:
 
 - segment stiffness k = EA N / q (the cable's EA / q in series N times);
-- segment damping c = N 2 zeta sqrt((EA / q) M) (M: the effector's mass), the
-  damping ratio zeta of the cable's axial mode with the effector as for the
-  straight cables; the rest length is q/N + (c / k) (dq/dt) / N so that the
-  damper acts on the segment's stretch rate relative to the winch, not on the
-  pay-out itself;
+- segment damping c = N 2 zeta sqrt((EA / q) M) (M: the effector's mass),
+  capped at MAX_DAMPING_STEP m / h for a vertex of mass m and a sub-step h
+  (MuJoCo 4.0 steps flex edge dampers explicitly); the rest length is
+  q/N + (c / k) (dq/dt) / N so that the damper acts on the segment's stretch
+  rate relative to the winch, not on the pay-out itself.  The axial mode of
+  the effector is damped by the cable's actuator instead (a dashpot on the
+  chord, :meth:`cdpr_design.motion.simulation.Simulator._drive_chains`);
+- physics sub-steps h <= SUBSTEP_OMEGA_DT / (2 sqrt(k / m)) (explicit springs);
 - every inner vertex weighs mu q / N (mu: mass per length) and the half
   segments at the ends put mu q / (2N) on the outlet (the frame) and on the
   effector (an applied force at the attachment).  This is exactly the
@@ -38,9 +41,10 @@ Per step (:meth:`Chains.update`), for an axis at q [m] moving at dq/dt:
   catenary's closure, so the chain's end forces and shape differ from the
   continuous cable's by O((L/N)^2).
 
-A flex edge also resists compression, unlike a cable; a chain of two or more
-segments without bending stiffness buckles instead of pushing (its vertices
-move sideways), so the effector never feels a push of any size.
+A flex edge also resists compression, unlike a cable.  A chain of segments
+without bending stiffness buckles under compression (its vertices move
+sideways), so it cannot hold the effector up by pushing; a compressed last
+segment can still push for an instant in a fast transient.
 """
 
 from __future__ import annotations
@@ -230,7 +234,7 @@ class Chains:
         K = self.EA / qs
         ks = K * self.N
         m_seg = np.maximum(self.mu * qs / self.N, 1e-12)
-        # MuJoCo integrates the edge springs and dampers explicitly: sub-steps keep the
+        # MuJoCo 4.0 steps the edge springs and dampers as explicit forces: sub-steps keep the
         # fastest segment mode (2 sqrt(k / m_seg) rad/s) below SUBSTEP_OMEGA_DT per sub-step
         sub = max(1, int(np.ceil(dt * float(np.max(2.0 * np.sqrt(ks / m_seg))) / SUBSTEP_OMEGA_DT)))
         h = dt / sub
@@ -270,7 +274,8 @@ class Chains:
             d = X[v_next] - X[v_end]
             return np.linalg.norm(t[:, None] * d / np.linalg.norm(d, axis=1)[:, None] + W, axis=1)
 
-        return end(self.vertadr + self.N, self.vertadr + self.N - 1, T[:, -1]), end(self.vertadr, self.vertadr + 1, T[:, 0])
+        v = self.vertadr
+        return end(v + self.N, v + self.N - 1, T[:, -1]), end(v, v + 1, T[:, 0])
 
     def settle_damping(self, model, data, damp) -> None:
         """Extra damping on the vertices while settling (about critical for each chain's

@@ -68,7 +68,7 @@ MuJoCo documentation: spatial tendons, position actuators, ``forcerange``.
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
