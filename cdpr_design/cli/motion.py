@@ -33,6 +33,15 @@ def segments_table(title: str, segments: list[dict]) -> Table:
     return t
 
 
+def setpoint_rows(summary: dict) -> list:
+    """Summary rows of a real cable model: the largest error of ideal set-points, unsolved samples."""
+    if "cable_model" not in summary:
+        return []
+    err = ", ".join(f"{c}: {fmt(None if v is None else 1e3 * v)}" for c, v in summary["max_setpoint_error"].items())
+    return [("cable model", summary["cable_model"]), ("ideal set-point error \\[mm]", err),
+            ("samples without set-points", f"{summary['unsolved_samples']:,}")]
+
+
 def delay_text(delay: dict) -> str:
     """``x: 0.12, y: ...``: delays in [ms] (given in [s])."""
     return ", ".join(f"{k}: {fmt(None if v is None else 1e3 * v)}" for k, v in delay.items())
@@ -67,6 +76,7 @@ def trajectory_cmd(
              ("peak acceleration \\[m/s²]", s["max_acceleration"]),
              ("tension range \\[N]", tension_ranges(s, samples.cable_names)),
              ("feasible", "yes" if s["feasible"] else f"no ({s['infeasible_samples']} samples)"),
+             *setpoint_rows(s),
              ("files", str(out_dir.path))]))
     if check and not s["feasible"]:
         raise CheckFailed(f"trajectory {name}: {s['infeasible_samples']} samples with tensions outside the bounds")
@@ -91,6 +101,8 @@ def simulate(
     hold: Annotated[Optional[float], typer.Option(
         "--hold", help="Time [s] to keep the last set-point at the end (default 0.5 s + the delay).")] = None,
     cycle_time: CycleOpt = None,
+    cable_segments: Annotated[Optional[int], typer.Option(
+        "--cable-segments", help="Segments of each sagging cable in the MuJoCo model, 2-200 (default 16).")] = None,
     out: OutOpt = None,
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
@@ -104,7 +116,8 @@ def simulate(
     result, s, samples, out_dir = job.simulate(
         design, name, delay=delay, servo_bandwidth=servo_bandwidth, feedforward=feedforward,
         compensate_stretch=compensate_stretch, cable_damping=cable_damping, timestep=timestep, hold=hold,
-        cycle_time=cycle_time, out=out, overwrite=overwrite, progress=bars(quiet or json_, min_total=2000))
+        cycle_time=cycle_time, out=out, overwrite=overwrite, progress=bars(quiet or json_, min_total=2000),
+        cable_segments=cable_segments)
     if json_:
         emit_json(s)
         return

@@ -158,15 +158,18 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
              feedforward: bool = True, compensate_stretch: bool = True, cable_damping: float = 0.7,
              timestep: float = 5e-4, hold: float | None = None, cycle_time: float | None = None,
              out: str | Path | None = None, overwrite: bool = False,
-             progress: Progress | None = None) -> SimulationRun:
+             progress: Progress | None = None, cable_segments: int | None = None) -> SimulationRun:
     """The ``simulate`` command: run trajectory ``name`` on the MuJoCo model; write simulation.csv,
     simulation.json and simulation.png.  ``delay``, ``timestep``, ``hold`` [s]; ``servo_bandwidth``
-    [rad/s]; ``hold`` default 0.5 s + the delay."""
+    [rad/s]; ``hold`` default 0.5 s + the delay; ``cable_segments``: segments of each sagging cable
+    (2 to 200).  With elastic or sagging cables a sample without set-points is an InputError."""
     from cdpr_design.motion import simulation as sim
 
     settings = {"delay": delay, "servo_bandwidth": servo_bandwidth, "cable_damping": cable_damping,
                 "timestep": timestep}
     _check_simulation(settings, hold)
+    if cable_segments is not None and not 2 <= cable_segments <= 200:
+        raise InputError(f"--cable-segments: expected 2 to 200, got {cable_segments}")
     samples = sample_named(design, name, cycle_time, hold_end=(0.5 + delay) if hold is None else hold)
     if samples.cycle_time < timestep:
         raise InputError(f"--timestep: {timestep} s is longer than the cycle time {samples.cycle_time} s")
@@ -175,9 +178,11 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
     with stage(progress, f"simulate {name}") as cb:
         try:
             result = sim.simulate(design, samples, feedforward=feedforward, compensate_stretch=compensate_stretch,
-                                  progress=cb, **settings)
+                                  progress=cb, cable_segments=cable_segments, **settings)
         except sim.SimulationError as exc:
             raise InputError(f"--timestep / --servo-bandwidth / --cable-damping: {exc}") from None
+        except ValueError as exc:  # samples without set-points (the cable model has no solution there)
+            raise InputError(f"trajectories.{name}: {exc}") from None
     out_dir.write_columns("simulation.csv", result.columns())
     s = result.summary()
     s["trajectory_feasible"] = samples.all_feasible

@@ -13,7 +13,12 @@ The model, built from the design alone:
   a slack cable carries exactly zero tension.  Its gain is the cable's axial
   stiffness k_i = EA / L0_i with L0_i the unstretched length paid out, updated
   every step, and its damping k_v,i = 2 zeta sqrt(k_i m) (``cable_damping`` =
-  zeta).  Cable mass is not modelled.
+  zeta).  Cable mass is not modelled here.
+- **Massive cables** (cable model ``sagging`` with a mass per length): a
+  1-D flex of ``cable_segments`` elastic segments between point masses from
+  the outlet to the attachment, whose rest lengths the winch sets
+  (:mod:`cdpr_design.motion.mjcf`); its tendon and actuator only measure the
+  chord.
 - **Swivel pulleys** (``cables[i].pulley``, :mod:`cdpr_design.statics.pulley`): the
   arc wrapped on the pulley is not a MuJoCo wrapping object.  The tendon runs
   from a mocap site that the simulator moves, before every physics step, to
@@ -36,6 +41,9 @@ The model, built from the design alone:
   and the actuator damping acts on the cable's velocity *relative to the
   winch*, so it does not make the effector lag (MuJoCo cable modelling notes
   in the project's algorithms reference).
+- **Real cables** (``elastic`` or ``sagging``): the set-points are the cable
+  model's unstretched lengths (:mod:`cdpr_design.motion.setpoints`), which
+  already hold the stretch, so T_ff / k is taken up only on ideal cables.
 
 Lengths reported by :meth:`Simulator.state` are the geometric (stretched)
 cable lengths from outlet to attachment (with a pulley: arc + free segment);
@@ -60,15 +68,21 @@ MuJoCo documentation: spatial tendons, position actuators, ``forcerange``.
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from cdpr_design.model.design import Design
+from cdpr_design.motion.mjcf import Chains, build_xml, massive_cables
+from cdpr_design.statics import cables as cm
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
-from cdpr_design.model.design import Design
+
+#: Segments of each massive cable (``cable_segments``): the chain's end forces
+#: differ from the catenary's by O((L/N)^2) (tests/test_simulation_cables.py).
+DEFAULT_CABLE_SEGMENTS = 16
 
 DEFAULT_AXIAL_STIFFNESS = 1.0e5
 """EA [N] used when the spec gives no ``cable.axial_stiffness``."""
@@ -104,6 +118,9 @@ class SimState:
         Winch positions q: unstretched length paid out [m].
     setpoints : (m,) array
         Set-points the axes are following now (after the delay) [m].
+    outlet_tensions : (m,) array or None
+        Tensions at the outlet [N]: those of the massive cables' first
+        segments with half its weight, the ``tensions`` of the others.
     """
 
     time: float
@@ -114,76 +131,7 @@ class SimState:
     tensions: np.ndarray
     axis: np.ndarray
     setpoints: np.ndarray
-
-
-def build_xml(design: Design, timestep: float = 5e-4, force_limit: float = 1e6) -> str:
-    """MJCF text of the design's robot (see the module notes for the model).
-
-    Parameters
-    ----------
-    design : Design
-    timestep : float
-        Physics step [s].
-    force_limit : float
-        Largest cable tension the actuator can exert [N] (not a design bound:
-        tension bounds are checked by the analysis, not enforced by physics).
-    """
-    eff = design.effector
-    planar = design.motion.planar
-    g = " ".join(f"{v:.10g}" for v in design.gravity)
-    I = np.array(eff.inertia_matrix, float)
-    I = 0.5 * (I + I.T)
-    d = np.maximum(np.diag(I), 1e-9 * max(eff.mass, 1e-9))
-    if planar:
-        # only the hinge about z moves: Ixx, Iyy do not enter the motion, but MuJoCo
-        # requires the triangle inequality (a planar spec's scalar inertia gives Izz alone)
-        d[0], d[1] = max(d[0], d[2]), max(d[1], d[2])
-    full = [d[0], d[1], d[2], I[0, 1], I[0, 2], I[1, 2]]
-    com = " ".join(f"{v:.10g}" for v in eff.center_of_mass)
-    size = np.maximum(np.asarray(eff.size, float) / 2, 1e-3)
-    lines = [
-        f'<mujoco model="{design.name}">',
-        '  <compiler inertiafromgeom="false" angle="radian"/>',
-        f'  <option timestep="{timestep:.10g}" gravity="{g}" integrator="implicitfast">',
-        '    <flag contact="disable"/>',
-        '  </option>',
-        '  <worldbody>',
-    ]
-    for c in design.cables:
-        pos = " ".join(f"{v:.10g}" for v in c.outlet)
-        if c.pulley is not None and c.pulley.radius > 0:
-            # the free cable leaves the pulley's tangent point: a mocap body the
-            # simulator moves there every step (module notes, "Swivel pulleys")
-            lines.append(f'    <body name="pulley_{c.name}" mocap="true" pos="{pos}">'
-                         f'<site name="outlet_{c.name}" pos="0 0 0" size="0.005"/></body>')
-        else:
-            lines.append(f'    <site name="outlet_{c.name}" pos="{pos}" size="0.005"/>')
-    lines.append('    <body name="effector" pos="0 0 0">')
-    if planar:
-        lines += [
-            '      <joint name="x" type="slide" axis="1 0 0"/>',
-            '      <joint name="y" type="slide" axis="0 1 0"/>',
-            '      <joint name="phi" type="hinge" axis="0 0 1"/>',
-        ]
-    else:
-        lines.append('      <freejoint name="free"/>')
-    lines.append(f'      <inertial pos="{com}" mass="{eff.mass:.10g}" '
-                 f'fullinertia="{" ".join(f"{v:.10g}" for v in full)}"/>')
-    lines.append(f'      <geom type="box" size="{" ".join(f"{v:.10g}" for v in size)}" '
-                 'contype="0" conaffinity="0"/>')
-    for c in design.cables:
-        pos = " ".join(f"{v:.10g}" for v in c.attachment)
-        lines.append(f'      <site name="attach_{c.name}" pos="{pos}" size="0.005"/>')
-    lines += ['    </body>', '  </worldbody>', '  <tendon>']
-    for c in design.cables:
-        lines.append(f'    <spatial name="{c.name}" width="0.002">'
-                     f'<site site="outlet_{c.name}"/><site site="attach_{c.name}"/></spatial>')
-    lines += ['  </tendon>', '  <actuator>']
-    for c in design.cables:
-        lines.append(f'    <position name="{c.name}" tendon="{c.name}" kp="1" '
-                     f'forcelimited="true" forcerange="{-force_limit:.10g} 0"/>')
-    lines += ['  </actuator>', '</mujoco>']
-    return "\n".join(lines)
+    outlet_tensions: np.ndarray | None = None
 
 
 @dataclass
@@ -219,20 +167,29 @@ class Simulator:
         Take up the expected static stretch T/k of each cable.  The expected
         tensions are those passed to :meth:`advance`, else the static tensions
         at the pose the set-points stand for (forward kinematics).
+        Cables whose model is elastic or sagging are commanded their unstretched
+        lengths, which hold the stretch already: no T/k on them.
     axial_stiffness : float, optional
         EA [N] for every cable; default: the spec's, else 1e5 N.
+    cable_segments : int
+        Segments of each massive (``sagging``) cable, >= 2.
     """
 
     def __init__(self, design: Design, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
                  delay: float = 0.0, cable_damping: float = 0.7, joint_damping: float = 0.05,
                  feedforward: bool = True, compensate_stretch: bool = True,
-                 axial_stiffness: float | None = None):
+                 axial_stiffness: float | None = None, cable_segments: int = DEFAULT_CABLE_SEGMENTS):
         if not timestep > 0:
             raise ValueError(f"timestep must be > 0, got {timestep}")
         if not delay >= 0:
             raise ValueError(f"delay must be >= 0, got {delay}")
         if not servo_bandwidth > 0:
             raise ValueError(f"servo_bandwidth must be > 0, got {servo_bandwidth}")
+        massive = massive_cables(design)
+        if massive and not (int(cable_segments) == cable_segments and cable_segments >= 2):
+            raise ValueError(f"cable_segments must be an integer >= 2, got {cable_segments}")
+        if massive:
+            cm.check_supported(design, pulleys=pl.any_pulley(design))
         self.design = design
         self.timestep = float(timestep)
         self.servo_bandwidth = float(servo_bandwidth)
@@ -246,10 +203,16 @@ class Simulator:
             v = axial_stiffness if axial_stiffness is not None else c.props.axial_stiffness
             ea.append(float(v) if v else DEFAULT_AXIAL_STIFFNESS)
         self.EA = np.array(ea)
-        self.xml = build_xml(design, timestep)
+        self.cable_segments = int(cable_segments) if massive else 0
+        self.xml = build_xml(design, timestep, segments=self.cable_segments)
         self.model = mujoco.MjModel.from_xml_string(self.xml)
         self.data = mujoco.MjData(self.model)
         self.model.dof_damping[:] = self.joint_damping
+        self._chains = Chains(self.model, design, self.cable_segments, self.EA, cable_damping) if massive else None
+        self._rest_damping()
+        # stretch taken up by T/k on ideal cables only (real cables are commanded unstretched lengths)
+        self._real = np.array([c.props.model != "ideal" for c in design.cables])
+        self._comp = ~self._real & self.compensate_stretch
         self.m = design.m
         self._planar = design.motion.planar
         self._fifo: deque[_Entry] = deque()
@@ -321,7 +284,7 @@ class Simulator:
         z = np.zeros_like(x)
         return states(self.design, x, z, z)["tensions"][0]
 
-    def reset(self, pose=None, *, settle: float = 3.0) -> SimState:
+    def reset(self, pose=None, *, settle: float = 3.0, setpoints=None) -> SimState:
         """Put the robot at rest at a pose, with the axes holding its cable lengths.
 
         Parameters
@@ -334,6 +297,11 @@ class Simulator:
             gravity with extra damping (the rigid body of an under-constrained
             robot tilts until the cable lines and gravity meet); 0 to skip.
             The clock restarts at 0 afterwards.
+        setpoints : (m,) array, optional
+            Axis positions to hold [m]; default: the chord lengths of ideal
+            cables, the cable model's unstretched lengths at the pose for real
+            ones (the chords where the model has no solution).  Massive cables
+            start on their catenary for these lengths.
         """
         d = self.design
         if pose is None:
@@ -342,40 +310,77 @@ class Simulator:
         pose = np.asarray(pose, float)
         mujoco.mj_resetData(self.model, self.data)
         self._set_pose(pose)
-        L = kin.inverse_kinematics(d, pose)
+        L = self._hold_lengths(pose) if setpoints is None else np.asarray(setpoints, float).reshape(-1).copy()
+        if L.size != self.m or not np.all(np.isfinite(L)):
+            raise ValueError(f"expected {self.m} finite set-points, got {L}")
         T = self.static_tensions(pose)
-        T = np.where(np.isfinite(T), np.clip(T, 0.0, self._t_cap), 0.0)
+        T = np.where(np.isfinite(T) & self._comp, np.clip(T, 0.0, self._t_cap), 0.0)
         self.q = L.copy()
         self.qdot = np.zeros(self.m)
         self._fifo.clear()
-        entry = _Entry(0.0, L.copy(), np.zeros(self.m), T if self.compensate_stretch else np.zeros(self.m))
+        entry = _Entry(0.0, L.copy(), np.zeros(self.m), T)
         self._current = entry
         self._last_issue = entry
         self.time = 0.0
+        if self._chains is not None:
+            self._place_chains(L)
         if settle > 0:
-            # extra damping while settling: about critical for a 1 m pendulum of the effector
-            mass = d.effector.mass
-            arm = 0.5 * float(np.max(d.effector.size)) + 0.1
-            damp = np.full(self.model.nv, 4.0 * mass)
-            if self._planar:
-                damp[2] = 4.0 * mass * arm * arm
-            else:
-                damp[3:] = 4.0 * mass * arm * arm
-            self.model.dof_damping[:] = np.maximum(damp, self.joint_damping)
-            steps = int(np.ceil(settle / self.timestep))
-            min_steps = int(np.ceil(0.2 / self.timestep))
-            for j in range(steps):
-                self._step()
-                # at rest: stop early (velocities below 1 um/s, 1 urad/s)
-                if j >= min_steps and j % 50 == 0 and np.max(np.abs(self.data.qvel)) < 1e-6:
-                    break
-            self._check_stable()
-            self.model.dof_damping[:] = self.joint_damping
-            self.data.qvel[:] = 0.0
-            mujoco.mj_forward(self.model, self.data)
+            self._settle(settle)
         self.time = 0.0
         self.data.time = 0.0
         return self.state()
+
+    def _hold_lengths(self, pose) -> np.ndarray:
+        """Axis positions [m] holding a pose: chords, or the cable model's unstretched lengths."""
+        L = kin.inverse_kinematics(self.design, pose)
+        if cm.is_ideal(self.design):
+            return L
+        from cdpr_design.statics.pose import evaluate_pose
+
+        L0 = evaluate_pose(self.design, pose).cable_state.unstretched_lengths
+        return np.where(np.isfinite(L0), L0, L)
+
+    def _place_chains(self, lengths) -> None:
+        """Massive cables on their catenaries for unstretched ``lengths`` (straight where none exists)."""
+        ch = self._chains
+        arr = cm.cable_arrays(self.design)
+        pts = []
+        for j, i in enumerate(ch.idx):
+            A, B = self.data.site_xpos[self.model.site(f"outlet_{self.design.cables[i].name}").id], \
+                self.data.site_xpos[ch.sites[j]]
+            shape = cm.cable_shape(A, B, float(lengths[i]), float(arr.w[i]), float(ch.EA[j]), arr.up, ch.N)
+            f = np.linspace(0.0, 1.0, ch.N + 1)[:, None]
+            pts.append(shape[0] if shape is not None else A[None, :] + f * (B - A)[None, :])
+        ch.place(self.model, self.data, pts)
+        ch.update(self.model, self.data, lengths, np.zeros(self.m), self.timestep)
+        mujoco.mj_forward(self.model, self.data)
+
+    def _settle(self, settle: float) -> None:
+        """Let the robot come to rest for up to ``settle`` [s] with extra damping."""
+        d = self.design
+        # extra damping while settling: about critical for a 1 m pendulum of the effector
+        mass = d.effector.mass
+        arm = 0.5 * float(np.max(d.effector.size)) + 0.1
+        ne = 3 if self._planar else 6  # the effector's dofs come first
+        damp = np.full(self.model.nv, 4.0 * mass)
+        if self._planar:
+            damp[2] = 4.0 * mass * arm * arm
+        else:
+            damp[3:ne] = 4.0 * mass * arm * arm
+        if self._chains is not None:
+            self._chains.settle_damping(self.model, self.data, damp)
+        self.model.dof_damping[:] = np.maximum(damp, self.joint_damping)
+        steps = int(np.ceil(settle / self.timestep))
+        min_steps = int(np.ceil(0.2 / self.timestep))
+        for j in range(steps):
+            self._step()
+            # at rest: stop early (velocities below 1 um/s, 1 urad/s)
+            if j >= min_steps and j % 50 == 0 and np.max(np.abs(self.data.qvel)) < 1e-6:
+                break
+        self._check_stable()
+        self._rest_damping()
+        self.data.qvel[:] = 0.0
+        mujoco.mj_forward(self.model, self.data)
 
     # ------------------------------------------------------------------
     # stepping
@@ -404,20 +409,50 @@ class Simulator:
         self.q = q_new
         k = self.EA / np.maximum(q_new, 1e-6)
         c = self._kv_per_sqrt_k / np.sqrt(k)  # kv / k
-        gp, bp = self._gainprm, self._biasprm
-        gp[:, 0] = k
-        bp[:, 1] = -k
-        bp[:, 2] = -c * k
-        ctrl = q_new + c * self.qdot
+        # the damper acts relative to the winch; on real cables relative to the commanded cable
+        # speed, so that the steps of their set-points (stretch and sag follow the tensions, which
+        # jump with the path's acceleration) are not damped away
+        rate = np.where(self._real, e.vel, self.qdot) if self._real.any() else self.qdot
+        ctrl = q_new + c * rate
         if self._pulley is not None:
             # the tendon spans the free segment only: the winch's length minus the wrapped arc
             self._update_pulleys()
             ctrl -= self._arc
         if self.compensate_stretch:
-            ctrl -= e.tension / k
-        self.data.ctrl[:] = ctrl
-        mujoco.mj_step(self.model, self.data)
+            ctrl -= e.tension / k  # e.tension is 0 where the set-points are unstretched lengths
+        gp, bp = self._gainprm, self._biasprm
+        gp[:, 0] = k
+        bp[:, 1] = -k
+        bp[:, 2] = -c * k
+        if self._chains is None:
+            self.data.ctrl[:] = ctrl
+            mujoco.mj_step(self.model, self.data)
+        else:
+            sub = self._drive_chains(q_new, rate, c * k, ctrl)
+            self.data.ctrl[:] = ctrl
+            mujoco.mj_step(self.model, self.data, sub)
         self.time += dt
+
+    def _drive_chains(self, q, rate, kv, ctrl) -> int:
+        """Massive cables for axes at ``q`` [m] paying out at ``rate`` [m/s]: the flexes
+        (:meth:`Chains.update`), and each cable's actuator as a dashpot on its chord relative to the
+        winch, force kv (rate - dL/dt) with kv [N s/m] as for straight cables (integrated implicitly,
+        unlike the flex's own dampers), pulling only like every cable actuator.
+        Returns the physics sub-steps."""
+        ch = self._chains
+        sub = ch.update(self.model, self.data, q, rate, self.timestep)
+        i = ch.idx
+        self._gainprm[i, 0] = kv[i]
+        self._biasprm[i, 1] = 0.0
+        self._biasprm[i, 2] = -kv[i]
+        ctrl[i] = rate[i]
+        return sub
+
+    def _rest_damping(self) -> None:
+        """``joint_damping`` on the effector; none on the massive cables' vertices (their flex damps them)."""
+        self.model.dof_damping[:] = self.joint_damping
+        if self._chains is not None:
+            self.model.dof_damping[self._chains.dofs.ravel()] = 0.0
 
     def _check_stable(self) -> None:
         if self._unstable():
@@ -470,7 +505,7 @@ class Simulator:
         else:
             T = np.asarray(tension, float).reshape(-1)
         # a feed-forward near a singular pose can be huge: never more than a cable's bound
-        T = np.where(np.isfinite(T), np.clip(T, 0.0, self._t_cap), 0.0)
+        T = np.where(np.isfinite(T) & self._comp, np.clip(T, 0.0, self._t_cap), 0.0)
         entry = _Entry(self.time, sp.copy(), vel.copy(), T)
         self._fifo.append(entry)
         self._last_issue = entry
@@ -519,156 +554,19 @@ class Simulator:
         pose = full[list(d.motion.pose_index)]
         # the actuator's force range [-F, 0] makes these >= 0 (0 when slack); + 0.0 turns -0.0 into 0.0
         tensions = -np.asarray(self.data.actuator_force, float) + 0.0
+        outlet = tensions.copy()
+        if self._chains is not None:
+            # the flex's end forces plus the pull of the chord's dashpot (0 at rest)
+            i = self._chains.idx
+            tB, tA = self._chains.end_tensions(self.model, self.data)
+            tensions[i], outlet[i] = tB + tensions[i], tA + tensions[i]
         sp = self._current.sp if self._current is not None else np.full(self.m, np.nan)
         return SimState(self.time, pose, full[3:].copy(), vel,
-                        np.array(self.data.ten_length, float) + self._arc, tensions, self.q.copy(), sp.copy())
+                        np.array(self.data.ten_length, float) + self._arc, tensions, self.q.copy(), sp.copy(),
+                        outlet)
 
 
-# ----------------------------------------------------------------------------
-# A whole trajectory
-# ----------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class SimulationResult:
-    """A simulated run of a sampled trajectory (k samples).
-
-    Attributes
-    ----------
-    time : (k,) array [s]
-    target_pose, pose : (k, ncoords) arrays
-        Set-point pose and simulated effector pose.
-    orientation : (k, 3) array
-        Simulated (rx, ry, rz) [rad] (the tilt of a planar effector is column 2).
-    target_lengths, lengths, axis, tensions : (k, m) arrays
-        Set-point lengths, simulated cable lengths, winch positions [m] and tensions [N].
-    segment : (k,) int array
-        Straight-segment id of each sample (-1: not a straight line).
-    """
-
-    name: str
-    coords: tuple[str, ...]
-    cable_names: tuple[str, ...]
-    time: np.ndarray
-    target_pose: np.ndarray
-    pose: np.ndarray
-    orientation: np.ndarray
-    target_lengths: np.ndarray
-    lengths: np.ndarray
-    axis: np.ndarray
-    tensions: np.ndarray
-    segment: np.ndarray
-    settings: dict = field(default_factory=dict)
-
-    def columns(self) -> dict[str, np.ndarray]:
-        """The ``simulation.csv`` columns of the CLI contract, in order (extra ones last)."""
-        out: dict[str, np.ndarray] = {"time": self.time}
-        for j, c in enumerate(self.coords):
-            out[f"{c}_target"] = self.target_pose[:, j]
-        for j, c in enumerate(self.coords):
-            out[c] = self.pose[:, j]
-        for i, c in enumerate(self.cable_names):
-            out[f"length_{c}_target"] = self.target_lengths[:, i]
-        for i, c in enumerate(self.cable_names):
-            out[f"length_{c}"] = self.lengths[:, i]
-        for i, c in enumerate(self.cable_names):
-            out[f"tension_{c}"] = self.tensions[:, i]
-        for i, c in enumerate(self.cable_names):
-            out[f"axis_{c}"] = self.axis[:, i]
-        for j, c in enumerate(("rx", "ry", "rz")):
-            if c not in self.coords and not (c == "rz" and "phi" in self.coords):
-                out[f"tilt_{c}"] = self.orientation[:, j]
-        out["segment"] = self.segment
-        return out
-
-    def comparison(self, max_delay: float | None = None):
-        """Delay, errors and the per-segment table of target vs simulated (see :mod:`compare`)."""
-        from cdpr_design.motion.compare import compare
-
-        tgt, act = {}, {}
-        for j, c in enumerate(self.coords):
-            tgt[c], act[c] = self.target_pose[:, j], self.pose[:, j]
-        for i, c in enumerate(self.cable_names):
-            tgt[f"length_{c}"], act[f"length_{c}"] = self.target_lengths[:, i], self.lengths[:, i]
-        return compare(self.time, tgt, self.time, act, segment_ids=self.segment, max_delay=max_delay)
-
-    def summary(self, max_delay: float | None = None) -> dict:
-        """JSON summary: ``rms_error``, ``max_error`` [m], ``delay`` [s] per column, ``segments``."""
-        cmp = self.comparison(max_delay)
-        out = cmp.to_json()
-        out = {"name": self.name, **out}
-        out["max_tension"] = {c: float(np.max(self.tensions[:, i])) for i, c in enumerate(self.cable_names)}
-        out["min_tension"] = {c: float(np.min(self.tensions[:, i])) for i, c in enumerate(self.cable_names)}
-        out["max_tilt"] = float(np.max(np.abs(self.orientation))) if not self.design_rotational else None
-        out["samples"] = int(self.time.size)
-        out["settings"] = dict(self.settings)
-        return out
-
-    @property
-    def design_rotational(self) -> bool:
-        return any(c in self.coords for c in ("phi", "rx", "ry", "rz"))
-
-
-def simulate(design: Design, samples, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
-             delay: float = 0.0, cable_damping: float = 0.7, joint_damping: float = 0.05,
-             feedforward: bool = True, compensate_stretch: bool = True, settle: float = 3.0,
-             progress=None) -> SimulationResult:
-    """Run a sampled trajectory on the simulated robot.
-
-    Set-point k (lengths, their speeds as feed-forward, the trajectory's
-    inertial tensions as stretch compensation) is issued at ``time[k]`` and
-    held as a ramp for one cycle; the state is recorded at every sample time.
-    Add hold time to the trajectory (``trajectory.sample(..., hold_end=...)``)
-    to see a delayed robot finish its motion.
-
-    Parameters
-    ----------
-    design : Design
-    samples : trajectory.Samples
-    progress : callable, optional
-        Called as ``progress(done, total)`` every few hundred samples.
-    Other parameters: see :class:`Simulator`.
-    """
-    sim = Simulator(design, timestep=timestep, servo_bandwidth=servo_bandwidth, delay=delay,
-                    cable_damping=cable_damping, joint_damping=joint_damping,
-                    feedforward=feedforward, compensate_stretch=compensate_stretch)
-    k = samples.time.size
-    dt = samples.cycle_time
-    sim.reset(samples.pose[0], settle=settle)
-    nc, m = samples.pose.shape[1], design.m
-    pose = np.empty((k, nc))
-    ori = np.empty((k, 3))
-    lengths = np.empty((k, m))
-    axis = np.empty((k, m))
-    tens = np.empty((k, m))
-
-    def record(j, s):
-        pose[j], ori[j], lengths[j], axis[j], tens[j] = s.pose, s.orientation, s.lengths, s.axis, s.tensions
-
-    record(0, sim.state())
-    T = samples.tensions
-    for j in range(k - 1):
-        s = sim.advance(samples.lengths[j], dt, velocity=samples.cable_speed[j],
-                        tension=T[j] if np.all(np.isfinite(T[j])) else None)
-        record(j + 1, s)
-        if progress is not None and (j % 500 == 0 or j == k - 2):
-            progress(j + 1, k - 1)
-    seg = samples.segment.copy()
-    kinds = {s.index: s.kind for s in samples.segments}
-    seg = np.array([v if kinds.get(int(v)) == "line" else -1 for v in seg], dtype=np.int64)
-    # samples of a segment: while its target moves (holds at the ends excluded)
-    for sgm in samples.segments:
-        sel = samples.segment == sgm.index
-        sel[: sgm.first] = False
-        sel[sgm.last + 1:] = False
-        seg[(samples.segment == sgm.index) & ~sel] = -1
-    settings = {"timestep": timestep, "servo_bandwidth": servo_bandwidth, "delay": delay,
-                "cable_damping": cable_damping, "joint_damping": joint_damping,
-                "feedforward": feedforward, "compensate_stretch": compensate_stretch,
-                "cycle_time": dt, "axial_stiffness": [float(v) for v in sim.EA]}
-    return SimulationResult(samples.name, tuple(samples.coords), tuple(samples.cable_names),
-                            samples.time.copy(), samples.pose.copy(), pose, ori,
-                            samples.lengths.copy(), lengths, axis, tens, seg, settings)
-
+# A whole trajectory: :mod:`cdpr_design.motion.run` (imported here for the historical names)
+from cdpr_design.motion.run import SimulationResult, simulate  # noqa: E402
 
 __all__ = ["SimState", "SimulationError", "SimulationResult", "Simulator", "build_xml", "simulate"]

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cdpr_design.model.design import Design, Trajectory
-from cdpr_design.motion import paths
+from cdpr_design.motion import paths, setpoints
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
 
@@ -107,6 +107,12 @@ class Samples:
     segments : tuple of Segment
     cycle_time : float
         [s]
+    cables : setpoints.CableSamples or None
+        With elastic or sagging cables: the unstretched lengths (the
+        set-points), the error of ideal set-points, outlet tensions, sag and
+        status per sample (:mod:`cdpr_design.motion.setpoints`); then
+        ``tensions`` are at the effector end and ``feasible`` holds the bounds
+        along the whole cable.  None for ideal cables.
     """
 
     name: str
@@ -125,6 +131,7 @@ class Samples:
     segment: np.ndarray
     segments: tuple[Segment, ...] = field(default_factory=tuple)
     cycle_time: float = DEFAULT_CYCLE_TIME
+    cables: object = None
 
     def __len__(self) -> int:
         return int(self.time.size)
@@ -157,6 +164,8 @@ class Samples:
         for i, c in enumerate(self.cable_names):
             out[f"cable_accel_{c}"] = self.cable_accel[:, i]
         out["segment"] = self.segment.astype(np.int64)
+        if self.cables is not None:
+            out.update(self.cables.columns(self.cable_names))
         return out
 
     def summary(self) -> dict:
@@ -164,7 +173,7 @@ class Samples:
         speed = np.linalg.norm(self.velocity[:, : _pos_dim(self.coords)], axis=1)
         acc = np.linalg.norm(self.acceleration[:, : _pos_dim(self.coords)], axis=1)
         with np.errstate(invalid="ignore"):
-            return {
+            out = {
                 "name": self.name,
                 "samples": int(self.time.size),
                 "duration": self.duration,
@@ -178,6 +187,9 @@ class Samples:
                 "max_cable_speed": dict(zip(self.cable_names, map(float, np.abs(self.cable_speed).max(axis=0)))),
                 "segments": len(self.segments),
             }
+        if self.cables is not None:
+            out.update(self.cables.summary(self.cable_names))
+        return out
 
 
 def _nan_to_none(values, names):
@@ -326,12 +338,14 @@ def sample(design: Design, trajectory: str | Trajectory, cycle_time: float | Non
     pose, vel, acc, seg = blocks.stack()
     time = dt * np.arange(pose.shape[0])
     st = states(design, pose, vel, acc, time=time, external=external)
+    cs, tensions, feasible = setpoints.cable_samples(design, st["positions"], st["attachments"], st["wrench"],
+                                                     st["lengths"], st["tensions"], st["feasible"])
     return Samples(
         name=traj.name, coords=tuple(design.motion.coords), cable_names=tuple(design.cable_names),
         time=time, pose=pose, velocity=vel, acceleration=acc, lengths=st["lengths"],
         cable_speed=st["cable_speed"], cable_accel=st["cable_accel"],
-        motor_angle=motor_angles(design, st["lengths"]), tensions=st["tensions"],
-        feasible=st["feasible"], segment=seg, segments=tuple(blocks.segments), cycle_time=dt,
+        motor_angle=motor_angles(design, st["lengths"]), tensions=tensions,
+        feasible=feasible, segment=seg, segments=tuple(blocks.segments), cycle_time=dt, cables=cs,
     )
 
 
@@ -517,7 +531,9 @@ def states(design: Design, pose, velocity, acceleration, *, time=None, external=
     Returns
     -------
     dict with ``lengths``, ``cable_speed``, ``cable_accel``, ``tensions`` (k, m)
-    and ``feasible`` (k,).
+    and ``feasible`` (k,) of straight, ideal cables; ``structure`` (k, n, m),
+    ``wrench`` (k, n) the wrench the cables exert [N, N m], ``positions``
+    (k, 3) [m] and ``attachments`` (k, m, 3) the rotated attachments [m].
 
     Notes
     -----
@@ -545,9 +561,11 @@ def states(design: Design, pose, velocity, acceleration, *, time=None, external=
     aB = Acc[:, None, :3] + np.cross(al[:, None, :], Rb) + np.cross(w[:, None, :], np.cross(w[:, None, :], Rb))
     L, u, Ld, Ldd = _cable_motion(design, P, Rb, vB, aB)
     W = _structure(design, u, Rb)
-    t = solve_tensions(design, W, -_load_wrenches(design, R, Acc, w, al, external))
+    wreq = -_load_wrenches(design, R, Acc, w, al, external)
+    t = solve_tensions(design, W, wreq)
     return {"lengths": L, "cable_speed": Ld, "cable_accel": Ldd, "tensions": t,
-            "feasible": within_bounds(design, t), "structure": W}
+            "feasible": within_bounds(design, t), "structure": W, "wrench": wreq, "positions": P[:, :3],
+            "attachments": Rb}
 
 
 def pose_at(samples: Samples, time) -> np.ndarray:

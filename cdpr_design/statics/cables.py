@@ -205,3 +205,73 @@ def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, o
             return t, W, CableState(cw[:, KS._TA].copy(), cw[:, KS._L0].copy(), sag)
         t = t2
     return None, W, CableState(nan, nan.copy(), nan.copy(), "not-converged")
+
+
+@dataclass
+class SampleStates:
+    """Sagging statics of k samples (:func:`sagging_samples`); NaN where a sample has no solution.
+
+    ``tensions`` (k, m) effector-end [N], ``outlet_tensions`` (k, m) [N],
+    ``unstretched_lengths`` (k, m) [m], ``sag`` (k, m) [m], ``lengths`` (k, m)
+    chords [m], ``status`` (k,) index into :data:`STATUS`, ``feasible`` (k,)
+    converged with every tension within its bounds along the whole cable.
+    """
+
+    tensions: np.ndarray
+    outlet_tensions: np.ndarray
+    unstretched_lengths: np.ndarray
+    sag: np.ndarray
+    lengths: np.ndarray
+    status: np.ndarray
+    feasible: np.ndarray
+
+
+def sagging_samples(design: Design, positions: np.ndarray, Rb: np.ndarray, wreq: np.ndarray) -> SampleStates:
+    """Sagging cables at k samples of a path, each with its own required wrench.
+
+    ``positions`` (k, 3) [m], ``Rb`` (k, m, 3) the rotated attachments [m],
+    ``wreq`` (k, n) the wrench the cables must exert on the effector [N, N m]
+    (gravity and inertia; motion's rows).  The kernel of :func:`sagging_pose`
+    with minimum-norm tensions (:mod:`cdpr_design.kernels.sag_path`).  A
+    sample whose shapes converge with tensions outside the bounds keeps the
+    numbers of the same pose under [0, inf) and is flagged infeasible; one
+    whose shapes do not exist or do not converge has NaN and its status.
+    """
+    from cdpr_design.kernels.sag_path import sag_samples
+    from cdpr_design.statics import kinematics as kin
+    from cdpr_design.statics.pose import combinations
+
+    check_supported(design, pulleys=kin.has_pulleys(design))
+    arr = cable_arrays(design)
+    P = np.ascontiguousarray(positions, dtype=float)
+    k, m = P.shape[0], design.m
+    out = [np.full((k, m), np.nan) for _ in range(5)]
+    status = np.zeros(k, dtype=np.int8)
+    feasible = np.zeros(k, dtype=np.uint8)
+    sag_samples(P, np.ascontiguousarray(Rb, dtype=float), np.ascontiguousarray(design.outlets), design.rows,
+                arr.up, arr.w, arr.EA, np.ascontiguousarray(wreq, dtype=float), design.tension_min,
+                design.tension_max, combinations(m, design.n), MAX_ITERATIONS, *out, status, feasible)
+    return SampleStates(*out, status, feasible.astype(bool))
+
+
+def cable_shape(outlet, attachment, L0: float, w: float, EA: float, up, count: int):
+    """Points (count + 1, 3) [m] of a sagging cable from its outlet to its attachment, at equal
+    unstretched arc lengths, and its end forces (H, VB) [N]; None when the catenary has no
+    solution (:func:`cdpr_design.kernels.catenary.catenary_inverse`).
+
+    ``outlet``, ``attachment`` (3,) [m], ``L0`` [m], ``w`` [N/m], ``EA`` [N], ``up`` (3,) unit.
+    """
+    from cdpr_design.kernels import catenary as C
+
+    A, B, up = (np.asarray(v, float) for v in (outlet, attachment, up))
+    d = A - B
+    Z = float(d @ up)
+    h = d - Z * up
+    X = float(np.linalg.norm(h))
+    u = h / X if X > 1e-14 * np.linalg.norm(d) else np.zeros(3)
+    H, VB, status, _ = C.catenary_inverse(X if u.any() else 0.0, Z, L0, w, EA, np.nan, np.nan, 1e-13, 100)
+    if status != C.CAT_CONVERGED:
+        return None
+    s = np.ascontiguousarray(L0 * np.linspace(1.0, 0.0, count + 1))
+    x, z = C.catenary_profile(H, VB, L0, w, EA, s)
+    return B[None, :] + x[:, None] * u[None, :] + z[:, None] * up[None, :], (H, VB)
