@@ -5,49 +5,61 @@ from __future__ import annotations
 from pathlib import Path
 from typing import NamedTuple
 
+from cdpr_design.io.columns import file_name
 from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.common import Progress, output_dir, stage
+from cdpr_design.jobs.tables import Timings, table_metadata
 from cdpr_design.jobs.motion import require_trajectory, trajectory_samples
 from cdpr_design.jobs.workspace import run_workspace
 from cdpr_design.plots.worker import PictureWorker
 
 
-def write_motor_sizing(out: OutputDir, sizing) -> Path:
-    """``motor_sizing.csv``: one row per cable, the contract columns first (cli.md)."""
+def write_motor_sizing(out: OutputDir, sizing, format: str = "csv", design=None) -> Path:
+    """``motor_sizing.csv`` (or ``.parquet``): one row per cable, the contract columns first (cli.md)."""
     from cdpr_design.design.sizing import AxisSizing
 
     rows = sizing.rows()
     header = list(rows[0].keys()) if rows else list(AxisSizing.CONTRACT)
-    return out.write_csv("motor_sizing.csv", header, ([r[k] for k in header] for r in rows))
+    cols = {k: [r[k] for r in rows] for k in header}
+    meta = table_metadata(design, "motor_sizing", header, cycle=sizing.cycle, safety_factor=sizing.safety_factor)
+    return out.write_columns(file_name("motor_sizing", format), cols, names=header, metadata=meta)
 
 
-def write_design_report(out: OutputDir, row: dict, name: str = "design_report.csv") -> Path:
-    """``design_report.csv``: one row of the design's headline figures (booleans as 1/0)."""
+def write_design_report(out: OutputDir, row: dict, stem: str = "design_report", format: str = "csv",
+                        design=None) -> Path:
+    """``design_report.csv`` (or ``.parquet``): one row of the design's headline figures (booleans as 1/0)."""
     header = list(row.keys())
-    return out.write_csv(name, header, [[row[k] for k in header]])
+    meta = table_metadata(design, stem, header)
+    return out.write_columns(file_name(stem, format), {k: [row[k]] for k in header}, names=header, metadata=meta)
 
 
 class SizingRun(NamedTuple):
     result: object  # design.sizing.SizingResult
     out: OutputDir
+    summary: dict  # the ``size-motors --json`` object (result.summary() and its timings)
 
 
 def size_motors(design, catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
                 motor: str | None = None, step: float | None = None, out: str | Path | None = None,
-                overwrite: bool = False, engine: str = "auto") -> SizingRun:
+                overwrite: bool = False, engine: str = "auto", format: str = "csv") -> SizingRun:
     """The ``size-motors`` command: size motor, gearbox and drum over the task workspace
     (grid ``step`` [m]; duty cycle of spec ``trajectory``, else a standard one) from the
-    shipped catalogue extended by the YAML file ``catalogue``; write motor_sizing.csv into ``out``."""
+    shipped catalogue extended by the YAML file ``catalogue``; write motor_sizing.csv
+    (``format='parquet'``: ``.parquet``) into ``out``."""
     from cdpr_design.design import sizing as sz
     from cdpr_design.model import spec
 
+    timings = Timings()
     cat = spec.load_catalogue(catalogue)
     samples = trajectory_samples(design, trajectory)
     out_dir = output_dir(design, out, overwrite)
-    result = sz.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor, motor=motor,
-                            engine=engine)
-    write_motor_sizing(out_dir, result)
-    return SizingRun(result, out_dir)
+    out_dir.target(file_name("motor_sizing", format))  # a foreign file: refused before any work
+    with timings.phase("sweep_s"):
+        result = sz.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor,
+                                motor=motor, engine=engine)
+    with timings.phase("write_s"):
+        write_motor_sizing(out_dir, result, format, design)
+    return SizingRun(result, out_dir, {**result.summary(), "timings": timings.as_dict()})
 
 
 def evaluate(design, catalogue, trajectory: str | None = None, safety_factor: float | None = None,
