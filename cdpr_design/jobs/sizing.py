@@ -7,10 +7,11 @@ from typing import NamedTuple
 
 from cdpr_design.io.columns import file_name
 from cdpr_design.io.files import OutputDir
-from cdpr_design.jobs.common import Progress, output_dir, stage
-from cdpr_design.jobs.tables import Timings, table_metadata
+from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
+from cdpr_design.jobs.tables import Timings, write_table
 from cdpr_design.jobs.motion import require_trajectory, trajectory_samples
 from cdpr_design.jobs.workspace import run_workspace
+from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
 
 
@@ -21,16 +22,14 @@ def write_motor_sizing(out: OutputDir, sizing, format: str = "csv", design=None)
     rows = sizing.rows()
     header = list(rows[0].keys()) if rows else list(AxisSizing.CONTRACT)
     cols = {k: [r[k] for r in rows] for k in header}
-    meta = table_metadata(design, "motor_sizing", header, cycle=sizing.cycle, safety_factor=sizing.safety_factor)
-    return out.write_columns(file_name("motor_sizing", format), cols, names=header, metadata=meta)
+    return write_table(out, "motor_sizing", cols, format, design, names=header, cycle=sizing.cycle,
+                       safety_factor=sizing.safety_factor)
 
 
 def write_design_report(out: OutputDir, row: dict, stem: str = "design_report", format: str = "csv",
                         design=None) -> Path:
     """``design_report.csv`` (or ``.parquet``): one row of the design's headline figures (booleans as 1/0)."""
-    header = list(row.keys())
-    meta = table_metadata(design, stem, header)
-    return out.write_columns(file_name(stem, format), {k: [row[k]] for k in header}, names=header, metadata=meta)
+    return write_table(out, stem, {k: [v] for k, v in row.items()}, format, design)
 
 
 class SizingRun(NamedTuple):
@@ -99,27 +98,36 @@ class ReportRun(NamedTuple):
     evaluation: object  # design.evaluate.Evaluation
     checks: list
     out: OutputDir
+    timings: dict  # the job's timings (also in report.json)
 
 
 def report(design, catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
            motor: str | None = None, step: float | None = None, force: bool = False,
            out: str | Path | None = None, overwrite: bool = False, pictures: PictureWorker | None = None,
-           engine: str = "auto", progress: Progress | None = None) -> ReportRun:
+           engine: str = "auto", progress: Progress | None = None, format: str = "csv") -> ReportRun:
     """The ``report`` command: the static workspace (:func:`~cdpr_design.jobs.workspace.run_workspace`),
-    then motor_sizing.csv, design_report.csv and report.json of the evaluation; ``catalogue``:
-    YAML file extending the shipped motor catalogue."""
+    then motor_sizing.csv, design_report.csv (``format='parquet'``: ``.parquet``), report.json and
+    report.html of the evaluation; ``catalogue``: YAML file extending the shipped motor catalogue."""
     from cdpr_design.design import evaluate as ev
     from cdpr_design.model import spec
 
+    timings = Timings()
     cat = spec.load_catalogue(catalogue)  # a bad catalogue: before any work
     if trajectory is not None:
         require_trajectory(design, trajectory, "--trajectory")  # unknown name: before any work
     out_dir = output_dir(design, out, overwrite)
+    for stem in ("motor_sizing", "design_report"):
+        out_dir.target(file_name(stem, format))
     wres = run_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
-                         progress=progress)
-    e = evaluate(design, cat, trajectory, safety_factor, motor, step, wres, progress, engine)
-    write_motor_sizing(out_dir, e.sizing)
-    write_design_report(out_dir, e.row)
-    checks = ev.check_table(e.row)
-    out_dir.write_json("report.json", {"report": e.row, "checks": checks, "sizing": e.sizing.summary()})
-    return ReportRun(e, checks, out_dir)
+                         progress=progress, format=format, timings=timings)
+    with timings.phase("sweep_s"):
+        e = evaluate(design, cat, trajectory, safety_factor, motor, step, wres, progress, engine)
+        checks = ev.check_table(e.row)
+    page = submit_pictures(out_dir, [("report.html", report_html, (wres, e.sizing, checks))], pictures, timings)
+    with timings.phase("write_s"):
+        write_motor_sizing(out_dir, e.sizing, format, design)
+        write_design_report(out_dir, e.row, format=format, design=design)
+    page.wait()
+    t = timings.as_dict()
+    out_dir.write_json("report.json", {"report": e.row, "checks": checks, "sizing": e.sizing.summary(), "timings": t})
+    return ReportRun(e, checks, out_dir, t)

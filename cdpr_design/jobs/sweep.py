@@ -12,7 +12,7 @@ from cdpr_design.io.files import OutputDir
 from cdpr_design.io.journal import SweepJournal
 from cdpr_design.io.tables import read_csv_table, text_rows
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
-from cdpr_design.jobs.tables import Timings, table_metadata
+from cdpr_design.jobs.tables import Timings, write_table
 from cdpr_design.jobs.motion import require_trajectory
 from cdpr_design.plots import sweep as sweep_plots
 
@@ -38,8 +38,7 @@ def write_sweep(out: OutputDir, header: list[str], rows: list[list], best_header
 
 def _write_rows(out: OutputDir, stem: str, header: list[str], rows: list[list], format: str, design, keys) -> Path:
     cols = list(zip(*rows)) if rows else [()] * len(header)
-    meta = table_metadata(design, stem, header, keys=list(keys))
-    return out.write_columns(file_name(stem, format), dict(zip(header, cols)), names=header, metadata=meta)
+    return write_table(out, stem, dict(zip(header, cols)), format, design, names=header, keys=list(keys))
 
 
 class SweepRun(NamedTuple):

@@ -13,7 +13,9 @@ import time
 from contextlib import contextmanager
 from typing import Iterable
 
-from cdpr_design.io.columns import FORMATS
+from pathlib import Path
+
+from cdpr_design.io.columns import FORMATS, file_name
 
 #: Table formats of ``--format``.
 TABLE_FORMATS = tuple(FORMATS)
@@ -62,6 +64,15 @@ def table_metadata(design, table: str, names: Iterable[str], **extra) -> dict:
     meta.update(extra)
     meta["units"] = units
     return meta
+
+
+def write_table(out, stem: str, columns: dict, format: str = "csv", design=None, names=None, **meta) -> Path:
+    """``stem.csv`` or ``stem.parquet`` of named columns (name -> array or list) in the output folder
+    ``out``, with the table's metadata (:func:`table_metadata`; ``meta``: further keys).  ``names``:
+    the column order (the header of a table without rows)."""
+    names = list(names) if names is not None else list(columns)
+    return out.write_columns(file_name(stem, format), columns, names=names,
+                             metadata=table_metadata(design, stem, names, **meta))
 
 
 def grid_metadata(grid) -> dict:
