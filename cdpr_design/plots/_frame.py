@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cdpr_design.plots._style import ORANGE, VERMILLION
+
 
 def frame_rect(ax, design, **kw) -> None:
     """The frame's x-y footprint as a rectangle outline."""
@@ -22,7 +24,7 @@ def draw_robot(ax, design, pose, proj=(0, 1)) -> None:
 
     a, b = proj
     A = design.outlets
-    ax.plot(A[:, a], A[:, b], "v", ms=9, mfc="tab:red", mec="k", zorder=6, label="outlets")
+    ax.plot(A[:, a], A[:, b], "v", ms=9, mfc=VERMILLION, mec="k", zorder=6, label="outlets")
     for i, c in enumerate(design.cables):
         ax.annotate(c.name, (A[i, a], A[i, b]), textcoords="offset points", xytext=(4, 6),
                     fontsize=8, zorder=7)
@@ -39,7 +41,7 @@ def draw_robot(ax, design, pose, proj=(0, 1)) -> None:
     pts3 = np.zeros((4, 3))
     pts3[:, a], pts3[:, b] = corners[:, 0], corners[:, 1]
     world = full[:3] + pts3 @ R.T
-    ax.add_patch(Polygon(world[:, [a, b]], closed=True, fc="tab:orange", ec="k", lw=1.0,
+    ax.add_patch(Polygon(world[:, [a, b]], closed=True, fc=ORANGE, ec="k", lw=1.0,
                          alpha=0.9, zorder=6, label="effector"))
 
 
@@ -68,6 +70,25 @@ def frame_aspect(d) -> float:
     """Height / width of the frame's x-y footprint (panel shape of the pictures)."""
     lo, hi = np.array(d.frame_lower), np.array(d.frame_upper)
     return float(np.clip((hi[1] - lo[1]) / (hi[0] - lo[0]), 0.3, 3.0))
+
+
+def panel_grid(n: int, ncol: int, aspect: float, width: float = 3.4, title_lines: int = 1):
+    """A figure of ``n`` equal-aspect map panels, ``ncol`` a row, sized to its content.
+
+    Each panel's axes are ``width`` [in] wide and ``aspect`` x ``width`` high
+    (the frame's shape); the figure adds room for tick and axis labels (0.75
+    in left of each panel, 0.85 in per row for the panel title and the x
+    label), a colour bar on the right and ``title_lines`` of figure title.
+    Matplotlib's constrained layout places the panels, so no white bands are
+    left between or around them.  Returns (figure, axes (nrow, ncol)).
+    """
+    import math
+
+    from cdpr_design.plots._style import pyplot
+
+    nrow = math.ceil(n / ncol)
+    size = (ncol * (width + 0.75) + 1.1, nrow * (width * aspect + 0.85) + 0.3 * title_lines + 0.15)
+    return pyplot().subplots(nrow, ncol, squeeze=False, layout="constrained", figsize=size)
 
 
 def pad_limits(ax, d) -> None:
@@ -102,7 +123,7 @@ def z_slices(axs, result, values, feas, zs, cmap, vmax: float):
         frac = feas[:, :, iz].mean() if feas[:, :, iz].size else 0.0
         frame_rect(ax, d)
         A = d.outlets
-        ax.plot(A[:, 0], A[:, 1], "v", ms=6, mfc="tab:red", mec="k")
+        ax.plot(A[:, 0], A[:, 1], "v", ms=6, mfc=VERMILLION, mec="k")
         pad_limits(ax, d)
         ax.set_title(f"z = {z_axis[iz]:.3g} m  ({100 * frac:.0f} % feasible)", fontsize=9)
         ax.set_xlabel("x [m]")

@@ -63,8 +63,8 @@ def report_html(result=None, sizing=None, checks=None, summary: dict | None = No
         parts += ["<h2>Summary</h2>", _summary_table(summary)]
     figures = []
     if result is not None:
-        figures = [("workspace", "Workspace", workspace_figure(result)),
-                   ("tensions", "Cable tensions", tension_figure(result))]
+        figures = [("workspace", "Workspace", workspace_plotly(result)),
+                   ("tensions", "Cable tensions", tension_plotly(result))]
         for fid, heading, (fig, note) in figures:
             parts += [f"<h2>{heading}</h2>", f'<div id="{fid}" class="figure"></div>',
                       f'<p class="note">{_esc(note)}</p>']
@@ -85,7 +85,7 @@ def report_html(result=None, sizing=None, checks=None, summary: dict | None = No
 # ----------------------------------------------------------------------------
 
 
-def workspace_figure(result) -> tuple[dict, str]:
+def workspace_plotly(result) -> tuple[dict, str]:
     """(figure, note): margin heat map (planar) or feasible 3-D points (spatial)."""
     if result.design.motion.planar:
         return _planar_workspace(result)
@@ -161,7 +161,7 @@ def _spatial_workspace(result) -> tuple[dict, str]:
     return {"data": traces, "layout": layout}, note
 
 
-def tension_figure(result) -> tuple[dict, str]:
+def tension_plotly(result) -> tuple[dict, str]:
     """(figure, note): each cable's minimum-norm tension over the grid (spatial: the z-slice with
     the most feasible poses), one panel per cable on a shared scale."""
     d = result.design
