@@ -85,6 +85,9 @@ def _round10(a):
         X = np.floor(np.log10(aa)).astype(np.int64)
         q = _scale(aa, 9 - X)
         m = np.rint(q)
+        # near a tie the scaled value may round either way: Python decides (also when that
+        # rounding carried into an 11th digit and the exponent was raised below)
+        tie = np.abs(q - m) >= 0.5 - 1e-5
         for _ in range(2):  # log10 one off near powers of ten, or rounding up to 10^10
             up, down = m >= 1e10, m < 1e9
             fix = up | down
@@ -93,7 +96,8 @@ def _round10(a):
             X = X + up - down
             q = np.where(fix, _scale(aa, 9 - X), q)
             m = np.rint(q)
-        ok &= (m >= 1e9) & (m < 1e10) & (np.abs(q - m) < 0.5 - 1e-5)
+            tie |= np.abs(q - m) >= 0.5 - 1e-5
+        ok &= (m >= 1e9) & (m < 1e10) & ~tie
     return m, X, ok
 
 
