@@ -102,7 +102,9 @@ def test_spatial_workspace_html_holds_3d_points(tmp_path):
     n = len(pts["x"])
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert n == len(pts["y"]) == len(pts["z"]) == len(pts["marker"]["color"]) == summary["feasible"] > 0
-    assert np.array(pts["customdata"], dtype=float).shape == (n, 8)
+    hover = np.array(pts["customdata"], dtype=float)
+    assert hover.shape == (n, 9)  # the margin, then the 8 tensions
+    np.testing.assert_allclose(hover[:, 0], pts["marker"]["color"])
     assert min(pts["marker"]["color"]) >= 0  # feasible: margin >= 0
     assert "z = " in pts["hovertemplate"] and "T c8" in pts["hovertemplate"]
     assert page.figures["workspace"]["layout"]["scene"]["zaxis"]["title"]["text"] == "z [m]"

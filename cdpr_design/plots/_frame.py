@@ -72,23 +72,45 @@ def frame_aspect(d) -> float:
     return float(np.clip((hi[1] - lo[1]) / (hi[0] - lo[0]), 0.3, 3.0))
 
 
-def panel_grid(n: int, ncol: int, aspect: float, width: float = 3.4, title_lines: int = 1):
+#: Room around a map panel [in]: left (tick labels, y label), below (tick labels, x label),
+#: above (the panel's title), and to the right of the panels for the colour bar.
+_LEFT, _BELOW, _ABOVE, _BAR = 0.75, 0.55, 0.32, 1.15
+
+
+def panel_grid(n: int, ncol: int, aspect: float, width: float = 3.4, title_lines: int = 1,
+               panel_title_lines: int = 1):
     """A figure of ``n`` equal-aspect map panels, ``ncol`` a row, sized to its content.
 
     Each panel's axes are ``width`` [in] wide and ``aspect`` x ``width`` high
-    (the frame's shape); the figure adds room for tick and axis labels (0.75
-    in left of each panel, 0.85 in per row for the panel title and the x
-    label), a colour bar on the right and ``title_lines`` of figure title.
-    Matplotlib's constrained layout places the panels, so no white bands are
-    left between or around them.  Returns (figure, axes (nrow, ncol)).
+    (the frame's shape); the figure adds fixed room for tick and axis labels,
+    ``panel_title_lines`` of panel title, ``title_lines`` of figure title and a colour bar on the
+    right (its own axes, so the panels keep their size), placed by
+    arithmetic: no white bands between or around the panels, and no layout
+    engine to run at drawing time.  Returns (figure, axes (nrow, ncol), colour-bar axes).
     """
     import math
 
     from cdpr_design.plots._style import pyplot
 
     nrow = math.ceil(n / ncol)
-    size = (ncol * (width + 0.75) + 1.1, nrow * (width * aspect + 0.85) + 0.3 * title_lines + 0.15)
-    return pyplot().subplots(nrow, ncol, squeeze=False, layout="constrained", figsize=size)
+    height = width * aspect
+    top = 0.3 * title_lines + 0.12
+    above = _ABOVE * panel_title_lines
+    W = ncol * (width + _LEFT) + _BAR
+    H = top + nrow * (above + height + _BELOW)
+    fig, axs = pyplot().subplots(nrow, ncol, squeeze=False, figsize=(W, H))
+    fig.subplots_adjust(left=_LEFT / W, right=1 - _BAR / W, bottom=_BELOW / H, top=1 - (top + above) / H,
+                        wspace=_LEFT / width, hspace=(above + _BELOW) / height)
+    span = 1 - (top + above + _BELOW) / H  # the panels' height, as a fraction of the figure's
+    cax = fig.add_axes((1 - 0.85 * _BAR / W, _BELOW / H + 0.1 * span, 0.16 / W, 0.8 * span))
+    return fig, axs, cax
+
+
+def single_panel(aspect: float, width: float = 5.8, title_lines: int = 1):
+    """:func:`panel_grid` of one panel (a planar map) whose title has ``title_lines``:
+    (figure, axes, colour-bar axes)."""
+    fig, axs, cax = panel_grid(1, 1, aspect, width, title_lines=0, panel_title_lines=title_lines)
+    return fig, axs[0, 0], cax
 
 
 def pad_limits(ax, d) -> None:

@@ -102,9 +102,10 @@ def _stride(shape, limit: int) -> int:
 
 def _hover(d, coords: list[str]) -> str:
     """Hover text: the pose coordinates, the margin and each cable's tension."""
+    spatial = len(coords) == 3  # 3-D points: customdata = [margin, tensions...]; heat maps: z is the margin
     lines = [f"{c} = %{{{'xyz'[i]}:.4g}} m" for i, c in enumerate(coords)]
-    lines.append("margin = %{marker.color:.4g} N" if len(coords) == 3 else "margin = %{z:.4g} N")
-    lines += [f"T {c} = %{{customdata[{i}]:.4g}} N" for i, c in enumerate(d.cable_names)]
+    lines.append("margin = %{customdata[0]:.4g} N" if spatial else "margin = %{z:.4g} N")
+    lines += [f"T {c} = %{{customdata[{i + spatial}]:.4g}} N" for i, c in enumerate(d.cable_names)]
     return "<br>".join(lines) + "<extra></extra>"
 
 
@@ -145,11 +146,12 @@ def _spatial_workspace(result) -> tuple[dict, str]:
     pts = [axes[j][idx[j]] for j in range(3)]
     marg = result.margin_map[::k, ::k, ::k][idx].astype(float)
     ten = np.stack([t[::k, ::k, ::k][idx] for t in result.tension_maps], axis=1)
+    hover_data = np.concatenate([marg[:, None], ten], axis=1)  # margin, then each cable's tension
     traces = [
         {"type": "scatter3d", "mode": "markers", "x": pts[0], "y": pts[1], "z": pts[2], "name": "feasible poses",
          "marker": {"size": 2.5, "color": marg, "colorscale": MARGIN_SCALE, "cmin": 0.0,
                     "colorbar": {"title": {"text": "capacity margin [N]"}}},
-         "customdata": ten, "hovertemplate": _hover(d, ["x", "y", "z"])},
+         "customdata": hover_data, "hovertemplate": _hover(d, ["x", "y", "z"])},
         _outlets(d, planar=False),
         _frame_edges(d),
     ]

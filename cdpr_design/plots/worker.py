@@ -117,7 +117,7 @@ def draw(jobs) -> list[tuple[str, bytes]]:
         plt = pyplot()
         try:
             buf = io.BytesIO()
-            fig.savefig(buf, format="png", dpi=dpi, bbox_inches="tight", pad_inches=0.08)
+            fig.savefig(buf, format="png", dpi=dpi)
         finally:
             plt.close(fig)
         out.append((name, buf.getvalue()))

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design.plots._frame import (draw_robot, extent, frame_aspect, frame_rect, pad_limits, panel_grid,
-                                      pose_txt, slices, used_panels, z_slices)
+                                      pose_txt, single_panel, slices, used_panels, z_slices)
 from cdpr_design.plots._style import BLUE, VERMILLION, cmap_grey_bad, pyplot
 
 _KIND_TEXT = {"static": "static-equilibrium", "wrench-feasible": "wrench-feasible",
@@ -64,8 +64,9 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
     d = result.design
     rep = wsmod.representative_pose(result)
     if ax is None:
-        fig, ax = _single_panel(d, title.count("\n") + 1)
-    fig = ax.figure
+        fig, ax, cax = single_panel(frame_aspect(d), title_lines=title.count("\n") + 1)
+    else:
+        fig, cax = ax.figure, None
     im = ax.imshow(marg.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("viridis"),
                    vmin=0.0, vmax=vmax, interpolation="nearest", aspect="equal", zorder=1)
     ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
@@ -79,8 +80,8 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
     pad_limits(ax, d)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    fig.colorbar(im, ax=ax, shrink=0.85, label="capacity margin [N] (grey: infeasible)")
-    ax.legend(loc="lower right", fontsize=8, framealpha=0.9)
+    _colorbar(fig, im, cax, ax, "capacity margin [N] (grey: infeasible)")
+    ax.legend(loc="best", fontsize=8, framealpha=0.9)
     ax.set_title(title, fontsize=10)
     if rep is not None:
         ax.text(0.01, 0.01, "drawn at the pose of largest margin " + pose_txt(d, rep),
@@ -92,9 +93,9 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
 def _spatial_workspace(result, feas, marg, vmax, title):
     d = result.design
     zs = slices(result)
-    fig, axs = panel_grid(len(zs), min(3, len(zs)), frame_aspect(d), title_lines=title.count("\n") + 1)
+    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), frame_aspect(d), title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, marg, feas, zs, cmap_grey_bad("viridis"), vmax)
-    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label="capacity margin [N] (grey: infeasible)")
+    fig.colorbar(im, cax=cax, label="capacity margin [N] (grey: infeasible)")
     fig.suptitle(title, fontsize=10)
     return fig
 
@@ -120,7 +121,7 @@ def tension_figure(result):
         img = T[:, :, :, iz]
         sub = f" at z = {result.map_axes[2][iz]:.3g} m (slice with the most feasible poses)"
     m = d.m
-    fig, axs = panel_grid(m, min(4, m), frame_aspect(d), width=3.1)
+    fig, axs, cax = panel_grid(m, min(4, m), frame_aspect(d), width=3.1)
     cmap = cmap_grey_bad("cividis")
     ext = extent(result.map_axes[:2])
     im = None
@@ -135,15 +136,17 @@ def tension_figure(result):
         ax.set_title(f"{c.name}: {c.tension_min:g}–{c.tension_max:g} N", fontsize=9)
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
-    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.85, label="cable tension [N] (grey: infeasible)")
+    fig.colorbar(im, cax=cax, label="cable tension [N] (grey: infeasible)")
     fig.suptitle(f"{d.name}: minimum-norm cable tensions, {result.kind} workspace{sub}", fontsize=10)
     return fig
 
 
-def _single_panel(d, title_lines: int = 1):
-    """A one-panel map figure sized to the frame's shape (constrained layout, colour bar right)."""
-    aspect = frame_aspect(d)
-    return pyplot().subplots(figsize=(7.4, 5.6 * aspect + 0.9 + 0.3 * title_lines), layout="constrained")
+def _colorbar(fig, im, cax, ax, label: str) -> None:
+    """The colour bar in ``cax`` (a figure of our own), else beside ``ax`` (a caller's axes)."""
+    if cax is not None:
+        fig.colorbar(im, cax=cax, label=label)
+    else:
+        fig.colorbar(im, ax=ax, shrink=0.85, label=label)
 
 
 def orientation_figure(result, ax=None):
@@ -183,8 +186,9 @@ def _orientation_title(result) -> tuple[str, str]:
 def _planar_orientation(result, val, feas, title, label, ax):
     d = result.design
     if ax is None:
-        fig, ax = _single_panel(d, title.count("\n") + 1)
-    fig = ax.figure
+        fig, ax, cax = single_panel(frame_aspect(d), title_lines=title.count("\n") + 1)
+    else:
+        fig, cax = ax.figure, None
     im = ax.imshow(val.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("cividis"),
                    vmin=0.0, vmax=1.0, interpolation="nearest", aspect="equal", zorder=1)
     if result.orientation_maps.mode == "total" and feas.any():
@@ -195,15 +199,16 @@ def _planar_orientation(result, val, feas, title, label, ax):
     pad_limits(ax, d)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    fig.colorbar(im, ax=ax, shrink=0.85, label=label)
+    _colorbar(fig, im, cax, ax, label)
     ax.set_title(title, fontsize=9)
     return fig
 
 
 def _spatial_orientation(result, val, feas, title, label):
     zs = slices(result)
-    fig, axs = panel_grid(len(zs), min(3, len(zs)), frame_aspect(result.design), title_lines=title.count("\n") + 1)
+    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), frame_aspect(result.design),
+                               title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, val, feas, zs, cmap_grey_bad("cividis"), 1.0)
-    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label=label)
+    fig.colorbar(im, cax=cax, label=label)
     fig.suptitle(title, fontsize=9)
     return fig
