@@ -189,3 +189,55 @@ def test_sizing_trajectory_and_sweep_parquet(tmp_path):
     units = table_metadata(tmp_path / "parquet" / "trajectory.parquet")["units"]
     assert units["time"] == "s" and units["x_vel"] == "m/s" and units["cable_speed_c1"] == "m/s"
     assert read_table(tmp_path / "parquet" / "motor_sizing.parquet")["motor"].dtype == object
+
+
+# ----------------------------------------------------------------------------
+# Pictures a designer keeps: filled figures, units on every axis, submit()
+# ----------------------------------------------------------------------------
+
+
+def _map_axes(fig):
+    """The axes holding a picture (not hidden, not the colour bar)."""
+    return [ax for ax in fig.axes if ax.get_visible() and ax.axison and ax.images and ax.get_label() != "<colorbar>"]
+
+
+@pytest.mark.parametrize("design,step,orient", [("planar2", 0.02, None), ("ipanema3", 0.6, None),
+                                                ("planar4", 0.1, "range")])
+def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
+    from cdpr_design import workspaces as ws
+    from cdpr_design.model import spec
+    from cdpr_design.plots import workspace as wsplots
+    from cdpr_design.plots._style import pyplot
+
+    d = spec.load(DESIGNS / f"{design}.yaml")
+    r = ws.run_orientations(d, orient, grid=ws.make_grid(d, step)) if orient else ws.run(d, step=step)
+    figures = [wsplots.workspace_figure(r), wsplots.tension_figure(r)]
+    if orient:
+        figures.append(wsplots.orientation_figure(r))
+    for fig in figures:
+        fig.canvas.draw()
+        maps = _map_axes(fig)
+        assert maps
+        for ax in maps:
+            assert ax.get_xlabel().endswith("[m]") and ax.get_ylabel().endswith("[m]")
+        bars = [ax for ax in fig.axes if ax not in maps and ax.get_visible() and ax.axison and ax.get_ylabel()]
+        assert bars and all("[" in ax.get_ylabel() or "scale" in ax.get_ylabel() for ax in bars)
+        # the drawn maps fill the figure: rows of panels leave no white band (the old tension map of
+        # IPAnema 3 had 55 % of its height blank)
+        rows = sorted({(round(ax.get_position().y0, 3), round(ax.get_position().y1, 3)) for ax in maps})
+        filled = sum(y1 - y0 for y0, y1 in rows)
+        assert filled > 0.6, (fig.get_suptitle(), filled)
+        pyplot().close(fig)
+
+
+def test_submitted_pictures_are_drawn_while_the_caller_works():
+    from cdpr_design.plots import worker as pw
+    from cdpr_design.plots.report import report_html
+
+    with pw.PictureWorker(force=True) as worker:
+        pending = worker.submit([("a.html", report_html, (None, None, [], {"name": "x"}))])
+        assert worker.proc is not None
+        out = pending.result()
+    assert out[0][0] == "a.html" and b"<h1>x</h1>" in out[0][1]
+    local = pw.PictureWorker(enabled=False).submit([("a.html", report_html, (None, None, [], {"name": "x"}))])
+    assert local.result() == out
