@@ -17,7 +17,10 @@ For IPAnema 3 on a fine grid and for planar2, all in one run on this machine:
 4. the CSV writer alone on the IPAnema 3 rows: the previous one (printf per
    row, as ``io.tables.format_block`` was) against :func:`cdpr_design.io.csvtext.csv_rows`.
 
-Ratios are LP time for the grid / measured time.  ``--root`` runs the command
+Ratios are LP time for the grid / measured time, in wall-clock time and in CPU
+time (user + system, all threads and the picture process: less sensitive to
+other work on a shared machine; the LP runs on one core, the kernels and the
+command on two).  ``--root`` runs the command
 from another checkout (e.g. the previous version, for before/after; its
 summary has no ``timings``, so its ``elapsed_s`` -- which then included the CSV
 formatting -- stands in for ``sweep_s``).
@@ -48,35 +51,34 @@ from cdpr_design.statics import kinematics as kin  # noqa: E402
 from cdpr_design.workspaces.grid import grid_positions  # noqa: E402
 
 
-def lp_seconds_per_pose(design, grid, count, rng) -> float:
-    """Mean time [s] of one per-pose linprog feasibility check on a random sample of the grid."""
+def lp_seconds_per_pose(design, grid, count, rng) -> tuple[float, float]:
+    """Mean (wall, CPU) time [s] of one per-pose linprog feasibility check on a random sample of the grid."""
     from scipy.optimize import linprog
 
     idx = np.sort(rng.choice(grid.size, size=min(count, grid.size), replace=False))
     ori = list(design.workspace.orientation or [])
     poses = [list(grid_positions(grid, int(i), 1)[0]) + ori for i in idx]
     bounds = list(zip(design.tension_min, design.tension_max))
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     for pose in poses:
         W = kin.structure_matrix(design, pose)
         w = kin.required_wrench(design, pose)
         linprog(np.zeros(design.m), A_eq=W, b_eq=w, bounds=bounds, method="highs")
-    return (time.perf_counter() - t0) / len(poses)
+    return (time.perf_counter() - t0) / len(poses), (time.process_time() - c0) / len(poses)
 
 
-def kernel_times(design, grid, repeat: int) -> tuple[float, float]:
-    """(cold, warm) seconds of the bare sweep in this process (no maps, no rows handed out)."""
-    t0 = time.perf_counter()
-    ws.run(design, grid=grid, keep_maps=False)
-    cold = time.perf_counter() - t0
-    warm = min(_timed(lambda: ws.run(design, grid=grid, keep_maps=False)) for _ in range(repeat))
+def kernel_times(design, grid, repeat: int) -> tuple[tuple, tuple]:
+    """(cold, warm) (wall, CPU) seconds of the bare sweep in this process (no maps, no rows handed out)."""
+    cold = _timed(lambda: ws.run(design, grid=grid, keep_maps=False), cpu=True)
+    warm = min(_timed(lambda: ws.run(design, grid=grid, keep_maps=False), cpu=True) for _ in range(repeat))
     return cold, warm
 
 
-def _timed(fn) -> float:
-    t0 = time.perf_counter()
+def _timed(fn, cpu: bool = False):
+    t0, c0 = time.perf_counter(), time.process_time()
     fn()
-    return time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    return (wall, time.process_time() - c0) if cpu else wall
 
 
 def command(root: Path, spec_path: Path, step: float | None, fmt: str, out: str, cache: str | None):
@@ -89,12 +91,17 @@ def command(root: Path, spec_path: Path, step: float | None, fmt: str, out: str,
         args += ["--step", str(step)]
     if fmt != "csv":
         args += ["--format", fmt]
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     r = subprocess.run(args, env=env, cwd=root, capture_output=True, text=True)
     wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     if r.returncode:
         raise SystemExit(f"{' '.join(args)} failed ({r.returncode}): {r.stderr[-500:]}")
-    return wall, json.loads(r.stdout)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return (wall, cpu), json.loads(r.stdout)
 
 
 def sweep_s(summary: dict) -> float:
@@ -131,11 +138,11 @@ def bench_design(name: str, step: float | None, args, rng) -> list[tuple]:
     path = ROOT / "designs" / f"{name}.yaml"
     d = spec.load(path)
     g = ws.make_grid(d, step)
-    lp = lp_seconds_per_pose(d, g, args.sample, rng)
-    lp_grid = lp * g.size
+    lp, lp_cpu = lp_seconds_per_pose(d, g, args.sample, rng)
+    lp_grid, lp_grid_cpu = lp * g.size, lp_cpu * g.size
     label = f"{name} ({g.size:,} poses, step {step or d.workspace.grid.step[0]} m)"
-    print(f"\n{label}: per-pose linprog {lp * 1e3:.3f} ms over {min(args.sample, g.size)} poses "
-          f"-> {lp_grid:.1f} s for the grid", flush=True)
+    print(f"\n{label}: per-pose linprog {lp * 1e3:.3f} ms ({lp_cpu * 1e3:.3f} ms CPU) over "
+          f"{min(args.sample, g.size)} poses -> {lp_grid:.1f} s for the grid", flush=True)
     rows = []
     kc, kw = kernel_times(d, g, args.repeat)
     rows += [("kernels in-process, cold", kc), ("kernels in-process, warm", kw)]
@@ -144,19 +151,20 @@ def bench_design(name: str, step: float | None, args, rng) -> list[tuple]:
         if args.cold:
             cache = tempfile.mkdtemp(dir=tmp)
             wall, s = command(root, path, step, "csv", f"{tmp}/cold", cache)
-            rows += [("whole command, cold cache (csv)", wall), ("  its sweep_s", sweep_s(s))]
+            rows += [("whole command, cold cache (csv)", wall), ("  its sweep_s", (sweep_s(s), None))]
         for fmt in ("csv", "parquet") if not args.root else ("csv",):
             command(root, path, step, fmt, f"{tmp}/prime", None)  # a warm numba cache
             runs = [command(root, path, step, fmt, f"{tmp}/{fmt}", None) for _ in range(args.repeat)]
-            wall, s = min(runs, key=lambda r: r[0])
-            rows += [(f"whole command, warm ({fmt})", wall), ("  its sweep_s", sweep_s(s))]
+            wall, s = min(runs, key=lambda r: r[0][0])
+            rows += [(f"whole command, warm ({fmt})", wall), ("  its sweep_s", (sweep_s(s), None))]
             if "timings" in s:
                 t = s["timings"]
                 print(f"  {fmt}: timings of the best run: sweep {t['sweep_s']:.3f} s, write {t['write_s']:.3f} s, "
-                      f"pictures {t['pictures_s']:.3f} s, job total {t['total_s']:.3f} s; process {wall:.3f} s")
-    print(f"  {'what':38s} {'time [s]':>9s} {'poses/s':>12s} {'x LP':>8s}")
-    for what, t in rows:
-        print(f"  {what:38s} {t:9.3f} {g.size / t:12,.0f} {lp_grid / t:8.1f}")
+                      f"pictures {t['pictures_s']:.3f} s, job total {t['total_s']:.3f} s; process {wall[0]:.3f} s")
+    print(f"  {'what':38s} {'wall [s]':>9s} {'poses/s':>12s} {'x LP':>8s} {'CPU [s]':>9s} {'x LP CPU':>9s}")
+    for what, (t, c) in rows:
+        cpu = f"{c:9.3f} {lp_grid_cpu / c:9.1f}" if c else ""
+        print(f"  {what:38s} {t:9.3f} {g.size / t:12,.0f} {lp_grid / t:8.1f} {cpu}")
     return rows
 
 

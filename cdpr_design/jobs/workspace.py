@@ -67,6 +67,9 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
     names = ws.column_names(design) + ws.extra_columns(design, collisions, orientations)
     meta = table_metadata(design, "workspace", names, kind=kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])
+    for name in ["workspace.png", "tension_map.png"] + (["orientation_workspace.png"] if orientations else []) \
+            + (["report.html"] if html else []):
+        out.target(name)  # a foreign file of that name: refused before any work
     writer = out.table("workspace", format, metadata=meta, names=names, background=True)
     try:
         result = _sweep(design, grid, kind, collisions, orientations, engine, progress, writer, timings)
