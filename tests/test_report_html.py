@@ -241,3 +241,14 @@ def test_submitted_pictures_are_drawn_while_the_caller_works():
     assert out[0][0] == "a.html" and b"<h1>x</h1>" in out[0][1]
     local = pw.PictureWorker(enabled=False).submit([("a.html", report_html, (None, None, [], {"name": "x"}))])
     assert local.result() == out
+
+
+def test_a_foreign_picture_or_page_is_refused_before_the_sweep(tmp_path):
+    for name in ("report.html", "tension_map.png"):
+        folder = tmp_path / name
+        folder.mkdir()
+        (folder / name).write_text("mine")
+        r = invoke("workspace", PLANAR2, "--step", "0.1", "--out", folder, "--html", "--format", "parquet")
+        assert r.exit_code == 2 and "--overwrite" in r.output
+        assert (folder / name).read_text() == "mine"
+        assert not (folder / "workspace.parquet").exists()  # refused before any work
