@@ -10,7 +10,7 @@ from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
 from cdpr_design.jobs.tables import Timings, write_table
 from cdpr_design.jobs.motion import require_trajectory, trajectory_samples
-from cdpr_design.jobs.workspace import run_workspace
+from cdpr_design.jobs.workspace import finish_workspace, start_workspace
 from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
 
@@ -105,7 +105,8 @@ def report(design, catalogue: Path | None = None, trajectory: str | None = None,
            motor: str | None = None, step: float | None = None, force: bool = False,
            out: str | Path | None = None, overwrite: bool = False, pictures: PictureWorker | None = None,
            engine: str = "auto", progress: Progress | None = None, format: str = "csv") -> ReportRun:
-    """The ``report`` command: the static workspace (:func:`~cdpr_design.jobs.workspace.run_workspace`),
+    """The ``report`` command: the static workspace (:func:`~cdpr_design.jobs.workspace.start_workspace`;
+    its pictures are drawn during the evaluation),
     then motor_sizing.csv, design_report.csv (``format='parquet'``: ``.parquet``), report.json and
     report.html of the evaluation; ``catalogue``: YAML file extending the shipped motor catalogue."""
     from cdpr_design.design import evaluate as ev
@@ -118,11 +119,13 @@ def report(design, catalogue: Path | None = None, trajectory: str | None = None,
     out_dir = output_dir(design, out, overwrite)
     for stem in ("motor_sizing", "design_report"):
         out_dir.target(file_name(stem, format))
-    wres = run_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
-                         progress=progress, format=format, timings=timings)
-    with timings.phase("sweep_s"):
+    out_dir.target("report.html")
+    wres, drawing = start_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
+                                    progress=progress, format=format, timings=timings)
+    with timings.phase("sweep_s"):  # while the workspace pictures are drawn
         e = evaluate(design, cat, trajectory, safety_factor, motor, step, wres, progress, engine)
         checks = ev.check_table(e.row)
+    finish_workspace(out_dir, wres, drawing, timings)
     page = submit_pictures(out_dir, [("report.html", report_html, (wres, e.sizing, checks))], pictures, timings)
     with timings.phase("write_s"):
         write_motor_sizing(out_dir, e.sizing, format, design)

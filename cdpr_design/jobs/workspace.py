@@ -60,9 +60,24 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
     are drawn; ``result.summary()['timings']`` gives the phases (``timings``:
     a running :class:`~cdpr_design.jobs.tables.Timings` to add them to).
     """
+    timings = timings or Timings()
+    result, pending = start_workspace(design, out, kind, step, force, collisions, orientations, pictures, engine,
+                                      progress, format, html, timings)
+    finish_workspace(out, result, pending, timings)
+    return result
+
+
+def start_workspace(design, out: OutputDir, kind: str = "static", step: float | None = None, force: bool = False,
+                    collisions: bool = False, orientations: str | None = None,
+                    pictures: PictureWorker | None = None, engine: str = "auto",
+                    progress: Progress | None = None, format: str = "csv", html: bool = False,
+                    timings: Timings | None = None):
+    """:func:`run_workspace` up to the pictures: the table is written and the pictures are being
+    drawn.  Returns (result, pending pictures); :func:`finish_workspace` waits for them, so a
+    caller can do more work (``report``'s evaluation) while they are drawn."""
     from cdpr_design import workspaces as ws
 
-    timings = timings or Timings()
+    timings = timings if timings is not None else Timings()
     grid = ws.make_grid(design, step, force)
     names = ws.column_names(design) + ws.extra_columns(design, collisions, orientations)
     meta = table_metadata(design, "workspace", names, kind=kind, grid=grid_metadata(grid),
@@ -80,10 +95,14 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
         writer.abort()
         raise
     timings.write_s += writer.busy_s
+    return result, pending
+
+
+def finish_workspace(out: OutputDir, result, pending, timings: Timings) -> None:
+    """Wait for the pictures of :func:`start_workspace`, then write ``summary.json`` with the timings."""
     pending.wait()
     result.extra["timings"] = timings.as_dict()
     out.write_json("summary.json", result.summary())
-    return result
 
 
 def _sweep(design, grid, kind, collisions, orientations, engine, progress, writer, timings):
