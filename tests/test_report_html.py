@@ -125,6 +125,29 @@ def test_report_command_writes_the_page_with_sizing_and_checks(tmp_path):
     assert json.loads((tmp_path / "report.json").read_text())["timings"]["total_s"] > 0
 
 
+def test_report_renders_in_a_real_browser_offline(tmp_path):
+    """Where playwright and a browser are installed (not in CI): the page draws its figures with
+    every network request refused and no script error."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    r = invoke("workspace", PLANAR2, "--step", "0.05", "--out", tmp_path, "--html", "--quiet")
+    assert r.exit_code == 0, r.output
+    with sync_api.sync_playwright() as p:
+        try:
+            browser = p.chromium.launch()
+        except Exception as exc:  # noqa: BLE001 - playwright without its browser
+            pytest.skip(f"playwright has no browser here: {exc}")
+        page = browser.new_page()
+        errors, requests = [], []
+        page.on("pageerror", errors.append)
+        page.route("**/*", lambda route: route.continue_() if route.request.url.startswith("file:")
+                   else (requests.append(route.request.url), route.abort()))
+        page.goto((tmp_path / "report.html").as_uri())
+        page.wait_for_selector("#workspace .main-svg", timeout=20_000)
+        assert page.locator("#tensions .main-svg").count() > 0
+        browser.close()
+    assert not errors and not requests
+
+
 def test_unknown_format_is_refused():
     r = invoke("workspace", PLANAR2, "--format", "xlsx")
     assert r.exit_code == 2 and "--format" in r.output
