@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (CableModelOpt, JsonOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg, bars, command, emit_json,
+from cdpr_design.cli.common import (CableModelOpt, Format, FormatOpt, JsonOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg, bars, command, emit_json,
                                     fmt, info, load_design, out_console, summary_table)
 from cdpr_design.errors import CheckFailed
 
@@ -59,13 +59,15 @@ def trajectory_cmd(
     quiet: QuietOpt = False,
     overwrite: OverwriteOpt = False,
     cable_model: CableModelOpt = None,
+    format: FormatOpt = Format.csv,
 ):
     """Sample a spec path at a fixed cycle: trajectory.csv, trajectory.png, trajectory_axes.png, trajectory.json."""
     from cdpr_design.cli import env
     from cdpr_design.jobs import motion as job
 
     design = load_design(spec, cable_model)
-    samples, s, out_dir = job.trajectory(design, name, cycle_time, out, overwrite, engine=env.engine())
+    samples, s, out_dir = job.trajectory(design, name, cycle_time, out, overwrite, engine=env.engine(),
+                                         format=format.value)
     if json_:
         emit_json(s)
     else:
@@ -108,6 +110,7 @@ def simulate(
     quiet: QuietOpt = False,
     overwrite: OverwriteOpt = False,
     cable_model: CableModelOpt = None,
+    format: FormatOpt = Format.csv,
 ):
     """Run a spec path on the MuJoCo model of the robot: simulation.csv, simulation.json, simulation.png."""
     from cdpr_design.jobs import motion as job
@@ -117,7 +120,7 @@ def simulate(
         design, name, delay=delay, servo_bandwidth=servo_bandwidth, feedforward=feedforward,
         compensate_stretch=compensate_stretch, cable_damping=cable_damping, timestep=timestep, hold=hold,
         cycle_time=cycle_time, out=out, overwrite=overwrite, progress=bars(quiet or json_, min_total=2000),
-        cable_segments=cable_segments)
+        cable_segments=cable_segments, format=format.value)
     if json_:
         emit_json(s)
         return

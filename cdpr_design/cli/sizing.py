@@ -5,7 +5,7 @@ from __future__ import annotations
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (CableModelOpt, CatalogueOpt, ForceOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt,
+from cdpr_design.cli.common import (CableModelOpt, CatalogueOpt, ForceOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt,
                                     SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt,
                                     info, load_design, out_console)
 from cdpr_design.errors import CheckFailed
@@ -57,22 +57,23 @@ def size_motors(
     quiet: QuietOpt = False,
     overwrite: OverwriteOpt = False,
     cable_model: CableModelOpt = None,
+    format: FormatOpt = Format.csv,
 ):
     """Motor, gearbox and drum sizing over the task workspace: motor_sizing.csv."""
     from cdpr_design.cli import env
     from cdpr_design.jobs import sizing as job
 
     design = load_design(spec, cable_model)
-    result, out_dir = job.size_motors(design, catalogue, trajectory, safety_factor, motor, step, out, overwrite,
-                                      engine=env.engine())
+    result, out_dir, summary = job.size_motors(design, catalogue, trajectory, safety_factor, motor, step, out,
+                                               overwrite, engine=env.engine(), format=format.value)
     if json_:
-        emit_json(result.summary())
+        emit_json(summary)
         return
     out_console.print(sizing_table(design, result))
     info(quiet, f"duty cycle: {result.cycle}")
     for note in result.notes:
         info(quiet, f"note: {note}")
-    info(quiet, f"wrote {out_dir.path / 'motor_sizing.csv'}")
+    info(quiet, f"wrote {out_dir.path / ('motor_sizing.' + format.value)}")
 
 
 @command
@@ -89,25 +90,28 @@ def report(
     force: ForceOpt = False,
     overwrite: OverwriteOpt = False,
     cable_model: CableModelOpt = None,
+    format: FormatOpt = Format.csv,
 ):
-    """Every artefact for one design (workspace, motor sizing) plus design_report.csv."""
+    """Every artefact for one design (workspace, motor sizing) plus design_report.csv and report.html."""
     from cdpr_design.cli import env
     from cdpr_design.jobs import sizing as job
     from cdpr_design.plots import worker as _picture_worker
 
     with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:  # matplotlib's import overlaps the spec and the sweep
         design = load_design(spec, cable_model)
-        e, checks, out_dir = job.report(design, catalogue, trajectory, safety_factor, motor, step, force, out,
-                                        overwrite, pictures=pictures, engine=env.engine(),
-                                        progress=bars(quiet or json_, min_total=500_000))
+        e, checks, out_dir, timings = job.report(design, catalogue, trajectory, safety_factor, motor, step, force,
+                                                 out, overwrite, pictures=pictures, engine=env.engine(),
+                                                 progress=bars(quiet or json_, min_total=500_000),
+                                                 format=format.value)
     if json_:
-        emit_json({**e.row, "checks": checks})
+        emit_json({**e.row, "checks": checks, "timings": timings})
         return
     out_console.print(sizing_table(design, e.sizing))
     if checks:
         out_console.print(checks_table(design, checks))
-    info(quiet, f"wrote workspace.csv, workspace.png, tension_map.png, summary.json, motor_sizing.csv, "
-                f"design_report.csv, report.json to {out_dir.path}")
+    ext = format.value
+    info(quiet, f"wrote workspace.{ext}, workspace.png, tension_map.png, summary.json, motor_sizing.{ext}, "
+                f"design_report.{ext}, report.json, report.html to {out_dir.path}")
 
 
 @command

@@ -8,9 +8,9 @@ from typing import Annotated, Optional
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (CatalogueOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt, SafetyOpt,
+from cdpr_design.cli.common import (CatalogueOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt, SafetyOpt,
                                     SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt, info,
-                                    load_design, out_console, summary_table)
+                                    load_design, out_console, summary_table, timings_text)
 from cdpr_design.errors import CheckFailed
 
 
@@ -45,7 +45,9 @@ def render(design, run, top: int, check_against: Path | None) -> None:
          ("resumed from journal", f"{st.skipped:,}"), ("failed to evaluate", f"{len(run.failed):,}"),
          ("pass every requirement", f"{len(run.best_rows):,}"),
          ("backend", f"{st.backend}, {st.workers} worker(s), {st.chunk} variant(s) per task"),
-         ("elapsed \\[s]", st.elapsed_s), ("files", str(run.out.path))]))
+         ("elapsed \\[s]", st.elapsed_s),
+         ("sweep / write / pictures / total \\[s]", timings_text(run.summary["timings"])),
+         ("files", str(run.out.path))]))
     if run.best_rows:
         out_console.print(best_table(run, top))
     ie = run.header.index("error")
@@ -94,6 +96,7 @@ def sweep(
     step: StepOpt = None,
     top: Annotated[int, typer.Option("--top", help="Best variants to list.")] = 10,
     no_picture: Annotated[bool, typer.Option("--no-picture", help="Do not draw sweep.png.")] = False,
+    format: FormatOpt = Format.csv,
     out: OutOpt = None,
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
@@ -106,7 +109,8 @@ def sweep(
     design = load_design(spec)
     run = job.sweep(design, vary, workers, scheduler, resume, rank_by, check_against, tolerance, abs_tolerance,
                     strict, catalogue, trajectory, safety_factor, motor, step, top, not no_picture, out, overwrite,
-                    progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg), engine=env.engine())
+                    progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg), engine=env.engine(),
+                    format=format.value)
     if json_:
         emit_json(run.summary)
     else:

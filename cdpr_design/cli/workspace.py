@@ -7,9 +7,9 @@ from typing import Annotated, Optional
 
 import typer
 
-from cdpr_design.errors import InputError
-from cdpr_design.cli.common import (CableModelOpt, ForceOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg,
-                                    bars, command, emit_json, load_design, out_console, summary_table)
+from cdpr_design.cli.common import (CableModelOpt, ForceOpt, Format, FormatOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg,
+                                    bars, command, emit_json, load_design, out_console, summary_table,
+                                    timings_text)
 
 
 class Orientations(str, Enum):
@@ -38,6 +38,10 @@ def workspace(
         "--max-tilt", help="Largest tilt [deg] a feasible pose may hang with (under-constrained designs with "
                            "effector.orientation: free; default requirements.max_tilt).")] = None,
     cable_model: CableModelOpt = None,
+    format: FormatOpt = Format.csv,
+    html: Annotated[bool, typer.Option(
+        "--html", help="Also write report.html: the interactive workspace, tension map and summary in one "
+                       "file that opens offline.")] = False,
 ):
     """Grid sweep of the workspace: workspace.csv, workspace.png, tension_map.png, summary.json."""
     from cdpr_design.cli import env
@@ -49,7 +53,8 @@ def workspace(
         result, out_dir = job.workspace(
             design, out, overwrite, kind=kind.value, step=step, force=force, collisions=collisions,
             orientations=orientations.value if orientations is not None else None, pictures=pictures,
-            engine=env.engine(), progress=bars(quiet or json_, min_total=500_000), max_tilt=_max_tilt(design, max_tilt))
+            engine=env.engine(), progress=bars(quiet or json_, min_total=500_000), format=format.value,
+            html=html, max_tilt=_max_tilt(design, max_tilt))
     s = result.summary()
     if json_:
         emit_json(s)
@@ -60,7 +65,8 @@ def workspace(
         [("poses", f"{s['poses']:,}"), ("feasible", f"{s['feasible']:,}"),
          ("fraction", f"{100 * s['fraction']:.2f} %"), ("measure", f"{s['measure']:.4g} {unit}"),
          ("min margin \\[N]", s["min_margin"]), ("max margin \\[N]", s["max_margin"]),
-         ("max tension \\[N]", s["max_tension"]), ("elapsed \\[s]", s["elapsed_s"])]
+         ("max tension \\[N]", s["max_tension"]), ("elapsed \\[s]", s["elapsed_s"]),
+         ("sweep / write / pictures / total \\[s]", timings_text(s["timings"]))]
         + ([("collision free", f"{s['collision_free']:,}"),
             ("feasible before interference", f"{s['feasible_statics']:,}")] if "collision_free" in s else [])
         + ([("orientations", f"{s['orientation_mode']} ({s['orientation_count']} samples)")]

@@ -10,8 +10,6 @@ that cdpr-design did not write is never overwritten unless the user asks
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import os
 import tempfile
@@ -19,7 +17,7 @@ from pathlib import Path
 from typing import Iterable, Sequence
 
 from cdpr_design.errors import InputError
-from cdpr_design.io.tables import columns_text, fmt, json_default
+from cdpr_design.io.tables import json_default
 
 MANIFEST = ".cdpr-design-outputs"
 
@@ -73,17 +71,30 @@ class OutputDir:
         return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n")
 
     def write_csv(self, name: str, header: Sequence[str], rows: Iterable[Sequence]) -> Path:
-        """A CSV of ``rows`` under ``header``, cells formatted by :func:`~cdpr_design.io.tables.fmt`."""
-        buf = io.StringIO()
-        w = csv.writer(buf, lineterminator="\n")
-        w.writerow(header)
-        for r in rows:
-            w.writerow([fmt(v) for v in r])
-        return self.write_text(name, buf.getvalue())
+        """A CSV of ``rows`` under ``header`` (cells as :func:`~cdpr_design.io.tables.fmt` writes them)."""
+        rows = [list(r) for r in rows]
+        cols = list(zip(*rows)) if rows else [()] * len(header)
+        return self.write_columns(name, dict(zip(header, cols)), names=header)
 
-    def write_columns(self, name: str, columns: dict) -> Path:
-        """A CSV of named 1-D columns (see :func:`~cdpr_design.io.tables.columns_text`)."""
-        return self.write_text(name, columns_text(columns))
+    def write_columns(self, name: str, columns: dict, names: Sequence[str] | None = None,
+                      metadata: dict | None = None) -> Path:
+        """A table of named 1-D columns in one go, CSV or Parquet by the extension of ``name``
+        (:class:`~cdpr_design.io.columns.ColumnWriter`)."""
+        stem, _, ext = name.rpartition(".")
+        with self.table(stem, ext, metadata=metadata, names=names if names is not None else list(columns)) as w:
+            if columns and len(next(iter(columns.values()))):
+                w.write(columns)
+        return w.path
+
+    def table(self, stem: str, format: str = "csv", metadata: dict | None = None,
+              names: Sequence[str] | None = None, background: bool = False):
+        """A :class:`~cdpr_design.io.columns.ColumnWriter` for ``stem.csv`` or ``stem.parquet``
+        (refused if a foreign file has that name; recorded in the manifest when closed)."""
+        from cdpr_design.io.columns import ColumnWriter, file_name
+
+        name = file_name(stem, format)
+        return ColumnWriter(self.target(name), format, metadata, names, on_commit=lambda: self.wrote(name),
+                            background=background)
 
     def stream(self, name: str) -> "AtomicFile":
         """An :class:`AtomicFile` for writing ``name`` piece by piece."""

@@ -1,7 +1,7 @@
 """CSV cells and blocks, CSV and log reading, and the JSON encoding of numpy values.
 
 Numbers are written with 10 significant digits, integers as integers,
-booleans as 1/0 and NaN/None as empty cells.  Readers raise
+booleans as 1/0 and NaN/None as empty cells (whole tables: :mod:`cdpr_design.io.columns`).  Readers raise
 :class:`~cdpr_design.errors.InputError` naming the file (and the option or
 argument it came from).
 """
@@ -11,7 +11,6 @@ from __future__ import annotations
 import csv
 import io
 import math
-import re
 from pathlib import Path
 from typing import Sequence
 
@@ -30,7 +29,9 @@ def json_default(o):
 
 
 def fmt(v) -> str:
-    """A CSV cell: numbers with 10 significant digits, NaN/None as empty."""
+    """A CSV cell: numbers with 10 significant digits (``-0`` as ``0``), NaN/None as empty.
+
+    The reference of the vectorised :func:`cdpr_design.io.csvtext.csv_rows`."""
     if v is None:
         return ""
     if isinstance(v, (bool, np.bool_)):
@@ -38,46 +39,13 @@ def fmt(v) -> str:
     if isinstance(v, (int, np.integer)):
         return str(int(v))
     if isinstance(v, (float, np.floating)):
-        return "" if not math.isfinite(v) else format(float(v), ".10g")
+        return "" if not math.isfinite(v) else format(float(v) + 0.0, ".10g")  # + 0.0: -0 is written 0
     return str(v)
 
 
 def text_rows(rows) -> list[list[str]]:
     """The CSV cells (:func:`fmt`) of rows of values."""
     return [[fmt(v) for v in r] for r in rows]
-
-
-_NONFINITE = re.compile(r"(?<![^,\n])-?(?:nan|inf)(?![^,\n])")
-
-
-def format_block(columns: list[np.ndarray], int_cols: Sequence[int] = ()) -> str:
-    """Rows of a numeric block as CSV text: NaN cells empty, floats with 10 digits.
-
-    ``columns`` are 1-D arrays of equal length; those listed in ``int_cols``
-    are written as integers.  Non-finite cells (NaN, inf) are written empty.
-    """
-    if not columns or not len(columns[0]):
-        return ""
-    ints = set(int_cols)
-    fmt = ",".join("%d" if j in ints else "%.10g" for j in range(len(columns)))
-    block = np.column_stack([np.asarray(c, dtype=float) for c in columns])
-    for j in ints:
-        if not np.isfinite(block[:, j]).all():
-            raise ValueError(f"integer column {j} holds a non-finite value")
-    text = "\n".join([fmt % row for row in map(tuple, block.tolist())]) + "\n"
-    return _NONFINITE.sub("", text) if "n" in text else text
-
-
-def columns_text(columns: dict) -> str:
-    """CSV text (header and rows) of named 1-D columns.
-
-    Integer columns are written as integers, NaN cells empty, floats with 10
-    significant digits.
-    """
-    names = list(columns)
-    cols = [np.asarray(columns[c]) for c in names]
-    ints = [j for j, c in enumerate(cols) if c.dtype.kind in "biu"]
-    return ",".join(names) + "\n" + format_block(cols, int_cols=ints)
 
 
 def read_csv_columns(path: str | Path, what: str = "CSV") -> dict[str, np.ndarray]:

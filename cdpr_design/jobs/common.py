@@ -8,6 +8,7 @@ command line passes one drawing progress bars; None reports nothing.
 
 from __future__ import annotations
 
+import time
 from contextlib import nullcontext
 from pathlib import Path
 from typing import Callable, ContextManager, Optional, Sequence
@@ -31,12 +32,33 @@ def stage(progress: Progress | None, description: str) -> ContextManager[Optiona
     return progress(description) if progress is not None else nullcontext(None)
 
 
-def save_pictures(out: OutputDir, pictures: Sequence[Picture], worker: PictureWorker | None = None) -> list[Path]:
-    """Draw each picture (in ``worker`` if given, else in-process) and write the PNGs atomically.
-
-    Every name is checked against ``out`` (foreign files) before anything is drawn.
-    """
+def submit_pictures(out: OutputDir, pictures: Sequence[Picture], worker: PictureWorker | None = None,
+                    timings=None) -> "PendingPictures":
+    """Start drawing the pictures (in ``worker``'s child if given, while the caller goes on);
+    :meth:`PendingPictures.wait` writes the PNGs.  Every name is checked against ``out``
+    (foreign files) before anything is drawn.  ``timings``: a :class:`~cdpr_design.jobs.tables.Timings`
+    whose ``pictures_s`` gets the time from here until the files are written."""
     for name, _, _ in pictures:
         out.target(name)
-    pngs = (worker or PictureWorker(enabled=False)).render(list(pictures))
-    return [out.write_bytes(name, data) for name, data in pngs]
+    return PendingPictures(out, (worker or PictureWorker(enabled=False)).submit(list(pictures)), timings)
+
+
+class PendingPictures:
+    """Pictures being drawn (:func:`submit_pictures`)."""
+
+    def __init__(self, out: OutputDir, pending, timings=None):
+        self.out, self.pending, self.timings = out, pending, timings
+        self.t0 = time.perf_counter()
+
+    def wait(self) -> list[Path]:
+        """Wait for the PNGs and write them atomically; their paths."""
+        paths = [self.out.write_bytes(name, data) for name, data in self.pending.result()]
+        if self.timings is not None:
+            self.timings.pictures_s += time.perf_counter() - self.t0
+        return paths
+
+
+def save_pictures(out: OutputDir, pictures: Sequence[Picture], worker: PictureWorker | None = None,
+                  timings=None) -> list[Path]:
+    """Draw each picture (in ``worker`` if given, else in-process) and write the PNGs atomically."""
+    return submit_pictures(out, pictures, worker, timings).wait()

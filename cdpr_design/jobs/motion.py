@@ -11,7 +11,9 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.io.files import OutputDir
 from cdpr_design.io.tables import read_csv_columns, read_log
-from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage
+from cdpr_design.io.columns import file_name
+from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
+from cdpr_design.jobs.tables import Timings, write_table
 from cdpr_design.plots import motion as motion_plots
 
 
@@ -118,18 +120,28 @@ class TrajectoryRun(NamedTuple):
 
 
 def trajectory(design, name: str, cycle_time: float | None = None, out: str | Path | None = None,
-               overwrite: bool = False, engine: str = "auto") -> TrajectoryRun:
-    """The ``trajectory`` command: sample ``name`` every ``cycle_time`` [s]; write trajectory.csv,
-    trajectory.json, trajectory.png and trajectory_axes.png into ``out``."""
-    samples = sample_named(design, name, cycle_time)
+               overwrite: bool = False, engine: str = "auto", format: str = "csv") -> TrajectoryRun:
+    """The ``trajectory`` command: sample ``name`` every ``cycle_time`` [s]; write trajectory.csv
+    (``format='parquet'``: ``.parquet``), trajectory.json, trajectory.png and trajectory_axes.png
+    into ``out`` (the pictures are drawn while the table is written)."""
+    timings = Timings()
+    with timings.phase("sweep_s"):
+        samples = sample_named(design, name, cycle_time)
     out_dir = output_dir(design, out, overwrite)
-    out_dir.write_columns("trajectory.csv", samples.columns())
-    s = samples.summary()
-    out_dir.write_json("trajectory.json", s)
-    save_pictures(out_dir, [
-        ("trajectory.png", motion_plots.trajectory_path_figure, (design, samples, path_map(design, engine))),
+    out_dir.target(file_name("trajectory", format))
+    with timings.phase("pictures_s"):
+        pmap = path_map(design, engine)
+    pending = submit_pictures(out_dir, [
+        ("trajectory.png", motion_plots.trajectory_path_figure, (design, samples, pmap)),
         ("trajectory_axes.png", motion_plots.trajectory_axes_figure, (samples,)),
-    ])
+    ], timings=timings)
+    with timings.phase("write_s"):
+        write_table(out_dir, "trajectory", samples.columns(), format, design, trajectory=name,
+                    cycle_time=samples.cycle_time)
+    pending.wait()
+    s = samples.summary()
+    s["timings"] = timings.as_dict()
+    out_dir.write_json("trajectory.json", s)
     return TrajectoryRun(samples, s, out_dir)
 
 
@@ -158,13 +170,16 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
              feedforward: bool = True, compensate_stretch: bool = True, cable_damping: float = 0.7,
              timestep: float = 5e-4, hold: float | None = None, cycle_time: float | None = None,
              out: str | Path | None = None, overwrite: bool = False,
-             progress: Progress | None = None, cable_segments: int | None = None) -> SimulationRun:
-    """The ``simulate`` command: run trajectory ``name`` on the MuJoCo model; write simulation.csv,
-    simulation.json and simulation.png.  ``delay``, ``timestep``, ``hold`` [s]; ``servo_bandwidth``
-    [rad/s]; ``hold`` default 0.5 s + the delay; ``cable_segments``: segments of each sagging cable
-    (2 to 200).  With elastic or sagging cables a sample without set-points is an InputError."""
+             progress: Progress | None = None, cable_segments: int | None = None,
+             format: str = "csv") -> SimulationRun:
+    """The ``simulate`` command: run trajectory ``name`` on the MuJoCo model; write simulation.csv
+    (``format='parquet'``: ``.parquet``), simulation.json and simulation.png.  ``delay``,
+    ``timestep``, ``hold`` [s]; ``servo_bandwidth`` [rad/s]; ``hold`` default 0.5 s + the delay;
+    ``cable_segments``: segments of each sagging cable (2 to 200).  With elastic or sagging cables a
+    sample without set-points is an InputError."""
     from cdpr_design.motion import simulation as sim
 
+    timings = Timings()
     settings = {"delay": delay, "servo_bandwidth": servo_bandwidth, "cable_damping": cable_damping,
                 "timestep": timestep}
     _check_simulation(settings, hold)
@@ -174,8 +189,8 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
     if samples.cycle_time < timestep:
         raise InputError(f"--timestep: {timestep} s is longer than the cycle time {samples.cycle_time} s")
     out_dir = output_dir(design, out, overwrite)
-    out_dir.target("simulation.csv")
-    with stage(progress, f"simulate {name}") as cb:
+    out_dir.target(file_name("simulation", format))
+    with stage(progress, f"simulate {name}") as cb, timings.phase("sweep_s"):
         try:
             result = sim.simulate(design, samples, feedforward=feedforward, compensate_stretch=compensate_stretch,
                                   progress=cb, cable_segments=cable_segments, **settings)
@@ -183,11 +198,15 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
             raise InputError(f"--timestep / --servo-bandwidth / --cable-damping: {exc}") from None
         except ValueError as exc:  # samples without set-points (the cable model has no solution there)
             raise InputError(f"trajectories.{name}: {exc}") from None
-    out_dir.write_columns("simulation.csv", result.columns())
+    pending = submit_pictures(out_dir, [("simulation.png", motion_plots.simulation_figure, (result,))],
+                              timings=timings)
+    with timings.phase("write_s"):
+        write_table(out_dir, "simulation", result.columns(), format, design, trajectory=name, settings=settings)
+    pending.wait()
     s = result.summary()
     s["trajectory_feasible"] = samples.all_feasible
+    s["timings"] = timings.as_dict()
     out_dir.write_json("simulation.json", s)
-    save_pictures(out_dir, [("simulation.png", motion_plots.simulation_figure, (result,))])
     return SimulationRun(result, s, samples, out_dir)
 
 

@@ -5,49 +5,60 @@ from __future__ import annotations
 from pathlib import Path
 from typing import NamedTuple
 
+from cdpr_design.io.columns import file_name
 from cdpr_design.io.files import OutputDir
-from cdpr_design.jobs.common import Progress, output_dir, stage
+from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
+from cdpr_design.jobs.tables import Timings, write_table
 from cdpr_design.jobs.motion import require_trajectory, trajectory_samples
-from cdpr_design.jobs.workspace import run_workspace
+from cdpr_design.jobs.workspace import finish_workspace, start_workspace
+from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
 
 
-def write_motor_sizing(out: OutputDir, sizing) -> Path:
-    """``motor_sizing.csv``: one row per cable, the contract columns first (cli.md)."""
+def write_motor_sizing(out: OutputDir, sizing, format: str = "csv", design=None) -> Path:
+    """``motor_sizing.csv`` (or ``.parquet``): one row per cable, the contract columns first (cli.md)."""
     from cdpr_design.design.sizing import AxisSizing
 
     rows = sizing.rows()
     header = list(rows[0].keys()) if rows else list(AxisSizing.CONTRACT)
-    return out.write_csv("motor_sizing.csv", header, ([r[k] for k in header] for r in rows))
+    cols = {k: [r[k] for r in rows] for k in header}
+    return write_table(out, "motor_sizing", cols, format, design, names=header, cycle=sizing.cycle,
+                       safety_factor=sizing.safety_factor)
 
 
-def write_design_report(out: OutputDir, row: dict, name: str = "design_report.csv") -> Path:
-    """``design_report.csv``: one row of the design's headline figures (booleans as 1/0)."""
-    header = list(row.keys())
-    return out.write_csv(name, header, [[row[k] for k in header]])
+def write_design_report(out: OutputDir, row: dict, stem: str = "design_report", format: str = "csv",
+                        design=None) -> Path:
+    """``design_report.csv`` (or ``.parquet``): one row of the design's headline figures (booleans as 1/0)."""
+    return write_table(out, stem, {k: [v] for k, v in row.items()}, format, design)
 
 
 class SizingRun(NamedTuple):
     result: object  # design.sizing.SizingResult
     out: OutputDir
+    summary: dict  # the ``size-motors --json`` object (result.summary() and its timings)
 
 
 def size_motors(design, catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
                 motor: str | None = None, step: float | None = None, out: str | Path | None = None,
-                overwrite: bool = False, engine: str = "auto") -> SizingRun:
+                overwrite: bool = False, engine: str = "auto", format: str = "csv") -> SizingRun:
     """The ``size-motors`` command: size motor, gearbox and drum over the task workspace
     (grid ``step`` [m]; duty cycle of spec ``trajectory``, else a standard one) from the
-    shipped catalogue extended by the YAML file ``catalogue``; write motor_sizing.csv into ``out``."""
+    shipped catalogue extended by the YAML file ``catalogue``; write motor_sizing.csv
+    (``format='parquet'``: ``.parquet``) into ``out``."""
     from cdpr_design.design import sizing as sz
     from cdpr_design.model import spec
 
+    timings = Timings()
     cat = spec.load_catalogue(catalogue)
     samples = trajectory_samples(design, trajectory)
     out_dir = output_dir(design, out, overwrite)
-    result = sz.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor, motor=motor,
-                            engine=engine)
-    write_motor_sizing(out_dir, result)
-    return SizingRun(result, out_dir)
+    out_dir.target(file_name("motor_sizing", format))  # a foreign file: refused before any work
+    with timings.phase("sweep_s"):
+        result = sz.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor,
+                                motor=motor, engine=engine)
+    with timings.phase("write_s"):
+        write_motor_sizing(out_dir, result, format, design)
+    return SizingRun(result, out_dir, {**result.summary(), "timings": timings.as_dict()})
 
 
 def evaluate(design, catalogue, trajectory: str | None = None, safety_factor: float | None = None,
@@ -87,27 +98,39 @@ class ReportRun(NamedTuple):
     evaluation: object  # design.evaluate.Evaluation
     checks: list
     out: OutputDir
+    timings: dict  # the job's timings (also in report.json)
 
 
 def report(design, catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
            motor: str | None = None, step: float | None = None, force: bool = False,
            out: str | Path | None = None, overwrite: bool = False, pictures: PictureWorker | None = None,
-           engine: str = "auto", progress: Progress | None = None) -> ReportRun:
-    """The ``report`` command: the static workspace (:func:`~cdpr_design.jobs.workspace.run_workspace`),
-    then motor_sizing.csv, design_report.csv and report.json of the evaluation; ``catalogue``:
-    YAML file extending the shipped motor catalogue."""
+           engine: str = "auto", progress: Progress | None = None, format: str = "csv") -> ReportRun:
+    """The ``report`` command: the static workspace (:func:`~cdpr_design.jobs.workspace.start_workspace`;
+    its pictures are drawn during the evaluation),
+    then motor_sizing.csv, design_report.csv (``format='parquet'``: ``.parquet``), report.json and
+    report.html of the evaluation; ``catalogue``: YAML file extending the shipped motor catalogue."""
     from cdpr_design.design import evaluate as ev
     from cdpr_design.model import spec
 
+    timings = Timings()
     cat = spec.load_catalogue(catalogue)  # a bad catalogue: before any work
     if trajectory is not None:
         require_trajectory(design, trajectory, "--trajectory")  # unknown name: before any work
     out_dir = output_dir(design, out, overwrite)
-    wres = run_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
-                         progress=progress)
-    e = evaluate(design, cat, trajectory, safety_factor, motor, step, wres, progress, engine)
-    write_motor_sizing(out_dir, e.sizing)
-    write_design_report(out_dir, e.row)
-    checks = ev.check_table(e.row)
-    out_dir.write_json("report.json", {"report": e.row, "checks": checks, "sizing": e.sizing.summary()})
-    return ReportRun(e, checks, out_dir)
+    for stem in ("motor_sizing", "design_report"):
+        out_dir.target(file_name(stem, format))
+    out_dir.target("report.html")
+    wres, drawing = start_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
+                                    progress=progress, format=format, timings=timings)
+    with timings.phase("sweep_s"):  # while the workspace pictures are drawn
+        e = evaluate(design, cat, trajectory, safety_factor, motor, step, wres, progress, engine)
+        checks = ev.check_table(e.row)
+    finish_workspace(out_dir, wres, drawing, timings)
+    page = submit_pictures(out_dir, [("report.html", report_html, (wres, e.sizing, checks))], pictures, timings)
+    with timings.phase("write_s"):
+        write_motor_sizing(out_dir, e.sizing, format, design)
+        write_design_report(out_dir, e.row, format=format, design=design)
+    page.wait()
+    t = timings.as_dict()
+    out_dir.write_json("report.json", {"report": e.row, "checks": checks, "sizing": e.sizing.summary(), "timings": t})
+    return ReportRun(e, checks, out_dir, t)

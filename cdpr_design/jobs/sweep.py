@@ -7,23 +7,38 @@ from pathlib import Path
 from typing import Callable, NamedTuple, Sequence
 
 from cdpr_design.errors import InputError
+from cdpr_design.io.columns import file_name
 from cdpr_design.io.files import OutputDir
 from cdpr_design.io.journal import SweepJournal
 from cdpr_design.io.tables import read_csv_table, text_rows
-from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage
+from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
+from cdpr_design.jobs.tables import Timings, write_table
 from cdpr_design.jobs.motion import require_trajectory
 from cdpr_design.plots import sweep as sweep_plots
 
 
 def write_sweep(out: OutputDir, header: list[str], rows: list[list], best_header: list[str],
                 best_rows: list[list], keys: Sequence[str], title: str = "",
-                rank_by: str | None = None, picture: bool = True) -> list[Path]:
-    """``sweep.csv``, ``sweep_best.csv`` and ``sweep.png`` (atomically)."""
-    paths = [out.write_csv("sweep.csv", header, rows), out.write_csv("sweep_best.csv", best_header, best_rows)]
+                rank_by: str | None = None, picture: bool = True, format: str = "csv",
+                design=None, timings: Timings | None = None) -> list[Path]:
+    """``sweep.csv`` (``format='parquet'``: ``sweep.parquet``), ``sweep_best`` and ``sweep.png``
+    (atomically); the picture is drawn while the tables are written."""
+    timings = timings or Timings()
+    pending = None
     if picture and rows:
-        paths += save_pictures(out, [("sweep.png", sweep_plots.sweep_figure,
-                                      (header, rows, keys, title, None, rank_by))])
+        pending = submit_pictures(out, [("sweep.png", sweep_plots.sweep_figure,
+                                         (header, rows, keys, title, None, rank_by))], timings=timings)
+    with timings.phase("write_s"):
+        paths = [_write_rows(out, "sweep", header, rows, format, design, keys),
+                 _write_rows(out, "sweep_best", best_header, best_rows, format, design, keys)]
+    if pending is not None:
+        paths += pending.wait()
     return paths
+
+
+def _write_rows(out: OutputDir, stem: str, header: list[str], rows: list[list], format: str, design, keys) -> Path:
+    cols = list(zip(*rows)) if rows else [()] * len(header)
+    return write_table(out, stem, dict(zip(header, cols)), format, design, names=header, keys=list(keys))
 
 
 class SweepRun(NamedTuple):
@@ -99,11 +114,12 @@ def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None,
           catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
           motor: str | None = None, step: float | None = None, top: int = 10, picture: bool = True,
           out: str | Path | None = None, overwrite: bool = False, progress: Progress | None = None,
-          log: Callable[[str], None] | None = None, engine: str = "auto") -> SweepRun:
+          log: Callable[[str], None] | None = None, engine: str = "auto", format: str = "csv") -> SweepRun:
     """The ``sweep`` command: evaluate every variant (``vary``: KEY=VALUES items, default the
     spec's sweep.vary), journalled in ``out`` (``resume`` continues it), then write sweep.csv,
     sweep_best.csv and sweep.png and compare with the baseline ``check_against``.
-    ``step`` [m]; ``log`` receives messages (resuming); ``engine``: of every variant's grid sweeps."""
+    ``step`` [m]; ``log`` receives messages (resuming); ``engine``: of every variant's grid sweeps;
+    ``format``: ``csv`` or ``parquet`` tables."""
     from cdpr_design import batch as sw
     from cdpr_design.model import spec
 
@@ -114,15 +130,18 @@ def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None,
     baseline = read_csv_table(check_against) if check_against is not None else None
     options = sw.Options(step=step, safety_factor=safety_factor, motor=motor, trajectory=trajectory,
                          catalogue=spec.load_catalogue(catalogue), engine=engine)
+    timings = Timings()
     out_dir = output_dir(design, out, overwrite)
-    for name in ("sweep.csv", "sweep_best.csv", "sweep.png"):
+    for name in (file_name("sweep", format), file_name("sweep_best", format), "sweep.png"):
         out_dir.target(name)  # refuse foreign files before any work
-    stats, records = _run_journalled(design, plan, options, out_dir, workers, scheduler, resume,
-                                     log or (lambda msg: None), progress)
-    header, rows = sw.table(plan, records)
-    bh, brows = sw.best(header, rows, rank_name, descending)
+    with timings.phase("sweep_s"):
+        stats, records = _run_journalled(design, plan, options, out_dir, workers, scheduler, resume,
+                                         log or (lambda msg: None), progress)
+        header, rows = sw.table(plan, records)
+        bh, brows = sw.best(header, rows, rank_name, descending)
     write_sweep(out_dir, header, rows, bh, brows, plan.keys,
-                title=f"{design.name}: sweep of {', '.join(plan.keys)}", rank_by=rank_name, picture=picture)
+                title=f"{design.name}: sweep of {', '.join(plan.keys)}", rank_by=rank_name, picture=picture,
+                format=format, design=design, timings=timings)
     regressions, improvements = [], []
     if baseline is not None:
         regressions, improvements = sw.compare(header, text_rows(rows), baseline[0], baseline[1], plan.keys,
@@ -135,6 +154,7 @@ def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None,
         "backend": stats.backend, "workers": stats.workers, "chunk": stats.chunk,
         "elapsed_s": stats.elapsed_s, "files": str(out_dir.path),
     }
+    summary["timings"] = timings.as_dict()
     if baseline is not None:
         summary["baseline"] = str(check_against)
         summary["regressions"] = [d.as_dict() for d in regressions]

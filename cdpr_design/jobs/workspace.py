@@ -1,32 +1,38 @@
-"""The ``workspace`` job: sweep the grid, stream ``workspace.csv``, write ``summary.json`` and pictures."""
+"""The ``workspace`` job: sweep the grid, stream ``workspace.csv`` (or ``.parquet``), write
+``summary.json``, the pictures and, if asked, ``report.html``."""
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
 
 from cdpr_design.io.files import OutputDir
-from cdpr_design.io.tables import format_block
-from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage
+from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage, submit_pictures
+from cdpr_design.jobs.tables import Timings, grid_metadata, table_metadata
 from cdpr_design.plots import workspace as wsplots
 from cdpr_design.plots.hanging import tilt_figure
+from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
 
 
-def workspace_rows(chunk, extra: dict[str, np.ndarray] | None = None) -> str:
-    """CSV text of one :class:`~cdpr_design.workspaces.grid.Chunk` (no header)."""
-    cols = [chunk.poses[:, j] for j in range(chunk.poses.shape[1])]
-    cols.append(chunk.feasible)
-    cols.append(chunk.margin)
-    cols += [chunk.tensions[:, i] for i in range(chunk.tensions.shape[1])]
-    cols += [chunk.lengths[:, i] for i in range(chunk.lengths.shape[1])]
-    ints = [chunk.poses.shape[1]]
-    for v in (extra or {}).values():
-        if v.dtype.kind in "biu":
-            ints.append(len(cols))
-        cols.append(v)
-    return format_block(cols, int_cols=ints)
+def workspace_columns(design, chunk) -> dict:
+    """The ``workspace.csv`` columns of one :class:`~cdpr_design.workspaces.grid.Chunk`, in order:
+    the contract's (pose coordinates, ``feasible`` as bool, ``margin``, tensions, lengths), then
+    whatever extra columns the chunk carries (:func:`~cdpr_design.workspaces.grid.chunk_extra`;
+    0/1 flags held as uint8 become bool)."""
+    from cdpr_design import workspaces as ws
+
+    names = ws.column_names(design)
+    k, m = chunk.poses.shape[1], chunk.tensions.shape[1]
+    arrays = ([chunk.poses[:, j] for j in range(k)] + [chunk.feasible.astype(bool), chunk.margin]
+              + [chunk.tensions[:, i] for i in range(m)] + [chunk.lengths[:, i] for i in range(m)])
+    cols = dict(zip(names, arrays))
+    for name, v in ws.chunk_extra(chunk).items():
+        v = np.asarray(v)
+        cols[name] = v.astype(bool) if v.dtype == np.uint8 else v
+    return cols
 
 
 def workspace(design, out: str | Path | None = None, overwrite: bool = False, **options):
@@ -40,77 +46,118 @@ def workspace(design, out: str | Path | None = None, overwrite: bool = False, **
 def run_workspace(design, out: OutputDir, kind: str = "static", step: float | None = None, force: bool = False,
                   collisions: bool = False, orientations: str | None = None,
                   pictures: PictureWorker | None = None, engine: str = "auto",
-                  progress: Progress | None = None, max_tilt: float | None = None):
-    """Sweep, stream ``workspace.csv``, write pictures and ``summary.json``; return the result.
+                  progress: Progress | None = None, format: str = "csv", html: bool = False,
+                  timings: Timings | None = None, max_tilt: float | None = None):
+    """Sweep, stream ``workspace.csv`` (``format='parquet'``: ``workspace.parquet``), write the
+    pictures, ``summary.json`` and (``html``) ``report.html``; return the result.
 
     ``step`` [m] overrides the spec's grid step; ``force`` allows grids past
     the size limit.  ``collisions``: intersect feasibility with the
     interference checks (column ``collision_free``); ``orientations``:
     ``total`` or ``range`` orientation workspace (rotational motions; extra
     columns, ``orientation_workspace.png``).  ``pictures``: the worker drawing
-    the PNGs (None: in-process); ``engine``: ``auto``, ``numba`` or ``numpy``;
+    the PNGs (None: in-process); ``engine``: ``auto``, ``numba`` or ``numpy``.
+    The table is written by a thread while the sweep goes on and the pictures
+    are drawn; ``result.summary()['timings']`` gives the phases (``timings``:
+    a running :class:`~cdpr_design.jobs.tables.Timings` to add them to).
     ``max_tilt`` [deg]: the tilt limit of an under-constrained design with
-    ``effector.orientation: free`` (its sweeps add ``tilt_map.png``).
+    ``effector.orientation: free`` (its sweeps add ``tilt_map.png``).  With
+    sagging cables the grid is swept again with ideal cables for ``cable_models.png``.
     """
-    result = _stream_sweep(design, out, kind, step, force, collisions, orientations, engine, progress, max_tilt)
-    out.write_json("summary.json", result.summary())
-    save_workspace_pictures(out, result, pictures)
-    if result.extra.get("cable_model") == "sagging" and not orientations:
-        save_cable_model_picture(out, result, engine, collisions, pictures)
-    if result.orientation_maps is not None:
-        save_orientation_picture(out, result)
+    timings = timings or Timings()
+    result, pending = start_workspace(design, out, kind, step, force, collisions, orientations, pictures, engine,
+                                      progress, format, html, timings, max_tilt)
+    finish_workspace(out, result, pending, timings)
     return result
 
 
-def _stream_sweep(design, out, kind, step, force, collisions, orientations, engine, progress, max_tilt=None):
-    """The grid sweep, its rows streamed into ``workspace.csv`` (kept only when complete)."""
+def start_workspace(design, out: OutputDir, kind: str = "static", step: float | None = None, force: bool = False,
+                    collisions: bool = False, orientations: str | None = None,
+                    pictures: PictureWorker | None = None, engine: str = "auto",
+                    progress: Progress | None = None, format: str = "csv", html: bool = False,
+                    timings: Timings | None = None, max_tilt: float | None = None):
+    """:func:`run_workspace` up to the pictures: the table is written and the pictures are being
+    drawn.  Returns (result, pending pictures); :func:`finish_workspace` waits for them, so a
+    caller can do more work (``report``'s evaluation) while they are drawn."""
     from cdpr_design import workspaces as ws
 
+    timings = timings if timings is not None else Timings()
     grid = ws.make_grid(design, step, force)
-    header = ws.column_names(design) + ws.extra_columns(design, collisions, orientations)
-    csv_file = out.stream("workspace.csv")
+    names = ws.column_names(design) + ws.extra_columns(design, collisions, orientations)
+    meta = table_metadata(design, "workspace", names, kind=kind, grid=grid_metadata(grid),
+                          orientation=[float(v) for v in (design.workspace.orientation or [])])
+    for name in ["workspace.png", "tension_map.png"] + (["orientation_workspace.png"] if orientations else []) \
+            + (["report.html"] if html else []):
+        out.target(name)  # a foreign file of that name: refused before any work
+    writer = out.table("workspace", format, metadata=meta, names=names, background=True)
     try:
-        csv_file.write(",".join(header) + "\n")
-
-        def on_chunk(chunk):
-            csv_file.write(workspace_rows(chunk, extra=ws.chunk_extra(chunk)))
-
-        with stage(progress, f"workspace {design.name}") as cb:
-            if orientations:
-                result = ws.run_orientations(design, orientations, kind=kind, grid=grid, on_chunk=on_chunk,
-                                             progress=cb, force=True, interference=collisions, engine=engine)
-            else:
-                result = ws.run(design, kind=kind, grid=grid, on_chunk=on_chunk, progress=cb, force=True,
-                                interference=collisions, engine=engine, max_tilt=max_tilt)
-        csv_file.commit()
+        result = _sweep(design, grid, kind, collisions, orientations, engine, progress, writer, timings, max_tilt)
+        pics = workspace_pictures(result) + ([("report.html", report_html, (result,))] if html else [])
+        if result.extra.get("cable_model") == "sagging" and not orientations:
+            pics.append(cable_model_picture(result, engine, collisions))
+        pending = submit_pictures(out, pics, pictures, timings)
+        writer.close()
     except BaseException:
-        csv_file.abort()
+        writer.abort()
         raise
+    timings.write_s += writer.busy_s
+    return result, pending
+
+
+def finish_workspace(out: OutputDir, result, pending, timings: Timings) -> None:
+    """Wait for the pictures of :func:`start_workspace`, then write ``summary.json`` with the timings."""
+    pending.wait()
+    result.extra["timings"] = timings.as_dict()
+    out.write_json("summary.json", result.summary())
+
+
+def _sweep(design, grid, kind, collisions, orientations, engine, progress, writer, timings, max_tilt=None):
+    """The grid sweep, each chunk handed to ``writer`` (a background ColumnWriter)."""
+    from cdpr_design import workspaces as ws
+
+    waited = 0.0
+
+    def on_chunk(chunk):
+        nonlocal waited
+        t = time.perf_counter()
+        writer.write(workspace_columns(design, chunk))
+        waited += time.perf_counter() - t
+
+    t0 = time.perf_counter()
+    with stage(progress, f"workspace {design.name}") as cb:
+        if orientations:
+            result = ws.run_orientations(design, orientations, kind=kind, grid=grid, on_chunk=on_chunk,
+                                         progress=cb, force=True, interference=collisions, engine=engine)
+        else:
+            result = ws.run(design, kind=kind, grid=grid, on_chunk=on_chunk, progress=cb, force=True,
+                            interference=collisions, engine=engine, max_tilt=max_tilt)
+    timings.sweep_s += time.perf_counter() - t0 - waited
     return result
 
 
-def save_workspace_pictures(out: OutputDir, result, worker: PictureWorker | None = None) -> list[Path]:
-    """``workspace.png``, ``tension_map.png`` (and ``tilt_map.png`` for an under-constrained
-    design) of a workspace result (drawn by ``worker`` if given)."""
-    pictures = [("workspace.png", wsplots.workspace_figure, (result,)),
-                ("tension_map.png", wsplots.tension_figure, (result,))]
+def workspace_pictures(result) -> list:
+    """The pictures of a workspace result: ``workspace.png``, ``tension_map.png``, for an
+    under-constrained design ``tilt_map.png`` and, for orientation sweeps, ``orientation_workspace.png``."""
+    pics = [("workspace.png", wsplots.workspace_figure, (result,)),
+            ("tension_map.png", wsplots.tension_figure, (result,))]
     if getattr(result, "hanging", None) is not None:
-        pictures.append(("tilt_map.png", tilt_figure, (result,)))
-    return save_pictures(out, pictures, worker)
+        pics.append(("tilt_map.png", tilt_figure, (result,)))
+    if result.orientation_maps is not None:
+        pics.append(("orientation_workspace.png", wsplots.orientation_figure, (result,)))
+    return pics
 
 
-def save_cable_model_picture(out: OutputDir, result, engine: str = "auto", collisions: bool = False,
-                             worker: PictureWorker | None = None) -> Path:
-    """``cable_models.png``: the same grid swept with ideal cables, compared with ``result``
-    (:func:`~cdpr_design.plots.workspace.cable_model_figure`)."""
+def cable_model_picture(result, engine: str = "auto", collisions: bool = False) -> tuple:
+    """``cable_models.png`` of a sagging sweep: the same grid swept with ideal cables, compared
+    with ``result`` (:func:`~cdpr_design.plots.workspace.cable_model_figure`)."""
     from cdpr_design import workspaces as ws
     from cdpr_design.model.spec import with_cable_model
 
     ideal = ws.run(with_cable_model(result.design, "ideal"), kind=result.kind, grid=result.grid,
                    orientation=result.orientation, force=True, interference=collisions, engine=engine)
-    return save_pictures(out, [("cable_models.png", wsplots.cable_model_figure, (result, ideal))], worker)[0]
+    return ("cable_models.png", wsplots.cable_model_figure, (result, ideal))
 
 
-def save_orientation_picture(out: OutputDir, result) -> Path:
-    """``orientation_workspace.png`` of an orientation sweep (:func:`~cdpr_design.plots.workspace.orientation_figure`)."""
-    return save_pictures(out, [("orientation_workspace.png", wsplots.orientation_figure, (result,))])[0]
+def save_workspace_pictures(out: OutputDir, result, worker: PictureWorker | None = None) -> list[Path]:
+    """The PNGs of :func:`workspace_pictures` (drawn by ``worker`` if given)."""
+    return save_pictures(out, workspace_pictures(result), worker)

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cdpr_design.plots._style import ORANGE, VERMILLION
+
 
 def frame_rect(ax, design, **kw) -> None:
     """The frame's x-y footprint as a rectangle outline."""
@@ -22,7 +24,7 @@ def draw_robot(ax, design, pose, proj=(0, 1)) -> None:
 
     a, b = proj
     A = design.outlets
-    ax.plot(A[:, a], A[:, b], "v", ms=9, mfc="tab:red", mec="k", zorder=6, label="outlets")
+    ax.plot(A[:, a], A[:, b], "v", ms=9, mfc=VERMILLION, mec="k", zorder=6, label="outlets")
     for i, c in enumerate(design.cables):
         ax.annotate(c.name, (A[i, a], A[i, b]), textcoords="offset points", xytext=(4, 6),
                     fontsize=8, zorder=7)
@@ -39,7 +41,7 @@ def draw_robot(ax, design, pose, proj=(0, 1)) -> None:
     pts3 = np.zeros((4, 3))
     pts3[:, a], pts3[:, b] = corners[:, 0], corners[:, 1]
     world = full[:3] + pts3 @ R.T
-    ax.add_patch(Polygon(world[:, [a, b]], closed=True, fc="tab:orange", ec="k", lw=1.0,
+    ax.add_patch(Polygon(world[:, [a, b]], closed=True, fc=ORANGE, ec="k", lw=1.0,
                          alpha=0.9, zorder=6, label="effector"))
 
 
@@ -68,6 +70,47 @@ def frame_aspect(d) -> float:
     """Height / width of the frame's x-y footprint (panel shape of the pictures)."""
     lo, hi = np.array(d.frame_lower), np.array(d.frame_upper)
     return float(np.clip((hi[1] - lo[1]) / (hi[0] - lo[0]), 0.3, 3.0))
+
+
+#: Room around a map panel [in]: left (tick labels, y label), below (tick labels, x label),
+#: above (the panel's title), and to the right of the panels for the colour bar.
+_LEFT, _BELOW, _ABOVE, _BAR = 0.75, 0.55, 0.32, 1.15
+
+
+def panel_grid(n: int, ncol: int, aspect: float, width: float = 3.4, title_lines: int = 1,
+               panel_title_lines: int = 1):
+    """A figure of ``n`` equal-aspect map panels, ``ncol`` a row, sized to its content.
+
+    Each panel's axes are ``width`` [in] wide and ``aspect`` x ``width`` high
+    (the frame's shape); the figure adds fixed room for tick and axis labels,
+    ``panel_title_lines`` of panel title, ``title_lines`` of figure title and a colour bar on the
+    right (its own axes, so the panels keep their size), placed by
+    arithmetic: no white bands between or around the panels, and no layout
+    engine to run at drawing time.  Returns (figure, axes (nrow, ncol), colour-bar axes).
+    """
+    import math
+
+    from cdpr_design.plots._style import pyplot
+
+    nrow = math.ceil(n / ncol)
+    height = width * aspect
+    top = 0.3 * title_lines + 0.12
+    above = _ABOVE * panel_title_lines
+    W = ncol * (width + _LEFT) + _BAR
+    H = top + nrow * (above + height + _BELOW)
+    fig, axs = pyplot().subplots(nrow, ncol, squeeze=False, figsize=(W, H))
+    fig.subplots_adjust(left=_LEFT / W, right=1 - _BAR / W, bottom=_BELOW / H, top=1 - (top + above) / H,
+                        wspace=_LEFT / width, hspace=(above + _BELOW) / height)
+    span = 1 - (top + above + _BELOW) / H  # the panels' height, as a fraction of the figure's
+    cax = fig.add_axes((1 - 0.85 * _BAR / W, _BELOW / H + 0.1 * span, 0.16 / W, 0.8 * span))
+    return fig, axs, cax
+
+
+def single_panel(aspect: float, width: float = 5.8, title_lines: int = 1):
+    """:func:`panel_grid` of one panel (a planar map) whose title has ``title_lines``:
+    (figure, axes, colour-bar axes)."""
+    fig, axs, cax = panel_grid(1, 1, aspect, width, title_lines=0, panel_title_lines=title_lines)
+    return fig, axs[0, 0], cax
 
 
 def pad_limits(ax, d) -> None:
@@ -102,7 +145,7 @@ def z_slices(axs, result, values, feas, zs, cmap, vmax: float):
         frac = feas[:, :, iz].mean() if feas[:, :, iz].size else 0.0
         frame_rect(ax, d)
         A = d.outlets
-        ax.plot(A[:, 0], A[:, 1], "v", ms=6, mfc="tab:red", mec="k")
+        ax.plot(A[:, 0], A[:, 1], "v", ms=6, mfc=VERMILLION, mec="k")
         pad_limits(ax, d)
         ax.set_title(f"z = {z_axis[iz]:.3g} m  ({100 * frac:.0f} % feasible)", fontsize=9)
         ax.set_xlabel("x [m]")

@@ -9,13 +9,16 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design.plots._frame import draw_robot, extent, frame_rect, pad_limits
-from cdpr_design.plots._style import pyplot
+from cdpr_design.plots._style import BLUE, VERMILLION, pyplot
+
+#: The static workspace under a path: light blue (grey elsewhere).
+_FEASIBLE = (0.80, 0.88, 0.96)
 
 
 def trajectory_path_figure(design, samples, workspace_result=None, ax=None):
     """The sampled path over the static workspace map (planar) or the frame (x-y projection).
 
-    Feasible samples in blue, infeasible ones in red; corners marked; the
+    Feasible samples in blue, infeasible ones in vermillion; corners marked; the
     robot drawn at the first pose.  ``workspace_result``: a static workspace
     (planar designs) drawn underneath.
     """
@@ -27,13 +30,13 @@ def trajectory_path_figure(design, samples, workspace_result=None, ax=None):
     frame_rect(ax, design)
     draw_robot(ax, design, samples.pose[0])
     p = samples.pose
-    ax.plot(p[:, 0], p[:, 1], "-", color="tab:blue", lw=1.6, zorder=7, label="path")
+    ax.plot(p[:, 0], p[:, 1], "-", color=BLUE, lw=1.6, zorder=7, label="path")
     bad = ~samples.feasible
     if bad.any():
-        ax.plot(p[bad, 0], p[bad, 1], ".", color="tab:red", ms=3, zorder=8, label="infeasible tensions")
+        ax.plot(p[bad, 0], p[bad, 1], ".", color=VERMILLION, ms=3, zorder=8, label="infeasible tensions")
     ends = [s.last for s in samples.segments if s.kind != "arc"]
     if ends:
-        ax.plot(p[ends, 0], p[ends, 1], "o", mfc="white", mec="tab:blue", ms=5, zorder=9, label="waypoints")
+        ax.plot(p[ends, 0], p[ends, 1], "o", mfc="white", mec=BLUE, ms=5, zorder=9, label="waypoints")
     pad_limits(ax, design)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
@@ -53,9 +56,9 @@ def _feasible_underlay(ax, workspace_result) -> None:
 
     feas = workspace_result.feasible_map.astype(float)
     ax.imshow(feas.T, origin="lower", extent=extent(workspace_result.map_axes),
-              cmap=ListedColormap([(0.88, 0.88, 0.88), (0.80, 0.93, 0.80)]), vmin=0, vmax=1,
+              cmap=ListedColormap([(0.88, 0.88, 0.88), _FEASIBLE]), vmin=0, vmax=1,
               interpolation="nearest", aspect="equal", zorder=1)
-    ax.plot([], [], "s", color=(0.80, 0.93, 0.80), label="static workspace")
+    ax.plot([], [], "s", color=_FEASIBLE, label="static workspace")
 
 
 def trajectory_axes_figure(samples):
@@ -91,7 +94,7 @@ def simulation_figure(result):
         axs[0].plot(t, result.pose[:, j], "-", color=line.get_color(), lw=1.4, label=c)
     axs[0].set_ylabel("position [m]")
     err_ = np.linalg.norm(result.pose[:, :npos] - result.target_pose[:, :npos], axis=1)
-    axs[1].plot(t, 1000 * err_, color="tab:red")
+    axs[1].plot(t, 1000 * err_, color=VERMILLION)
     axs[1].set_ylabel("position error [mm]")
     for i, c in enumerate(result.cable_names):
         axs[2].plot(t, result.tensions[:, i], label=c)

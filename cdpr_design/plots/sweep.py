@@ -13,14 +13,31 @@ from typing import Sequence
 import numpy as np
 
 from cdpr_design.plots._frame import used_panels
-from cdpr_design.plots._style import cmap_grey_bad, pyplot
+from cdpr_design.plots._style import FAIL, PASS, cmap_grey_bad, pyplot
 
 _FIG_LABELS = {
     "fraction": "feasible fraction", "min_margin_figure": "capacity margin [N]\n(task box)",
     "peak_tension": "peak tension [N]", "peak_motor_torque": "peak motor torque [N m]",
     "torque_margin": "torque margin (≥ 1 passes)", "speed_margin": "speed margin (≥ 1 passes)",
-    "measure": "feasible measure", "task_min_margin": "task min margin [N]",
+    "measure": "feasible measure [m² or m³]", "task_min_margin": "task min margin [N]",
+    "peak_cable_speed": "peak cable speed [m/s]", "rms_motor_torque": "RMS motor torque [N m]",
+    "peak_motor_speed": "peak motor speed [rpm]", "max_tension": "largest tension [N]",
+    "min_margin": "least margin [N]", "max_margin": "largest margin [N]",
 }
+#: Units of varied spec keys, by their last named part (docs/spec-format.md).
+_KEY_UNITS = {
+    "mass": "kg", "tension": "N", "outlet": "m", "attachment": "m", "upper": "m", "lower": "m", "size": "m",
+    "step": "m", "diameter": "m", "drum_radius": "m", "radius": "m", "inertia": "kg m²", "gravity": "m/s²",
+    "max_speed": "m/s", "max_acceleration": "m/s²", "min_margin": "N", "drum_inertia": "kg m²",
+    "axial_stiffness": "N", "orientation": "rad", "external_wrench": "N, N m",
+}
+
+
+def key_label(key: str) -> str:
+    """An axis label for a varied spec key: the key and its unit (``effector.mass [kg]``)."""
+    parts = [p for p in key.replace("[", ".").replace("]", "").split(".") if p and not p.isdigit()]
+    unit = next((_KEY_UNITS[p] for p in reversed(parts) if p in _KEY_UNITS), "")
+    return f"{key} [{unit}]" if unit else key
 
 
 def _axis_values(header, rows, key):
@@ -108,10 +125,10 @@ def _line_panels(header, rows, key, figs, ok):
     for k, ax in used_panels(axs, len(figs)):
         y = _figure_column(header, rows, figs[k])
         ax.plot(x[order], y[order], "-", color="0.5", lw=1.0, zorder=1)
-        ax.plot(x[ok], y[ok], "o", ms=4, color="tab:green", label="passes", zorder=2)
-        ax.plot(x[~ok], y[~ok], "x", ms=5, color="tab:red", label="fails a requirement", zorder=2)
+        ax.plot(x[ok], y[ok], "o", ms=4, color=PASS, label="passes", zorder=2)
+        ax.plot(x[~ok], y[~ok], "x", ms=5, color=FAIL, label="fails a requirement", zorder=2)
         ax.set_ylabel(_FIG_LABELS.get(figs[k], figs[k]), fontsize=8)
-        ax.set_xlabel(key, fontsize=8)
+        ax.set_xlabel(key_label(key), fontsize=8)
         ax.tick_params(labelsize=7)
         if labels is not None:
             ax.set_xticks(range(len(labels)), labels, rotation=30, fontsize=7)
@@ -139,15 +156,18 @@ def _heat_maps(header, rows, keys, figs, ok):
         im = ax.imshow(np.ma.masked_invalid(img), origin="lower", aspect="auto", cmap=cmap_grey_bad("viridis"),
                        interpolation="nearest")
         fy, fx = np.nonzero(fail)
-        ax.plot(fx, fy, "x", color="tab:red", ms=5, mew=1.2, label="fails a requirement")
+        ax.plot(fx, fy, "x", color=FAIL, ms=5, mew=1.2, label="fails a requirement")
         for axis, vals, lab in ((ax.set_xticks, xs, xl), (ax.set_yticks, ys, yl)):
             step = max(1, math.ceil(len(vals) / 8))
             pos = list(range(0, len(vals), step))
             axis(pos, [(lab[int(vals[p])] if lab is not None else f"{vals[p]:.4g}") for p in pos], fontsize=7)
-        ax.set_xlabel(keys[1], fontsize=8)
-        ax.set_ylabel(keys[0], fontsize=8)
-        ax.set_title(_FIG_LABELS.get(figs[k], figs[k]).replace("\n", " "), fontsize=9)
-        fig.colorbar(im, ax=ax, shrink=0.85)
+        ax.set_xlabel(key_label(keys[1]), fontsize=8)
+        ax.set_ylabel(key_label(keys[0]), fontsize=8)
+        label = _FIG_LABELS.get(figs[k], figs[k]).replace("\n", " ")
+        ax.set_title(label, fontsize=9)
+        cb = fig.colorbar(im, ax=ax, shrink=0.85)
+        cb.set_label(label, fontsize=8)
+        cb.ax.tick_params(labelsize=7)
         ax.set_xlim(-0.5, len(xs) - 0.5)
         ax.set_ylim(-0.5, len(ys) - 0.5)
     return fig
@@ -187,7 +207,7 @@ def _parallel_coordinates(header, rows, keys, figs, ok, rank_by):
             colr = cmap((rank[r] - rlo) / (rhi - rlo) if rhi > rlo else 0.5)
             ax.plot(xs, yv, "-", color=colr, lw=1.2, alpha=0.9, zorder=3)
         else:
-            ax.plot(xs, yv, "-", color="0.75" if not ok[r] else "tab:green", lw=0.8, alpha=0.6, zorder=2)
+            ax.plot(xs, yv, "-", color="0.75" if not ok[r] else PASS, lw=0.8, alpha=0.6, zorder=2)
     _parallel_axes(ax, ticks, cols, keys)
     if rank is not None and rank_by:
         from matplotlib.cm import ScalarMappable
@@ -206,7 +226,8 @@ def _parallel_axes(ax, ticks, cols, keys) -> None:
         bottom = lab[0] if lab is not None else f"{lo:.4g}"
         ax.text(k, 1.03, top, ha="center", fontsize=7)
         ax.text(k, -0.06, bottom, ha="center", va="top", fontsize=7)
-    ax.set_xticks(np.arange(len(cols)), [c if c in keys else _FIG_LABELS.get(c, c).replace("\n", " ") for c in cols],
+    ax.set_xticks(np.arange(len(cols)), [key_label(c) if c in keys else _FIG_LABELS.get(c, c).replace("\n", " ")
+                                         for c in cols],
                   rotation=25, ha="right", fontsize=8)
     ax.set_yticks([])
     ax.set_ylim(-0.1, 1.1)

@@ -104,13 +104,17 @@ def draw_parallel(jobs) -> list[tuple[str, bytes]]:
 
 
 def draw(jobs) -> list[tuple[str, bytes]]:
-    """PNG bytes of each job ``(name, builder, args, dpi)``; figures are closed."""
+    """PNG bytes of each job ``(name, builder, args, dpi)``; figures are closed.  A builder
+    returning text instead of a figure (the HTML report) gives that text, UTF-8 encoded."""
     from cdpr_design.plots._style import pyplot
 
-    plt = pyplot()
     out = []
     for name, builder, args, dpi in jobs:
         fig = builder(*args)
+        if isinstance(fig, str):
+            out.append((name, fig.encode("utf-8")))
+            continue
+        plt = pyplot()
         try:
             buf = io.BytesIO()
             fig.savefig(buf, format="png", dpi=dpi)
@@ -151,28 +155,38 @@ class PictureWorker:
     def render(self, jobs) -> list[tuple[str, bytes]]:
         """PNG bytes of each job ``(name, builder, args)``; builder: a figure function of
         :mod:`cdpr_design.plots` (or any importable function returning a figure)."""
-        from cdpr_design.plots._style import DPI
+        jobs = _with_dpi(jobs)
+        pngs = self._render_remote(jobs)
+        return pngs if pngs is not None else draw(jobs)
 
-        jobs = [(name, builder, tuple(args), DPI) for name, builder, args in jobs]
-        if self.proc is not None:
-            # the request is written by a thread (it may exceed the pipe's buffer) while this
-            # one waits for the answer; a child that hangs is given up on after `timeout`
-            sent: list[BaseException] = []
-            writer = threading.Thread(target=_send, args=(self.proc.stdin, jobs, sent), daemon=True)
-            writer.start()
-            try:
-                answer = (read_message(self.proc.stdout) if _readable(self.proc.stdout, self.timeout)
-                          else None)
-            except (OSError, ValueError, EOFError, pickle.PickleError, AttributeError, TypeError):
-                answer = None
-            if sent:  # the request could not be sent (pickling it failed, or the child died)
-                answer = None
-            if answer is not None and answer[0] == "ok":
-                writer.join()
-                return answer[1]
-            self.close(kill=True)  # also ends a writer blocked on the pipe
+    def submit(self, jobs) -> "Pending":
+        """Start :meth:`render` and return at once: the child draws while the caller works on
+        (writes its tables); :meth:`Pending.result` waits for the PNG bytes.  Without a child
+        the pictures are drawn in this process when the result is asked for."""
+        return Pending(self, _with_dpi(jobs))
+
+    def _render_remote(self, jobs):
+        """The child's PNGs of ``jobs`` (with dpi), or None when it cannot draw them."""
+        if self.proc is None:
+            return None
+        # the request is written by a thread (it may exceed the pipe's buffer) while this
+        # one waits for the answer; a child that hangs is given up on after `timeout`
+        sent: list[BaseException] = []
+        writer = threading.Thread(target=_send, args=(self.proc.stdin, jobs, sent), daemon=True)
+        writer.start()
+        try:
+            answer = (read_message(self.proc.stdout) if _readable(self.proc.stdout, self.timeout)
+                      else None)
+        except (OSError, ValueError, EOFError, pickle.PickleError, AttributeError, TypeError):
+            answer = None
+        if sent:  # the request could not be sent (pickling it failed, or the child died)
+            answer = None
+        if answer is not None and answer[0] == "ok":
             writer.join()
-        return draw(jobs)
+            return answer[1]
+        self.close(kill=True)  # also ends a writer blocked on the pipe
+        writer.join()
+        return None
 
     def close(self, kill: bool = False) -> None:
         """Let the child go: it ends at end of input.  ``kill``: stop it now (it may be busy)."""
@@ -196,6 +210,37 @@ class PictureWorker:
         # after an error the child may still be importing: stop it rather than wait
         self.close(kill=exc_type is not None)
         return False
+
+
+class Pending:
+    """Pictures being drawn by a :class:`PictureWorker`'s child (:meth:`PictureWorker.submit`)."""
+
+    def __init__(self, worker: PictureWorker, jobs):
+        self.jobs = jobs
+        self._pngs = None
+        self._thread = None
+        if worker.proc is not None:
+            # a thread of this process waits for the child's answer; it only moves bytes
+            self._thread = threading.Thread(target=self._wait, args=(worker,), daemon=True)
+            self._thread.start()
+
+    def _wait(self, worker: PictureWorker) -> None:
+        self._pngs = worker._render_remote(self.jobs)
+
+    def result(self) -> list[tuple[str, bytes]]:
+        """PNG bytes of each job; drawn here when the child could not (errors surface here)."""
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
+        if self._pngs is None:
+            self._pngs = draw(self.jobs)
+        return self._pngs
+
+
+def _with_dpi(jobs) -> list:
+    from cdpr_design.plots._style import DPI
+
+    return [(name, builder, tuple(args), DPI) for name, builder, args in jobs]
 
 
 def _send(stream, obj, failures: list) -> None:

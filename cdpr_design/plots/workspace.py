@@ -8,13 +8,11 @@ z-slices on a figure of their own.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from cdpr_design.plots._frame import (draw_robot, extent, frame_aspect, frame_rect, pad_limits, pose_txt,
-                                      slices, used_panels, z_slices)
-from cdpr_design.plots._style import cmap_grey_bad, pyplot
+from cdpr_design.plots._frame import (draw_robot, extent, frame_aspect, frame_rect, pad_limits, panel_grid,
+                                      pose_txt, single_panel, slices, used_panels, z_slices)
+from cdpr_design.plots._style import BLUE, VERMILLION, cmap_grey_bad, pyplot
 
 _KIND_TEXT = {"static": "static-equilibrium", "wrench-feasible": "wrench-feasible",
               "wrench-closure": "wrench-closure"}
@@ -66,9 +64,9 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
     d = result.design
     rep = wsmod.representative_pose(result)
     if ax is None:
-        fig, ax = pyplot().subplots(figsize=(7.5, 6.6))
-        fig.subplots_adjust(left=0.09, right=0.97, bottom=0.08, top=0.90)
-    fig = ax.figure
+        fig, ax, cax = single_panel(frame_aspect(d), title_lines=title.count("\n") + 1)
+    else:
+        fig, cax = ax.figure, None
     im = ax.imshow(marg.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("viridis"),
                    vmin=0.0, vmax=vmax, interpolation="nearest", aspect="equal", zorder=1)
     ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
@@ -78,12 +76,12 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
     if d.requirements.task_box is not None:
         lo, hi = d.requirements.task_box
         ax.add_patch(Rectangle((lo[0], lo[1]), hi[0] - lo[0], hi[1] - lo[1], fill=False,
-                               ls="--", lw=1.5, ec="tab:blue", zorder=4, label="task box"))
+                               ls="--", lw=1.5, ec=BLUE, zorder=4, label="task box"))
     pad_limits(ax, d)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    fig.colorbar(im, ax=ax, shrink=0.85, label="capacity margin [N] (grey: infeasible)")
-    ax.legend(loc="lower right", fontsize=8, framealpha=0.9)
+    _colorbar(fig, im, cax, ax, "capacity margin [N] (grey: infeasible)")
+    ax.legend(loc="best", fontsize=8, framealpha=0.9)
     ax.set_title(title, fontsize=10)
     if rep is not None:
         ax.text(0.01, 0.01, "drawn at the pose of largest margin " + pose_txt(d, rep),
@@ -95,15 +93,9 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
 def _spatial_workspace(result, feas, marg, vmax, title):
     d = result.design
     zs = slices(result)
-    ncol = min(3, len(zs))
-    nrow = math.ceil(len(zs) / ncol)
-    aspect = frame_aspect(d)
-    height = (3.9 * aspect + 0.9) * nrow + 0.9
-    fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, height), squeeze=False)
-    fig.subplots_adjust(left=0.07, right=0.88, bottom=0.7 / height, top=1 - 0.8 / height,
-                        wspace=0.3, hspace=0.9 / (3.9 * aspect))
+    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), frame_aspect(d), title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, marg, feas, zs, cmap_grey_bad("viridis"), vmax)
-    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label="capacity margin [N] (grey: infeasible)")
+    fig.colorbar(im, cax=cax, label="capacity margin [N] (grey: infeasible)")
     fig.suptitle(title, fontsize=10)
     return fig
 
@@ -128,8 +120,9 @@ def tension_figure(result):
         iz = int(np.argmax(feas.sum(axis=(0, 1))))
         img = T[:, :, :, iz]
         sub = f" at z = {result.map_axes[2][iz]:.3g} m (slice with the most feasible poses)"
-    fig, axs = _tension_panels(d)
-    cmap = cmap_grey_bad("magma")
+    m = d.m
+    fig, axs, cax = panel_grid(m, min(4, m), frame_aspect(d), width=3.1)
+    cmap = cmap_grey_bad("cividis")
     ext = extent(result.map_axes[:2])
     im = None
     for i, ax in used_panels(axs, d.m):
@@ -137,28 +130,23 @@ def tension_figure(result):
                        interpolation="nearest", aspect="equal")
         frame_rect(ax, d)
         A = d.outlets
-        ax.plot(A[i, 0], A[i, 1], "v", ms=9, mfc="tab:cyan", mec="k", zorder=6)
+        ax.plot(A[i, 0], A[i, 1], "v", ms=9, mfc=VERMILLION, mec="k", zorder=6)
         pad_limits(ax, d)
         c = d.cables[i]
         ax.set_title(f"{c.name}: {c.tension_min:g}–{c.tension_max:g} N", fontsize=9)
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
-    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.85, label="cable tension [N] (grey: infeasible)")
+    fig.colorbar(im, cax=cax, label="cable tension [N] (grey: infeasible)")
     fig.suptitle(f"{d.name}: minimum-norm cable tensions, {result.kind} workspace{sub}", fontsize=10)
     return fig
 
 
-def _tension_panels(d):
-    """The figure and axes of :func:`tension_figure`: one panel per cable, up to 4 a row."""
-    m = d.m
-    ncol = min(4, m) if m > 2 else m
-    nrow = math.ceil(m / ncol)
-    aspect = frame_aspect(d)
-    height = (3.7 * aspect + 0.9) * nrow + 0.7
-    fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.0 * ncol + 1.4, height), squeeze=False)
-    fig.subplots_adjust(left=0.08, right=0.9, bottom=0.6 / height, top=1 - 0.6 / height,
-                        wspace=0.3, hspace=0.9 / (3.7 * aspect))
-    return fig, axs
+def _colorbar(fig, im, cax, ax, label: str) -> None:
+    """The colour bar in ``cax`` (a figure of our own), else beside ``ax`` (a caller's axes)."""
+    if cax is not None:
+        fig.colorbar(im, cax=cax, label=label)
+    else:
+        fig.colorbar(im, ax=ax, shrink=0.85, label=label)
 
 
 def orientation_figure(result, ax=None):
@@ -198,32 +186,30 @@ def _orientation_title(result) -> tuple[str, str]:
 def _planar_orientation(result, val, feas, title, label, ax):
     d = result.design
     if ax is None:
-        fig, ax = pyplot().subplots(figsize=(7.5, 6.6))
-        fig.subplots_adjust(left=0.09, right=0.97, bottom=0.08, top=0.88)
-    fig = ax.figure
+        fig, ax, cax = single_panel(frame_aspect(d), title_lines=title.count("\n") + 1)
+    else:
+        fig, cax = ax.figure, None
     im = ax.imshow(val.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("cividis"),
                    vmin=0.0, vmax=1.0, interpolation="nearest", aspect="equal", zorder=1)
     if result.orientation_maps.mode == "total" and feas.any():
         ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
                    colors="k", linewidths=0.8, zorder=2)
     frame_rect(ax, d)
-    ax.plot(d.outlets[:, 0], d.outlets[:, 1], "v", ms=7, mfc="tab:red", mec="k", zorder=5)
+    ax.plot(d.outlets[:, 0], d.outlets[:, 1], "v", ms=7, mfc=VERMILLION, mec="k", zorder=5)
     pad_limits(ax, d)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    fig.colorbar(im, ax=ax, shrink=0.85, label=label)
+    _colorbar(fig, im, cax, ax, label)
     ax.set_title(title, fontsize=9)
     return fig
 
 
 def _spatial_orientation(result, val, feas, title, label):
     zs = slices(result)
-    ncol = min(3, len(zs))
-    nrow = math.ceil(len(zs) / ncol)
-    fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, 4.2 * nrow + 0.9), squeeze=False)
-    fig.subplots_adjust(left=0.07, right=0.88, bottom=0.08, top=0.86, wspace=0.3, hspace=0.35)
+    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), frame_aspect(result.design),
+                               title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, val, feas, zs, cmap_grey_bad("cividis"), 1.0)
-    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label=label)
+    fig.colorbar(im, cax=cax, label=label)
     fig.suptitle(title, fontsize=9)
     return fig
 

@@ -1,0 +1,196 @@
+#!/usr/bin/env python3
+"""Benchmark: the whole ``workspace`` command and its kernels against per-pose scipy LP.
+
+For IPAnema 3 on a fine grid and for planar2, all in one run on this machine:
+
+1. the baseline: per-pose scipy ``linprog`` (HiGHS) feasibility of a random
+   sample of the grid's poses, in this process, scaled to the whole grid (the
+   LP answers feasibility only: no tensions, no margin, no file);
+2. the kernels in this process: ``workspaces.run`` without maps or rows,
+   cold (the first call: numba's on-disk cache loaded, or compiled) and warm
+   (best of ``--repeat``), and the ``sweep_s`` the command reports;
+3. the whole command, ``python -m cdpr_design workspace SPEC --step S --json``
+   in a new process each time (start-up, spec, sweep, ``workspace.csv``,
+   ``workspace.png``, ``tension_map.png``, ``summary.json``): cold (an empty
+   numba cache: every kernel compiled) and warm (best of ``--repeat``), with
+   ``--format csv`` and ``--format parquet``;
+4. the CSV writer alone on the IPAnema 3 rows: the previous one (printf per
+   row, as ``io.tables.format_block`` was) against :func:`cdpr_design.io.csvtext.csv_rows`.
+
+Ratios are LP time for the grid / measured time, in wall-clock time and in CPU
+time (user + system, all threads and the picture process: less sensitive to
+other work on a shared machine; the LP runs on one core, the kernels and the
+command on two).  ``--root`` runs the command
+from another checkout (e.g. the previous version, for before/after; its
+summary has no ``timings``, so its ``elapsed_s`` -- which then included the CSV
+formatting -- stands in for ``sweep_s``).
+
+    python3 scripts/bench_outputs.py [--step 0.14] [--sample 300] [--repeat 3] [--root DIR] [--no-cold]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from cdpr_design import workspaces as ws  # noqa: E402
+from cdpr_design.model import spec  # noqa: E402
+from cdpr_design.statics import kinematics as kin  # noqa: E402
+from cdpr_design.workspaces.grid import grid_positions  # noqa: E402
+
+
+def lp_seconds_per_pose(design, grid, count, rng) -> tuple[float, float]:
+    """Mean (wall, CPU) time [s] of one per-pose linprog feasibility check on a random sample of the grid."""
+    from scipy.optimize import linprog
+
+    idx = np.sort(rng.choice(grid.size, size=min(count, grid.size), replace=False))
+    ori = list(design.workspace.orientation or [])
+    poses = [list(grid_positions(grid, int(i), 1)[0]) + ori for i in idx]
+    bounds = list(zip(design.tension_min, design.tension_max))
+    t0, c0 = time.perf_counter(), time.process_time()
+    for pose in poses:
+        W = kin.structure_matrix(design, pose)
+        w = kin.required_wrench(design, pose)
+        linprog(np.zeros(design.m), A_eq=W, b_eq=w, bounds=bounds, method="highs")
+    return (time.perf_counter() - t0) / len(poses), (time.process_time() - c0) / len(poses)
+
+
+def kernel_times(design, grid, repeat: int) -> tuple[tuple, tuple]:
+    """(cold, warm) (wall, CPU) seconds of the bare sweep in this process (no maps, no rows handed out)."""
+    cold = _timed(lambda: ws.run(design, grid=grid, keep_maps=False), cpu=True)
+    warm = min(_timed(lambda: ws.run(design, grid=grid, keep_maps=False), cpu=True) for _ in range(repeat))
+    return cold, warm
+
+
+def _timed(fn, cpu: bool = False):
+    t0, c0 = time.perf_counter(), time.process_time()
+    fn()
+    wall = time.perf_counter() - t0
+    return (wall, time.process_time() - c0) if cpu else wall
+
+
+def command(root: Path, spec_path: Path, step: float | None, fmt: str, out: str, cache: str | None):
+    """Wall time [s] of one ``workspace`` process and its summary."""
+    env = dict(os.environ, PYTHONPATH=str(root))
+    if cache is not None:
+        env["NUMBA_CACHE_DIR"] = cache
+    args = [sys.executable, "-m", "cdpr_design", "workspace", str(spec_path), "--out", out, "--json", "--overwrite"]
+    if step is not None:
+        args += ["--step", str(step)]
+    if fmt != "csv":
+        args += ["--format", fmt]
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    r = subprocess.run(args, env=env, cwd=root, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if r.returncode:
+        raise SystemExit(f"{' '.join(args)} failed ({r.returncode}): {r.stderr[-500:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return (wall, cpu), json.loads(r.stdout)
+
+
+def sweep_s(summary: dict) -> float:
+    return summary["timings"]["sweep_s"] if "timings" in summary else summary["elapsed_s"]
+
+
+def previous_format_block(columns, int_cols) -> str:
+    """The previous CSV writer of workspace rows: one printf per row, NaN cells removed by a regex."""
+    ints = set(int_cols)
+    fmt = ",".join("%d" if j in ints else "%.10g" for j in range(len(columns)))
+    block = np.column_stack([np.asarray(c, dtype=float) for c in columns])
+    text = "\n".join([fmt % row for row in map(tuple, block.tolist())]) + "\n"
+    return re.sub(r"(?<![^,\n])-?(?:nan|inf)(?![^,\n])", "", text)
+
+
+def writer_times(design, grid, repeat: int) -> tuple[float, float, int]:
+    """(previous, new) seconds to format every row of the grid as CSV text, and the cell count."""
+    from cdpr_design.io.csvtext import csv_rows
+
+    chunks = []
+    ws.run(design, grid=grid, keep_maps=False, on_chunk=chunks.append)
+
+    def cols(c):
+        return ([c.poses[:, j] for j in range(c.poses.shape[1])] + [c.feasible, c.margin]
+                + [c.tensions[:, i] for i in range(c.tensions.shape[1])] + [c.lengths[:, i] for i in range(c.lengths.shape[1])])
+
+    k = chunks[0].poses.shape[1]
+    old = min(_timed(lambda: [previous_format_block(cols(c), [k]) for c in chunks]) for _ in range(repeat))
+    new = min(_timed(lambda: [csv_rows(cols(c)) for c in chunks]) for _ in range(repeat))
+    return old, new, sum(len(cols(c)) * len(c.feasible) for c in chunks)
+
+
+def bench_design(name: str, step: float | None, args, rng) -> list[tuple]:
+    path = ROOT / "designs" / f"{name}.yaml"
+    d = spec.load(path)
+    g = ws.make_grid(d, step)
+    lp, lp_cpu = lp_seconds_per_pose(d, g, args.sample, rng)
+    lp_grid, lp_grid_cpu = lp * g.size, lp_cpu * g.size
+    label = f"{name} ({g.size:,} poses, step {step or d.workspace.grid.step[0]} m)"
+    print(f"\n{label}: per-pose linprog {lp * 1e3:.3f} ms ({lp_cpu * 1e3:.3f} ms CPU) over "
+          f"{min(args.sample, g.size)} poses -> {lp_grid:.1f} s for the grid", flush=True)
+    rows = []
+    kc, kw = kernel_times(d, g, args.repeat)
+    rows += [("kernels in-process, cold", kc), ("kernels in-process, warm", kw)]
+    root = Path(args.root).resolve() if args.root else ROOT
+    with tempfile.TemporaryDirectory() as tmp:
+        if args.cold:
+            cache = tempfile.mkdtemp(dir=tmp)
+            wall, s = command(root, path, step, "csv", f"{tmp}/cold", cache)
+            rows += [("whole command, cold cache (csv)", wall), ("  its sweep_s", (sweep_s(s), None))]
+        for fmt in ("csv", "parquet") if not args.root else ("csv",):
+            command(root, path, step, fmt, f"{tmp}/prime", None)  # a warm numba cache
+            runs = [command(root, path, step, fmt, f"{tmp}/{fmt}", None) for _ in range(args.repeat)]
+            wall, s = min(runs, key=lambda r: r[0][0])
+            rows += [(f"whole command, warm ({fmt})", wall), ("  its sweep_s", (sweep_s(s), None))]
+            if "timings" in s:
+                t = s["timings"]
+                print(f"  {fmt}: timings of the best run: sweep {t['sweep_s']:.3f} s, write {t['write_s']:.3f} s, "
+                      f"pictures {t['pictures_s']:.3f} s, job total {t['total_s']:.3f} s; process {wall[0]:.3f} s")
+    print(f"  {'what':38s} {'wall [s]':>9s} {'poses/s':>12s} {'x LP':>8s} {'CPU [s]':>9s} {'x LP CPU':>9s}")
+    for what, (t, c) in rows:
+        cpu = f"{c:9.3f} {lp_grid_cpu / c:9.1f}" if c else ""
+        print(f"  {what:38s} {t:9.3f} {g.size / t:12,.0f} {lp_grid / t:8.1f} {cpu}")
+    return rows
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--step", type=float, default=0.14, help="IPAnema 3 grid step [m] (0.14: 154,440 poses)")
+    ap.add_argument("--planar2-step", type=float, default=0.002, help="planar2's fine grid step [m]")
+    ap.add_argument("--sample", type=int, default=300, help="poses of the per-pose LP baseline")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--root", help="checkout whose command is timed (default: this one)")
+    ap.add_argument("--no-cold", dest="cold", action="store_false", help="skip the cold-cache command")
+    args = ap.parse_args(argv)
+    import numba
+
+    rng = np.random.default_rng(0)
+    print(f"numba threads {numba.get_num_threads()}, load average {os.getloadavg()[0]:.2f}; command from "
+          f"{args.root or ROOT}")
+    bench_design("ipanema3", args.step, args, rng)
+    bench_design("planar2", None, args, rng)
+    bench_design("planar2", args.planar2_step, args, rng)
+    d = spec.load(ROOT / "designs" / "ipanema3.yaml")
+    old, new, cells = writer_times(d, ws.make_grid(d, args.step), args.repeat)
+    print(f"\nCSV of the IPAnema 3 rows ({cells:,} cells): previous writer {old:.3f} s "
+          f"({old / cells * 1e9:.0f} ns/cell), csv_rows {new:.3f} s ({new / cells * 1e9:.0f} ns/cell): "
+          f"{old / new:.1f}x faster")
+
+
+if __name__ == "__main__":
+    main()

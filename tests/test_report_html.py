@@ -1,0 +1,277 @@
+"""report.html (self-contained, the design named, interactive figures with their JSON valid) and
+the commands' --format parquet tables against their CSV."""
+
+from __future__ import annotations
+
+import json
+from html.parser import HTMLParser
+
+import numpy as np
+import pytest
+
+from cdpr_design.io.columns import read_table, table_metadata
+from cdpr_design.io.tables import fmt
+
+from .helpers import DESIGNS, PLANAR2, invoke
+
+_VOID = {"meta", "br", "img", "input", "link", "hr", "col", "area", "base", "embed", "source", "track", "wbr"}
+
+
+class _Page(HTMLParser):
+    """Checks that tags nest and close; collects the figure JSON blocks and script sources."""
+
+    def __init__(self):
+        super().__init__(convert_charrefs=True)
+        self.stack, self.errors, self.figures, self.sources, self.text = [], [], {}, [], []
+        self._figure = None
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "script":
+            if "src" in a:
+                self.sources.append(a["src"])
+            self._figure = a.get("data-figure") if a.get("type") == "application/json" else None
+        if tag not in _VOID:
+            self.stack.append(tag)
+
+    def handle_endtag(self, tag):
+        if not self.stack or self.stack[-1] != tag:
+            self.errors.append(f"</{tag}> closes {self.stack[-1:] or 'nothing'}")
+            return
+        self.stack.pop()
+        self._figure = None
+
+    def handle_data(self, data):
+        if self._figure is not None:
+            self.figures[self._figure] = json.loads(data)
+        elif self.stack and self.stack[-1] != "script":
+            self.text.append(data)
+
+
+def parse_page(path):
+    text = path.read_text(encoding="utf-8")
+    page = _Page()
+    page.feed(text)
+    page.close()
+    assert not page.errors, page.errors[:5]
+    assert page.stack == [], page.stack
+    assert text.startswith("<!DOCTYPE html>")
+    return text, page
+
+
+def _check_self_contained(text: str, page: _Page) -> None:
+    assert not page.sources  # every script inline: the page opens offline
+    assert '<script src="http' not in text and "<script src='http" not in text
+    assert "Plotly.newPlot" in text and len(text) > 3_000_000  # plotly.js itself is inlined
+
+
+def test_planar_workspace_html(tmp_path):
+    r = invoke("workspace", PLANAR2, "--step", "0.02", "--out", tmp_path, "--html", "--quiet")
+    assert r.exit_code == 0, r.output
+    text, page = parse_page(tmp_path / "report.html")
+    _check_self_contained(text, page)
+    assert "<title>planar2" in text and "<h1>planar2</h1>" in text
+    assert set(page.figures) == {"workspace", "tensions"}
+    ws = page.figures["workspace"]
+    heat = [t for t in ws["data"] if t["type"] == "heatmap"]
+    assert len(heat) == 2  # infeasible (grey) and feasible (margin) cells
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    nx, ny = summary["grid"]["shape"]
+    feasible_cells = 0
+    for t in heat:
+        z = np.array(t["z"], dtype=float)
+        assert z.shape == (ny, nx) and len(t["x"]) == nx and len(t["y"]) == ny
+        assert np.array(t["customdata"], dtype=float).shape == (ny, nx, 2)  # both cables' tensions
+        assert "margin" in t["hovertemplate"] and "T c1" in t["hovertemplate"] and "x = " in t["hovertemplate"]
+        feasible_cells += int(np.isfinite(z).sum()) if t["name"] == "feasible" else 0
+    assert feasible_cells == summary["feasible"]
+    assert ws["layout"]["xaxis"]["title"]["text"] == "x [m]"
+    ten = page.figures["tensions"]
+    assert [t["name"] for t in ten["data"]] == ["c1", "c2"]
+    assert "Summary" in "".join(page.text)
+
+
+def test_spatial_workspace_html_holds_3d_points(tmp_path):
+    r = invoke("workspace", DESIGNS / "ipanema3.yaml", "--step", "0.6", "--out", tmp_path, "--html", "--quiet")
+    assert r.exit_code == 0, r.output
+    text, page = parse_page(tmp_path / "report.html")
+    _check_self_contained(text, page)
+    assert "<h1>ipanema3</h1>" in text
+    pts = [t for t in page.figures["workspace"]["data"] if t["name"] == "feasible poses"][0]
+    assert pts["type"] == "scatter3d"
+    n = len(pts["x"])
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert n == len(pts["y"]) == len(pts["z"]) == len(pts["marker"]["color"]) == summary["feasible"] > 0
+    hover = np.array(pts["customdata"], dtype=float)
+    assert hover.shape == (n, 9)  # the margin, then the 8 tensions
+    np.testing.assert_allclose(hover[:, 0], pts["marker"]["color"])
+    assert min(pts["marker"]["color"]) >= 0  # feasible: margin >= 0
+    assert "z = " in pts["hovertemplate"] and "T c8" in pts["hovertemplate"]
+    assert page.figures["workspace"]["layout"]["scene"]["zaxis"]["title"]["text"] == "z [m]"
+    assert len(page.figures["tensions"]["data"]) == 8
+
+
+def test_report_command_writes_the_page_with_sizing_and_checks(tmp_path):
+    r = invoke("report", PLANAR2, "--step", "0.05", "--out", tmp_path, "--json")
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert set(out["timings"]) == {"sweep_s", "write_s", "pictures_s", "total_s"}
+    text, page = parse_page(tmp_path / "report.html")
+    _check_self_contained(text, page)
+    body = " ".join(page.text)
+    assert "Motor sizing" in body and "AM8112-0F21-EL7211" in body
+    assert "Requirement checks" in body and "min_margin" in body
+    assert ("FAIL" in body) == (not all(c["passed"] for c in out["checks"]))
+    assert json.loads((tmp_path / "report.json").read_text())["timings"]["total_s"] > 0
+
+
+def test_report_renders_in_a_real_browser_offline(tmp_path):
+    """Where playwright and a browser are installed (not in CI): the page draws its figures with
+    every network request refused and no script error."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    r = invoke("workspace", PLANAR2, "--step", "0.05", "--out", tmp_path, "--html", "--quiet")
+    assert r.exit_code == 0, r.output
+    with sync_api.sync_playwright() as p:
+        try:
+            browser = p.chromium.launch()
+        except Exception as exc:  # noqa: BLE001 - playwright without its browser
+            pytest.skip(f"playwright has no browser here: {exc}")
+        page = browser.new_page()
+        errors, requests = [], []
+        page.on("pageerror", errors.append)
+        page.route("**/*", lambda route: route.continue_() if route.request.url.startswith("file:")
+                   else (requests.append(route.request.url), route.abort()))
+        page.goto((tmp_path / "report.html").as_uri())
+        page.wait_for_selector("#workspace .main-svg", timeout=20_000)
+        assert page.locator("#tensions .main-svg").count() > 0
+        browser.close()
+    assert not errors and not requests
+
+
+def test_unknown_format_is_refused():
+    r = invoke("workspace", PLANAR2, "--format", "xlsx")
+    assert r.exit_code == 2 and "--format" in r.output
+
+
+# ----------------------------------------------------------------------------
+# --format parquet against the CSV of the same command
+# ----------------------------------------------------------------------------
+
+
+def _same_table(csv_path, pq_path):
+    a, b = read_table(csv_path), read_table(pq_path)
+    assert list(a) == list(b)
+    n = len(next(iter(a.values())))
+    for k in a:
+        assert len(b[k]) == n, k
+        if a[k].dtype.kind == "f" and b[k].dtype.kind in "biuf":
+            np.testing.assert_allclose(a[k], b[k].astype(float), rtol=1e-9, atol=1e-300, err_msg=k)
+        else:  # text in Parquet (cells of mixed kinds, joined values): the CSV's cells
+            want = [fmt(v) for v in a[k]]
+            got = [fmt(v) for v in b[k]]
+            assert got == want, k
+    return a, b
+
+
+@pytest.mark.parametrize("design,extra", [("planar2", ["--step", "0.05"]),
+                                          ("ipanema3", ["--step", "0.8", "--collisions"]),
+                                          ("planar4", ["--step", "0.2", "--orientations", "range"])])
+def test_workspace_parquet_round_trip(tmp_path, design, extra):
+    spec_path = DESIGNS / f"{design}.yaml"
+    for fmt_ in ("csv", "parquet"):
+        r = invoke("workspace", spec_path, *extra, "--out", tmp_path / fmt_, "--format", fmt_, "--quiet")
+        assert r.exit_code == 0, r.output
+    assert not (tmp_path / "parquet" / "workspace.csv").exists()
+    a, b = _same_table(tmp_path / "csv" / "workspace.csv", tmp_path / "parquet" / "workspace.parquet")
+    summary = json.loads((tmp_path / "parquet" / "summary.json").read_text())
+    assert b["feasible"].dtype == bool and int(b["feasible"].sum()) == int(np.nansum(a["feasible"])) == \
+        summary["feasible"]
+    assert len(b["feasible"]) == summary["poses"]
+    assert b["margin"].dtype == np.float64
+    if "collision_free" in b:
+        assert b["collision_free"].dtype == bool
+    meta = table_metadata(tmp_path / "parquet" / "workspace.parquet")
+    assert meta["name"] == design and meta["table"] == "workspace" and meta["kind"] == "static"
+    assert meta["grid"] == summary["grid"] and meta["spec"].endswith(f"{design}.yaml")
+    assert meta["units"]["margin"] == "N" and meta["units"]["tension_c1"] == "N"
+    assert meta["units"]["length_c1"] == "m" and meta["units"]["x"] == "m"
+
+
+def test_sizing_trajectory_and_sweep_parquet(tmp_path):
+    runs = {"motor_sizing": ["size-motors", PLANAR2, "--step", "0.05"],
+            "trajectory": ["trajectory", PLANAR2, "square_fast", "--cycle-time", "0.02"],
+            "sweep": ["sweep", PLANAR2, "--vary", "effector.mass=0.5,1", "--step", "0.1", "--workers", "1",
+                      "--no-picture"]}
+    for stem, args in runs.items():
+        for fmt_ in ("csv", "parquet"):
+            r = invoke(*args, "--out", tmp_path / fmt_, "--format", fmt_, "--json")
+            assert r.exit_code == 0, r.output
+            assert "timings" in json.loads(r.stdout)
+        _same_table(tmp_path / "csv" / f"{stem}.csv", tmp_path / "parquet" / f"{stem}.parquet")
+        assert table_metadata(tmp_path / "parquet" / f"{stem}.parquet")["name"] == "planar2"
+    units = table_metadata(tmp_path / "parquet" / "trajectory.parquet")["units"]
+    assert units["time"] == "s" and units["x_vel"] == "m/s" and units["cable_speed_c1"] == "m/s"
+    assert read_table(tmp_path / "parquet" / "motor_sizing.parquet")["motor"].dtype == object
+
+
+# ----------------------------------------------------------------------------
+# Pictures a designer keeps: filled figures, units on every axis, submit()
+# ----------------------------------------------------------------------------
+
+
+def _map_axes(fig):
+    """The axes holding a picture (not hidden, not the colour bar)."""
+    return [ax for ax in fig.axes if ax.get_visible() and ax.axison and ax.images and ax.get_label() != "<colorbar>"]
+
+
+@pytest.mark.parametrize("design,step,orient", [("planar2", 0.02, None), ("ipanema3", 0.6, None),
+                                                ("planar4", 0.1, "range")])
+def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
+    from cdpr_design import workspaces as ws
+    from cdpr_design.model import spec
+    from cdpr_design.plots import workspace as wsplots
+    from cdpr_design.plots._style import pyplot
+
+    d = spec.load(DESIGNS / f"{design}.yaml")
+    r = ws.run_orientations(d, orient, grid=ws.make_grid(d, step)) if orient else ws.run(d, step=step)
+    figures = [wsplots.workspace_figure(r), wsplots.tension_figure(r)]
+    if orient:
+        figures.append(wsplots.orientation_figure(r))
+    for fig in figures:
+        fig.canvas.draw()
+        maps = _map_axes(fig)
+        assert maps
+        for ax in maps:
+            assert ax.get_xlabel().endswith("[m]") and ax.get_ylabel().endswith("[m]")
+        bars = [ax for ax in fig.axes if ax not in maps and ax.get_visible() and ax.axison and ax.get_ylabel()]
+        assert bars and all("[" in ax.get_ylabel() or "scale" in ax.get_ylabel() for ax in bars)
+        # the drawn maps fill the figure: rows of panels leave no white band (the old tension map of
+        # IPAnema 3 had 55 % of its height blank)
+        rows = sorted({(round(ax.get_position().y0, 3), round(ax.get_position().y1, 3)) for ax in maps})
+        filled = sum(y1 - y0 for y0, y1 in rows)
+        assert filled > 0.6, (fig.get_suptitle(), filled)
+        pyplot().close(fig)
+
+
+def test_submitted_pictures_are_drawn_while_the_caller_works():
+    from cdpr_design.plots import worker as pw
+    from cdpr_design.plots.report import report_html
+
+    with pw.PictureWorker(force=True) as worker:
+        pending = worker.submit([("a.html", report_html, (None, None, [], {"name": "x"}))])
+        assert worker.proc is not None
+        out = pending.result()
+    assert out[0][0] == "a.html" and b"<h1>x</h1>" in out[0][1]
+    local = pw.PictureWorker(enabled=False).submit([("a.html", report_html, (None, None, [], {"name": "x"}))])
+    assert local.result() == out
+
+
+def test_a_foreign_picture_or_page_is_refused_before_the_sweep(tmp_path):
+    for name in ("report.html", "tension_map.png"):
+        folder = tmp_path / name
+        folder.mkdir()
+        (folder / name).write_text("mine")
+        r = invoke("workspace", PLANAR2, "--step", "0.1", "--out", folder, "--html", "--format", "parquet")
+        assert r.exit_code == 2 and "--overwrite" in r.output
+        assert (folder / name).read_text() == "mine"
+        assert not (folder / "workspace.parquet").exists()  # refused before any work
