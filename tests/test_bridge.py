@@ -360,7 +360,9 @@ def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_da
                 proc.kill()
                 proc.communicate()
     assert proc.returncode == 3, stderr
-    assert took < 5.0  # a few cycles of timeouts, not a hang
+    # the run was asked for 60 s: ending well inside it means the loss ended it (a few
+    # cycles of timeouts), not the duration; the bound leaves room for a loaded machine
+    assert took < 20.0
     assert "PLC lost" in stderr and "Traceback" not in stderr
     summary = json.loads(stdout)
     assert summary["stopped"] == "plc_lost" and summary["missed"] >= 3
