@@ -138,7 +138,23 @@ def test_csv_identical_to_the_previous_writer(case, tmp_path, no_pictures):
     for f in files:
         old = gzip.decompress(f.read_bytes()).decode()
         new = (tmp_path / f.name.split("__")[1][:-3]).read_text()
-        assert new == _NEG0.sub("0", old), f.name
+        assert _old_columns(new, old) == _NEG0.sub("0", old), f.name
+
+
+def _old_columns(new: str, old: str) -> str:
+    """``new`` restricted to the columns ``old`` has, in its order: the contract lets later
+    issues add columns (planar2's workspace gained its hanging tilt), never change one."""
+    import csv
+    import io
+
+    old_head = next(csv.reader(io.StringIO(old)))
+    rows = list(csv.reader(io.StringIO(new)))
+    if rows[0] == old_head:
+        return new
+    idx = [rows[0].index(c) for c in old_head]
+    out = io.StringIO()
+    csv.writer(out, lineterminator="\n").writerows([[r[i] for i in idx] for r in rows])
+    return out.getvalue()
 
 
 def test_the_references_hold_negative_zeros_and_scientific_cells():
@@ -157,9 +173,10 @@ def test_workspace_table_of_every_design_matches_the_reference(name):
 
     d = spec.load(DESIGNS / f"{name}.yaml")
     step = 0.1 if d.motion.planar else 0.8
-    table = collect(d, step=step, interference=not d.motion.planar)
+    checks = not d.motion.planar and d.effector.orientation == "fixed"  # a free body: no interference sweep
+    table = collect(d, step=step, interference=checks)
     cols = table.columns()
-    assert "collision_free" in cols or d.motion.planar
+    assert "collision_free" in cols or not checks
     text = csv_rows([np.asarray(v) for v in cols.values()]).decode()
     ref = reference_text([np.asarray(v) for v in cols.values()])
     assert text == ref

@@ -74,8 +74,10 @@ FormatOpt = Annotated[Format, typer.Option(
 
 
 def error(message: str) -> None:
-    """Print ``error: message`` on stderr."""
-    err.print(f"[bold red]error:[/] {message}", markup=True, soft_wrap=True)
+    """Print ``error: message`` on stderr, the message as plain text (``[0, 180]`` is not markup)."""
+    from rich.text import Text
+
+    err.print(Text.assemble(("error:", "bold red"), " ", str(message)), soft_wrap=True)
 
 
 def command(fn):

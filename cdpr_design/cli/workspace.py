@@ -7,9 +7,10 @@ from typing import Annotated, Optional
 
 import typer
 
-from cdpr_design.cli.common import (CableModelOpt, ForceOpt, Format, FormatOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg,
-                                    bars, command, emit_json, load_design, out_console, summary_table,
-                                    timings_text)
+from cdpr_design.cli.common import (CableModelOpt, ForceOpt, Format, FormatOpt, JsonOpt, Kind, KindOpt, OutOpt,
+                                    OverwriteOpt, QuietOpt, SpecArg, bars, command, emit_json, load_design,
+                                    out_console, summary_table, timings_text)
+from cdpr_design.errors import InputError
 
 
 class Orientations(str, Enum):

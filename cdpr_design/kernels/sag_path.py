@@ -16,7 +16,7 @@ import numba as nb
 import numpy as np
 
 from cdpr_design.kernels._jit import njit_parallel
-from cdpr_design.kernels.sagging import SAG_NO_TENSIONS, SAG_OK, make_sag_scratch, sag_pose
+from cdpr_design.kernels.sagging import SAG_NO_TENSIONS, SAG_OK, make_pose_outputs, make_sag_scratch, sag_pose
 
 
 @njit_parallel
@@ -43,26 +43,22 @@ def sag_samples(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
         return
     bsize = (k + nblocks - 1) // nblocks
     for b in nb.prange(nblocks):
-        W, cw, lo, hi, inf_hi, tq, scr = make_sag_scratch(n, m, 1)
+        W, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, 1)
         zero = np.zeros(m)
-        t = np.empty(m)
-        ta = np.empty(m)
-        l0 = np.empty(m)
-        sg = np.empty(m)
-        L = np.empty(m)
+        t, ta, l0, sg, L = make_pose_outputs(m)
         wj = np.empty((1, n))
         for j in range(b * bsize, min(k, (b + 1) * bsize)):
             for r in range(n):
                 wj[0, r] = wreq[j, r]
             Rj = Rb[j]
             st, ok, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, tmin, tmax,
-                                    combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr)
+                                    combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work)
             solved = ok
             if st == SAG_OK and not ok:
                 # converged but outside the bounds: the same pose under [0, inf)
                 st, solved, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, zero,
                                             inf_hi, combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi,
-                                            tq, scr)
+                                            tq, scr, work)
                 if st == SAG_OK and not solved:
                     st = SAG_NO_TENSIONS
             status[j] = st

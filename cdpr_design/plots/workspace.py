@@ -8,6 +8,8 @@ z-slices on a figure of their own.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from cdpr_design.plots._frame import (draw_robot, extent, frame_aspect, frame_rect, pad_limits, panel_grid,
