@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from typing import Sequence
 
 from cdpr_design.batch.local import Job, Options, evaluate_variant
+from cdpr_design.errors import InputError
 from cdpr_design.optimize import objectives as obj
 from cdpr_design.optimize.space import Space, make_space
 
@@ -94,6 +95,7 @@ def make_problem(design, vary: Sequence[str], maximize: Sequence[str] | None, mi
     from cdpr_design.design.evaluate import parts_needed
 
     space = make_space(design, vary)
+    _check_motor_choices(space, options.catalogue)
     objectives = obj.make_objectives(design, maximize, minimize)
     limits = tuple(obj.parse_limit(design, t) for t in require or ())
     checks = tuple(obj.spec_checks(design, options.motor))
@@ -101,6 +103,21 @@ def make_problem(design, vary: Sequence[str], maximize: Sequence[str] | None, mi
     options = replace(options, figures=figures)
     workspace = parts_needed(design, figures, options.motor)[0]
     return Problem(design.name, space, tuple(objectives), limits, checks, options, workspace)
+
+
+def _check_motor_choices(space: Space, catalogue) -> None:
+    """A motor choice (``winch.motor``, ``cables.i.winch.motor``) must be in the catalogue, else exit 2."""
+    if catalogue is None:
+        from cdpr_design.model import spec
+
+        catalogue = spec.load_catalogue()
+    for p in space.params:
+        if p.kind == "categorical" and p.path[-1] == "motor":
+            bad = [c for c in p.choices if catalogue.motor(str(c)) is None]
+            if bad:
+                known = ", ".join(m.name for m in catalogue.motors)
+                raise InputError(f"--vary {p.key}: the choice {bad[0]!r} makes the spec invalid (not in the motor "
+                                 f"catalogue; known: {known}; add it with --catalogue FILE)")
 
 
 @dataclass

@@ -130,6 +130,8 @@ def importances(study, problem: Problem) -> dict[str, dict[str, float]]:
     """Each objective's parameter importances (PED-ANOVA, Watanabe et al. 2023: how much each key's
     distribution differs between the top 10 % trials and all, over trials with every objective
     defined); empty with one key or fewer than :data:`MIN_IMPORTANCE_TRIALS` such trials."""
+    import warnings
+
     import optuna
 
     if len(problem.space.params) < 2:
@@ -141,9 +143,11 @@ def importances(study, problem: Problem) -> dict[str, dict[str, float]]:
     for k, o in enumerate(problem.objectives):
         sign = -1.0 if o.maximize else 1.0  # PED-ANOVA takes lower as better
         try:
-            imp = optuna.importance.get_param_importances(
-                study, evaluator=optuna.importance.PedAnovaImportanceEvaluator(), params=problem.space.keys,
-                target=lambda t, k=k, sign=sign: sign * t.values[k])
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # optuna's reminder that lower is better: we orient the target
+                imp = optuna.importance.get_param_importances(
+                    study, evaluator=optuna.importance.PedAnovaImportanceEvaluator(), params=problem.space.keys,
+                    target=lambda t, k=k, sign=sign: sign * t.values[k])
         except (ValueError, RuntimeError):  # too few distinct values to compare
             continue
         out[o.figure] = {key: float(v) for key, v in imp.items()}

@@ -55,6 +55,9 @@ from cdpr_design.optimize.problem import Problem, evaluate
 DB = "optimize.db"
 STUDY = "cdpr-design optimize"
 RUN_LOCK = ".optimize.lock"
+WORKERS_LOCK = ".optimize.workers"
+#: Seconds a new run waits for the worker processes of a killed run to finish their trial and exit.
+ORPHAN_WAIT_S = 120.0
 CLAIM_LOCK = ".optimize.claim"
 #: Seconds a writer waits for SQLite's lock before giving up.
 BUSY_TIMEOUT_S = 300.0
@@ -106,6 +109,12 @@ def storage(folder: Path):
     return st
 
 
+def load(folder: Path):
+    """The study in ``folder`` (after a run)."""
+    optuna = _optuna()
+    return optuna.load_study(study_name=STUDY, storage=storage(folder))
+
+
 def make_sampler(seed: int | None):
     """TPE (several objectives: multi-objective TPE); optuna's defaults otherwise (multivariate for one
     objective); the limits reach it as the trials' constraints."""
@@ -114,14 +123,15 @@ def make_sampler(seed: int | None):
 
 
 @contextlib.contextmanager
-def _flock(path: Path, blocking: bool = True):
-    """An exclusive lock on ``path`` (POSIX ``flock``); yields False when not ``blocking`` and taken."""
+def _flock(path: Path, blocking: bool = True, shared: bool = False):
+    """An exclusive (``shared``: shared) lock on ``path`` (POSIX ``flock``); yields False when not
+    ``blocking`` and taken."""
     import fcntl
 
     fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
     try:
         try:
-            fcntl.flock(fd, fcntl.LOCK_EX | (0 if blocking else fcntl.LOCK_NB))
+            fcntl.flock(fd, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | (0 if blocking else fcntl.LOCK_NB))
         except BlockingIOError:
             yield False
             return
@@ -175,15 +185,19 @@ def _tell(study, trial, problem: Problem, outcome, seconds: float, worker: int) 
 
 
 def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline: float | None,
-         worker: int = 0, single_thread: bool = False, on_trial: Callable[[], None] | None = None) -> int:
+         worker: int = 0, single_thread: bool = False, on_trial: Callable[[], None] | None = None,
+         parent: int | None = None) -> int:
     """Claim and evaluate trials until ``total`` count or ``deadline`` (time.time()) passes; the
-    number evaluated here.  A KeyboardInterrupt marks the trial under way interrupted and propagates."""
+    number evaluated here.  A KeyboardInterrupt marks the trial under way interrupted and propagates.
+    ``parent``: the process id of the run; a worker whose run has died stops after its trial."""
     optuna = _optuna()
     study = optuna.load_study(study_name=STUDY, storage=storage(folder), sampler=make_sampler(seed))
     job = problem.job()
     lock = Path(folder) / CLAIM_LOCK
     done = 0
     while deadline is None or time.time() < deadline:
+        if parent is not None and os.getppid() != parent:
+            break  # the run was killed: leave the rest to a resumed run
         if single_thread:
             prepare_worker(False)  # numba (once loaded by a trial) on one thread: parallelism is across processes
         trial = _claim(study, total, lock)
@@ -206,8 +220,28 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
 
 
 def _worker_main(problem: Problem, folder: str, total: int, seed: int | None, deadline: float | None,
-                 worker: int) -> int:
-    return work(problem, Path(folder), total, seed, deadline, worker, single_thread=True)
+                 worker: int, parent: int) -> int:
+    """A worker process: holds a shared lock on ``.optimize.workers`` while it works (a later run
+    waits for it, :func:`_wait_for_orphans`)."""
+    with _flock(Path(folder) / WORKERS_LOCK, shared=True):
+        return work(problem, Path(folder), total, seed, deadline, worker, single_thread=True, parent=parent)
+
+
+def _wait_for_orphans(folder: Path, log: Callable[[str], None]) -> None:
+    """Wait until no worker of an earlier, killed run is still evaluating (each ends after its trial)."""
+    end = time.time() + ORPHAN_WAIT_S
+    told = False
+    while True:
+        with _flock(folder / WORKERS_LOCK, blocking=False) as free:
+            if free:
+                return
+        if time.time() > end:
+            raise InputError(f"--out: worker processes of an earlier run still use {folder}; "
+                             "wait for them to end or choose another --out")
+        if not told:
+            log("waiting for the workers of an interrupted run to finish their trials")
+            told = True
+        time.sleep(0.2)
 
 
 def open_study(problem: Problem, folder: Path, resume: bool, log: Callable[[str], None]):
@@ -267,6 +301,7 @@ def run(problem: Problem, folder: Path, total: int, *, workers: int = 1, seed: i
     with _flock(folder / RUN_LOCK, blocking=False) as mine:
         if not mine:
             raise InputError(f"--out: another optimize run is using {folder}; wait for it or choose another --out")
+        _wait_for_orphans(folder, log)
         study, before, requeued = open_study(problem, folder, resume, log)
         stats = RunStats(requested=total, resumed=before, requeued=requeued, workers=workers)
         if resume and before:
@@ -303,7 +338,8 @@ def _run_pool(problem, folder, total, workers, seed, deadline, study, progress, 
     ex = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(start_method))
     try:
         futures = [ex.submit(_worker_main, problem, str(folder), total,
-                             None if seed is None else seed + k, deadline, k) for k in range(workers)]
+                             None if seed is None else seed + k, deadline, k, os.getpid())
+                   for k in range(workers)]
         pending = set(futures)
         while pending:
             finished_now, pending = wait(pending, timeout=0.5, return_when=FIRST_EXCEPTION)
