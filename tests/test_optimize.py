@@ -360,3 +360,154 @@ def test_timeout_stops_and_resume_completes(tmp_path, light_spec):
     s = json.loads(r.stdout)
     assert r.exit_code == 0 and s["stopped_by_timeout"] and 1 <= s["trials_done"] < 400
     assert len(csv_dicts(out / "optimize.csv")) == s["trials_done"]
+
+
+# ----------------------------------------------------------------------------
+# Interrupted runs
+# ----------------------------------------------------------------------------
+
+N_KILL = 30
+
+
+def _finished_trials(db) -> dict:
+    """number -> (state, params) of the trials the study holds, read straight from SQLite."""
+    if not db.exists():
+        return {}
+    con = sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=30)
+    try:
+        trials = dict(con.execute("SELECT trial_id, number FROM trials").fetchall())
+        states = dict(con.execute("SELECT trial_id, state FROM trials").fetchall())
+        params: dict = {t: {} for t in trials}
+        for tid, name, value in con.execute("SELECT trial_id, param_name, param_value FROM trial_params"):
+            params[tid][name] = value
+        attrs = {tid for tid, key in con.execute("SELECT trial_id, key FROM trial_user_attributes")
+                 if key == "interrupted"}
+    except sqlite3.OperationalError:  # the tables are being created
+        return {}
+    finally:
+        con.close()
+    return {trials[t]: (states[t], params[t], t in attrs) for t in trials}
+
+
+def _start_and_kill(tmp_path, light_spec, sig, group: bool, workers: int):
+    """Start a run of N_KILL trials in a subprocess, send ``sig`` once 6 trials have finished; the
+    study's trials right after."""
+    out = tmp_path / "opt"
+    cmd = [sys.executable, "-m", "cdpr_design", "optimize", str(light_spec), *OUTLETS, "--maximize",
+           "task_min_margin", "--trials", str(N_KILL), "--workers", str(workers), "--seed", "2", "--out", str(out),
+           "--quiet", "--no-picture"]
+    log = open(tmp_path / "stderr.txt", "wb")  # a file, not a pipe: workers of a killed run may hold it
+    proc = subprocess.Popen(cmd, env=subprocess_env(), stdout=subprocess.DEVNULL, stderr=log,
+                            start_new_session=True)
+    try:
+        deadline = time.monotonic() + 180
+        while time.monotonic() < deadline and proc.poll() is None:
+            t = _finished_trials(out / "optimize.db")
+            states = [s for s, _, _ in t.values()]
+            if sum(s in ("COMPLETE", "FAIL") for s in states) >= 6 and "RUNNING" in states:
+                break  # mid-trial
+            time.sleep(0.05)
+        assert proc.poll() is None, (tmp_path / "stderr.txt").read_text()
+        (os.killpg if group else os.kill)(proc.pid, sig)
+        code = proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=30)
+        log.close()
+    return out, code, (tmp_path / "stderr.txt").read_text()
+
+
+def _check_resumed(out, before, light_spec):
+    """Resume to N_KILL: exactly N_KILL trials, those finished before unchanged, interrupted ones
+    evaluated once, no parameters twice."""
+    r = invoke("optimize", light_spec, *OUTLETS, "--maximize", "task_min_margin", "--trials", N_KILL,
+               "--seed", 2, "--out", out, "--json", "--no-picture", "--resume")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout)
+    rows = csv_dicts(out / "optimize.csv")
+    assert len(rows) == N_KILL == s["trials_done"]
+    assert len({r["trial"] for r in rows}) == N_KILL
+    assert all(r["state"] in ("complete", "infeasible", "failed") for r in rows)
+    key = ("cables.0.outlet.0", "cables.1.outlet.0")
+    by_number = {int(r["trial"]): r for r in rows}
+    done_before = {n: p for n, (st, p, intr) in before.items() if st in ("COMPLETE", "FAIL") and not intr}
+    assert len(done_before) >= 6 and s["resumed"] == len(done_before)
+    for n, p in done_before.items():  # nothing lost: the same trial, the same point
+        assert [float(by_number[n][k]) for k in key] == pytest.approx([p[k] for k in key], rel=1e-9)
+    points = [tuple(float(r[k]) for k in key) for r in rows]  # 10 significant digits in the CSV
+    assert len(set(points)) == N_KILL  # nothing evaluated twice
+    interrupted = [p for n, (st, p, intr) in before.items() if (st == "RUNNING" or intr) and p]
+    for p in interrupted:  # each interrupted point evaluated once, after the resume
+        assert sum(all(math.isclose(x, p[k], rel_tol=1e-9) for x, k in zip(q, key)) for q in points) == 1
+    assert s["requeued_interrupted"] == len(interrupted)
+    return s, interrupted
+
+
+def test_a_trial_left_running_is_evaluated_again_on_resume(tmp_path, light_spec):
+    """What SIGKILL leaves (a RUNNING trial with its parameters) and SIGINT leaves (a failed trial
+    marked interrupted): both queued again once, neither counted, the total exact."""
+    import optuna
+
+    pb = opt.make_problem(spec.load(light_spec), OUTLETS[1::2], ["task_min_margin"], None, None, batch.Options())
+    opt.run(pb, tmp_path, 3, seed=0)
+    study = opt.study.load(tmp_path)
+    killed = study.ask()
+    killed_point = {p.key: p.suggest(killed) for p in pb.space.params}
+    stopped = study.ask()
+    stopped_point = {p.key: p.suggest(stopped) for p in pb.space.params}
+    stopped.set_user_attr("interrupted", True)
+    study.tell(stopped, state=optuna.trial.TrialState.FAIL)
+    assert opt.study.counted(study) == 4  # the RUNNING one counts until a resume marks it
+    stats = opt.run(pb, tmp_path, 6, seed=0, resume=True)
+    assert (stats.resumed, stats.requeued, stats.evaluated) == (3, 2, 3)
+    rows = opt.results.trials(opt.finished(opt.study.load(tmp_path)))
+    assert [r.number for r in rows] == [0, 1, 2, 5, 6, 7]
+    assert [rows[3].params, rows[4].params] == [killed_point, stopped_point]
+    # a second resume queues nothing again
+    stats = opt.run(pb, tmp_path, 6, resume=True)
+    assert (stats.requeued, stats.evaluated) == (0, 0)
+
+
+def test_sigint_then_resume(tmp_path, light_spec):
+    out, code, err = _start_and_kill(tmp_path, light_spec, signal.SIGINT, group=True, workers=2)
+    assert code == 130, err
+    assert not (out / "optimize.csv").exists()
+    before = _finished_trials(out / "optimize.db")
+    assert all(s != "RUNNING" for s, _, _ in before.values())  # interrupted trials were told so
+    _check_resumed(out, before, light_spec)
+
+
+def test_sigkill_then_resume(tmp_path, light_spec):
+    out, code, _ = _start_and_kill(tmp_path, light_spec, signal.SIGKILL, group=True, workers=1)
+    assert code == -signal.SIGKILL
+    before = _finished_trials(out / "optimize.db")
+    running = [n for n, (st, p, _) in before.items() if st == "RUNNING" and p]
+    _, interrupted = _check_resumed(out, before, light_spec)
+    assert len(interrupted) == len(running) <= 1  # the trial under way when the run was killed
+
+
+def _workers_gone(out, within_s: float = 60.0) -> bool:
+    """Whether the worker processes of a run (which hold a shared lock on .optimize.workers) have ended."""
+    import fcntl
+
+    end = time.monotonic() + within_s
+    with open(out / opt.study.WORKERS_LOCK, "a") as fh:
+        while time.monotonic() < end:
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                fcntl.flock(fh, fcntl.LOCK_UN)
+                return True
+            except BlockingIOError:
+                time.sleep(0.05)
+    return False
+
+
+def test_sigkill_of_the_run_alone_leaves_workers_that_end(tmp_path, light_spec):
+    """The run's process killed alone: its two workers finish their trials (told normally) and end."""
+    out, code, _ = _start_and_kill(tmp_path, light_spec, signal.SIGKILL, group=False, workers=2)
+    assert code == -signal.SIGKILL
+    assert _workers_gone(out)
+    before = _finished_trials(out / "optimize.db")
+    assert all(s != "RUNNING" for s, _, _ in before.values())
+    _check_resumed(out, before, light_spec)
