@@ -151,12 +151,18 @@ def _interrupted(t) -> bool:
     return bool(t.user_attrs.get("interrupted"))
 
 
-def counted(study) -> int:
-    """Trials that count towards the total: every trial but the interrupted ones."""
+def interrupted_count(study) -> int:
+    """Interrupted trials (failed and marked so); constant during a run (an interruption ends it)."""
     optuna = _optuna()
-    n = len(study.get_trials(deepcopy=False))
-    failed = study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.FAIL,))
-    return n - sum(_interrupted(t) for t in failed)
+    return sum(_interrupted(t) for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.FAIL,)))
+
+
+def counted(study, interrupted: int | None = None) -> int:
+    """Trials that count towards the total: every trial but the interrupted ones (``interrupted``:
+    their number if known).  One COUNT query (optuna's storage API) rather than loading the trials."""
+    if interrupted is None:
+        interrupted = interrupted_count(study)
+    return study._storage.get_n_trials(study._study_id) - interrupted
 
 
 def finished(study) -> list:
@@ -166,22 +172,33 @@ def finished(study) -> list:
     return [t for t in study.get_trials(deepcopy=False, states=states) if not _interrupted(t)]
 
 
-def _claim(study, total: int, lock: Path):
-    """A new trial (optuna's ``ask``) while fewer than ``total`` trials count, else None."""
+def _claim(study, total: int, lock: Path, interrupted: int):
+    """A new trial while fewer than ``total`` trials count, else None.
+
+    Only the trial's creation (a queued trial taken, or a new row) is under the lock; the sampling
+    (TPE over every trial so far, the slow part of optuna's ``ask``) runs outside it, so workers
+    sample in parallel.  This is ``Study.ask`` split in two (optuna 5; its private helpers)."""
+    optuna = _optuna()
     with _flock(lock):
-        if counted(study) >= total:
+        if counted(study, interrupted) >= total:
             return None
-        return study.ask()
+        study._thread_local.cached_all_trials = None
+        trial_id = study._pop_waiting_trial_id()
+        if trial_id is None:
+            trial_id = study._storage.create_new_trial(study._study_id)
+    return optuna.Trial(study, trial_id)
 
 
 def _tell(study, trial, problem: Problem, outcome, seconds: float, worker: int) -> None:
-    """Record the outcome (one user attribute, ``result``), the limits' violations as constraints, and
-    tell optuna (failed: ``FAIL``, else the objective values)."""
+    """Record the outcome (one user attribute, ``result``), the limits' violations as one constraint (their
+    positive sum, else the largest), and tell optuna (failed: ``FAIL``, else the objective values)."""
     optuna = _optuna()
     trial.set_user_attr("result", {"state": outcome.state, "reason": outcome.reason, "figures": outcome.figures,
                                    "seconds": round(seconds, 6), "worker": worker})
-    for name, v in zip(problem.constraint_names, outcome.violations):
-        trial.set_constraint(name, v)
+    if outcome.violations:
+        # optuna's TPE ranks trials by the summed positive violation only: one constraint carries it
+        over = sum(v for v in outcome.violations if v > 0)
+        trial.set_constraint("limits", over if over > 0 else max(outcome.violations))
     if outcome.state == "failed":
         study.tell(trial, state=optuna.trial.TrialState.FAIL)
     else:
@@ -190,12 +207,14 @@ def _tell(study, trial, problem: Problem, outcome, seconds: float, worker: int) 
 
 def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline: float | None,
          worker: int = 0, single_thread: bool = False, on_trial: Callable[[], None] | None = None,
-         parent: int | None = None) -> int:
+         parent: int | None = None, store=None) -> int:
     """Claim and evaluate trials until ``total`` count or ``deadline`` (time.time()) passes; the
     number evaluated here.  A KeyboardInterrupt marks the trial under way interrupted and propagates.
-    ``parent``: the process id of the run; a worker whose run has died stops after its trial."""
+    ``parent``: the process id of the run; a worker whose run has died stops after its trial.
+    ``store``: the storage already open in this process (default: open it)."""
     optuna = _optuna()
-    study = optuna.load_study(study_name=STUDY, storage=storage(folder), sampler=make_sampler(seed))
+    study = optuna.load_study(study_name=STUDY, storage=store or storage(folder), sampler=make_sampler(seed))
+    interrupted = interrupted_count(study)
     job = problem.job()
     lock = Path(folder) / CLAIM_LOCK
     done = 0
@@ -204,7 +223,7 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
             break  # the run was killed: leave the rest to a resumed run
         if single_thread:
             prepare_worker(False)  # numba (once loaded by a trial) on one thread: parallelism is across processes
-        trial = _claim(study, total, lock)
+        trial = _claim(study, total, lock, interrupted)
         if trial is None:
             break
         try:
@@ -330,7 +349,7 @@ def run(problem: Problem, folder: Path, total: int, *, workers: int = 1, seed: i
         if progress is not None:
             progress(min(before, total), total)
         if workers == 1:
-            stats.evaluated = work(problem, folder, total, seed, deadline, on_trial=tick)
+            stats.evaluated = work(problem, folder, total, seed, deadline, on_trial=tick, store=study._storage)
         else:
             stats.evaluated = _run_pool(problem, folder, total, workers, seed, deadline, study, progress,
                                         start_method)
