@@ -34,7 +34,7 @@ import math
 import os
 import sys
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 from cdpr_design.batch.variants import Plan
@@ -54,10 +54,16 @@ class Options:
     catalogue: Any = None  # a model.catalogue.Catalogue; None: the shipped one
     #: engine of every variant's grid sweeps (results are identical: not in the fingerprint)
     engine: str = "auto"
+    #: only the figures needed (``evaluate(figures=...)``: the workspace sweep or the sizing is
+    #: skipped when neither they nor the spec's checks need it); None: every figure
+    figures: frozenset | None = None
 
     def fingerprint(self) -> dict:
-        return {"step": self.step, "safety_factor": self.safety_factor, "motor": self.motor,
-                "trajectory": self.trajectory, "catalogue": repr(self.catalogue)}
+        out = {"step": self.step, "safety_factor": self.safety_factor, "motor": self.motor,
+               "trajectory": self.trajectory, "catalogue": repr(self.catalogue)}
+        if self.figures is not None:
+            out["figures"] = sorted(self.figures)
+        return out
 
 
 @dataclass(frozen=True)
@@ -91,7 +97,8 @@ def evaluate_variant(job: Job, index: int, values: Sequence) -> dict:
 
             samples = tr.sample(design, opt.trajectory)
         row = ev.evaluate(design, step=opt.step, catalogue=opt.catalogue, samples=samples,
-                          safety_factor=opt.safety_factor, motor=opt.motor, engine=opt.engine)
+                          safety_factor=opt.safety_factor, motor=opt.motor, engine=opt.engine,
+                          figures=opt.figures)
     except Exception as exc:  # noqa: BLE001 - a failing variant is a row, the sweep goes on
         msg = " ".join(str(exc).split())
         return record(index, values, error=f"{type(exc).__name__}: {msg}" if msg else type(exc).__name__)
@@ -121,7 +128,13 @@ def _single_thread_kernels() -> None:
 
 def prepare_process(job: Job) -> None:
     """The kernels loaded if the sweep is big; one numba thread (parallelism is across variants)."""
-    if job.kernels:
+    prepare_worker(job.kernels)
+
+
+def prepare_worker(kernels: bool) -> None:
+    """A worker process set up for evaluating designs: the numba kernels loaded first
+    (``kernels``), one numba thread (parallelism is across processes)."""
+    if kernels:
         from cdpr_design import workspaces as ws
 
         ws.load_kernels()
@@ -143,7 +156,7 @@ def _pool_chunk(items):
 
 
 def with_catalogue(opt: Options, cat) -> Options:
-    return Options(opt.step, opt.safety_factor, opt.motor, opt.trajectory, cat, opt.engine)
+    return replace(opt, catalogue=cat)
 
 
 def default_workers() -> int:

@@ -12,7 +12,7 @@ import sys
 
 import typer
 
-from cdpr_design.cli import bridge, motion, pose, sizing, sweep, workspace
+from cdpr_design.cli import bridge, motion, optimize, pose, sizing, sweep, workspace
 from cdpr_design.cli.common import err
 
 app = typer.Typer(
@@ -23,7 +23,7 @@ app = typer.Typer(
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
-for _module in (workspace, pose, sizing, bridge, motion, sweep):  # the order of the help's command list
+for _module in (workspace, pose, sizing, bridge, motion, sweep, optimize):  # the order of the help's command list
     _module.register(app)
 
 

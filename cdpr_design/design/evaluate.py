@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Iterable
 
 import numpy as np
 
@@ -39,15 +39,24 @@ from cdpr_design.model.design import Design
 
 CHECKS = ("task_box", "min_margin", "min_fraction", "motors")
 
+#: Figures of the static workspace sweep (the whole workspace grid).
+WORKSPACE_FIGURES = frozenset({"kind", "poses", "feasible", "fraction", "measure", "min_margin", "max_margin",
+                               "max_tension"})
+#: Figures of the motor sizing (also ``peak_tension_<cable>`` and ``motor_<cable>``).
+SIZING_FIGURES = frozenset({"sizing_poses", "peak_tension", "peak_cable_speed", "peak_motor_torque",
+                            "rms_motor_torque", "peak_motor_speed", "motor", "torque_margin", "speed_margin",
+                            "implied_tension_max", "tension_max", "drum_radius", "gear_ratio", "safety_factor",
+                            "duty_cycle"})
+
 
 @dataclass
 class Evaluation:
     """Everything :func:`evaluate_full` computed (the row plus the results behind it)."""
 
     row: dict
-    workspace: ws.WorkspaceResult
+    workspace: ws.WorkspaceResult | None  # None: not asked for (``figures``)
     task: ws.WorkspaceResult | None
-    sizing: sz.SizingResult
+    sizing: sz.SizingResult | None  # None: not asked for (``figures``)
 
     @property
     def passed(self) -> bool:
@@ -89,10 +98,37 @@ def task_sweep(design: Design, step: float | None = None, progress=None, engine:
     return res, least[0]
 
 
+def motors_asked(design: Design, motor: str | None = None) -> bool:
+    """Whether the ``motors`` check is asked for (a motor named, or max_speed / max_acceleration given)."""
+    req = design.requirements
+    return (any(c.winch.motor for c in design.cables) or motor is not None
+            or req.max_speed is not None or req.max_acceleration is not None)
+
+
+def parts_needed(design: Design, figures: Iterable[str] | None, motor: str | None = None) -> tuple[bool, bool]:
+    """(workspace, sizing): whether ``figures`` or the spec's checks need the workspace sweep / the sizing.
+
+    The task box is always swept (it is small).  The workspace is needed by its
+    own figures (:data:`WORKSPACE_FIGURES`), by ``requirements.min_fraction``, and
+    when the spec has no task box (the margin check then reads the workspace);
+    the sizing by its figures (:data:`SIZING_FIGURES`, per-cable ones) and the
+    ``motors`` check.  ``figures`` None: everything.
+    """
+    if figures is None:
+        return True, True
+    figures = set(figures)
+    req = design.requirements
+    workspace = req.task_box is None or req.min_fraction is not None or bool(figures & WORKSPACE_FIGURES)
+    sizing = motors_asked(design, motor) or any(
+        f in SIZING_FIGURES or f.startswith(("peak_tension_", "motor_")) for f in figures)
+    return workspace, sizing
+
+
 def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catalogue | None = None,
                   samples=None, safety_factor: float | None = None, motor: str | None = None,
                   workspace_result: ws.WorkspaceResult | None = None, keep_maps: bool = False,
-                  progress: Callable[[int, int], None] | None = None, engine: str = "auto") -> Evaluation:
+                  progress: Callable[[int, int], None] | None = None, engine: str = "auto",
+                  figures: Iterable[str] | None = None) -> Evaluation:
     """Workspace, task box, motor sizing and checks of one design.
 
     Parameters
@@ -109,34 +145,44 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catal
         A static sweep already made (``report`` writes the workspace files first).
     engine : {'auto', 'numba', 'numpy'}
         Engine of the grid sweeps (:func:`cdpr_design.workspaces.run`).
+    figures : names of the figures wanted, optional
+        Skip the workspace sweep or the sizing when neither these figures nor
+        the spec's checks need it (:func:`parts_needed`); the skipped part's
+        figures are then absent from the row (the others are the same
+        numbers).  Default: everything.
     """
     if catalogue is None:
         catalogue = spec.load_catalogue()
-    wres = workspace_result if workspace_result is not None else ws.run(
-        design, "static", step=step, keep_maps=keep_maps, progress=progress, engine=engine)
+    need_ws, need_sizing = parts_needed(design, figures, motor)
+    wres = workspace_result
+    if wres is None and need_ws:
+        wres = ws.run(design, "static", step=step, keep_maps=keep_maps, progress=progress, engine=engine)
     task, task_least = task_sweep(design, step, engine=engine)
-    sizing = sz.size_motors(design, catalogue, step=step, samples=samples,
-                            safety_factor=safety_factor, motor=motor, engine=engine)
+    sizing = sz.size_motors(design, catalogue, step=step, samples=samples, safety_factor=safety_factor,
+                            motor=motor, engine=engine) if need_sizing else None
     row = _workspace_figures(design, wres, task, task_least)
-    row.update(_sizing_figures(sizing))
+    if sizing is not None:
+        row.update(_sizing_figures(sizing))
     row.update(_checks(design, wres, task, task_least, sizing, motor))
     # per-cable figures last (their number depends on the design)
-    for a in sizing.axes:
+    for a in sizing.axes if sizing is not None else ():
         row[f"peak_tension_{a.cable}"] = _f(a.peak_tension)
         row[f"motor_{a.cable}"] = a.motor
     return Evaluation(row, wres, task, sizing)
 
 
-def _workspace_figures(design: Design, wres: ws.WorkspaceResult, task: ws.WorkspaceResult | None,
+def _workspace_figures(design: Design, wres: ws.WorkspaceResult | None, task: ws.WorkspaceResult | None,
                        task_least: float | None) -> dict:
-    """The workspace's and the task box's figures (margins [N], tensions [N], fractions)."""
-    row: dict = {
-        "name": design.name, "motion": design.motion.name, "cables": design.m,
-        "kind": wres.kind, "poses": int(wres.poses), "feasible": int(wres.feasible),
-        "fraction": float(wres.fraction), "measure": float(wres.measure),
-        "min_margin": _f(wres.min_margin), "max_margin": _f(wres.max_margin),
-        "max_tension": _f(np.nanmax(wres.max_tension)) if np.isfinite(wres.max_tension).any() else None,
-    }
+    """The workspace's (unless ``wres`` is None) and the task box's figures (margins [N], tensions [N],
+    fractions)."""
+    row: dict = {"name": design.name, "motion": design.motion.name, "cables": design.m}
+    if wres is not None:
+        row.update({
+            "kind": wres.kind, "poses": int(wres.poses), "feasible": int(wres.feasible),
+            "fraction": float(wres.fraction), "measure": float(wres.measure),
+            "min_margin": _f(wres.min_margin), "max_margin": _f(wres.max_margin),
+            "max_tension": _f(np.nanmax(wres.max_tension)) if np.isfinite(wres.max_tension).any() else None,
+        })
     if task is not None:
         row.update(task_poses=int(task.poses), task_feasible=int(task.feasible),
                    task_fraction=float(task.fraction), task_min_margin=_f(task_least)
@@ -168,9 +214,11 @@ def _sizing_figures(sizing: sz.SizingResult) -> dict:
     )
 
 
-def _checks(design: Design, wres: ws.WorkspaceResult, task: ws.WorkspaceResult | None,
-            task_least: float | None, sizing: sz.SizingResult, motor: str | None) -> dict:
-    """The requirement figures and limits, ``check_<name>`` (True, False, None) and ``checks_passed``."""
+def _checks(design: Design, wres: ws.WorkspaceResult | None, task: ws.WorkspaceResult | None,
+            task_least: float | None, sizing: sz.SizingResult | None, motor: str | None) -> dict:
+    """The requirement figures and limits, ``check_<name>`` (True, False, None) and ``checks_passed``.
+
+    ``wres`` and ``sizing`` may be None only where :func:`parts_needed` says the checks do not need them."""
     req = design.requirements
     row: dict = {}
     checks: dict = {}
@@ -185,9 +233,7 @@ def _checks(design: Design, wres: ws.WorkspaceResult, task: ws.WorkspaceResult |
     row["req_min_margin"] = req.min_margin
     checks["min_fraction"] = (wres.fraction >= req.min_fraction) if req.min_fraction is not None else None
     row["req_min_fraction"] = req.min_fraction
-    asked = (any(c.winch.motor for c in design.cables) or motor is not None
-             or req.max_speed is not None or req.max_acceleration is not None)
-    checks["motors"] = sizing.ok if asked else None
+    checks["motors"] = sizing.ok if motors_asked(design, motor) else None
     for name in CHECKS:
         row[f"check_{name}"] = None if checks[name] is None else bool(checks[name])
     row["checks_passed"] = all(v is not False for v in checks.values())
@@ -196,14 +242,14 @@ def _checks(design: Design, wres: ws.WorkspaceResult, task: ws.WorkspaceResult |
 
 def evaluate(design: Design, *, step: float | None = None, catalogue: Catalogue | None = None,
              samples=None, safety_factor: float | None = None, motor: str | None = None,
-             engine: str = "auto") -> dict:
+             engine: str = "auto", figures: Iterable[str] | None = None) -> dict:
     """The headline figures of one design: one ``design_report.csv`` row (plain, picklable values).
 
     See :func:`evaluate_full` for the parameters and the module docstring for
     the checks.
     """
     return evaluate_full(design, step=step, catalogue=catalogue, samples=samples,
-                         safety_factor=safety_factor, motor=motor, engine=engine).row
+                         safety_factor=safety_factor, motor=motor, engine=engine, figures=figures).row
 
 
 def check_table(row: dict) -> list[dict]:

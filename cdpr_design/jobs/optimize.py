@@ -1,0 +1,147 @@
+"""The ``optimize`` job: a design search (optuna study in ``optimize.db``), then optimize.csv,
+pareto.csv (several objectives), best.yaml and optimize.png."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Callable, NamedTuple, Sequence
+
+from cdpr_design.errors import InputError
+from cdpr_design.io.files import OutputDir
+from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage
+from cdpr_design.jobs.motion import require_trajectory
+from cdpr_design.plots import optimize as optimize_plots
+
+#: Files the job writes (the study's SQLite file besides).
+OUTPUTS = ("optimize.csv", "pareto.csv", "best.yaml", "optimize.png")
+
+
+class OptimizeRun(NamedTuple):
+    summary: dict  # the ``optimize --json`` object
+    problem: object  # optimize.Problem
+    stats: object  # optimize.RunStats
+    trials: list  # optimize.Trial, by number
+    best: object  # optimize.Trial or None
+    pareto: list  # optimize.Trial (several objectives)
+    out: OutputDir
+
+
+def _check_options(trials: int, workers: int | None, seed: int | None, timeout: float | None,
+                   step: float | None) -> int:
+    """Validate the numeric options (exit 2 naming the option); the number of workers."""
+    if trials < 1:
+        raise InputError(f"--trials: expected at least 1, got {trials}")
+    workers = 1 if workers is None else workers
+    if workers < 1:
+        raise InputError(f"--workers: expected at least 1, got {workers}")
+    if seed is not None and seed < 0:
+        raise InputError(f"--seed: expected a whole number >= 0, got {seed}")
+    if timeout is not None and not (math.isfinite(timeout) and timeout > 0):
+        raise InputError(f"--timeout: expected a positive number of seconds, got {timeout}")
+    if step is not None and not (math.isfinite(step) and step > 0):
+        raise InputError(f"--step: expected a positive number of metres, got {step}")
+    return workers
+
+
+def best_spec_text(design, problem, best) -> str:
+    """``best.yaml``: the base spec with the best trial's values, as YAML, validated first."""
+    import yaml
+
+    from cdpr_design.model import spec
+
+    data = problem.space.data(best.params)
+    spec.validate(data, design.source)  # a complete trial's spec is valid: a failure here is a bug
+    objectives = ", ".join(f"{o.figure} = {v:.6g}" for o, v in zip(problem.objectives, best.values))
+    head = [f"# The best design of `cdpr-design optimize` on {design.source or design.name}: trial {best.number}",
+            f"# ({objectives}).",
+            "# Searched keys: " + ", ".join(f"{k} = {best.params[k]!r}" for k in problem.space.keys)]
+    return "\n".join(head) + "\n" + yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
+
+
+def _picture_data(design, problem, rows, best, front, importances) -> dict:
+    from cdpr_design import optimize as opt
+
+    return {"title": f"{design.name}: search of {', '.join(problem.space.keys)}",
+            "objectives": [(o.figure, o.maximize) for o in problem.objectives],
+            "trials": [(r.number, r.state, r.values) for r in rows],
+            "best": best.number if best is not None else None,
+            "pareto": [r.number for r in front],
+            "convergence": opt.convergence(problem, rows) if len(problem.objectives) == 1 else [],
+            "importances": importances}
+
+
+def write_outputs(out: OutputDir, design, problem, rows, best, front, importances, picture: bool) -> list[Path]:
+    """optimize.csv, pareto.csv (several objectives), best.yaml (when a trial is complete), optimize.png."""
+    from cdpr_design import optimize as opt
+
+    header, table = opt.table(problem, rows)
+    paths = [out.write_csv("optimize.csv", header, table)]
+    if len(problem.objectives) > 1:
+        paths.append(out.write_csv("pareto.csv", *opt.table(problem, front)))
+    if best is not None:
+        paths.append(out.write_text("best.yaml", best_spec_text(design, problem, best)))
+    if picture and rows:
+        paths += save_pictures(out, [("optimize.png", optimize_plots.optimize_figure,
+                                      (_picture_data(design, problem, rows, best, front, importances),))])
+    return paths
+
+
+def _summary(design, problem, stats, rows, best, front, importances, out_dir) -> dict:
+    states = [r.state for r in rows]
+    return {
+        "name": design.name, **problem.describe(),
+        "trials_requested": stats.requested, "trials_done": len(rows),
+        "complete": states.count("complete"), "infeasible": states.count("infeasible"),
+        "failed": states.count("failed"),
+        "evaluated_now": stats.evaluated, "resumed": stats.resumed, "requeued_interrupted": stats.requeued,
+        "stopped_by_timeout": stats.stopped_by_timeout, "workers": stats.workers,
+        "elapsed_s": stats.elapsed_s,
+        "trials_per_s": stats.evaluated / stats.elapsed_s if stats.elapsed_s > 0 else None,
+        "sampler": "TPE" if len(problem.objectives) == 1 else "multi-objective TPE",
+        "best": best.as_dict(problem) if best is not None else None,
+        "best_rule": "best value" if len(problem.objectives) == 1 else "knee of the Pareto front",
+        "pareto": [r.as_dict(problem) for r in front] if len(problem.objectives) > 1 else None,
+        "importances": importances, "files": str(out_dir.path),
+    }
+
+
+def optimize(design, vary: Sequence[str], maximize: Sequence[str] | None = None,
+             minimize: Sequence[str] | None = None, require: Sequence[str] | None = None, trials: int = 100,
+             workers: int | None = None, seed: int | None = None, timeout: float | None = None,
+             resume: bool = False, catalogue: Path | None = None, trajectory: str | None = None,
+             safety_factor: float | None = None, motor: str | None = None, step: float | None = None,
+             picture: bool = True, out: str | Path | None = None, overwrite: bool = False,
+             progress: Progress | None = None, log: Callable[[str], None] | None = None,
+             engine: str = "auto") -> OptimizeRun:
+    """The ``optimize`` command: search ``vary`` (KEY=LO:HI[:log] / KEY=a,b,c) for the objectives
+    ``maximize`` / ``minimize`` under the spec's requirements and ``require`` (FIGURE>=X / FIGURE<=X),
+    ``trials`` trials in ``workers`` processes (``resume`` continues the study in ``out``; ``timeout`` [s]
+    stops starting trials), then write optimize.csv, pareto.csv, best.yaml and optimize.png.
+    ``step`` [m]: grid step of the evaluations; ``log`` receives messages."""
+    from cdpr_design import batch
+    from cdpr_design import optimize as opt
+    from cdpr_design.model import spec
+
+    if trajectory is not None and require_trajectory(design, trajectory, "--trajectory").type == "csv":
+        raise InputError(f"--trajectory {trajectory}: a csv trajectory cannot follow the varied design; "
+                         "use a square, polyline or circle path")
+    options = batch.Options(step=step, safety_factor=safety_factor, motor=motor, trajectory=trajectory,
+                            catalogue=spec.load_catalogue(catalogue), engine=engine)
+    problem = opt.make_problem(design, vary, maximize, minimize, require, options)
+    workers = _check_options(trials, workers, seed, timeout, step)
+    out_dir = output_dir(design, out, overwrite)
+    for name in (*OUTPUTS, opt.DB):
+        out_dir.target(name)  # refuse foreign files before any work
+    out_dir.wrote(opt.DB)
+    with stage(progress, f"optimize {design.name}") as cb:
+        stats = opt.run(problem, out_dir.path, trials, workers=workers, seed=seed, timeout=timeout,
+                        resume=resume, progress=cb, log=log)
+    study = opt.study.load(out_dir.path)
+    rows = opt.results.trials(opt.finished(study))
+    front = opt.pareto(problem, rows) if len(problem.objectives) > 1 else []
+    best = opt.best(problem, rows)
+    importances = opt.importances(study, problem)
+    write_outputs(out_dir, design, problem, rows, best, front, importances, picture)
+    summary = _summary(design, problem, stats, rows, best, front, importances, out_dir)
+    return OptimizeRun(summary, problem, stats, rows, best, front, out_dir)

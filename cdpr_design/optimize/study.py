@@ -1,0 +1,401 @@
+"""The optuna study: storage, sampler, trials claimed and evaluated by one or several processes, resuming.
+
+Storage
+-------
+One SQLite file (``optimize.db`` in the output folder) through optuna's
+``RDBStorage``.  SQLite is transactional, so a run killed at any instant
+(SIGKILL included) leaves a consistent study; every worker process opens the
+same file, and SQLite serialises their writes (a busy writer is waited for up
+to :data:`BUSY_TIMEOUT_S`, never an error under this load: a few writes per
+trial, each well under a second).
+
+Exactly N trials
+----------------
+A run ends when N trials have finished (``complete``, ``infeasible`` or
+``failed``).  Workers *claim* a trial under an exclusive file lock
+(``.optimize.claim``): count the study's trials that are not interrupted, and
+create one only while that count is below N.  So several workers never
+overshoot N, and a resumed run stops at the same total.
+
+Interrupted trials
+------------------
+A trial stopped by SIGINT is told ``FAIL`` with the user attribute
+``interrupted``; one stopped by SIGKILL stays ``RUNNING`` in the file.  A
+resumed run (which holds ``.optimize.lock``, so no other run is using the
+study) marks the latter failed-and-interrupted too, and queues every
+interrupted trial's parameters again: each point is evaluated once, and
+interrupted trials do not count towards N nor appear in the results.
+
+Samplers
+--------
+TPE (Bergstra et al. 2011) for one objective, multi-objective TPE (Ozaki et
+al. 2020, 2022) for several, both multivariate (Falkner et al. 2018) and
+with optuna's constraint handling (the limits' violations,
+:mod:`cdpr_design.optimize.objectives`).  See ``docs/optimize.md`` for the
+choice.  With ``seed`` and one worker a run is deterministic; a resumed run
+seeds its sampler with ``seed`` plus the trials already in the study (so its
+random start-up points are not the first run's again).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import time
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from cdpr_design.batch.local import prepare_worker
+from cdpr_design.errors import InputError
+from cdpr_design.optimize.problem import Problem, evaluate
+
+#: The study's file, its name inside it, the lock files (in the output folder).
+DB = "optimize.db"
+STUDY = "cdpr-design optimize"
+RUN_LOCK = ".optimize.lock"
+WORKERS_LOCK = ".optimize.workers"
+#: Seconds a new run waits for the worker processes of a killed run to finish their trial and exit.
+ORPHAN_WAIT_S = 120.0
+CLAIM_LOCK = ".optimize.claim"
+#: Seconds a writer waits for SQLite's lock before giving up.
+BUSY_TIMEOUT_S = 300.0
+#: Random trials before TPE models the results (optuna's default).
+STARTUP_TRIALS = 10
+#: Candidates TPE draws per trial (optuna's default is 24; docs/optimize.md: 64 converges more surely on
+#: the sharp-ridged margins of outlet placement).
+EI_CANDIDATES = 64
+
+
+@dataclass
+class RunStats:
+    """How a run went: trials requested, finished before, evaluated now, interrupted ones re-queued."""
+
+    requested: int
+    resumed: int = 0
+    evaluated: int = 0
+    requeued: int = 0
+    workers: int = 1
+    elapsed_s: float = 0.0
+    stopped_by_timeout: bool = False
+    notes: list[str] = field(default_factory=list)
+
+
+def _optuna():
+    import optuna
+
+    optuna.logging.set_verbosity(optuna.logging.ERROR)
+    warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
+    return optuna
+
+
+def _sqlite_pragmas(dbapi_connection, connection_record) -> None:
+    """Write-ahead log, synced at checkpoints (``synchronous=NORMAL``): a commit is no fsync, and
+    readers do not wait for the writer.  Still atomic and consistent when a process is killed
+    (SQLite's documentation, "Write-Ahead Logging"); only a power cut may lose the last commits."""
+    cur = dbapi_connection.cursor()
+    cur.execute("PRAGMA journal_mode=WAL")
+    cur.execute("PRAGMA synchronous=NORMAL")
+    cur.close()
+
+
+def storage(folder: Path):
+    """The study's SQLite storage in ``folder``."""
+    import sqlalchemy
+
+    optuna = _optuna()
+    url = f"sqlite:///{(Path(folder) / DB).resolve()}"
+    st = optuna.storages.RDBStorage(url, engine_kwargs={"connect_args": {"timeout": BUSY_TIMEOUT_S}})
+    sqlalchemy.event.listen(st.engine, "connect", _sqlite_pragmas)
+    st.engine.dispose()  # the connections opened while creating the tables: reopened with the pragmas
+    return st
+
+
+def load(folder: Path):
+    """The study in ``folder`` (after a run)."""
+    optuna = _optuna()
+    return optuna.load_study(study_name=STUDY, storage=storage(folder))
+
+
+def make_sampler(seed: int | None):
+    """TPE (several objectives: multi-objective TPE); optuna's defaults otherwise (multivariate for one
+    objective); the limits reach it as the trials' constraints."""
+    optuna = _optuna()
+    return optuna.samplers.TPESampler(seed=seed, n_startup_trials=STARTUP_TRIALS, n_ei_candidates=EI_CANDIDATES,
+                                      constant_liar=True)
+
+
+@contextlib.contextmanager
+def _flock(path: Path, blocking: bool = True, shared: bool = False):
+    """An exclusive (``shared``: shared) lock on ``path`` (POSIX ``flock``); yields False when not
+    ``blocking`` and taken."""
+    import fcntl
+
+    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        try:
+            fcntl.flock(fd, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | (0 if blocking else fcntl.LOCK_NB))
+        except BlockingIOError:
+            yield False
+            return
+        try:
+            yield True
+        finally:
+            fcntl.flock(fd, fcntl.LOCK_UN)
+    finally:
+        os.close(fd)
+
+
+def _interrupted(t) -> bool:
+    return bool(t.user_attrs.get("interrupted"))
+
+
+def interrupted_count(study) -> int:
+    """Interrupted trials (failed and marked so); constant during a run (an interruption ends it)."""
+    optuna = _optuna()
+    return sum(_interrupted(t) for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.FAIL,)))
+
+
+def counted(study, interrupted: int | None = None) -> int:
+    """Trials that count towards the total: every trial but the interrupted ones (``interrupted``:
+    their number if known).  One COUNT query (optuna's storage API) rather than loading the trials."""
+    if interrupted is None:
+        interrupted = interrupted_count(study)
+    return study._storage.get_n_trials(study._study_id) - interrupted
+
+
+def finished(study) -> list:
+    """The finished trials that count (complete, infeasible, failed; not interrupted), by number."""
+    optuna = _optuna()
+    states = (optuna.trial.TrialState.COMPLETE, optuna.trial.TrialState.FAIL)
+    return [t for t in study.get_trials(deepcopy=False, states=states) if not _interrupted(t)]
+
+
+def _claim(study, total: int, lock: Path, interrupted: int):
+    """A new trial while fewer than ``total`` trials count, else None.
+
+    Only the trial's creation (a queued trial taken, or a new row) is under the lock; the sampling
+    (TPE over every trial so far, the slow part of optuna's ``ask``) runs outside it, so workers
+    sample in parallel.  This is ``Study.ask`` split in two (optuna 5; its private helpers)."""
+    optuna = _optuna()
+    with _flock(lock):
+        if counted(study, interrupted) >= total:
+            return None
+        study._thread_local.cached_all_trials = None
+        trial_id = study._pop_waiting_trial_id()
+        if trial_id is None:
+            trial_id = study._storage.create_new_trial(study._study_id)
+    return optuna.Trial(study, trial_id)
+
+
+def _tell(study, trial, problem: Problem, outcome, seconds: float, worker: int) -> None:
+    """Record the outcome (one user attribute, ``result``), the limits' violations as one constraint (their
+    positive sum, else the largest), and tell optuna (failed: ``FAIL``, else the objective values)."""
+    optuna = _optuna()
+    trial.set_user_attr("result", {"state": outcome.state, "reason": outcome.reason, "figures": outcome.figures,
+                                   "seconds": round(seconds, 6), "worker": worker})
+    if outcome.violations:
+        # optuna's TPE ranks trials by the summed positive violation only: one constraint carries it
+        over = sum(v for v in outcome.violations if v > 0)
+        trial.set_constraint("limits", over if over > 0 else max(outcome.violations))
+    if outcome.state == "failed":
+        study.tell(trial, state=optuna.trial.TrialState.FAIL)
+    else:
+        study.tell(trial, outcome.values)
+
+
+def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline: float | None,
+         worker: int = 0, single_thread: bool = False, on_trial: Callable[[], None] | None = None,
+         parent: int | None = None, store=None) -> int:
+    """Claim and evaluate trials until ``total`` count or ``deadline`` (time.time()) passes; the
+    number evaluated here.  A KeyboardInterrupt marks the trial under way interrupted and propagates.
+    ``parent``: the process id of the run; a worker whose run has died stops after its trial.
+    ``store``: the storage already open in this process (default: open it)."""
+    optuna = _optuna()
+    study = optuna.load_study(study_name=STUDY, storage=store or storage(folder), sampler=make_sampler(seed))
+    interrupted = interrupted_count(study)
+    job = problem.job()
+    lock = Path(folder) / CLAIM_LOCK
+    done = 0
+    while deadline is None or time.time() < deadline:
+        if parent is not None and os.getppid() != parent:
+            break  # the run was killed: leave the rest to a resumed run
+        if single_thread:
+            prepare_worker(False)  # numba (once loaded by a trial) on one thread: parallelism is across processes
+        trial = _claim(study, total, lock, interrupted)
+        if trial is None:
+            break
+        try:
+            values = {p.key: p.suggest(trial) for p in problem.space.params}
+            t0 = time.perf_counter()
+            outcome = evaluate(problem, job, trial.number, values)
+            _tell(study, trial, problem, outcome, time.perf_counter() - t0, worker)
+        except BaseException:
+            with contextlib.suppress(Exception):
+                trial.set_user_attr("interrupted", True)
+                study.tell(trial, state=optuna.trial.TrialState.FAIL)
+            raise
+        done += 1
+        if on_trial is not None:
+            on_trial()
+    return done
+
+
+def _worker_main(problem: Problem, folder: str, total: int, seed: int | None, deadline: float | None,
+                 worker: int, parent: int) -> int:
+    """A worker process: holds a shared lock on ``.optimize.workers`` while it works (a later run
+    waits for it, :func:`_wait_for_orphans`)."""
+    with _flock(Path(folder) / WORKERS_LOCK, shared=True):
+        done = work(problem, Path(folder), total, seed, deadline, worker, single_thread=True, parent=parent)
+    if os.getppid() != parent:
+        os._exit(0)  # the run was killed: nobody will hand this pool worker more work or collect it
+    return done
+
+
+def _wait_for_orphans(folder: Path, log: Callable[[str], None]) -> None:
+    """Wait until no worker of an earlier, killed run is still evaluating (each ends after its trial)."""
+    end = time.time() + ORPHAN_WAIT_S
+    told = False
+    while True:
+        with _flock(folder / WORKERS_LOCK, blocking=False) as free:
+            if free:
+                return
+        if time.time() > end:
+            raise InputError(f"--out: worker processes of an earlier run still use {folder}; "
+                             "wait for them to end or choose another --out")
+        if not told:
+            log("waiting for the workers of an interrupted run to finish their trials")
+            told = True
+        time.sleep(0.2)
+
+
+def open_study(problem: Problem, folder: Path, resume: bool, log: Callable[[str], None]):
+    """The study in ``folder``: created, or (``resume``) loaded after checking it is this problem's,
+    its interrupted trials re-queued.  (study, trials already finished, trials re-queued)."""
+    optuna = _optuna()
+    st = storage(folder)
+    names = optuna.get_all_study_names(st)
+    if STUDY in names and not resume:
+        raise InputError(f"--resume: {Path(folder) / DB} already holds a study; pass --resume to continue it, "
+                         "or choose another --out")
+    if STUDY not in names:
+        if resume:
+            log(f"--resume: no study in {folder}; starting one")
+        study = optuna.create_study(study_name=STUDY, storage=st, directions=problem.directions)
+        study.set_user_attr("fingerprint", problem.fingerprint())
+        study.set_user_attr("problem", problem.describe())
+        return study, 0, 0
+    study = optuna.load_study(study_name=STUDY, storage=st)
+    if study.user_attrs.get("fingerprint") != problem.fingerprint():
+        raise InputError(f"--resume: the study in {folder} is from another search (other spec, keys, ranges, "
+                         "objectives, limits or options); run without --resume and another --out to start over")
+    requeued = requeue_interrupted(study)
+    return study, len(finished(study)), requeued
+
+
+def requeue_interrupted(study) -> int:
+    """Mark trials left RUNNING (a killed run) interrupted, and queue every interrupted trial's
+    parameters again, once (the study's user attribute ``requeued`` lists the trials queued again).
+    The number queued now."""
+    optuna = _optuna()
+    TS = optuna.trial.TrialState
+    st = study._storage
+    done = set(study.user_attrs.get("requeued") or ())
+    n = 0
+    for t in study.get_trials(deepcopy=False, states=(TS.RUNNING, TS.FAIL)):
+        if t.state == TS.RUNNING:
+            st.set_trial_user_attr(t._trial_id, "interrupted", True)
+            st.set_trial_state_values(t._trial_id, TS.FAIL)
+        elif not _interrupted(t) or t.number in done:
+            continue
+        done.add(t.number)
+        if t.params:
+            study.enqueue_trial(t.params, user_attrs={"requeued_from": t.number})
+            n += 1
+    study.set_user_attr("requeued", sorted(done))
+    return n
+
+
+def run(problem: Problem, folder: Path, total: int, *, workers: int = 1, seed: int | None = None,
+        timeout: float | None = None, resume: bool = False, progress: Callable[[int, int], None] | None = None,
+        log: Callable[[str], None] | None = None, start_method: str = "spawn") -> RunStats:
+    """Run the study in ``folder`` until ``total`` trials have finished (or ``timeout`` [s] passed).
+
+    ``workers`` processes share the study (1: this process); ``progress(done, total)``.
+    """
+    log = log or (lambda msg: None)
+    folder = Path(folder)
+    t0 = time.perf_counter()
+    with _flock(folder / RUN_LOCK, blocking=False) as mine:
+        if not mine:
+            raise InputError(f"--out: another optimize run is using {folder}; wait for it or choose another --out")
+        _wait_for_orphans(folder, log)
+        study, before, requeued = open_study(problem, folder, resume, log)
+        stats = RunStats(requested=total, resumed=before, requeued=requeued, workers=workers)
+        if resume and before:
+            log(f"resuming: {before} of {total} trials already done"
+                + (f", {requeued} interrupted trial(s) queued again" if requeued else ""))
+        if seed is not None:
+            seed = seed + len(study.get_trials(deepcopy=False))
+        deadline = time.time() + timeout if timeout is not None else None
+        done = [before]
+
+        def tick():
+            done[0] += 1
+            if progress is not None:
+                progress(min(done[0], total), total)
+
+        if progress is not None:
+            progress(min(before, total), total)
+        if workers == 1:
+            stats.evaluated = work(problem, folder, total, seed, deadline, on_trial=tick, store=study._storage)
+        else:
+            stats.evaluated = _run_pool(problem, folder, total, workers, seed, deadline, study, progress,
+                                        start_method)
+        stats.elapsed_s = time.perf_counter() - t0
+        stats.stopped_by_timeout = len(finished(study)) < total
+    return stats
+
+
+def _run_pool(problem, folder, total, workers, seed, deadline, study, progress, start_method) -> int:
+    """``workers`` processes each running :func:`work` on the shared study; progress by polling it."""
+    import multiprocessing as mp
+    from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
+
+    before = set(mp.active_children())
+    ex = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(start_method))
+    try:
+        futures = [ex.submit(_worker_main, problem, str(folder), total,
+                             None if seed is None else seed + k, deadline, k, os.getpid())
+                   for k in range(workers)]
+        pending = set(futures)
+        while pending:
+            finished_now, pending = wait(pending, timeout=0.5, return_when=FIRST_EXCEPTION)
+            for f in finished_now:
+                f.result()  # a worker's error surfaces here
+            if progress is not None:
+                progress(min(len(finished(study)), total), total)
+        ex.shutdown(wait=True)
+        return sum(f.result() for f in futures)
+    except BaseException:
+        children = [p for p in mp.active_children() if p not in before]
+        _stop(children)
+        ex.shutdown(wait=False, cancel_futures=True)
+        raise
+
+
+def _stop(processes, grace_s: float = 10.0) -> None:
+    """Interrupt worker processes (each marks its trial interrupted), then end those still running."""
+    import signal
+
+    for p in processes:
+        with contextlib.suppress(Exception):
+            os.kill(p.pid, signal.SIGINT)
+    end = time.time() + grace_s
+    for p in processes:
+        p.join(max(0.0, end - time.time()))
+    for p in processes:
+        if p.is_alive():
+            with contextlib.suppress(Exception):
+                p.terminate()
