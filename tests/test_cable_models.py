@@ -269,3 +269,15 @@ def test_ideal_planar2_workspace_and_sizing_numbers_unchanged():
 
     assert ws.run(spec.load(PLANAR2)).feasible == 18421
     assert planar2_raw()["cable"].get("model") is None
+
+
+def test_trajectory_duty_cycle_uses_the_winch_side_tension(planar2):
+    from cdpr_design.design.duty import trajectory_cycle
+    from cdpr_design.motion import trajectory
+
+    d = with_cable_model(planar2, "sagging")
+    samples = trajectory.sample(d, "square_slow")
+    cyc = trajectory_cycle(samples)
+    np.testing.assert_array_equal(cyc.tension, samples.cables.outlet_tensions)
+    ok = np.isfinite(samples.tensions)
+    assert ok.any() and np.all(cyc.tension[ok] > samples.tensions[ok])

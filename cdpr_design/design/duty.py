@@ -63,13 +63,20 @@ def default_cycle(env: Envelope) -> DutyCycle:
 
 
 def trajectory_cycle(samples) -> DutyCycle:
-    """Duty cycle of a sampled trajectory (``time``, ``tensions``, ``cable_speed``, ``cable_accel``)."""
+    """Duty cycle of a sampled trajectory (``time``, ``tensions``, ``cable_speed``, ``cable_accel``).
+
+    With elastic or sagging cables the tensions are the outlet (winch-side) ones.
+    """
     t = np.asarray(samples.time, float)
     if t.size > 1:
         dt = np.gradient(t)
         w = dt / dt.sum()
     else:
         w = np.ones(t.size)
-    return DutyCycle(np.asarray(samples.tensions, float), np.asarray(samples.cable_accel, float),
+    tensions = np.asarray(samples.tensions, float)
+    cables = getattr(samples, "cables", None)
+    if cables is not None:  # elastic or sagging cables: the winch holds the outlet tension
+        tensions = np.asarray(cables.outlet_tensions, float)
+    return DutyCycle(tensions, np.asarray(samples.cable_accel, float),
                      np.asarray(samples.cable_speed, float), w,
                      f"trajectory {getattr(samples, 'name', '')}".strip())
