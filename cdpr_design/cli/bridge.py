@@ -18,10 +18,10 @@ def _table(design, summary: dict, cycle_time: float, files):
     return summary_table(
         f"{design.name} — bridge ({summary['stopped']})",
         [("cycles", summary["cycles"]), ("overruns", summary["overruns"]),
-         ("cycle time \\[ms]", cycle_time * 1e3),
-         ("round trip mean / p99 / max \\[ms]",
+         ("cycle time [ms]", cycle_time * 1e3),
+         ("round trip mean / p99 / max [ms]",
           " / ".join(fmt(None if v is None else v * 1e3) for v in (lat["mean"], lat["p99"], lat["max"]))),
-         ("delay \\[ms]", ", ".join(f"{k}: {fmt(None if v is None else v * 1e3)}"
+         ("delay [ms]", ", ".join(f"{k}: {fmt(None if v is None else v * 1e3)}"
                                   for k, v in summary["delay"].items())),
          ("files", str(files))])
 

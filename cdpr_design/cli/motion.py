@@ -25,7 +25,7 @@ def tension_ranges(summary: dict, cables) -> str:
 def segments_table(title: str, segments: list[dict]) -> Table:
     """The paper's Table 2 layout: mean target and mean actual position per straight segment."""
     t = Table(title=title, title_justify="left")
-    for head in ("segment", "axis", "mean target \\[mm]", "mean actual \\[mm]", "error \\[mm]", "error \\[%]"):
+    for head in ("segment", "axis", "mean target [mm]", "mean actual [mm]", "error [mm]", "error [%]"):
         t.add_column(head, justify="right")
     for r in segments:
         t.add_row(str(r["segment"]), r["axis"], f"{1e3 * r['mean_target']:.3f}", f"{1e3 * r['mean_actual']:.3f}",
@@ -61,10 +61,10 @@ def trajectory_cmd(
     else:
         out_console.print(summary_table(
             f"{design.name} — trajectory {name}",
-            [("samples", f"{s['samples']:,}"), ("cycle time \\[ms]", 1e3 * s["cycle_time"]),
-             ("duration \\[s]", s["duration"]), ("peak speed \\[m/s]", s["max_speed"]),
-             ("peak acceleration \\[m/s²]", s["max_acceleration"]),
-             ("tension range \\[N]", tension_ranges(s, samples.cable_names)),
+            [("samples", f"{s['samples']:,}"), ("cycle time [ms]", 1e3 * s["cycle_time"]),
+             ("duration [s]", s["duration"]), ("peak speed [m/s]", s["max_speed"]),
+             ("peak acceleration [m/s²]", s["max_acceleration"]),
+             ("tension range [N]", tension_ranges(s, samples.cable_names)),
              ("feasible", "yes" if s["feasible"] else f"no ({s['infeasible_samples']} samples)"),
              ("files", str(out_dir.path))]))
     if check and not s["feasible"]:
@@ -108,9 +108,9 @@ def simulate(
         return
     out_console.print(summary_table(
         f"{design.name} — simulation of {name} (delay {1e3 * delay:g} ms)",
-        [("samples", f"{s['samples']:,}"), ("RMS position error \\[mm]", 1e3 * s["rms_error"]),
-         ("max position error \\[mm]", 1e3 * s["max_error"]), ("delay \\[ms]", delay_text(s["delay"])),
-         ("tension range \\[N]", tension_ranges(s, result.cable_names)),
+        [("samples", f"{s['samples']:,}"), ("RMS position error [mm]", 1e3 * s["rms_error"]),
+         ("max position error [mm]", 1e3 * s["max_error"]), ("delay [ms]", delay_text(s["delay"])),
+         ("tension range [N]", tension_ranges(s, result.cable_names)),
          ("files", str(out_dir.path))]))
     if s["segments"]:
         out_console.print(segments_table("straight segments (the paper's Table 2)", s["segments"]))
@@ -142,7 +142,7 @@ def compare(
         emit_json(s)
         return
     t = Table(title=f"compare {target.name} → {actual.name}", title_justify="left")
-    for head in ("column", "delay \\[ms]", "mean error", "RMS error", "max error"):
+    for head in ("column", "delay [ms]", "mean error", "RMS error", "max error"):
         t.add_column(head, justify="right")
     for c in cols:
         st = s["columns"][c]
@@ -152,7 +152,7 @@ def compare(
     pos = res.position_columns
     if pos:
         out_console.print(summary_table("position error (" + ",".join(pos) + ")",
-                                        [("RMS \\[mm]", 1e3 * res.rms_error), ("max \\[mm]", 1e3 * res.max_error)]))
+                                        [("RMS [mm]", 1e3 * res.rms_error), ("max [mm]", 1e3 * res.max_error)]))
     if s["segments"]:
         out_console.print(segments_table("straight segments (the paper's Table 2)", s["segments"]))
 

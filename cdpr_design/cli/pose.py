@@ -93,7 +93,7 @@ def fk(
         return
     out_console.print(summary_table(
         f"{design.name} — forward kinematics ({res.method})",
-        [(c, float(v)) for c, v in zip(design.motion.coords, res.pose)] + [("residual \\[m]", res.residual)]))
+        [(c, float(v)) for c, v in zip(design.motion.coords, res.pose)] + [("residual [m]", res.residual)]))
 
 
 @command

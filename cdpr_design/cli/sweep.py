@@ -45,7 +45,7 @@ def render(design, run, top: int, check_against: Path | None) -> None:
          ("resumed from journal", f"{st.skipped:,}"), ("failed to evaluate", f"{len(run.failed):,}"),
          ("pass every requirement", f"{len(run.best_rows):,}"),
          ("backend", f"{st.backend}, {st.workers} worker(s), {st.chunk} variant(s) per task"),
-         ("elapsed \\[s]", st.elapsed_s), ("files", str(run.out.path))]))
+         ("elapsed [s]", st.elapsed_s), ("files", str(run.out.path))]))
     if run.best_rows:
         out_console.print(best_table(run, top))
     ie = run.header.index("error")

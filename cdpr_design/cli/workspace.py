@@ -54,8 +54,8 @@ def workspace(
         f"{design.name} — {s['kind']} workspace",
         [("poses", f"{s['poses']:,}"), ("feasible", f"{s['feasible']:,}"),
          ("fraction", f"{100 * s['fraction']:.2f} %"), ("measure", f"{s['measure']:.4g} {unit}"),
-         ("min margin \\[N]", s["min_margin"]), ("max margin \\[N]", s["max_margin"]),
-         ("max tension \\[N]", s["max_tension"]), ("elapsed \\[s]", s["elapsed_s"])]
+         ("min margin [N]", s["min_margin"]), ("max margin [N]", s["max_margin"]),
+         ("max tension [N]", s["max_tension"]), ("elapsed [s]", s["elapsed_s"])]
         + ([("collision free", f"{s['collision_free']:,}"),
             ("feasible before interference", f"{s['feasible_statics']:,}")] if "collision_free" in s else [])
         + ([("orientations", f"{s['orientation_mode']} ({s['orientation_count']} samples)")]

@@ -99,6 +99,8 @@ def task_grid(design: Design, step: float | None = None) -> Grid | None:
     box = design.requirements.task_box
     if box is None:
         return None
+    if step is not None:
+        wsg.check_step(step, "--step")
     st = (float(step),) * len(box[0]) if step is not None else design.workspace.grid.step
     return Grid(tuple(float(x) for x in box[0]), tuple(float(x) for x in box[1]), tuple(st))
 
