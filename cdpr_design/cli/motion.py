@@ -13,7 +13,7 @@ from cdpr_design.cli.common import (JsonOpt, OutOpt, OverwriteOpt, QuietOpt, Spe
 from cdpr_design.errors import CheckFailed
 
 CycleOpt = Annotated[Optional[float], typer.Option(
-    "--cycle-time", help="Sample period [s] (default: the trajectory's cycle_time, else 0.001).")]
+    "--cycle-time", help="Sample period [s] (default: the trajectory's cycle_time, else 0.001).", min=1e-5, max=1.0)]
 NameArg = Annotated[str, typer.Argument(help="Name of a path in the spec's trajectories: section.")]
 
 
@@ -76,19 +76,21 @@ def simulate(
     spec: SpecArg,
     name: NameArg,
     delay: Annotated[float, typer.Option(
-        "--delay", help="Transport delay of the set-points [s] (the paper's ADS path: 0.11-0.15).")] = 0.0,
+        "--delay", help="Transport delay of the set-points [s] (the paper's ADS path: 0.11-0.15).",
+        min=0.0, max=10.0)] = 0.0,
     servo_bandwidth: Annotated[float, typer.Option(
-        "--servo-bandwidth", help="Position-loop bandwidth of each winch axis [rad/s].")] = 300.0,
+        "--servo-bandwidth", help="Position-loop bandwidth of each winch axis [rad/s].", min=1e-3, max=1e6)] = 300.0,
     feedforward: Annotated[bool, typer.Option(
         "--feedforward/--no-feedforward", help="Velocity feed-forward in the axis position loop.")] = True,
     compensate_stretch: Annotated[bool, typer.Option(
         "--stretch-compensation/--no-stretch-compensation",
         help="Take up each cable's expected elastic stretch T/k in the command.")] = True,
     cable_damping: Annotated[float, typer.Option(
-        "--cable-damping", help="Damping ratio of the axial cable mode.")] = 0.7,
-    timestep: Annotated[float, typer.Option("--timestep", help="Physics step [s].")] = 5e-4,
+        "--cable-damping", help="Damping ratio of the axial cable mode.", min=0.0, max=100.0)] = 0.7,
+    timestep: Annotated[float, typer.Option("--timestep", help="Physics step [s].", min=1e-6, max=0.01)] = 5e-4,
     hold: Annotated[Optional[float], typer.Option(
-        "--hold", help="Time [s] to keep the last set-point at the end (default 0.5 s + the delay).")] = None,
+        "--hold", help="Time [s] to keep the last set-point at the end (default 0.5 s + the delay).",
+        min=0.0, max=60.0)] = None,
     cycle_time: CycleOpt = None,
     out: OutOpt = None,
     json_: JsonOpt = False,
@@ -127,7 +129,7 @@ def compare(
     rename: Annotated[Optional[list[str]], typer.Option(
         "--map", help="TARGET_COL=ACTUAL_COL: compare differently named columns (repeatable).")] = None,
     max_delay: Annotated[Optional[float], typer.Option(
-        "--max-delay", help="Largest delay searched [s] (default: half the record).")] = None,
+        "--max-delay", help="Largest delay searched [s] (default: half the record).", min=1e-6, max=1e6)] = None,
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Folder for comparison.json (default: nothing written).")] = None,
     json_: JsonOpt = False,

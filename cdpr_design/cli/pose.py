@@ -9,9 +9,11 @@ from typing import Annotated, Optional
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (JsonOpt, Kind, KindOpt, SpecArg, command, emit_json, fmt, load_design,
+from cdpr_design.cli.common import (JsonOpt, Kind, KindOpt, QuietOpt, SpecArg, command, emit_json, fmt, load_design,
                                     out_console, parse_numbers, parse_pose, summary_table)
 from cdpr_design.errors import InputError
+from cdpr_design.model.limits import LENGTH
+from cdpr_design.statics.reach import require_reached
 
 
 class Objective(str, Enum):
@@ -45,6 +47,7 @@ def pose(
     objective: ObjectiveOpt = Objective.min_norm,
     weights: WeightsOpt = None,
     json_: JsonOpt = False,
+    quiet: QuietOpt = False,
 ):
     """One pose: cable lengths, tensions, feasibility, margin, structure matrix."""
     from cdpr_design.jobs import pose as job
@@ -77,16 +80,18 @@ def fk(
     lengths: Annotated[str, typer.Option("--lengths", help="Cable lengths [m], comma-separated, in cable order.")],
     guess: Annotated[Optional[str], typer.Option("--guess", help="Starting pose for the numerical solver.")] = None,
     json_: JsonOpt = False,
+    quiet: QuietOpt = False,
 ):
     """Forward kinematics: the pose for given cable lengths."""
     from cdpr_design.statics import kinematics as kin
 
     design = load_design(spec)
-    L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)")
+    L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)", limit=LENGTH)
     if any(v < 0 for v in L):
         raise InputError("--lengths: cable lengths must be non-negative")
     g = parse_pose(design, guess, "--guess") if guess is not None else None
     res = kin.forward_kinematics(design, L, guess=g)
+    require_reached(res.residual, L)  # lengths no pose has: exit 2 with the residual, never a pose
     data = {"pose": [float(v) for v in res.pose], "residual": float(res.residual), "method": res.method}
     if json_:
         emit_json(data)
@@ -97,10 +102,16 @@ def fk(
 
 
 @command
-def schema():
+def schema(
+    json_: Annotated[bool, typer.Option("--json", help="Print the schema as one line of JSON.")] = False,
+    quiet: QuietOpt = False,
+):
     """Print the JSON Schema of the spec format (for editors' YAML validation)."""
     from cdpr_design.model import spec as spec_mod
 
+    if json_:
+        emit_json(spec_mod.json_schema())
+        return
     sys.stdout.write(spec_mod.schema_text() + "\n")
 
 

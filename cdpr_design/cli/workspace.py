@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 import typer
 
 from cdpr_design.cli.common import (ForceOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg,
-                                    bars, command, emit_json, load_design, out_console, summary_table)
+                                    StepOpt, bars, command, emit_json, load_design, out_console, summary_table)
 
 
 class Orientations(str, Enum):
@@ -20,7 +20,7 @@ class Orientations(str, Enum):
 def workspace(
     spec: SpecArg,
     kind: KindOpt = Kind.static,
-    step: Annotated[Optional[float], typer.Option("--step", help="Grid step [m] (overrides workspace.grid.step).")] = None,
+    step: StepOpt = None,
     out: OutOpt = None,
     json_: JsonOpt = False,
     quiet: QuietOpt = False,

@@ -1,7 +1,8 @@
 """CSV cells and blocks, CSV and log reading, and the JSON encoding of numpy values.
 
-Numbers are written with 10 significant digits, integers as integers,
-booleans as 1/0 and NaN/None as empty cells.  Readers raise
+Numbers are written with 10 significant digits (never ``-0``), integers as
+integers, booleans as 1/0 and NaN/None as empty cells; JSON never holds NaN or
+infinities (``null`` instead).  Readers raise
 :class:`~cdpr_design.errors.InputError` naming the file (and the option or
 argument it came from).
 """
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import math
 import re
 from pathlib import Path
@@ -29,6 +31,28 @@ def json_default(o):
     raise TypeError(f"not JSON serialisable: {type(o).__name__}")
 
 
+def json_finite(o):
+    """A copy of plain data for JSON: NaN and infinities (never valid JSON) become None, ``-0.0``
+    becomes 0.0, numpy values Python ones; a non-finite number is not a result to report."""
+    if isinstance(o, (float, np.floating)):
+        v = float(o)
+        return v + 0.0 if math.isfinite(v) else None
+    if isinstance(o, dict):
+        return {k: json_finite(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [json_finite(v) for v in o]
+    if isinstance(o, np.ndarray):
+        return json_finite(o.tolist())
+    if isinstance(o, np.generic):
+        return json_finite(o.item())
+    return o
+
+
+def json_text(data, indent: int | None = None) -> str:
+    """``data`` as JSON text through :func:`json_finite` (strict JSON: no ``NaN``, no ``Infinity``)."""
+    return json.dumps(json_finite(data), indent=indent, default=json_default, allow_nan=False)
+
+
 def fmt(v) -> str:
     """A CSV cell: numbers with 10 significant digits, NaN/None as empty."""
     if v is None:
@@ -38,7 +62,7 @@ def fmt(v) -> str:
     if isinstance(v, (int, np.integer)):
         return str(int(v))
     if isinstance(v, (float, np.floating)):
-        return "" if not math.isfinite(v) else format(float(v), ".10g")
+        return "" if not math.isfinite(v) else format(float(v) + 0.0, ".10g")  # + 0.0: no "-0"
     return str(v)
 
 
@@ -60,7 +84,7 @@ def format_block(columns: list[np.ndarray], int_cols: Sequence[int] = ()) -> str
         return ""
     ints = set(int_cols)
     fmt = ",".join("%d" if j in ints else "%.10g" for j in range(len(columns)))
-    block = np.column_stack([np.asarray(c, dtype=float) for c in columns])
+    block = np.column_stack([np.asarray(c, dtype=float) for c in columns]) + 0.0  # + 0.0: -0.0 -> 0.0, no "-0"
     for j in ints:
         if not np.isfinite(block[:, j]).all():
             raise ValueError(f"integer column {j} holds a non-finite value")
