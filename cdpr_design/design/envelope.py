@@ -38,6 +38,7 @@ import numpy as np
 
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate_structure
 from cdpr_design import workspaces as workspace
 from cdpr_design.workspaces import grid as wsg
 
@@ -121,7 +122,7 @@ def _structure_many(design: Design, positions: np.ndarray, Rb: np.ndarray, curva
         paths = pl.design_cable_paths(design, positions[:, None, :] + Rb[None, :, :])
         L = paths.lengths
         u = paths.directions.copy()
-        u[~(paths.free_lengths > 1e-12)] = 0.0
+        u[~(paths.free_lengths > MIN_CABLE_LENGTH)] = 0.0
         kappa = paths.max_curvature()
     else:
         vec = design.outlets[None, :, :] - positions[:, None, :] - Rb[None, :, :]
@@ -129,7 +130,7 @@ def _structure_many(design: Design, positions: np.ndarray, Rb: np.ndarray, curva
         with np.errstate(invalid="ignore", divide="ignore"):
             u = vec / L[:, :, None]
             kappa = 1.0 / L
-        u[L <= 1e-12] = 0.0
+        u[L <= MIN_CABLE_LENGTH] = 0.0
     mom = np.cross(Rb[None, :, :], u)
     full = np.concatenate([u, mom], axis=2)  # (k, m, 6)
     W = np.transpose(full[:, :, list(design.motion.wrench_rows)], (0, 2, 1))
@@ -209,6 +210,11 @@ def envelope_chunk(design: Design, positions: np.ndarray, orientation, A: float,
         static, peak, low, ok = _square_chunk(W, w0, M, A)
     else:
         static, peak, low, ok = _redundant_chunk(design, W, w0, M, A)
+    bad = degenerate_structure(W)  # a cable of zero length: left out, as `pose` calls it infeasible
+    if bad.any():
+        ok = ok & ~bad
+        for a in (static, peak, low):
+            a[bad] = np.nan
     with np.errstate(divide="ignore", invalid="ignore"):
         accel = A + V * V * kappa  # kappa = 1 / L for a point outlet
     accel[:, :] = np.where(L > 1e-12, accel, np.nan)

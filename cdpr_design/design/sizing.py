@@ -198,7 +198,7 @@ def size_motors(design: Design, catalogue: Catalogue, *, step: float | None = No
     else:
         cycle = default_cycle(env)
     if env.singular:
-        notes.append(f"{env.singular} task poses with a rank-deficient structure matrix were left out")
+        notes.append(f"{env.singular} task poses with a rank-deficient structure matrix or a cable of zero length were left out")
     by_size = catalogue.by_size()
     axes = []
     for k, c in enumerate(design.cables):

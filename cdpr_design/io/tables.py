@@ -20,6 +20,7 @@ from typing import Sequence
 import numpy as np
 
 from cdpr_design.errors import InputError
+from cdpr_design.io.inputs import MAX_LOG_BYTES, read_text
 
 
 def json_default(o):
@@ -104,17 +105,19 @@ def columns_text(columns: dict) -> str:
     return ",".join(names) + "\n" + format_block(cols, int_cols=ints)
 
 
-def read_csv_columns(path: str | Path, what: str = "CSV") -> dict[str, np.ndarray]:
+def read_csv_columns(path: str | Path, what: str = "CSV", dropped: list | None = None) -> dict[str, np.ndarray]:
     """Numeric columns of a CSV log with a header row: name -> float array.
 
     Empty or non-numeric cells become NaN; columns with no number at all are
-    dropped.  Bad files raise :class:`InputError` naming the file.
+    dropped (their names appended to ``dropped`` when given).  Bad files
+    raise :class:`InputError` naming the file; only regular files of at most
+    :data:`~cdpr_design.io.inputs.MAX_LOG_BYTES` are read.
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{what} {p}: cannot read: {exc}") from None
+        text = read_text(p, MAX_LOG_BYTES, encoding="utf-8-sig")
+    except InputError as exc:
+        raise InputError(f"{what} {p}: {exc}") from None
     rows = list(csv.reader(io.StringIO(text)))
     rows = [r for r in rows if r and any(c.strip() for c in r)]
     if len(rows) < 2:
@@ -133,12 +136,15 @@ def read_csv_columns(path: str | Path, what: str = "CSV") -> dict[str, np.ndarra
     for j, h in enumerate(header):
         if np.any(np.isfinite(data[:, j])):
             out[h] = data[:, j]
+        elif dropped is not None:
+            dropped.append(h)
     return out
 
 
-def read_log(path: str | Path, what: str = "log") -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """A logged run: its time column [s] (``time`` or ``t``, increasing) and the other columns."""
-    cols = read_csv_columns(path, what)
+def read_log(path: str | Path, what: str = "log", dropped: list | None = None) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """A logged run: its time column [s] (``time`` or ``t``, increasing) and the other columns
+    (``dropped``: as for :func:`read_csv_columns`)."""
+    cols = read_csv_columns(path, what, dropped)
     tname = "time" if "time" in cols else ("t" if "t" in cols else None)
     if tname is None:
         raise InputError(f"{what} {path}: no time column (expected 'time' or 't'; found {', '.join(cols) or 'none'})")
@@ -157,9 +163,9 @@ def read_csv_table(path: str | Path, what: str = "--check-against") -> tuple[lis
     """(header, rows) of a CSV file, cells as text; bad files raise :class:`InputError`."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{what}: cannot read {p}: {exc}") from None
+        text = read_text(p, MAX_LOG_BYTES, encoding="utf-8-sig")
+    except InputError as exc:
+        raise InputError(f"{what}: {exc}") from None
     rows = [r for r in csv.reader(io.StringIO(text)) if r]
     if not rows:
         raise InputError(f"{what}: {p} is empty (expected a header row)")
