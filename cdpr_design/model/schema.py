@@ -231,7 +231,9 @@ def _message(e: dict) -> str:
         return "unknown key (check its spelling against the spec format)"
     if kind == "finite_number":
         return f"expected a finite number, got {quote(got)}"
-    if kind in ("float_type", "float_parsing", "int_type", "int_parsing"):
+    if kind in ("int_type", "int_parsing", "int_from_float"):
+        return f"expected a whole number, got {quote(got)}"
+    if kind in ("float_type", "float_parsing"):
         return f"expected a number, got {quote(got)}"
     if kind == "list_type":
         return f"expected a list, got {quote(got)}"
