@@ -219,7 +219,7 @@ def test_size_motors_and_sweep_options_are_ranged(tmp_path):
 
 def test_fk_on_unreachable_lengths_is_an_error_with_the_residual():
     res = invoke("fk", PLANAR2, "--lengths", "30,0.1", "--json")  # the two cables cannot span the frame
-    assert_clean_error(res, "--lengths", "no pose has these cable lengths", "residual")
+    assert_clean_error(res, "--lengths", "no pose found with these cable lengths", "residual")
     assert res.stdout == ""
     res = invoke("fk", PLANAR2, "--lengths", "0.1,0.1")
     assert_clean_error(res, "--lengths", "residual")

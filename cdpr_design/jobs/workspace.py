@@ -63,12 +63,17 @@ def _stream_sweep(design, out, kind, step, force, collisions, orientations, engi
 
     grid = ws.make_grid(design, step, force)
     header = ws.column_names(design) + ws.extra_columns(design, collisions, orientations)
-    csv_file = out.stream("workspace.csv")
-    try:
-        csv_file.write(",".join(header) + "\n")
+    files = []  # workspace.csv, opened with the first chunk: options the sweep refuses leave no file
 
+    def csv_file():
+        if not files:
+            files.append(out.stream("workspace.csv"))
+            files[0].write(",".join(header) + "\n")
+        return files[0]
+
+    try:
         def on_chunk(chunk):
-            csv_file.write(workspace_rows(chunk, extra=ws.chunk_extra(chunk)))
+            csv_file().write(workspace_rows(chunk, extra=ws.chunk_extra(chunk)))
 
         with stage(progress, f"workspace {design.name}") as cb:
             if orientations:
@@ -77,9 +82,10 @@ def _stream_sweep(design, out, kind, step, force, collisions, orientations, engi
             else:
                 result = ws.run(design, kind=kind, grid=grid, on_chunk=on_chunk, progress=cb, force=True,
                                 interference=collisions, engine=engine)
-        csv_file.commit()
+        csv_file().commit()
     except BaseException:
-        csv_file.abort()
+        if files:
+            files[0].abort()
         raise
     return result
 

@@ -43,14 +43,20 @@ from cdpr_design.model.spec_checks import check_semantics
 # ----------------------------------------------------------------------------
 
 
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """``yaml.SafeLoader`` that refuses a key given twice in one mapping."""
+class _UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+    """``yaml.SafeLoader`` (libyaml's parser when PyYAML has it: ten times faster, the same
+    documents) that refuses a key given twice in one mapping."""
 
 
 def _construct_mapping(loader, node, deep=False):
     seen = set()
     for key_node, _ in node.value:
         key = loader.construct_object(key_node, deep=deep)
+        try:
+            hash(key)
+        except TypeError:  # a list or mapping as a key (``? [a, b]``)
+            raise yaml.constructor.ConstructorError(
+                None, None, f"a key must be a name, got {quote(key)}", key_node.start_mark) from None
         if key in seen:
             raise yaml.constructor.ConstructorError(
                 None, None, f"key {quote(key)} is given twice", key_node.start_mark)

@@ -34,6 +34,7 @@ def reached(residual: float, lengths) -> bool:
 def require_reached(residual: float, lengths, option: str = "--lengths") -> None:
     """Raise an :class:`InputError` naming ``option`` and giving the residual unless :func:`reached`."""
     if not reached(residual, lengths):
-        raise InputError(f"{option}: no pose has these cable lengths: the closest pose found misses them by "
+        raise InputError(f"{option}: no pose found with these cable lengths: the solver's best misses them by "
                          f"{residual:.4g} m (residual, 2-norm over the cables; at most "
-                         f"{residual_tolerance(lengths):.2g} m counts as reached)")
+                         f"{residual_tolerance(lengths):.2g} m counts as reached). Lengths no pose has are "
+                         "refused so; if they should be reachable, start the solver nearer (--guess)")
