@@ -414,3 +414,32 @@ def test_hostile_documents_at_the_top(work, value):
     p.write_text(yaml.safe_dump(value))
     res, exc = outcome(spec.load, p, limit=LOAD_LIMIT)
     assert exc is not None
+
+
+# ----------------------------------------------------------------------------
+# Cases the fuzz runs found in the entry points (the spec-level ones are files in the corpus)
+# ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("step", [100.0, 1e30])
+def test_found_a_grid_of_one_row_draws_its_pictures(tmp_path, planar2, step):
+    # a step larger than the frame leaves one pose (or one row): the outline contour raised a TypeError
+    from cdpr_design.jobs import workspace as job
+
+    res, out = job.workspace(planar2, tmp_path / "o", step=step)
+    assert res.poses == 1 and (tmp_path / "o" / "workspace.png").stat().st_size > 0
+    d = planar2.replace(workspace=planar2.workspace.__class__(
+        grid=planar2.workspace.grid.__class__((0.0, 0.5), (1.5, 0.5), (0.1, 0.1)), orientation=(),
+        external_wrench=None, orientation_set=None, orientation_range=None))
+    res, out = job.workspace(d, tmp_path / "row")
+    assert res.grid.shape == (16, 1) and (tmp_path / "row" / "tension_map.png").stat().st_size > 0
+
+
+def test_found_a_refused_kind_leaves_no_folder(tmp_path, planar2):
+    # the workspace.csv stream used to create the folder before the sweep checked --kind
+    from cdpr_design.errors import SpecError
+    from cdpr_design.jobs import workspace as job
+
+    with pytest.raises(SpecError, match="--kind"):
+        job.workspace(planar2, tmp_path / "o", kind="nope")
+    assert not (tmp_path / "o").exists()
