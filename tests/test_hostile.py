@@ -409,3 +409,20 @@ def test_every_command_takes_json_and_quiet():
     for args in (["pose", PLANAR2, "--at", "0.75,0.75"], ["fk", PLANAR2, "--lengths", "1,1"]):
         res = invoke(*args, "--quiet", "--json")
         assert res.exit_code == 0 and json.loads(res.stdout), res.output
+
+
+def test_a_catalogue_with_overflowing_figures_is_refused(tmp_path):
+    from cdpr_design.errors import SpecError
+    from cdpr_design.model import spec
+
+    p = tmp_path / "cat.yaml"
+    p.write_text("motors:\n  - {name: BIG, rated_torque: 1.0e+300, peak_torque: 1.0e+308, max_speed: 3000,"
+                 " rotor_inertia: 1.0e-5}\n")
+    with pytest.raises(SpecError, match=r"motors\[0\]\.peak_torque: expected a value in \[-1e\+12, 1e\+12\]"):
+        spec.load_catalogue(p)
+
+
+def test_tables_on_screen_show_no_minus_zero():
+    from cdpr_design.cli.common import fmt
+
+    assert fmt(-0.0) == "0" and fmt(-0.5) == "-0.5"

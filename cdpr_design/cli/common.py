@@ -188,7 +188,7 @@ def fmt(v, digits=4):
     if isinstance(v, float):
         if not math.isfinite(v):
             return "—"
-        return f"{v:.{digits}g}"
+        return f"{v + 0.0:.{digits}g}"  # + 0.0: no "-0" on screen either
     return str(v)
 
 
