@@ -35,7 +35,7 @@ def read_text(path: str | Path, max_bytes: int, encoding: str = "utf-8") -> str:
     try:
         fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     except FileNotFoundError:
-        raise InputError(f"no such file: {p}") from None
+        raise InputError(f"cannot read {p}: no such file") from None
     except IsADirectoryError:
         raise InputError(f"{p} is a folder, expected a file") from None
     except OSError as exc:
