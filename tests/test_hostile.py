@@ -218,14 +218,27 @@ def test_size_motors_and_sweep_options_are_ranged(tmp_path):
 
 
 def test_fk_on_unreachable_lengths_is_an_error_with_the_residual():
-    res = invoke("fk", PLANAR2, "--lengths", "30,0.1", "--json")  # the two cables cannot span the frame
-    assert_clean_error(res, "--lengths", "no pose found with these cable lengths", "residual")
+    # two cables too short to meet: no pose has them; the message gives the miss
+    res = invoke("fk", PLANAR2, "--lengths", "0.1,0.1", "--json")
+    assert_clean_error(res, "--lengths", "cannot both reach", "short by 1.18 m")
     assert res.stdout == ""
-    res = invoke("fk", PLANAR2, "--lengths", "0.1,0.1")
-    assert_clean_error(res, "--lengths", "residual")
+    res = invoke("fk", PLANAR2, "--lengths", "0.5,0.5")
+    assert_clean_error(res, "--lengths", "short by 0.38 m")
+    # one cable far too long is not unreachable: it hangs slack and the effector hangs from the other
+    hang = invoke("fk", PLANAR2, "--lengths", "30,0.1", "--json")
+    assert hang.exit_code == 0, hang.output
+    data = json.loads(hang.stdout)
+    assert data["slack"] == ["c1"] and data["residual"] < 1e-9 and data["tensions"]["c1"] == 0.0
     ok = invoke("fk", PLANAR2, "--lengths", "0.975807,0.975807", "--json")  # pose 0.75, 0.75: reachable
     assert ok.exit_code == 0, ok.output
     assert json.loads(ok.stdout)["residual"] < 1e-9
+
+
+def test_fk_with_pulleys_refuses_lengths_it_cannot_reach(tmp_path):
+    """The kinematic solve (swivel pulleys) returns the pose that misses least: refused with its residual."""
+    p = spec_with(tmp_path, lambda d: [c.update(pulley={"radius": 0.02, "axis": [0, 1, 0]}) for c in d["cables"]])
+    res = invoke("fk", p, "--lengths", "0.1,0.1")
+    assert_clean_error(res, "--lengths", "no pose found with these cable lengths", "residual")
 
 
 def test_a_sample_at_a_zero_length_cable_is_infeasible_as_pose_says(tmp_path):
@@ -400,7 +413,8 @@ def test_every_command_takes_json_and_quiet():
     from cdpr_design.cli.app import app
 
     names = [c.name or c.callback.__name__.replace("_", "-") for c in app.registered_commands]
-    assert len(names) == 12, names
+    assert sorted(names) == sorted(["workspace", "pose", "fk", "schema", "size-motors", "report", "check", "sweep",
+                                    "compare", "trajectory", "simulate", "bridge", "optimize"]), names
     for name in names:
         res = invoke(name, "--help")
         assert res.exit_code == 0 and "--json" in res.output and "--quiet" in res.output, name
