@@ -18,7 +18,7 @@ import pytest
 
 from cdpr_design.cli.common import QuietOpt, command
 
-from .helpers import PLANAR2, invoke, planar2_raw, read_csv, subprocess_env, write_spec
+from .helpers import PLANAR2, ROOT, invoke, planar2_raw, read_csv, subprocess_env, write_spec
 
 
 def run_cli(*args, timeout: float = 60, cwd=None):
@@ -208,6 +208,22 @@ def test_nonsense_specs_are_refused(tmp_path, change, path):
         spec.load(spec_with(tmp_path, change))
     assert any(p.startswith(path) for p, _ in info.value.problems), info.value.problems
     assert len(str(info.value)) < 600  # the offending value is quoted short, never whole
+
+
+def test_exponent_numbers_are_numbers_and_quoted_ones_text(tmp_path):
+    """``1.0e6`` and ``1e6`` (YAML 1.2 floats; PyYAML's 1.1 reads them as text) are numbers;
+    the quoted ``"1.0e6"`` stays text and is refused where a number is meant."""
+    from cdpr_design.errors import SpecError
+    from cdpr_design.model import spec
+
+    text = (ROOT / "designs" / "planar2.yaml").read_text()
+    for written, value in (("1.0e0", 1.0), ("1e0", 1.0), ("25E-1", 2.5), ("+.5e1", 5.0)):
+        p = tmp_path / "s.yaml"
+        p.write_text(text.replace("mass: 1.0", f"mass: {written}", 1))
+        assert spec.load(p).effector.mass == value, written
+    p.write_text(text.replace("mass: 1.0", 'mass: "1.0e0"', 1))
+    with pytest.raises(SpecError, match="effector.mass"):
+        spec.load(p)
 
 
 def test_size_motors_and_sweep_options_are_ranged(tmp_path):
