@@ -394,13 +394,15 @@ def test_reconnect_retries_then_gives_up(tmp_path, loop_data, design):
 
 
 @pytest.mark.serial
-def test_ctrl_c_stops_cleanly_with_the_log_intact(tmp_path, loop_data):
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=lambda s: s.name)
+def test_ctrl_c_stops_cleanly_with_the_log_intact(tmp_path, loop_data, sig):
+    """Ctrl-C, and SIGTERM / SIGHUP the same way: exit 130, the summary printed, bridge.csv whole."""
     p = write_spec(tmp_path, loop_data)
     proc, out = _start_bridge(tmp_path, p, "--test-plc", "square_slow", "--duration", "60")
     try:
         _wait_running(proc, out)
         time.sleep(0.5)
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(sig)
         stdout, stderr = proc.communicate(timeout=20)
     finally:
         if proc.poll() is None:

@@ -62,21 +62,29 @@ def _endpoint(design, test_plc: str | None, local_net_id: str | None) -> _Endpoi
     return _Endpoint(host, design.plc.ams_net_id, design.plc.port, local_net_id)
 
 
+#: Signals that stop the bridge cleanly (the summary and the log written, exit 130): Ctrl-C, and
+#: SIGTERM / SIGHUP (a job scheduler, a closed terminal) where the platform has them.
+STOP_SIGNALS = tuple(s for s in (signal.SIGINT, getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None))
+                     if s is not None)
+
+
 @contextmanager
-def _stop_on_sigint():
-    """A stop flag set by the first Ctrl-C (the second one interrupts); the handler restored after."""
+def _stop_on_signal():
+    """A stop flag set by the first Ctrl-C, SIGTERM or SIGHUP (a second one interrupts); the
+    handlers restored after."""
     stop = {"flag": False}
 
-    def on_sigint(signum, frame):
+    def on_signal(signum, frame):
         if stop["flag"]:
             raise KeyboardInterrupt
         stop["flag"] = True
 
-    old_handler = signal.signal(signal.SIGINT, on_sigint)
+    old = {s: signal.signal(s, on_signal) for s in STOP_SIGNALS}
     try:
         yield stop
     finally:
-        signal.signal(signal.SIGINT, old_handler)
+        for s, h in old.items():
+            signal.signal(s, h)
 
 
 def _connect(transport, reconnect: int, stop: dict, log: Callable[[str], None]) -> None:
@@ -156,7 +164,7 @@ def bridge(design, test_plc: str | None = None, duration: float | None = None, c
     out_dir.target("bridge.csv")
     out_dir.target("bridge.json")
     log = log or (lambda msg: None)
-    with _stop_on_sigint() as stop:
+    with _stop_on_signal() as stop:
         transport = AdsTransport(layout, where.net_id, where.port, where.host, timeout=tmo,
                                  local_net_id=where.local_net_id)
         res, rows, plc_log = _session(design, transport, layout, samples, test_plc, where, dt, duration,
