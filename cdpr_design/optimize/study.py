@@ -28,9 +28,9 @@ interrupted trials do not count towards N nor appear in the results.
 
 Samplers
 --------
-TPE (Bergstra et al. 2011) for one objective, multi-objective TPE (Ozaki et
-al. 2020, 2022) for several, both multivariate (Falkner et al. 2018) and
-with optuna's constraint handling (the limits' violations,
+TPE (Bergstra et al. 2011), multivariate (Falkner et al. 2018), for one
+objective; multi-objective TPE (Ozaki et al. 2020, 2022; optuna models its
+keys independently) for several; both with optuna's constraint handling (the limits' violations,
 :mod:`cdpr_design.optimize.objectives`).  See ``docs/optimize.md`` for the
 choice.  With ``seed`` and one worker a run is deterministic; a resumed run
 seeds its sampler with ``seed`` plus the trials already in the study (so its
@@ -120,7 +120,7 @@ def load(folder: Path):
 
 def make_sampler(seed: int | None):
     """TPE (several objectives: multi-objective TPE); optuna's defaults otherwise (multivariate for one
-    objective); the limits reach it as the trials' constraints."""
+    objective, independent for several); the limits reach it as the trials' constraints."""
     optuna = _optuna()
     return optuna.samplers.TPESampler(seed=seed, n_startup_trials=STARTUP_TRIALS, n_ei_candidates=EI_CANDIDATES,
                                       constant_liar=True)
