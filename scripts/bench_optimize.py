@@ -11,12 +11,16 @@ Problems (each a study in a temporary folder):
 - IPAnema 3 without a task box (the README's two-objective example): the
   workspace grid at 1 m and the sizing over its feasible poses.
 
-For each: one worker (in this process) and two worker processes, the same
-number of trials; trials/s, the speed-up, and the split of a one-worker
-trial into the design's evaluation (the baseline: the same variants
-evaluated without optuna, in this process) and optuna's share (sampling and
-the SQLite study).  Also the first IPAnema 3 trial in a fresh process with a
-warm and a cold (empty) numba cache.
+For each: one worker (this process) and two (this process and a spawned
+one), the same number of trials; trials/s, CPU time (this process and its
+joined workers: on a shared machine the wall-clock speed-up alone says
+little), the speed-up, and the split of a one-worker trial into the
+design's evaluation (the baseline: the same variants evaluated without
+optuna, in this process) and optuna's share (sampling and the SQLite study);
+for the two-worker run, where each worker's time went (start-up, evaluation,
+optuna and SQLite, waiting for the claim lock, idle at the end).  Also the
+first IPAnema 3 trial in a fresh process with a warm and a cold (empty)
+numba cache.
 
 With ``--samplers``, also the choice of the multi-objective sampler: on
 planar2 (the two outlets; maximise the task minimum margin, minimise the peak
