@@ -340,6 +340,21 @@ def test_one_worker_with_a_seed_is_repeatable(tmp_path, light_spec):
     assert header[-1] == "seconds" and tables[0] == tables[1]
 
 
+def test_two_workers_end_with_exactly_the_trials_asked(tmp_path, light_spec):
+    """This process (worker 0) and a spawned worker share the study: exactly N trials, each once."""
+    out = tmp_path / "opt"
+    r = invoke("optimize", light_spec, *OUTLETS, "--maximize", "task_min_margin", "--trials", 24, "--workers", 2,
+               "--seed", 5, "--out", out, "--json", "--no-picture")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout)
+    rows = csv_dicts(out / "optimize.csv")
+    assert s["workers"] == 2 and s["trials_done"] == s["evaluated_now"] == 24
+    assert [int(r["trial"]) for r in rows] == list(range(24))
+    assert len({(r["cables.0.outlet.0"], r["cables.1.outlet.0"]) for r in rows}) == 24
+    workers = {t.user_attrs["result"]["worker"] for t in opt.finished(opt.study.load(out))}
+    assert 0 in workers and workers <= {0, 1}
+
+
 def test_invalid_variants_in_a_range_are_failed_trials(tmp_path, light_spec):
     """tension.1 below tension.0 (0 N) breaks the spec: a failed trial with the spec's reason."""
     out = tmp_path / "opt"
