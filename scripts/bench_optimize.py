@@ -11,12 +11,16 @@ Problems (each a study in a temporary folder):
 - IPAnema 3 without a task box (the README's two-objective example): the
   workspace grid at 1 m and the sizing over its feasible poses.
 
-For each: one worker (in this process) and two worker processes, the same
-number of trials; trials/s, the speed-up, and the split of a one-worker
-trial into the design's evaluation (the baseline: the same variants
-evaluated without optuna, in this process) and optuna's share (sampling and
-the SQLite study).  Also the first IPAnema 3 trial in a fresh process with a
-warm and a cold (empty) numba cache.
+For each: one worker (this process) and two (this process and a spawned
+one), the same number of trials; trials/s, CPU time (this process and its
+joined workers: on a shared machine the wall-clock speed-up alone says
+little), the speed-up, and the split of a one-worker trial into the
+design's evaluation (the baseline: the same variants evaluated without
+optuna, in this process) and optuna's share (sampling and the SQLite study);
+for the two-worker run, where each worker's time went (start-up, evaluation,
+optuna and SQLite, waiting for the claim lock, idle at the end).  Also the
+first IPAnema 3 trial in a fresh process with a warm and a cold (empty)
+numba cache.
 
 With ``--samplers``, also the choice of the multi-objective sampler: on
 planar2 (the two outlets; maximise the task minimum margin, minimise the peak
@@ -78,12 +82,46 @@ def problems(quick: bool):
     ], cat
 
 
-def run(pb, trials: int, workers: int) -> tuple[float, list]:
+def cpu_s() -> float:
+    """CPU time of this process and its ended children (the worker processes, once joined) [s]."""
+    t = os.times()
+    return t.user + t.system + t.children_user + t.children_system
+
+
+def run(pb, trials: int, workers: int) -> tuple[float, float, list, dict]:
+    """Wall time [s], CPU time [s], the trials, and where a worker's time went (:func:`timing`)."""
     with tempfile.TemporaryDirectory() as tmp:
+        c0, w0 = cpu_s(), time.time()
         st = opt.run(pb, Path(tmp), trials, workers=workers, seed=1)
-        rows = opt.results.trials(opt.finished(opt.study.load(tmp)))
+        cpu = cpu_s() - c0
+        done = opt.finished(opt.study.load(tmp))
+        rows = opt.results.trials(done)
     assert len(rows) == trials, (len(rows), trials)
-    return st.elapsed_s, rows
+    return st.elapsed_s, cpu, rows, timing(done, w0, st.elapsed_s)
+
+
+def timing(done, start: float, elapsed: float) -> dict:
+    """Per worker: seconds from the run's start to its first trial (process start-up), and of its
+    trials' wall time the evaluation's share and the rest (sampling, SQLite; from the study's
+    timestamps); the mean idle gap between a worker's trials (waiting for the claim lock)."""
+    out = {}
+    for w in sorted({t.user_attrs["result"]["worker"] for t in done}):
+        ts = sorted((t for t in done if t.user_attrs["result"]["worker"] == w), key=lambda t: t.datetime_start)
+        walls = [(t.datetime_complete - t.datetime_start).total_seconds() for t in ts]
+        evals = [t.user_attrs["result"]["seconds"] for t in ts]
+        gaps = [(b.datetime_start - a.datetime_complete).total_seconds() for a, b in zip(ts, ts[1:])]
+        out[w] = {"trials": len(ts), "startup": ts[0].datetime_start.timestamp() - start,
+                  "eval": sum(evals), "other": sum(walls) - sum(evals), "gap": sum(gaps),
+                  "tail": start + elapsed - ts[-1].datetime_complete.timestamp()}
+    return out
+
+
+def print_timing(t: dict) -> None:
+    for w, d in t.items():
+        n = d["trials"]
+        print(f"    worker {w}: {n} trials, first after {d['startup']:.2f} s; per trial: evaluation "
+              f"{1e3 * d['eval'] / n:.0f} ms, optuna and SQLite {1e3 * d['other'] / n:.0f} ms, "
+              f"waiting between trials {1e3 * d['gap'] / max(1, n - 1):.0f} ms; idle at the end {d['tail']:.2f} s")
 
 
 def baseline(pb, rows) -> float:
@@ -184,14 +222,16 @@ def main() -> None:
     for name, design, vary, maxi, mini, step, trials in cases:
         pb = opt.make_problem(design, vary, maxi, mini, None, batch.Options(step=step, catalogue=cat))
         run(pb, 3, 1)  # warm this process (kernels, optuna, SQLite)
-        t1, rows = run(pb, trials, 1)
-        t2, _ = run(pb, trials, 2)
+        t1, c1, rows, _ = run(pb, trials, 1)
+        t2, c2, _, tm2 = run(pb, trials, 2)
         base = baseline(pb, rows)
         print(f"\n{name} ({pb.describe()['evaluates']}), {trials} trials:")
-        print(f"  1 worker : {t1:6.1f} s  {trials / t1:6.2f} trials/s")
-        print(f"  2 workers: {t2:6.1f} s  {trials / t2:6.2f} trials/s  (speed-up {t1 / t2:.2f}x)")
+        print(f"  1 worker : {t1:6.1f} s  {trials / t1:6.2f} trials/s  CPU {c1:6.1f} s")
+        print(f"  2 workers: {t2:6.1f} s  {trials / t2:6.2f} trials/s  CPU {c2:6.1f} s  (speed-up {t1 / t2:.2f}x)")
         print(f"  per trial, 1 worker: {1e3 * t1 / trials:.0f} ms = evaluation {1e3 * base / trials:.0f} ms "
               f"(the same variants without optuna) + optuna and SQLite {1e3 * (t1 - base) / trials:.0f} ms")
+        print("  2 workers, where the time went:")
+        print_timing(tm2)
     print(f"\nload average after: {os.getloadavg()[0]:.2f} (other work on the machine skews the ratios)")
 
 

@@ -117,6 +117,21 @@ def test_the_help_lists_every_figure():
     assert listed == set(opt.FIGURES) | {"peak_tension_<cable>"}
 
 
+def test_the_docs_list_every_figure():
+    """docs/optimize.md and docs/cli.md give the same FIGURE list as --help and the code."""
+    import re
+
+    from .helpers import ROOT
+
+    want = set(opt.FIGURES) | {"peak_tension_<cable>"}
+    for doc, start in (("docs/optimize.md", "### FIGURE"), ("docs/cli.md", "**FIGURE** is one of")):
+        text = (ROOT / doc).read_text()
+        text = text[text.index(start):]
+        head = text.index("`task_min_margin`, `min_margin_figure`")  # the list, up to the paragraph's end
+        listed = set(re.findall(r"`([a-z_<>]+)`", text[head:text.index("\n\n", head)]))
+        assert listed == want, (doc, listed ^ want)
+
+
 def test_judge_outcomes(planar2):
     pb = opt.make_problem(planar2, ["effector.mass=0.5:2"], ["task_min_margin"], None, ["peak_tension<=18"],
                           batch.Options())
@@ -202,6 +217,47 @@ def test_single_objective_best_and_convergence(planar2):
     assert opt.convergence(pb, rows) == [None, None, 3.0, 5.0, 5.0, 5.0]
 
 
+def _drawn(ax) -> dict:
+    """label -> (x, y, colour) of each labelled line of ``ax``."""
+    return {ln.get_label(): (list(ln.get_xdata()), list(ln.get_ydata()), ln.get_color()) for ln in ax.get_lines()
+            if not ln.get_label().startswith("_")}
+
+
+def test_the_picture_shows_convergence_or_the_front_and_importances(planar2):
+    """optimize.png, as the job builds it: one objective, each trial and the best so far; two, the front
+    in colour, dominated complete trials grey, infeasible ones apart; importances only when given."""
+    from matplotlib.colors import to_rgb
+
+    from cdpr_design.jobs.optimize import _picture_data
+    from cdpr_design.plots.optimize import optimize_figure
+
+    pb = _fake_problem(planar2, (True,))
+    rows = [opt.Trial(0, "failed", {}, None), opt.Trial(1, "complete", {}, [2.0]), opt.Trial(2, "infeasible", {},
+            [9.0]), opt.Trial(3, "complete", {}, [1.0]), opt.Trial(4, "complete", {}, [4.0])]
+    fig = optimize_figure(_picture_data(planar2, pb, rows, opt.best(pb, rows), [], {}))
+    assert len(fig.axes) == 1  # no importances: no second panel
+    lines = _drawn(fig.axes[0])
+    assert lines["best so far"][:2] == ([1, 2, 3, 4], [2.0, 2.0, 2.0, 4.0])
+    assert lines["complete"][:2] == ([1, 3, 4], [2.0, 1.0, 4.0]) and lines["infeasible"][:2] == ([2], [9.0])
+    assert lines["best (trial 4)"][:2] == ([4], [4.0]) and lines["failed"][0] == [0]
+
+    pb = _fake_problem(planar2, (True, False))
+    rows = [opt.Trial(0, "complete", {}, [1.0, 1.0]), opt.Trial(1, "complete", {}, [2.0, 2.0]),
+            opt.Trial(2, "complete", {}, [1.0, 3.0]), opt.Trial(3, "infeasible", {}, [5.0, 0.0]),
+            opt.Trial(4, "failed", {}, None), opt.Trial(5, "complete", {}, [0.5, 1.5])]
+    front = opt.pareto(pb, rows)
+    imp = {"task_min_margin": {"effector.mass": 1.0}, "peak_motor_torque": {"effector.mass": 1.0}}
+    fig = optimize_figure(_picture_data(planar2, pb, rows, opt.best(pb, rows), front, imp))
+    assert len(fig.axes) == 2 and fig.axes[1].get_title() == "which keys matter"
+    lines = _drawn(fig.axes[0])
+    assert sorted(zip(*lines["Pareto front"][:2])) == [(1.0, 1.0), (2.0, 2.0)]
+    assert sorted(zip(*lines["dominated"][:2])) == [(0.5, 1.5), (1.0, 3.0)]
+    assert to_rgb(lines["dominated"][2]) == (0.7, 0.7, 0.7)  # grey
+    assert to_rgb(lines["Pareto front"][2]) != to_rgb(lines["dominated"][2])
+    assert lines["infeasible"][:2] == ([5.0], [0.0])
+    assert len(fig.axes[1].patches) == 2  # a bar per objective for the one key
+
+
 # ----------------------------------------------------------------------------
 # The command: exhaustive grid, report, two objectives, determinism, bad input
 # ----------------------------------------------------------------------------
@@ -268,6 +324,9 @@ def test_two_objectives_pareto_csv_is_the_front(tmp_path, light_spec):
     assert d.raw["cables"][0]["outlet"][0] == pytest.approx(float(best_row["cables.0.outlet.0"]), rel=1e-9)
     assert f"trial {knee}" in text
     assert (out / "optimize.png").stat().st_size > 10_000
+    # two keys: each objective's importances, over both keys
+    assert {f: set(v) for f, v in s["importances"].items()} == {f: {OUTLETS[1][:17], OUTLETS[3][:17]}
+                                                                for f in ("task_min_margin", "peak_tension")}
 
 
 def test_one_worker_with_a_seed_is_repeatable(tmp_path, light_spec):
@@ -279,6 +338,21 @@ def test_one_worker_with_a_seed_is_repeatable(tmp_path, light_spec):
         header, rows = read_csv(tmp_path / str(k) / "optimize.csv")
         tables.append([row[:-1] for row in rows])  # all but the seconds column
     assert header[-1] == "seconds" and tables[0] == tables[1]
+
+
+def test_two_workers_end_with_exactly_the_trials_asked(tmp_path, light_spec):
+    """This process (worker 0) and a spawned worker share the study: exactly N trials, each once."""
+    out = tmp_path / "opt"
+    r = invoke("optimize", light_spec, *OUTLETS, "--maximize", "task_min_margin", "--trials", 24, "--workers", 2,
+               "--seed", 5, "--out", out, "--json", "--no-picture")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout)
+    rows = csv_dicts(out / "optimize.csv")
+    assert s["workers"] == 2 and s["trials_done"] == s["evaluated_now"] == 24
+    assert [int(r["trial"]) for r in rows] == list(range(24))
+    assert len({(r["cables.0.outlet.0"], r["cables.1.outlet.0"]) for r in rows}) == 24
+    workers = {t.user_attrs["result"]["worker"] for t in opt.finished(opt.study.load(out))}
+    assert 0 in workers and workers <= {0, 1}
 
 
 def test_invalid_variants_in_a_range_are_failed_trials(tmp_path, light_spec):
@@ -297,6 +371,7 @@ def test_invalid_variants_in_a_range_are_failed_trials(tmp_path, light_spec):
         assert f["task_min_margin"] == ""
     assert all(float(r["tension.1"]) >= 0 for r in rows if r["state"] != "failed")
     assert any(r["state"] == "complete" for r in rows)
+    assert s["importances"] == {}  # one key: nothing to compare
 
 
 def test_no_feasible_trial_exits_1_without_best(tmp_path, light_spec):
@@ -438,8 +513,9 @@ def _check_resumed(out, before, light_spec):
     points = [tuple(float(r[k]) for k in key) for r in rows]  # 10 significant digits in the CSV
     assert len(set(points)) == N_KILL  # nothing evaluated twice
     interrupted = [p for n, (st, p, intr) in before.items() if (st == "RUNNING" or intr) and p]
-    for p in interrupted:  # each interrupted point evaluated once, after the resume
-        assert sum(all(math.isclose(x, p[k], rel_tol=1e-9) for x, k in zip(q, key)) for q in points) == 1
+    for p in interrupted:  # each interrupted point evaluated once, after the resume (a trial killed between
+        # its two suggestions has one key: the resumed trial keeps it and samples the other)
+        assert sum(all(math.isclose(x, p[k], rel_tol=1e-9) for x, k in zip(q, key) if k in p) for q in points) == 1
     assert s["requeued_interrupted"] == len(interrupted)
     return s, interrupted
 
@@ -504,10 +580,14 @@ def _workers_gone(out, within_s: float = 60.0) -> bool:
 
 
 def test_sigkill_of_the_run_alone_leaves_workers_that_end(tmp_path, light_spec):
-    """The run's process killed alone: its two workers finish their trials (told normally) and end."""
+    """The run's process killed alone: its worker process finishes its trial (told normally) and ends;
+    the trial the run's process was evaluating (it is worker 0) is left running, and evaluated again on
+    resume."""
     out, code, _ = _start_and_kill(tmp_path, light_spec, signal.SIGKILL, group=False, workers=2)
     assert code == -signal.SIGKILL
     assert _workers_gone(out)
     before = _finished_trials(out / "optimize.db")
-    assert all(s != "RUNNING" for s, _, _ in before.values())
-    _check_resumed(out, before, light_spec)
+    running = [n for n, (st, p, _) in before.items() if st == "RUNNING"]
+    assert len(running) <= 1  # the run's own trial; the worker process's was told
+    _, interrupted = _check_resumed(out, before, light_spec)
+    assert len(interrupted) == len([n for n in running if before[n][1]])

@@ -28,9 +28,9 @@ interrupted trials do not count towards N nor appear in the results.
 
 Samplers
 --------
-TPE (Bergstra et al. 2011) for one objective, multi-objective TPE (Ozaki et
-al. 2020, 2022) for several, both multivariate (Falkner et al. 2018) and
-with optuna's constraint handling (the limits' violations,
+TPE (Bergstra et al. 2011), multivariate (Falkner et al. 2018), for one
+objective; multi-objective TPE (Ozaki et al. 2020, 2022; optuna models its
+keys independently) for several; both with optuna's constraint handling (the limits' violations,
 :mod:`cdpr_design.optimize.objectives`).  See ``docs/optimize.md`` for the
 choice.  With ``seed`` and one worker a run is deterministic; a resumed run
 seeds its sampler with ``seed`` plus the trials already in the study (so its
@@ -120,7 +120,7 @@ def load(folder: Path):
 
 def make_sampler(seed: int | None):
     """TPE (several objectives: multi-objective TPE); optuna's defaults otherwise (multivariate for one
-    objective); the limits reach it as the trials' constraints."""
+    objective, independent for several); the limits reach it as the trials' constraints."""
     optuna = _optuna()
     return optuna.samplers.TPESampler(seed=seed, n_startup_trials=STARTUP_TRIALS, n_ei_candidates=EI_CANDIDATES,
                                       constant_liar=True)
@@ -172,8 +172,16 @@ def finished(study) -> list:
     return [t for t in study.get_trials(deepcopy=False, states=states) if not _interrupted(t)]
 
 
-def _claim(study, total: int, lock: Path, interrupted: int):
-    """A new trial while fewer than ``total`` trials count, else None.
+def done_count(study, interrupted: int) -> int:
+    """Finished trials that count (one COUNT query; ``interrupted``: their number, constant in a run)."""
+    TS = _optuna().trial.TrialState
+    return study._storage.get_n_trials(study._study_id, state=(TS.COMPLETE, TS.FAIL)) - interrupted
+
+
+def _claim(study, total: int, lock: Path, interrupted: int, queued: bool):
+    """(a new trial while fewer than ``total`` trials count, else None; whether trials may still be
+    queued).  ``queued``: whether they may be (only a resumed run queues trials, before any worker
+    starts; once none is left none comes, and the query for them is spared).
 
     Only the trial's creation (a queued trial taken, or a new row) is under the lock; the sampling
     (TPE over every trial so far, the slow part of optuna's ``ask``) runs outside it, so workers
@@ -181,12 +189,13 @@ def _claim(study, total: int, lock: Path, interrupted: int):
     optuna = _optuna()
     with _flock(lock):
         if counted(study, interrupted) >= total:
-            return None
+            return None, queued
         study._thread_local.cached_all_trials = None
-        trial_id = study._pop_waiting_trial_id()
+        trial_id = study._pop_waiting_trial_id() if queued else None
         if trial_id is None:
+            queued = False
             trial_id = study._storage.create_new_trial(study._study_id)
-    return optuna.Trial(study, trial_id)
+    return optuna.Trial(study, trial_id), queued
 
 
 def _tell(study, trial, problem: Problem, outcome, seconds: float, worker: int) -> None:
@@ -215,6 +224,7 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
     optuna = _optuna()
     study = optuna.load_study(study_name=STUDY, storage=store or storage(folder), sampler=make_sampler(seed))
     interrupted = interrupted_count(study)
+    queued = bool(study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.WAITING,)))
     job = problem.job()
     lock = Path(folder) / CLAIM_LOCK
     done = 0
@@ -223,23 +233,49 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
             break  # the run was killed: leave the rest to a resumed run
         if single_thread:
             prepare_worker(False)  # numba (once loaded by a trial) on one thread: parallelism is across processes
-        trial = _claim(study, total, lock, interrupted)
-        if trial is None:
-            break
+        trial = None
         try:
+            with _sigint_held():  # a trial created is a trial in hand
+                trial, queued = _claim(study, total, lock, interrupted, queued)
+            if trial is None:
+                break
             values = {p.key: p.suggest(trial) for p in problem.space.params}
             t0 = time.perf_counter()
             outcome = evaluate(problem, job, trial.number, values)
-            _tell(study, trial, problem, outcome, time.perf_counter() - t0, worker)
+            with _sigint_held():  # told whole
+                _tell(study, trial, problem, outcome, time.perf_counter() - t0, worker)
         except BaseException:
-            with contextlib.suppress(Exception):
-                trial.set_user_attr("interrupted", True)
-                study.tell(trial, state=optuna.trial.TrialState.FAIL)
+            if trial is not None:
+                with _sigint_held(raise_after=False), contextlib.suppress(Exception):
+                    trial.set_user_attr("interrupted", True)
+                    study.tell(trial, state=optuna.trial.TrialState.FAIL)
             raise
         done += 1
         if on_trial is not None:
             on_trial()
     return done
+
+
+@contextlib.contextmanager
+def _sigint_held(raise_after: bool = True):
+    """SIGINT (Ctrl-C, or a run stopping its workers) held while a step that must not be cut runs (a
+    trial's creation, its record in the study): raised as KeyboardInterrupt after it (``raise_after``;
+    else dropped: the caller is stopping already).  Only the main thread receives signals; elsewhere
+    nothing changes."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got = []
+    old = signal.signal(signal.SIGINT, lambda *_: got.append(True))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old if old is not None else signal.default_int_handler)
+    if got and raise_after:
+        raise KeyboardInterrupt
 
 
 def _worker_main(problem: Problem, folder: str, total: int, seed: int | None, deadline: float | None,
@@ -359,30 +395,57 @@ def run(problem: Problem, folder: Path, total: int, *, workers: int = 1, seed: i
 
 
 def _run_pool(problem, folder, total, workers, seed, deadline, study, progress, start_method) -> int:
-    """``workers`` processes each running :func:`work` on the shared study; progress by polling it."""
+    """This process as worker 0 (set up already: it starts evaluating at once) and ``workers - 1``
+    worker processes, each running :func:`work` on the shared study; progress by counting its trials."""
     import multiprocessing as mp
     from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 
     before = set(mp.active_children())
-    ex = ProcessPoolExecutor(max_workers=workers, mp_context=mp.get_context(start_method))
+    ex = ProcessPoolExecutor(max_workers=workers - 1, mp_context=mp.get_context(start_method))
+    interrupted = interrupted_count(study)
+
+    def tick():
+        for f in futures:
+            if f.done():
+                f.result()  # a worker's error surfaces here
+        if progress is not None:
+            progress(min(done_count(study, interrupted), total), total)
+
     try:
         futures = [ex.submit(_worker_main, problem, str(folder), total,
                              None if seed is None else seed + k, deadline, k, os.getpid())
-                   for k in range(workers)]
+                   for k in range(1, workers)]
+        with _numba_threads_kept():
+            here = work(problem, folder, total, seed, deadline, 0, single_thread=True, on_trial=tick,
+                        store=study._storage)
         pending = set(futures)
         while pending:
-            finished_now, pending = wait(pending, timeout=0.5, return_when=FIRST_EXCEPTION)
-            for f in finished_now:
-                f.result()  # a worker's error surfaces here
-            if progress is not None:
-                progress(min(len(finished(study)), total), total)
+            _, pending = wait(pending, timeout=0.5, return_when=FIRST_EXCEPTION)
+            tick()
         ex.shutdown(wait=True)
-        return sum(f.result() for f in futures)
+        return here + sum(f.result() for f in futures)
     except BaseException:
         children = [p for p in mp.active_children() if p not in before]
         _stop(children)
         ex.shutdown(wait=False, cancel_futures=True)
         raise
+
+
+@contextlib.contextmanager
+def _numba_threads_kept():
+    """numba's thread count in this process as it was after this process evaluated as one worker of
+    several (on one thread)."""
+    import sys
+
+    before = sys.modules["numba"].get_num_threads() if "numba" in sys.modules else None
+    try:
+        yield
+    finally:
+        if "numba" in sys.modules:
+            import numba
+
+            with contextlib.suppress(Exception):
+                numba.set_num_threads(before if before is not None else numba.config.NUMBA_NUM_THREADS)
 
 
 def _stop(processes, grace_s: float = 10.0) -> None:
