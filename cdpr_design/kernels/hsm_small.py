@@ -41,10 +41,10 @@ from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL
 
 
 @njit_inline
-def _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol):
+def _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure):
     """Per-pose quantities in basis-slot order: M = G G^T, e_v = G (W t_mid - w_v) (``e`` row v),
     and per position p (slots 0..n-1, then the non-basic columns) the tension range ``sv[0, p]``
-    and the closure tolerance ``sv[1, p]``."""
+    and (``want_closure``) the closure tolerance ``sv[1, p]``."""
     n, m = W.shape
     for i in range(n):
         for j in range(i, n):
@@ -64,11 +64,13 @@ def _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol):
             e[v, i] = s - g
     for p in range(m):
         j = bcol[p] if p < n else nbc[p - n]
-        s = 0.0
-        for i in range(n):
-            s += W[i, j] * W[i, j]
         sv[0, p] = tmax[j] - tmin[j]
-        sv[1, p] = CLOSURE_TOL * math.sqrt(s)
+        sv[1, p] = 0.0
+        if want_closure:
+            s = 0.0
+            for i in range(n):
+                s += W[i, j] * W[i, j]
+            sv[1, p] = CLOSURE_TOL * math.sqrt(s)
 
 
 @njit_inline
@@ -107,7 +109,7 @@ def hsm_one(W, wreq, nv, tmin, tmax, scr, want_closure):
     ``closure`` is tested only when ``want_closure`` (else returned True)."""
     n, m = W.shape
     tab, M, e, sv = scr[0], scr[1], scr[2], scr[28]
-    _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, scr[19], scr[20])
+    _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, scr[19], scr[20], want_closure)
     c = scr[19][0]
     margin0 = np.inf
     margin = np.inf
@@ -146,7 +148,7 @@ def hsm_two(W, wreq, nv, tmin, tmax, scr, want_closure):
     ``closure`` is tested only when ``want_closure`` (else returned True)."""
     n, m = W.shape
     tab, M, e, sv, P = scr[0], scr[1], scr[2], scr[28], scr[29]
-    _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, scr[19], scr[20])
+    _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, scr[19], scr[20], want_closure)
     c1 = scr[19][0]
     c2 = scr[19][1]
     for s in range(n):
