@@ -107,6 +107,15 @@ def _other_rows(e, nv, a, b, c, la, lb, lc, half, inv, margin):
 def hsm_one(W, wreq, nv, tmin, tmax, scr, want_closure):
     """:func:`~cdpr_design.kernels.hsm.hsm_enumerate` for m = n + 1: (margin0, margin, closure);
     ``closure`` is tested only when ``want_closure`` (else returned True)."""
+    # two copies, each with the flag a constant (the test drops out of the other)
+    if want_closure:
+        return _one(W, wreq, nv, tmin, tmax, scr, True)
+    return _one(W, wreq, nv, tmin, tmax, scr, False)
+
+
+@njit_inline
+def _one(W, wreq, nv, tmin, tmax, scr, want_closure):
+    """The body of :func:`hsm_one`."""
     n, m = W.shape
     tab, M, e, sv = scr[0], scr[1], scr[2], scr[28]
     _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, scr[19], scr[20], want_closure)
@@ -146,6 +155,15 @@ def hsm_one(W, wreq, nv, tmin, tmax, scr, want_closure):
 def hsm_two(W, wreq, nv, tmin, tmax, scr, want_closure):
     """:func:`~cdpr_design.kernels.hsm.hsm_enumerate` for m = n + 2: (margin0, margin, closure);
     ``closure`` is tested only when ``want_closure`` (else returned True)."""
+    # two copies, each with the flag a constant (the test drops out of the other)
+    if want_closure:
+        return _two(W, wreq, nv, tmin, tmax, scr, True)
+    return _two(W, wreq, nv, tmin, tmax, scr, False)
+
+
+@njit_inline
+def _two(W, wreq, nv, tmin, tmax, scr, want_closure):
+    """The body of :func:`hsm_two`."""
     n, m = W.shape
     tab, M, e, sv, P = scr[0], scr[1], scr[2], scr[28], scr[29]
     _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, scr[19], scr[20], want_closure)
