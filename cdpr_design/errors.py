@@ -7,6 +7,28 @@ failed a check it was asked to pass (exit 1).
 
 from __future__ import annotations
 
+import reprlib
+
+#: Widest quotation of an offending value in a message (characters).
+QUOTE_WIDTH = 80
+#: Problems listed in one :class:`SpecError` message (the rest are counted).
+MAX_PROBLEMS_SHOWN = 20
+
+_repr = reprlib.Repr()
+_repr.maxlevel, _repr.maxlist, _repr.maxtuple, _repr.maxdict = 2, 4, 4, 4
+_repr.maxstring, _repr.maxother, _repr.maxlong = QUOTE_WIDTH, QUOTE_WIDTH, QUOTE_WIDTH
+
+
+def quote(value) -> str:
+    """``repr(value)`` shortened for a message: never the whole input.
+
+    Nested containers are cut after a few entries and two levels, strings
+    and other values to about :data:`QUOTE_WIDTH` characters, so a huge or
+    self-referencing value (a YAML alias bomb) costs nothing to show.
+    """
+    text = _repr.repr(value)
+    return text if len(text) <= QUOTE_WIDTH else text[: QUOTE_WIDTH - 3] + "..."
+
 
 class CdprError(Exception):
     """Base class of every error this package raises on purpose."""
@@ -35,7 +57,9 @@ class SpecError(CdprError, ValueError):
         head = f"{self.source}: " if self.source else ""
         if len(lines) == 1:
             return head + lines[0]
-        return head + f"{len(lines)} problems\n" + "\n".join("  " + s for s in lines)
+        more = len(lines) - MAX_PROBLEMS_SHOWN
+        shown = lines[:MAX_PROBLEMS_SHOWN] + ([f"... and {more} more"] if more > 0 else [])
+        return head + f"{len(lines)} problems\n" + "\n".join("  " + s for s in shown)
 
 
 class InputError(CdprError, ValueError):

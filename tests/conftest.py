@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from .helpers import DESIGNS, PLANAR2, ROOT, planar2_raw, random_planar_data, write_spec  # noqa: F401
@@ -27,3 +29,14 @@ def catalogue():
     from cdpr_design.model import spec
 
     return spec.load_catalogue()
+
+
+def pytest_addoption(parser):
+    parser.addoption("--fuzz-scale", type=float, default=1.0,
+                     help="Run the fuzz tests (test_fuzz.py) with this many times their examples, fresh random "
+                          "seeds when > 1 (CI: 1, a fixed set).")
+
+
+def pytest_configure(config):
+    # read by test_fuzz.py when it is imported (its hypothesis settings are made then)
+    os.environ["CDPR_FUZZ_SCALE"] = str(config.getoption("--fuzz-scale"))

@@ -20,10 +20,10 @@ from cdpr_design.batch.local import (JOURNAL_VERSION, Options, RunStats, chunk_s
 from cdpr_design.batch.sweep import run
 from cdpr_design.batch.table import (HEADLINE, HIGHER_IS_BETTER, KNOWN_FIGURES, LOWER_IS_BETTER, Difference, best,
                                      compare, parse_rank, table)
-from cdpr_design.batch.variants import (Axis, Plan, make_plan, parse_path, parse_values, parse_vary, resolve,
-                                        vary_from_spec, with_value)
+from cdpr_design.batch.variants import (HARD_MAX_VARIANTS, MAX_VARIANTS, Axis, Plan, make_plan, parse_path,
+                                        parse_values, parse_vary, resolve, vary_from_spec, with_value)
 
-__all__ = ["HEADLINE", "HIGHER_IS_BETTER", "JOURNAL_VERSION", "KNOWN_FIGURES", "LOWER_IS_BETTER", "Axis",
+__all__ = ["HARD_MAX_VARIANTS", "MAX_VARIANTS", "HEADLINE", "HIGHER_IS_BETTER", "JOURNAL_VERSION", "KNOWN_FIGURES", "LOWER_IS_BETTER", "Axis",
            "Difference", "Options", "Plan", "RunStats", "best", "chunk_size", "chunks", "compare",
            "default_workers", "guided_chunks", "make_plan", "parse_path", "parse_rank", "parse_values",
            "parse_vary", "record", "resolve", "run", "table", "vary_from_spec", "wait_closed", "with_value"]

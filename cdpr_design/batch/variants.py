@@ -18,8 +18,12 @@ import re
 from dataclasses import dataclass
 from typing import Any, Iterable, Iterator, Sequence
 
-from cdpr_design.errors import InputError, SpecError
+from cdpr_design.errors import InputError, SpecError, quote
 
+#: Largest sweep run without ``max_variants`` raised (variants): a day of planar2 variants on one core.
+MAX_VARIANTS = 100_000
+#: Largest sweep ever (variants): its table (sweep.csv) is built in memory, about 1 kB a variant.
+HARD_MAX_VARIANTS = 1_000_000
 
 _INT = re.compile(r"^[+-]?\d+$")
 
@@ -34,7 +38,7 @@ def _scalar(text: str):
     except ValueError:
         return t
     if not math.isfinite(v):
-        raise ValueError(f"expected finite numbers, got {t!r}")
+        raise ValueError(f"expected finite numbers, got {quote(t)}")
     return v
 
 
@@ -57,22 +61,24 @@ def parse_values(text: str) -> tuple:
     if ":" in text and "," not in text:
         parts = text.split(":")
         if len(parts) != 3:
-            raise ValueError(f"expected start:stop:count, got {text!r}")
+            raise ValueError(f"expected start:stop:count, got {quote(text)}")
         try:
             start, stop = float(parts[0]), float(parts[1])
         except ValueError:
-            raise ValueError(f"expected numbers in start:stop:count, got {text!r}") from None
+            raise ValueError(f"expected numbers in start:stop:count, got {quote(text)}") from None
         if not (math.isfinite(start) and math.isfinite(stop)):
-            raise ValueError(f"expected finite start and stop, got {text!r}")
+            raise ValueError(f"expected finite start and stop, got {quote(text)}")
         if not _INT.match(parts[2].strip()) or int(parts[2]) < 1:
-            raise ValueError(f"expected a whole count >= 1 in start:stop:count, got {parts[2]!r}")
+            raise ValueError(f"expected a whole count >= 1 in start:stop:count, got {quote(parts[2])}")
+        if int(parts[2]) > HARD_MAX_VARIANTS:
+            raise ValueError(f"expected a count of at most {HARD_MAX_VARIANTS:,} in start:stop:count, got {parts[2]}")
         n = int(parts[2])
         if n == 1:
             return (_tidy(start),)
         return tuple(_tidy(start + (stop - start) * k / (n - 1)) for k in range(n))
     items = [s for s in text.split(",")]
     if any(not s.strip() for s in items):
-        raise ValueError(f"expected comma-separated values without empty entries, got {text!r}")
+        raise ValueError(f"expected comma-separated values without empty entries, got {quote(text)}")
     return tuple(_scalar(s) for s in items)
 
 
@@ -87,7 +93,7 @@ def parse_vary(option: str) -> tuple[str, tuple]:
     key, sep, values = option.partition("=")
     key = key.strip()
     if not sep or not key:
-        raise InputError(f"--vary {option!r}: expected KEY=VALUES (e.g. effector.mass=0.5,1,2 or "
+        raise InputError(f"--vary {quote(option)}: expected KEY=VALUES (e.g. effector.mass=0.5,1,2 or "
                          "frame.upper.0=1.2:2.0:5)")
     try:
         return key, parse_values(values)
@@ -119,7 +125,7 @@ def vary_from_spec(section: dict | None) -> list[tuple[str, tuple]]:
         elif isinstance(v, (int, float)) and not isinstance(v, bool):
             out.append((str(key), (v,)))
         else:
-            problems.append((where, f"expected a list of values or 'start:stop:count', got {v!r}"))
+            problems.append((where, f"expected a list of values or 'start:stop:count', got {quote(v)}"))
     if problems:
         raise SpecError(problems)
     return out
@@ -130,7 +136,7 @@ def parse_path(key: str) -> tuple:
     text = re.sub(r"\[(\w+)\]", r".\1", key.strip())
     parts = text.split(".")
     if not text or any(p == "" for p in parts):
-        raise ValueError(f"expected a dotted key path such as effector.mass, got {key!r}")
+        raise ValueError(f"expected a dotted key path such as effector.mass, got {quote(key)}")
     return tuple(int(p) if _INT.match(p) else p for p in parts)
 
 
@@ -148,8 +154,8 @@ def _locate(container, part, trail: str):
         for i, item in enumerate(container):
             if isinstance(item, dict) and item.get("name") == part:
                 return i
-        raise ValueError(f"{trail}: no entry named {part!r}")
-    raise ValueError(f"{trail} is a value ({container!r}), not a section or a list")
+        raise ValueError(f"{trail}: no entry named {quote(part)}")
+    raise ValueError(f"{trail} is a value ({quote(container)}), not a section or a list")
 
 
 def resolve(base: dict, path: tuple) -> tuple:
@@ -263,7 +269,20 @@ class Plan:
         return hashlib.sha256(blob.encode()).hexdigest()[:20]
 
 
-def make_plan(design, vary: Sequence[tuple[str, Sequence]], max_problems: int = 10) -> Plan:
+def check_count(lengths: Sequence[int], max_variants: int = MAX_VARIANTS) -> None:
+    """Refuse a sweep of more than ``max_variants`` (at most :data:`HARD_MAX_VARIANTS`) variants:
+    the product of the keys' value counts, computed before a single variant is built."""
+    n = math.prod(lengths)
+    limit = min(max_variants, HARD_MAX_VARIANTS)
+    if n > limit:
+        hint = ("pass --max-variants to raise the limit" if n <= HARD_MAX_VARIANTS
+                else f"{HARD_MAX_VARIANTS:,} is the most any sweep runs")
+        raise InputError(f"--vary: the sweep would have {n:,} variants ({' x '.join(map(str, lengths))}), "
+                         f"more than {limit:,}; {hint}")
+
+
+def make_plan(design, vary: Sequence[tuple[str, Sequence]], max_problems: int = 10,
+              max_variants: int = MAX_VARIANTS) -> Plan:
     """Check a sweep definition against the design and validate every variant up front.
 
     Parameters
@@ -272,12 +291,16 @@ def make_plan(design, vary: Sequence[tuple[str, Sequence]], max_problems: int = 
         The base design (its ``raw`` spec data is varied).
     vary : list of (key, values)
         From :func:`parse_vary` / :func:`vary_from_spec`.
+    max_variants : int
+        Most variants allowed (:func:`check_count`; default :data:`MAX_VARIANTS`).
 
     Raises
     ------
     SpecError
         An unknown key path, a key given twice, or a variant the spec format
         rejects; each message names the variant by index and varied values.
+    InputError
+        More than ``max_variants`` variants.
     """
     from cdpr_design.model import spec
 
@@ -303,6 +326,7 @@ def make_plan(design, vary: Sequence[tuple[str, Sequence]], max_problems: int = 
         axes.append(Axis(key, path, tuple(values)))
     if problems:
         raise SpecError(problems, design.source)
+    check_count([len(a.values) for a in axes], max_variants)
     plan = Plan(base, tuple(axes), design.source)
     bad = 0
     seen_problems: set = set()

@@ -18,10 +18,10 @@ def _table(design, summary: dict, cycle_time: float, files):
     return summary_table(
         f"{design.name} — bridge ({summary['stopped']})",
         [("cycles", summary["cycles"]), ("overruns", summary["overruns"]),
-         ("cycle time \\[ms]", cycle_time * 1e3),
-         ("round trip mean / p99 / max \\[ms]",
+         ("cycle time [ms]", cycle_time * 1e3),
+         ("round trip mean / p99 / max [ms]",
           " / ".join(fmt(None if v is None else v * 1e3) for v in (lat["mean"], lat["p99"], lat["max"]))),
-         ("delay \\[ms]", ", ".join(f"{k}: {fmt(None if v is None else v * 1e3)}"
+         ("delay [ms]", ", ".join(f"{k}: {fmt(None if v is None else v * 1e3)}"
                                   for k, v in summary["delay"].items())),
          ("files", str(files))])
 
@@ -34,14 +34,14 @@ def bridge(
         help="Start a built-in test PLC on 127.0.0.1 that plays this spec trajectory as set-points.")] = None,
     duration: Annotated[Optional[float], typer.Option(
         "--duration", help="Stop after this many seconds (default: the test trajectory + 0.5 s; "
-        "else until Ctrl-C).")] = None,
+        "else until Ctrl-C).", min=1e-3, max=1e7)] = None,
     cycle_time: Annotated[Optional[float], typer.Option(
-        "--cycle-time", help="Gateway cycle [s] (default plc.cycle_time).")] = None,
+        "--cycle-time", help="Gateway cycle [s] (default plc.cycle_time).", min=1e-4, max=10.0)] = None,
     timeout: Annotated[Optional[float], typer.Option(
-        "--timeout", help="Timeout of each ADS request [s] (default max(5 cycles, 50 ms)).")] = None,
+        "--timeout", help="Timeout of each ADS request [s] (default max(5 cycles, 50 ms)).", min=1e-4, max=600.0)] = None,
     reconnect: Annotated[int, typer.Option(
         "--reconnect", help="Reconnection attempts when the PLC stops answering, with back-off "
-        "0.1 s doubling to 2 s (default 0: stop).")] = 0,
+        "0.1 s doubling to 2 s (default 0: stop).", min=0, max=1000)] = 0,
     local_net_id: Annotated[Optional[str], typer.Option(
         "--local-net-id", help="AMS net id of this computer (the route the PLC knows it by).")] = None,
     out: OutOpt = None,

@@ -9,9 +9,10 @@ stdout; progress and messages go to stderr.
 from __future__ import annotations
 
 import functools
-import json
 import math
+import os
 import sys
+import warnings
 from contextlib import contextmanager
 from enum import Enum
 from pathlib import Path
@@ -20,11 +21,13 @@ from typing import Annotated, Optional
 import typer
 from rich.console import Console
 from rich.table import Table
+from rich.text import Text
 
-from cdpr_design.errors import CheckFailed, InputError, SpecError
+from cdpr_design.errors import CheckFailed, InputError, SpecError, quote
 
-err = Console(stderr=True, highlight=False)
-out_console = Console(highlight=False)
+# markup off: messages, names and paths are printed as they are ("[min, max]" stays, "[/x]" is text)
+err = Console(stderr=True, highlight=False, markup=False)
+out_console = Console(highlight=False, markup=False)
 
 SpecArg = Annotated[Path, typer.Argument(help="Design spec (YAML).", show_default=False)]
 OutOpt = Annotated[Optional[Path], typer.Option("--out", help="Output folder (default out/<design name>/).")]
@@ -33,13 +36,17 @@ QuietOpt = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bars 
 OverwriteOpt = Annotated[bool, typer.Option(
     "--overwrite", help="Replace files in --out that cdpr-design did not write.")]
 ForceOpt = Annotated[bool, typer.Option("--force", help="Allow grids larger than the sane-size limit.")]
-StepOpt = Annotated[Optional[float], typer.Option("--step", help="Grid step [m] (overrides workspace.grid.step).")]
+#: Grid steps [m]: 1 um (below any robot's accuracy) to 10 km (model.limits.LENGTH); the pose count is limited too.
+STEP_RANGE = {"min": 1e-6, "max": 1e4}
+StepOpt = Annotated[Optional[float], typer.Option(
+    "--step", help="Grid step [m] (overrides workspace.grid.step).", **STEP_RANGE)]
 CatalogueOpt = Annotated[Optional[Path], typer.Option(
     "--catalogue", help="Motor catalogue YAML extending the shipped one (same format as cdpr_design/data/motors.yaml).")]
 TrajectoryOpt = Annotated[Optional[str], typer.Option(
     "--trajectory", help="Name of a spec trajectory whose duty cycle gives the RMS torque (default: a standard cycle).")]
 SafetyOpt = Annotated[Optional[float], typer.Option(
-    "--safety-factor", help="Factor >= 1 on required torque and speed (default requirements.safety_factor or 1).")]
+    "--safety-factor", help="Factor >= 1 on required torque and speed (default requirements.safety_factor or 1).",
+    min=1.0, max=100.0)]
 MotorOpt = Annotated[Optional[str], typer.Option(
     "--motor", help="Evaluate this catalogue motor on every axis instead of the spec's or the smallest that fits.")]
 
@@ -73,32 +80,44 @@ FormatOpt = Annotated[Format, typer.Option(
     "--format", help="Tables as csv (default) or parquet (typed columns, units and the spec in the metadata).")]
 
 
-def error(message: str) -> None:
-    """Print ``error: message`` on stderr, the message as plain text (``[0, 180]`` is not markup)."""
-    from rich.text import Text
-
-    err.print(Text.assemble(("error:", "bold red"), " ", str(message)), soft_wrap=True)
+def error(message: str, head: str = "error:") -> None:
+    """Print ``error: message`` on stderr, the message as plain text (no markup)."""
+    err.print(Text.assemble((head, "bold red"), " ", str(message)), soft_wrap=True)
 
 
 def command(fn):
-    """Turn the package's errors into exit codes and messages (no tracebacks for bad input)."""
+    """Turn the package's errors into exit codes and messages (no tracebacks for bad input).
+
+    SIGTERM and SIGHUP interrupt the command like Ctrl-C (:mod:`cdpr_design.cli.signals`);
+    with ``--quiet`` warnings (numpy's overflow, ...) are not printed either.
+    """
+    from cdpr_design.cli.signals import interruptible
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
-            return fn(*args, **kwargs)
+            with interruptible(), warnings.catch_warnings():
+                if kwargs.get("quiet"):
+                    quiet_warnings()
+                return fn(*args, **kwargs)
         except (SpecError, InputError) as exc:
             error(str(exc))
             raise typer.Exit(2) from None
         except CheckFailed as exc:
             if str(exc):
-                err.print(f"[bold red]check failed:[/] {exc}", markup=True, soft_wrap=True)
+                error(str(exc), "check failed:")
             raise typer.Exit(1) from None
         except KeyboardInterrupt:
             err.print("interrupted")
             raise typer.Exit(130) from None
 
     return wrapper
+
+
+def quiet_warnings() -> None:
+    """No warnings on stderr, in this process and in the worker processes it starts."""
+    warnings.simplefilter("ignore")
+    os.environ["PYTHONWARNINGS"] = "ignore"
 
 
 def load_design(path: Path, cable_model: CableModel | None = None):
@@ -109,14 +128,16 @@ def load_design(path: Path, cable_model: CableModel | None = None):
     return spec.with_cable_model(design, cable_model.value) if cable_model is not None else design
 
 
-def parse_numbers(text: str, option: str, count: int | None = None, what: str = "numbers") -> list[float]:
-    """Comma-separated numbers of an option (``--at 0.75,0.75``); bad text is exit 2."""
+def parse_numbers(text: str, option: str, count: int | None = None, what: str = "numbers",
+                  limit: float = 1e12) -> list[float]:
+    """Comma-separated numbers of an option (``--at 0.75,0.75``), each finite and of magnitude at most
+    ``limit``; bad text is exit 2."""
     try:
         vals = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
     except ValueError:
-        raise InputError(f"{option}: expected comma-separated numbers, got {text!r}") from None
-    if not all(math.isfinite(v) for v in vals):
-        raise InputError(f"{option}: expected finite numbers, got {text!r}")
+        raise InputError(f"{option}: expected comma-separated numbers, got {quote(text)}") from None
+    if not all(math.isfinite(v) and abs(v) <= limit for v in vals):
+        raise InputError(f"{option}: expected finite numbers of magnitude at most {limit:g}, got {quote(text)}")
     if count is not None and len(vals) != count:
         raise InputError(f"{option}: expected {count} {what}, got {len(vals)}")
     return vals
@@ -124,16 +145,18 @@ def parse_numbers(text: str, option: str, count: int | None = None, what: str = 
 
 def parse_pose(design, text: str, option: str = "--at") -> list[float]:
     """The pose coordinates [m, rad] of an option, one per motion coordinate."""
+    from cdpr_design.model.limits import LENGTH
+
     coords = design.motion.coords
     return parse_numbers(text, option, len(coords),
-                         f"numbers ({','.join(coords)}) for motion {design.motion.name}")
+                         f"numbers ({','.join(coords)}) for motion {design.motion.name}", limit=LENGTH)
 
 
 def emit_json(data) -> None:
-    """``data`` as one line of JSON on stdout."""
-    from cdpr_design.io.tables import json_default
+    """``data`` as one line of JSON on stdout (NaN and infinities as ``null``: always valid JSON)."""
+    from cdpr_design.io.tables import json_text
 
-    sys.stdout.write(json.dumps(data, default=json_default) + "\n")
+    sys.stdout.write(json_text(data) + "\n")
     sys.stdout.flush()
 
 
@@ -174,7 +197,7 @@ def bars(quiet: bool, min_total: int = 0):
 
 
 def info(quiet: bool, msg: str) -> None:
-    """A message on stderr unless ``quiet``."""
+    """A message on stderr unless ``quiet`` (plain text: no markup)."""
     if not quiet:
         err.print(msg, soft_wrap=True)
 
@@ -186,7 +209,7 @@ def fmt(v, digits=4):
     if isinstance(v, float):
         if not math.isfinite(v):
             return "—"
-        return f"{v:.{digits}g}"
+        return f"{v + 0.0:.{digits}g}"  # + 0.0: no "-0" on screen either
     return str(v)
 
 
@@ -196,7 +219,7 @@ def summary_table(title: str, rows: list[tuple[str, object]]) -> Table:
     t.add_column("", style="bold")
     t.add_column("")
     for k, v in rows:
-        t.add_row(k, fmt(v))
+        t.add_row(k, fmt(v))  # the consoles print without markup: values and paths as they are
     return t
 
 

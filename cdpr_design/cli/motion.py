@@ -13,7 +13,7 @@ from cdpr_design.cli.common import (CableModelOpt, Format, FormatOpt, JsonOpt, O
 from cdpr_design.errors import CheckFailed
 
 CycleOpt = Annotated[Optional[float], typer.Option(
-    "--cycle-time", help="Sample period [s] (default: the trajectory's cycle_time, else 0.001).")]
+    "--cycle-time", help="Sample period [s] (default: the trajectory's cycle_time, else 0.001).", min=1e-5, max=1.0)]
 NameArg = Annotated[str, typer.Argument(help="Name of a path in the spec's trajectories: section.")]
 
 
@@ -25,7 +25,7 @@ def tension_ranges(summary: dict, cables) -> str:
 def segments_table(title: str, segments: list[dict]) -> Table:
     """The paper's Table 2 layout: mean target and mean actual position per straight segment."""
     t = Table(title=title, title_justify="left")
-    for head in ("segment", "axis", "mean target \\[mm]", "mean actual \\[mm]", "error \\[mm]", "error \\[%]"):
+    for head in ("segment", "axis", "mean target [mm]", "mean actual [mm]", "error [mm]", "error [%]"):
         t.add_column(head, justify="right")
     for r in segments:
         t.add_row(str(r["segment"]), r["axis"], f"{1e3 * r['mean_target']:.3f}", f"{1e3 * r['mean_actual']:.3f}",
@@ -38,7 +38,7 @@ def setpoint_rows(summary: dict) -> list:
     if "cable_model" not in summary:
         return []
     err = ", ".join(f"{c}: {fmt(None if v is None else 1e3 * v)}" for c, v in summary["max_setpoint_error"].items())
-    return [("cable model", summary["cable_model"]), ("ideal set-point error \\[mm]", err),
+    return [("cable model", summary["cable_model"]), ("ideal set-point error [mm]", err),
             ("samples without set-points", f"{summary['unsolved_samples']:,}")]
 
 
@@ -73,10 +73,10 @@ def trajectory_cmd(
     else:
         out_console.print(summary_table(
             f"{design.name} — trajectory {name}",
-            [("samples", f"{s['samples']:,}"), ("cycle time \\[ms]", 1e3 * s["cycle_time"]),
-             ("duration \\[s]", s["duration"]), ("peak speed \\[m/s]", s["max_speed"]),
-             ("peak acceleration \\[m/s²]", s["max_acceleration"]),
-             ("tension range \\[N]", tension_ranges(s, samples.cable_names)),
+            [("samples", f"{s['samples']:,}"), ("cycle time [ms]", 1e3 * s["cycle_time"]),
+             ("duration [s]", s["duration"]), ("peak speed [m/s]", s["max_speed"]),
+             ("peak acceleration [m/s²]", s["max_acceleration"]),
+             ("tension range [N]", tension_ranges(s, samples.cable_names)),
              ("feasible", "yes" if s["feasible"] else f"no ({s['infeasible_samples']} samples)"),
              *setpoint_rows(s),
              ("files", str(out_dir.path))]))
@@ -89,19 +89,21 @@ def simulate(
     spec: SpecArg,
     name: NameArg,
     delay: Annotated[float, typer.Option(
-        "--delay", help="Transport delay of the set-points [s] (the paper's ADS path: 0.11-0.15).")] = 0.0,
+        "--delay", help="Transport delay of the set-points [s] (the paper's ADS path: 0.11-0.15).",
+        min=0.0, max=10.0)] = 0.0,
     servo_bandwidth: Annotated[float, typer.Option(
-        "--servo-bandwidth", help="Position-loop bandwidth of each winch axis [rad/s].")] = 300.0,
+        "--servo-bandwidth", help="Position-loop bandwidth of each winch axis [rad/s].", min=1e-3, max=1e6)] = 300.0,
     feedforward: Annotated[bool, typer.Option(
         "--feedforward/--no-feedforward", help="Velocity feed-forward in the axis position loop.")] = True,
     compensate_stretch: Annotated[bool, typer.Option(
         "--stretch-compensation/--no-stretch-compensation",
         help="Take up each cable's expected elastic stretch T/k in the command.")] = True,
     cable_damping: Annotated[float, typer.Option(
-        "--cable-damping", help="Damping ratio of the axial cable mode.")] = 0.7,
-    timestep: Annotated[float, typer.Option("--timestep", help="Physics step [s].")] = 5e-4,
+        "--cable-damping", help="Damping ratio of the axial cable mode.", min=0.0, max=100.0)] = 0.7,
+    timestep: Annotated[float, typer.Option("--timestep", help="Physics step [s].", min=1e-6, max=0.01)] = 5e-4,
     hold: Annotated[Optional[float], typer.Option(
-        "--hold", help="Time [s] to keep the last set-point at the end (default 0.5 s + the delay).")] = None,
+        "--hold", help="Time [s] to keep the last set-point at the end (default 0.5 s + the delay).",
+        min=0.0, max=60.0)] = None,
     cycle_time: CycleOpt = None,
     cable_segments: Annotated[Optional[int], typer.Option(
         "--cable-segments", help="Segments of each sagging cable in the MuJoCo model, 2-200 (default 16).")] = None,
@@ -126,9 +128,9 @@ def simulate(
         return
     out_console.print(summary_table(
         f"{design.name} — simulation of {name} (delay {1e3 * delay:g} ms)",
-        [("samples", f"{s['samples']:,}"), ("RMS position error \\[mm]", 1e3 * s["rms_error"]),
-         ("max position error \\[mm]", 1e3 * s["max_error"]), ("delay \\[ms]", delay_text(s["delay"])),
-         ("tension range \\[N]", tension_ranges(s, result.cable_names)),
+        [("samples", f"{s['samples']:,}"), ("RMS position error [mm]", 1e3 * s["rms_error"]),
+         ("max position error [mm]", 1e3 * s["max_error"]), ("delay [ms]", delay_text(s["delay"])),
+         ("tension range [N]", tension_ranges(s, result.cable_names)),
          ("files", str(out_dir.path))]))
     if s["segments"]:
         out_console.print(segments_table("straight segments (the paper's Table 2)", s["segments"]))
@@ -145,7 +147,7 @@ def compare(
     rename: Annotated[Optional[list[str]], typer.Option(
         "--map", help="TARGET_COL=ACTUAL_COL: compare differently named columns (repeatable).")] = None,
     max_delay: Annotated[Optional[float], typer.Option(
-        "--max-delay", help="Largest delay searched [s] (default: half the record).")] = None,
+        "--max-delay", help="Largest delay searched [s] (default: half the record).", min=1e-6, max=1e6)] = None,
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Folder for comparison.json (default: nothing written).")] = None,
     json_: JsonOpt = False,
@@ -160,7 +162,7 @@ def compare(
         emit_json(s)
         return
     t = Table(title=f"compare {target.name} → {actual.name}", title_justify="left")
-    for head in ("column", "delay \\[ms]", "mean error", "RMS error", "max error"):
+    for head in ("column", "delay [ms]", "mean error", "RMS error", "max error"):
         t.add_column(head, justify="right")
     for c in cols:
         st = s["columns"][c]
@@ -170,7 +172,7 @@ def compare(
     pos = res.position_columns
     if pos:
         out_console.print(summary_table("position error (" + ",".join(pos) + ")",
-                                        [("RMS \\[mm]", 1e3 * res.rms_error), ("max \\[mm]", 1e3 * res.max_error)]))
+                                        [("RMS [mm]", 1e3 * res.rms_error), ("max [mm]", 1e3 * res.max_error)]))
     if s["segments"]:
         out_console.print(segments_table("straight segments (the paper's Table 2)", s["segments"]))
 

@@ -45,7 +45,7 @@ def render(design, run) -> None:
                     f"{s['infeasible']} infeasible, {s['failed']} failed)"),
          ("evaluated now", f"{st.evaluated} in {st.workers} worker(s)" +
           (f", {st.resumed} resumed" if st.resumed else "")),
-         ("elapsed \\[s]", st.elapsed_s), ("trials/s", s["trials_per_s"]), ("files", str(run.out.path))]))
+         ("elapsed [s]", st.elapsed_s), ("trials/s", s["trials_per_s"]), ("files", str(run.out.path))]))
     if run.best is not None:
         out_console.print(best_table(run))
     for r in [r for r in run.trials if r.state == "failed"][:3]:

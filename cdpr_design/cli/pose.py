@@ -9,9 +9,10 @@ from typing import Annotated, Optional
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (CableModelOpt, JsonOpt, Kind, KindOpt, SpecArg, command, emit_json, fmt, load_design,
-                                    out_console, parse_numbers, parse_pose, summary_table)
+from cdpr_design.cli.common import (CableModelOpt, JsonOpt, Kind, KindOpt, QuietOpt, SpecArg, command, emit_json, fmt,
+                                    load_design, out_console, parse_numbers, parse_pose, summary_table)
 from cdpr_design.errors import InputError
+from cdpr_design.model.limits import LENGTH
 
 
 class Objective(str, Enum):
@@ -47,6 +48,7 @@ def pose(
     weights: WeightsOpt = None,
     json_: JsonOpt = False,
     cable_model: CableModelOpt = None,
+    quiet: QuietOpt = False,
 ):
     """One pose: cable lengths, tensions, feasibility, margin, structure matrix (and the hanging tilt)."""
     from cdpr_design.jobs import hanging as hjob
@@ -118,6 +120,7 @@ def fk(
                         "pose of the kinematic solve with swivel pulleys).")] = None,
     json_: JsonOpt = False,
     cable_model: CableModelOpt = None,
+    quiet: QuietOpt = False,
 ):
     """Where the effector rests for given cable lengths (geometrico-static forward problem; unstretched
     lengths with elastic or sagging cables)."""
@@ -125,7 +128,7 @@ def fk(
     from cdpr_design.jobs import pose as job
 
     design = load_design(spec, cable_model)
-    L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)")
+    L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)", limit=LENGTH)
     if any(v < 0 for v in L):
         raise InputError("--lengths: cable lengths must be non-negative")
     g = parse_pose(design, guess, "--guess") if guess is not None else None
@@ -136,8 +139,8 @@ def fk(
             return
         out_console.print(summary_table(
             f"{design.name} — forward kinematics ({data['method']})",
-            [(c, float(v)) for c, v in zip(design.motion.coords, data["pose"])] + [("residual \\[m]", data["residual"])]
-            + [(f"tension {c} \\[N]", v) for c, v in data.get("tensions", {}).items()]
+            [(c, float(v)) for c, v in zip(design.motion.coords, data["pose"])] + [("residual [m]", data["residual"])]
+            + [(f"tension {c} [N]", v) for c, v in data.get("tensions", {}).items()]
             + [("within tension bounds", "yes" if data["within_bounds"] else "no")]))
         return
     data = hjob.fk_data(design, L, guess=g)
@@ -146,18 +149,24 @@ def fk(
         return
     rows = [(c, v) for c, v in zip(design.motion.coords, data["pose"])]
     if data["tensions"] is not None:
-        rows += [("tilt \\[deg]", data["tilt"])] + [(f"tension {c} \\[N]", v) for c, v in data["tensions"].items()]
+        rows += [("tilt [deg]", data["tilt"])] + [(f"tension {c} [N]", v) for c, v in data["tensions"].items()]
         rows += [("slack", ", ".join(data["slack"]) or "none"), ("stable", str(data["stable"])),
                  ("other stable equilibria", str(len(data["equilibria"])))]
-    rows += [("residual \\[m]", data["residual"])]
+    rows += [("residual [m]", data["residual"])]
     out_console.print(summary_table(f"{design.name} — where it rests ({data['method']})", rows))
 
 
 @command
-def schema():
+def schema(
+    json_: Annotated[bool, typer.Option("--json", help="Print the schema as one line of JSON.")] = False,
+    quiet: QuietOpt = False,
+):
     """Print the JSON Schema of the spec format (for editors' YAML validation)."""
     from cdpr_design.model import spec as spec_mod
 
+    if json_:
+        emit_json(spec_mod.json_schema())
+        return
     sys.stdout.write(spec_mod.schema_text() + "\n")
 
 

@@ -15,10 +15,10 @@ def sizing_table(design, result) -> Table:
     """One row per cable: peak tension, motor torques and speed, the motor and its margins."""
     t = Table(title=f"{design.name} — motor sizing ({result.envelope.poses:,} {result.envelope.source} poses, "
                     f"safety factor {result.safety_factor:g})", title_justify="left")
-    cols = [("cable", "cable"), ("T \\[N]", "peak_tension"), ("τ pk", "peak_motor_torque"),
+    cols = [("cable", "cable"), ("T [N]", "peak_tension"), ("τ pk", "peak_motor_torque"),
             ("τ rms", "rms_motor_torque"), ("rpm", "peak_motor_speed"),
             ("motor", "motor"), ("τ mrg", "torque_margin"), ("n mrg", "speed_margin"),
-            ("T lim \\[N]", "implied_tension_max")]
+            ("T lim [N]", "implied_tension_max")]
     for head, key in cols:
         t.add_column(head, no_wrap=key in ("motor", "cable"))
     for row in result.rows():

@@ -8,9 +8,10 @@ from typing import Annotated, Optional
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (CatalogueOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt, SafetyOpt,
-                                    SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt, info,
+from cdpr_design.cli.common import (CatalogueOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt,
+                                    SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt, info,
                                     load_design, out_console, summary_table, timings_text)
+from cdpr_design.batch.variants import HARD_MAX_VARIANTS, MAX_VARIANTS
 from cdpr_design.errors import CheckFailed
 
 
@@ -45,8 +46,8 @@ def render(design, run, top: int, check_against: Path | None) -> None:
          ("resumed from journal", f"{st.skipped:,}"), ("failed to evaluate", f"{len(run.failed):,}"),
          ("pass every requirement", f"{len(run.best_rows):,}"),
          ("backend", f"{st.backend}, {st.workers} worker(s), {st.chunk} variant(s) per task"),
-         ("elapsed \\[s]", st.elapsed_s),
-         ("sweep / write / pictures / total \\[s]", timings_text(run.summary["timings"])),
+         ("elapsed [s]", st.elapsed_s),
+         ("sweep / write / pictures / total [s]", timings_text(run.summary["timings"])),
          ("files", str(run.out.path))]))
     if run.best_rows:
         out_console.print(best_table(run, top))
@@ -70,7 +71,8 @@ def sweep(
              "tension.1) and its values: a,b,c or start:stop:count. Repeat for a full grid. "
              "Given on the command line, these replace the spec's sweep.vary.")] = None,
     workers: Annotated[Optional[int], typer.Option(
-        "--workers", help="Worker processes (default sweep.workers, else one per core; 1: in this process).")] = None,
+        "--workers", help="Worker processes (default sweep.workers, else one per core; 1: in this process).",
+        min=1, max=1024)] = None,
     scheduler: Annotated[Optional[str], typer.Option(
         "--scheduler", metavar="ADDRESS",
         help="Run on the Dask scheduler at ADDRESS (tcp://host:8786); 'local' starts a LocalCluster "
@@ -84,9 +86,9 @@ def sweep(
         "--check-against", metavar="BASELINE.csv",
         help="Compare with a baseline sweep.csv; exit 1 when a figure regresses.")] = None,
     tolerance: Annotated[float, typer.Option(
-        "--tolerance", help="Relative tolerance of --check-against.")] = 1e-6,
+        "--tolerance", help="Relative tolerance of --check-against.", min=0.0)] = 1e-6,
     abs_tolerance: Annotated[float, typer.Option(
-        "--abs-tolerance", help="Absolute tolerance of --check-against (added to the relative one).")] = 1e-9,
+        "--abs-tolerance", help="Absolute tolerance of --check-against (added to the relative one).", min=0.0)] = 1e-9,
     strict: Annotated[bool, typer.Option(
         "--strict", help="With --check-against: improvements beyond the tolerance fail too.")] = False,
     catalogue: CatalogueOpt = None,
@@ -94,7 +96,11 @@ def sweep(
     safety_factor: SafetyOpt = None,
     motor: MotorOpt = None,
     step: StepOpt = None,
-    top: Annotated[int, typer.Option("--top", help="Best variants to list.")] = 10,
+    top: Annotated[int, typer.Option("--top", help="Best variants to list.", min=0)] = 10,
+    max_variants: Annotated[int, typer.Option(
+        "--max-variants", help="Most variants the sweep may have (the product of the value counts); "
+                               f"raise it explicitly for larger sweeps (at most {HARD_MAX_VARIANTS:,}).",
+        min=1, max=HARD_MAX_VARIANTS)] = MAX_VARIANTS,
     no_picture: Annotated[bool, typer.Option("--no-picture", help="Do not draw sweep.png.")] = False,
     format: FormatOpt = Format.csv,
     out: OutOpt = None,
@@ -110,7 +116,7 @@ def sweep(
     run = job.sweep(design, vary, workers, scheduler, resume, rank_by, check_against, tolerance, abs_tolerance,
                     strict, catalogue, trajectory, safety_factor, motor, step, top, not no_picture, out, overwrite,
                     progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg), engine=env.engine(),
-                    format=format.value)
+                    format=format.value, max_variants=max_variants)
     if json_:
         emit_json(run.summary)
     else:

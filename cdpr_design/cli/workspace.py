@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 import typer
 
 from cdpr_design.cli.common import (CableModelOpt, ForceOpt, Format, FormatOpt, JsonOpt, Kind, KindOpt, OutOpt,
-                                    OverwriteOpt, QuietOpt, SpecArg, bars, command, emit_json, load_design,
+                                    OverwriteOpt, QuietOpt, SpecArg, StepOpt, bars, command, emit_json, load_design,
                                     out_console, summary_table, timings_text)
 from cdpr_design.errors import InputError
 
@@ -22,7 +22,7 @@ class Orientations(str, Enum):
 def workspace(
     spec: SpecArg,
     kind: KindOpt = Kind.static,
-    step: Annotated[Optional[float], typer.Option("--step", help="Grid step [m] (overrides workspace.grid.step).")] = None,
+    step: StepOpt = None,
     out: OutOpt = None,
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
@@ -65,15 +65,15 @@ def workspace(
         f"{design.name} — {s['kind']} workspace",
         [("poses", f"{s['poses']:,}"), ("feasible", f"{s['feasible']:,}"),
          ("fraction", f"{100 * s['fraction']:.2f} %"), ("measure", f"{s['measure']:.4g} {unit}"),
-         ("min margin \\[N]", s["min_margin"]), ("max margin \\[N]", s["max_margin"]),
-         ("max tension \\[N]", s["max_tension"]), ("elapsed \\[s]", s["elapsed_s"]),
-         ("sweep / write / pictures / total \\[s]", timings_text(s["timings"]))]
+         ("min margin [N]", s["min_margin"]), ("max margin [N]", s["max_margin"]),
+         ("max tension [N]", s["max_tension"]), ("elapsed [s]", s["elapsed_s"]),
+         ("sweep / write / pictures / total [s]", timings_text(s["timings"]))]
         + ([("collision free", f"{s['collision_free']:,}"),
             ("feasible before interference", f"{s['feasible_statics']:,}")] if "collision_free" in s else [])
         + ([("orientations", f"{s['orientation_mode']} ({s['orientation_count']} samples)")]
            if "orientation_mode" in s else [])
         + ([("effector orientation", s["effector_orientation"]), ("hangs at", f"{s['hangs']:,} positions"),
-            ("max tilt (feasible) \\[deg]", s["max_tilt"])] if "effector_orientation" in s else [])
+            ("max tilt (feasible) [deg]", s["max_tilt"])] if "effector_orientation" in s else [])
         + ([("cable model", s["cable_model"])] if "cable_model" in s else [])
         + ([("cable status", ", ".join(f"{k} {v:,}" for k, v in s["cable_status"].items() if v))]
            if "cable_status" in s else [])

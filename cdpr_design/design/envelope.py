@@ -46,6 +46,7 @@ import numpy as np
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics import cables as cable_models
 from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate_structure
 from cdpr_design import workspaces as workspace
 from cdpr_design.workspaces import grid as wsg
 
@@ -107,6 +108,8 @@ def task_grid(design: Design, step: float | None = None) -> Grid | None:
     box = design.requirements.task_box
     if box is None:
         return None
+    if step is not None:
+        wsg.check_step(step, "--step")
     st = (float(step),) * len(box[0]) if step is not None else design.workspace.grid.step
     return Grid(tuple(float(x) for x in box[0]), tuple(float(x) for x in box[1]), tuple(st))
 
@@ -127,7 +130,7 @@ def _structure_many(design: Design, positions: np.ndarray, Rb: np.ndarray, curva
         paths = pl.design_cable_paths(design, positions[:, None, :] + Rb[None, :, :])
         L = paths.lengths
         u = paths.directions.copy()
-        u[~(paths.free_lengths > 1e-12)] = 0.0
+        u[~(paths.free_lengths > MIN_CABLE_LENGTH)] = 0.0
         kappa = paths.max_curvature()
     else:
         vec = design.outlets[None, :, :] - positions[:, None, :] - Rb[None, :, :]
@@ -135,7 +138,7 @@ def _structure_many(design: Design, positions: np.ndarray, Rb: np.ndarray, curva
         with np.errstate(invalid="ignore", divide="ignore"):
             u = vec / L[:, :, None]
             kappa = 1.0 / L
-        u[L <= 1e-12] = 0.0
+        u[L <= MIN_CABLE_LENGTH] = 0.0
     mom = np.cross(Rb[None, :, :], u)
     full = np.concatenate([u, mom], axis=2)  # (k, m, 6)
     W = np.transpose(full[:, :, list(design.motion.wrench_rows)], (0, 2, 1))
@@ -224,6 +227,11 @@ def envelope_chunk(design: Design, positions: np.ndarray, orientation, A: float,
         # the winch holds the outlet tension: the effector's plus the cable's share of its weight
         ok &= sag_ok
         static, peak = static + offset, peak + offset
+    bad = degenerate_structure(W)  # a cable of zero length: left out, as `pose` calls it infeasible
+    if bad.any():
+        ok = ok & ~bad
+        for a in (static, peak, low):
+            a[bad] = np.nan
     with np.errstate(divide="ignore", invalid="ignore"):
         accel = A + V * V * kappa  # kappa = 1 / L for a point outlet
     accel[:, :] = np.where(L > 1e-12, accel, np.nan)

@@ -33,7 +33,7 @@ import numpy as np
 from cdpr_design.design.duty import DutyCycle, default_cycle, trajectory_cycle
 from cdpr_design.design.envelope import Envelope, task_envelope
 from cdpr_design.design.winch import WinchLoad, implied_tension, margins, winch_load
-from cdpr_design.errors import InputError
+from cdpr_design.errors import InputError, quote
 from cdpr_design.io.tables import Table, rows_to_columns
 from cdpr_design.model.catalogue import Catalogue, Motor
 from cdpr_design.model.design import Cable, Design
@@ -188,10 +188,7 @@ def size_motors(design: Design, catalogue: Catalogue, *, step: float | None = No
         A motor named by the spec or ``motor`` is not in the catalogue, or the
         safety factor is below 1.
     """
-    sf = float(design.requirements.safety_factor if safety_factor is None else safety_factor)
-    if not math.isfinite(sf) or sf < 1.0:
-        raise InputError(f"--safety-factor: expected a number >= 1, got {sf}")
-    _check_motor_names(design, catalogue, motor)
+    sf = check_options(design, catalogue, safety_factor, motor)
     env = envelope if envelope is not None else task_envelope(design, step=step, progress=progress, engine=engine)
     notes = []
     if samples is not None:
@@ -201,7 +198,7 @@ def size_motors(design: Design, catalogue: Catalogue, *, step: float | None = No
     else:
         cycle = default_cycle(env)
     if env.singular:
-        notes.append(f"{env.singular} task poses with a rank-deficient structure matrix were left out")
+        notes.append(f"{env.singular} task poses with a rank-deficient structure matrix or a cable of zero length were left out")
     by_size = catalogue.by_size()
     axes = []
     for k, c in enumerate(design.cables):
@@ -213,14 +210,25 @@ def size_motors(design: Design, catalogue: Catalogue, *, step: float | None = No
     return SizingResult(design.name, axes, env, cycle.text, sf, notes)
 
 
+def check_options(design: Design, catalogue: Catalogue, safety_factor: float | None = None,
+                  motor: str | None = None) -> float:
+    """Check the sizing options before any work (a job calls it before writing a file): the
+    safety factor (>= 1, default ``requirements.safety_factor``), returned, and every motor name."""
+    sf = float(design.requirements.safety_factor if safety_factor is None else safety_factor)
+    if not math.isfinite(sf) or sf < 1.0:
+        raise InputError(f"--safety-factor: expected a number >= 1, got {sf}")
+    _check_motor_names(design, catalogue, motor)
+    return sf
+
+
 def _check_motor_names(design: Design, catalogue: Catalogue, motor: str | None) -> None:
     """InputError when ``motor`` (or, without it, a spec's ``winch.motor``) is not in the catalogue."""
     known = ", ".join(m.name for m in catalogue.motors)
     if motor is not None and catalogue.motor(motor) is None:
-        raise InputError(f"--motor: {motor!r} is not in the motor catalogue (known: {known})")
+        raise InputError(f"--motor: {quote(motor)} is not in the motor catalogue (known: {known})")
     for k, c in enumerate(design.cables):
         if motor is None and c.winch.motor is not None and catalogue.motor(c.winch.motor) is None:
-            raise InputError(f"cables[{k}].winch.motor: {c.winch.motor!r} is not in the motor catalogue "
+            raise InputError(f"cables[{k}].winch.motor: {quote(c.winch.motor)} is not in the motor catalogue "
                              f"(known: {known}; add it with --catalogue FILE)")
 
 

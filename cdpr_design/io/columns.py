@@ -107,6 +107,9 @@ class ColumnWriter:
     names : the columns in order, when known before the first chunk (the
         header of a table with no rows); chunks must then carry exactly these.
     on_commit : called once the file is in place (the output folder's manifest).
+    before_open : called just before the temporary file is made, at the first
+        write or at :meth:`close` (the output folder's creation): a sweep that
+        refuses its input before its first chunk leaves nothing behind.
     background : format and write in a thread of this process, so that the
         caller's next work (a sweep's next chunk: the kernels release the GIL;
         pictures drawn by another process) overlaps the writing.  At most two
@@ -118,14 +121,16 @@ class ColumnWriter:
 
     def __init__(self, path: str | Path, format: str = "csv", metadata: Mapping | None = None,
                  names: Sequence[str] | None = None, on_commit: Callable[[], None] | None = None,
-                 background: bool = False):
+                 background: bool = False, before_open: Callable[[], object] | None = None):
         check_format(format)
         self.path = Path(path)
         self.format = format
         self.metadata = dict(metadata or {})
         self.names = list(names) if names is not None else None
         self.rows = 0
-        self._file = AtomicFile(self.path, binary=True, on_commit=on_commit)
+        self._atomic: AtomicFile | None = None
+        self._on_commit = on_commit
+        self._before_open = before_open
         self._schema = None
         self._parquet = None
         self._header_done = False
@@ -138,6 +143,15 @@ class ColumnWriter:
             self._queue = queue.Queue(maxsize=2)
             self._thread = threading.Thread(target=self._run, name=f"write {self.path.name}", daemon=True)
             self._thread.start()
+
+    @property
+    def _file(self) -> AtomicFile:
+        """The temporary file, made on first use."""
+        if self._atomic is None:
+            if self._before_open is not None:
+                self._before_open()
+            self._atomic = AtomicFile(self.path, binary=True, on_commit=self._on_commit)
+        return self._atomic
 
     # -- writing -----------------------------------------------------------
 
@@ -281,7 +295,8 @@ class ColumnWriter:
                 self._parquet.close()
             except Exception:  # noqa: BLE001 - the file is dropped anyway
                 pass
-        self._file.abort()
+        if self._atomic is not None:
+            self._atomic.abort()
 
     def __enter__(self):
         return self

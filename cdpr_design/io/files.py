@@ -10,14 +10,14 @@ that cdpr-design did not write is never overwritten unless the user asks
 
 from __future__ import annotations
 
-import json
 import os
 import tempfile
 from pathlib import Path
 from typing import Iterable, Sequence
 
 from cdpr_design.errors import InputError
-from cdpr_design.io.tables import json_default
+from cdpr_design.io.preflight import check_folder, remove_stale, temp_prefix
+from cdpr_design.io.tables import json_text
 
 MANIFEST = ".cdpr-design-outputs"
 
@@ -27,24 +27,39 @@ class OutputDir:
 
     Parameters
     ----------
-    path : folder, created if missing.
+    path : folder, created (with its parents) when the first file is written.
     overwrite : replace foreign files of the same name too.
+
+    The constructor only checks that the folder is writable or can be created
+    (:func:`~cdpr_design.io.preflight.check_folder`): a command that refuses
+    its input afterwards leaves nothing behind, not even the folder.  The
+    first write (:meth:`ensure`) creates it and removes the temporary files
+    a killed run left there.
     """
 
     def __init__(self, path: str | Path, overwrite: bool = False):
         self.path = Path(path)
         self.overwrite = overwrite
-        if self.path.exists() and not self.path.is_dir():
-            raise InputError(f"--out: {self.path} exists and is not a folder")
-        try:
-            self.path.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise InputError(f"--out: cannot create {self.path}: {exc}") from None
+        check_folder(self.path)
+        self._ready = False
         self._manifest = self.path / MANIFEST
         try:
             self._ours = set(self._manifest.read_text().split("\n")) - {""}
-        except FileNotFoundError:
+        except (FileNotFoundError, NotADirectoryError):
             self._ours = set()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise InputError(f"--out: cannot read {self._manifest}: {exc}") from None
+
+    def ensure(self) -> Path:
+        """Create the folder if missing and clear stale temporary files (once); the folder."""
+        if not self._ready:
+            try:
+                self.path.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise InputError(f"--out: cannot create {self.path}: {exc.strerror or exc}") from None
+            remove_stale(self.path)
+            self._ready = True
+        return self.path
 
     def target(self, name: str) -> Path:
         """The path for output ``name``, after checking it may be (over)written."""
@@ -58,17 +73,20 @@ class OutputDir:
         """Record ``name`` in the folder's manifest (cdpr-design wrote it)."""
         if name not in self._ours:
             self._ours.add(name)
+            self.ensure()
             write_text_atomic(self._manifest, "\n".join(sorted(self._ours)) + "\n")
 
     def write_text(self, name: str, text: str) -> Path:
         p = self.target(name)
+        self.ensure()
         write_text_atomic(p, text)
         self.wrote(name)
         return p
 
     def write_json(self, name: str, data) -> Path:
-        """``data`` as indented JSON (numpy scalars and arrays as numbers and lists)."""
-        return self.write_text(name, json.dumps(data, indent=2, default=json_default) + "\n")
+        """``data`` as indented JSON (numpy scalars and arrays as numbers and lists, NaN and
+        infinities as null)."""
+        return self.write_text(name, json_text(data, indent=2) + "\n")
 
     def write_csv(self, name: str, header: Sequence[str], rows: Iterable[Sequence]) -> Path:
         """A CSV of ``rows`` under ``header`` (cells as :func:`~cdpr_design.io.tables.fmt` writes them)."""
@@ -94,15 +112,17 @@ class OutputDir:
 
         name = file_name(stem, format)
         return ColumnWriter(self.target(name), format, metadata, names, on_commit=lambda: self.wrote(name),
-                            background=background)
+                            background=background, before_open=self.ensure)
 
     def stream(self, name: str) -> "AtomicFile":
         """An :class:`AtomicFile` for writing ``name`` piece by piece."""
         p = self.target(name)
+        self.ensure()
         return AtomicFile(p, on_commit=lambda: self.wrote(name))
 
     def write_bytes(self, name: str, data: bytes) -> Path:
         p = self.target(name)
+        self.ensure()
         with AtomicFile(p, binary=True) as fh:
             fh.write(data)
         self.wrote(name)
@@ -122,7 +142,8 @@ class AtomicFile:
         self.path = Path(path)
         self.on_commit = on_commit
         self.keep_partial = keep_partial
-        fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=self.path.parent)
+        # the writer's pid in the name: a later run removes what a killed one left (io.preflight)
+        fd, tmp = tempfile.mkstemp(prefix=temp_prefix(self.path.name), suffix=".tmp", dir=self.path.parent)
         self.tmp = Path(tmp)
         os.chmod(self.tmp, 0o666 & ~_umask())
         self.fh = os.fdopen(fd, "wb" if binary else "w", **({} if binary else {"newline": "", "encoding": "utf-8"}))

@@ -58,6 +58,7 @@ class SweepJournal:
     def start(self, meta: dict, records: Sequence[dict] = ()) -> None:
         """Write the journal afresh (meta and the records kept), then keep it open for appending."""
         self.out.target(self.name)
+        self.out.ensure()
         body = json.dumps(meta, sort_keys=True) + "\n" + "".join(
             json.dumps(r) + "\n" for r in records)
         write_text_atomic(self.path, body)

@@ -1,7 +1,8 @@
 """CSV cells and blocks, CSV and log reading, and the JSON encoding of numpy values.
 
-Numbers are written with 10 significant digits, integers as integers,
-booleans as 1/0 and NaN/None as empty cells (whole tables: :mod:`cdpr_design.io.columns`).  Readers raise
+Numbers are written with 10 significant digits (never ``-0``), integers as
+integers, booleans as 1/0 and NaN/None as empty cells; JSON never holds NaN or
+infinities (``null`` instead); whole tables: :mod:`cdpr_design.io.columns`.  Readers raise
 :class:`~cdpr_design.errors.InputError` naming the file (and the option or
 argument it came from).
 """
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import math
 from pathlib import Path
 from typing import Sequence
@@ -17,6 +19,7 @@ from typing import Sequence
 import numpy as np
 
 from cdpr_design.errors import InputError
+from cdpr_design.io.inputs import MAX_LOG_BYTES, read_text
 
 
 def json_default(o):
@@ -26,6 +29,28 @@ def json_default(o):
     if isinstance(o, np.ndarray):
         return o.tolist()
     raise TypeError(f"not JSON serialisable: {type(o).__name__}")
+
+
+def json_finite(o):
+    """A copy of plain data for JSON: NaN and infinities (never valid JSON) become None, ``-0.0``
+    becomes 0.0, numpy values Python ones; a non-finite number is not a result to report."""
+    if isinstance(o, (float, np.floating)):
+        v = float(o)
+        return v + 0.0 if math.isfinite(v) else None
+    if isinstance(o, dict):
+        return {k: json_finite(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [json_finite(v) for v in o]
+    if isinstance(o, np.ndarray):
+        return json_finite(o.tolist())
+    if isinstance(o, np.generic):
+        return json_finite(o.item())
+    return o
+
+
+def json_text(data, indent: int | None = None) -> str:
+    """``data`` as JSON text through :func:`json_finite` (strict JSON: no ``NaN``, no ``Infinity``)."""
+    return json.dumps(json_finite(data), indent=indent, default=json_default, allow_nan=False)
 
 
 def fmt(v) -> str:
@@ -48,17 +73,19 @@ def text_rows(rows) -> list[list[str]]:
     return [[fmt(v) for v in r] for r in rows]
 
 
-def read_csv_columns(path: str | Path, what: str = "CSV") -> dict[str, np.ndarray]:
+def read_csv_columns(path: str | Path, what: str = "CSV", dropped: list | None = None) -> dict[str, np.ndarray]:
     """Numeric columns of a CSV log with a header row: name -> float array.
 
     Empty or non-numeric cells become NaN; columns with no number at all are
-    dropped.  Bad files raise :class:`InputError` naming the file.
+    dropped (their names appended to ``dropped`` when given).  Bad files
+    raise :class:`InputError` naming the file; only regular files of at most
+    :data:`~cdpr_design.io.inputs.MAX_LOG_BYTES` are read.
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{what} {p}: cannot read: {exc}") from None
+        text = read_text(p, MAX_LOG_BYTES, encoding="utf-8-sig")
+    except InputError as exc:
+        raise InputError(f"{what} {p}: {exc}") from None
     rows = list(csv.reader(io.StringIO(text)))
     rows = [r for r in rows if r and any(c.strip() for c in r)]
     if len(rows) < 2:
@@ -77,12 +104,15 @@ def read_csv_columns(path: str | Path, what: str = "CSV") -> dict[str, np.ndarra
     for j, h in enumerate(header):
         if np.any(np.isfinite(data[:, j])):
             out[h] = data[:, j]
+        elif dropped is not None:
+            dropped.append(h)
     return out
 
 
-def read_log(path: str | Path, what: str = "log") -> tuple[np.ndarray, dict[str, np.ndarray]]:
-    """A logged run: its time column [s] (``time`` or ``t``, increasing) and the other columns."""
-    cols = read_csv_columns(path, what)
+def read_log(path: str | Path, what: str = "log", dropped: list | None = None) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """A logged run: its time column [s] (``time`` or ``t``, increasing) and the other columns
+    (``dropped``: as for :func:`read_csv_columns`)."""
+    cols = read_csv_columns(path, what, dropped)
     tname = "time" if "time" in cols else ("t" if "t" in cols else None)
     if tname is None:
         raise InputError(f"{what} {path}: no time column (expected 'time' or 't'; found {', '.join(cols) or 'none'})")
@@ -101,9 +131,9 @@ def read_csv_table(path: str | Path, what: str = "--check-against") -> tuple[lis
     """(header, rows) of a CSV file, cells as text; bad files raise :class:`InputError`."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8-sig")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{what}: cannot read {p}: {exc}") from None
+        text = read_text(p, MAX_LOG_BYTES, encoding="utf-8-sig")
+    except InputError as exc:
+        raise InputError(f"{what}: {exc}") from None
     rows = [r for r in csv.reader(io.StringIO(text)) if r]
     if not rows:
         raise InputError(f"{what}: {p} is empty (expected a header row)")

@@ -55,10 +55,12 @@ def fk_data(design, lengths, guess=None) -> dict:
     """
     from cdpr_design.statics import hanging as H
     from cdpr_design.statics import kinematics as kin
+    from cdpr_design.statics.reach import require_reached
 
     rho = np.asarray(lengths, float)
     if kin.has_pulleys(design):
         res = kin.forward_kinematics(design, rho, guess=guess)
+        require_reached(res.residual, rho)  # lengths no pose has: exit 2 with the residual, never a pose
         return {"pose": [float(v) for v in res.pose], "residual": float(res.residual),
                 "method": f"{res.method} (swivel pulleys: kinematic solution, tensions not solved)",
                 "orientation": None, "tilt": None, "tensions": None, "slack": None, "stable": None,

@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import io
 import math
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from cdpr_design.errors import InputError
+from cdpr_design.errors import InputError, quote
 from cdpr_design.io.files import OutputDir
+from cdpr_design.io.inputs import MAX_LOG_BYTES, read_text
 from cdpr_design.io.tables import read_csv_columns, read_log
 from cdpr_design.io.columns import file_name
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
@@ -34,17 +36,18 @@ def read_poses(path: str | Path, design, what: str) -> np.ndarray:
     coords = list(design.motion.coords)
     pos = coords[: design.motion.dim]
     try:
-        first = p.read_text(encoding="utf-8-sig").splitlines()[0] if p.exists() else None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{what}: cannot read {p}: {exc}") from None
+        text = read_text(p, MAX_LOG_BYTES, encoding="utf-8-sig")  # a regular file of bounded size
+    except InputError as exc:
+        raise InputError(f"{what}: {exc}") from None
+    first = next((line for line in text.splitlines() if line.strip()), None)
     if first is None:
-        raise InputError(f"{what}: no such file {p}")
+        raise InputError(f"{what}: {p} is empty")
     try:
         [float(c) for c in first.split(",") if c.strip()]
         has_header = False
     except ValueError:
         has_header = True
-    arr = _named_poses(p, coords, pos, what) if has_header else _bare_poses(p, coords, pos, what)
+    arr = _named_poses(p, coords, pos, what) if has_header else _bare_poses(p, text, coords, pos, what)
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{what}: {p} has empty or non-numeric cells")
     if arr.shape[0] < 2:
@@ -61,9 +64,9 @@ def _named_poses(p: Path, coords, pos, what: str) -> np.ndarray:
     return np.stack([cols[c] for c in use], axis=1)
 
 
-def _bare_poses(p: Path, coords, pos, what: str) -> np.ndarray:
+def _bare_poses(p: Path, text: str, coords, pos, what: str) -> np.ndarray:
     try:
-        arr = np.loadtxt(p, delimiter=",", ndmin=2)
+        arr = np.loadtxt(io.StringIO(text), delimiter=",", ndmin=2)
     except ValueError as exc:
         raise InputError(f"{what}: {p}: {exc}") from None
     if arr.shape[1] not in (len(pos), len(coords)):
@@ -233,6 +236,16 @@ def _compare_columns(tgt: dict, act: dict, columns: str | None, rename) -> list[
     return cols
 
 
+def _refuse_empty_columns(tgt: dict, act: dict, empty_t: list, empty_a: list) -> None:
+    """A column with numbers in one log and none in the other (every cell empty or NaN) is not
+    silently left out of the comparison: an :class:`InputError` names it."""
+    for what, empty, other in (("ACTUAL", empty_a, tgt), ("TARGET", empty_t, act)):
+        lost = [c for c in empty if c in other and c not in ("segment", "feasible")]
+        if lost:
+            raise InputError(f"{what} column(s) {', '.join(quote(c) for c in lost)} hold no number (every cell "
+                             "empty or NaN), so they cannot be compared; choose the columns with --columns")
+
+
 class ComparisonRun(NamedTuple):
     comparison: object  # motion.compare.Comparison
     summary: dict
@@ -246,9 +259,12 @@ def compare(target: Path, actual: Path, columns: str | None = None, rename=None,
     comparison.json there (default: nothing written)."""
     from cdpr_design.motion import compare as cmp
 
-    t_t, tgt = read_log(target, "TARGET")
-    t_a, act = read_log(actual, "ACTUAL")
+    empty_t, empty_a = [], []
+    t_t, tgt = read_log(target, "TARGET", empty_t)
+    t_a, act = read_log(actual, "ACTUAL", empty_a)
     cols = _compare_columns(tgt, act, columns, rename)
+    if columns is None:
+        _refuse_empty_columns(tgt, act, empty_t, empty_a)
     if max_delay is not None and not (math.isfinite(max_delay) and max_delay > 0):
         raise InputError(f"--max-delay: expected a positive number of seconds, got {max_delay}")
     try:

@@ -9,10 +9,11 @@ from cdpr_design.io.columns import file_name
 from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
 from cdpr_design.jobs.tables import Timings, write_table
-from cdpr_design.jobs.motion import require_trajectory, trajectory_samples
+from cdpr_design.jobs.motion import trajectory_samples
 from cdpr_design.jobs.workspace import finish_workspace, start_workspace
 from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
+from cdpr_design.workspaces.grid import check_step
 
 
 def write_motor_sizing(out: OutputDir, sizing, format: str = "csv", design=None) -> Path:
@@ -61,15 +62,16 @@ def size_motors(design, catalogue: Path | None = None, trajectory: str | None = 
     return SizingRun(result, out_dir, {**result.summary(), "timings": timings.as_dict()})
 
 
-def evaluate(design, catalogue, trajectory: str | None = None, safety_factor: float | None = None,
+def evaluate(design, catalogue, trajectory=None, safety_factor: float | None = None,
              motor: str | None = None, step: float | None = None, workspace_result=None,
              progress: Progress | None = None, engine: str = "auto"):
     """Workspace, task box, motor sizing and checks of one design
     (:func:`cdpr_design.design.evaluate.evaluate_full`; ``catalogue``: a loaded motor catalogue,
-    ``trajectory``: a spec trajectory's name, ``step`` [m])."""
+    ``trajectory``: a spec trajectory's name or its samples, ``step`` [m])."""
     from cdpr_design.design import evaluate as ev
 
-    samples = trajectory_samples(design, trajectory)
+    samples = trajectory if trajectory is None or not isinstance(trajectory, str) else \
+        trajectory_samples(design, trajectory)
     with stage(progress, f"evaluate {design.name}") as cb:
         return ev.evaluate_full(design, step=step, catalogue=catalogue, samples=samples,
                                 safety_factor=safety_factor, motor=motor,
@@ -112,10 +114,15 @@ def report(design, catalogue: Path | None = None, trajectory: str | None = None,
     from cdpr_design.design import evaluate as ev
     from cdpr_design.model import spec
 
+    from cdpr_design.design import sizing as sz
+
     timings = Timings()
-    cat = spec.load_catalogue(catalogue)  # a bad catalogue: before any work
-    if trajectory is not None:
-        require_trajectory(design, trajectory, "--trajectory")  # unknown name: before any work
+    # every option checked before the first file is written (the workspace's)
+    cat = spec.load_catalogue(catalogue)
+    samples = trajectory_samples(design, trajectory)  # an unknown name: --trajectory, before any work
+    sz.check_options(design, cat, safety_factor, motor)
+    if step is not None:
+        check_step(step, "--step")
     out_dir = output_dir(design, out, overwrite)
     for stem in ("motor_sizing", "design_report"):
         out_dir.target(file_name(stem, format))
@@ -123,7 +130,7 @@ def report(design, catalogue: Path | None = None, trajectory: str | None = None,
     wres, drawing = start_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
                                     progress=progress, format=format, timings=timings)
     with timings.phase("sweep_s"):  # while the workspace pictures are drawn
-        e = evaluate(design, cat, trajectory, safety_factor, motor, step, wres, progress, engine)
+        e = evaluate(design, cat, samples, safety_factor, motor, step, wres, progress, engine)
         checks = ev.check_table(e.row)
     finish_workspace(out_dir, wres, drawing, timings)
     page = submit_pictures(out_dir, [("report.html", report_html, (wres, e.sizing, checks))], pictures, timings)

@@ -114,17 +114,20 @@ def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None,
           catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
           motor: str | None = None, step: float | None = None, top: int = 10, picture: bool = True,
           out: str | Path | None = None, overwrite: bool = False, progress: Progress | None = None,
-          log: Callable[[str], None] | None = None, engine: str = "auto", format: str = "csv") -> SweepRun:
+          log: Callable[[str], None] | None = None, engine: str = "auto", format: str = "csv",
+          max_variants: int | None = None) -> SweepRun:
     """The ``sweep`` command: evaluate every variant (``vary``: KEY=VALUES items, default the
     spec's sweep.vary), journalled in ``out`` (``resume`` continues it), then write sweep.csv,
     sweep_best.csv and sweep.png and compare with the baseline ``check_against``.
     ``step`` [m]; ``log`` receives messages (resuming); ``engine``: of every variant's grid sweeps;
-    ``format``: ``csv`` or ``parquet`` tables."""
+    ``format``: ``csv`` or ``parquet`` tables; ``max_variants``: the most variants run (default
+    :data:`cdpr_design.batch.variants.MAX_VARIANTS`)."""
     from cdpr_design import batch as sw
     from cdpr_design.model import spec
 
     section = design.sweep or {}
-    plan = sw.make_plan(design, [sw.parse_vary(v) for v in vary] if vary else sw.vary_from_spec(section))
+    plan = sw.make_plan(design, [sw.parse_vary(v) for v in vary] if vary else sw.vary_from_spec(section),
+                        max_variants=max_variants or sw.MAX_VARIANTS)
     rank_name, descending = sw.parse_rank(rank_by or section.get("rank_by"))
     workers = _check_options(design, workers, step, tolerance, abs_tolerance, trajectory)
     baseline = read_csv_table(check_against) if check_against is not None else None

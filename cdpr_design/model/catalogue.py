@@ -18,6 +18,7 @@ from pydantic import Field
 from pydantic.types import FiniteFloat
 
 from cdpr_design.errors import SpecError
+from cdpr_design.model.limits import check_numbers
 from cdpr_design.model.schema import NonNegFloat, PosFloat, StrictModel, parse
 
 
@@ -205,6 +206,9 @@ def catalogue_from_dict(data: Any, source: str | None = None, base: Catalogue | 
     if not isinstance(data, dict):
         raise SpecError([("", f"expected a mapping with motors, drives, gearboxes, got {type(data).__name__}")], source)
     c = parse(CatalogueSpec, data, source)
+    bounds = check_numbers(c.model_dump(exclude_none=True))  # magnitudes at most 1e12, texts bounded
+    if bounds:
+        raise SpecError(bounds, source)
     if base is not None:
         extra = [DriveEntry(name=d.name, rated_current=d.rated_current, peak_current=d.peak_current,
                             source=d.source) for d in base.drives if d.name not in {x.name for x in c.drives}]

@@ -12,10 +12,11 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal, TypeVar
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StringConstraints, ValidationError
 from pydantic.types import FiniteFloat
 
-from cdpr_design.errors import SpecError
+from cdpr_design.errors import SpecError, quote
+from cdpr_design.model.limits import MAX_CABLES, MAX_NAME_LENGTH, NAME_PATTERN
 
 
 def _as_list(v):
@@ -29,12 +30,15 @@ Vec = list[FiniteFloat]
 PosFloat = Annotated[FiniteFloat, Field(gt=0)]
 NonNegFloat = Annotated[FiniteFloat, Field(ge=0)]
 ScalarOrList = Annotated[list[PosFloat], BeforeValidator(_as_list)]
+#: A design, cable or trajectory name (model.limits.NAME_PATTERN: never ".", ".." or a path)
+Name = Annotated[str, StringConstraints(min_length=1, max_length=MAX_NAME_LENGTH, pattern=NAME_PATTERN)]
 
 
 class StrictModel(BaseModel):
-    """A frozen model that refuses unknown keys."""
+    """A frozen model that refuses unknown keys and values of the wrong type (strict: no ``true``
+    or ``"1.0"`` where a number is meant; whole numbers are accepted where a float is)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
 class WinchSpec(StrictModel):
@@ -64,7 +68,7 @@ class CablePhysSpec(StrictModel):
 
 
 class CableSpec(StrictModel):
-    name: str = Field(min_length=1)
+    name: Name
     outlet: Vec = Field(description="a_i: where the cable leaves the frame (frame coordinates) [m]")
     attachment: Vec = Field(description="b_i: where it meets the effector (platform coordinates) [m]")
     tension: Vec | None = Field(None, description="[min, max] tension [N]; overrides the design-wide bounds")
@@ -172,19 +176,18 @@ class PlcSpec(StrictModel):
 class DesignSpec(StrictModel):
     """A cable-driven parallel robot design (cdpr-design spec format)."""
 
-    name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_.+-]+$",
-                      description="Design name; also the default output folder out/<name>/")
+    name: Name = Field(description="Design name; also the default output folder out/<name>/")
     description: str = ""
     motion: Literal["2T", "1R2T", "3T", "3R3T"]
     gravity: Vec | None = Field(None, description="m/s^2; default -9.81 along the last axis")
     frame: FrameSpec
     effector: EffectorSpec
     tension: Vec | None = Field(None, description="[min, max] N for every cable")
-    cables: list[CableSpec] = Field(min_length=1)
+    cables: list[CableSpec] = Field(min_length=1, max_length=MAX_CABLES)
     winch: WinchSpec | None = None
     cable: CablePhysSpec | None = None
     workspace: WorkspaceSpecModel | None = None
-    trajectories: dict[str, TrajectorySpec] | None = None
+    trajectories: dict[Name, TrajectorySpec] | None = None
     plc: PlcSpec | None = None
     requirements: RequirementsSpec | None = None
     sweep: dict[str, Any] | None = Field(None, description="Parameter sweep: vary: {dotted.key: values}")
@@ -240,20 +243,29 @@ def _message(e: dict) -> str:
     if kind == "extra_forbidden":
         return "unknown key (check its spelling against the spec format)"
     if kind == "finite_number":
-        return f"expected a finite number, got {got!r}"
-    if kind in ("float_type", "float_parsing", "int_type", "int_parsing"):
-        return f"expected a number, got {got!r}"
+        return f"expected a finite number, got {quote(got)}"
+    if kind in ("int_type", "int_parsing", "int_from_float"):
+        return f"expected a whole number, got {quote(got)}"
+    if kind in ("float_type", "float_parsing"):
+        return f"expected a number, got {quote(got)}"
     if kind == "list_type":
-        return f"expected a list, got {got!r}"
+        return f"expected a list, got {quote(got)}"
     if kind == "literal_error":
         allowed = e.get("ctx", {}).get("expected", "")
-        return f"expected one of {allowed}, got {got!r}"
+        return f"expected one of {allowed}, got {quote(got)}"
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
-        return f"{e['msg'].replace('Input should be', 'expected a value')}, got {got!r}"
+        return f"{e['msg'].replace('Input should be', 'expected a value')}, got {quote(got)}"
     if kind == "model_type" or kind == "dict_type":
-        return f"expected a mapping of keys, got {got!r}"
+        return f"expected a mapping of keys, got {quote(got)}"
     if kind == "too_short":
-        return f"expected at least {e.get('ctx', {}).get('min_length', 1)} entries, got {len(got) if hasattr(got, '__len__') else got!r}"
-    if kind == "string_pattern_mismatch":
-        return f"expected letters, digits and _ . + - only, got {got!r}"
-    return f"{e['msg']}, got {got!r}"
+        return f"expected at least {e.get('ctx', {}).get('min_length', 1)} entries, got {_count(got)}"
+    if kind in ("string_pattern_mismatch", "string_too_long"):
+        return (f"expected a name of 1 to {MAX_NAME_LENGTH} letters, digits and _ . + - not starting "
+                f"with a dot, got {quote(got)}")
+    if kind == "too_long":
+        return f"expected at most {e.get('ctx', {}).get('max_length')} entries, got {_count(got)}"
+    return f"{e['msg']}, got {quote(got)}"
+
+
+def _count(got) -> str:
+    return str(len(got)) if hasattr(got, "__len__") else quote(got)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from cdpr_design.errors import quote
 from cdpr_design.model.design import MOTIONS
 from cdpr_design.model.schema import DesignSpec, WorkspaceSpecModel
 
@@ -113,6 +114,10 @@ def _check_inertia(p: Problems, inertia, dim: int) -> None:
         elif dim == 3:
             p.append(("effector.inertia", "expected a 3x3 matrix (or 3 diagonal values) for a spatial motion, got a scalar"))
         return
+    if any(isinstance(row, list) for row in inertia) and not all(
+            isinstance(row, list) and len(row) == 3 for row in inertia):
+        p.append(("effector.inertia", "expected a 3x3 matrix: 3 rows of 3 numbers each"))
+        return
     arr = np.array(inertia, dtype=float)
     if arr.shape == (3,):
         arr = np.diag(arr)
@@ -131,7 +136,7 @@ def _check_cables(p: Problems, s: DesignSpec) -> None:
     for i, c in enumerate(s.cables):
         base = f"cables[{i}]"
         if c.name in seen:
-            p.append((f"{base}.name", f"duplicate cable name {c.name!r} (also cables[{seen[c.name]}])"))
+            p.append((f"{base}.name", f"duplicate cable name {quote(c.name)} (also cables[{seen[c.name]}])"))
         seen.setdefault(c.name, i)
         _motion_vec(p, s, f"{base}.outlet", c.outlet)
         _motion_vec(p, s, f"{base}.attachment", c.attachment)
@@ -275,16 +280,16 @@ def _check_sweep(p: Problems, sweep: dict) -> None:
             p.append((f"sweep.{key}", "unknown key (expected vary, rank_by or workers)"))
     vary = sweep.get("vary")
     if vary is not None and not isinstance(vary, dict):
-        p.append(("sweep.vary", f"expected a mapping of dotted keys to values, got {vary!r}"))
+        p.append(("sweep.vary", f"expected a mapping of dotted keys to values, got {quote(vary)}"))
     elif vary:
         for key, v in vary.items():
             ok = (isinstance(v, str) or (isinstance(v, list) and len(v) > 0)
                   or (isinstance(v, (int, float)) and not isinstance(v, bool)))
             if not ok:
-                p.append((f"sweep.vary.{key}", f"expected a list of values or 'start:stop:count', got {v!r}"))
+                p.append((f"sweep.vary.{key}", f"expected a list of values or 'start:stop:count', got {quote(v)}"))
     workers = sweep.get("workers")
     if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
-        p.append(("sweep.workers", f"expected a whole number >= 1, got {workers!r}"))
+        p.append(("sweep.workers", f"expected a whole number >= 1, got {quote(workers)}"))
     rank_by = sweep.get("rank_by")
     if rank_by is not None and not isinstance(rank_by, str):
-        p.append(("sweep.rank_by", f"expected a figure name such as fraction, got {rank_by!r}"))
+        p.append(("sweep.rank_by", f"expected a figure name such as fraction, got {quote(rank_by)}"))

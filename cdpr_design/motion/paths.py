@@ -26,6 +26,7 @@ import numpy as np
 
 from cdpr_design.model.design import Design, Trajectory
 from cdpr_design.motion import profile as prof
+from cdpr_design.motion.profile import MAX_SAMPLES, too_many_samples
 
 
 def fixed_orientation(design: Design, traj: Trajectory) -> np.ndarray:
@@ -80,6 +81,8 @@ def path_waypoints(design: Design, traj: Trajectory, csv_poses=None) -> np.ndarr
         closed = bool(np.allclose(base[0], base[-1]))
     else:
         raise ValueError(f"trajectory {traj.name!r}: no corner list for a {traj.type} path")
+    if base.shape[0] * traj.laps > MAX_SAMPLES:  # each corner takes a sample at least
+        raise ValueError(too_many_samples(base.shape[0] * traj.laps))
     out = [base]
     for _lap in range(1, traj.laps):
         if not closed:

@@ -150,7 +150,10 @@ def fit_to_cycle(profile: Profile, cycle_time: float) -> Profile:
     T = profile.raw_duration
     if T <= 0:
         return profile
-    N = max(int(np.ceil(T / cycle_time - 1e-9)), 1)
+    n = T / cycle_time
+    if not n <= MAX_SAMPLES:  # before int(): T / cycle_time may be huge or inf
+        raise ValueError(too_many_samples(n))
+    N = max(int(np.ceil(n - 1e-9)), 1)
     return Profile(profile.distance, profile.durations, profile.a0, profile.jerk,
                    scale=N * cycle_time / T)
 
@@ -167,15 +170,29 @@ def for_trajectory(traj: Trajectory, distance: float, speed: float, accel: float
     return fit_to_cycle(law, cycle_time)
 
 
+#: Most samples of one sampled path (whole trajectory): 1,000 s at the default 1 ms cycle.  The
+#: samples and their statics are held in memory (about 1-2 kB a sample for a spatial robot).
+MAX_SAMPLES = 1_000_000
+
+
+def too_many_samples(n: float) -> str:
+    """The message for a path of ``n`` samples (more than :data:`MAX_SAMPLES`)."""
+    return (f"the path would have {n:.4g} samples, more than the {MAX_SAMPLES:,} sampled; raise the speed, "
+            "the acceleration or the cycle time, or shorten the path")
+
+
 def sampled(profile: Profile, cycle_time: float, *, include_start: bool = False):
     """s [m], speed [m/s] and acceleration [m/s^2] of a cycle-fitted profile at every cycle.
 
     The samples are at t = j * cycle_time for j = 1 .. N (j = 0 .. N with
     ``include_start``), N = duration / cycle_time.
     """
-    N = int(round(profile.duration / cycle_time))
+    n = profile.duration / cycle_time
+    if not n <= MAX_SAMPLES:  # checked as a float, before anything is allocated
+        raise ValueError(too_many_samples(n))
+    N = int(round(n))
     t = cycle_time * np.arange(0 if include_start else 1, N + 1)
     return profile.evaluate(t)
 
 
-__all__ = ["Profile", "double_s", "fit_to_cycle", "for_trajectory", "sampled", "trapezoid"]
+__all__ = ["MAX_SAMPLES", "Profile", "double_s", "fit_to_cycle", "for_trajectory", "sampled", "trapezoid"]

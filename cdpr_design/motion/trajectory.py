@@ -37,8 +37,10 @@ import numpy as np
 
 from cdpr_design.model.design import Design, Trajectory
 from cdpr_design.motion import paths, setpoints
+from cdpr_design.motion.profile import MAX_SAMPLES, too_many_samples
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
+from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate, directions
 
 DEFAULT_CYCLE_TIME = 1e-3
 """Default sample period [s]: one PLC cycle."""
@@ -216,6 +218,13 @@ class _Blocks:
         self.accs: list[np.ndarray] = []
         self.segid: list[np.ndarray] = []
         self.segments: list[Segment] = []
+        self.total = 0
+
+    def _grow(self, n: int) -> None:
+        """Count ``n`` more samples; a ValueError past :data:`~cdpr_design.motion.profile.MAX_SAMPLES`."""
+        self.total += n
+        if self.total > MAX_SAMPLES:
+            raise ValueError(too_many_samples(self.total))
 
     @property
     def count(self) -> int:
@@ -228,6 +237,7 @@ class _Blocks:
 
     def rest(self, pose, count: int, segment: int) -> None:
         """``count`` samples standing still at ``pose``, counted in segment ``segment``."""
+        self._grow(count)
         self.poses.append(np.repeat(pose[None, :], count, axis=0))
         self.vels.append(np.zeros((count, self.nc)))
         self.accs.append(np.zeros((count, self.nc)))
@@ -239,6 +249,7 @@ class _Blocks:
         if block is None:
             return
         p, v, a = block
+        self._grow(p.shape[0])
         idx = len(self.segments)
         first = self.count
         self.poses.append(p)
@@ -413,14 +424,13 @@ def _cable_motion(design: Design, P, Rb, vB, aB):
         # swivel pulleys: arc + free length, u along the free segment from the tangent point
         cp = pl.design_cable_paths(design, P[:, None, :3] + Rb)
         u = np.nan_to_num(cp.directions)
+        u[~(cp.free_lengths > MIN_CABLE_LENGTH)] = 0.0  # no direction: a degenerate sample
         Ld = -np.einsum("kmi,kmi->km", u, vB)
         Ldd = cp.second_derivative(vB) - np.einsum("kmi,kmi->km", u, aB)
         return cp.lengths, u, Ld, Ldd
     vec = design.outlets[None, :, :] - P[:, None, :3] - Rb
     L = np.linalg.norm(vec, axis=2)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        u = vec / L[:, :, None]
-    u = np.nan_to_num(u)
+    u = directions(vec, L)  # zero for a cable of zero length: a degenerate sample
     Ld = -np.einsum("kmi,kmi->km", u, vB)
     with np.errstate(invalid="ignore", divide="ignore"):
         Ldd = (np.einsum("kmi,kmi->km", vB, vB) - Ld ** 2) / L - np.einsum("kmi,kmi->km", u, aB)
@@ -563,6 +573,7 @@ def states(design: Design, pose, velocity, acceleration, *, time=None, external=
     W = _structure(design, u, Rb)
     wreq = -_load_wrenches(design, R, Acc, w, al, external)
     t = solve_tensions(design, W, wreq)
+    t[degenerate(u)] = np.nan  # a cable of zero length: infeasible, as for `pose` (statics.degenerate)
     return {"lengths": L, "cable_speed": Ld, "cable_accel": Ldd, "tensions": t,
             "feasible": within_bounds(design, t), "structure": W, "wrench": wreq, "positions": P[:, :3],
             "attachments": Rb}

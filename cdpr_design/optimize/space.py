@@ -18,6 +18,7 @@ failed trial, with the spec's reason, not bad input.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import Any, Sequence
 
@@ -157,7 +158,10 @@ def _child(schema: dict, node: dict, part) -> list[dict]:
             props = v.get("properties") or {}
             if part in props:
                 out.append(props[part])
-            elif isinstance(v.get("additionalProperties"), dict):
+                continue
+            out += [sub for pattern, sub in (v.get("patternProperties") or {}).items()
+                    if re.search(pattern, str(part))]  # named entries (trajectories.NAME)
+            if isinstance(v.get("additionalProperties"), dict):
                 out.append(v["additionalProperties"])
     return out
 

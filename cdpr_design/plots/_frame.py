@@ -53,6 +53,11 @@ def extent(axes2) -> list[float]:
     return [x[0] - dx / 2, x[-1] + dx / 2, y[0] - dy / 2, y[-1] + dy / 2]
 
 
+def contourable(axes2) -> bool:
+    """Whether a map over the grid axes (x, y) can take a contour line (two samples on each axis at least)."""
+    return all(np.asarray(a).size >= 2 for a in axes2[:2])
+
+
 def slices(result, nmax: int = 6) -> list[int]:
     """z-slice indices to show for a spatial result: evenly spread, up to nmax."""
     nz = result.feasible_map.shape[2]

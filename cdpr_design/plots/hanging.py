@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.plots._frame import extent, frame_aspect, frame_rect, pad_limits, slices, z_slices
+from cdpr_design.plots._frame import contourable, extent, frame_aspect, frame_rect, pad_limits, slices, z_slices
 from cdpr_design.plots._style import cmap_grey_bad, pyplot
 
 #: Tilt contours drawn on planar maps [deg].
@@ -64,10 +64,10 @@ def _planar(result, tilt, feas, vmax, ax):
     x, y = result.map_axes
     im = ax.imshow(tilt.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("plasma"),
                    vmin=0.0, vmax=vmax, interpolation="nearest", aspect="equal", zorder=1)
-    if feas.any() and not feas.all():
+    if feas.any() and not feas.all() and contourable(result.map_axes):
         ax.contour(x, y, feas.T.astype(float), levels=[0.5], colors="w", linewidths=1.2, zorder=2)
     levels = [v for v in LEVELS if v < vmax]
-    if levels and x.size > 1 and y.size > 1:
+    if levels and contourable(result.map_axes):
         cs = ax.contour(x, y, np.nan_to_num(tilt, nan=-1.0).T, levels=levels, colors="k", linewidths=0.6,
                         zorder=3)
         ax.clabel(cs, fmt="%g°", fontsize=7)

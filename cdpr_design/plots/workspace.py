@@ -12,8 +12,8 @@ import math
 
 import numpy as np
 
-from cdpr_design.plots._frame import (draw_robot, extent, frame_aspect, frame_rect, pad_limits, panel_grid,
-                                      pose_txt, single_panel, slices, used_panels, z_slices)
+from cdpr_design.plots._frame import (contourable, draw_robot, extent, frame_aspect, frame_rect, pad_limits,
+                                      panel_grid, pose_txt, single_panel, slices, used_panels, z_slices)
 from cdpr_design.plots._style import BLUE, VERMILLION, cmap_grey_bad, pyplot
 
 _KIND_TEXT = {"static": "static-equilibrium", "wrench-feasible": "wrench-feasible",
@@ -71,8 +71,9 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
         fig, cax = ax.figure, None
     im = ax.imshow(marg.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("viridis"),
                    vmin=0.0, vmax=vmax, interpolation="nearest", aspect="equal", zorder=1)
-    ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
-               colors="k", linewidths=0.8, zorder=2)
+    if contourable(result.map_axes):  # a grid of one row or column has no outline to draw
+        ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
+                   colors="k", linewidths=0.8, zorder=2)
     frame_rect(ax, d)
     draw_robot(ax, d, rep)
     if d.requirements.task_box is not None:
@@ -193,7 +194,7 @@ def _planar_orientation(result, val, feas, title, label, ax):
         fig, cax = ax.figure, None
     im = ax.imshow(val.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("cividis"),
                    vmin=0.0, vmax=1.0, interpolation="nearest", aspect="equal", zorder=1)
-    if result.orientation_maps.mode == "total" and feas.any():
+    if result.orientation_maps.mode == "total" and feas.any() and contourable(result.map_axes):
         ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
                    colors="k", linewidths=0.8, zorder=2)
     frame_rect(ax, d)

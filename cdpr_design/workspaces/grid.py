@@ -10,6 +10,7 @@ a :class:`WorkspaceResult`.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -20,8 +21,10 @@ from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics import cables
 from cdpr_design.statics.pose import pose_at
 
-#: Largest grid swept without ``force=True`` (poses).
+#: Largest grid swept without ``force=True`` (poses): about 10 s of the numba kernels on one core.
 MAX_POSES = 20_000_000
+#: Largest grid swept even with ``force=True`` (poses): grid indices and positions stay exact in float64.
+HARD_MAX_POSES = 2 ** 53
 #: Rows evaluated per chunk (bounded memory: ~ CHUNK * (2 m + 2) * 8 bytes).
 CHUNK = 1 << 18
 #: Largest number of cells kept for the maps behind the pictures.
@@ -151,18 +154,51 @@ def make_grid(design: Design, step: float | None = None, force: bool = False) ->
     """
     g = design.workspace.grid
     if step is not None:
-        if not np.isfinite(step) or step <= 0:
-            raise SpecError([("--step", f"expected a positive number of metres, got {step}")])
+        check_step(step, "--step")
         g = Grid(g.lower, g.upper, (float(step),) * len(g.lower))
     check_grid_size(g, force, path="--step" if step is not None else "workspace.grid.step")
     return g
 
 
+def check_step(step: float, path: str = "--step") -> None:
+    """A grid step [m]: a positive finite number (:class:`SpecError` naming ``path`` otherwise)."""
+    if isinstance(step, bool) or not isinstance(step, (int, float, np.floating)) or not (
+            math.isfinite(step) and step > 0):
+        raise SpecError([(path, f"expected a positive number of metres, got {step}")])
+
+
+def axis_counts(g: Grid) -> list[float]:
+    """Samples per axis of a grid, as floats: never overflows (inf for a zero or tiny step)."""
+    out = []
+    for lo, hi, st in zip(g.lower, g.upper, g.step):
+        c = (hi - lo) / st if st > 0 else math.inf
+        out.append(float(math.floor(c + 1e-9) + 1) if math.isfinite(c) else math.inf)
+    return out
+
+
+def grid_count(g: Grid) -> float:
+    """Poses of a grid, as a float computed without overflow (before any array or int64 sees it)."""
+    return math.prod(axis_counts(g))
+
+
+def _count_text(n: float) -> str:
+    if not math.isfinite(n):
+        return "more than 1e308"
+    return f"{n:,.0f}" if n < 1e15 else f"{n:.3g}"
+
+
 def check_grid_size(g: Grid, force: bool, path: str = "workspace.grid.step") -> None:
-    if not force and g.size > MAX_POSES:
-        dims = " x ".join(str(s) for s in g.shape)
-        raise SpecError([(path, f"the grid would have {g.size:,} poses ({dims}), more than the "
-                                f"{MAX_POSES:,} swept without --force; raise the step or pass --force")])
+    """Refuse a grid of more than :data:`MAX_POSES` poses (without ``force``) or of more than
+    :data:`HARD_MAX_POSES` (ever); counted in floats first, so no step is too small to be told so."""
+    n = grid_count(g)
+    if n <= MAX_POSES or (force and n <= HARD_MAX_POSES):
+        return
+    dims = " x ".join(_count_text(c) for c in axis_counts(g))
+    if n > HARD_MAX_POSES:
+        raise SpecError([(path, f"the grid would have {_count_text(n)} poses ({dims}), more than the "
+                                f"{HARD_MAX_POSES:.3g} any sweep can index exactly; raise the step")])
+    raise SpecError([(path, f"the grid would have {_count_text(n)} poses ({dims}), more than the "
+                            f"{MAX_POSES:,} swept without --force; raise the step or pass --force")])
 
 
 def grid3(g: Grid):

@@ -1,0 +1,85 @@
+"""Before an output folder is written: can it be, and what did a killed run leave in it.
+
+:func:`check_folder` is the pre-flight check of ``--out``: the folder exists
+and is writable, or it can be created (its nearest existing ancestor is a
+writable folder, not a file).  Nothing is created by the check, so a command
+that then refuses its input leaves no trace.
+
+Temporary files carry the id of the process writing them
+(:func:`temp_prefix`); :func:`remove_stale` deletes those whose process is
+gone, which is what a run killed by SIGKILL (or a power cut) leaves behind.
+The temporary files of a run still going in the same folder are left alone.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+from cdpr_design.errors import InputError
+
+#: ``.<name>.<pid>.<random>.tmp``: the temporary files of :class:`cdpr_design.io.files.AtomicFile`.
+_TEMP = re.compile(r"^\..+\.(\d+)\.[A-Za-z0-9_]+\.tmp$")
+
+
+def temp_prefix(name: str) -> str:
+    """The prefix of this process's temporary files for output ``name``."""
+    return f".{name}.{os.getpid()}."
+
+
+def check_folder(path: str | Path, option: str = "--out") -> None:
+    """Raise an :class:`InputError` naming ``option`` unless ``path`` is (or can be made) a writable folder.
+
+    ``os.access`` is asked, so a read-only file system refuses even root.
+    """
+    p = Path(path)
+    try:
+        if p.exists():
+            if not p.is_dir():
+                raise InputError(f"{option}: {p} exists and is not a folder")
+            if not os.access(p, os.W_OK | os.X_OK):
+                raise InputError(f"{option}: {p} is not writable")
+            return
+        for anc in p.absolute().parents:
+            if anc.exists():
+                break
+        else:  # pragma: no cover - the root always exists
+            raise InputError(f"{option}: cannot create {p}")
+        if not anc.is_dir():
+            raise InputError(f"{option}: cannot create {p}: {anc} is a file, not a folder")
+        if not os.access(anc, os.W_OK | os.X_OK):
+            raise InputError(f"{option}: cannot create {p}: {anc} is not writable")
+    except OSError as exc:
+        raise InputError(f"{option}: cannot use {p}: {exc.strerror or exc}") from None
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, ValueError):
+        return True  # another user's process (or not a pid we can ask about): keep its files
+    return True
+
+
+def remove_stale(folder: str | Path) -> list[Path]:
+    """Delete the temporary files in ``folder`` whose writing process no longer runs; the paths removed."""
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for e in entries:
+        m = _TEMP.match(e.name)
+        if m is None or not e.is_file(follow_symlinks=False) or _alive(int(m.group(1))):
+            continue
+        try:
+            os.unlink(e.path)
+            removed.append(Path(e.path))
+        except OSError:
+            pass
+    return removed

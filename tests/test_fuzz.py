@@ -1,0 +1,445 @@
+"""Fuzzing (issue 19): random valid specs and hostile mutations of them through ``load`` and every
+command's library entry point; each ends with a result or a clean error, within a time limit.
+
+"Clean" means a :class:`~cdpr_design.errors.CdprError` (the command line's exit 2 or 1); anything
+else is a crash.  On success the results must be valid JSON (no NaN), CSVs hold no ``-0`` and no
+temporary file is left; on an error nothing has been written (not even the output folder).
+
+CI runs a fixed, derandomised set (a few thousand examples in all, about a minute);
+``pytest tests/test_fuzz.py --fuzz-scale 20`` (or ``python scripts/fuzz.py``) runs twenty times as
+many with fresh random seeds.  Cases found are kept as files in tests/data/fuzz_corpus/ and
+replayed by :func:`test_fuzz_corpus`.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+from cdpr_design.errors import CdprError
+
+from .fuzzing import EXTREME_NUMBERS, ODD_STRINGS, hostile_values, mutated_spec_data, mutated_yaml, option_floats, \
+    spec_data
+from .helpers import PLANAR2, ROOT
+
+CORPUS = ROOT / "tests" / "data" / "fuzz_corpus"
+SCALE = float(os.environ.get("CDPR_FUZZ_SCALE", "1"))
+#: Longest a spec may take to load or refuse [s]; longest a command's run [s] (a first numba compile included).
+LOAD_LIMIT, JOB_LIMIT = 2.0, 60.0
+_counter = itertools.count()
+
+
+def fuzz(n: int):
+    """Hypothesis settings for ``n`` examples (times the scale); derandomised at scale 1 (CI)."""
+    return settings(max_examples=max(1, int(n * SCALE)), deadline=None, derandomize=SCALE == 1,
+                    database=None if SCALE == 1 else settings.default.database,
+                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
+                                           HealthCheck.filter_too_much, HealthCheck.function_scoped_fixture])
+
+
+@pytest.fixture(scope="module")
+def work(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("fuzz")
+
+
+def fresh(work: Path, what: str) -> Path:
+    return work / f"{what}-{next(_counter)}"
+
+
+def outcome(fn, *args, limit: float = JOB_LIMIT, **kwargs):
+    """``fn(*args, **kwargs)``: (result, None) or (None, the CdprError); anything else fails the test,
+    as does a run longer than ``limit`` seconds."""
+    t0 = time.perf_counter()
+    try:
+        res, exc = fn(*args, **kwargs), None
+    except CdprError as e:
+        res, exc = None, e
+    dt = time.perf_counter() - t0
+    assert dt < limit, f"{getattr(fn, '__name__', fn)} took {dt:.1f} s"
+    if exc is not None:
+        assert str(exc) and len(str(exc)) < 5000, "an error message quotes far too much"
+    return res, exc
+
+
+def strict_json(data) -> None:
+    """``data`` as JSON the way the command line prints it: no NaN, no Infinity."""
+    from cdpr_design.io.tables import json_text
+
+    json.loads(json_text(data), parse_constant=lambda c: pytest.fail(f"non-JSON constant {c}"))
+
+
+def check_folder(out: Path, failed: bool) -> None:
+    """After a job: nothing written when it failed; no temporary file and no "-0" cell when it worked."""
+    if failed:
+        assert not out.exists(), f"files written before the error: {sorted(p.name for p in out.iterdir())}"
+        return
+    assert not list(out.glob(".*.tmp")), "temporary files left behind"
+    for csv in out.glob("*.csv"):
+        text = csv.read_text()
+        assert ",-0," not in text and ",-0\n" not in text and "\n-0," not in text, csv.name
+        assert "nan" not in text.lower().replace("nan_", ""), csv.name
+
+
+def load_design(data):
+    from cdpr_design.model import spec
+
+    try:
+        return spec.from_dict(data)
+    except CdprError:
+        return None
+
+
+# ----------------------------------------------------------------------------
+# Spec loading
+# ----------------------------------------------------------------------------
+
+
+@fuzz(200)
+@given(spec_data())
+def test_random_valid_specs_load(data):
+    from cdpr_design.model import spec
+
+    d = spec.from_dict(data)
+    assert d.m == len(data["cables"]) and d.name == data["name"]
+
+
+@fuzz(1000)
+@given(mutated_spec_data())
+def test_mutated_specs_load_or_are_refused(work, data):
+    from cdpr_design.model import spec
+
+    p = fresh(work, "spec").with_suffix(".yaml")
+    try:
+        p.write_text(yaml.safe_dump(data, allow_unicode=True))
+    except (yaml.YAMLError, UnicodeEncodeError):  # a value YAML cannot hold (a lone surrogate): not a spec
+        assume(False)
+    res, exc = outcome(spec.load, p, limit=LOAD_LIMIT)
+    assert (res is None) != (exc is None)
+    res2, exc2 = outcome(spec.from_dict, data, limit=LOAD_LIMIT)  # the same data without YAML in between
+    assert (res2 is None) == (res is None)
+
+
+@fuzz(400)
+@given(st.data())
+def test_mutated_yaml_text_loads_or_is_refused(work, data):
+    from cdpr_design.model import spec
+
+    base = data.draw(st.sampled_from([PLANAR2.read_text(), yaml.safe_dump(data.draw(spec_data()))]))
+    text = data.draw(mutated_yaml(base))
+    p = fresh(work, "text").with_suffix(".yaml")
+    p.write_text(text, encoding="utf-8", errors="surrogatepass")
+    outcome(spec.load, p, limit=LOAD_LIMIT)
+
+
+@pytest.mark.parametrize("path", sorted(CORPUS.glob("*.yaml")), ids=lambda p: p.name)
+def test_fuzz_corpus(path):
+    """Every kept case: its first line says ``# expect: ok`` or ``# expect: error <words in the message>``."""
+    from cdpr_design.model import spec
+
+    head = path.read_bytes().split(b"\n", 1)[0].decode()
+    assert head.startswith("# expect: "), f"{path.name}: no expectation on its first line"
+    expect = head[len("# expect: "):].strip()
+    res, exc = outcome(spec.load, path, limit=LOAD_LIMIT)
+    if expect == "ok":
+        assert exc is None, str(exc)
+    else:
+        assert expect.startswith("error") and exc is not None, f"{path.name} loaded"
+        assert expect[len("error"):].strip() in str(exc), str(exc)
+
+
+def test_the_corpus_is_kept():
+    assert len(list(CORPUS.glob("*.yaml"))) >= 20
+
+
+# ----------------------------------------------------------------------------
+# One pose, forward kinematics, the schema
+# ----------------------------------------------------------------------------
+
+
+number_text = st.one_of(st.floats(-3, 5).map(lambda v: f"{v:.4g}"), st.sampled_from(EXTREME_NUMBERS).map(str),
+                        st.sampled_from(ODD_STRINGS))
+
+
+@fuzz(100)
+@given(spec_data(), st.lists(number_text, min_size=1, max_size=4),
+       st.sampled_from(["static", "wrench-feasible", "wrench-closure"]),
+       st.sampled_from(["min-norm", "min-norm", "min-max", "min-sum"]))
+def test_pose(data, at, kind, objective):
+    from cdpr_design.cli.common import parse_pose
+    from cdpr_design.jobs.pose import pose_data
+    from cdpr_design.statics.pose import evaluate_pose
+
+    design = load_design(data)
+    assume(design is not None)
+    pose, exc = outcome(parse_pose, design, ",".join(at))
+    if exc is not None:
+        return
+    res, exc = outcome(evaluate_pose, design, pose, kind, objective)
+    if res is not None:
+        out = pose_data(design, res)
+        strict_json(out)
+        assert not res.feasible or np.all(np.isfinite(res.tensions))
+
+
+@fuzz(40)
+@given(spec_data(), st.lists(st.floats(0.2, 0.8), min_size=3, max_size=3),
+       st.one_of(st.none(), st.lists(st.one_of(st.floats(0, 10), st.sampled_from(EXTREME_NUMBERS)), min_size=4,
+                                     max_size=4)))
+def test_fk(data, where, lengths):
+    from cdpr_design.statics import kinematics as kin
+    from cdpr_design.statics.reach import reached, require_reached
+
+    design = load_design(data)
+    assume(design is not None)
+    g = design.workspace.grid
+    pose = [lo + f * (hi - lo) for lo, hi, f in zip(g.lower, g.upper, where)] + list(design.workspace.orientation)
+    if lengths is None:  # lengths of a pose: reachable; the solver may miss them from its default start
+        L = kin.inverse_kinematics(design, pose)
+        res = kin.forward_kinematics(design, L)
+        if not reached(res.residual, L):
+            outcome(require_reached, res.residual, L)  # then refused cleanly, and found from the pose itself
+            assert reached(kin.forward_kinematics(design, L, guess=pose).residual, L)
+        return
+    L = lengths[: design.m]
+    try:
+        res = kin.forward_kinematics(design, L)
+    except ValueError as exc:  # the library's own refusal of negative or non-finite lengths
+        assert not np.all(np.isfinite(np.asarray(L, float))) or min(L) < 0, exc
+        return
+    outcome(require_reached, res.residual, L)
+    strict_json({"pose": list(res.pose), "residual": res.residual})
+
+
+def test_schema_is_strict_json():
+    from cdpr_design.model import spec
+
+    strict_json(spec.json_schema())
+
+
+# ----------------------------------------------------------------------------
+# The commands that write files
+# ----------------------------------------------------------------------------
+
+steps = option_floats(0.05, 1.0)
+
+
+@fuzz(8)
+@given(spec_data(), steps, st.sampled_from(["static", "wrench-feasible", "wrench-closure", "nope"]))
+def test_workspace_job(work, data, step, kind):
+    from cdpr_design.jobs import workspace as job
+
+    design = load_design(data)
+    assume(design is not None)
+    out = fresh(work, "ws")
+    res, exc = outcome(job.workspace, design, out, step=step, kind=kind)
+    check_folder(out, exc is not None)
+    if res is not None:
+        strict_json(res[0].summary())
+
+
+motors = st.one_of(st.none(), st.sampled_from(["AM8112-0F21", "SGMP-01", "NOPE", ""]))
+
+
+@fuzz(15)
+@given(spec_data(), steps, option_floats(1.0, 3.0), motors, st.sampled_from([None, "sq", "pl", "nope"]))
+def test_size_motors_job(work, data, step, safety, motor, trajectory):
+    from cdpr_design.jobs import sizing as job
+
+    design = load_design(data)
+    assume(design is not None)
+    out = fresh(work, "sm")
+    res, exc = outcome(job.size_motors, design, None, trajectory, safety, motor, step, out)
+    check_folder(out, exc is not None)
+    if res is not None:
+        strict_json(res.result.summary())
+
+
+@fuzz(10)
+@given(spec_data(), steps, option_floats(1.0, 3.0), motors)
+def test_check_job(data, step, safety, motor):
+    from cdpr_design.jobs import sizing as job
+
+    design = load_design(data)
+    assume(design is not None)
+    res, exc = outcome(job.check, design, None, None, safety, motor, step)
+    if res is not None:
+        strict_json({"checks": res.checks, "figures": res.evaluation.row})
+
+
+@fuzz(4)
+@given(spec_data(), steps, motors)
+def test_report_job(work, data, step, motor):
+    from cdpr_design.jobs import sizing as job
+
+    design = load_design(data)
+    assume(design is not None)
+    out = fresh(work, "rep")
+    res, exc = outcome(job.report, design, motor=motor, step=step, out=out)
+    check_folder(out, exc is not None)
+
+
+vary_keys = st.sampled_from(["effector.mass", "tension.1", "cables.0.outlet.0", "frame.upper.1", "name",
+                             "cables.c2.attachment", "winch.drum_radius", "nope.key", "cables.9.outlet"])
+vary_values = st.one_of(st.sampled_from(["0.5,1", "1:2:2", "1e308", "nan", "a,b", "", "1:2:0", "-1,2", "[/x]",
+                                         "1:2:99999999"]),
+                        st.lists(st.floats(0.1, 3).map(lambda v: f"{v:.3g}"), min_size=1, max_size=2).map(",".join))
+
+
+@fuzz(4)
+@given(spec_data(), st.lists(st.tuples(vary_keys, vary_values), min_size=1, max_size=2),
+       st.sampled_from([None, "fraction", "nope", "fraction:asc"]))
+def test_sweep_job(work, data, vary, rank_by):
+    from cdpr_design.jobs import sweep as job
+
+    design = load_design(data)
+    assume(design is not None)
+    out = fresh(work, "sw")
+    res, exc = outcome(job.sweep, design, [f"{k}={v}" for k, v in vary], workers=1, rank_by=rank_by, step=0.25,
+                       picture=False, out=out)
+    check_folder(out, exc is not None)
+    if res is not None:
+        strict_json(res.summary)
+
+
+@fuzz(6)
+@given(spec_data(), option_floats(1e-3, 0.05), st.sampled_from(["sq", "pl", "nope"]))
+def test_trajectory_job(work, data, cycle_time, name):
+    from cdpr_design.jobs import motion as job
+
+    design = load_design(data)
+    assume(design is not None)
+    out = fresh(work, "tr")
+    res, exc = outcome(job.trajectory, design, name, cycle_time, out)
+    check_folder(out, exc is not None)
+    if res is not None:
+        strict_json(res.summary)
+        s = res.samples  # a feasible sample has its tensions (infeasible ones may keep out-of-bounds ones)
+        assert not np.any(s.feasible & ~np.all(np.isfinite(s.tensions), axis=1))
+
+
+@fuzz(8)
+@given(spec_data(), st.sampled_from(["sq", "pl", "nope"]), option_floats(0.0, 0.2), option_floats(1e-4, 1e-3),
+       option_floats(10.0, 500.0))
+def test_simulate_job_options(work, data, name, delay, timestep, bandwidth):
+    """The simulation's options are checked before it runs; valid runs are left to test_simulation.py
+    (MuJoCo runs take seconds)."""
+    from cdpr_design.jobs import motion as job
+
+    design = load_design(data)
+    assume(design is not None)
+    delay = 0.0 if delay is None else delay
+    timestep = 5e-4 if timestep is None else timestep
+    bandwidth = 300.0 if bandwidth is None else bandwidth
+    ok = name in design.trajectories and 0 <= delay <= 10 and 1e-6 <= timestep <= 0.01 and 1e-3 <= bandwidth <= 1e6
+    assume(not ok)
+    out = fresh(work, "sim")
+    res, exc = outcome(job.simulate, design, name, delay=delay, timestep=timestep, servo_bandwidth=bandwidth, out=out)
+    assert exc is not None
+    check_folder(out, True)
+
+
+@fuzz(8)
+@given(spec_data(), option_floats(1e-3, 0.1), option_floats(0.1, 2.0), st.integers(-3, 3))
+def test_bridge_job_options(work, data, cycle_time, duration, reconnect):
+    """The gateway's options and spec are checked before it connects (valid runs: test_bridge.py)."""
+    from cdpr_design.jobs import bridge as job
+
+    design = load_design(data)
+    assume(design is not None)  # no plc: section (or a bad option): refused before any connection
+    out = fresh(work, "br")
+    res, exc = outcome(job.bridge, design, None, duration, cycle_time, 0.05, reconnect, out=out)
+    assert exc is not None
+    check_folder(out, True)
+
+
+cells = st.one_of(st.floats(-10, 10).map(lambda v: f"{v:.6g}"), st.sampled_from(["", "nan", "inf", "-0", "x",
+                                                                                   "1e308", "[/x]", " "]))
+
+
+@st.composite
+def logs(draw):
+    """Two CSV logs of a motion, often broken: missing or unsorted time, empty and text cells,
+    NaN columns, duplicate names."""
+    names = draw(st.lists(st.sampled_from(["x", "y", "L1", "time", "t", "segment", "x"]), min_size=1, max_size=4))
+    n = draw(st.integers(0, 40))
+    out = []
+    for _ in range(2):
+        rows = [",".join(names)]
+        t0 = draw(st.floats(0, 1))
+        for i in range(n):
+            row = []
+            for c in names:
+                if c in ("time", "t") and draw(st.integers(0, 9)):
+                    row.append(f"{t0 + 0.01 * i:.6g}")
+                elif draw(st.integers(0, 3)):
+                    row.append(f"{np.sin(0.1 * i):.6g}")
+                else:
+                    row.append(draw(cells))
+            rows.append(",".join(row))
+        out.append("\n".join(rows) + "\n")
+    return out
+
+
+@fuzz(80)
+@given(logs(), st.one_of(st.none(), st.sampled_from(["x", "y,x", "nope", "", ","])),
+       st.one_of(st.none(), st.lists(st.sampled_from(["x=y", "y=x", "=", "a=b=c", "x="]), max_size=2)),
+       option_floats(0.001, 0.2))
+def test_compare_job(work, texts, columns, rename, max_delay):
+    from cdpr_design.jobs import motion as job
+
+    a, b = fresh(work, "a").with_suffix(".csv"), fresh(work, "b").with_suffix(".csv")
+    a.write_text(texts[0])
+    b.write_text(texts[1])
+    res, exc = outcome(job.compare, a, b, columns, rename, max_delay)
+    if res is not None:
+        strict_json(res.summary)
+
+
+@fuzz(200)
+@given(hostile_values)
+def test_hostile_documents_at_the_top(work, value):
+    """A document that is not a mapping (a number, a string, a list, nesting) is refused cleanly."""
+    from cdpr_design.model import spec
+
+    p = fresh(work, "top").with_suffix(".yaml")
+    p.write_text(yaml.safe_dump(value))
+    res, exc = outcome(spec.load, p, limit=LOAD_LIMIT)
+    assert exc is not None
+
+
+# ----------------------------------------------------------------------------
+# Cases the fuzz runs found in the entry points (the spec-level ones are files in the corpus)
+# ----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("step", [100.0, 1e30])
+def test_found_a_grid_of_one_row_draws_its_pictures(tmp_path, planar2, step):
+    # a step larger than the frame leaves one pose (or one row): the outline contour raised a TypeError
+    from cdpr_design.jobs import workspace as job
+
+    res, out = job.workspace(planar2, tmp_path / "o", step=step)
+    assert res.poses == 1 and (tmp_path / "o" / "workspace.png").stat().st_size > 0
+    d = planar2.replace(workspace=planar2.workspace.__class__(
+        grid=planar2.workspace.grid.__class__((0.0, 0.5), (1.5, 0.5), (0.1, 0.1)), orientation=(),
+        external_wrench=None, orientation_set=None, orientation_range=None))
+    res, out = job.workspace(d, tmp_path / "row")
+    assert res.grid.shape == (16, 1) and (tmp_path / "row" / "tension_map.png").stat().st_size > 0
+
+
+def test_found_a_refused_kind_leaves_no_folder(tmp_path, planar2):
+    # the workspace.csv stream used to create the folder before the sweep checked --kind
+    from cdpr_design.errors import SpecError
+    from cdpr_design.jobs import workspace as job
+
+    with pytest.raises(SpecError, match="--kind"):
+        job.workspace(planar2, tmp_path / "o", kind="nope")
+    assert not (tmp_path / "o").exists()

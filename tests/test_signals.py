@@ -1,0 +1,122 @@
+"""SIGTERM and SIGHUP behave like Ctrl-C; what a killed run leaves is cleaned by the next (issue 19).
+
+Each test runs the real command line in a subprocess and signals it once its
+first temporary file exists (the sweep is streaming rows into it).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from .helpers import PLANAR2, subprocess_env
+
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+
+
+def start(*args, cwd=None) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "cdpr_design", *map(str, args)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, cwd=cwd,
+                            env=subprocess_env(CDPR_DESIGN_PICTURE_WORKER="0", CDPR_DESIGN_ENGINE="numpy"))
+
+
+def wait_for(cond, proc: subprocess.Popen, timeout: float = 60.0) -> None:
+    t0 = time.monotonic()
+    while not cond():
+        if proc.poll() is not None:
+            out, err = proc.communicate()
+            pytest.fail(f"the command ended (exit {proc.returncode}) before the signal: {err[-2000:]}")
+        if time.monotonic() - t0 > timeout:
+            proc.kill()
+            pytest.fail("timed out waiting for the command to start writing")
+        time.sleep(0.02)
+
+
+def temps(folder: Path) -> list[Path]:
+    return sorted(folder.glob(".*.tmp"))
+
+
+#: 2.25 M poses of planar2 (0.001 m): a few seconds of streaming into workspace.csv
+BIG = ["workspace", PLANAR2, "--step", "0.001", "--quiet"]
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], ids=lambda s: s.name)
+def test_a_signal_during_workspace_exits_130_and_removes_its_temporary_files(tmp_path, sig):
+    out = tmp_path / "out"
+    proc = start(*BIG, "--out", out)
+    wait_for(lambda: out.is_dir() and any(p.stat().st_size > 0 for p in temps(out)), proc)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err  # was -15 / -1: killed, 70-110 MB of .tmp left behind
+    assert "interrupted" in err and "Traceback" not in err
+    assert temps(out) == [] and not (out / "workspace.csv").exists()
+
+
+def test_a_run_in_the_same_out_removes_what_a_killed_run_left(tmp_path):
+    out = tmp_path / "out"
+    proc = start(*BIG, "--out", out)
+    wait_for(lambda: out.is_dir() and any(p.stat().st_size > 0 for p in temps(out)), proc)
+    proc.kill()  # SIGKILL: nothing runs, the temporary file stays
+    proc.communicate(timeout=60)
+    left = temps(out)
+    assert left, "SIGKILL left no temporary file to clean"
+    foreign = out / ".notes.tmp"  # not ours (no writer's pid in the name): kept
+    foreign.write_text("mine")
+    done = subprocess.run([sys.executable, "-m", "cdpr_design", "workspace", PLANAR2, "--step", "0.05", "--out",
+                           out, "--quiet"], capture_output=True, text=True, timeout=120,
+                          env=subprocess_env(CDPR_DESIGN_PICTURE_WORKER="0"))
+    assert done.returncode == 0, done.stderr
+    assert temps(out) == [foreign] and (out / "workspace.csv").is_file()
+
+
+def test_stale_temporary_files_of_live_processes_are_kept(tmp_path):
+    from cdpr_design.io.files import OutputDir
+    from cdpr_design.io.preflight import remove_stale
+
+    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True).stdout.strip()
+    dead = tmp_path / f".workspace.csv.{gone}.abcd1234.tmp"
+    live = tmp_path / f".workspace.csv.{os.getppid()}.efgh5678.tmp"  # our parent runs
+    for p in (dead, live):
+        p.write_text("partial")
+    OutputDir(tmp_path).write_text("x.txt", "x")  # the first write cleans
+    assert not dead.exists() and live.exists()
+    assert remove_stale(tmp_path) == []
+
+
+def test_sigterm_during_a_sweep_keeps_the_journal_and_resume_is_identical(tmp_path):
+    args = ["sweep", PLANAR2, "--vary", "effector.mass=0.5:2:6", "--step", "0.05", "--workers", "1",
+            "--no-picture", "--quiet"]
+    ref = subprocess.run([sys.executable, "-m", "cdpr_design", *map(str, args), "--out", tmp_path / "ref"],
+                         capture_output=True, text=True, timeout=300, env=subprocess_env(CDPR_DESIGN_PICTURE_WORKER="0"))
+    assert ref.returncode == 0, ref.stderr
+    out = tmp_path / "out"
+    journal = out / "sweep.journal.jsonl"
+    proc = start(*args, "--out", out)
+    wait_for(lambda: journal.is_file() and journal.read_text().count("\n") >= 2, proc)  # a variant is in
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert journal.is_file() and temps(out) == [] and not (out / "sweep.csv").exists()
+    res = subprocess.run([sys.executable, "-m", "cdpr_design", *map(str, args), "--out", out, "--resume"],
+                         capture_output=True, text=True, timeout=300, env=subprocess_env(CDPR_DESIGN_PICTURE_WORKER="0"))
+    assert res.returncode == 0, res.stderr
+    assert (out / "sweep.csv").read_bytes() == (tmp_path / "ref" / "sweep.csv").read_bytes()
+
+
+def test_interruptible_turns_sigterm_into_keyboardinterrupt_once():
+    from cdpr_design.cli.signals import Interrupted, interruptible
+
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(KeyboardInterrupt) as info:
+        with interruptible():
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(5)  # the handler raises here
+    assert isinstance(info.value, Interrupted) and info.value.signum == signal.SIGTERM
+    assert signal.getsignal(signal.SIGTERM) == before
