@@ -40,7 +40,7 @@ from cdpr_design.kernels._jit import njit, njit_fast, njit_inline
 from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL
 
 
-@njit_inline
+@njit_fast
 def _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure):
     """Per-pose quantities in basis-slot order: M = G G^T, e_v = G (W t_mid - w_v) (``e`` row v),
     and per position p (slots 0..n-1, then the non-basic columns) the tension range ``sv[0, p]``
@@ -73,7 +73,7 @@ def _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure):
             sv[1, p] = CLOSURE_TOL * math.sqrt(s)
 
 
-@njit_inline
+@njit_fast
 def _width(la, lb, lc, da, db, dc, ka, kb, kc, nrm2, want_closure):
     """One facet's half width / ||nu||, 1 / ||nu|| and closure test, from scalars only.
 
