@@ -43,7 +43,13 @@ kernel CPU per pose, interleaved runs        5.8-6.6 us                  3.6-4.0
 whole command, warm, csv: wall / CPU         5.42 s = 75x / 81x          6.94 s = 50x / 77x
   its sweep_s                                1.88 s = 217x               2.01 s = 173x
 whole command, warm, parquet: wall / CPU     8.48 s = 48x / 98x          5.84 s = 60x / 95x
+cold: first sweep with an empty numba cache  36 s (load 215)             57-65 s (load 290-430)
 ===========================================  ==========================  ==========================
+
+The cold figure (numba compiling every kernel into its cache, once per
+machine) grew: the closed forms add code that every kernel calling
+``hsm_factored`` compiles; measured only on a heavily loaded machine, to be
+looked at again.
 
 planar2 (22,801 poses): kernels warm 0.47 s (189x) before, 0.26 s (161x,
 LP 1.84 ms) after; the whole command 3.8 s before, 3.3 s after (its start-up
