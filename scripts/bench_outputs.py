@@ -26,6 +26,59 @@ summary has no ``timings``, so its ``elapsed_s`` -- which then included the CSV
 formatting -- stands in for ``sweep_s``).
 
     python3 scripts/bench_outputs.py [--step 0.14] [--sample 300] [--repeat 3] [--root DIR] [--no-cold]
+
+Figures (2-core development machine, shared: the load average is given with
+each run; on a loaded machine the wall-clock ratios of anything using both
+cores drop, the CPU ratios much less).  IPAnema 3, 154,440 poses, static:
+
+===========================================  ==========================  ==========================
+                                             before (e612e10), load 0-4  after, load 3.7
+===========================================  ==========================  ==========================
+per-pose linprog (wall / CPU)                2.64 / 2.64 ms              1.64 / 1.64 ms
+kernels in-process, warm, wall               0.70 s = 581x LP            0.42 s = 602x LP
+kernels in-process, warm, CPU                1.36 s = 301x LP CPU        0.60 s = 421x LP CPU
+kernel CPU per pose, interleaved runs        5.8-6.1 us                  3.7-3.9 us
+  two threads, same minute (load 4)          0.46 s (333,000 poses/s)    0.29 s (528,000 poses/s)
+whole command, warm, csv: wall / CPU         5.42 s = 75x / 81x          3.21 s = 79x / 94x
+  its sweep_s                                1.88 s = 217x               0.99 s = 257x
+whole command, warm, parquet: wall / CPU     8.48 s = 48x / 98x          5.06 s = 50x / 89x
+cold: first sweep with an empty numba cache  36 s (load 215)             57-65 s (load 290-430)
+===========================================  ==========================  ==========================
+
+The LP itself ran at 1.6-3.1 ms per pose over the day (other work on the
+machine), so the ratios move with it; the per-pose CPU of the kernels is the
+steadier comparison (interleaved runs of both versions, same minutes).
+
+The cold figure (numba compiling every kernel into its cache, once per
+machine) grew: the closed forms add code that every kernel calling
+``hsm_factored`` compiles; measured only on a heavily loaded machine, to be
+looked at again.
+
+planar2 (22,801 poses): kernels warm 0.47 s (189x) before, 0.22 s (196x,
+LP 1.85 ms) after; the whole command 3.8 s before, 2.9 s after (its start-up
+and pictures, not the sweep, set it).
+
+Where the time goes, per IPAnema 3 pose in the kernels (one thread, CPU):
+before, structure matrix 0.2-0.5 us, basis factorisation 0.6-1.4 us, margin
+by hyperplane shifting 3.4-7 us (56 facets through the general enumeration),
+tensions (null space + Goldfarb-Idnani) 1.1-1.5 us; after, the same except
+the margin, 1.3-1.4 us (the closed forms of ``kernels.hsm_small``, the
+closure test left out of static sweeps) and 0.5 us less loop overhead
+(``kernels.sweep.grid_block``).  With two idle cores the 3.6-4.0 us of CPU
+per pose give 516,000-541,000 poses/s (0.29 s for the grid): 1,400x an LP
+of 2.64 ms per pose, 880x the 1.64 ms the LP took in the run of the table
+(where the kernels themselves got 0.42 s, 600x): the 1000x target is met
+only when the LP is slow and both cores are free.
+
+The whole command: Python start-up and imports 1.2-2 s (typer and pydantic
+0.5 s, numpy 0.2 s, numba 0.3 s, scipy.linalg that numba imports to look for
+BLAS 0.3 s, the spec schema 0.1 s), numba's first-call set-up and cache load
+0.5-1 s (counted in ``sweep_s``), the sweep 0.3-0.6 s, the CSV 0.75 s of CPU
+on one core after the sweep (the grid is one chunk), the two pictures 0.6 and
+0.8 s of CPU in the helper process (matplotlib's text and axis layout, not
+the 154,440 cells, which are one ``imshow``).  These fixed costs put the
+whole command at 3.2 s (79x an LP of 1.64 ms, 120x one of 2.64 ms): the
+200x target for the whole process is not met.
 """
 
 from __future__ import annotations

@@ -292,3 +292,43 @@ def test_min_norm_kernel_detects_infeasibility_and_is_exact():
         else:
             assert np.all(np.isnan(t))
     assert outcomes == {True, False}, "both feasible and infeasible cases must be compared"
+
+
+@pytest.mark.parametrize("r", [1, 2])
+def test_small_redundancy_closed_forms_match_enumeration(r):
+    """hsm_one / hsm_two (m - n = 1, 2, behind hsm_factored) against the general enumeration
+    hsm_enumerate on the same factorisation: same margins (v = 0 and every row) and closure,
+    on random matrices and on degenerate ones (exact zeros, parallel columns: facets dropped
+    by the rank tests); the margins without the closure test are the same (to rounding: a
+    separately compiled copy)."""
+    rng = np.random.default_rng(50 + r)
+    counts = dict(cases=0, closure=0, degenerate=0)
+    for trial in range(600):
+        n = int(rng.choice([2, 3, 4, 6]))
+        m = n + r
+        W = rng.normal(size=(n, m))
+        if trial % 3 == 1:
+            W[rng.random((n, m)) < 0.3] = 0.0
+        if trial % 5 == 2:
+            W[:, 1] = 2.0 * W[:, 0]
+        tmin = rng.uniform(0.0, 5.0, m)
+        tmax = tmin + rng.uniform(1.0, 30.0, m)
+        wreq = np.array([W @ rng.uniform(tmin - 3.0, tmax + 3.0) for _ in range(3)])
+        scr = K.make_scratch(n, m, 3)
+        if not K.basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+            continue
+        ref = K.hsm_enumerate(W, wreq, 3, tmin, tmax, scr)
+        fast = (K.hsm_one if r == 1 else K.hsm_two)(W, wreq, 3, tmin, tmax, scr, True)
+        disp = K.hsm_factored(W, wreq, 3, tmin, tmax, scr, True)
+        quiet = K.hsm_factored(W, wreq, 3, tmin, tmax, scr, False)
+        for a, b, c, d in zip(ref[:2], fast[:2], quiet[:2], disp[:2]):
+            # the closed form, its copy without the closure test, and both behind hsm_factored
+            for x in (b, c, d):
+                assert abs(a - x) <= 1e-12 * max(1.0, abs(a)), (a, x)
+        assert fast[2] == ref[2] and disp[2] == ref[2]
+        static = (K.hsm_one if r == 1 else K.hsm_two)(W, wreq, 1, tmin, tmax, scr, False)
+        assert abs(static[0] - ref[0]) <= 1e-12 * max(1.0, abs(ref[0]))
+        counts["cases"] += 1
+        counts["closure"] += int(ref[2])
+        counts["degenerate"] += int(trial % 3 == 1 or trial % 5 == 2)
+    assert counts["cases"] > 400 and 0 < counts["closure"] < counts["cases"] and counts["degenerate"] > 150, counts

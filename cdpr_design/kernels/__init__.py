@@ -11,6 +11,7 @@ module             what
 ``geometry``       rotations, structure matrix columns, swivel-pulley exits
 ``linalg``         small determinants, inverses, Householder QR
 ``hsm``            wrench feasibility / capacity margin (hyperplane shifting)
+``hsm_small``      the same in closed form for one or two redundant cables
 ``tension_qp``     exact minimum-2-norm tensions (Goldfarb-Idnani)
 ``pose``           one pose for any m, n: feasibility, margin, tensions
 ``interference``   cable / effector / frame contacts
@@ -21,8 +22,9 @@ module             what
 
 from cdpr_design.kernels.geometry import (fill_column, pulley_exit, rotate_attachments, rotation,
                                           structure_matrix, structure_matrix_pulley)
-from cdpr_design.kernels.hsm import (CLOSURE_TOL, basis_factor, facet_normal, hsm_factored, hsm_margin,
-                                     make_scratch, square_eval)
+from cdpr_design.kernels.hsm import (CLOSURE_TOL, basis_factor, facet_normal, hsm_enumerate, hsm_factored,
+                                     hsm_margin, make_scratch, square_eval)
+from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
 from cdpr_design.kernels.interference import (HIT_CABLE_CABLE, HIT_CABLE_EFFECTOR, HIT_CABLE_FRAME,
                                               HIT_EFFECTOR_FRAME, cable_cable_dist, cable_effector_chord,
                                               interference_pose, seg_seg_dist2, segment_box_chord)

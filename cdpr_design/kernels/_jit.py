@@ -13,4 +13,7 @@ JIT = dict(cache=True, nogil=True, error_model="numpy")
 njit = nb.njit(**JIT)
 njit_parallel = nb.njit(parallel=True, **JIT)
 #: Reassociation (vectorised reductions) without giving up NaN/inf semantics.
-njit_fast = nb.njit(fastmath={"reassoc", "contract", "arcp"}, **JIT)
+FAST = {"reassoc", "contract", "arcp"}
+njit_fast = nb.njit(fastmath=FAST, **JIT)
+#: Small helpers of the hot loops, inlined into their callers (no call, no reference counting per call).
+njit_inline = nb.njit(fastmath=FAST, inline="always", **JIT)

@@ -12,7 +12,8 @@ import math
 import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_fast
-from cdpr_design.kernels.linalg import RANK_TOL, det_small, inverse_small
+from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
+from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, det_small, inverse_small
 
 
 @njit
@@ -180,10 +181,6 @@ def hsm_margin(W, wreq, tmin, tmax, combos):
     return True, margin
 
 
-#: Relative tolerance of the wrench-closure sign test (|l_j| against |w_j|).
-CLOSURE_TOL = 1e-12
-
-
 @njit
 def make_scratch(n, m, nv):
     """Scratch arrays for :func:`eval_general` (allocate once per block of poses).
@@ -219,7 +216,9 @@ def make_scratch(n, m, nv):
             np.empty(2 * m + 1, dtype=np.int64),  # 24 active constraints
             np.empty(m),                # 25 t_b (basic solution)
             np.empty(m),                # 26 facet: l_j
-            np.empty(m))                # 27 t_max - t_min
+            np.empty(m),                # 27 t_max - t_min
+            np.empty((2, m)),           # 28 hsm_small: range and closure tolerance per position
+            np.empty((n, n)))           # 29 hsm_small: 2 x 2 minors of F
 
 
 @njit
@@ -344,7 +343,25 @@ def _next_comb(idx, k, nn):
 
 
 @njit_fast
-def hsm_factored(W, wreq, nv, tmin, tmax, scr):
+def hsm_factored(W, wreq, nv, tmin, tmax, scr, want_closure):
+    """Capacity margins and wrench closure of the factored W: (margin0, margin, closure).
+
+    :func:`hsm_enumerate`'s results; one or two redundant cables (m - n = 1,
+    2) take the closed forms of :mod:`cdpr_design.kernels.hsm_small` (same
+    facets, same tests), any other m the enumeration itself.  ``closure``
+    means something only when ``want_closure`` (the closed forms skip the
+    test otherwise).
+    """
+    r = W.shape[1] - W.shape[0]
+    if r == 2:
+        return hsm_two(W, wreq, nv, tmin, tmax, scr, want_closure)
+    if r == 1:
+        return hsm_one(W, wreq, nv, tmin, tmax, scr, want_closure)
+    return hsm_enumerate(W, wreq, nv, tmin, tmax, scr)
+
+
+@njit_fast
+def hsm_enumerate(W, wreq, nv, tmin, tmax, scr):
     """Hyperplane shifting on the factored W: capacity margins and wrench closure.
 
     Gouttefarde & Krut, ARK 2010; Bouchard, Gosselin & Moore, ASME JMR 2010

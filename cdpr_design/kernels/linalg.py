@@ -12,6 +12,9 @@ from cdpr_design.kernels._jit import njit
 #: Relative tolerance below which a facet normal or a pivot counts as zero.
 RANK_TOL = 1e-10
 
+#: Relative tolerance of the wrench-closure sign test (|l_j| against |w_j|).
+CLOSURE_TOL = 1e-12
+
 
 @njit
 def det_small(M, k):

@@ -44,7 +44,7 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr):
             return False, np.nan
     if not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
         return False, np.nan
-    margin0, margin, closure = hsm_factored(W, wreq, nv, tmin, tmax, scr)
+    margin0, margin, closure = hsm_factored(W, wreq, nv, tmin, tmax, scr, kind == KIND_WRENCH_CLOSURE)
     qp_ok = False
     if margin0 >= 0.0:
         if m == n:

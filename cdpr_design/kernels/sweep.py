@@ -7,7 +7,7 @@ import math
 import numba as nb
 import numpy as np
 
-from cdpr_design.kernels._jit import njit_parallel
+from cdpr_design.kernels._jit import njit, njit_parallel
 from cdpr_design.kernels.linalg import RANK_TOL
 from cdpr_design.kernels.geometry import structure_matrix, structure_matrix_pulley
 from cdpr_design.kernels.hsm import make_scratch
@@ -22,58 +22,69 @@ def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, 
 
     Outputs are written to rows 0..count-1 of ``feasible`` (uint8), ``margin``,
     ``tensions`` (count, m) and ``lengths`` (count, m).  The orientation is
-    fixed: ``Rb`` holds R b_i.  Work is split into blocks, each with its own
-    scratch arrays, so no allocation happens per pose.
+    fixed: ``Rb`` holds R b_i.  Work is split into blocks (:func:`grid_block`),
+    each with its own scratch arrays, so no allocation happens per pose.
     """
-    n = rows.shape[0]
-    m = A.shape[0]
     nblocks = min(count, 256)
     if nblocks == 0:
         return
     bsize = (count + nblocks - 1) // nblocks
+    for b in nb.prange(nblocks):
+        grid_block(start, b * bsize, min(count, (b + 1) * bsize), lower, step, shape, Rb, A, rows, wreq,
+                   tmin, tmax, combos, kind, feasible, margin, tensions, lengths)
+
+
+@njit
+def grid_block(start, k0, k1, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos,
+               kind, feasible, margin, tensions, lengths):
+    """Rows k0..k1-1 of :func:`sweep_grid` (grid poses start+k0 .. start+k1-1), with their own scratch.
+
+    A plain function rather than the body of the parallel loop: compiled on
+    its own, the pose loop keeps the optimiser's full view (inlining,
+    hoisting) that the parallel lowering would otherwise take away.
+    """
+    n = rows.shape[0]
+    m = A.shape[0]
+    W = np.empty((n, m))
+    t = np.empty(m)
+    L = np.empty(m)
+    scr = make_scratch(n, m, wreq.shape[0])  # general m != n kernels
     ny = shape[1]
     nz = shape[2]
-    for b in nb.prange(nblocks):
-        W = np.empty((n, m))
-        t = np.empty(m)
-        L = np.empty(m)
-        scr = make_scratch(n, m, wreq.shape[0])  # general m != n kernels
-        k0 = b * bsize
-        k1 = min(count, k0 + bsize)
-        # grid indices of the block's first pose, then counted up (no division per pose)
-        idx = start + k0
-        iz = idx % nz
-        r = idx // nz
-        iy = r % ny
-        ix = r // ny
-        for k in range(k0, k1):
-            px = lower[0] + ix * step[0]
-            py = lower[1] + iy * step[1]
-            pz = lower[2] + iz * step[2]
-            iz += 1
-            if iz == nz:
-                iz = 0
-                iy += 1
-                if iy == ny:
-                    iy = 0
-                    ix += 1
-            ok = structure_matrix(px, py, pz, Rb, A, rows, W, L)
+    # grid indices of the block's first pose, then counted up (no division per pose)
+    idx = start + k0
+    iz = idx % nz
+    r = idx // nz
+    iy = r % ny
+    ix = r // ny
+    for k in range(k0, k1):
+        px = lower[0] + ix * step[0]
+        py = lower[1] + iy * step[1]
+        pz = lower[2] + iz * step[2]
+        iz += 1
+        if iz == nz:
+            iz = 0
+            iy += 1
+            if iy == ny:
+                iy = 0
+                ix += 1
+        ok = structure_matrix(px, py, pz, Rb, A, rows, W, L)
+        for i in range(m):
+            lengths[k, i] = L[i]
+        if not ok:
+            feasible[k] = 0
+            margin[k] = np.nan
             for i in range(m):
-                lengths[k, i] = L[i]
-            if not ok:
-                feasible[k] = 0
-                margin[k] = np.nan
-                for i in range(m):
-                    tensions[k, i] = np.nan
-                continue
-            if m == n:
-                f, mg = eval_pose(W, wreq, tmin, tmax, combos, kind, t)
-            else:
-                f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr)
-            feasible[k] = 1 if f else 0
-            margin[k] = mg + 0.0  # -0.0 -> 0.0: one zero in the CSV, whatever the engine
-            for i in range(m):
-                tensions[k, i] = t[i]
+                tensions[k, i] = np.nan
+            continue
+        if m == n:
+            f, mg = eval_pose(W, wreq, tmin, tmax, combos, kind, t)
+        else:
+            f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr)
+        feasible[k] = 1 if f else 0
+        margin[k] = mg + 0.0  # -0.0 -> 0.0: one zero in the CSV, whatever the engine
+        for i in range(m):
+            tensions[k, i] = t[i]
 
 
 @njit_parallel

@@ -136,7 +136,7 @@ def capacity_margin(W, wreq, tmin, tmax) -> float:
     scr = K.make_scratch(n, m, wreq.shape[0])
     if m < n or not K.basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
         return float("nan")
-    _, mg, _ = K.hsm_factored(W, wreq, wreq.shape[0], _arr(tmin, (m,)), _arr(tmax, (m,)), scr)
+    _, mg, _ = K.hsm_factored(W, wreq, wreq.shape[0], _arr(tmin, (m,)), _arr(tmax, (m,)), scr, False)
     return float(mg)
 
 
@@ -150,7 +150,7 @@ def wrench_closure(W) -> bool:
     if not K.basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
         return False
     zeros = np.zeros((1, n))
-    _, _, closure = K.hsm_factored(W, zeros, 1, np.zeros(m), np.ones(m), scr)
+    _, _, closure = K.hsm_factored(W, zeros, 1, np.zeros(m), np.ones(m), scr, True)
     return bool(closure)
 
 
