@@ -10,7 +10,6 @@ import math
 import numpy as np
 
 from cdpr_design.kernels._jit import njit
-from cdpr_design.kernels.geometry import rotation
 
 
 #: Bits of the interference mask returned by :func:`interference_pose`.

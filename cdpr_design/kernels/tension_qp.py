@@ -8,7 +8,7 @@ import numpy as np
 
 from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.linalg import householder_qr
-from cdpr_design.kernels.hsm import basis_factor, make_scratch
+from cdpr_design.kernels.hsm import basis_factor
 
 
 #: Relative tolerance (to the largest tension bound) of the QP's bound checks.
