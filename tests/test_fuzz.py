@@ -505,7 +505,7 @@ def test_pose_with_cable_models_and_free_orientation(data, where, kind):
             assert np.all(t >= design.tension_min - 1e-6) and np.all(t <= design.tension_max + 1e-6), t
 
 
-@fuzz(40)
+@fuzz(12)  # an elastic fk with no equilibrium takes 10-20 s to give up: more examples in the long run
 @given(feature_spec_data(), st.lists(st.floats(0.2, 0.8), min_size=3, max_size=3),
        st.one_of(st.none(), st.lists(st.one_of(st.floats(0, 10), st.sampled_from([0.0, 1e-9, 1e-6, 1e4, 0.5])),
                                      min_size=4, max_size=4)))
@@ -569,21 +569,29 @@ opt_requires = st.one_of(st.sampled_from(["task_min_margin>=1", "fraction<=2", "
                          st.text(max_size=10))
 
 
-@fuzz(6)
-@given(spec_data(), st.lists(opt_vary, min_size=0, max_size=2), st.lists(opt_figures, max_size=2),
-       st.lists(opt_figures, max_size=1), st.lists(opt_requires, max_size=2),
-       st.sampled_from([2, 2, 3, 1, 0, -1, 10 ** 7]), st.sampled_from([None, None, 1, 0, -1, 10 ** 6]),
-       st.sampled_from([None, 0, 7, -1, 2 ** 32 - 1, 2 ** 32, 2 ** 64]),
-       st.one_of(st.none(), st.sampled_from([30.0, 0.0, -1.0, math.nan, math.inf, 1e308])))
-def test_optimize_job(work, data, vary, maximize, minimize, require, trials, workers, seed, timeout):
+@fuzz(12)
+@given(spec_data(), st.tuples(st.sampled_from([["effector.mass=0.5:2"], ["tension.1=100:300"], []]),
+                              st.lists(opt_vary, max_size=1)).map(lambda t: t[0] + t[1]),
+       st.tuples(st.sampled_from([["task_min_margin"], ["task_fraction"], []]),
+                 st.lists(opt_figures, max_size=1)).map(lambda t: t[0] + t[1]),
+       st.one_of(st.just([]), st.lists(opt_figures, max_size=1)),
+       st.one_of(st.just([]), st.lists(opt_requires, max_size=2)),
+       st.sampled_from([2, 2, 2, 3, 1, 0, -1, 10 ** 7]), st.sampled_from([None, None, None, 1, 0, -1, 10 ** 6]),
+       st.sampled_from([None, None, 0, 7, -1, 2 ** 32 - 1, 2 ** 32, 2 ** 64]),
+       st.one_of(st.none(), st.sampled_from([30.0, 0.0, -1.0, math.nan, math.inf, 1e308])), st.booleans())
+def test_optimize_job(work, data, vary, maximize, minimize, require, trials, workers, seed, timeout, hostile):
     """``optimize`` (small trial counts, one worker, task-box evaluations) with hostile --vary, --maximize,
     --minimize, --require, --trials, --workers, --seed and --timeout: a result, or a clean refusal
     before anything is written."""
     from cdpr_design.jobs import optimize as job
     from cdpr_design.model import spec
 
-    data.get("requirements", {}).pop("max_speed", None)  # trials sweep only the task box
-    data.get("requirements", {}).pop("max_acceleration", None)
+    assume("requirements" in data)  # a task box
+    data["requirements"].pop("max_speed")  # trials sweep only the task box
+    data["requirements"].pop("max_acceleration")
+    if not hostile:  # half the examples run: the first key and objective, two trials
+        vary, maximize, minimize, require = vary[:1] or ["effector.mass=0.5:2"], maximize[:1] or ["task_fraction"], [], []
+        trials, workers, seed, timeout = 2, None, 1, None
     design = load_design(data)
     assume(design is not None)
     out = fresh(work, "opt")
