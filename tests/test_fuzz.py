@@ -499,7 +499,7 @@ def test_pose_with_cable_models_and_free_orientation(data, where, kind):
     res, exc = outcome(pose_entry, design, ",".join(f"{v:.6g}" for v in pose), kind)
     if res is not None:
         strict_json(res)
-        if res["feasible"]:  # a feasible pose has every tension, within its bounds
+        if res["feasible"] and kind != "wrench-closure":  # every tension, within its bounds (closure: unbounded)
             t = np.array([res["tensions"][c.name] for c in design.cables], dtype=float)
             assert np.all(np.isfinite(t))
             assert np.all(t >= design.tension_min - 1e-6) and np.all(t <= design.tension_max + 1e-6), t
