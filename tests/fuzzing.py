@@ -161,3 +161,89 @@ def mutated_yaml(draw, base_text: str) -> str:
 #: Option values: mostly sensible, often hostile (numbers for steps, cycle times, tolerances).
 def option_floats(low: float, high: float):
     return st.one_of(st.none(), st.floats(low, high), st.sampled_from(EXTREME_NUMBERS).map(float))
+
+
+# ----------------------------------------------------------------------------
+# Cable models, the hanging pose (effector.orientation, requirements.max_tilt)
+# ----------------------------------------------------------------------------
+
+CABLE_MODELS = ["ideal", "elastic", "sagging"]
+#: The keys of the later features, mutated by :func:`mutated_feature_data`.
+FEATURE_KEYS = ("cable", "model", "axial_stiffness", "mass_per_length", "orientation", "max_tilt",
+                "center_of_mass")
+
+
+def _cable_props(draw, model: str, always: bool) -> dict:
+    """What ``model`` needs (EA [N], mass per length [kg/m]); with ``always`` every property."""
+    props: dict = {}
+    if model != "ideal" or always:
+        props["axial_stiffness"] = _r(draw(st.floats(1e3, 1e7)))
+    if model == "sagging" or always:
+        props["mass_per_length"] = _r(draw(st.floats(1e-3, 0.5)))
+    return props
+
+
+@st.composite
+def feature_spec_data(draw) -> dict:
+    """A random valid spec (:func:`spec_data`) that also draws a cable model (design-wide, often with
+    the properties of every model, sometimes per cable) and, for the designs it applies to (2T with
+    two cables, 3T with three or four: under-constrained), ``effector.orientation: free`` with a
+    centre of mass below the attachments and often ``requirements.max_tilt``."""
+    data = draw(spec_data())
+    model = draw(st.sampled_from(CABLE_MODELS))
+    if model != "ideal" or draw(st.booleans()):
+        data["cable"] = {"model": model, **_cable_props(draw, model, draw(st.booleans()))}
+    for c in data["cables"]:
+        if draw(st.integers(0, 4)) == 0:  # a cable of its own model
+            own = draw(st.sampled_from(CABLE_MODELS))
+            c.update({"model": own, **_cable_props(draw, own, False)})
+    m, motion = len(data["cables"]), data["motion"]
+    under = (motion == "2T" and m == 2) or (motion == "3T" and m <= 4)
+    if under and draw(st.booleans()):
+        data["effector"]["orientation"] = "free"
+        dim = 3 if motion == "3T" else 2
+        data["effector"]["center_of_mass"] = [0.0] * (dim - 1) + [-_r(draw(st.floats(0.0, 0.3)))]
+        if draw(st.booleans()):
+            data.setdefault("requirements", {})["max_tilt"] = _r(draw(st.floats(0.0, 180.0)))
+    elif draw(st.integers(0, 5)) == 0:
+        data["effector"]["orientation"] = "fixed"
+    return data
+
+
+def _feature_paths(data):
+    return [p for p in _paths(data) if p and any(k in FEATURE_KEYS for k in p if isinstance(k, str))]
+
+
+@st.composite
+def mutated_feature_data(draw) -> dict:
+    """A :func:`feature_spec_data` spec with one to three hostile changes to the keys of cable models and
+    the hanging pose: a model or orientation misspelt or of the wrong type, a property the model needs
+    deleted, extreme numbers (EA 0 or 1e308, a negative density, max_tilt 500 or NaN), ``free`` or
+    ``max_tilt`` where they do not apply."""
+    data = copy.deepcopy(draw(feature_spec_data()))
+    for _ in range(draw(st.integers(1, 3))):
+        action = draw(st.sampled_from(["replace", "replace", "delete", "model", "free", "tilt"]))
+        paths = _feature_paths(data)
+        if action == "model":  # a model whose properties may be missing, on the design or one cable
+            cables = data.get("cables") if isinstance(data.get("cables"), list) else []
+            if not isinstance(data.get("cable", {}), dict):
+                continue
+            places = [w for w in [data.setdefault("cable", {})] + cables if isinstance(w, dict)]
+            where = draw(st.sampled_from(places))
+            where["model"] = draw(st.sampled_from(CABLE_MODELS + ["Sagging", "catenary", "", None, 1, True]))
+        elif action == "free" and isinstance(data.get("effector"), dict):
+            data["effector"]["orientation"] = draw(st.sampled_from(["free", "fixed", "Free", "hanging", True, 0,
+                                                                    None, ["free"]]))
+        elif action == "tilt" and isinstance(data.get("requirements", {}), dict):
+            data.setdefault("requirements", {})["max_tilt"] = draw(st.one_of(
+                st.sampled_from([-1, 180.0001, 500, 1e308, math.nan, math.inf, "10", True, None, [10]]),
+                st.floats(0, 180)))
+        elif action in ("replace", "delete") and paths:
+            path = draw(st.sampled_from(paths))
+            parent, key = _get(data, path[:-1]), path[-1]
+            if action == "replace":
+                parent[key] = draw(st.one_of(hostile_values, st.sampled_from(
+                    [0, -1.0, 1e-300, 1e308, 1e13, math.nan, "sagging", "free"])))
+            else:
+                del parent[key]
+    return data

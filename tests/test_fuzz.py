@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import os
 import time
 from pathlib import Path
@@ -27,8 +28,8 @@ from hypothesis import strategies as st
 
 from cdpr_design.errors import CdprError
 
-from .fuzzing import EXTREME_NUMBERS, ODD_STRINGS, hostile_values, mutated_spec_data, mutated_yaml, option_floats, \
-    spec_data
+from .fuzzing import EXTREME_NUMBERS, ODD_STRINGS, feature_spec_data, hostile_values, mutated_feature_data, \
+    mutated_spec_data, mutated_yaml, option_floats, spec_data
 from .helpers import PLANAR2, ROOT
 
 CORPUS = ROOT / "tests" / "data" / "fuzz_corpus"
@@ -417,6 +418,194 @@ def test_hostile_documents_at_the_top(work, value):
 
 
 # ----------------------------------------------------------------------------
+# Cable models, the hanging pose, optimize, table formats (merged after issue 19)
+# ----------------------------------------------------------------------------
+
+
+def check_cable_models(design) -> None:
+    """A loaded design's cables have what their model needs (EA > 0; sagging: a density > 0)."""
+    for c in design.cables:
+        p = c.props
+        assert p.model in ("ideal", "elastic", "sagging"), p.model
+        if p.model != "ideal":
+            assert p.axial_stiffness is not None and 0 < p.axial_stiffness < np.inf, (c.name, p)
+        if p.model == "sagging":
+            assert 0 < p.mass_per_length < np.inf, (c.name, p)
+    assert design.effector.orientation in ("fixed", "free")
+    tilt = design.requirements.max_tilt
+    assert tilt is None or (0 <= tilt <= 180 and design.effector.orientation == "free")
+
+
+@fuzz(100)
+@given(feature_spec_data())
+def test_random_feature_specs_load(data):
+    from cdpr_design.model import spec
+
+    check_cable_models(spec.from_dict(data))
+
+
+@fuzz(400)
+@given(mutated_feature_data())
+def test_mutated_feature_keys_load_or_are_refused(work, data):
+    from cdpr_design.model import spec
+
+    p = fresh(work, "feat").with_suffix(".yaml")
+    try:
+        p.write_text(yaml.safe_dump(data, allow_unicode=True))
+    except (yaml.YAMLError, UnicodeEncodeError):
+        assume(False)
+    res, exc = outcome(spec.load, p, limit=LOAD_LIMIT)
+    if res is not None:
+        check_cable_models(res)
+    res2, exc2 = outcome(spec.from_dict, data, limit=LOAD_LIMIT)
+    assert (res2 is None) == (res is None)
+
+
+def pose_entry(design, at: str, kind: str) -> dict:
+    """What ``pose --at`` computes (cli/pose.py's branches, through the library)."""
+    from cdpr_design.cli.common import parse_numbers, parse_pose
+    from cdpr_design.errors import InputError
+    from cdpr_design.jobs import hanging as hjob
+    from cdpr_design.jobs import pose as job
+    from cdpr_design.statics import hanging as H
+    from cdpr_design.statics.kinematics import has_pulleys
+    from cdpr_design.statics.pose import evaluate_pose
+
+    ideal = job.cable_model_name(design) == "ideal"
+    if H.hangs_freely(design):
+        if not ideal:
+            raise InputError("--cable-model: free hangs on ideal cables")
+        return hjob.free_pose_data(design, parse_numbers(at, "--at", design.motion.dim), kind)
+    p = parse_pose(design, at)
+    data = job.pose_data(design, evaluate_pose(design, p, kind, "min-norm"))
+    if ideal and H.underconstrained(design) and not has_pulleys(design):
+        data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
+    return data
+
+
+@fuzz(60)
+@given(feature_spec_data(), st.lists(st.one_of(st.floats(0.1, 0.9), st.sampled_from([0.0, 1.0, -1.0, 2.0])),
+                                     min_size=3, max_size=3),
+       st.sampled_from(["static", "static", "wrench-feasible", "wrench-closure"]))
+def test_pose_with_cable_models_and_free_orientation(data, where, kind):
+    design = load_design(data)
+    assume(design is not None)
+    g = design.workspace.grid
+    pose = [lo + f * (hi - lo) for lo, hi, f in zip(g.lower, g.upper, where)]
+    from cdpr_design.statics import hanging as H
+
+    if not H.hangs_freely(design):
+        pose += list(design.workspace.orientation)
+    res, exc = outcome(pose_entry, design, ",".join(f"{v:.6g}" for v in pose), kind)
+    if res is not None:
+        strict_json(res)
+        if res["feasible"] and kind != "wrench-closure":  # every tension, within its bounds (closure: unbounded)
+            t = np.array([res["tensions"][c.name] for c in design.cables], dtype=float)
+            assert np.all(np.isfinite(t))
+            assert np.all(t >= design.tension_min - 1e-6) and np.all(t <= design.tension_max + 1e-6), t
+
+
+@fuzz(12)  # an elastic fk with no equilibrium takes 10-20 s to give up: more examples in the long run
+@given(feature_spec_data(), st.lists(st.floats(0.2, 0.8), min_size=3, max_size=3),
+       st.one_of(st.none(), st.lists(st.one_of(st.floats(0, 10), st.sampled_from([0.0, 1e-9, 1e-6, 1e4, 0.5])),
+                                     min_size=4, max_size=4)))
+def test_fk_with_cable_models_and_free_orientation(data, where, lengths):
+    """``fk``'s library entry points (hanging for ideal cables, cable_fk for elastic and sagging ones) on
+    lengths of a pose or lengths the command line accepts (finite, 0 to 10 km): a pose whose residual
+    says it was reached, or a clean refusal."""
+    from cdpr_design.jobs import hanging as hjob
+    from cdpr_design.jobs import pose as job
+    from cdpr_design.statics import kinematics as kin
+    from cdpr_design.statics.reach import reached
+
+    design = load_design(data)
+    assume(design is not None)
+    g = design.workspace.grid
+    pose = [lo + f * (hi - lo) for lo, hi, f in zip(g.lower, g.upper, where)] + list(design.workspace.orientation)
+    L = list(kin.inverse_kinematics(design, pose)) if lengths is None else lengths[: design.m]
+    if job.cable_model_name(design) == "ideal":
+        res, exc = outcome(hjob.fk_data, design, L)
+    else:
+        res, exc = outcome(job.cable_fk_data, design, L)
+    if res is not None:
+        strict_json(res)
+        assert reached(res["residual"], np.asarray(L, float)), f"a pose {res['residual']:.3g} m off reported"
+
+
+formats = st.sampled_from(["csv", "csv", "parquet", "xls"])
+tilts = st.one_of(st.none(), st.floats(0, 180), st.sampled_from([-1.0, 180.5, 500.0, math.nan, math.inf, 1e308]))
+
+
+@fuzz(10)
+@given(feature_spec_data(), steps, st.sampled_from(["static", "static", "wrench-feasible", "nope"]), formats,
+       st.booleans(), tilts)
+def test_workspace_job_formats_html_and_tilt(work, data, step, kind, fmt, html, max_tilt):
+    from cdpr_design.jobs import workspace as job
+
+    design = load_design(data)
+    assume(design is not None)
+    out = fresh(work, "wsf")
+    res, exc = outcome(job.workspace, design, out, step=step, kind=kind, format=fmt, html=html, max_tilt=max_tilt)
+    check_folder(out, exc is not None)
+    if res is not None:
+        assert fmt in ("csv", "parquet") and (max_tilt is None or 0 <= max_tilt <= 180)
+        strict_json(res[0].summary())
+        assert (out / f"workspace.{fmt}").is_file() and (out / "report.html").is_file() == html
+
+
+opt_vary = st.one_of(
+    st.sampled_from(["effector.mass=0.5:2", "effector.mass=0.1:10:log", "tension.1=100:300", "cables.0.outlet.0=0:1",
+                     "cable.model=ideal,elastic", "effector.mass=1,2,3", "effector.mass=2:1", "effector.mass=0:1:log",
+                     "effector.mass=nan:1", "effector.mass=1:1e308", "nope=0:1", "effector.mass", "=", "",
+                     "effector.mass=1:2:3:4", "[/x]=0:1", "name=a,b", "effector.orientation=fixed,free",
+                     "requirements.max_tilt=0:500", "cables.9.outlet.0=0:1", "workspace.grid.step=1e-9:1e-8",
+                     "effector.mass=1,1"]),
+    st.text(max_size=12))
+opt_figures = st.one_of(st.sampled_from(["task_min_margin", "task_fraction", "fraction", "min_margin",
+                                         "max_tension", "peak_tension_c1", "nope", "", "[/x]", "fraction>=1"]),
+                        st.text(max_size=8))
+opt_requires = st.one_of(st.sampled_from(["task_min_margin>=1", "fraction<=2", "fraction>=nan", "fraction>=1e308",
+                                          "fraction=1", ">=1", "fraction>=", "nope>=1", "task_fraction>=-inf"]),
+                         st.text(max_size=10))
+
+
+@fuzz(12)
+@given(spec_data(), st.tuples(st.sampled_from([["effector.mass=0.5:2"], ["tension.1=100:300"], []]),
+                              st.lists(opt_vary, max_size=1)).map(lambda t: t[0] + t[1]),
+       st.tuples(st.sampled_from([["task_min_margin"], ["task_fraction"], []]),
+                 st.lists(opt_figures, max_size=1)).map(lambda t: t[0] + t[1]),
+       st.one_of(st.just([]), st.lists(opt_figures, max_size=1)),
+       st.one_of(st.just([]), st.lists(opt_requires, max_size=2)),
+       st.sampled_from([2, 2, 2, 3, 1, 0, -1, 10 ** 7]), st.sampled_from([None, None, None, 1, 0, -1, 10 ** 6]),
+       st.sampled_from([None, None, 0, 7, -1, 2 ** 32 - 1, 2 ** 32, 2 ** 64]),
+       st.one_of(st.none(), st.sampled_from([30.0, 0.0, -1.0, math.nan, math.inf, 1e308])), st.booleans())
+def test_optimize_job(work, data, vary, maximize, minimize, require, trials, workers, seed, timeout, hostile):
+    """``optimize`` (small trial counts, one worker, task-box evaluations) with hostile --vary, --maximize,
+    --minimize, --require, --trials, --workers, --seed and --timeout: a result, or a clean refusal
+    before anything is written."""
+    from cdpr_design.jobs import optimize as job
+    from cdpr_design.model import spec
+
+    assume("requirements" in data)  # a task box
+    data["requirements"].pop("max_speed")  # trials sweep only the task box
+    data["requirements"].pop("max_acceleration")
+    if not hostile:  # half the examples run: the first key and objective, two trials
+        vary, maximize, minimize, require = vary[:1] or ["effector.mass=0.5:2"], maximize[:1] or ["task_fraction"], [], []
+        trials, workers, seed, timeout = 2, None, 1, None
+    design = load_design(data)
+    assume(design is not None)
+    out = fresh(work, "opt")
+    res, exc = outcome(job.optimize, design, vary, maximize, minimize, require, trials, workers, seed, timeout,
+                       picture=False, out=out)
+    check_folder(out, exc is not None)
+    if res is not None:
+        strict_json(res.summary)
+        assert (out / "optimize.csv").is_file() and res.summary["trials_done"] == trials
+        if res.best is not None:
+            spec.load(out / "best.yaml")
+
+
+# ----------------------------------------------------------------------------
 # Cases the fuzz runs found in the entry points (the spec-level ones are files in the corpus)
 # ----------------------------------------------------------------------------
 
@@ -443,3 +632,37 @@ def test_found_a_refused_kind_leaves_no_folder(tmp_path, planar2):
     with pytest.raises(SpecError, match="--kind"):
         job.workspace(planar2, tmp_path / "o", kind="nope")
     assert not (tmp_path / "o").exists()
+
+
+def test_found_a_table_format_outside_the_list_is_bad_input(tmp_path, planar2):
+    # format="xls" through the library was a ValueError (a crash); the command line's enum hid it
+    from cdpr_design.errors import InputError
+    from cdpr_design.jobs import workspace as job
+
+    with pytest.raises(InputError, match="--format"):
+        job.workspace(planar2, tmp_path / "o", step=0.5, format="xls")
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("options, option", [
+    ({"seed": 2 ** 32}, "--seed"), ({"seed": 2 ** 64}, "--seed"), ({"workers": 10 ** 6}, "--workers"),
+    ({"trials": 10 ** 7}, "--trials")])
+def test_found_optimize_options_out_of_range_are_refused_before_any_work(tmp_path, planar2, options, option):
+    # a seed >= 2**32 was numpy's ValueError after optimize.db was created; a million workers or ten
+    # million trials were started
+    from cdpr_design.errors import InputError
+    from cdpr_design.jobs import optimize as job
+
+    kwargs = {"trials": 2, **options}
+    with pytest.raises(InputError, match=option):
+        job.optimize(planar2, ["cables.0.outlet.0=-0.5:0.5"], ["task_min_margin"], out=tmp_path / "o",
+                     picture=False, **kwargs)
+    assert not (tmp_path / "o").exists()
+
+
+def test_found_a_resumed_seed_near_the_top_stays_a_seed(tmp_path):
+    # the sampler's seed is the run's seed plus the trials already done (and plus the worker's number):
+    # --seed 4294967295 on a resumed study was numpy's ValueError
+    from cdpr_design.optimize.study import make_sampler
+
+    assert make_sampler(2 ** 32 - 1 + 5) is not None

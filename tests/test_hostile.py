@@ -458,3 +458,53 @@ def test_tables_on_screen_show_no_minus_zero():
     from cdpr_design.cli.common import fmt
 
     assert fmt(-0.0) == "0" and fmt(-0.5) == "-0.5"
+
+
+# ----------------------------------------------------------------------------
+# The options of the features merged after issue 19: optimize, --max-tilt, --cable-model, --format
+# ----------------------------------------------------------------------------
+
+OPT = ["optimize", PLANAR2, "--vary", "cables.0.outlet.0=-0.5:0.5", "--maximize", "task_min_margin", "--no-picture",
+       "--quiet"]
+
+
+@pytest.mark.parametrize("option, value", [
+    ("--trials", "0"), ("--trials", "2000000"), ("--workers", "0"), ("--workers", "2000"),
+    ("--timeout", "-1"), ("--timeout", "nan"), ("--timeout", "inf"), ("--seed", "-1"),
+    ("--seed", "4294967296"), ("--seed", "99999999999999999999"), ("--step", "nan")])
+def test_optimize_options_are_ranged(tmp_path, option, value):
+    # --seed 2**32 was a numpy ValueError traceback after optimize.db was created; --workers 2000 and
+    # --trials 2000000 started (2000 processes; a study of millions of trials held in memory at the end)
+    out = tmp_path / "o"
+    assert_clean_error(invoke(*OPT, option, value, "--out", out), option)
+    assert not out.exists()
+
+
+def test_optimize_out_under_a_file_or_read_only_is_refused_before_any_work(tmp_path):
+    (tmp_path / "afile").write_text("x")
+    assert_clean_error(invoke(*OPT, "--out", tmp_path / "afile" / "sub"), "--out", "is a file, not a folder")
+    ro = _read_only_folder(tmp_path)
+    if ro is not None:
+        assert_clean_error(invoke(*OPT, "--out", os.path.join(ro, "sub")), "--out", "not writable")
+
+
+@pytest.mark.parametrize("spec_path, args, option", [
+    (PLANAR2, ["--max-tilt", "500"], "--max-tilt"), (PLANAR2, ["--max-tilt", "nan"], "--max-tilt"),
+    (ROOT / "designs" / "crane4.yaml", ["--max-tilt", "-1"], "--max-tilt"),
+    (ROOT / "designs" / "crane4.yaml", ["--max-tilt", "nan"], "--max-tilt"),
+    (PLANAR2, ["--cable-model", "bogus"], "--cable-model"), (PLANAR2, ["--format", "xls"], "--format")])
+def test_workspace_feature_options_are_checked(tmp_path, spec_path, args, option):
+    out = tmp_path / "o"
+    assert_clean_error(invoke("workspace", spec_path, "--step", "0.5", *args, "--out", out), option)
+    assert not out.exists()
+
+
+def test_cable_model_and_format_on_other_commands(tmp_path):
+    assert_clean_error(invoke("pose", PLANAR2, "--at", "0.7,0.7", "--cable-model", "bogus"), "--cable-model")
+    assert_clean_error(invoke("fk", PLANAR2, "--lengths", "1,1", "--cable-model", "bogus"), "--cable-model")
+    # a model whose property the spec lacks: refused naming the key
+    bare = spec_with(tmp_path, lambda d: d["cable"].pop("axial_stiffness"))
+    for cmd in (["pose", bare, "--at", "0.7,0.7"], ["fk", bare, "--lengths", "1,1"],
+                ["workspace", bare, "--step", "0.5", "--out", tmp_path / "o"]):
+        assert_clean_error(invoke(*cmd, "--cable-model", "sagging"), "axial_stiffness")
+    assert not (tmp_path / "o").exists()

@@ -6,6 +6,7 @@ first temporary file exists (the sweep is streaming rows into it).
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -15,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from .helpers import PLANAR2, subprocess_env
+from .helpers import PLANAR2, planar2_raw, subprocess_env, write_spec
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 
@@ -120,3 +121,42 @@ def test_interruptible_turns_sigterm_into_keyboardinterrupt_once():
             time.sleep(5)  # the handler raises here
     assert isinstance(info.value, Interrupted) and info.value.signum == signal.SIGTERM
     assert signal.getsignal(signal.SIGTERM) == before
+
+
+def _trial_states(db: Path) -> list[str]:
+    import sqlite3
+
+    if not db.is_file():
+        return []
+    try:
+        with sqlite3.connect(f"file:{db}?mode=ro", uri=True, timeout=5) as con:
+            return [s for (s,) in con.execute("SELECT state FROM trials")]
+    except sqlite3.Error:  # the tables are being created
+        return []
+
+
+def test_sigterm_during_optimize_exits_130_and_the_study_resumes(tmp_path):
+    """SIGTERM behaves like Ctrl-C for optimize: exit 130, no table written, no trial left RUNNING,
+    and --resume completes the study."""
+    raw = planar2_raw()
+    raw["winch"].pop("motor")
+    for k in ("max_speed", "max_acceleration"):
+        raw["requirements"].pop(k)
+    spec = write_spec(tmp_path, raw, "light.yaml")
+    out = tmp_path / "opt"
+    args = ["optimize", spec, "--vary", "cables.0.outlet.0=-0.5:0.5", "--maximize", "task_min_margin",
+            "--no-picture", "--quiet", "--seed", "1", "--out", out]
+    proc = start(*args, "--trials", 500)
+    wait_for(lambda: _trial_states(out / "optimize.db").count("COMPLETE") >= 2, proc, timeout=120)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    assert "interrupted" in err and "Traceback" not in err
+    states = _trial_states(out / "optimize.db")
+    assert "RUNNING" not in states and not (out / "optimize.csv").exists() and temps(out) == []
+    total = states.count("COMPLETE") + 3  # (an interrupted trial is marked failed and not counted)
+    res = subprocess.run([sys.executable, "-m", "cdpr_design", *map(str, args), "--trials", str(total), "--resume",
+                          "--json"], capture_output=True, text=True, timeout=300,
+                         env=subprocess_env(CDPR_DESIGN_PICTURE_WORKER="0"))
+    assert res.returncode in (0, 1), res.stderr
+    assert json.loads(res.stdout)["trials_done"] == total and (out / "optimize.csv").is_file()

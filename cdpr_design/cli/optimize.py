@@ -11,6 +11,7 @@ from cdpr_design.cli.common import (CatalogueOpt, JsonOpt, MotorOpt, OutOpt, Ove
                                     SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt, info,
                                     load_design, out_console, summary_table)
 from cdpr_design.errors import CheckFailed
+from cdpr_design.model.limits import MAX_TRIALS, MAX_WORKERS, SEED_LIMIT
 
 _FIGURES = ("task_min_margin, min_margin_figure, task_fraction, task_feasible, fraction, measure, feasible, "
             "min_margin, max_margin, max_tension, peak_tension, peak_tension_<cable>, peak_cable_speed, "
@@ -68,13 +69,16 @@ def optimize(
     require: Annotated[Optional[list[str]], typer.Option(
         "--require", metavar="FIGURE>=X|FIGURE<=X",
         help="A limit besides the spec's requirements (repeatable); trials breaking one are infeasible.")] = None,
-    trials: Annotated[int, typer.Option("--trials", help="Trials in the study (with --resume: the total).")] = 100,
+    trials: Annotated[int, typer.Option("--trials", help="Trials in the study (with --resume: the total).",
+                                        min=1, max=MAX_TRIALS)] = 100,
     workers: Annotated[Optional[int], typer.Option(
-        "--workers", help="Processes evaluating trials on the shared study (default 1: this process).")] = None,
+        "--workers", help="Processes evaluating trials on the shared study (default 1: this process).",
+        min=1, max=MAX_WORKERS)] = None,
     seed: Annotated[Optional[int], typer.Option(
-        "--seed", help="Sampler seed: with one worker the run is repeatable.")] = None,
+        "--seed", help="Sampler seed: with one worker the run is repeatable.", min=0, max=SEED_LIMIT - 1)] = None,
     timeout: Annotated[Optional[float], typer.Option(
-        "--timeout", metavar="SEC", help="Start no trial after SEC seconds (--resume continues).")] = None,
+        "--timeout", metavar="SEC", help="Start no trial after SEC seconds (--resume continues).",
+        min=0.0, max=1e9)] = None,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue the study in --out (interrupted trials are evaluated again).")] = False,
     catalogue: CatalogueOpt = None,

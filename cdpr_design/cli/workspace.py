@@ -37,7 +37,7 @@ def workspace(
                                "(workspace.orientation_range). 1R2T and 3R3T.")] = None,
     max_tilt: Annotated[Optional[float], typer.Option(
         "--max-tilt", help="Largest tilt [deg] a feasible pose may hang with (under-constrained designs with "
-                           "effector.orientation: free; default requirements.max_tilt).")] = None,
+                           "effector.orientation: free; default requirements.max_tilt).", min=0.0, max=180.0)] = None,
     cable_model: CableModelOpt = None,
     format: FormatOpt = Format.csv,
     html: Annotated[bool, typer.Option(

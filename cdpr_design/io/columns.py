@@ -37,6 +37,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
+from cdpr_design.errors import InputError, quote
 from cdpr_design.io.csvtext import csv_rows
 from cdpr_design.io.files import AtomicFile
 from cdpr_design.io.tables import fmt, json_default
@@ -54,8 +55,9 @@ def file_name(stem: str, format: str = "csv") -> str:
 
 
 def check_format(format: str) -> None:
+    """A table format the writers know (bad input, as ``--format``: an :class:`InputError`)."""
     if format not in FORMATS:
-        raise ValueError(f"table format: expected one of {', '.join(FORMATS)}, got {format!r}")
+        raise InputError(f"--format: expected one of {', '.join(FORMATS)}, got {quote(format)}")
 
 
 def as_columns(data) -> dict:

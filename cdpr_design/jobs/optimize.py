@@ -11,6 +11,7 @@ from cdpr_design.errors import InputError
 from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage
 from cdpr_design.jobs.motion import require_trajectory
+from cdpr_design.model.limits import MAX_TRIALS, MAX_WORKERS, SEED_LIMIT
 from cdpr_design.plots import optimize as optimize_plots
 
 #: Files the job writes (the study's SQLite file besides).
@@ -30,13 +31,13 @@ class OptimizeRun(NamedTuple):
 def _check_options(trials: int, workers: int | None, seed: int | None, timeout: float | None,
                    step: float | None) -> int:
     """Validate the numeric options (exit 2 naming the option); the number of workers."""
-    if trials < 1:
-        raise InputError(f"--trials: expected at least 1, got {trials}")
+    if not 1 <= trials <= MAX_TRIALS:
+        raise InputError(f"--trials: expected 1 to {MAX_TRIALS:,}, got {trials}")
     workers = 1 if workers is None else workers
-    if workers < 1:
-        raise InputError(f"--workers: expected at least 1, got {workers}")
-    if seed is not None and seed < 0:
-        raise InputError(f"--seed: expected a whole number >= 0, got {seed}")
+    if not 1 <= workers <= MAX_WORKERS:
+        raise InputError(f"--workers: expected 1 to {MAX_WORKERS}, got {workers}")
+    if seed is not None and not 0 <= seed < SEED_LIMIT:
+        raise InputError(f"--seed: expected a whole number from 0 to {SEED_LIMIT - 1}, got {seed}")
     if timeout is not None and not (math.isfinite(timeout) and timeout > 0):
         raise InputError(f"--timeout: expected a positive number of seconds, got {timeout}")
     if step is not None and not (math.isfinite(step) and step > 0):

@@ -57,6 +57,13 @@ MAX_TEXT = 10_000
 #: Most orientations tested per position (``orientation_set`` counts multiplied;
 #: ``orientation_range`` levels x count^rotations).
 MAX_ORIENTATION_SAMPLES = 10_000
+#: Most trials of one ``optimize`` study: every trial is a row of optimize.csv, built in
+#: memory at the end (as sweep's variants, ``batch.variants.HARD_MAX_VARIANTS``).
+MAX_TRIALS = 1_000_000
+#: Most worker processes of one ``optimize`` run (as ``sweep --workers``).
+MAX_WORKERS = 1024
+#: Sampler seeds are numpy's: 0 to 2**32 - 1.
+SEED_LIMIT = 2 ** 32
 
 #: Lengths and coordinates [m]: 10 km, fifteen times the largest cable robot
 #: built (FAST's 600 m feed cabin support); squares and moments stay far from overflow.

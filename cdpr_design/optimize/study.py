@@ -49,6 +49,7 @@ from typing import Callable
 
 from cdpr_design.batch.local import prepare_worker
 from cdpr_design.errors import InputError
+from cdpr_design.model.limits import SEED_LIMIT
 from cdpr_design.optimize.problem import Problem, evaluate
 
 #: The study's file, its name inside it, the lock files (in the output folder).
@@ -122,6 +123,7 @@ def make_sampler(seed: int | None):
     """TPE (several objectives: multi-objective TPE); optuna's defaults otherwise (multivariate for one
     objective, independent for several); the limits reach it as the trials' constraints."""
     optuna = _optuna()
+    seed = None if seed is None else seed % SEED_LIMIT  # a resumed run's or a worker's offset may pass the top
     return optuna.samplers.TPESampler(seed=seed, n_startup_trials=STARTUP_TRIALS, n_ei_candidates=EI_CANDIDATES,
                                       constant_liar=True)
 
