@@ -47,6 +47,23 @@ def fuzz(n: int):
                                            HealthCheck.filter_too_much, HealthCheck.function_scoped_fixture])
 
 
+@pytest.fixture(scope="module", autouse=True)
+def compiled_kernels():
+    """numba's first compile of the pose kernels (up to a minute each on a cold cache and a loaded
+    machine) done before the timed examples: JOB_LIMIT is there to catch hangs, not compiles."""
+    from cdpr_design.model import spec
+    from cdpr_design.statics.pose import evaluate_pose
+
+    for name, kinds in (("planar4", ("static", "wrench-feasible", "wrench-closure")),
+                        ("ipanema3", ("static", "wrench-feasible", "wrench-closure")),
+                        ("pointmass3", ("static",)), ("sagging40", ("static",))):
+        d = spec.load(ROOT / "designs" / f"{name}.yaml")
+        g = d.workspace.grid
+        centre = [(lo + hi) / 2 for lo, hi in zip(g.lower, g.upper)] + list(d.workspace.orientation or [])
+        for kind in kinds:
+            evaluate_pose(d, centre[: len(d.motion.coords)], kind)
+
+
 @pytest.fixture(scope="module")
 def work(tmp_path_factory) -> Path:
     return tmp_path_factory.mktemp("fuzz")
