@@ -213,8 +213,9 @@ def test_max_tilt_makes_larger_tilts_infeasible(free_rows, tmp_path):
 
 
 @pytest.mark.parametrize("args,message", [
-    (["--max-tilt", "-1"], "--max-tilt: expected an angle in [0, 180] degrees"),
-    (["--max-tilt", "200"], "--max-tilt: expected an angle in [0, 180] degrees"),
+    # the option declares its range (issue 19): typer refuses outside it, naming the option
+    (["--max-tilt", "-1"], "'--max-tilt': Input should be greater than or equal to 0"),
+    (["--max-tilt", "200"], "'--max-tilt': Input should be less than or equal to 180"),
     (["--kind", "wrench-feasible"], "--kind wrench-feasible"),
     (["--collisions"], "--collisions"),
     (["--orientations", "total"], "--orientations: an under-constrained design with effector.orientation: free"),
