@@ -13,7 +13,7 @@ import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_fast
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
-from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, det_small, inverse_small
+from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, det_small, gram_of_inverse, inverse_small
 
 
 @njit
@@ -398,13 +398,7 @@ def hsm_enumerate(W, wreq, nv, tmin, tmax, scr):
         for j in range(m):
             s += tab[i, j] * 0.5 * (tmin[j] + tmax[j])
         wmid[i] = s
-    for i in range(n):
-        for j in range(i, n):
-            s = 0.0
-            for k in range(n):
-                s += tab[i, m + k] * tab[j, m + k]
-            M[i, j] = s
-            M[j, i] = s
+    gram_of_inverse(tab, n, m, M)
     for j in range(m):
         s = 0.0
         for i in range(n):

@@ -37,7 +37,7 @@ import math
 import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_fast, njit_inline
-from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL
+from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, gram_of_inverse
 
 
 @njit_fast
@@ -46,13 +46,7 @@ def _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure):
     and per position p (slots 0..n-1, then the non-basic columns) the tension range ``sv[0, p]``
     and (``want_closure``) the closure tolerance ``sv[1, p]``."""
     n, m = W.shape
-    for i in range(n):
-        for j in range(i, n):
-            s = 0.0
-            for k in range(n):
-                s += tab[i, m + k] * tab[j, m + k]
-            M[i, j] = s
-            M[j, i] = s
+    gram_of_inverse(tab, n, m, M)
     for i in range(n):
         s = 0.0
         for j in range(m):

@@ -17,6 +17,20 @@ CLOSURE_TOL = 1e-12
 
 
 @njit
+def gram_of_inverse(tab, n, m, M):
+    """M = G G^T (n x n) of the basis inverse G held in columns ``m..m+n-1`` of the
+    factored tableau ``tab`` (:func:`cdpr_design.kernels.hsm.basis_factor`): the metric
+    of facet normals nu = G^T mu, ||nu||^2 = mu^T M mu [1/N^2]."""
+    for i in range(n):
+        for j in range(i, n):
+            s = 0.0
+            for k in range(n):
+                s += tab[i, m + k] * tab[j, m + k]
+            M[i, j] = s
+            M[j, i] = s
+
+
+@njit
 def det_small(M, k):
     """Determinant of the leading k x k block of ``M`` (copied; partial pivoting)."""
     a = np.empty((k, k))
