@@ -41,9 +41,3 @@ def pytest_configure(config):
     # read by test_fuzz.py when it is imported (its hypothesis settings are made then)
     os.environ["CDPR_FUZZ_SCALE"] = str(config.getoption("--fuzz-scale"))
 
-
-def pytest_collection_modifyitems(config, items):
-    # tests that bind a fixed port run one after another in one xdist worker (--dist loadgroup)
-    for item in items:
-        if item.get_closest_marker("serial") is not None:
-            item.add_marker(pytest.mark.xdist_group("serial"))

@@ -234,6 +234,7 @@ def test_delay_trace_sees_the_hold_of_the_written_values():
 
 
 @pytest.mark.serial
+@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 def test_setpoints_from_the_test_plc_move_the_effector(design):
     """The loop closes: PLC set-points -> simulated robot -> PLC actuals, heartbeat, pose."""
     samples = trajectory.sample(design, "probe")
@@ -289,6 +290,7 @@ def test_setpoints_from_the_test_plc_move_the_effector(design):
 
 
 @pytest.mark.serial
+@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 @pytest.mark.parametrize("case", ["missing", "mistyped"])
 def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, case):
     lay = PlcLayout.from_design(design)
@@ -308,6 +310,7 @@ def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, c
 
 
 @pytest.mark.serial
+@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 def test_no_plc_at_all_is_a_clean_error(tmp_path, loop_data):
     p = write_spec(tmp_path, loop_data)
     t = time.monotonic()
@@ -341,6 +344,7 @@ def _wait_running(proc, out: Path, timeout=60.0):
 
 
 @pytest.mark.serial
+@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 @pytest.mark.parametrize("how", ["stop_server", "freeze"])
 def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_data, design, how):
     lay = PlcLayout.from_design(design)
@@ -372,6 +376,7 @@ def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_da
 
 
 @pytest.mark.serial
+@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 def test_reconnect_retries_then_gives_up(tmp_path, loop_data, design):
     """--reconnect: the lost PLC is retried with back-off, then the run ends (exit 3)."""
     lay = PlcLayout.from_design(design)
@@ -394,6 +399,7 @@ def test_reconnect_retries_then_gives_up(tmp_path, loop_data, design):
 
 
 @pytest.mark.serial
+@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=lambda s: s.name)
 def test_ctrl_c_stops_cleanly_with_the_log_intact(tmp_path, loop_data, sig):
     """Ctrl-C, and SIGTERM / SIGHUP the same way: exit 130, the summary printed, bridge.csv whole."""
@@ -420,6 +426,7 @@ def test_ctrl_c_stops_cleanly_with_the_log_intact(tmp_path, loop_data, sig):
 
 
 @pytest.mark.serial
+@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 def test_test_plc_run_writes_compare_ready_log(tmp_path, loop_data):
     """--test-plc: bridge.csv has the simulation.csv columns; compare reads it."""
     p = write_spec(tmp_path, loop_data)
