@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -259,7 +261,7 @@ def test_engine_variable_is_read_by_the_command_line(tmp_path, monkeypatch):
     monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")
     r = invoke("workspace", PLANAR2, "--out", tmp_path / "a", "--json", "--quiet")
     assert r.exit_code == 0, r.output
-    assert calls == ["numba"]
+    assert calls == ["numba", "numba"]  # the one-pose warm-up (numba's start-up timed apart), then the sweep
     monkeypatch.setenv("CDPR_DESIGN_ENGINE", "fortran")
     r = invoke("workspace", PLANAR2, "--out", tmp_path / "b", "--json", "--quiet")
     assert r.exit_code == 2
@@ -307,3 +309,44 @@ def test_chunk_stats_parallel_matches_numpy(count):
         assert got[1:] == ref[1:]
         assert not np.signbit(got[1]) or got[1] < 0
     np.testing.assert_array_equal(tp_k, tp_n)
+
+
+def test_engine_resolved_for_the_whole_grid():
+    """``auto`` becomes numba for grids over NUMPY_MAX_POSES (so that a one-pose warm-up loads
+    the kernels the whole sweep runs); explicit engines and small grids are left as they are."""
+    assert eng.resolve("auto", eng.NUMPY_MAX_POSES + 1) == "numba"
+    assert eng.resolve("auto", eng.NUMPY_MAX_POSES) == "auto"
+    assert eng.resolve("numpy", 10 ** 9) == "numpy"
+    assert eng.resolve("numba", 1) == "numba"
+    with pytest.raises(InputError, match="engine: expected one of"):
+        eng.resolve("fortran", 1)
+
+
+def test_warm_up_runs_the_sweeps_first_pose_with_the_whole_grids_engine(monkeypatch):
+    """warm_up sweeps the grid's first pose alone with the engine chosen for the whole grid,
+    and returns that engine."""
+    design = spec.load(PLANAR2)
+    seen = []
+    real = eng.sweep
+
+    def spy(design, kind, g, ori, **kwargs):
+        seen.append((g.size, tuple(g.lower), kwargs["engine"]))
+        return real(design, kind, g, ori, **kwargs)
+
+    monkeypatch.setattr(ws, "straight_sweep", spy)
+    big = ws.make_grid(design, 0.004)
+    assert big.size > eng.NUMPY_MAX_POSES
+    assert ws.warm_up(design, "static", big) == "numba"
+    assert seen == [(1, tuple(big.lower), "numba")]
+    small = ws.make_grid(design)
+    assert ws.warm_up(design, "static", small) == "auto"
+    assert seen[-1] == (1, tuple(small.lower), "auto")
+
+
+def test_workspace_reports_numba_start_up_apart(tmp_path):
+    """The workspace summary's timings carry load_s (numba's start-up) besides the four phases."""
+    r = invoke("workspace", PLANAR2, "--out", tmp_path / "a", "--json", "--quiet")
+    assert r.exit_code == 0, r.output
+    t = json.loads(r.output)["timings"]
+    assert list(t) == ["load_s", "sweep_s", "write_s", "pictures_s", "total_s"]
+    assert all(v >= 0 for v in t.values()) and t["total_s"] >= t["load_s"] + t["sweep_s"]

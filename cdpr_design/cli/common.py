@@ -24,6 +24,7 @@ from rich.table import Table
 from rich.text import Text
 
 from cdpr_design.errors import CheckFailed, InputError, SpecError, quote
+from cdpr_design.io.tables import timing_phases
 
 # markup off: messages, names and paths are printed as they are ("[min, max]" stays, "[/x]" is text)
 err = Console(stderr=True, highlight=False, markup=False)
@@ -223,6 +224,8 @@ def summary_table(title: str, rows: list[tuple[str, object]]) -> Table:
     return t
 
 
-def timings_text(timings: dict) -> str:
-    """``0.42 / 0.08 / 0.61 / 0.95``: a summary's ``timings`` (sweep, write, pictures, total) [s]."""
-    return " / ".join(f"{timings[k]:.3g}" for k in ("sweep_s", "write_s", "pictures_s", "total_s"))
+def timings_row(timings: dict) -> tuple[str, str]:
+    """(``load / sweep / write / pictures / total [s]``, ``0.9 / 0.42 / 0.08 / 0.61 / 1.9``): a
+    summary's ``timings`` as a row of :func:`summary_table` (``load`` only where measured)."""
+    phases = timing_phases(timings)
+    return (" / ".join(k for k, _ in phases) + " [s]", " / ".join(f"{v:.3g}" for _, v in phases))

@@ -10,7 +10,7 @@ from rich.table import Table
 
 from cdpr_design.cli.common import (CatalogueOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt,
                                     SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt, info,
-                                    load_design, out_console, summary_table, timings_text)
+                                    load_design, out_console, summary_table, timings_row)
 from cdpr_design.batch.variants import HARD_MAX_VARIANTS, MAX_VARIANTS
 from cdpr_design.errors import CheckFailed
 
@@ -47,7 +47,7 @@ def render(design, run, top: int, check_against: Path | None) -> None:
          ("pass every requirement", f"{len(run.best_rows):,}"),
          ("backend", f"{st.backend}, {st.workers} worker(s), {st.chunk} variant(s) per task"),
          ("elapsed [s]", st.elapsed_s),
-         ("sweep / write / pictures / total [s]", timings_text(run.summary["timings"])),
+         timings_row(run.summary["timings"]),
          ("files", str(run.out.path))]))
     if run.best_rows:
         out_console.print(best_table(run, top))

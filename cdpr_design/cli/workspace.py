@@ -9,7 +9,7 @@ import typer
 
 from cdpr_design.cli.common import (CableModelOpt, ForceOpt, Format, FormatOpt, JsonOpt, Kind, KindOpt, OutOpt,
                                     OverwriteOpt, QuietOpt, SpecArg, StepOpt, bars, command, emit_json, load_design,
-                                    out_console, summary_table, timings_text)
+                                    out_console, summary_table, timings_row)
 from cdpr_design.errors import InputError
 
 
@@ -67,7 +67,7 @@ def workspace(
          ("fraction", f"{100 * s['fraction']:.2f} %"), ("measure", f"{s['measure']:.4g} {unit}"),
          ("min margin [N]", s["min_margin"]), ("max margin [N]", s["max_margin"]),
          ("max tension [N]", s["max_tension"]), ("elapsed [s]", s["elapsed_s"]),
-         ("sweep / write / pictures / total [s]", timings_text(s["timings"]))]
+         timings_row(s["timings"])]
         + ([("collision free", f"{s['collision_free']:,}"),
             ("feasible before interference", f"{s['feasible_statics']:,}")] if "collision_free" in s else [])
         + ([("orientations", f"{s['orientation_mode']} ({s['orientation_count']} samples)")]

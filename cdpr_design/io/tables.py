@@ -53,6 +53,15 @@ def json_text(data, indent: int | None = None) -> str:
     return json.dumps(json_finite(data), indent=indent, default=json_default, allow_nan=False)
 
 
+#: A summary's ``timings`` phases, in the order they are shown (``load_s`` only where measured).
+TIMING_PHASES = ("load_s", "sweep_s", "write_s", "pictures_s", "total_s")
+
+
+def timing_phases(timings: dict) -> list[tuple[str, float]]:
+    """(phase without ``_s``, seconds) of a summary's ``timings``, in :data:`TIMING_PHASES` order."""
+    return [(k[:-2], timings[k]) for k in TIMING_PHASES if k in timings]
+
+
 def fmt(v) -> str:
     """A CSV cell: numbers with 10 significant digits (``-0`` as ``0``), NaN/None as empty.
 

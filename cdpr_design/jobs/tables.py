@@ -85,7 +85,10 @@ class Timings:
     """Wall-clock phases of a job [s], for the ``timings`` object of its summary.
 
     ``sweep_s``: the computation (grid sweep, evaluation, sampling or
-    simulation) without the time its thread spent writing; ``write_s``: formatting
+    simulation) without the time its thread spent writing; ``load_s`` (jobs that
+    time it apart, ``workspace`` and ``report``): numba's start-up before the sweep,
+    loading the kernels from its on-disk cache or compiling them on a machine's
+    first run; ``write_s``: formatting
     and writing the tables; ``pictures_s``: drawing the pictures (waiting for
     the picture worker); ``total_s``: the whole job.  Phases may overlap
     (tables are written while the pictures are drawn), so the parts can add up
@@ -95,18 +98,20 @@ class Timings:
     def __init__(self):
         self.t0 = time.perf_counter()
         self.sweep_s = self.write_s = self.pictures_s = 0.0
+        self.load_s: float | None = None  # measured by the jobs that time numba's start-up apart
 
     @contextmanager
     def phase(self, name: str):
-        """Add the time spent in the ``with`` block to ``name`` (``sweep_s``, ``write_s``, ``pictures_s``)."""
+        """Add the time spent in the ``with`` block to ``name`` (``load_s``, ``sweep_s``, ``write_s``, ``pictures_s``)."""
         t = time.perf_counter()
         try:
             yield
         finally:
-            setattr(self, name, getattr(self, name) + time.perf_counter() - t)
+            setattr(self, name, (getattr(self, name) or 0.0) + time.perf_counter() - t)
 
     def as_dict(self) -> dict:
-        """``{sweep_s, write_s, pictures_s, total_s}``, total up to now."""
-        return {"sweep_s": round(self.sweep_s, 4), "write_s": round(self.write_s, 4),
-                "pictures_s": round(self.pictures_s, 4),
-                "total_s": round(time.perf_counter() - self.t0, 4)}
+        """``{sweep_s, write_s, pictures_s, total_s}`` (and ``load_s`` when measured), total up to now."""
+        out = {} if self.load_s is None else {"load_s": round(self.load_s, 4)}
+        return out | {"sweep_s": round(self.sweep_s, 4), "write_s": round(self.write_s, 4),
+                      "pictures_s": round(self.pictures_s, 4),
+                      "total_s": round(time.perf_counter() - self.t0, 4)}

@@ -123,6 +123,8 @@ def _sweep(design, grid, kind, collisions, orientations, engine, progress, write
         writer.write(workspace_columns(design, chunk))
         waited += time.perf_counter() - t
 
+    with timings.phase("load_s"):  # numba's start-up, apart from the sweep's time
+        engine = ws.warm_up(design, kind, grid, orientations, collisions, engine, max_tilt)
     t0 = time.perf_counter()
     with stage(progress, f"workspace {design.name}") as cb:
         if orientations:

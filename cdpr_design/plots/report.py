@@ -20,6 +20,8 @@ import json
 
 import numpy as np
 
+from cdpr_design.io.tables import timing_phases
+
 #: Largest planar map shown cell by cell in the page (cells).
 MAX_CELLS = 90_000
 #: Largest number of feasible poses drawn as 3-D points.
@@ -259,9 +261,8 @@ def _summary_table(s: dict) -> str:
         g = s["grid"]
         rows.append(("grid", " × ".join(str(v) for v in g["shape"]) + f", step {', '.join(_cell(v) for v in g['step'])} m"))
     if "timings" in s:
-        t = s["timings"]
-        rows.append(("sweep / write / pictures / total", " / ".join(_cell(t[k]) for k in
-                                                                    ("sweep_s", "write_s", "pictures_s", "total_s")) + " s"))
+        phases = timing_phases(s["timings"])
+        rows.append((" / ".join(k for k, _ in phases), " / ".join(_cell(v) for _, v in phases) + " s"))
     return _table(["", ""], rows, header=False)
 
 

@@ -21,13 +21,14 @@ from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.pose import KINDS, check_kind
 from cdpr_design.workspaces import hanging
 from cdpr_design.workspaces.cables import ElasticColumns, cable_summary, sweep_sagging
-from cdpr_design.workspaces.engine import ENGINES, check_engine, load_kernels
+from cdpr_design.workspaces.engine import ENGINES, check_engine, load_kernels, resolve
 from cdpr_design.workspaces.engine import sweep as straight_sweep
 from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, chunk_extra,
-                                         column_names, extra_columns, make_grid, representative_pose)
+                                         column_names, extra_columns, first_pose, make_grid,
+                                         representative_pose)
 
 __all__ = ["CHUNK", "ENGINES", "KINDS", "MAX_POSES", "Chunk", "WorkspaceResult", "chunk_extra", "column_names", "extra_columns",
-           "load_kernels", "make_grid", "representative_pose", "run", "run_orientations"]
+           "load_kernels", "make_grid", "representative_pose", "run", "run_orientations", "warm_up"]
 
 
 def _setup(design: Design, kind: str, step, grid: Grid | None, orientation, force: bool):
@@ -154,3 +155,25 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     return sweep_orientations(design, mode, kind, g, nominal, orientations=orientations,
                               on_chunk=on_chunk, progress=progress, chunk=chunk,
                               keep_maps=keep_maps, interference=interference)
+
+
+def warm_up(design: Design, kind: str = "static", grid: Grid | None = None, orientations: str | None = None,
+            interference: bool = False, engine: str = "auto", max_tilt: float | None = None) -> str:
+    """Sweep ``grid``'s first pose alone, as :func:`run` (or, with ``orientations``,
+    :func:`run_orientations`) would sweep the whole grid: every numba kernel the whole sweep
+    will run is loaded from numba's on-disk cache, or compiled on a machine's first run.
+
+    Lets a caller time numba's start-up apart from the sweep.  Returns the engine to sweep
+    ``grid`` with (:func:`~cdpr_design.workspaces.engine.resolve`: the choice of ``auto``
+    made for the whole grid, not for one pose).  The other parameters are those of :func:`run`.
+    """
+    g = grid if grid is not None else make_grid(design)
+    engine = resolve(engine, g.size)
+    one = first_pose(g)
+    if orientations:
+        run_orientations(design, orientations, kind=kind, grid=one, keep_maps=False,
+                         interference=interference, engine=engine)
+    else:
+        run(design, kind=kind, grid=one, keep_maps=False, interference=interference, engine=engine,
+            max_tilt=max_tilt)
+    return engine

@@ -160,6 +160,11 @@ def make_grid(design: Design, step: float | None = None, force: bool = False) ->
     return g
 
 
+def first_pose(g: Grid) -> Grid:
+    """The one-pose grid at ``g``'s first pose (its lower corner), with ``g``'s step."""
+    return Grid(tuple(g.lower), tuple(g.lower), tuple(g.step))
+
+
 def check_step(step: float, path: str = "--step") -> None:
     """A grid step [m]: a positive finite number (:class:`SpecError` naming ``path`` otherwise)."""
     if isinstance(step, bool) or not isinstance(step, (int, float, np.floating)) or not (
