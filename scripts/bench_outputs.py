@@ -136,7 +136,7 @@ def _timed(fn, cpu: bool = False):
 
 def command(root: Path, spec_path: Path, step: float | None, fmt: str, out: str, cache: str | None):
     """Wall time [s] of one ``workspace`` process and its summary."""
-    env = dict(os.environ, PYTHONPATH=str(root))
+    env = _env(root)
     if cache is not None:
         env["NUMBA_CACHE_DIR"] = cache
     args = [sys.executable, "-m", "cdpr_design", "workspace", str(spec_path), "--out", out, "--json", "--overwrite"]
@@ -155,6 +155,39 @@ def command(root: Path, spec_path: Path, step: float | None, fmt: str, out: str,
         raise SystemExit(f"{' '.join(args)} failed ({r.returncode}): {r.stderr[-500:]}")
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     return (wall, cpu), json.loads(r.stdout)
+
+
+def _env(root: Path) -> dict:
+    """The commands' environment: ``root`` first on the path, and Python's bytecode cache
+    allowed (an installed package has its ``.pyc`` files; a machine set to
+    ``PYTHONDONTWRITEBYTECODE`` would otherwise compile every module of the package from
+    source in every run, 0.3-0.5 s)."""
+    env = dict(os.environ, PYTHONPATH=str(root))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)
+    return env
+
+
+FLOOR = {
+    "python start-up": "pass",
+    "python, numpy": "import numpy",
+    "python, numpy, numba, a small cached kernel's first call": ("import numpy as np; from cdpr_design.kernels.linalg import det_small; "
+                                                "det_small(np.eye(2), 2)"),
+    "python, the command's modules (no numba)": "import cdpr_design.cli.app, cdpr_design.jobs.workspace",
+    "python, matplotlib.pyplot (the picture process)": "import matplotlib; matplotlib.use('Agg'); import matplotlib.pyplot",
+}
+
+
+def floor_times(root: Path, repeat: int) -> list[tuple[str, float]]:
+    """Best wall time [s] of a fresh process doing only each of :data:`FLOOR`: the fixed
+    costs under every command, whatever its grid."""
+    out = []
+    for what, code in FLOOR.items():
+        args = [sys.executable, "-c", code]
+        subprocess.run(args, env=_env(root), cwd=root, check=True)  # bytecode and numba cache written
+        best = min(_timed(lambda: subprocess.run(args, env=_env(root), cwd=root, check=True))
+                   for _ in range(repeat))
+        out.append((what, best))
+    return out
 
 
 def sweep_s(summary: dict) -> float:
@@ -212,7 +245,8 @@ def bench_design(name: str, step: float | None, args, rng) -> list[tuple]:
             rows += [(f"whole command, warm ({fmt})", wall), ("  its sweep_s", (sweep_s(s), None))]
             if "timings" in s:
                 t = s["timings"]
-                print(f"  {fmt}: timings of the best run: sweep {t['sweep_s']:.3f} s, write {t['write_s']:.3f} s, "
+                load = f"load {t['load_s']:.3f} s, " if "load_s" in t else ""
+                print(f"  {fmt}: timings of the best run: {load}sweep {t['sweep_s']:.3f} s, write {t['write_s']:.3f} s, "
                       f"pictures {t['pictures_s']:.3f} s, job total {t['total_s']:.3f} s; process {wall[0]:.3f} s")
     print(f"  {'what':38s} {'wall [s]':>9s} {'poses/s':>12s} {'x LP':>8s} {'CPU [s]':>9s} {'x LP CPU':>9s}")
     for what, (t, c) in rows:
@@ -235,6 +269,10 @@ def main(argv=None):
     rng = np.random.default_rng(0)
     print(f"numba threads {numba.get_num_threads()}, load average {os.getloadavg()[0]:.2f}; command from "
           f"{args.root or ROOT}")
+    root = Path(args.root).resolve() if args.root else ROOT
+    print("\nfixed costs of a process (best of --repeat, wall):")
+    for what, t in floor_times(root, args.repeat):
+        print(f"  {what:58s} {t:7.3f} s")
     bench_design("ipanema3", args.step, args, rng)
     bench_design("planar2", None, args, rng)
     bench_design("planar2", args.planar2_step, args, rng)
