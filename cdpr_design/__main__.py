@@ -1,9 +1,14 @@
 """``python -m cdpr_design`` and the ``cdpr-design`` console script."""
 
+import gc
 import sys
 
 
 def main() -> None:
+    # a command allocates most of its objects once, at start-up (numba alone builds ~10^6):
+    # collecting the youngest generation every 50,000 allocations instead of every 700 saves
+    # 0.15-0.2 s of CPU there (measured); cycles made later are still collected
+    gc.set_threshold(50_000, 20, 20)
     # start the picture worker before importing the command line (typer, rich,
     # numpy): its matplotlib import then overlaps all of the parent's start-up
     from cdpr_design.cli import env

@@ -115,7 +115,7 @@ def test_report_command_writes_the_page_with_sizing_and_checks(tmp_path):
     r = invoke("report", PLANAR2, "--step", "0.05", "--out", tmp_path, "--json")
     assert r.exit_code == 0, r.output
     out = json.loads(r.stdout)
-    assert set(out["timings"]) == {"sweep_s", "write_s", "pictures_s", "total_s"}
+    assert set(out["timings"]) == {"load_s", "sweep_s", "write_s", "pictures_s", "total_s"}
     text, page = parse_page(tmp_path / "report.html")
     _check_self_contained(text, page)
     body = " ".join(page.text)

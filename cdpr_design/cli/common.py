@@ -225,7 +225,7 @@ def summary_table(title: str, rows: list[tuple[str, object]]) -> Table:
 
 
 def timings_row(timings: dict) -> tuple[str, str]:
-    """(``load / sweep / write / pictures / total [s]``, ``0.9 / 0.42 / 0.08 / 0.61 / 1.9``): a
-    summary's ``timings`` as a row of :func:`summary_table` (``load`` only where measured)."""
+    """(``load/sweep/write/pictures/total [s]``, ``0.9/0.42/0.08/0.61/1.9``): a summary's
+    ``timings`` as a row of :func:`summary_table` (``load`` only where measured)."""
     phases = timing_phases(timings)
-    return (" / ".join(k for k, _ in phases) + " [s]", " / ".join(f"{v:.3g}" for _, v in phases))
+    return ("/".join(k for k, _ in phases) + " [s]", "/".join(f"{v:.3g}" for _, v in phases))
