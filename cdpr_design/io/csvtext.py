@@ -19,10 +19,18 @@ put in front) or scientific notation (``d.ddde-XX``), trailing zeros dropped.
 Each cell is laid out in four little-endian 64-bit words -- sign, 16 bytes of
 digits, exponent suffix and separator -- with unused bytes zero; the row
 block's bytes with the zeros removed are the CSV text.
+
+When numba is already imported in the process (``"numba" in sys.modules``),
+:func:`csv_rows` hands the rows to the compiled formatter of
+:mod:`cdpr_design.io.csvfast` instead (the same algorithm and tables, one cell
+at a time, about four times faster, the GIL released).  Only then: importing
+numba costs about a second, more than formatting a small table this way; a
+sweep has imported it anyway, a trajectory or sizing table has not.
 """
 
 from __future__ import annotations
 
+import sys
 from typing import Sequence
 
 import numpy as np
@@ -32,6 +40,10 @@ _WORDS = 3  # per cell: sign and digits (2 words), exponent suffix and separator
 _P10 = 10.0 ** np.arange(23)
 _IP10 = 10 ** np.arange(19, dtype=np.int64)
 _FLOAT_RANGE = (1e-35, 1e54)  # |v| handled by the vectorised path (two scalings at most)
+#: A scaled value within this of a half (of its nearest integer) is a possible tie: Python decides.
+_TIE = 1e-5
+#: Integers with |v| below this are formatted here (ten digits at most), larger ones by Python.
+_INT_LIMIT = 10 ** 10
 #: Rows formatted per block (bounds the temporary arrays: ~ rows x columns x 40 bytes).
 BLOCK = 16384
 
@@ -87,7 +99,7 @@ def _round10(a):
         m = np.rint(q)
         # near a tie the scaled value may round either way: Python decides (also when that
         # rounding carried into an 11th digit and the exponent was raised below)
-        tie = np.abs(q - m) >= 0.5 - 1e-5
+        tie = np.abs(q - m) >= 0.5 - _TIE
         for _ in range(2):  # log10 one off near powers of ten, or rounding up to 10^10
             up, down = m >= 1e10, m < 1e9
             fix = up | down
@@ -96,7 +108,7 @@ def _round10(a):
             X = X + up - down
             q = np.where(fix, _scale(aa, 9 - X), q)
             m = np.rint(q)
-            tie |= np.abs(q - m) >= 0.5 - 1e-5
+            tie |= np.abs(q - m) >= 0.5 - _TIE
         ok &= (m >= 1e9) & (m < 1e10) & ~tie
     return m, X, ok
 
@@ -104,7 +116,7 @@ def _round10(a):
 def _int_digits(v):
     """(m, X, ok) of integers: m = |v| 10^(9 - X) exactly, ok where 0 < |v| < 10^10."""
     a = np.abs(v.astype(np.int64))
-    ok = (a > 0) & (a < 10 ** 10)  # a < 0 only for the smallest int64
+    ok = (a > 0) & (a < _INT_LIMIT)  # a < 0 only for the smallest int64
     a = np.where(ok, a, 0)
     X = np.maximum(np.searchsorted(_IP10[:11], a, side="right") - 1, 0)
     return a * _IP10[9 - X], X, ok
@@ -177,6 +189,8 @@ def csv_rows(columns: Sequence[np.ndarray]) -> bytes:
 
     Byte-identical to writing each cell with :func:`~cdpr_design.io.tables.fmt`:
     floats ``'.10g'``, integers and booleans as integers, NaN and inf empty.
+    Compiled (:mod:`~cdpr_design.io.csvfast`) when numba is already imported,
+    else vectorised numpy (see the module).
     """
     if not columns:
         return b""
@@ -187,6 +201,16 @@ def csv_rows(columns: Sequence[np.ndarray]) -> bytes:
             raise ValueError("csv_rows: columns must be 1-D and of equal length")
         if c.dtype.kind not in "biuf":
             raise TypeError(f"csv_rows: numeric columns only, got dtype {c.dtype}")
+    if "numba" in sys.modules:
+        from cdpr_design.io.csvfast import numba_rows
+
+        return numba_rows(arrays)
+    return numpy_rows(arrays)
+
+
+def numpy_rows(arrays: Sequence[np.ndarray]) -> bytes:
+    """:func:`csv_rows` of checked columns by whole-array numpy operations, block by block."""
+    n = len(arrays[0]) if arrays else 0
     out = []
     for start in range(0, n, BLOCK):
         stop = min(n, start + BLOCK)
