@@ -162,36 +162,32 @@ def format_rows(values, bits, is_int, out, slow, p10, tens, digits, tz5, suffix,
 
 
 def numba_rows(arrays: Sequence[np.ndarray], block: int = BLOCK) -> bytes:
-    """:func:`~cdpr_design.io.csvtext.csv_rows` of checked columns by :func:`format_rows`, block by block."""
+    """:func:`~cdpr_design.io.csvtext.csv_rows` of checked columns by :func:`format_rows`, block by block.
+
+    The blocks' text goes into one buffer of ``CELL_MAX`` bytes a cell (its pages
+    touched only as far as it is filled), joined once with the cells Python formats."""
     n, ncol = len(arrays[0]) if arrays else 0, len(arrays)
     if not n or not ncol:
         return b""
     rows = min(n, block)
     values = np.empty((rows, ncol), dtype=np.float64)
     is_int = np.array([c.dtype.kind in "biu" for c in arrays], dtype=np.uint8)
-    out = np.empty(CELL_MAX * rows * ncol, dtype=np.uint8)
+    out = np.empty(CELL_MAX * n * ncol, dtype=np.uint8)
     slow = np.empty((rows * ncol, 2), dtype=np.int64)
-    parts = []
+    view = memoryview(out)
+    pieces, end = [], 0
     for start in range(0, n, block):
         k = min(n, start + block) - start
         vals = values if k == rows else np.empty((k, ncol), dtype=np.float64)
         for j, c in enumerate(arrays):
             vals[:, j] = c[start:start + k]
-        used, ns = format_rows(vals, vals.view(np.int64), is_int, out, slow, *_TABLES, _FLOAT_RANGE[0], _FLOAT_RANGE[1],
-                               float(_INT_LIMIT), _TIE)
-        text = out[:used].tobytes()
-        if ns:
-            text = _splice(text, slow[:ns], arrays, start, ncol)
-        parts.append(text)
-    return b"".join(parts)
-
-
-def _splice(text: bytes, slow: np.ndarray, arrays, start: int, ncol: int) -> bytes:
-    """text with the Python-formatted cells (index, offset) of ``slow`` put in at their offsets."""
-    pieces, prev = [], 0
-    for idx, pos in slow.tolist():
-        i, j = divmod(idx, ncol)
-        pieces += [text[prev:pos], _python_cell(arrays[j][start + i]).encode()]
-        prev = pos
-    pieces.append(text[prev:])
+        used, ns = format_rows(vals, vals.view(np.int64), is_int, out[end:], slow, *_TABLES,
+                               _FLOAT_RANGE[0], _FLOAT_RANGE[1], float(_INT_LIMIT), _TIE)
+        prev = end
+        for idx, pos in slow[:ns].tolist():  # the cells left to Python, in order
+            i, j = divmod(idx, ncol)
+            pieces += [view[prev:end + pos], _python_cell(arrays[j][start + i]).encode()]
+            prev = end + pos
+        end += used
+        pieces.append(view[prev:end])
     return b"".join(pieces)

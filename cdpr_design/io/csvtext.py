@@ -11,7 +11,7 @@ How: a float ``v != 0`` is rounded to 10 significant digits as an integer
 scaling with exact powers of ten (``10^k``, ``|k| <= 22``, at most twice);
 the scaled value is within 2 ulp of the exact product, so its nearest
 integer is the correctly rounded one unless its fraction lies within 1e-5
-of one half (then, and outside ``10^-35 .. 10^54``, the cell is formatted by
+of one half (then, and outside ``10^-34 .. 10^53``, the cell is formatted by
 Python instead; both are rare).  The ten digits come from a table of
 five-digit groups as bytes; ``printf``'s ``%g`` rule then picks fixed
 notation (``-4 <= X < 10``: the decimal point inserted, or ``0.`` and zeros
@@ -39,7 +39,9 @@ _U = np.uint64
 _WORDS = 3  # per cell: sign and digits (2 words), exponent suffix and separator
 _P10 = 10.0 ** np.arange(23)
 _IP10 = 10 ** np.arange(19, dtype=np.int64)
-_FLOAT_RANGE = (1e-35, 1e54)  # |v| handled by the vectorised path (two scalings at most)
+# |v| handled by the vectorised path: 10^(9 - X) in two scalings by _P10 (|9 - X| <= 44) for every
+# exponent X that log10 and the corrections of _round10 can give (1e-35 itself gave X = -36)
+_FLOAT_RANGE = (1e-34, 1e53)
 #: A scaled value within this of a half (of its nearest integer) is a possible tie: Python decides.
 _TIE = 1e-5
 #: Integers with |v| below this are formatted here (ten digits at most), larger ones by Python.
@@ -115,7 +117,10 @@ def _round10(a):
 
 def _int_digits(v):
     """(m, X, ok) of integers: m = |v| 10^(9 - X) exactly, ok where 0 < |v| < 10^10."""
-    a = np.abs(v.astype(np.int64))
+    if v.dtype.kind == "u":  # from 2^63 on, a uint64 taken as int64 would be negative
+        a = np.minimum(v.astype(np.uint64), np.uint64(_INT_LIMIT)).astype(np.int64)
+    else:
+        a = np.abs(v.astype(np.int64))
     ok = (a > 0) & (a < _INT_LIMIT)  # a < 0 only for the smallest int64
     a = np.where(ok, a, 0)
     X = np.maximum(np.searchsorted(_IP10[:11], a, side="right") - 1, 0)
