@@ -170,10 +170,22 @@ def previous_format_block(columns, int_cols) -> str:
     return re.sub(r"(?<![^,\n])-?(?:nan|inf)(?![^,\n])", "", text)
 
 
-def writer_times(design, grid, repeat: int) -> tuple[float, float, int]:
-    """(previous, new) seconds to format every row of the grid as CSV text, and the cell count."""
-    from cdpr_design.io.csvtext import csv_rows
+def _prime_csv_kernel() -> None:
+    """numba's on-disk cache of the compiled CSV formatter filled, by another process."""
+    code = "import numba, numpy; from cdpr_design.io.csvfast import numba_rows; numba_rows([numpy.ones(3)])"
+    subprocess.run([sys.executable, "-c", code], env=dict(os.environ, PYTHONPATH=str(ROOT)), check=True)
 
+
+def writer_times(design, grid, repeat: int) -> dict:
+    """Seconds to format every row of the grid as CSV text, and the cell count (``cells``).
+
+    ``previous``: printf per row; ``numpy``: :func:`cdpr_design.io.csvtext.numpy_rows`;
+    ``numba_cold``: the first call of :func:`cdpr_design.io.csvfast.numba_rows` in this
+    process (numba's cache warm: loaded, not compiled); ``numba``: warm (best of ``repeat``)."""
+    from cdpr_design.io import csvfast
+    from cdpr_design.io.csvtext import numpy_rows
+
+    _prime_csv_kernel()
     chunks = []
     ws.run(design, grid=grid, keep_maps=False, on_chunk=chunks.append)
 
@@ -182,9 +194,24 @@ def writer_times(design, grid, repeat: int) -> tuple[float, float, int]:
                 + [c.tensions[:, i] for i in range(c.tensions.shape[1])] + [c.lengths[:, i] for i in range(c.lengths.shape[1])])
 
     k = chunks[0].poses.shape[1]
-    old = min(_timed(lambda: [previous_format_block(cols(c), [k]) for c in chunks]) for _ in range(repeat))
-    new = min(_timed(lambda: [csv_rows(cols(c)) for c in chunks]) for _ in range(repeat))
-    return old, new, sum(len(cols(c)) * len(c.feasible) for c in chunks)
+    out = {"numba_cold": _timed(lambda: [csvfast.numba_rows(cols(c)) for c in chunks])}
+    out["previous"] = min(_timed(lambda: [previous_format_block(cols(c), [k]) for c in chunks]) for _ in range(repeat))
+    out["numpy"] = min(_timed(lambda: [numpy_rows(cols(c)) for c in chunks]) for _ in range(repeat))
+    out["numba"] = min(_timed(lambda: [csvfast.numba_rows(cols(c)) for c in chunks]) for _ in range(repeat))
+    out["cells"] = sum(len(cols(c)) * len(c.feasible) for c in chunks)
+    return out
+
+
+def print_writer_times(t: dict) -> None:
+    cells = t["cells"]
+
+    def ns(what):
+        return f"{t[what]:.3f} s ({t[what] / cells * 1e9:.0f} ns/cell)"
+
+    print(f"\nCSV of the IPAnema 3 rows ({cells:,} cells): previous writer {ns('previous')}, numpy csv_rows "
+          f"{ns('numpy')}, numba csv_rows warm {ns('numba')}, cold (first call, cache warm) {ns('numba_cold')}: "
+          f"numba {t['previous'] / t['numba']:.1f}x the previous writer, {t['numpy'] / t['numba']:.1f}x numpy; "
+          f"numpy {t['previous'] / t['numpy']:.1f}x the previous writer")
 
 
 def bench_design(name: str, step: float | None, args, rng) -> list[tuple]:
@@ -239,10 +266,7 @@ def main(argv=None):
     bench_design("planar2", None, args, rng)
     bench_design("planar2", args.planar2_step, args, rng)
     d = spec.load(ROOT / "designs" / "ipanema3.yaml")
-    old, new, cells = writer_times(d, ws.make_grid(d, args.step), args.repeat)
-    print(f"\nCSV of the IPAnema 3 rows ({cells:,} cells): previous writer {old:.3f} s "
-          f"({old / cells * 1e9:.0f} ns/cell), csv_rows {new:.3f} s ({new / cells * 1e9:.0f} ns/cell): "
-          f"{old / new:.1f}x faster")
+    print_writer_times(writer_times(d, ws.make_grid(d, args.step), args.repeat))
 
 
 if __name__ == "__main__":
