@@ -15,7 +15,10 @@ For IPAnema 3 on a fine grid and for planar2, all in one run on this machine:
    numba cache: every kernel compiled) and warm (best of ``--repeat``), with
    ``--format csv`` and ``--format parquet``;
 4. the CSV writer alone on the IPAnema 3 rows: the previous one (printf per
-   row, as ``io.tables.format_block`` was) against :func:`cdpr_design.io.csvtext.csv_rows`.
+   row, as ``io.tables.format_block`` was) against both paths of
+   :func:`cdpr_design.io.csvtext.csv_rows`, the vectorised numpy one and the
+   compiled one of :mod:`cdpr_design.io.csvfast` (warm, and its first call in the
+   process with numba's cache warm).
 
 Ratios are LP time for the grid / measured time, in wall-clock time and in CPU
 time (user + system, all threads and the picture process: less sensitive to
@@ -57,6 +60,13 @@ looked at again.
 planar2 (22,801 poses): kernels warm 0.47 s (189x) before, 0.22 s (196x,
 LP 1.85 ms) after; the whole command 3.8 s before, 2.9 s after (its start-up
 and pictures, not the sweep, set it).
+
+The CSV writer alone on the IPAnema 3 rows (3,706,560 cells, one core, load
+1.2-1.4): previous writer 554 ns/cell, numpy ``csv_rows`` 94 ns/cell (5.9x),
+numba ``csv_rows`` 45 ns/cell warm (12.4x the previous writer, 2.1x numpy;
+2.5x in interleaved runs of the two) and 69 ns/cell on its first call (the
+compiled code loaded from numba's cache).  Of the 45 ns about 37 are the
+kernel, the rest the copy of the columns into a block and the final join.
 
 Where the time goes, per IPAnema 3 pose in the kernels (one thread, CPU):
 before, structure matrix 0.2-0.5 us, basis factorisation 0.6-1.4 us, margin
