@@ -15,7 +15,10 @@ For IPAnema 3 on a fine grid and for planar2, all in one run on this machine:
    numba cache: every kernel compiled) and warm (best of ``--repeat``), with
    ``--format csv`` and ``--format parquet``;
 4. the CSV writer alone on the IPAnema 3 rows: the previous one (printf per
-   row, as ``io.tables.format_block`` was) against :func:`cdpr_design.io.csvtext.csv_rows`.
+   row, as ``io.tables.format_block`` was) against both paths of
+   :func:`cdpr_design.io.csvtext.csv_rows`, the vectorised numpy one and the
+   compiled one of :mod:`cdpr_design.io.csvfast` (warm, and its first call in the
+   process with numba's cache warm).
 
 Ratios are LP time for the grid / measured time, in wall-clock time and in CPU
 time (user + system, all threads and the picture process: less sensitive to
@@ -57,6 +60,13 @@ looked at again.
 planar2 (22,801 poses): kernels warm 0.47 s (189x) before, 0.22 s (196x,
 LP 1.85 ms) after; the whole command 3.8 s before, 2.9 s after (its start-up
 and pictures, not the sweep, set it).
+
+The CSV writer alone on the IPAnema 3 rows (3,706,560 cells, one core, load
+1.2-1.4): previous writer 554 ns/cell, numpy ``csv_rows`` 94 ns/cell (5.9x),
+numba ``csv_rows`` 45 ns/cell warm (12.4x the previous writer, 2.1x numpy;
+2.5x in interleaved runs of the two) and 69 ns/cell on its first call (the
+compiled code loaded from numba's cache).  Of the 45 ns about 37 are the
+kernel, the rest the copy of the columns into a block and the final join.
 
 Where the time goes, per IPAnema 3 pose in the kernels (one thread, CPU):
 before, structure matrix 0.2-0.5 us, basis factorisation 0.6-1.4 us, margin
@@ -203,10 +213,22 @@ def previous_format_block(columns, int_cols) -> str:
     return re.sub(r"(?<![^,\n])-?(?:nan|inf)(?![^,\n])", "", text)
 
 
-def writer_times(design, grid, repeat: int) -> tuple[float, float, int]:
-    """(previous, new) seconds to format every row of the grid as CSV text, and the cell count."""
-    from cdpr_design.io.csvtext import csv_rows
+def _prime_csv_kernel() -> None:
+    """numba's on-disk cache of the compiled CSV formatter filled, by another process."""
+    code = "import numba, numpy; from cdpr_design.io.csvfast import numba_rows; numba_rows([numpy.ones(3)])"
+    subprocess.run([sys.executable, "-c", code], env=dict(os.environ, PYTHONPATH=str(ROOT)), check=True)
 
+
+def writer_times(design, grid, repeat: int) -> dict:
+    """Seconds to format every row of the grid as CSV text, and the cell count (``cells``).
+
+    ``previous``: printf per row; ``numpy``: :func:`cdpr_design.io.csvtext.numpy_rows`;
+    ``numba_cold``: the first call of :func:`cdpr_design.io.csvfast.numba_rows` in this
+    process (numba's cache warm: loaded, not compiled); ``numba``: warm (best of ``repeat``)."""
+    from cdpr_design.io import csvfast
+    from cdpr_design.io.csvtext import numpy_rows
+
+    _prime_csv_kernel()
     chunks = []
     ws.run(design, grid=grid, keep_maps=False, on_chunk=chunks.append)
 
@@ -215,9 +237,24 @@ def writer_times(design, grid, repeat: int) -> tuple[float, float, int]:
                 + [c.tensions[:, i] for i in range(c.tensions.shape[1])] + [c.lengths[:, i] for i in range(c.lengths.shape[1])])
 
     k = chunks[0].poses.shape[1]
-    old = min(_timed(lambda: [previous_format_block(cols(c), [k]) for c in chunks]) for _ in range(repeat))
-    new = min(_timed(lambda: [csv_rows(cols(c)) for c in chunks]) for _ in range(repeat))
-    return old, new, sum(len(cols(c)) * len(c.feasible) for c in chunks)
+    out = {"numba_cold": _timed(lambda: [csvfast.numba_rows(cols(c)) for c in chunks])}
+    out["previous"] = min(_timed(lambda: [previous_format_block(cols(c), [k]) for c in chunks]) for _ in range(repeat))
+    out["numpy"] = min(_timed(lambda: [numpy_rows(cols(c)) for c in chunks]) for _ in range(repeat))
+    out["numba"] = min(_timed(lambda: [csvfast.numba_rows(cols(c)) for c in chunks]) for _ in range(repeat))
+    out["cells"] = sum(len(cols(c)) * len(c.feasible) for c in chunks)
+    return out
+
+
+def print_writer_times(t: dict) -> None:
+    cells = t["cells"]
+
+    def ns(what):
+        return f"{t[what]:.3f} s ({t[what] / cells * 1e9:.0f} ns/cell)"
+
+    print(f"\nCSV of the IPAnema 3 rows ({cells:,} cells): previous writer {ns('previous')}, numpy csv_rows "
+          f"{ns('numpy')}, numba csv_rows warm {ns('numba')}, cold (first call, cache warm) {ns('numba_cold')}: "
+          f"numba {t['previous'] / t['numba']:.1f}x the previous writer, {t['numpy'] / t['numba']:.1f}x numpy; "
+          f"numpy {t['previous'] / t['numpy']:.1f}x the previous writer")
 
 
 def bench_design(name: str, step: float | None, args, rng) -> list[tuple]:
@@ -277,10 +314,7 @@ def main(argv=None):
     bench_design("planar2", None, args, rng)
     bench_design("planar2", args.planar2_step, args, rng)
     d = spec.load(ROOT / "designs" / "ipanema3.yaml")
-    old, new, cells = writer_times(d, ws.make_grid(d, args.step), args.repeat)
-    print(f"\nCSV of the IPAnema 3 rows ({cells:,} cells): previous writer {old:.3f} s "
-          f"({old / cells * 1e9:.0f} ns/cell), csv_rows {new:.3f} s ({new / cells * 1e9:.0f} ns/cell): "
-          f"{old / new:.1f}x faster")
+    print_writer_times(writer_times(d, ws.make_grid(d, args.step), args.repeat))
 
 
 if __name__ == "__main__":

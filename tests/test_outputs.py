@@ -16,6 +16,7 @@ import pytest
 
 from cdpr_design.io import csvtext
 from cdpr_design.io.columns import ColumnWriter, read_table, table_metadata
+from cdpr_design.io.csvfast import numba_rows
 from cdpr_design.io.csvtext import csv_rows
 from cdpr_design.io.files import OutputDir
 from cdpr_design.io.tables import fmt
@@ -76,7 +77,7 @@ def test_csv_cells_of_every_float_kind_one_by_one():
 
 
 def test_the_vectorised_path_formats_ordinary_numbers_itself():
-    """Python formats only the rare cells (near ties, outside 1e-35..1e54): the fast path is taken."""
+    """Python formats only the rare cells (near ties, outside 1e-34..1e53): the fast path is taken."""
     rng = np.random.default_rng(7)
     x = rng.normal(size=50_000) * 10.0 ** rng.uniform(-30, 50, 50_000)
     cells = np.empty((x.size, 3), dtype="<u8")
@@ -177,9 +178,12 @@ def test_workspace_table_of_every_design_matches_the_reference(name):
     table = collect(d, step=step, interference=checks)
     cols = table.columns()
     assert "collision_free" in cols or not checks
-    text = csv_rows([np.asarray(v) for v in cols.values()]).decode()
-    ref = reference_text([np.asarray(v) for v in cols.values()])
+    arrays = [np.asarray(v) for v in cols.values()]
+    text = csv_rows(arrays).decode()
+    ref = reference_text(arrays)
     assert text == ref
+    assert csvtext.numpy_rows(arrays).decode() == ref  # both paths, whichever csv_rows took
+    assert numba_rows(arrays).decode() == ref
     assert len(text.splitlines()) == table.poses.shape[0] > 0
 
 

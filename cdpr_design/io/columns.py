@@ -10,7 +10,7 @@ Every table the tool writes (``workspace``, ``sweep``, motor sizing,
 CSV follows the command line's contract (docs/cli.md): one header row, ``\\n``
 line ends, numbers with 10 significant digits, integers and booleans as
 integers, NaN/None as empty cells (numeric columns are formatted by the
-vectorised :func:`~cdpr_design.io.csvtext.csv_rows`, other columns cell by
+vectorised or compiled :func:`~cdpr_design.io.csvtext.csv_rows`, other columns cell by
 cell with :func:`~cdpr_design.io.tables.fmt` and the ``csv`` module's
 quoting).  Parquet keeps the types -- booleans as ``bool``, integers as
 ``int64``, every other number as ``float64`` (NaN where CSV has an empty

@@ -11,7 +11,7 @@ How: a float ``v != 0`` is rounded to 10 significant digits as an integer
 scaling with exact powers of ten (``10^k``, ``|k| <= 22``, at most twice);
 the scaled value is within 2 ulp of the exact product, so its nearest
 integer is the correctly rounded one unless its fraction lies within 1e-5
-of one half (then, and outside ``10^-35 .. 10^54``, the cell is formatted by
+of one half (then, and outside ``10^-34 .. 10^53``, the cell is formatted by
 Python instead; both are rare).  The ten digits come from a table of
 five-digit groups as bytes; ``printf``'s ``%g`` rule then picks fixed
 notation (``-4 <= X < 10``: the decimal point inserted, or ``0.`` and zeros
@@ -19,10 +19,18 @@ put in front) or scientific notation (``d.ddde-XX``), trailing zeros dropped.
 Each cell is laid out in four little-endian 64-bit words -- sign, 16 bytes of
 digits, exponent suffix and separator -- with unused bytes zero; the row
 block's bytes with the zeros removed are the CSV text.
+
+When numba is already imported in the process (``"numba" in sys.modules``),
+:func:`csv_rows` hands the rows to the compiled formatter of
+:mod:`cdpr_design.io.csvfast` instead (the same algorithm and tables, one cell
+at a time, about four times faster, the GIL released).  Only then: importing
+numba costs about a second, more than formatting a small table this way; a
+sweep has imported it anyway, a trajectory or sizing table has not.
 """
 
 from __future__ import annotations
 
+import sys
 from typing import Sequence
 
 import numpy as np
@@ -31,7 +39,13 @@ _U = np.uint64
 _WORDS = 3  # per cell: sign and digits (2 words), exponent suffix and separator
 _P10 = 10.0 ** np.arange(23)
 _IP10 = 10 ** np.arange(19, dtype=np.int64)
-_FLOAT_RANGE = (1e-35, 1e54)  # |v| handled by the vectorised path (two scalings at most)
+# |v| handled by the vectorised path: 10^(9 - X) in two scalings by _P10 (|9 - X| <= 44) for every
+# exponent X that log10 and the corrections of _round10 can give (1e-35 itself gave X = -36)
+_FLOAT_RANGE = (1e-34, 1e53)
+#: A scaled value within this of a half (of its nearest integer) is a possible tie: Python decides.
+_TIE = 1e-5
+#: Integers with |v| below this are formatted here (ten digits at most), larger ones by Python.
+_INT_LIMIT = 10 ** 10
 #: Rows formatted per block (bounds the temporary arrays: ~ rows x columns x 40 bytes).
 BLOCK = 16384
 
@@ -87,7 +101,7 @@ def _round10(a):
         m = np.rint(q)
         # near a tie the scaled value may round either way: Python decides (also when that
         # rounding carried into an 11th digit and the exponent was raised below)
-        tie = np.abs(q - m) >= 0.5 - 1e-5
+        tie = np.abs(q - m) >= 0.5 - _TIE
         for _ in range(2):  # log10 one off near powers of ten, or rounding up to 10^10
             up, down = m >= 1e10, m < 1e9
             fix = up | down
@@ -96,15 +110,18 @@ def _round10(a):
             X = X + up - down
             q = np.where(fix, _scale(aa, 9 - X), q)
             m = np.rint(q)
-            tie |= np.abs(q - m) >= 0.5 - 1e-5
+            tie |= np.abs(q - m) >= 0.5 - _TIE
         ok &= (m >= 1e9) & (m < 1e10) & ~tie
     return m, X, ok
 
 
 def _int_digits(v):
     """(m, X, ok) of integers: m = |v| 10^(9 - X) exactly, ok where 0 < |v| < 10^10."""
-    a = np.abs(v.astype(np.int64))
-    ok = (a > 0) & (a < 10 ** 10)  # a < 0 only for the smallest int64
+    if v.dtype.kind == "u":  # from 2^63 on, a uint64 taken as int64 would be negative
+        a = np.minimum(v.astype(np.uint64), np.uint64(_INT_LIMIT)).astype(np.int64)
+    else:
+        a = np.abs(v.astype(np.int64))
+    ok = (a > 0) & (a < _INT_LIMIT)  # a < 0 only for the smallest int64
     a = np.where(ok, a, 0)
     X = np.maximum(np.searchsorted(_IP10[:11], a, side="right") - 1, 0)
     return a * _IP10[9 - X], X, ok
@@ -177,6 +194,8 @@ def csv_rows(columns: Sequence[np.ndarray]) -> bytes:
 
     Byte-identical to writing each cell with :func:`~cdpr_design.io.tables.fmt`:
     floats ``'.10g'``, integers and booleans as integers, NaN and inf empty.
+    Compiled (:mod:`~cdpr_design.io.csvfast`) when numba is already imported,
+    else vectorised numpy (see the module).
     """
     if not columns:
         return b""
@@ -187,6 +206,16 @@ def csv_rows(columns: Sequence[np.ndarray]) -> bytes:
             raise ValueError("csv_rows: columns must be 1-D and of equal length")
         if c.dtype.kind not in "biuf":
             raise TypeError(f"csv_rows: numeric columns only, got dtype {c.dtype}")
+    if "numba" in sys.modules:
+        from cdpr_design.io.csvfast import numba_rows
+
+        return numba_rows(arrays)
+    return numpy_rows(arrays)
+
+
+def numpy_rows(arrays: Sequence[np.ndarray]) -> bytes:
+    """:func:`csv_rows` of checked columns by whole-array numpy operations, block by block."""
+    n = len(arrays[0]) if arrays else 0
     out = []
     for start in range(0, n, BLOCK):
         stop = min(n, start + BLOCK)
