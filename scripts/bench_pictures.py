@@ -34,7 +34,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+if "--child" not in sys.argv:  # a child draws with the checkout on its PYTHONPATH
+    sys.path.insert(0, str(ROOT))
 
 STEPS = {"ipanema3": 0.14, "cogiro": 0.5, "planar2": 0.01, "planar4": 0.02}
 
@@ -43,65 +44,76 @@ def _cpu() -> float:
     return time.process_time()
 
 
-def child(path: str, repeat: int, profile: bool, build_only: bool) -> None:
-    """Time the jobs pickled in ``path`` the way the picture worker draws them: matplotlib
-    warmed up as the worker does, the jobs unpickled, one warm-up draw, then ``repeat`` draws."""
+def child(path: str) -> None:
+    """Draw the jobs pickled in ``path`` the way the picture worker does (matplotlib warmed up
+    as the worker does, the jobs unpickled, one warm-up draw), one job per command read from
+    stdin (``draw K``: the CPU time and PNG size printed; ``png K FILE``: the PNG written;
+    ``profile``: a cProfile of all jobs printed on stderr)."""
     import pickle
 
-    from cdpr_design.plots._style import pyplot
     from cdpr_design.plots.worker import _warm_up, draw
 
     _warm_up()
     with open(path, "rb") as fh:
-        name, jobs = pickle.load(fh)
+        jobs = pickle.load(fh)
     draw(jobs)  # warm-up: fonts, colour maps, caches
-    for job in jobs:
-        times, png = [], b""
-        for _ in range(repeat):
+    print("ready", flush=True)
+    for line in sys.stdin:
+        cmd = line.split()
+        if cmd[0] == "draw":
             t = _cpu()
-            png = draw([job])[0][1]
-            times.append(_cpu() - t)
-        build = float("nan")
-        if build_only:
-            bt = []
-            for _ in range(repeat):
-                t = _cpu()
-                fig = job[1](*job[2])
-                bt.append(_cpu() - t)
-                pyplot().close(fig)
-            build = min(bt)
-        print(f"{name:10s} {job[0]:16s} {job[2][0].poses:8d} {min(times):10.3f} "
-              f"{statistics.median(times):8.3f} {build:8.3f} {len(png) / 1024:7.0f}", flush=True)
-        if os.environ.get("BENCH_PNG_DIR"):
-            out = Path(os.environ["BENCH_PNG_DIR"])
-            out.mkdir(parents=True, exist_ok=True)
-            (out / f"{name}_{job[0]}").write_bytes(png)
-    if profile:
-        import cProfile
-        import pstats
+            png = draw([jobs[int(cmd[1])]])[0][1]
+            print(f"{_cpu() - t} {len(png)}", flush=True)
+        elif cmd[0] == "png":
+            Path(cmd[2]).write_bytes(draw([jobs[int(cmd[1])]])[0][1])
+            print("done", flush=True)
+        elif cmd[0] == "profile":
+            import cProfile
+            import pstats
 
-        prof = cProfile.Profile()
-        prof.enable()
-        draw(jobs)
-        prof.disable()
-        pstats.Stats(prof).sort_stats("cumulative").print_stats(45)
-        pstats.Stats(prof).sort_stats("tottime").print_stats(30)
+            prof = cProfile.Profile()
+            prof.enable()
+            draw(jobs)
+            prof.disable()
+            for key, n in (("cumulative", 45), ("tottime", 30)):
+                pstats.Stats(prof, stream=sys.stderr).sort_stats(key).print_stats(n)
+            print("done", flush=True)
+
+
+class Side:
+    """A child drawing one checkout's pictures (``root``: the checkout's folder)."""
+
+    def __init__(self, root: Path, path: Path):
+        import subprocess
+
+        env = {**os.environ, "PYTHONPATH": str(root)}
+        self.proc = subprocess.Popen([sys.executable, __file__, "--child", str(path)], env=env, text=True,
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+        assert self.proc.stdout.readline().strip() == "ready"
+
+    def ask(self, line: str) -> str:
+        self.proc.stdin.write(line + "\n")
+        self.proc.stdin.flush()
+        return self.proc.stdout.readline().strip()
+
+    def close(self) -> None:
+        self.proc.stdin.close()
+        self.proc.wait()
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--designs", default="ipanema3,cogiro,planar2,planar4")
-    ap.add_argument("--repeat", type=int, default=5)
-    ap.add_argument("--profile", default="", help="design whose drawing is profiled")
+    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--baseline", default="", help="a checkout of the previous version, drawn alternately")
+    ap.add_argument("--profile", default="", help="design whose drawing is profiled (on stderr)")
     ap.add_argument("--png", default="", help="folder to write the PNGs to")
-    ap.add_argument("--build-only", action="store_true", help="also time building the figures alone")
     ap.add_argument("--child", default="", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child:
-        return child(args.child, args.repeat, bool(args.profile), args.build_only)
+        return child(args.child)
 
     import pickle
-    import subprocess
     import tempfile
 
     from cdpr_design import workspaces as ws
@@ -110,22 +122,40 @@ def main(argv=None) -> None:
     from cdpr_design.plots._style import DPI
 
     figs = (("workspace.png", wsplots.workspace_figure), ("tension_map.png", wsplots.tension_figure))
-    print(f"{'design':10s} {'picture':16s} {'poses':>8s} {'best CPU s':>10s} {'median':>8s} "
-          f"{'build s':>8s} {'PNG kB':>7s}", flush=True)
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    if args.png:
-        env["BENCH_PNG_DIR"] = args.png
+    roots = {"this": ROOT} | ({"baseline": Path(args.baseline).resolve()} if args.baseline else {})
+    head = "".join(f" {k + ' best':>14s} {'median':>7s} {'kB':>5s}" for k in roots)
+    print(f"{'design':9s} {'picture':16s} {'poses':>7s}{head}" + ("  this/baseline" if args.baseline else ""),
+          flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.designs.split(","):
             d = spec.load(ROOT / "designs" / f"{name}.yaml")
             r = ws.run(d, grid=ws.make_grid(d, STEPS[name], False))
             path = Path(tmp) / f"{name}.pkl"
-            with open(path, "wb") as fh:
-                pickle.dump((name, [(n, f, (r,), DPI) for n, f in figs]), fh)
-            cmd = [sys.executable, __file__, "--child", str(path), "--repeat", str(args.repeat)]
-            cmd += ["--profile", "1"] if args.profile == name else []
-            cmd += ["--build-only"] if args.build_only else []
-            subprocess.run(cmd, check=True, env=env)
+            with open(path, "wb") as fh:  # the figure functions by name: each side imports its own
+                pickle.dump([(n, f, (r,), DPI) for n, f in figs], fh)
+            sides = {k: Side(root, path) for k, root in roots.items()}
+            for k, (pic, _) in enumerate(figs):
+                times = {s: [] for s in sides}
+                size = {}
+                for _ in range(args.repeat):  # interleaved: both sides see the same load
+                    for s, side in sides.items():
+                        t, n = side.ask(f"draw {k}").split()
+                        times[s].append(float(t))
+                        size[s] = int(n)
+                cols = "".join(f" {min(times[s]):14.3f} {statistics.median(times[s]):7.3f} "
+                               f"{size[s] / 1024:5.0f}" for s in sides)
+                ratio = (f"  {statistics.median(times['this']) / statistics.median(times['baseline']):.2f}"
+                         if args.baseline else "")
+                print(f"{name:9s} {pic:16s} {r.poses:7d}{cols}{ratio}", flush=True)
+                if args.png:
+                    for s, side in sides.items():
+                        out = Path(args.png) / s
+                        out.mkdir(parents=True, exist_ok=True)
+                        side.ask(f"png {k} {out / (name + '_' + pic)}")
+            if args.profile == name:
+                sides["this"].ask("profile")
+            for side in sides.values():
+                side.close()
 
 
 if __name__ == "__main__":

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from cdpr_design.plots._style import ORANGE, VERMILLION
@@ -77,9 +79,10 @@ def frame_aspect(d) -> float:
     return float(np.clip((hi[1] - lo[1]) / (hi[0] - lo[0]), 0.3, 3.0))
 
 
-#: Room around a map panel [in]: left (tick labels, y label), below (tick labels, x label),
-#: above (the panel's title), and to the right of the panels for the colour bar.
-_LEFT, _BELOW, _ABOVE, _BAR = 0.75, 0.55, 0.32, 1.15
+#: Room around the map panels [in]: left of them (tick labels, y label), below them (tick labels,
+#: x label), above each (its title), to their right for the colour bar, and between two
+#: panels (the panels share their axes: only the outer ones carry tick and axis labels).
+_LEFT, _BELOW, _ABOVE, _BAR, _GAP = 0.62, 0.5, 0.26, 1.0, 0.14
 
 
 def panel_grid(n: int, ncol: int, aspect: float, width: float = 3.4, title_lines: int = 1,
@@ -91,7 +94,11 @@ def panel_grid(n: int, ncol: int, aspect: float, width: float = 3.4, title_lines
     ``panel_title_lines`` of panel title, ``title_lines`` of figure title and a colour bar on the
     right (its own axes, so the panels keep their size), placed by
     arithmetic: no white bands between or around the panels, and no layout
-    engine to run at drawing time.  Returns (figure, axes (nrow, ncol), colour-bar axes).
+    engine to run at drawing time.  The panels share their x and y axes (the
+    same limits, :func:`pad_limits`): only the bottom panel of each column
+    carries x tick labels and ``x [m]``, only the left column y tick labels and
+    ``y [m]`` (:func:`label_outer`); panels beyond ``n`` are hidden.
+    Returns (figure, axes (nrow, ncol), colour-bar axes).
     """
     import math
 
@@ -100,15 +107,56 @@ def panel_grid(n: int, ncol: int, aspect: float, width: float = 3.4, title_lines
     nrow = math.ceil(n / ncol)
     height = width * aspect
     top = 0.3 * title_lines + 0.12
-    above = _ABOVE * panel_title_lines
-    W = ncol * (width + _LEFT) + _BAR
-    H = top + nrow * (above + height + _BELOW)
-    fig, axs = pyplot().subplots(nrow, ncol, squeeze=False, figsize=(W, H))
+    above = _ABOVE * panel_title_lines + 0.04
+    W = _LEFT + ncol * width + (ncol - 1) * _GAP + _BAR
+    H = top + nrow * (above + height) + (nrow - 1) * _GAP + _BELOW
+    fig, axs = pyplot().subplots(nrow, ncol, squeeze=False, figsize=(W, H), sharex=True, sharey=True)
     fig.subplots_adjust(left=_LEFT / W, right=1 - _BAR / W, bottom=_BELOW / H, top=1 - (top + above) / H,
-                        wspace=_LEFT / width, hspace=(above + _BELOW) / height)
+                        wspace=_GAP / width, hspace=(above + _GAP) / height)
     span = 1 - (top + above + _BELOW) / H  # the panels' height, as a fraction of the figure's
-    cax = fig.add_axes((1 - 0.85 * _BAR / W, _BELOW / H + 0.1 * span, 0.16 / W, 0.8 * span))
+    cax = fig.add_axes((1 - 0.8 * _BAR / W, _BELOW / H + 0.1 * span, 0.16 / W, 0.8 * span))
+    axs[0, 0].xaxis.set_major_locator(_in_view_locator())  # shared: set once for all panels
+    axs[0, 0].yaxis.set_major_locator(_in_view_locator())
+    label_outer(axs, n)
     return fig, axs, cax
+
+
+@functools.cache
+def _in_view_class():
+    from matplotlib.ticker import AutoLocator
+
+    class InView(AutoLocator):
+        """matplotlib's default tick locator, without the ticks beyond the axis limits: those
+        are never drawn, yet each costs a Tick (two lines, a grid line and two texts, about
+        1 ms to make and lay out) in every panel."""
+
+        def __call__(self):
+            lo, hi = sorted(self.axis.get_view_interval())
+            tol = 1e-9 * max(hi - lo, 1e-300)
+            return [v for v in super().__call__() if lo - tol <= v <= hi + tol]
+
+    return InView
+
+
+def _in_view_locator():
+    """A new tick locator: matplotlib's default one, only the ticks within the axis limits."""
+    return _in_view_class()()
+
+
+def label_outer(axs, n: int, xlabel: str = "x [m]", ylabel: str = "y [m]") -> None:
+    """Axis labels and tick labels on the outer panels of a grid of ``n`` used panels (row by
+    row) with shared axes: x on the lowest used panel of each column, y on the left column."""
+    ncol = axs.shape[1]
+    for k, ax in enumerate(axs.flat[:n]):
+        c = k % ncol
+        if k + ncol >= n:  # no used panel below this one
+            ax.set_xlabel(xlabel)
+        else:
+            ax.tick_params(labelbottom=False)
+        if c == 0:
+            ax.set_ylabel(ylabel)
+        else:
+            ax.tick_params(labelleft=False)
 
 
 def single_panel(aspect: float, width: float = 5.8, title_lines: int = 1):
@@ -138,7 +186,8 @@ def used_panels(axs, n: int):
 
 def z_slices(axs, result, values, feas, zs, cmap, vmax: float):
     """One x-y panel per z-slice index in ``zs``: ``values`` [nx, ny, nz] shaded, the frame's
-    footprint, the outlets and the feasible share in the title.  Returns the last image."""
+    footprint, the outlets and the feasible share in the title (axis labels: :func:`label_outer`).
+    Returns the last image."""
     d = result.design
     ext = extent(result.map_axes[:2])
     z_axis = result.map_axes[2]
@@ -152,7 +201,5 @@ def z_slices(axs, result, values, feas, zs, cmap, vmax: float):
         A = d.outlets
         ax.plot(A[:, 0], A[:, 1], "v", ms=6, mfc=VERMILLION, mec="k")
         pad_limits(ax, d)
-        ax.set_title(f"z = {z_axis[iz]:.3g} m  ({100 * frac:.0f} % feasible)", fontsize=9)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        ax.set_title(f"z = {z_axis[iz]:.3g} m  ({100 * frac:.0f} % feasible)", fontsize=9, y=1.0)
     return im

@@ -38,6 +38,10 @@ from pathlib import Path
 
 _LEN = struct.Struct("<Q")
 
+#: zlib level of the PNGs: 3 encodes in two thirds of the time of PIL's default 6 (about 20 ms
+#: less for a 1700 x 800 pixel picture), the files 15-25 % larger (about 140 kB instead of 120)
+PNG_COMPRESSION = 3
+
 
 def read_message(stream):
     """One length-prefixed pickle from ``stream``, or None at end of input."""
@@ -117,7 +121,7 @@ def draw(jobs) -> list[tuple[str, bytes]]:
         plt = pyplot()
         try:
             buf = io.BytesIO()
-            fig.savefig(buf, format="png", dpi=dpi)
+            fig.savefig(buf, format="png", dpi=dpi, pil_kwargs={"compress_level": PNG_COMPRESSION})
         finally:
             plt.close(fig)
         out.append((name, buf.getvalue()))
@@ -309,7 +313,13 @@ def discard() -> None:
 
 
 def _warm_up() -> None:
-    """Import matplotlib and load the font the pictures' text needs."""
+    """Import matplotlib and load the font the pictures' text needs; then move everything
+    loaded so far (modules, fonts, caches: about 100,000 objects that live as long as the
+    worker) out of the cyclic garbage collector's sight (:func:`gc.freeze`).  Its full
+    collections walked them all over again while a figure was drawn: a fifth of a picture's
+    CPU time.  Frozen objects are still freed when their reference counts drop to zero."""
+    import gc
+
     from cdpr_design.plots._style import pyplot
 
     plt = pyplot()
@@ -317,6 +327,8 @@ def _warm_up() -> None:
     fig.text(0.5, 0.5, "x [m]")
     fig.savefig(io.BytesIO(), format="png", dpi=20)
     plt.close(fig)
+    gc.collect()
+    gc.freeze()
 
 
 def main() -> None:

@@ -85,7 +85,7 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
     ax.set_ylabel("y [m]")
     _colorbar(fig, im, cax, ax, "capacity margin [N] (grey: infeasible)")
     ax.legend(loc="best", fontsize=8, framealpha=0.9)
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=10, y=1.0)
     if rep is not None:
         ax.text(0.01, 0.01, "drawn at the pose of largest margin " + pose_txt(d, rep),
                 transform=ax.transAxes, fontsize=7, va="bottom", zorder=8,
@@ -136,9 +136,7 @@ def tension_figure(result):
         ax.plot(A[i, 0], A[i, 1], "v", ms=9, mfc=VERMILLION, mec="k", zorder=6)
         pad_limits(ax, d)
         c = d.cables[i]
-        ax.set_title(f"{c.name}: {c.tension_min:g}–{c.tension_max:g} N", fontsize=9)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        ax.set_title(f"{c.name}: {c.tension_min:g}–{c.tension_max:g} N", fontsize=9, y=1.0)
     fig.colorbar(im, cax=cax, label="cable tension [N] (grey: infeasible)")
     fig.suptitle(f"{d.name}: minimum-norm cable tensions, {result.kind} workspace{sub}", fontsize=10)
     return fig
@@ -203,7 +201,7 @@ def _planar_orientation(result, val, feas, title, label, ax):
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     _colorbar(fig, im, cax, ax, label)
-    ax.set_title(title, fontsize=9)
+    ax.set_title(title, fontsize=9, y=1.0)
     return fig
 
 
@@ -262,6 +260,9 @@ def cable_model_figure(result, ideal):
     fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, height), squeeze=False)
     fig.subplots_adjust(left=0.07, right=0.97, bottom=1.1 / height, top=1 - 0.8 / height, wspace=0.3)
     z_slices(axs, result, code, b, zs, cmap, 3.0)
+    for _, ax in used_panels(axs, len(zs)):
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
     fig.suptitle(title, fontsize=10)
     return fig
