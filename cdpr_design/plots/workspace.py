@@ -66,7 +66,7 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
     d = result.design
     rep = wsmod.representative_pose(result)
     if ax is None:
-        fig, ax, cax = single_panel(frame_aspect(d), title_lines=title.count("\n") + 1)
+        fig, ax, cax = single_panel(d, title_lines=title.count("\n") + 1)
     else:
         fig, cax = ax.figure, None
     im = ax.imshow(marg.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("viridis"),
@@ -96,7 +96,7 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
 def _spatial_workspace(result, feas, marg, vmax, title):
     d = result.design
     zs = slices(result)
-    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), frame_aspect(d), title_lines=title.count("\n") + 1)
+    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), d, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, marg, feas, zs, cmap_grey_bad("viridis"), vmax)
     fig.colorbar(im, cax=cax, label="capacity margin [N] (grey: infeasible)")
     fig.suptitle(title, fontsize=10)
@@ -124,7 +124,7 @@ def tension_figure(result):
         img = T[:, :, :, iz]
         sub = f" at z = {result.map_axes[2][iz]:.3g} m (slice with the most feasible poses)"
     m = d.m
-    fig, axs, cax = panel_grid(m, min(4, m), frame_aspect(d), width=3.1)
+    fig, axs, cax = panel_grid(m, min(4, m), d, width=3.1)
     cmap = cmap_grey_bad("cividis")
     ext = extent(result.map_axes[:2])
     im = None
@@ -187,7 +187,7 @@ def _orientation_title(result) -> tuple[str, str]:
 def _planar_orientation(result, val, feas, title, label, ax):
     d = result.design
     if ax is None:
-        fig, ax, cax = single_panel(frame_aspect(d), title_lines=title.count("\n") + 1)
+        fig, ax, cax = single_panel(d, title_lines=title.count("\n") + 1)
     else:
         fig, cax = ax.figure, None
     im = ax.imshow(val.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("cividis"),
@@ -207,8 +207,7 @@ def _planar_orientation(result, val, feas, title, label, ax):
 
 def _spatial_orientation(result, val, feas, title, label):
     zs = slices(result)
-    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), frame_aspect(result.design),
-                               title_lines=title.count("\n") + 1)
+    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), result.design, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, val, feas, zs, cmap_grey_bad("cividis"), 1.0)
     fig.colorbar(im, cax=cax, label=label)
     fig.suptitle(title, fontsize=9)
