@@ -49,8 +49,10 @@ def child(path: str) -> None:
     as the worker does, the jobs unpickled, one warm-up draw), one job per command read from
     stdin (``draw K``: the CPU time and PNG size printed; ``png K FILE``: the PNG written;
     ``profile``: a cProfile of all jobs printed on stderr)."""
+    import gc
     import pickle
 
+    from cdpr_design.plots import worker
     from cdpr_design.plots.worker import _warm_up, draw
 
     _warm_up()
@@ -60,10 +62,14 @@ def child(path: str) -> None:
     print("ready", flush=True)
     for line in sys.stdin:
         cmd = line.split()
-        if cmd[0] == "draw":
+        if cmd[0] == "draw":  # as the worker answers a request, then collects its garbage
             t = _cpu()
-            png = draw([jobs[int(cmd[1])]])[0][1]
-            print(f"{_cpu() - t} {len(png)}", flush=True)
+            job = [jobs[int(cmd[1])]]
+            res = worker.answer(job) if hasattr(worker, "answer") else ("ok", draw(job))  # (before: draw)
+            t1 = _cpu()
+            if hasattr(worker, "answer"):  # the worker collects after answering (before: never)
+                gc.collect()
+            print(f"{t1 - t} {_cpu() - t1} {len(res[1][0][1])}", flush=True)
         elif cmd[0] == "png":
             Path(cmd[2]).write_bytes(draw([jobs[int(cmd[1])]])[0][1])
             print("done", flush=True)
@@ -123,7 +129,7 @@ def main(argv=None) -> None:
 
     figs = (("workspace.png", wsplots.workspace_figure), ("tension_map.png", wsplots.tension_figure))
     roots = {"this": ROOT} | ({"baseline": Path(args.baseline).resolve()} if args.baseline else {})
-    head = "".join(f" {k + ' best':>14s} {'median':>7s} {'kB':>5s}" for k in roots)
+    head = "".join(f" {k[:4] + ' best':>10s} {'median':>7s} {'gc':>6s} {'kB':>5s}" for k in roots)
     print(f"{'design':9s} {'picture':16s} {'poses':>7s}{head}" + ("  this/baseline" if args.baseline else ""),
           flush=True)
     with tempfile.TemporaryDirectory() as tmp:
@@ -139,13 +145,14 @@ def main(argv=None) -> None:
                 size = {}
                 for _ in range(args.repeat):  # interleaved: both sides see the same load
                     for s, side in sides.items():
-                        t, n = side.ask(f"draw {k}").split()
-                        times[s].append(float(t))
+                        t, gc_t, n = side.ask(f"draw {k}").split()
+                        times[s].append((float(t), float(gc_t)))
                         size[s] = int(n)
-                cols = "".join(f" {min(times[s]):14.3f} {statistics.median(times[s]):7.3f} "
-                               f"{size[s] / 1024:5.0f}" for s in sides)
-                ratio = (f"  {statistics.median(times['this']) / statistics.median(times['baseline']):.2f}"
-                         if args.baseline else "")
+                total = {s: statistics.median(a + b for a, b in times[s]) for s in sides}
+                cols = "".join(f" {min(a for a, _ in times[s]):10.3f} {statistics.median(a for a, _ in times[s]):7.3f} "
+                               f"{statistics.median(b for _, b in times[s]):6.3f} {size[s] / 1024:5.0f}"
+                               for s in sides)
+                ratio = f"  {total['this'] / total['baseline']:.2f}" if args.baseline else ""
                 print(f"{name:9s} {pic:16s} {r.poses:7d}{cols}{ratio}", flush=True)
                 if args.png:
                     for s, side in sides.items():
