@@ -1,27 +1,49 @@
 #!/usr/bin/env python3
 """Benchmark: CPU time of building and saving the ``workspace`` command's pictures.
 
-For each design the spec is loaded and swept
-(``workspaces.run`` on ``make_grid(design, step)``), then ``workspace.png``
-and ``tension_map.png`` are drawn with :func:`cdpr_design.plots.worker.draw`
-(the function the picture worker runs): one warm-up draw of both, then
-``--repeat`` draws of each, timed in process CPU time (best and median).
-``--build-only`` also times building the figure without saving it.
-``--profile NAME`` prints a cProfile of drawing that design's pictures.
-``--png DIR`` writes the PNGs for looking at them.
+For each design the spec is loaded and swept (``workspaces.run`` on
+``make_grid(design, step)``), then ``workspace.png`` and ``tension_map.png``
+are drawn in a child process set up as the picture worker is
+(:mod:`cdpr_design.plots.worker`: matplotlib warmed up, the request
+unpickled, one warm-up draw), one picture per request, ``--repeat`` times,
+timed in the child's CPU time; ``gc`` is the garbage collection the worker
+runs after answering (off the parent's path, counted in the ratio).
+``--baseline DIR`` draws the same pictures with another checkout (e.g. ``git
+archive`` of the previous commit) in a second child, alternately with this
+one, so both see the same load on a shared machine; the ratio is of the
+medians.  ``--profile NAME`` prints a cProfile of that design's drawing
+(stderr), ``--png DIR`` writes the PNGs to look at.
 
-    python3 scripts/bench_pictures.py [--repeat 5] [--designs ipanema3,cogiro,planar2,planar4]
+    python3 scripts/bench_pictures.py [--repeat 7] [--baseline DIR] [--designs ipanema3,cogiro,planar2,planar4]
 
-The designs and grid steps: IPAnema 3 0.14 m (154,440 poses), CoGiRo 0.5 m,
-planar2 0.01 m, planar4 0.02 m (spatial and planar, several cable counts).
+Grid steps: IPAnema 3 0.14 m (154,440 poses), CoGiRo 0.5 m, planar2 0.01 m,
+planar4 0.02 m.  Measured on the 2-core development machine (shared, load
+about 1-2), CPU per picture [s], median of 9, against 946fb56's pictures:
 
-Figures (2-core development machine, shared), CPU per picture [s], best of 5:
+=========  ===============  =======  =============  =====  ====================
+design     picture          before   after + gc     ratio  PNG before/after kB
+=========  ===============  =======  =============  =====  ====================
+ipanema3   workspace.png    0.600    0.329 + 0.010  0.61  114 / 139
+ipanema3   tension_map.png  0.556    0.281 + 0.012  0.53  98 / 125
+cogiro     workspace.png    0.571    0.343 + 0.011  0.62  78 / 91
+cogiro     tension_map.png  0.680    0.334 + 0.022  0.52  74 / 97
+planar2    workspace.png    0.203    0.173 + 0.003  0.87  91 / 103
+planar2    tension_map.png  0.218    0.163 + 0.004  0.76  65 / 78
+planar4    workspace.png    0.236    0.212 + 0.005  0.92  92 / 97
+planar4    tension_map.png  0.339    0.222 + 0.009  0.68  57 / 76
+=========  ===============  =======  =============  =====  ====================
 
-=========  ==================  ===========  ==================  ===========
-design     workspace before    after        tension_map before  after
-=========  ==================  ===========  ==================  ===========
-(filled in below the table by the commit that measured them)
-=========  ==================  ===========  ==================  ===========
+Where the time went before (cProfile, IPAnema 3): matplotlib's ticks (each
+two lines, a grid line and two texts; 271 made for the two pictures, at
+1-2 ms each to make, lay out and draw), the automatic placement of every
+panel title (a tight bounding box of each axis), full garbage collections
+walking the worker's ~100,000 long-lived objects (a fifth of the time), and
+the PNG's zlib.  What changed: the panels' tick labels only on the outer
+side (the inner panels' tick marks as one line of markers), no ticks beyond
+the limits, titles placed at a fixed height, :func:`gc.freeze` after the
+worker's warm-up and no collection while it draws, zlib level 3.  What is
+left is each panel's axes (about 6 ms to make), the outer ticks and the
+text; a single-panel planar map has little else to save.
 """
 
 from __future__ import annotations
