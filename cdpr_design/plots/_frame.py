@@ -79,7 +79,7 @@ def frame_aspect(d) -> float:
 
 #: Room around the map panels [in]: left of them (tick labels, y label), below them (tick labels,
 #: x label), above each (its title), to their right for the colour bar, and between two
-#: panels (the panels share their axes: only the outer ones carry tick and axis labels).
+#: panels (only the outer ones carry tick and axis labels: :func:`_outer_ticks`).
 _LEFT, _BELOW, _ABOVE, _BAR, _GAP = 0.62, 0.5, 0.26, 1.0, 0.14
 
 
@@ -114,6 +114,7 @@ def panel_grid(n: int, ncol: int, design, width: float = 3.4, title_lines: int =
     span = 1 - (top + above + _BELOW) / H  # the panels' height, as a fraction of the figure's
     cax = fig.add_axes((1 - 0.8 * _BAR / W, _BELOW / H + 0.1 * span, 0.16 / W, 0.8 * span))
     for _, ax in used_panels(axs, n):
+        ax.set_aspect("equal")  # as the maps are drawn (imshow)
         pad_limits(ax, design)
     _outer_ticks(axs, n)
     return fig, axs, cax
