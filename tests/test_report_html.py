@@ -224,6 +224,20 @@ def _map_axes(fig):
     return [ax for ax in fig.axes if ax.get_visible() and ax.axison and ax.images and ax.get_label() != "<colorbar>"]
 
 
+def _assert_outer_labels(ax, maps):
+    """``ax``'s column has x tick labels and ``x [m]`` on its lowest panel, its row y tick labels
+    and ``y [m]`` on its leftmost one, both over the same limits as ``ax``."""
+    pos = ax.get_position()
+    col = [o for o in maps if abs(o.get_position().x0 - pos.x0) < 1e-6]
+    row = [o for o in maps if abs(o.get_position().y0 - pos.y0) < 1e-6]
+    low = min(col, key=lambda o: o.get_position().y0)
+    left = min(row, key=lambda o: o.get_position().x0)
+    assert low.get_xlabel().endswith("[m]") and left.get_ylabel().endswith("[m]")
+    assert [t.get_text() for t in low.get_xticklabels() if t.get_visible() and t.get_text()]
+    assert [t.get_text() for t in left.get_yticklabels() if t.get_visible() and t.get_text()]
+    assert low.get_xlim() == ax.get_xlim() and left.get_ylim() == ax.get_ylim()
+
+
 @pytest.mark.parametrize("design,step,orient", [("planar2", 0.02, None), ("ipanema3", 0.6, None),
                                                 ("planar4", 0.1, "range")])
 def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
@@ -241,8 +255,8 @@ def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
         fig.canvas.draw()
         maps = _map_axes(fig)
         assert maps
-        for ax in maps:
-            assert ax.get_xlabel().endswith("[m]") and ax.get_ylabel().endswith("[m]")
+        for ax in maps:  # panels share their axes: the outer ones carry the labels, with units
+            _assert_outer_labels(ax, maps)
         bars = [ax for ax in fig.axes if ax not in maps and ax.get_visible() and ax.axison and ax.get_ylabel()]
         assert bars and all("[" in ax.get_ylabel() or "scale" in ax.get_ylabel() for ax in bars)
         # the drawn maps fill the figure: rows of panels leave no white band (the old tension map of

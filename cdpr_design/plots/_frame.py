@@ -77,44 +77,106 @@ def frame_aspect(d) -> float:
     return float(np.clip((hi[1] - lo[1]) / (hi[0] - lo[0]), 0.3, 3.0))
 
 
-#: Room around a map panel [in]: left (tick labels, y label), below (tick labels, x label),
-#: above (the panel's title), and to the right of the panels for the colour bar.
-_LEFT, _BELOW, _ABOVE, _BAR = 0.75, 0.55, 0.32, 1.15
+#: Room around the map panels [in]: left of them (tick labels, y label), below them (tick labels,
+#: x label), above each (its title), to their right for the colour bar, and between two
+#: panels (only the outer ones carry tick and axis labels: :func:`_outer_ticks`).
+_LEFT, _BELOW, _ABOVE, _BAR, _GAP = 0.62, 0.5, 0.26, 1.0, 0.14
 
 
-def panel_grid(n: int, ncol: int, aspect: float, width: float = 3.4, title_lines: int = 1,
+def panel_grid(n: int, ncol: int, design, width: float = 3.4, title_lines: int = 1,
                panel_title_lines: int = 1):
-    """A figure of ``n`` equal-aspect map panels, ``ncol`` a row, sized to its content.
+    """A figure of ``n`` equal-aspect map panels of ``design``'s frame, ``ncol`` a row, sized to
+    its content.
 
-    Each panel's axes are ``width`` [in] wide and ``aspect`` x ``width`` high
-    (the frame's shape); the figure adds fixed room for tick and axis labels,
+    Each panel's axes are ``width`` [in] wide and :func:`frame_aspect` x ``width``
+    high; the figure adds fixed room for tick and axis labels,
     ``panel_title_lines`` of panel title, ``title_lines`` of figure title and a colour bar on the
     right (its own axes, so the panels keep their size), placed by
     arithmetic: no white bands between or around the panels, and no layout
-    engine to run at drawing time.  Returns (figure, axes (nrow, ncol), colour-bar axes).
+    engine to run at drawing time.  Every panel shows the same x-y range
+    (:func:`pad_limits`), so only the outer ones carry tick and axis labels
+    (:func:`_outer_ticks`); panels beyond ``n`` are hidden.
+    Returns (figure, axes (nrow, ncol), colour-bar axes).
     """
     import math
 
     from cdpr_design.plots._style import pyplot
 
     nrow = math.ceil(n / ncol)
-    height = width * aspect
+    height = width * frame_aspect(design)
     top = 0.3 * title_lines + 0.12
-    above = _ABOVE * panel_title_lines
-    W = ncol * (width + _LEFT) + _BAR
-    H = top + nrow * (above + height + _BELOW)
+    above = _ABOVE * panel_title_lines + 0.04
+    W = _LEFT + ncol * width + (ncol - 1) * _GAP + _BAR
+    H = top + nrow * (above + height) + (nrow - 1) * _GAP + _BELOW
     fig, axs = pyplot().subplots(nrow, ncol, squeeze=False, figsize=(W, H))
     fig.subplots_adjust(left=_LEFT / W, right=1 - _BAR / W, bottom=_BELOW / H, top=1 - (top + above) / H,
-                        wspace=_LEFT / width, hspace=(above + _BELOW) / height)
+                        wspace=_GAP / width, hspace=(above + _GAP) / height)
     span = 1 - (top + above + _BELOW) / H  # the panels' height, as a fraction of the figure's
-    cax = fig.add_axes((1 - 0.85 * _BAR / W, _BELOW / H + 0.1 * span, 0.16 / W, 0.8 * span))
+    cax = fig.add_axes((1 - 0.8 * _BAR / W, _BELOW / H + 0.1 * span, 0.16 / W, 0.8 * span))
+    for _, ax in used_panels(axs, n):
+        ax.set_aspect("equal")  # as the maps are drawn (imshow)
+        pad_limits(ax, design)
+    _outer_ticks(axs, n)
     return fig, axs, cax
 
 
-def single_panel(aspect: float, width: float = 5.8, title_lines: int = 1):
-    """:func:`panel_grid` of one panel (a planar map) whose title has ``title_lines``:
-    (figure, axes, colour-bar axes)."""
-    fig, axs, cax = panel_grid(1, 1, aspect, width, title_lines=0, panel_title_lines=title_lines)
+def _outer_ticks(axs, n: int, xlabel: str = "x [m]", ylabel: str = "y [m]") -> None:
+    """Ticks for the first ``n`` panels of a grid (row by row), all of one size and x-y range.
+
+    The lowest used panel of each column carries the x tick labels and
+    ``xlabel``, the left column the y tick labels and ``ylabel``, at the places
+    matplotlib's default locator picks for the panel (those within the limits).
+    The other panels get tick marks at the same places, drawn as one line of
+    markers a side instead of matplotlib's ticks: each of those is two lines, a
+    grid line and two texts, made, laid out and drawn in 1-2 ms, most of a
+    picture's time when every panel had its own.
+    """
+    from matplotlib.ticker import FixedLocator, NullLocator
+
+    ref = axs.flat[0]
+    ref.apply_aspect()  # the panel's drawn size: the locator's number of ticks depends on it
+    ticks = [_in_view(ref.xaxis.get_majorticklocs(), ref.get_xlim()),
+             _in_view(ref.yaxis.get_majorticklocs(), ref.get_ylim())]
+    ncol = axs.shape[1]
+    for k, ax in enumerate(axs.flat[:n]):
+        outer = (k + ncol >= n, k % ncol == 0)  # (no used panel below, the left column)
+        for i, (axis, label) in enumerate(((ax.xaxis, xlabel), (ax.yaxis, ylabel))):
+            if outer[i]:
+                axis.set_major_locator(FixedLocator(ticks[i]))
+                axis.set_label_text(label)
+            else:
+                axis.set_major_locator(NullLocator())
+                _tick_marks(ax, ticks[i], "xy"[i])
+
+
+def _in_view(locs, lims) -> np.ndarray:
+    """The tick positions ``locs`` within the axis limits ``lims`` (the others are never drawn)."""
+    lo, hi = sorted(lims)
+    tol = 1e-9 * (hi - lo)
+    locs = np.asarray(locs, float)
+    return locs[(locs >= lo - tol) & (locs <= hi + tol)]
+
+
+def _tick_marks(ax, locs, which: str) -> None:
+    """Tick marks (no labels) at ``locs`` [data units] on the bottom (``which="x"``) or left
+    (``"y"``) side of ``ax``, drawn like matplotlib's major ticks: one line of markers."""
+    import matplotlib as mpl
+    from matplotlib.lines import Line2D
+    from matplotlib.markers import TICKDOWN, TICKLEFT
+
+    rc = mpl.rcParams
+    zero = np.zeros(len(locs))
+    xy, transform, marker = (((locs, zero), ax.get_xaxis_transform(), TICKDOWN) if which == "x"
+                             else ((zero, locs), ax.get_yaxis_transform(), TICKLEFT))
+    ax.add_line(Line2D(*xy, transform=transform, linestyle="none", marker=marker, clip_on=False,
+                       markersize=rc[f"{which}tick.major.size"], markeredgewidth=rc[f"{which}tick.major.width"],
+                       color=rc[f"{which}tick.color"], zorder=2.5))
+
+
+def single_panel(design, width: float = 5.8, title_lines: int = 1):
+    """:func:`panel_grid` of one panel (a planar map of ``design``) whose title has
+    ``title_lines``: (figure, axes, colour-bar axes)."""
+    fig, axs, cax = panel_grid(1, 1, design, width, title_lines=0, panel_title_lines=title_lines)
     return fig, axs[0, 0], cax
 
 
@@ -138,7 +200,8 @@ def used_panels(axs, n: int):
 
 def z_slices(axs, result, values, feas, zs, cmap, vmax: float):
     """One x-y panel per z-slice index in ``zs``: ``values`` [nx, ny, nz] shaded, the frame's
-    footprint, the outlets and the feasible share in the title.  Returns the last image."""
+    footprint, the outlets and the feasible share in the title (ticks and axis labels: :func:`panel_grid`).
+    Returns the last image."""
     d = result.design
     ext = extent(result.map_axes[:2])
     z_axis = result.map_axes[2]
@@ -152,7 +215,5 @@ def z_slices(axs, result, values, feas, zs, cmap, vmax: float):
         A = d.outlets
         ax.plot(A[:, 0], A[:, 1], "v", ms=6, mfc=VERMILLION, mec="k")
         pad_limits(ax, d)
-        ax.set_title(f"z = {z_axis[iz]:.3g} m  ({100 * frac:.0f} % feasible)", fontsize=9)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        ax.set_title(f"z = {z_axis[iz]:.3g} m  ({100 * frac:.0f} % feasible)", fontsize=9, y=1.0)
     return im

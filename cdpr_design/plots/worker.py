@@ -27,6 +27,7 @@ ends the child.
 
 from __future__ import annotations
 
+import gc
 import io
 import os
 import pickle
@@ -37,6 +38,10 @@ import threading
 from pathlib import Path
 
 _LEN = struct.Struct("<Q")
+
+#: zlib level of the PNGs: 3 encodes in two thirds of the time of PIL's default 6 (about 20 ms
+#: less for a 1700 x 800 pixel picture), the files 15-25 % larger (about 140 kB instead of 120)
+PNG_COMPRESSION = 3
 
 
 def read_message(stream):
@@ -117,7 +122,7 @@ def draw(jobs) -> list[tuple[str, bytes]]:
         plt = pyplot()
         try:
             buf = io.BytesIO()
-            fig.savefig(buf, format="png", dpi=dpi)
+            fig.savefig(buf, format="png", dpi=dpi, pil_kwargs={"compress_level": PNG_COMPRESSION})
         finally:
             plt.close(fig)
         out.append((name, buf.getvalue()))
@@ -309,7 +314,11 @@ def discard() -> None:
 
 
 def _warm_up() -> None:
-    """Import matplotlib and load the font the pictures' text needs."""
+    """Import matplotlib and load the font the pictures' text needs; then put everything
+    loaded so far (modules, fonts, caches: about 70,000 objects that live as long as the
+    worker) out of the cyclic garbage collector's sight (:func:`gc.freeze`), so that no
+    collection walks them again.  Frozen objects are still freed when their reference counts
+    drop to zero."""
     from cdpr_design.plots._style import pyplot
 
     plt = pyplot()
@@ -317,6 +326,8 @@ def _warm_up() -> None:
     fig.text(0.5, 0.5, "x [m]")
     fig.savefig(io.BytesIO(), format="png", dpi=20)
     plt.close(fig)
+    gc.collect()
+    gc.freeze()
 
 
 def main() -> None:
@@ -328,13 +339,26 @@ def main() -> None:
             jobs = read_message(inp)
             if jobs is None:
                 return
-            try:
-                answer = ("ok", draw_parallel(jobs))
-            except Exception as exc:  # the parent redraws in-process and reports it
-                answer = ("error", f"{type(exc).__name__}: {exc}")
-            write_message(outp, answer)
+            write_message(outp, answer(jobs))
+            gc.collect()  # the request's garbage, while the parent writes the pictures
     except (KeyboardInterrupt, BrokenPipeError):
         return
+
+
+def answer(jobs) -> tuple:
+    """The worker's answer to a request (see the module's description), drawn with the cyclic
+    garbage collector paused: a figure is thousands of objects in reference cycles, and the
+    collections they triggered while drawing (each walking every live object) cost up to a
+    fifth of a picture's CPU time; :func:`main` collects once the answer is sent.  Meanwhile the
+    request's closed figures wait in memory: a few MB each (their pixel buffers), a handful
+    of figures a request."""
+    gc.disable()
+    try:
+        return ("ok", draw_parallel(jobs))
+    except Exception as exc:  # the parent redraws in-process and reports it
+        return ("error", f"{type(exc).__name__}: {exc}")
+    finally:
+        gc.enable()
 
 
 if __name__ == "__main__":

@@ -66,7 +66,7 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
     d = result.design
     rep = wsmod.representative_pose(result)
     if ax is None:
-        fig, ax, cax = single_panel(frame_aspect(d), title_lines=title.count("\n") + 1)
+        fig, ax, cax = single_panel(d, title_lines=title.count("\n") + 1)
     else:
         fig, cax = ax.figure, None
     im = ax.imshow(marg.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("viridis"),
@@ -85,7 +85,7 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
     ax.set_ylabel("y [m]")
     _colorbar(fig, im, cax, ax, "capacity margin [N] (grey: infeasible)")
     ax.legend(loc="best", fontsize=8, framealpha=0.9)
-    ax.set_title(title, fontsize=10)
+    ax.set_title(title, fontsize=10, y=1.0)
     if rep is not None:
         ax.text(0.01, 0.01, "drawn at the pose of largest margin " + pose_txt(d, rep),
                 transform=ax.transAxes, fontsize=7, va="bottom", zorder=8,
@@ -96,7 +96,7 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
 def _spatial_workspace(result, feas, marg, vmax, title):
     d = result.design
     zs = slices(result)
-    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), frame_aspect(d), title_lines=title.count("\n") + 1)
+    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), d, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, marg, feas, zs, cmap_grey_bad("viridis"), vmax)
     fig.colorbar(im, cax=cax, label="capacity margin [N] (grey: infeasible)")
     fig.suptitle(title, fontsize=10)
@@ -124,7 +124,7 @@ def tension_figure(result):
         img = T[:, :, :, iz]
         sub = f" at z = {result.map_axes[2][iz]:.3g} m (slice with the most feasible poses)"
     m = d.m
-    fig, axs, cax = panel_grid(m, min(4, m), frame_aspect(d), width=3.1)
+    fig, axs, cax = panel_grid(m, min(4, m), d, width=3.1)
     cmap = cmap_grey_bad("cividis")
     ext = extent(result.map_axes[:2])
     im = None
@@ -136,9 +136,7 @@ def tension_figure(result):
         ax.plot(A[i, 0], A[i, 1], "v", ms=9, mfc=VERMILLION, mec="k", zorder=6)
         pad_limits(ax, d)
         c = d.cables[i]
-        ax.set_title(f"{c.name}: {c.tension_min:g}–{c.tension_max:g} N", fontsize=9)
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
+        ax.set_title(f"{c.name}: {c.tension_min:g}–{c.tension_max:g} N", fontsize=9, y=1.0)
     fig.colorbar(im, cax=cax, label="cable tension [N] (grey: infeasible)")
     fig.suptitle(f"{d.name}: minimum-norm cable tensions, {result.kind} workspace{sub}", fontsize=10)
     return fig
@@ -189,7 +187,7 @@ def _orientation_title(result) -> tuple[str, str]:
 def _planar_orientation(result, val, feas, title, label, ax):
     d = result.design
     if ax is None:
-        fig, ax, cax = single_panel(frame_aspect(d), title_lines=title.count("\n") + 1)
+        fig, ax, cax = single_panel(d, title_lines=title.count("\n") + 1)
     else:
         fig, cax = ax.figure, None
     im = ax.imshow(val.T, origin="lower", extent=extent(result.map_axes), cmap=cmap_grey_bad("cividis"),
@@ -203,14 +201,13 @@ def _planar_orientation(result, val, feas, title, label, ax):
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     _colorbar(fig, im, cax, ax, label)
-    ax.set_title(title, fontsize=9)
+    ax.set_title(title, fontsize=9, y=1.0)
     return fig
 
 
 def _spatial_orientation(result, val, feas, title, label):
     zs = slices(result)
-    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), frame_aspect(result.design),
-                               title_lines=title.count("\n") + 1)
+    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), result.design, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, val, feas, zs, cmap_grey_bad("cividis"), 1.0)
     fig.colorbar(im, cax=cax, label=label)
     fig.suptitle(title, fontsize=9)
@@ -262,6 +259,9 @@ def cable_model_figure(result, ideal):
     fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, height), squeeze=False)
     fig.subplots_adjust(left=0.07, right=0.97, bottom=1.1 / height, top=1 - 0.8 / height, wspace=0.3)
     z_slices(axs, result, code, b, zs, cmap, 3.0)
+    for _, ax in used_panels(axs, len(zs)):
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
     fig.suptitle(title, fontsize=10)
     return fig
