@@ -114,13 +114,17 @@ from cdpr_design.statics import kinematics as kin  # noqa: E402
 from cdpr_design.workspaces.grid import grid_positions  # noqa: E402
 
 
-def lp_seconds_per_pose(design, grid, count, rng) -> tuple[float, float]:
-    """Mean (wall, CPU) time [s] of one per-pose linprog feasibility check on a random sample of the grid."""
-    from scipy.optimize import linprog
-
+def lp_poses(design, grid, count, rng) -> list[list[float]]:
+    """A random sample of ``count`` poses of the grid (the LP baseline's poses)."""
     idx = np.sort(rng.choice(grid.size, size=min(count, grid.size), replace=False))
     ori = list(design.workspace.orientation or [])
-    poses = [list(grid_positions(grid, int(i), 1)[0]) + ori for i in idx]
+    return [list(grid_positions(grid, int(i), 1)[0]) + ori for i in idx]
+
+
+def lp_seconds_per_pose(design, poses) -> tuple[float, float]:
+    """Mean (wall, CPU) time [s] of one per-pose linprog feasibility check over ``poses``."""
+    from scipy.optimize import linprog
+
     bounds = list(zip(design.tension_min, design.tension_max))
     t0, c0 = time.perf_counter(), time.process_time()
     for pose in poses:
@@ -128,13 +132,6 @@ def lp_seconds_per_pose(design, grid, count, rng) -> tuple[float, float]:
         w = kin.required_wrench(design, pose)
         linprog(np.zeros(design.m), A_eq=W, b_eq=w, bounds=bounds, method="highs")
     return (time.perf_counter() - t0) / len(poses), (time.process_time() - c0) / len(poses)
-
-
-def kernel_times(design, grid, repeat: int) -> tuple[tuple, tuple]:
-    """(cold, warm) (wall, CPU) seconds of the bare sweep in this process (no maps, no rows handed out)."""
-    cold = _timed(lambda: ws.run(design, grid=grid, keep_maps=False), cpu=True)
-    warm = min(_timed(lambda: ws.run(design, grid=grid, keep_maps=False), cpu=True) for _ in range(repeat))
-    return cold, warm
 
 
 def _timed(fn, cpu: bool = False):
@@ -257,39 +254,67 @@ def print_writer_times(t: dict) -> None:
           f"numpy {t['previous'] / t['numpy']:.1f}x the previous writer")
 
 
-def bench_design(name: str, step: float | None, args, rng) -> list[tuple]:
+def bench_design(name: str, step: float | None, args, rng) -> dict:
+    """Rounds of (LP, kernels warm, whole commands, LP again) for one design; prints the table.
+
+    The machine's speed drifts (the LP took 1.6-3.1 ms a pose between runs of one day on
+    the shared machine), so every round times the LP around what it is compared with, and
+    each ratio is taken within its round; the table gives the median round and the range.
+    """
     path = ROOT / "designs" / f"{name}.yaml"
     d = spec.load(path)
     g = ws.make_grid(d, step)
-    lp, lp_cpu = lp_seconds_per_pose(d, g, args.sample, rng)
-    lp_grid, lp_grid_cpu = lp * g.size, lp_cpu * g.size
-    label = f"{name} ({g.size:,} poses, step {step or d.workspace.grid.step[0]} m)"
-    print(f"\n{label}: per-pose linprog {lp * 1e3:.3f} ms ({lp_cpu * 1e3:.3f} ms CPU) over "
-          f"{min(args.sample, g.size)} poses -> {lp_grid:.1f} s for the grid", flush=True)
-    rows = []
-    kc, kw = kernel_times(d, g, args.repeat)
-    rows += [("kernels in-process, cold", kc), ("kernels in-process, warm", kw)]
+    poses = lp_poses(d, g, args.sample, rng)
     root = Path(args.root).resolve() if args.root else ROOT
+    fmts = ("csv", "parquet") if not args.root else ("csv",)
+    label = f"{name} ({g.size:,} poses, step {step or d.workspace.grid.step[0]} m)"
+    print(f"\n{label}: per-pose linprog over {len(poses)} poses, {args.repeat} rounds", flush=True)
+    first_call = _timed(lambda: ws.run(d, grid=g, keep_maps=False), cpu=True)
+    measures: dict[str, list] = {}  # what -> [(wall, cpu or None, LP wall, LP cpu)], one per round
+
+    def add(what, wall, cpu, lp):
+        measures.setdefault(what, []).append((wall, cpu, lp[0], lp[1]))
+
+    best = {}
     with tempfile.TemporaryDirectory() as tmp:
         if args.cold:
-            cache = tempfile.mkdtemp(dir=tmp)
-            wall, s = command(root, path, step, "csv", f"{tmp}/cold", cache)
-            rows += [("whole command, cold cache (csv)", wall), ("  its sweep_s", (sweep_s(s), None))]
-        for fmt in ("csv", "parquet") if not args.root else ("csv",):
-            command(root, path, step, fmt, f"{tmp}/prime", None)  # a warm numba cache
-            runs = [command(root, path, step, fmt, f"{tmp}/{fmt}", None) for _ in range(args.repeat)]
-            wall, s = min(runs, key=lambda r: r[0][0])
-            rows += [(f"whole command, warm ({fmt})", wall), ("  its sweep_s", (sweep_s(s), None))]
-            if "timings" in s:
-                t = s["timings"]
-                load = f"load {t['load_s']:.3f} s, " if "load_s" in t else ""
-                print(f"  {fmt}: timings of the best run: {load}sweep {t['sweep_s']:.3f} s, write {t['write_s']:.3f} s, "
-                      f"pictures {t['pictures_s']:.3f} s, job total {t['total_s']:.3f} s; process {wall[0]:.3f} s")
-    print(f"  {'what':38s} {'wall [s]':>9s} {'poses/s':>12s} {'x LP':>8s} {'CPU [s]':>9s} {'x LP CPU':>9s}")
-    for what, (t, c) in rows:
-        cpu = f"{c:9.3f} {lp_grid_cpu / c:9.1f}" if c else ""
-        print(f"  {what:38s} {t:9.3f} {g.size / t:12,.0f} {lp_grid / t:8.1f} {cpu}")
-    return rows
+            lp = lp_seconds_per_pose(d, poses)
+            (wall, cpu), s = command(root, path, step, "csv", f"{tmp}/cold", tempfile.mkdtemp(dir=tmp))
+            add("whole command, cold numba cache (csv)", wall, cpu, lp)
+            add("  its load_s (numba compiling)", s.get("timings", {}).get("load_s", 0.0), None, lp)
+        for fmt in fmts:
+            command(root, path, step, fmt, f"{tmp}/prime", None)  # numba's cache and the bytecode warm
+        add("kernels in-process, first call", *first_call, lp_seconds_per_pose(d, poses))
+        for _ in range(args.repeat):
+            before = lp_seconds_per_pose(d, poses)
+            kw = _timed(lambda: ws.run(d, grid=g, keep_maps=False), cpu=True)
+            runs = {fmt: command(root, path, step, fmt, f"{tmp}/{fmt}", None) for fmt in fmts}
+            after = lp_seconds_per_pose(d, poses)
+            lp = ((before[0] + after[0]) / 2, (before[1] + after[1]) / 2)
+            add("kernels in-process, warm", *kw, lp)
+            for fmt, ((wall, cpu), s) in runs.items():
+                add(f"whole command, warm ({fmt})", wall, cpu, lp)
+                add(f"  its sweep_s ({fmt})", sweep_s(s), None, lp)
+                if fmt not in best or wall < best[fmt][0]:
+                    best[fmt] = (wall, s)
+    lps = [r[2] for r in measures["kernels in-process, warm"]]
+    print(f"  per-pose linprog {min(lps) * 1e3:.2f}-{max(lps) * 1e3:.2f} ms over the rounds "
+          f"({np.median(lps) * g.size:.1f} s for the grid at the median)")
+    for fmt, (wall, s) in best.items():
+        if "timings" in s:
+            t = s["timings"]
+            load = f"load {t['load_s']:.3f} s, " if "load_s" in t else ""
+            print(f"  {fmt}: timings of the fastest run: {load}sweep {t['sweep_s']:.3f} s, write {t['write_s']:.3f} s, "
+                  f"pictures {t['pictures_s']:.3f} s, job total {t['total_s']:.3f} s; process {wall:.3f} s")
+    print(f"  {'what (median round)':40s} {'wall [s]':>9s} {'poses/s':>10s} {'x LP (range)':>20s} {'CPU [s]':>8s} "
+          f"{'x LP CPU':>9s}")
+    for what, rounds in measures.items():
+        ratios = sorted(lpw * g.size / w for w, _, lpw, _ in rounds)
+        wall, cpu, _, lpc = sorted(rounds)[len(rounds) // 2]
+        ratio_text = f"{np.median(ratios):7.1f} ({ratios[0]:.0f}-{ratios[-1]:.0f})"
+        cpu_text = f"{cpu:8.3f} {lpc * g.size / cpu:9.1f}" if cpu else ""
+        print(f"  {what:40s} {wall:9.3f} {g.size / wall:10,.0f} {ratio_text:>20s} {cpu_text}")
+    return measures
 
 
 def main(argv=None):
