@@ -3,17 +3,22 @@
 
 For IPAnema 3 on a fine grid and for planar2, all in one run on this machine:
 
-1. the baseline: per-pose scipy ``linprog`` (HiGHS) feasibility of a random
-   sample of the grid's poses, in this process, scaled to the whole grid (the
-   LP answers feasibility only: no tensions, no margin, no file);
-2. the kernels in this process: ``workspaces.run`` without maps or rows,
-   cold (the first call: numba's on-disk cache loaded, or compiled) and warm
-   (best of ``--repeat``), and the ``sweep_s`` the command reports;
+1. the baseline: per-pose scipy ``linprog`` (HiGHS) feasibility of a fixed
+   random sample of the grid's poses, in this process, scaled to the whole
+   grid (the LP answers feasibility only: no tensions, no margin, no file);
+   timed before and after each round of 2 and 3, and each ratio taken within
+   its round, because this machine's speed drifts between minutes;
+2. the kernels in this process: ``workspaces.run`` without maps or rows, on
+   its first call (numba's on-disk cache loaded) and warm;
 3. the whole command, ``python -m cdpr_design workspace SPEC --step S --json``
-   in a new process each time (start-up, spec, sweep, ``workspace.csv``,
-   ``workspace.png``, ``tension_map.png``, ``summary.json``): cold (an empty
-   numba cache: every kernel compiled) and warm (best of ``--repeat``), with
-   ``--format csv`` and ``--format parquet``;
+   in a new process each time (start-up, spec, numba's start-up -- its
+   ``load_s`` --, sweep, ``workspace.csv``, ``workspace.png``,
+   ``tension_map.png``, ``summary.json``, exit), with ``--format csv`` and
+   ``--format parquet``, warm (numba's cache and Python's bytecode written
+   by a first run) and, unless ``--no-cold``, once with an empty numba cache
+   (every kernel compiled); and the fixed costs under any command (a process
+   that only starts Python, imports numpy, calls one small cached kernel,
+   imports matplotlib);
 4. the CSV writer alone on the IPAnema 3 rows: the previous one (printf per
    row, as ``io.tables.format_block`` was) against both paths of
    :func:`cdpr_design.io.csvtext.csv_rows`, the vectorised numpy one and the
@@ -21,74 +26,74 @@ For IPAnema 3 on a fine grid and for planar2, all in one run on this machine:
    process with numba's cache warm).
 
 Ratios are LP time for the grid / measured time, in wall-clock time and in CPU
-time (user + system, all threads and the picture process: less sensitive to
-other work on a shared machine; the LP runs on one core, the kernels and the
-command on two).  ``--root`` runs the command
+time (user + system of all threads: less sensitive to other work on a shared
+machine; the LP runs on one core, the kernels and the command on two; the
+picture process, which the command does not wait for at exit, is not in the
+command's CPU time).  ``--root`` runs the command
 from another checkout (e.g. the previous version, for before/after; its
 summary has no ``timings``, so its ``elapsed_s`` -- which then included the CSV
 formatting -- stands in for ``sweep_s``).
 
     python3 scripts/bench_outputs.py [--step 0.14] [--sample 300] [--repeat 3] [--root DIR] [--no-cold]
 
-Figures (2-core development machine, shared: the load average is given with
-each run; on a loaded machine the wall-clock ratios of anything using both
-cores drop, the CPU ratios much less).  IPAnema 3, 154,440 poses, static:
+Figures (2-core development machine shared with other virtual machines: its
+speed drifts by up to 1.7x between minutes -- the LP took 1.6 to 3.0 ms a pose
+over one afternoon, numba's start-up 1.0 to 1.75 s -- hence the rounds).  The
+medians and ranges of three rounds, warm, load average below 1; "before" is
+946fb56 (``--root``), "after" this version, run 5-10 minutes apart; the
+kernels in this process are the current ones in both runs (the spread of
+their ratio, 610-833x, is the machine's):
 
-===========================================  ==========================  ==========================
-                                             before (e612e10), load 0-4  after, load 3.7
-===========================================  ==========================  ==========================
-per-pose linprog (wall / CPU)                2.64 / 2.64 ms              1.64 / 1.64 ms
-kernels in-process, warm, wall               0.70 s = 581x LP            0.42 s = 602x LP
-kernels in-process, warm, CPU                1.36 s = 301x LP CPU        0.60 s = 421x LP CPU
-kernel CPU per pose, interleaved runs        5.8-6.1 us                  3.7-3.9 us
-  two threads, same minute (load 4)          0.46 s (333,000 poses/s)    0.29 s (528,000 poses/s)
-whole command, warm, csv: wall / CPU         5.42 s = 75x / 81x          3.21 s = 79x / 94x
-  its sweep_s                                1.88 s = 217x               0.99 s = 257x
-whole command, warm, parquet: wall / CPU     8.48 s = 48x / 98x          5.06 s = 50x / 89x
-cold: first sweep with an empty numba cache  36 s (load 215)             57-65 s (load 290-430)
-===========================================  ==========================  ==========================
+============================================  =========================  ===============================
+IPAnema 3, 154,440 poses, static, csv         before (946fb56)           after (two runs)
+============================================  =========================  ===============================
+per-pose linprog over the rounds              1.73-2.62 ms               1.82-2.07 / 2.04-2.88 ms
+whole command                                 3.76 s = 95x (85-97)       2.61 s = 108x / 2.86 s = 129x
+  its load_s (numba's start-up)               (inside sweep_s)           0.63-0.78 s
+  its sweep_s                                 1.32 s = 253x              0.55 s = 581x / 0.56 s = 728x
+  best run: load / sweep / write / pictures   - / 1.03 / 0.74 / 0.84 s   0.63 / 0.34 / 0.45 / 0.51 s
+kernels in-process, warm                      0.49 s = 833x              0.46 s = 610x / 0.54 s = 710x
+============================================  =========================  ===============================
 
-The LP itself ran at 1.6-3.1 ms per pose over the day (other work on the
-machine), so the ratios move with it; the per-pose CPU of the kernels is the
-steadier comparison (interleaved runs of both versions, same minutes).
+Larger IPAnema 3 grids (same version, LP timed around each run): 425,971 poses
+(step 0.1 m) 3.8-4.2 s = 240-294x, ``sweep_s`` 522-870x; 1,192,605 poses (step
+0.07 m) 7.0-7.9 s = 303-321x.  planar2 with its hanging tilt: 22,801 poses 1.93
+s (23x) before, 1.67-1.73 s (29-32x) after; 564,001 poses 9.6 s (95x) before,
+6.0-6.1 s (154-234x) after -- ``auto`` now gives grids over 100,000 poses to
+the kernels, not to numpy.
 
-The cold figure (numba compiling every kernel into its cache, once per
-machine) grew: the closed forms add code that every kernel calling
-``hsm_factored`` compiles; measured only on a heavily loaded machine, to be
-looked at again.
+Where the time goes now (IPAnema 3, 154,440 poses, fastest run, wall): Python
+start-up and the command's modules 0.3-0.45 s (numpy 0.1, typer with the
+pydantic adapters it builds per option 0.1-0.2, the spec schema's pydantic
+models 0.1); numba's start-up 0.63-0.78 s (``load_s``; a process that only
+calls one small cached kernel takes 1.0-1.75 s from nothing, 0.3 s of it
+scipy.linalg that numba imports at its first call -- and that imports
+numpy.f2py); the sweep 0.34-0.56 s; then the table (0.2 s of CPU: the numba
+CSV path) and the two pictures in the picture process (0.3 s of CPU each)
+together 0.45-0.5 s; the exit 0.05 s.  The whole-process target (200x) needs
+1.5 s at an LP of 2 ms a pose: the fixed costs of Python, numpy and numba
+alone take about that, so at this grid size it is out of reach with a fresh
+process per command; from about 400,000 poses it is met.  The kernel target
+(1000x) is met in single rounds on an idle machine and missed in the medians.
 
-planar2 (22,801 poses): kernels warm 0.47 s (189x) before, 0.22 s (196x,
-LP 1.85 ms) after; the whole command 3.8 s before, 2.9 s after (its start-up
-and pictures, not the sweep, set it).
+What changed since 946fb56: numba's start-up timed apart (``load_s``, a one-pose
+warm-up); the interpreter's exit skips its last garbage collections
+(``gc.freeze()`` when the command is done: the exit went from 0.3-0.7 s to 0.05
+s); the start-up's collections less frequent (0.15-0.2 s of CPU); the CSV
+cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
+of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
+lowered to 100,000 poses.
+
+The previous round (e612e10 -> 946fb56, the closed-form margin of
+``kernels.hsm_small``): kernel CPU per IPAnema 3 pose 5.8-6.1 us -> 3.7-3.9 us in
+interleaved runs; cold (an empty numba cache, every kernel compiled) 36 s ->
+57-65 s, measured under heavy load.
 
 The CSV writer alone on the IPAnema 3 rows (3,706,560 cells, one core, load
-1.2-1.4): previous writer 554 ns/cell, numpy ``csv_rows`` 94 ns/cell (5.9x),
-numba ``csv_rows`` 45 ns/cell warm (12.4x the previous writer, 2.1x numpy;
-2.5x in interleaved runs of the two) and 69 ns/cell on its first call (the
-compiled code loaded from numba's cache).  Of the 45 ns about 37 are the
-kernel, the rest the copy of the columns into a block and the final join.
-
-Where the time goes, per IPAnema 3 pose in the kernels (one thread, CPU):
-before, structure matrix 0.2-0.5 us, basis factorisation 0.6-1.4 us, margin
-by hyperplane shifting 3.4-7 us (56 facets through the general enumeration),
-tensions (null space + Goldfarb-Idnani) 1.1-1.5 us; after, the same except
-the margin, 1.3-1.4 us (the closed forms of ``kernels.hsm_small``, the
-closure test left out of static sweeps) and 0.5 us less loop overhead
-(``kernels.sweep.grid_block``).  With two idle cores the 3.6-4.0 us of CPU
-per pose give 516,000-541,000 poses/s (0.29 s for the grid): 1,400x an LP
-of 2.64 ms per pose, 880x the 1.64 ms the LP took in the run of the table
-(where the kernels themselves got 0.42 s, 600x): the 1000x target is met
-only when the LP is slow and both cores are free.
-
-The whole command: Python start-up and imports 1.2-2 s (typer and pydantic
-0.5 s, numpy 0.2 s, numba 0.3 s, scipy.linalg that numba imports to look for
-BLAS 0.3 s, the spec schema 0.1 s), numba's first-call set-up and cache load
-0.5-1 s (counted in ``sweep_s``), the sweep 0.3-0.6 s, the CSV 0.75 s of CPU
-on one core after the sweep (the grid is one chunk), the two pictures 0.6 and
-0.8 s of CPU in the helper process (matplotlib's text and axis layout, not
-the 154,440 cells, which are one ``imshow``).  These fixed costs put the
-whole command at 3.2 s (79x an LP of 1.64 ms, 120x one of 2.64 ms): the
-200x target for the whole process is not met.
+below 1): previous writer 590-683 ns/cell, numpy ``csv_rows`` 119-136 ns/cell,
+numba ``csv_rows`` 54-57 ns/cell warm (10-13x the previous writer, 2.1-2.5x
+numpy), 53-72 ns/cell on its first call (the compiled code loaded from
+numba's cache).
 """
 
 from __future__ import annotations
