@@ -59,7 +59,7 @@ Larger IPAnema 3 grids (same version, LP timed around each run): 425,971 poses
 (step 0.1 m) 3.8-4.2 s = 240-294x, ``sweep_s`` 522-870x; 1,192,605 poses (step
 0.07 m) 7.0-7.9 s = 303-321x.  planar2 with its hanging tilt: 22,801 poses 1.93
 s (23x) before, 1.67-1.73 s (29-32x) after; 564,001 poses 9.6 s (95x) before,
-6.0-6.1 s (154-234x) after -- ``auto`` now gives grids over 100,000 poses to
+6.0-6.1 s (154-234x) after -- ``auto`` now gives grids over 130,000 poses to
 the kernels, not to numpy.
 
 Where the time goes now (IPAnema 3, 154,440 poses, fastest run, wall): Python
@@ -82,7 +82,7 @@ warm-up); the interpreter's exit skips its last garbage collections
 s); the start-up's collections less frequent (0.15-0.2 s of CPU); the CSV
 cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
 of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
-lowered to 100,000 poses.
+lowered to 130,000 poses.
 
 The previous round (e612e10 -> 946fb56, the closed-form margin of
 ``kernels.hsm_small``): kernel CPU per IPAnema 3 pose 5.8-6.1 us -> 3.7-3.9 us in

@@ -134,13 +134,20 @@ def test_the_kernel_formats_ordinary_numbers_itself():
     assert left(np.full((n, 1), 1e60), 0) == n  # beyond the exact range: every cell to Python
 
 
-def test_csv_rows_uses_the_kernel_only_where_numba_is_imported(monkeypatch):
-    """Where numba is imported, csv_rows takes the compiled path; elsewhere the numpy one."""
+def test_csv_rows_uses_the_kernel_only_where_numba_is_imported_and_compiles(monkeypatch):
+    """Where numba is imported with its JIT on, csv_rows takes the compiled path; elsewhere
+    (numba not imported, or NUMBA_DISABLE_JIT: the kernel would run interpreted, ~50x slower
+    than numpy) the numpy one."""
+    import numba
+
     calls = []
     monkeypatch.setattr(csvfast, "numba_rows", lambda a: calls.append("numba") or numba_rows(a))
     monkeypatch.setattr(csvtext, "numpy_rows", lambda a: calls.append("numpy") or numpy_rows(a))
     cols = [np.array([1.5, -0.0]), np.array([3, 4])]
+    monkeypatch.setattr(numba.config, "DISABLE_JIT", False)
+    assert csvtext.csv_rows(cols) == b"1.5,3\n0,4\n"
+    monkeypatch.setattr(numba.config, "DISABLE_JIT", True)
     assert csvtext.csv_rows(cols) == b"1.5,3\n0,4\n"
     monkeypatch.delitem(sys.modules, "numba")
     assert csvtext.csv_rows(cols) == b"1.5,3\n0,4\n"
-    assert calls == ["numba", "numpy"]
+    assert calls == ["numba", "numpy", "numpy"]

@@ -239,18 +239,22 @@ def _assert_outer_labels(ax, maps):
 
 
 @pytest.mark.parametrize("design,step,orient", [("planar2", 0.02, None), ("ipanema3", 0.6, None),
-                                                ("planar4", 0.1, "range")])
+                                                ("planar4", 0.1, "range"), ("crane4", 0.25, None)])
 def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
+    """Every map picture of a workspace (the tilt map of a hanging design too, planar or spatial)."""
     from cdpr_design import workspaces as ws
     from cdpr_design.model import spec
     from cdpr_design.plots import workspace as wsplots
     from cdpr_design.plots._style import pyplot
+    from cdpr_design.plots.hanging import tilt_figure
 
     d = spec.load(DESIGNS / f"{design}.yaml")
     r = ws.run_orientations(d, orient, grid=ws.make_grid(d, step)) if orient else ws.run(d, step=step)
     figures = [wsplots.workspace_figure(r), wsplots.tension_figure(r)]
     if orient:
         figures.append(wsplots.orientation_figure(r))
+    if getattr(r, "hanging", None) is not None:
+        figures.append(tilt_figure(r))
     for fig in figures:
         fig.canvas.draw()
         maps = _map_axes(fig)

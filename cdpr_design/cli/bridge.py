@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 from typing import Annotated, Optional
 
 import typer
@@ -60,6 +61,9 @@ def bridge(
     from cdpr_design.plc.transport import PlcLinkError
 
     design = load_design(spec)
+    # a real-time loop: Python's default collection thresholds (short pauses, often) rather than the
+    # start-up's (cdpr_design.__main__: a pause of a few ms every 50,000 allocations)
+    gc.set_threshold(700, 10, 10)
     try:
         res, summary, dt, out_dir = job.bridge(
             design, test_plc, duration, cycle_time, timeout, reconnect, local_net_id, out, overwrite,

@@ -20,8 +20,8 @@ Each cell is laid out in four little-endian 64-bit words -- sign, 16 bytes of
 digits, exponent suffix and separator -- with unused bytes zero; the row
 block's bytes with the zeros removed are the CSV text.
 
-When numba is already imported in the process (``"numba" in sys.modules``),
-:func:`csv_rows` hands the rows to the compiled formatter of
+When numba is already imported in the process (``"numba" in sys.modules``) with its
+JIT on, :func:`csv_rows` hands the rows to the compiled formatter of
 :mod:`cdpr_design.io.csvfast` instead (the same algorithm and tables, one cell
 at a time, about four times faster, the GIL released).  Only then: importing
 numba costs about a second, more than formatting a small table this way; a
@@ -206,7 +206,7 @@ def csv_rows(columns: Sequence[np.ndarray]) -> bytes:
             raise ValueError("csv_rows: columns must be 1-D and of equal length")
         if c.dtype.kind not in "biuf":
             raise TypeError(f"csv_rows: numeric columns only, got dtype {c.dtype}")
-    if "numba" in sys.modules:
+    if "numba" in sys.modules and not sys.modules["numba"].config.DISABLE_JIT:
         from cdpr_design.io.csvfast import numba_rows
 
         return numba_rows(arrays)

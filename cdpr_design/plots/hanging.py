@@ -8,11 +8,9 @@ nothing is written.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from cdpr_design.plots._frame import contourable, extent, frame_aspect, frame_rect, pad_limits, slices, z_slices
+from cdpr_design.plots._frame import contourable, extent, frame_rect, pad_limits, panel_grid, slices, z_slices
 from cdpr_design.plots._style import cmap_grey_bad, pyplot
 
 #: Tilt contours drawn on planar maps [deg].
@@ -44,14 +42,11 @@ def tilt_figure(result, ax=None):
     if ax is not None:
         raise ValueError("a spatial tilt map is drawn as z-slices on a figure of its own (pass ax=None)")
     zs = slices(result)
-    ncol = min(3, len(zs))
-    nrow = math.ceil(len(zs) / ncol)
-    height = (3.9 * frame_aspect(d) + 0.9) * nrow + 0.9
-    fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, height), squeeze=False)
-    fig.subplots_adjust(left=0.07, right=0.88, bottom=0.7 / height, top=1 - 0.8 / height, wspace=0.3)
+    title = _title(result)
+    fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), d, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, tilt, feas, zs, cmap_grey_bad("plasma"), vmax)
-    fig.colorbar(im, ax=axs.ravel().tolist(), shrink=0.8, label="tilt [deg]")
-    fig.suptitle(_title(result), fontsize=9)
+    fig.colorbar(im, cax=cax, label="tilt from level [deg] (grey: it cannot hang there)")
+    fig.suptitle(title, fontsize=9)
     return fig
 
 

@@ -40,7 +40,8 @@ from pathlib import Path
 _LEN = struct.Struct("<Q")
 
 #: zlib level of the PNGs: 3 encodes in two thirds of the time of PIL's default 6 (about 20 ms
-#: less for a 1700 x 800 pixel picture), the files 15-25 % larger (about 140 kB instead of 120)
+#: less for a 1700 x 800 pixel picture); with this round's layouts the files came out 5-33 %
+#: larger than before (scripts/bench_pictures.py, layout and compression together)
 PNG_COMPRESSION = 3
 
 

@@ -31,7 +31,7 @@ ENGINES = ("auto", "numba", "numpy")
 #: Largest closed-form grid ``auto`` gives to numpy while the kernels are not loaded.  Measured
 #: on planar2 (with its hanging tilt), warm, one process: numpy 16 us a pose, numba 8.6 us a pose
 #: on two threads plus about 1 s of numba start-up, so numba pays off from ~130,000 poses.
-NUMPY_MAX_POSES = 100_000
+NUMPY_MAX_POSES = 130_000
 
 
 def kernels():
