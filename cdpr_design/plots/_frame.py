@@ -81,22 +81,24 @@ def frame_aspect(d) -> float:
 #: x label), above each (its title), to their right for the colour bar, and between two
 #: panels (only the outer ones carry tick and axis labels: :func:`_outer_ticks`).
 _LEFT, _BELOW, _ABOVE, _BAR, _GAP = 0.62, 0.5, 0.26, 1.0, 0.14
+#: Room to the right of the panels [in] when there is no colour bar.
+_RIGHT = 0.15
 
 
 def panel_grid(n: int, ncol: int, design, width: float = 3.4, title_lines: int = 1,
-               panel_title_lines: int = 1):
+               panel_title_lines: int = 1, bar: bool = True):
     """A figure of ``n`` equal-aspect map panels of ``design``'s frame, ``ncol`` a row, sized to
     its content.
 
     Each panel's axes are ``width`` [in] wide and :func:`frame_aspect` x ``width``
     high; the figure adds fixed room for tick and axis labels,
-    ``panel_title_lines`` of panel title, ``title_lines`` of figure title and a colour bar on the
-    right (its own axes, so the panels keep their size), placed by
+    ``panel_title_lines`` of panel title, ``title_lines`` of figure title and (``bar``) a colour
+    bar on the right (its own axes, so the panels keep their size), placed by
     arithmetic: no white bands between or around the panels, and no layout
     engine to run at drawing time.  Every panel shows the same x-y range
     (:func:`pad_limits`), so only the outer ones carry tick and axis labels
     (:func:`_outer_ticks`); panels beyond ``n`` are hidden.
-    Returns (figure, axes (nrow, ncol), colour-bar axes).
+    Returns (figure, axes (nrow, ncol), colour-bar axes or None without ``bar``).
     """
     import math
 
@@ -106,13 +108,14 @@ def panel_grid(n: int, ncol: int, design, width: float = 3.4, title_lines: int =
     height = width * frame_aspect(design)
     top = 0.3 * title_lines + 0.12
     above = _ABOVE * panel_title_lines + 0.04
-    W = _LEFT + ncol * width + (ncol - 1) * _GAP + _BAR
+    right = _BAR if bar else _RIGHT
+    W = _LEFT + ncol * width + (ncol - 1) * _GAP + right
     H = top + nrow * (above + height) + (nrow - 1) * _GAP + _BELOW
     fig, axs = pyplot().subplots(nrow, ncol, squeeze=False, figsize=(W, H))
-    fig.subplots_adjust(left=_LEFT / W, right=1 - _BAR / W, bottom=_BELOW / H, top=1 - (top + above) / H,
+    fig.subplots_adjust(left=_LEFT / W, right=1 - right / W, bottom=_BELOW / H, top=1 - (top + above) / H,
                         wspace=_GAP / width, hspace=(above + _GAP) / height)
     span = 1 - (top + above + _BELOW) / H  # the panels' height, as a fraction of the figure's
-    cax = fig.add_axes((1 - 0.8 * _BAR / W, _BELOW / H + 0.1 * span, 0.16 / W, 0.8 * span))
+    cax = fig.add_axes((1 - 0.8 * _BAR / W, _BELOW / H + 0.1 * span, 0.16 / W, 0.8 * span)) if bar else None
     for _, ax in used_panels(axs, n):
         ax.set_aspect("equal")  # as the maps are drawn (imshow)
         pad_limits(ax, design)

@@ -8,8 +8,6 @@ z-slices on a figure of their own.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from cdpr_design.plots._frame import (contourable, draw_robot, extent, frame_aspect, frame_rect, pad_limits,
@@ -253,15 +251,12 @@ def cable_model_figure(result, ideal):
         ax.set_title(title, fontsize=10)
         return fig
     zs = slices(result)
-    ncol = min(3, len(zs))
-    nrow = math.ceil(len(zs) / ncol)
-    height = (3.9 * frame_aspect(d) + 0.9) * nrow + 1.3
-    fig, axs = pyplot().subplots(nrow, ncol, figsize=(4.6 * ncol, height), squeeze=False)
-    fig.subplots_adjust(left=0.07, right=0.97, bottom=1.1 / height, top=1 - 0.8 / height, wspace=0.3)
+    lines = title.count("\n") + 1
+    # one more title line: the legend's row, under the title
+    fig, axs, _ = panel_grid(len(zs), min(3, len(zs)), d, title_lines=lines + 1, bar=False)
     z_slices(axs, result, code, b, zs, cmap, 3.0)
-    for _, ax in used_panels(axs, len(zs)):
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
-    fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=8)
+    height = fig.get_size_inches()[1]
+    fig.legend(handles=handles, loc="upper center", ncol=4, fontsize=8,
+               bbox_to_anchor=(0.5, 1 - (0.3 * lines + 0.06) / height))
     fig.suptitle(title, fontsize=10)
     return fig
