@@ -12,7 +12,27 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import njit, njit_inline
+
+
+@njit_inline
+def grid_index(idx, ny, nz):
+    """(ix, iy, iz): the axis indices of flat grid index ``idx`` (C order over x, y, z)."""
+    r = idx // nz
+    return r // ny, r % ny, idx % nz
+
+
+@njit_inline
+def next_grid_index(ix, iy, iz, ny, nz):
+    """The axis indices of the grid pose after (ix, iy, iz) in C order (no division)."""
+    iz += 1
+    if iz == nz:
+        iz = 0
+        iy += 1
+        if iy == ny:
+            iy = 0
+            ix += 1
+    return ix, iy, iz
 
 
 @njit

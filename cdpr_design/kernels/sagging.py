@@ -42,7 +42,7 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_parallel
 from cdpr_design.kernels.cable_shape import cable_for_tension, least_tension
 from cdpr_design.kernels.catenary import catenary_sag
-from cdpr_design.kernels.geometry import fill_column
+from cdpr_design.kernels.geometry import fill_column, grid_index
 from cdpr_design.kernels.hsm import make_scratch
 from cdpr_design.kernels.pose import eval_general, eval_pose
 from cdpr_design.kernels.tension_qp import min_norm_tensions
@@ -524,11 +524,7 @@ def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA,
         k0 = b * bsize
         k1 = min(count, k0 + bsize)
         for k in range(k0, k1):
-            idx = start + k
-            iz = idx % nz
-            r = idx // nz
-            iy = r % ny
-            ix = r // ny
+            ix, iy, iz = grid_index(start + k, ny, nz)
             st, f, mg, _ = sag_pose(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2],
                                     Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
                                     t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)

@@ -9,7 +9,7 @@ import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_parallel
 from cdpr_design.kernels.linalg import RANK_TOL
-from cdpr_design.kernels.geometry import structure_matrix, structure_matrix_pulley
+from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
 from cdpr_design.kernels.hsm import make_scratch
 from cdpr_design.kernels.pose import eval_general, eval_pose
 from cdpr_design.kernels.interference import interference_pose
@@ -52,22 +52,12 @@ def grid_block(start, k0, k1, lower, step, shape, Rb, A, rows, wreq, tmin, tmax,
     ny = shape[1]
     nz = shape[2]
     # grid indices of the block's first pose, then counted up (no division per pose)
-    idx = start + k0
-    iz = idx % nz
-    r = idx // nz
-    iy = r % ny
-    ix = r // ny
+    ix, iy, iz = grid_index(start + k0, ny, nz)
     for k in range(k0, k1):
         px = lower[0] + ix * step[0]
         py = lower[1] + iy * step[1]
         pz = lower[2] + iz * step[2]
-        iz += 1
-        if iz == nz:
-            iz = 0
-            iy += 1
-            if iy == ny:
-                iy = 0
-                ix += 1
+        ix, iy, iz = next_grid_index(ix, iy, iz, ny, nz)
         ok = structure_matrix(px, py, pz, Rb, A, rows, W, L)
         for i in range(m):
             lengths[k, i] = L[i]
@@ -123,21 +113,11 @@ def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax
     for b in nb.prange(nblocks):
         k0 = b * bsize
         k1 = min(count, k0 + bsize)
-        idx = start + k0
-        iz = idx % nz
-        r = idx // nz
-        iy = r % ny
-        ix = r // ny
+        ix, iy, iz = grid_index(start + k0, ny, nz)
         for k in range(k0, k1):
             px = lower[0] + ix * step[0]
             py = lower[1] + iy * step[1]
-            iz += 1
-            if iz == nz:
-                iz = 0
-                iy += 1
-                if iy == ny:
-                    iy = 0
-                    ix += 1
+            ix, iy, iz = next_grid_index(ix, iy, iz, ny, nz)
             lx0 = a0x - px
             ly0 = a0y - py
             lx1 = a1x - px
