@@ -88,6 +88,24 @@ def outcome(fn, *args, limit: float = JOB_LIMIT, **kwargs):
     return res, exc
 
 
+def load_both(work: Path, what: str, data) -> tuple:
+    """``data`` loaded through a YAML file (:func:`spec.load`) and directly (:func:`spec.from_dict`):
+    the design or None from each; both agree on whether it is one.  Data YAML cannot hold (a lone
+    surrogate) is not a spec: the example is dropped."""
+    from cdpr_design.model import spec
+
+    p = fresh(work, what).with_suffix(".yaml")
+    try:
+        p.write_text(yaml.safe_dump(data, allow_unicode=True))
+    except (yaml.YAMLError, UnicodeEncodeError):
+        assume(False)
+    res, exc = outcome(spec.load, p, limit=LOAD_LIMIT)
+    assert (res is None) != (exc is None)
+    res2, _ = outcome(spec.from_dict, data, limit=LOAD_LIMIT)  # the same data without YAML in between
+    assert (res2 is None) == (res is None)
+    return res
+
+
 def strict_json(data) -> None:
     """``data`` as JSON the way the command line prints it: no NaN, no Infinity."""
     from cdpr_design.io.tables import json_text
@@ -133,17 +151,7 @@ def test_random_valid_specs_load(data):
 @fuzz(1000)
 @given(mutated_spec_data())
 def test_mutated_specs_load_or_are_refused(work, data):
-    from cdpr_design.model import spec
-
-    p = fresh(work, "spec").with_suffix(".yaml")
-    try:
-        p.write_text(yaml.safe_dump(data, allow_unicode=True))
-    except (yaml.YAMLError, UnicodeEncodeError):  # a value YAML cannot hold (a lone surrogate): not a spec
-        assume(False)
-    res, exc = outcome(spec.load, p, limit=LOAD_LIMIT)
-    assert (res is None) != (exc is None)
-    res2, exc2 = outcome(spec.from_dict, data, limit=LOAD_LIMIT)  # the same data without YAML in between
-    assert (res2 is None) == (res is None)
+    load_both(work, "spec", data)
 
 
 @fuzz(400)
@@ -464,18 +472,9 @@ def test_random_feature_specs_load(data):
 @fuzz(400)
 @given(mutated_feature_data())
 def test_mutated_feature_keys_load_or_are_refused(work, data):
-    from cdpr_design.model import spec
-
-    p = fresh(work, "feat").with_suffix(".yaml")
-    try:
-        p.write_text(yaml.safe_dump(data, allow_unicode=True))
-    except (yaml.YAMLError, UnicodeEncodeError):
-        assume(False)
-    res, exc = outcome(spec.load, p, limit=LOAD_LIMIT)
+    res = load_both(work, "feat", data)
     if res is not None:
         check_cable_models(res)
-    res2, exc2 = outcome(spec.from_dict, data, limit=LOAD_LIMIT)
-    assert (res2 is None) == (res is None)
 
 
 def pose_entry(design, at: str, kind: str) -> dict:
