@@ -160,3 +160,32 @@ def test_sigterm_during_optimize_exits_130_and_the_study_resumes(tmp_path):
                          env=subprocess_env(CDPR_DESIGN_PICTURE_WORKER="0"))
     assert res.returncode in (0, 1), res.stderr
     assert json.loads(res.stdout)["trials_done"] == total and (out / "optimize.csv").is_file()
+
+
+def test_optimize_holds_every_stop_signal_through_a_trials_record():
+    """SIGTERM (like SIGINT) during a trial's creation or record is delivered after it, to the
+    handler in place (here one raising Stop), so no trial is left RUNNING; with raise_after=False
+    it is dropped."""
+    from cdpr_design.optimize.study import _signals_held
+
+    class Stop(Exception):
+        pass
+
+    def stop(signum, frame):
+        raise Stop(signum)
+
+    old = signal.signal(signal.SIGTERM, stop)
+    try:
+        done = []
+        with pytest.raises(Stop):
+            with _signals_held():
+                os.kill(os.getpid(), signal.SIGTERM)
+                time.sleep(0.05)  # the handler would run here, were the signal not held
+                done.append("recorded")
+        assert done == ["recorded"]
+        with _signals_held(raise_after=False):
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)
+        assert signal.getsignal(signal.SIGTERM) is stop
+    finally:
+        signal.signal(signal.SIGTERM, old)

@@ -19,7 +19,7 @@ overshoot N, and a resumed run stops at the same total.
 
 Interrupted trials
 ------------------
-A trial stopped by SIGINT is told ``FAIL`` with the user attribute
+A trial stopped by SIGINT (or SIGTERM, SIGHUP) is told ``FAIL`` with the user attribute
 ``interrupted``; one stopped by SIGKILL stays ``RUNNING`` in the file.  A
 resumed run (which holds ``.optimize.lock``, so no other run is using the
 study) marks the latter failed-and-interrupted too, and queues every
@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -237,18 +238,18 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
             prepare_worker(False)  # numba (once loaded by a trial) on one thread: parallelism is across processes
         trial = None
         try:
-            with _sigint_held():  # a trial created is a trial in hand
+            with _signals_held():  # a trial created is a trial in hand
                 trial, queued = _claim(study, total, lock, interrupted, queued)
             if trial is None:
                 break
             values = {p.key: p.suggest(trial) for p in problem.space.params}
             t0 = time.perf_counter()
             outcome = evaluate(problem, job, trial.number, values)
-            with _sigint_held():  # told whole
+            with _signals_held():  # told whole
                 _tell(study, trial, problem, outcome, time.perf_counter() - t0, worker)
         except BaseException:
             if trial is not None:
-                with _sigint_held(raise_after=False), contextlib.suppress(Exception):
+                with _signals_held(raise_after=False), contextlib.suppress(Exception):
                     trial.set_user_attr("interrupted", True)
                     study.tell(trial, state=optuna.trial.TrialState.FAIL)
             raise
@@ -258,26 +259,34 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
     return done
 
 
+#: The signals a command stops on (Ctrl-C; ``kill``; a closed terminal), those this platform has.
+_STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
+
+
 @contextlib.contextmanager
-def _sigint_held(raise_after: bool = True):
-    """SIGINT (Ctrl-C, or a run stopping its workers) held while a step that must not be cut runs (a
-    trial's creation, its record in the study): raised as KeyboardInterrupt after it (``raise_after``;
-    else dropped: the caller is stopping already).  Only the main thread receives signals; elsewhere
-    nothing changes."""
-    import signal
+def _signals_held(raise_after: bool = True):
+    """The stop signals (:data:`_STOP_SIGNALS`: Ctrl-C, a run stopping its workers, ``kill``, a
+    closed terminal) held while a step that must not be cut runs (a trial's creation, its record in
+    the study): each one that came is delivered again after the step, to the handler that was there
+    before (Python's KeyboardInterrupt, the command line's, or the default action)
+    (``raise_after``; else dropped: the caller is stopping already).  Only the main thread
+    receives signals; elsewhere nothing changes."""
     import threading
 
     if threading.current_thread() is not threading.main_thread():
         yield
         return
     got = []
-    old = signal.signal(signal.SIGINT, lambda *_: got.append(True))
+    old = {s: signal.signal(s, lambda signum, _: got.append(signum)) for s in _STOP_SIGNALS}
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, old if old is not None else signal.default_int_handler)
-    if got and raise_after:
-        raise KeyboardInterrupt
+        for s, h in old.items():  # None: a handler not set from Python, put back as Python's default
+            signal.signal(s, h if h is not None else
+                          signal.default_int_handler if s == signal.SIGINT else signal.SIG_DFL)
+    if raise_after:
+        for s in dict.fromkeys(got):
+            signal.raise_signal(s)
 
 
 def _worker_main(problem: Problem, folder: str, total: int, seed: int | None, deadline: float | None,
