@@ -103,6 +103,7 @@ def main():
         os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="numba-cache-")
 
     import numba
+    from cdpr_design.kernels import parallel
 
     from cdpr_design.kernels import catenary as C
 
@@ -133,7 +134,7 @@ def main():
     per_cold = t_cold / n
     per_warm = t_warm / n
     per_scipy = t_scipy / idx.size
-    print(f"numba {numba.__version__}, {numba.get_num_threads()} threads"
+    print(f"numba {numba.__version__}, {parallel.threads()} threads"
           + ("; fresh cache (cold = compilation)" if args.fresh_cache else ""))
     print(f"kernel: {n} cables, converged {np.count_nonzero(status == C.CAT_CONVERGED)}, "
           f"Newton iterations mean {iters.mean():.2f} max {iters.max()}, "

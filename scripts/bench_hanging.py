@@ -109,6 +109,7 @@ def main():
         os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="numba-cache-")
 
     import numba
+    from cdpr_design.kernels import parallel
 
     from cdpr_design.model import spec
 
@@ -169,7 +170,7 @@ def main():
 
     per_cold, per_warm, per_scipy = t_cold / n, t_warm / n, t_scipy / idx.size
     tilt = np.degrees(np.abs(phi))
-    print(f"numba {numba.__version__}, {numba.get_num_threads()} threads"
+    print(f"numba {numba.__version__}, {parallel.threads()} threads"
           + ("; fresh cache (cold = compilation)" if args.fresh_cache else ""))
     print(f"planar2 tilt map, COM at y = {c[1]:+.3f} m: {n} positions, "
           f"{np.count_nonzero(status == K.TILT_OK)} hang stably, max tilt {np.nanmax(tilt):.2f} deg; "

@@ -331,10 +331,10 @@ def main(argv=None):
     ap.add_argument("--root", help="checkout whose command is timed (default: this one)")
     ap.add_argument("--no-cold", dest="cold", action="store_false", help="skip the cold-cache command")
     args = ap.parse_args(argv)
-    import numba
+    from cdpr_design.kernels import parallel
 
     rng = np.random.default_rng(0)
-    print(f"numba threads {numba.get_num_threads()}, load average {os.getloadavg()[0]:.2f}; command from "
+    print(f"kernel threads {parallel.threads()}, load average {os.getloadavg()[0]:.2f}; command from "
           f"{args.root or ROOT}")
     root = Path(args.root).resolve() if args.root else ROOT
     print("\nfixed costs of a process (best of --repeat, wall):")

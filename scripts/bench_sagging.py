@@ -164,9 +164,10 @@ def main():
         env["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="numba-cache-")
 
     import numba
+    from cdpr_design.kernels import parallel
 
     rng = np.random.default_rng(args.seed)
-    threads = numba.get_num_threads()
+    threads = parallel.threads()
     print(f"numba {numba.__version__}, {threads} threads, load average {os.getloadavg()[0]:.1f}"
           + ("; fresh cache (cold = compilation)" if args.fresh_cache else ""))
     for name in DESIGNS:

@@ -44,7 +44,7 @@ from cdpr_design import workspaces as ws
 ev = importlib.import_module("cdpr_design.design.evaluate")
 d = spec.load({spec!r}); cat = spec.load_catalogue()
 ws.load_kernels()  # what a worker of a big sweep does first (sweep._prepare_process)
-import numba; numba.set_num_threads(1)
+from cdpr_design.kernels import parallel; parallel.set_threads(1)
 t1 = time.perf_counter()
 ev.evaluate(d, catalogue=cat)
 t2 = time.perf_counter()

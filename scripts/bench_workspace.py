@@ -78,10 +78,10 @@ def main():
     grid = ws.make_grid(design, args.step, force=True)
     ws.run(design, step=0.1, engine="numba")  # load the kernels (cache) before timing
 
-    import numba
+    from cdpr_design.kernels import parallel
 
     print(f"planar2 static workspace, step {args.step} m: {grid.size:,} poses, "
-          f"numba threads {numba.get_num_threads()}")
+          f"kernel threads {parallel.threads()}")
     tk, (r, fk, mk, Tk) = best(lambda: rows_sweep(design, grid, "numba"), args.repeat)
     tn, (_, fn, mn, Tn) = best(lambda: rows_sweep(design, grid, "numpy"), args.repeat)
     tks, _ = best(lambda: ws.run(design, grid=grid, keep_maps=False, engine="numba"), args.repeat)

@@ -100,9 +100,9 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3, help="warm repetitions (best is kept)")
     args = ap.parse_args(argv)
     rng = np.random.default_rng(0)
-    import numba
+    from cdpr_design.kernels import parallel
 
-    print(f"numba threads: {numba.get_num_threads()}, import of cdpr_design: {t_import:.2f} s")
+    print(f"kernel threads: {parallel.threads()}, import of cdpr_design: {t_import:.2f} s")
 
     # --- 1. IPAnema 3 static sweep
     d3 = cd.load(ROOT / "designs" / "ipanema3.yaml")
@@ -133,8 +133,8 @@ def main(argv=None):
           f"orientation {list(d3.workspace.orientation)}; cold start (first sweep, "
           f"numba cache load or compile): {cold:.2f} s")
     print(f"kernel sweep CPU time: {cpu / res.poses * 1e6:.2f} us per pose (all threads); "
-          f"on {numba.get_num_threads()} idle cores that is "
-          f"{numba.get_num_threads() * res.poses / cpu:,.0f} poses/s "
+          f"on {parallel.threads()} idle cores that is "
+          f"{parallel.threads() * res.poses / cpu:,.0f} poses/s "
           f"(wall clock above is slower when other processes share the cores)")
     print(f"{'method':46s} {'poses':>9s} {'time [s]':>9s} {'poses/s':>12s} {'feasible':>9s} {'speed-up':>9s}")
     for label, npos, dt, r, frac in rows:

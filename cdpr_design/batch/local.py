@@ -12,16 +12,15 @@ Execution backends
 ------------------
 - in-process (``workers=1``);
 - a process pool (``workers > 1``, default one per core).  Workers are
-  started with ``spawn``: the kernels run numba's parallel layer, which here is
-  GNU OpenMP, and a ``fork`` after an OpenMP parallel region can deadlock the
-  child (numba's documentation, "threading layers": the GNU OpenMP runtime is
-  not fork-safe); ``spawn`` is safe whatever the parent ran before.  Workers
-  load the kernels from numba's on-disk cache (``cache=True``).
+  started with ``spawn``, which is safe whatever the parent ran before (its
+  threads, its open files, a caller's OpenMP library: a ``fork`` copies the
+  process in the middle of all that).  Workers load the kernels from numba's
+  on-disk cache (``cache=True``).
 - Dask distributed (:mod:`cdpr_design.batch.dask`).
 
-Parallelism is across variants: each worker runs numba's kernels on one
-thread (``numba.set_num_threads(1)``), which also avoids oversubscribing the
-cores.  Results do not depend on the thread count (each pose is computed on
+Parallelism is across variants: each worker runs the kernels on one
+thread (:func:`cdpr_design.kernels.parallel.set_threads`), which also avoids
+oversubscribing the cores.  Results do not depend on the thread count (each pose is computed on
 its own; the reductions are min / max / counts).  Variants travel in chunks
 so that scheduling overhead stays small.
 """
@@ -32,12 +31,12 @@ import importlib
 import itertools
 import math
 import os
-import sys
 import threading
 from dataclasses import dataclass, field, replace
 from typing import Any, Sequence
 
 from cdpr_design.batch.variants import Plan
+from cdpr_design.kernels import parallel
 
 
 JOURNAL_VERSION = 1
@@ -112,33 +111,19 @@ def evaluate_chunk(job: Job, items: Sequence[tuple[int, tuple]]) -> list[dict]:
 _WORKER_JOB: Job | None = None
 
 
-def _single_thread_kernels() -> None:
-    """Run numba's parallel kernels on one thread in this process (parallelism is across variants).
-
-    Nothing to do while numba is not loaded (small planar2 sweeps take the numpy engine)."""
-    if "numba" not in sys.modules:
-        return
-    try:
-        import numba
-
-        numba.set_num_threads(1)
-    except Exception:  # noqa: BLE001 - numba missing or layer refused: results are the same
-        pass
-
-
 def prepare_process(job: Job) -> None:
-    """The kernels loaded if the sweep is big; one numba thread (parallelism is across variants)."""
+    """The kernels loaded if the sweep is big; one kernel thread (parallelism is across variants)."""
     prepare_worker(job.kernels)
 
 
 def prepare_worker(kernels: bool) -> None:
     """A worker process set up for evaluating designs: the numba kernels loaded first
-    (``kernels``), one numba thread (parallelism is across processes)."""
+    (``kernels``), one kernel thread (parallelism is across processes)."""
     if kernels:
         from cdpr_design import workspaces as ws
 
         ws.load_kernels()
-    _single_thread_kernels()
+    parallel.set_threads(1)
 
 
 def _init_worker(job: Job) -> None:
@@ -207,19 +192,10 @@ class RunStats:
 
 
 def run_serial(job: Job, todo, emit) -> None:
-    numba = sys.modules.get("numba")
-    before = numba.get_num_threads() if numba is not None else None
-    prepare_process(job)
-    try:
+    with parallel.threads_kept():
+        prepare_process(job)
         for i, vals in todo:
             emit([evaluate_variant(job, i, vals)])
-    finally:
-        numba = sys.modules.get("numba")
-        if numba is not None:
-            try:
-                numba.set_num_threads(before if before is not None else numba.config.NUMBA_NUM_THREADS)
-            except Exception:  # noqa: BLE001
-                pass
 
 
 def run_pool(job: Job, todo, w: int, chunk: int | None, emit, stats: RunStats, start_method: str) -> None:

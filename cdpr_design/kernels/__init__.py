@@ -2,8 +2,11 @@
 
 Kernels take contiguous float64 arrays in SI units and never model objects;
 the jit options are set once in :mod:`cdpr_design.kernels._jit`.  Importing
-this package imports numba (about 0.4 s): the layers above import it on first
-use only.
+a kernel imports numba (about 0.4 s); this package itself is cheap and loads
+each submodule the first time one of its names is used
+(``from cdpr_design import kernels as K; K.sweep_grid``), so the layers above
+can import it at the top and :mod:`cdpr_design.kernels.parallel` (the thread
+count) needs no numba.
 
 =================  ==========================================================
 module             what
@@ -16,19 +19,46 @@ module             what
 ``pose``           one pose for any m, n: feasibility, margin, tensions
 ``interference``   cable / effector / frame contacts
 ``sweep``          grid and point sweeps, per-chunk statistics
+``parallel``       blocks of rows on threads (every parallel kernel)
 ``hanging``        hanging orientation of a planar two-cable body; statics at per-pose orientations
 =================  ==========================================================
 """
 
-from cdpr_design.kernels.geometry import (fill_column, pulley_exit, rotate_attachments, rotation,
-                                          structure_matrix, structure_matrix_pulley)
-from cdpr_design.kernels.hsm import (CLOSURE_TOL, basis_factor, facet_normal, hsm_enumerate, hsm_factored,
-                                     hsm_margin, make_scratch, square_eval)
-from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
-from cdpr_design.kernels.interference import (HIT_CABLE_CABLE, HIT_CABLE_EFFECTOR, HIT_CABLE_FRAME,
-                                              HIT_EFFECTOR_FRAME, cable_cable_dist, cable_effector_chord,
-                                              interference_pose, seg_seg_dist2, segment_box_chord)
-from cdpr_design.kernels.linalg import RANK_TOL, det_small, householder_qr, inverse_small
-from cdpr_design.kernels.pose import KIND_STATIC, KIND_WRENCH_CLOSURE, KIND_WRENCH_FEASIBLE, eval_general, eval_pose
-from cdpr_design.kernels.sweep import chunk_stats, sweep_grid, sweep_grid_planar2, sweep_points
-from cdpr_design.kernels.tension_qp import QP_TOL, goldfarb_idnani, min_norm_tensions, null_space_setup
+import importlib
+
+#: name -> submodule, for the names used as ``kernels.<name>``
+_EXPORTS = {
+    **dict.fromkeys(("fill_column", "pulley_exit", "rotate_attachments", "rotation", "structure_matrix",
+                     "structure_matrix_pulley"), "geometry"),
+    **dict.fromkeys(("CLOSURE_TOL", "basis_factor", "facet_normal", "hsm_enumerate", "hsm_factored",
+                     "hsm_margin", "make_scratch", "square_eval"), "hsm"),
+    **dict.fromkeys(("hsm_one", "hsm_two"), "hsm_small"),
+    **dict.fromkeys(("HIT_CABLE_CABLE", "HIT_CABLE_EFFECTOR", "HIT_CABLE_FRAME", "HIT_EFFECTOR_FRAME",
+                     "cable_cable_dist", "cable_effector_chord", "interference_pose", "seg_seg_dist2",
+                     "segment_box_chord"), "interference"),
+    **dict.fromkeys(("RANK_TOL", "det_small", "householder_qr", "inverse_small"), "linalg"),
+    **dict.fromkeys(("KIND_STATIC", "KIND_WRENCH_CLOSURE", "KIND_WRENCH_FEASIBLE", "eval_general",
+                     "eval_pose"), "pose"),
+    **dict.fromkeys(("chunk_stats", "sweep_grid", "sweep_grid_planar2", "sweep_points"), "sweep"),
+    **dict.fromkeys(("QP_TOL", "goldfarb_idnani", "min_norm_tensions", "null_space_setup"), "tension_qp"),
+}
+
+_SUBMODULES = {"cable_shape", "catenary", "geometry", "hanging", "hsm", "hsm_small", "interference", "linalg",
+               "parallel", "pose", "sag_path", "sagging", "sweep", "tension_qp"}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(f"{__name__}.{_EXPORTS[name]}"), name)
+    elif name in _SUBMODULES:
+        value = importlib.import_module(f"{__name__}.{name}")
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS) | _SUBMODULES)

@@ -48,10 +48,10 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_parallel
+from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels.parallel import run_blocks
 
 #: Status codes of :func:`catenary_inverse`.
 CAT_CONVERGED = 0
@@ -654,34 +654,34 @@ def catenary_sag(H, VB, L0, w, EA):
 # batched forms
 # ---------------------------------------------------------------------------
 
-@njit_parallel
 def catenary_ends_batch(H, VB, L0, w, EA):
-    """:func:`catenary_ends` over arrays of equal length n: returns (X, Z)."""
-    n = H.shape[0]
-    X = np.empty(n)
-    Z = np.empty(n)
-    for i in nb.prange(n):
-        X[i], Z[i] = catenary_ends(H[i], VB[i], L0[i], w[i], EA[i])
+    """:func:`catenary_ends` over arrays of equal length n (blocks on threads): returns (X, Z)."""
+    X, Z = np.empty(H.shape[0]), np.empty(H.shape[0])
+    run_blocks(_ends_block, H.shape[0], H, VB, L0, w, EA, X, Z, grain=1024)
     return X, Z
 
 
-@njit_parallel
+@njit
+def _ends_block(k0, k1, H, VB, L0, w, EA, X, Z):
+    for i in range(k0, k1):
+        X[i], Z[i] = catenary_ends(H[i], VB[i], L0[i], w[i], EA[i])
+
+
 def catenary_inverse_batch(X, Z, L0, w, EA, H0, VB0, tol, maxit):
     """:func:`catenary_inverse` over n cables (arrays of equal length n; ``H0``,
-    ``VB0`` may hold NaN for the built-in start).  Returns (H, VB, status,
-    iterations) as arrays (status int8, iterations int32)."""
+    ``VB0`` may hold NaN for the built-in start), in blocks on threads.  Returns
+    (H, VB, status, iterations) as arrays (status int8, iterations int32)."""
     n = X.shape[0]
-    H = np.empty(n)
-    VB = np.empty(n)
-    status = np.empty(n, dtype=np.int8)
-    iters = np.empty(n, dtype=np.int32)
-    for i in nb.prange(n):
-        h, v, st, k = catenary_inverse(X[i], Z[i], L0[i], w[i], EA[i], H0[i], VB0[i], tol, maxit)
-        H[i] = h
-        VB[i] = v
-        status[i] = st
-        iters[i] = k
+    H, VB, status, iters = np.empty(n), np.empty(n), np.empty(n, dtype=np.int8), np.empty(n, dtype=np.int32)
+    run_blocks(_inverse_block, n, X, Z, L0, w, EA, H0, VB0, tol, maxit, H, VB, status, iters, grain=256)
     return H, VB, status, iters
+
+
+@njit
+def _inverse_block(k0, k1, X, Z, L0, w, EA, H0, VB0, tol, maxit, H, VB, status, iters):
+    for i in range(k0, k1):
+        H[i], VB[i], status[i], iters[i] = catenary_inverse(X[i], Z[i], L0[i], w[i], EA[i], H0[i], VB0[i], tol,
+                                                            maxit)
 
 
 @njit

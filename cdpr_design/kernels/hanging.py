@@ -47,10 +47,10 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_parallel
+from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.geometry import rotate_attachments, structure_matrix
 from cdpr_design.kernels.hsm import make_scratch
 from cdpr_design.kernels.pose import eval_general, eval_pose
@@ -288,9 +288,8 @@ def hanging_tilt(A, B, c, mass, gx, gy, px, py, coef, roots):
     return math.nan, math.nan, math.nan, math.nan, TILT_NO_BALANCE, nbal
 
 
-@njit_parallel
 def hanging_tilt_batch(A, B, c, mass, g, P):
-    """:func:`hanging_tilt` at every position P[k] = (x, y[, ...]) [m].
+    """:func:`hanging_tilt` at every position P[k] = (x, y[, ...]) [m] (blocks on threads).
 
     ``A``, ``B`` (2, >=2) outlets and attachments [m] (x, y used), ``c`` (>=2)
     centre of mass in platform coordinates [m], ``mass`` [kg], ``g`` (>=2)
@@ -303,11 +302,16 @@ def hanging_tilt_batch(A, B, c, mass, g, P):
     h = np.empty(k)
     status = np.empty(k, dtype=np.int8)
     nbal = np.empty(k, dtype=np.int8)
-    gx = g[0]
-    gy = g[1]
-    for i in nb.prange(k):
-        coef = np.empty(5)
-        roots = np.empty(4)
+    run_blocks(_tilt_block, k, A, B, c, float(mass), float(g[0]), float(g[1]), P, phi, t, h, status, nbal,
+               grain=512)
+    return phi, t, h, status, nbal
+
+
+@njit
+def _tilt_block(k0, k1, A, B, c, mass, gx, gy, P, phi, t, h, status, nbal):
+    coef = np.empty(5)
+    roots = np.empty(4)
+    for i in range(k0, k1):
         p_, t1, t2, hh, st, nb_ = hanging_tilt(A, B, c, mass, gx, gy, P[i, 0], P[i, 1], coef, roots)
         phi[i] = p_
         t[i, 0] = t1
@@ -315,10 +319,8 @@ def hanging_tilt_batch(A, B, c, mass, g, P):
         h[i] = hh
         status[i] = st
         nbal[i] = nb_
-    return phi, t, h, status, nbal
 
 
-@njit_parallel
 def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths):
     """Feasibility, capacity margin and tensions at positions each with its own orientation.
 
@@ -329,42 +331,43 @@ def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, mar
     (the effector cannot hang there) gets feasible 0 and NaN margin, tensions
     and lengths.  Outputs as :func:`~cdpr_design.kernels.sweep.sweep_grid`.
     """
-    count = P.shape[0]
+    run_blocks(rotated_block, P.shape[0], P, R, A, B, rows, wreq, tmin, tmax, combos, kind,
+               feasible, margin, tensions, lengths)
+
+
+@njit
+def rotated_block(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths):
+    """Rows k0..k1-1 of :func:`eval_rotated`, with their own scratch."""
     n = rows.shape[0]
     m = A.shape[0]
-    nblocks = min(count, 256)
-    if nblocks == 0:
-        return
-    bsize = (count + nblocks - 1) // nblocks
-    for b in nb.prange(nblocks):
-        W = np.empty((n, m))
-        t = np.empty(m)
-        L = np.empty(m)
-        Rb = np.empty((m, 3))
-        scr = make_scratch(n, m, wreq.shape[1])
-        for k in range(b * bsize, min(count, (b + 1) * bsize)):
-            if not np.isfinite(R[k, 0, 0]):
-                feasible[k] = 0
-                margin[k] = np.nan
-                for i in range(m):
-                    tensions[k, i] = np.nan
-                    lengths[k, i] = np.nan
-                continue
-            rotate_attachments(R[k], B, Rb)
-            ok = structure_matrix(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
+    W = np.empty((n, m))
+    t = np.empty(m)
+    L = np.empty(m)
+    Rb = np.empty((m, 3))
+    scr = make_scratch(n, m, wreq.shape[1])
+    for k in range(k0, k1):
+        if not np.isfinite(R[k, 0, 0]):
+            feasible[k] = 0
+            margin[k] = np.nan
             for i in range(m):
-                lengths[k, i] = L[i]
-            if not ok:
-                feasible[k] = 0
-                margin[k] = np.nan
-                for i in range(m):
-                    tensions[k, i] = np.nan
-                continue
-            if m == n:
-                f, mg = eval_pose(W, wreq[k], tmin, tmax, combos, kind, t)
-            else:
-                f, mg = eval_general(W, wreq[k], tmin, tmax, combos, kind, t, scr)
-            feasible[k] = 1 if f else 0
-            margin[k] = mg + 0.0
+                tensions[k, i] = np.nan
+                lengths[k, i] = np.nan
+            continue
+        rotate_attachments(R[k], B, Rb)
+        ok = structure_matrix(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
+        for i in range(m):
+            lengths[k, i] = L[i]
+        if not ok:
+            feasible[k] = 0
+            margin[k] = np.nan
             for i in range(m):
-                tensions[k, i] = t[i]
+                tensions[k, i] = np.nan
+            continue
+        if m == n:
+            f, mg = eval_pose(W, wreq[k], tmin, tmax, combos, kind, t)
+        else:
+            f, mg = eval_general(W, wreq[k], tmin, tmax, combos, kind, t, scr)
+        feasible[k] = 1 if f else 0
+        margin[k] = mg + 0.0
+        for i in range(m):
+            tensions[k, i] = t[i]

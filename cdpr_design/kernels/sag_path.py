@@ -12,14 +12,13 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
-from cdpr_design.kernels._jit import njit_parallel
+from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.sagging import SAG_NO_TENSIONS, SAG_OK, make_pose_outputs, make_sag_scratch, sag_pose
 
 
-@njit_parallel
 def sag_samples(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
                 tensions, outlet, L0, sag, lengths, status, feasible):
     """Sagging inverse statics of k samples.
@@ -35,38 +34,40 @@ def sag_samples(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
     kernel's SAG_* code); ``feasible`` (k,) uint8: converged with tensions
     within the bounds along the whole cable.
     """
-    k = P.shape[0]
+    run_blocks(sag_samples_block, P.shape[0], P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
+               tensions, outlet, L0, sag, lengths, status, feasible, grain=4)
+
+
+@njit
+def sag_samples_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
+                      tensions, outlet, L0, sag, lengths, status, feasible):
+    """Samples k0..k1-1 of :func:`sag_samples`, with their own scratch."""
     m = A.shape[0]
     n = rows.shape[0]
-    nblocks = min(k, 64)
-    if nblocks == 0:
-        return
-    bsize = (k + nblocks - 1) // nblocks
-    for b in nb.prange(nblocks):
-        W, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, 1)
-        zero = np.zeros(m)
-        t, ta, l0, sg, L = make_pose_outputs(m)
-        wj = np.empty((1, n))
-        for j in range(b * bsize, min(k, (b + 1) * bsize)):
-            for r in range(n):
-                wj[0, r] = wreq[j, r]
-            Rj = Rb[j]
-            st, ok, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, tmin, tmax,
-                                    combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work)
-            solved = ok
-            if st == SAG_OK and not ok:
-                # converged but outside the bounds: the same pose under [0, inf)
-                st, solved, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, zero,
-                                            inf_hi, combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi,
-                                            tq, scr, work)
-                if st == SAG_OK and not solved:
-                    st = SAG_NO_TENSIONS
-            status[j] = st
-            feasible[j] = 1 if ok else 0
-            for i in range(m):
-                # sag_pose may leave its scratch in the outputs when it gives up: NaN unless solved
-                tensions[j, i] = t[i] if solved else math.nan
-                outlet[j, i] = ta[i] if solved else math.nan
-                L0[j, i] = l0[i] if solved else math.nan
-                sag[j, i] = sg[i] if solved else math.nan
-                lengths[j, i] = L[i]
+    W, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, 1)
+    zero = np.zeros(m)
+    t, ta, l0, sg, L = make_pose_outputs(m)
+    wj = np.empty((1, n))
+    for j in range(k0, k1):
+        for r in range(n):
+            wj[0, r] = wreq[j, r]
+        Rj = Rb[j]
+        st, ok, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, tmin, tmax,
+                                combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work)
+        solved = ok
+        if st == SAG_OK and not ok:
+            # converged but outside the bounds: the same pose under [0, inf)
+            st, solved, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, zero,
+                                        inf_hi, combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi,
+                                        tq, scr, work)
+            if st == SAG_OK and not solved:
+                st = SAG_NO_TENSIONS
+        status[j] = st
+        feasible[j] = 1 if ok else 0
+        for i in range(m):
+            # sag_pose may leave its scratch in the outputs when it gives up: NaN unless solved
+            tensions[j, i] = t[i] if solved else math.nan
+            outlet[j, i] = ta[i] if solved else math.nan
+            L0[j, i] = l0[i] if solved else math.nan
+            sag[j, i] = sg[i] if solved else math.nan
+            lengths[j, i] = L[i]

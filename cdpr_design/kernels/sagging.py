@@ -36,10 +36,10 @@ from __future__ import annotations
 
 import math
 
-import numba as nb
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_parallel
+from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.cable_shape import cable_for_tension, least_tension
 from cdpr_design.kernels.catenary import catenary_sag
 from cdpr_design.kernels.geometry import fill_column, grid_index
@@ -501,7 +501,6 @@ def make_pose_outputs(m):
     return np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
 
 
-@njit_parallel
 def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
                        combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status):
     """:func:`cdpr_design.kernels.sweep.sweep_grid` with sagging cables (:func:`sag_pose`).
@@ -510,36 +509,36 @@ def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA,
     ``L0`` [m], ``sag`` [m]; ``status`` (count,) int8.  Every pose starts from
     its own straight-cable solution, so rows do not depend on the chunking.
     """
+    run_blocks(sagging_grid_block, count, start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
+               combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, grain=16)
+
+
+@njit
+def sagging_grid_block(k0, k1, start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
+                       combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status):
+    """Rows k0..k1-1 of :func:`sweep_grid_sagging`, with their own scratch."""
     n = rows.shape[0]
     m = A.shape[0]
-    nblocks = min(count, 256)
-    if nblocks == 0:
-        return
-    bsize = (count + nblocks - 1) // nblocks
     ny = shape[1]
     nz = shape[2]
-    for b in nb.prange(nblocks):
-        Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
-        t, ta, l0, sg, L = make_pose_outputs(m)
-        k0 = b * bsize
-        k1 = min(count, k0 + bsize)
-        for k in range(k0, k1):
-            ix, iy, iz = grid_index(start + k, ny, nz)
-            st, f, mg, _ = sag_pose(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2],
-                                    Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-                                    t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)
-            status[k] = st
-            feasible[k] = 1 if f else 0
-            margin[k] = mg
-            for i in range(m):
-                tensions[k, i] = t[i]
-                lengths[k, i] = L[i]
-                outlet[k, i] = ta[i]
-                L0[k, i] = l0[i]
-                sag[k, i] = sg[i]
+    Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
+    t, ta, l0, sg, L = make_pose_outputs(m)
+    for k in range(k0, k1):
+        ix, iy, iz = grid_index(start + k, ny, nz)
+        st, f, mg, _ = sag_pose(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2],
+                                Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
+                                t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)
+        status[k] = st
+        feasible[k] = 1 if f else 0
+        margin[k] = mg
+        for i in range(m):
+            tensions[k, i] = t[i]
+            lengths[k, i] = L[i]
+            outlet[k, i] = ta[i]
+            L0[k, i] = l0[i]
+            sag[k, i] = sg[i]
 
 
-@njit_parallel
 def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
                feasible, Ws, tensions, outlet, status):
     """:func:`sag_pose` at positions ``P`` (k, 3) [m] (one orientation, in ``Rb``).
@@ -549,24 +548,26 @@ def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
     (k, m) [N], ``status`` (k,) int8.  For the sizing, which needs the
     structure matrix of each task pose.
     """
+    run_blocks(sag_points_block, P.shape[0], P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
+               feasible, Ws, tensions, outlet, status, grain=16)
+
+
+@njit
+def sag_points_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
+                     feasible, Ws, tensions, outlet, status):
+    """Rows k0..k1-1 of :func:`sag_points`, with their own scratch."""
     n = rows.shape[0]
     m = A.shape[0]
-    k = P.shape[0]
-    nblocks = min(k, 256)
-    if nblocks == 0:
-        return
-    bsize = (k + nblocks - 1) // nblocks
-    for b in nb.prange(nblocks):
-        Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
-        t, ta, l0, sg, L = make_pose_outputs(m)
-        for j in range(b * bsize, min(k, (b + 1) * bsize)):
-            st, f, mg, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rb, A, rows, up, w, EA, wreq, tmin, tmax,
-                                    combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)
-            status[j] = st
-            feasible[j] = 1 if f else 0
-            for r in range(n):
-                for i in range(m):
-                    Ws[j, r, i] = Wb[r, i]
+    Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
+    t, ta, l0, sg, L = make_pose_outputs(m)
+    for j in range(k0, k1):
+        st, f, mg, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rb, A, rows, up, w, EA, wreq, tmin, tmax,
+                                combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)
+        status[j] = st
+        feasible[j] = 1 if f else 0
+        for r in range(n):
             for i in range(m):
-                tensions[j, i] = t[i]
-                outlet[j, i] = ta[i]
+                Ws[j, r, i] = Wb[r, i]
+        for i in range(m):
+            tensions[j, i] = t[i]
+            outlet[j, i] = ta[i]

@@ -49,6 +49,7 @@ from pathlib import Path
 from typing import Callable
 
 from cdpr_design.batch.local import prepare_worker
+from cdpr_design.kernels import parallel
 from cdpr_design.errors import InputError
 from cdpr_design.model.limits import SEED_LIMIT
 from cdpr_design.optimize.problem import Problem, evaluate
@@ -235,7 +236,7 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
         if parent is not None and os.getppid() != parent:
             break  # the run was killed: leave the rest to a resumed run
         if single_thread:
-            prepare_worker(False)  # numba (once loaded by a trial) on one thread: parallelism is across processes
+            prepare_worker(False)  # the kernels on one thread: parallelism is across processes
         trial = None
         try:
             with _signals_held():  # a trial created is a trial in hand
@@ -426,7 +427,7 @@ def _run_pool(problem, folder, total, workers, seed, deadline, study, progress, 
         futures = [ex.submit(_worker_main, problem, str(folder), total,
                              None if seed is None else seed + k, deadline, k, os.getpid())
                    for k in range(1, workers)]
-        with _numba_threads_kept():
+        with parallel.threads_kept():  # this process's trials ran on one thread, the command goes on as before
             here = work(problem, folder, total, seed, deadline, 0, single_thread=True, on_trial=tick,
                         store=study._storage)
         pending = set(futures)
@@ -440,23 +441,6 @@ def _run_pool(problem, folder, total, workers, seed, deadline, study, progress, 
         _stop(children)
         ex.shutdown(wait=False, cancel_futures=True)
         raise
-
-
-@contextlib.contextmanager
-def _numba_threads_kept():
-    """numba's thread count in this process as it was after this process evaluated as one worker of
-    several (on one thread)."""
-    import sys
-
-    before = sys.modules["numba"].get_num_threads() if "numba" in sys.modules else None
-    try:
-        yield
-    finally:
-        if "numba" in sys.modules:
-            import numba
-
-            with contextlib.suppress(Exception):
-                numba.set_num_threads(before if before is not None else numba.config.NUMBA_NUM_THREADS)
 
 
 def _stop(processes, grace_s: float = 10.0) -> None:
