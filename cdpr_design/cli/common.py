@@ -165,31 +165,53 @@ def show_progress(quiet: bool) -> bool:
     return not quiet and err.is_terminal
 
 
+#: A stage that has shown nothing for this long shows its description with a moving bar [s].
+SILENT_S = 1.5
+
+
 @contextmanager
 def progress_bar(description: str, quiet: bool, min_total: int = 0):
     """Yields a ``progress(done, total)`` callback drawing a rich bar on stderr.
 
-    Off when stderr is not a terminal, with ``--quiet``, or for work smaller
-    than ``min_total`` items (that finishes in well under a second).
+    Off when stderr is not a terminal or with ``--quiet``.  Work smaller than
+    ``min_total`` items (that finishes in well under a second) gets no bar
+    of its own; a stage still running after :data:`SILENT_S` seconds without
+    one (a small sweep that turned out slow, numba compiling the kernels on a
+    machine's first run) shows its description with a moving bar, so the
+    terminal never looks stuck.
     """
     if not show_progress(quiet):
         yield None
         return
+    import threading
+
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                   TimeRemainingColumn(), console=err, transient=True) as prog:
         task = None
+        lock = threading.Lock()
+
+        def shown(total=None):
+            nonlocal task
+            with lock:
+                if task is None:
+                    task = prog.add_task(description, total=total)
+                return task
+
+        timer = threading.Timer(SILENT_S, shown)
+        timer.daemon = True
+        timer.start()
 
         def cb(done, total):
-            nonlocal task
             if total < min_total:
                 return
-            if task is None:
-                task = prog.add_task(description, total=total)
-            prog.update(task, completed=done)
+            prog.update(shown(total), total=total, completed=done)
 
-        yield cb
+        try:
+            yield cb
+        finally:
+            timer.cancel()
 
 
 def bars(quiet: bool, min_total: int = 0):

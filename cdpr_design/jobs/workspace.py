@@ -111,6 +111,10 @@ def finish_workspace(out: OutputDir, result, pending, timings: Timings) -> None:
     out.write_json("summary.json", result.summary())
 
 
+#: What the load stage says while it runs (shown once it has taken a while).
+LOAD_HINT = "a first run compiles them: about a minute"
+
+
 def _sweep(design, grid, kind, collisions, orientations, engine, progress, writer, timings, max_tilt=None):
     """The grid sweep, each chunk handed to ``writer`` (a background ColumnWriter)."""
     from cdpr_design import workspaces as ws
@@ -123,7 +127,8 @@ def _sweep(design, grid, kind, collisions, orientations, engine, progress, write
         writer.write(workspace_columns(design, chunk))
         waited += time.perf_counter() - t
 
-    with timings.phase("load_s"):  # numba's start-up, apart from the sweep's time
+    # numba's start-up, apart from the sweep's time (a machine's first run compiles the kernels)
+    with timings.phase("load_s"), stage(progress, f"loading the kernels ({LOAD_HINT})"):
         engine = ws.warm_up(design, kind, grid, orientations, collisions, engine, max_tilt)
     t0 = time.perf_counter()
     with stage(progress, f"workspace {design.name}") as cb:
