@@ -8,6 +8,11 @@ failed a check it was asked to pass (exit 1).
 from __future__ import annotations
 
 import reprlib
+import signal
+
+#: The signals every command stops on, cleanly, as on Ctrl-C: SIGINT, and SIGTERM (``kill``, a job
+#: scheduler, ``timeout``) and SIGHUP (a closed terminal) where the platform has them.
+STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
 
 #: Widest quotation of an offending value in a message (characters).
 QUOTE_WIDTH = 80

@@ -21,8 +21,10 @@ import signal
 import threading
 from contextlib import contextmanager
 
-#: The signals treated as an interrupt besides SIGINT (those this platform has).
-SIGNALS = tuple(s for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)) if s is not None)
+from cdpr_design.errors import STOP_SIGNALS
+
+#: The signals treated as an interrupt besides SIGINT (Python's own KeyboardInterrupt).
+SIGNALS = tuple(s for s in STOP_SIGNALS if s != signal.SIGINT)
 
 
 class Interrupted(KeyboardInterrupt):

@@ -16,7 +16,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, NamedTuple
 
-from cdpr_design.errors import InputError
+from cdpr_design.errors import STOP_SIGNALS, InputError
 from cdpr_design.io.files import OutputDir
 from cdpr_design.io.tables import fmt
 from cdpr_design.jobs.common import output_dir
@@ -62,10 +62,6 @@ def _endpoint(design, test_plc: str | None, local_net_id: str | None) -> _Endpoi
     return _Endpoint(host, design.plc.ams_net_id, design.plc.port, local_net_id)
 
 
-#: Signals that stop the bridge cleanly (the summary and the log written, exit 130): Ctrl-C, and
-#: SIGTERM / SIGHUP (a job scheduler, a closed terminal) where the platform has them.
-STOP_SIGNALS = tuple(s for s in (signal.SIGINT, getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None))
-                     if s is not None)
 
 
 @contextmanager

@@ -50,7 +50,7 @@ from typing import Callable
 
 from cdpr_design.batch.local import prepare_worker
 from cdpr_design.kernels import parallel
-from cdpr_design.errors import InputError
+from cdpr_design.errors import STOP_SIGNALS, InputError
 from cdpr_design.model.limits import SEED_LIMIT
 from cdpr_design.optimize.problem import Problem, evaluate
 
@@ -260,13 +260,9 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
     return done
 
 
-#: The signals a command stops on (Ctrl-C; ``kill``; a closed terminal), those this platform has.
-_STOP_SIGNALS = tuple(getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n))
-
-
 @contextlib.contextmanager
 def _signals_held(raise_after: bool = True):
-    """The stop signals (:data:`_STOP_SIGNALS`: Ctrl-C, a run stopping its workers, ``kill``, a
+    """The stop signals (:data:`cdpr_design.errors.STOP_SIGNALS`: Ctrl-C, a run stopping its workers, ``kill``, a
     closed terminal) held while a step that must not be cut runs (a trial's creation, its record in
     the study): each one that came is delivered again after the step, to the handler that was there
     before (Python's KeyboardInterrupt, the command line's, or the default action)
@@ -278,7 +274,7 @@ def _signals_held(raise_after: bool = True):
         yield
         return
     got = []
-    old = {s: signal.signal(s, lambda signum, _: got.append(signum)) for s in _STOP_SIGNALS}
+    old = {s: signal.signal(s, lambda signum, _: got.append(signum)) for s in STOP_SIGNALS}
     try:
         yield
     finally:
