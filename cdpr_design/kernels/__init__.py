@@ -38,7 +38,7 @@ _EXPORTS = {
                      "segment_box_chord"), "interference"),
     **dict.fromkeys(("RANK_TOL", "det_small", "householder_qr", "inverse_small"), "linalg"),
     **dict.fromkeys(("KIND_STATIC", "KIND_WRENCH_CLOSURE", "KIND_WRENCH_FEASIBLE", "eval_general",
-                     "eval_pose"), "pose"),
+                     "eval_pose", "eval_square"), "pose"),
     **dict.fromkeys(("chunk_stats", "sweep_grid", "sweep_grid_planar2", "sweep_points"), "sweep"),
     **dict.fromkeys(("QP_TOL", "goldfarb_idnani", "min_norm_tensions", "null_space_setup"), "tension_qp"),
 }

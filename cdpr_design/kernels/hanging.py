@@ -53,7 +53,7 @@ from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.geometry import rotate_attachments, structure_matrix
 from cdpr_design.kernels.hsm import make_scratch
-from cdpr_design.kernels.pose import eval_general, eval_pose
+from cdpr_design.kernels.pose import eval_general, eval_square
 
 #: A stable equilibrium with both tensions >= 0 was found.
 TILT_OK = 0
@@ -364,7 +364,7 @@ def rotated_block(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feas
                 tensions[k, i] = np.nan
             continue
         if m == n:
-            f, mg = eval_pose(W, wreq[k], tmin, tmax, combos, kind, t)
+            f, mg = eval_square(W, wreq[k], tmin, tmax, kind, t)
         else:
             f, mg = eval_general(W, wreq[k], tmin, tmax, combos, kind, t, scr)
         feasible[k] = 1 if f else 0

@@ -86,24 +86,37 @@ def eval_pose(W, wreq, tmin, tmax, combos, kind, t_out):
     (feasible, margin) : margin is NaN where rank W < n.
     """
     n, m = W.shape
-    nv = wreq.shape[0] if kind == KIND_WRENCH_FEASIBLE else 1
-    for i in range(m):
-        t_out[i] = np.nan
     if m == n:
-        rank_ok, margin = square_eval(W, wreq[:nv], tmin, tmax, t_out)
-        if not rank_ok:
-            return False, np.nan
-        # t = W^-1 w is unique: it is the tension distribution where it
-        # respects the bounds, and there is none otherwise
-        for i in range(m):
-            if not (tmin[i] <= t_out[i] <= tmax[i]):
-                for j in range(m):
-                    t_out[j] = np.nan
-                break
-        # m = n columns can never positively span R^n: no wrench closure
-        feasible = kind != KIND_WRENCH_CLOSURE and margin >= 0.0
-        return feasible, margin
+        return eval_square(W, wreq, tmin, tmax, kind, t_out)
     # any m != n: basis-factored HSM + exact Goldfarb-Idnani min-norm QP
     # (allocates its scratch: sweeps call eval_general with per-block scratch)
     return eval_general(W, wreq, tmin, tmax, combos, kind, t_out,
                         make_scratch(n, m, wreq.shape[0]))
+
+
+@njit
+def eval_square(W, wreq, tmin, tmax, kind, t_out):
+    """:func:`eval_pose` for a square W (m = n): the tensions t = W^-1 w are unique.
+
+    A kernel that handles any m calls this for m = n and :func:`eval_general`
+    (with its own scratch) otherwise, rather than :func:`eval_pose`: each
+    compiled function carries the code of everything it calls, so going
+    through ``eval_pose`` would compile ``eval_general`` into it twice.
+    """
+    m = W.shape[1]
+    nv = wreq.shape[0] if kind == KIND_WRENCH_FEASIBLE else 1
+    for i in range(m):
+        t_out[i] = np.nan
+    rank_ok, margin = square_eval(W, wreq[:nv], tmin, tmax, t_out)
+    if not rank_ok:
+        return False, np.nan
+    # t = W^-1 w is unique: it is the tension distribution where it
+    # respects the bounds, and there is none otherwise
+    for i in range(m):
+        if not (tmin[i] <= t_out[i] <= tmax[i]):
+            for j in range(m):
+                t_out[j] = np.nan
+            break
+    # m = n columns can never positively span R^n: no wrench closure
+    feasible = kind != KIND_WRENCH_CLOSURE and margin >= 0.0
+    return feasible, margin

@@ -44,7 +44,7 @@ from cdpr_design.kernels.cable_shape import cable_for_tension, least_tension
 from cdpr_design.kernels.catenary import catenary_sag
 from cdpr_design.kernels.geometry import fill_column, grid_index
 from cdpr_design.kernels.hsm import make_scratch
-from cdpr_design.kernels.pose import eval_general, eval_pose
+from cdpr_design.kernels.pose import eval_general, eval_square
 from cdpr_design.kernels.tension_qp import min_norm_tensions
 
 #: Status of a pose (``status`` column of a sagging sweep).
@@ -314,7 +314,7 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
         hi[i] = cw[i, _HI]
     n = W.shape[0]
     if m == n:
-        feasible, margin = eval_pose(W, wreq, lo, hi, combos, kind, t)
+        feasible, margin = eval_square(W, wreq, lo, hi, kind, t)
     else:
         feasible, margin = eval_general(W, wreq, lo, hi, combos, kind, t, scr)
     feasible = feasible and bounded == 2

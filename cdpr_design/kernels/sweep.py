@@ -11,7 +11,7 @@ from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.linalg import RANK_TOL
 from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
 from cdpr_design.kernels.hsm import make_scratch
-from cdpr_design.kernels.pose import eval_general, eval_pose
+from cdpr_design.kernels.pose import eval_general, eval_square
 from cdpr_design.kernels.interference import interference_pose
 from cdpr_design.kernels.parallel import run_blocks
 
@@ -58,7 +58,7 @@ def grid_block(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax,
                 tensions[k, i] = np.nan
             continue
         if m == n:
-            f, mg = eval_pose(W, wreq, tmin, tmax, combos, kind, t)
+            f, mg = eval_square(W, wreq, tmin, tmax, kind, t)
         else:
             f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr)
         feasible[k] = 1 if f else 0
@@ -207,6 +207,7 @@ def points_block(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, comb
     s0 = np.empty(3)
     s1 = np.empty(3)
     cp = np.empty(3)
+    scr = make_scratch(n, m, wreq.shape[0])
     for k in range(k0, k1):
         px, py, pz = P[k, 0], P[k, 1], P[k, 2]
         ok = structure_matrix_pulley(px, py, pz, Rb, A, K, Eref, rad, rows, W, L, C)
@@ -227,7 +228,10 @@ def points_block(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, comb
             for i in range(m):
                 tensions[k, i] = np.nan
             continue
-        f, mg = eval_pose(W, wreq, tmin, tmax, combos, kind, t)
+        if m == n:
+            f, mg = eval_square(W, wreq, tmin, tmax, kind, t)
+        else:
+            f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr)
         feasible[k] = 1 if f else 0
         margin[k] = mg + 0.0  # -0.0 -> 0.0: one zero in the CSV, whatever the engine
         for i in range(m):
