@@ -236,7 +236,7 @@ def test_engine_choice(monkeypatch):
     assert eng.use_numpy("numpy", True, 10)
     assert not eng.use_numpy("numba", True, 10)
     # auto: numpy only while the kernels are not loaded, and only for grids numba would not repay
-    monkeypatch.delitem(__import__("sys").modules, "cdpr_design.kernels")
+    monkeypatch.delitem(__import__("sys").modules, eng.LOADED, raising=False)
     assert eng.use_numpy("auto", True, eng.NUMPY_MAX_POSES)
     assert not eng.use_numpy("auto", True, eng.NUMPY_MAX_POSES + 1)
     assert not eng.use_numpy("auto", False, 10)
@@ -290,6 +290,21 @@ def test_small_planar2_sweep_does_not_load_numba():
     feasible, numba_loaded, kernels_loaded = out.stdout.split()
     assert (numba_loaded, kernels_loaded) == ("False", "False")
     assert int(feasible) == ws.run(spec.load(PLANAR2), engine="numba").feasible
+
+
+def test_kernels_package_alone_is_not_the_kernels_loaded():
+    """``cdpr_design.kernels`` is lazy and imported without numba (batch and optimize import its
+    ``parallel``): ``auto`` still takes numpy for small planar2 grids there, and ``load_kernels``
+    (what a worker of a big sweep does first) does load numba."""
+    import subprocess
+    import sys
+
+    code = ("import sys; import cdpr_design.batch.local, cdpr_design.optimize.study; "
+            "from cdpr_design.workspaces import engine as eng; a = eng.use_numpy('auto', True, 100); "
+            "b = 'numba' in sys.modules; eng.load_kernels(); "
+            "print(a, b, 'numba' in sys.modules, eng.use_numpy('auto', True, 100))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["True", "False", "True", "False"]
 
 
 @pytest.mark.parametrize("count", [0, 1, 63, 64, 65, 1000, 4099])

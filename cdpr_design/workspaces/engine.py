@@ -34,9 +34,16 @@ ENGINES = ("auto", "numba", "numpy")
 NUMPY_MAX_POSES = 130_000
 
 
+#: The kernel module whose presence means "the kernels are loaded in this process": the package
+#: :mod:`cdpr_design.kernels` itself is lazy (``kernels.parallel`` is imported without numba by
+#: the batch and optimize layers), so its presence in ``sys.modules`` says nothing.
+LOADED = "cdpr_design.kernels.sweep"
+
+
 def kernels():
     """The numba kernels, imported on first use (importing numba takes ~0.4 s)."""
     from cdpr_design import kernels as K
+    from cdpr_design.kernels import sweep  # noqa: F401 - numba and the sweep kernels, now (the package is lazy)
 
     return K
 
@@ -75,7 +82,7 @@ def use_numpy(engine: str, planar2: bool, poses: int) -> bool:
         return True
     if engine == "numba":
         return False
-    return planar2 and poses <= NUMPY_MAX_POSES and "cdpr_design.kernels" not in sys.modules
+    return planar2 and poses <= NUMPY_MAX_POSES and LOADED not in sys.modules
 
 
 class _Sweep:
