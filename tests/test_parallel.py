@@ -187,3 +187,74 @@ def test_thread_setting_is_checked_and_restored():
     import numba
 
     assert parallel.threads() == numba.config.NUMBA_NUM_THREADS
+
+
+def test_fewer_threads_after_more_are_honoured():
+    """The pool only grows; a later, smaller setting still runs at most that many blocks at once."""
+    lock = threading.Lock()
+    state = {"active": 0, "peak": 0}
+
+    def block(k0, k1):
+        with lock:
+            state["active"] += 1
+            state["peak"] = max(state["peak"], state["active"])
+        time.sleep(0.005)
+        with lock:
+            state["active"] -= 1
+
+    for n in (4, 2):
+        parallel.set_threads(n)
+        state["peak"] = 0
+        parallel.run_blocks(block, 10_000, grain=1)
+        assert state["peak"] <= n
+
+
+def test_raising_the_thread_count_while_other_threads_run_blocks():
+    """A bigger pool replaces the old one (shut down) while other threads submit: never
+    'cannot schedule new futures after shutdown'."""
+    errors = []
+    stop = threading.Event()
+
+    def runner():
+        out = np.zeros(1000)
+        while not stop.is_set():
+            try:
+                parallel.run_blocks(lambda k0, k1, o: o.__setitem__(slice(k0, k1), 1), out.size, out, grain=1)
+            except Exception as exc:  # noqa: BLE001
+                errors.append(exc)
+                return
+
+    parallel.set_threads(2)
+    ts = [threading.Thread(target=runner) for _ in range(3)]
+    for t in ts:
+        t.start()
+    try:
+        for n in range(3, 60):
+            parallel.set_threads(n)
+            time.sleep(0.002)
+    finally:
+        stop.set()
+        for t in ts:
+            t.join()
+    assert errors == []
+
+
+def test_a_numba_block_not_compiled_yet_runs_its_first_block_in_the_caller():
+    import numba
+
+    names = []
+
+    @numba.njit(nogil=True)
+    def fill(k0, k1, out):
+        for k in range(k0, k1):
+            out[k] = k
+
+    def block(k0, k1, out):
+        names.append(threading.current_thread().name)
+        fill(k0, k1, out)
+
+    block.signatures = fill.signatures  # [] until the first call: as a dispatcher that has not run
+    parallel.set_threads(2)
+    out = np.zeros(10_000)
+    parallel.run_blocks(block, out.size, out, grain=10)
+    assert names[0] == threading.current_thread().name and np.array_equal(out, np.arange(10_000))

@@ -89,14 +89,15 @@ if hasattr(os, "register_at_fork"):
 
 
 def _executor(n: int) -> ThreadPoolExecutor:
+    """The pool, with at least ``n`` threads; the caller holds ``_lock`` (and submits under it: a
+    pool replaced by a bigger one is shut down, and takes no new work)."""
     global _pool, _pool_size
-    with _lock:
-        if _pool is None or _pool_size < n:
-            if _pool is not None:
-                _pool.shutdown(wait=False)
-            _pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix=_PREFIX)
-            _pool_size = n
-        return _pool
+    if _pool is None or _pool_size < n:
+        if _pool is not None:
+            _pool.shutdown(wait=False)  # its queued work still runs
+        _pool = ThreadPoolExecutor(max_workers=n, thread_name_prefix=_PREFIX)
+        _pool_size = n
+    return _pool
 
 
 def blocks(count: int, grain: int, nthreads: int) -> list[tuple[int, int]]:
@@ -112,11 +113,12 @@ def blocks(count: int, grain: int, nthreads: int) -> list[tuple[int, int]]:
 def run_blocks(block: Callable, count: int, *args, grain: int = 256) -> None:
     """Call ``block(k0, k1, *args)`` over rows 0 .. count-1 in blocks of at least ``grain`` rows.
 
-    One block runs in the calling thread; several run on the pool and this
-    waits for all of them.  An error in a block is raised here (the first
-    one); if this thread is interrupted (Ctrl-C), the blocks not yet started
-    are cancelled and the running ones finish before the exception goes on,
-    so no thread writes into the outputs after this returns.
+    One block runs in the calling thread; several run on at most :func:`threads` pool threads
+    (each takes the next block not begun) and this waits for all of them.  An error in a block is
+    raised here (the first one); if this thread is interrupted (Ctrl-C), the blocks not yet
+    started are dropped and the running ones finish before the exception goes on, so no thread
+    writes into the outputs after this returns.  A numba block not compiled yet runs its first
+    block here: the compile (or the load from numba's cache) happens where Ctrl-C reaches it.
     """
     nthreads = threads()
     parts = blocks(count, grain, nthreads)
@@ -125,15 +127,37 @@ def run_blocks(block: Callable, count: int, *args, grain: int = 256) -> None:
         for k0, k1 in parts:
             block(k0, k1, *args)
         return
-    pool = _executor(nthreads)
-    futures = [pool.submit(block, k0, k1, *args) for k0, k1 in parts]
+    if getattr(block, "signatures", None) == []:  # a numba dispatcher that has not run yet
+        k0, k1 = parts.pop(0)
+        block(k0, k1, *args)
+    todo = iter(parts)
+    take = threading.Lock()
+    stop = threading.Event()
+
+    def runner():
+        while not stop.is_set():
+            with take:
+                part = next(todo, None)
+            if part is None:
+                return
+            try:
+                block(part[0], part[1], *args)
+            except BaseException:
+                stop.set()  # the other runners begin no further block
+                raise
+
+    futures = []
     try:
+        with _lock:  # no pool is replaced between taking it and submitting to it
+            pool = _executor(nthreads)
+            futures = [pool.submit(runner) for _ in range(min(nthreads, len(parts)))]
         pending = set(futures)
         while pending:  # short waits: a signal's handler (Ctrl-C) runs between them
             done, pending = wait(pending, timeout=0.05, return_when=FIRST_EXCEPTION)
             for f in done:
                 f.result()
     except BaseException:
+        stop.set()
         for f in futures:
             f.cancel()
         wait(futures)
