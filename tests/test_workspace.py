@@ -308,8 +308,8 @@ def test_kernels_package_alone_is_not_the_kernels_loaded():
 
 
 @pytest.mark.parametrize("count", [0, 1, 63, 64, 65, 1000, 4099])
-def test_chunk_stats_parallel_matches_numpy(count):
-    """The parallel block reduction equals the plain numpy one (only the first ``count`` rows count)."""
+def test_chunk_stats_matches_numpy(count):
+    """The kernel's reduction equals the plain numpy one (only the first ``count`` rows count)."""
     rng = np.random.default_rng(count)
     n = count + 17
     feas = (rng.random(n) < 0.6).astype(np.uint8)

@@ -21,6 +21,10 @@ module             what
 ``sweep``          grid and point sweeps, per-chunk statistics
 ``parallel``       blocks of rows on threads (every parallel kernel)
 ``hanging``        hanging orientation of a planar two-cable body; statics at per-pose orientations
+``catenary``       Irvine's elastic catenary of one cable: ends from forces, forces from ends
+``cable_shape``    one heavy elastic cable at a given tension: its shape, its least tension
+``sagging``        statics of a pose with sagging cables; the sagging grid sweep
+``sag_path``       sagging statics along a sampled trajectory
 =================  ==========================================================
 """
 
