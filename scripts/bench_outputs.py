@@ -84,6 +84,32 @@ cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
 of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
 lowered to 130,000 poses.
 
+This round (54fea28 -> this version): the parallel kernels run their blocks
+of poses on a thread pool (``kernels/parallel.py``) instead of numba's
+``prange``, and the sweeps call the square-case evaluation directly.  Cold
+(an empty numba cache), the IPAnema 3 command took 77.2 s wall before (its
+``load_s`` 72.7 s) and 53.7 s (``load_s`` 49.4 s) with the thread pool, the
+two run side by side on the two cores; after the second change, alone on the
+machine, 47.8 s (``load_s`` 43.9 s).  Warm, the same within the machine's
+noise: in five interleaved pairs the whole command took 2.21-2.75 s before and
+2.22-2.69 s after.  One run of this script on this version (load average
+1.6 at the start; median round and range of three):
+
+============================================  ================================
+IPAnema 3, 154,440 poses, static              this version
+============================================  ================================
+per-pose linprog over the rounds              1.87-2.29 ms
+whole command, warm (csv)                     2.75 s = 117x (115-119)
+  its sweep_s                                 0.46 s = 654x (647-706)
+  fastest run: load / sweep / write / pics    0.72 / 0.45 / 0.42 / 0.57 s
+whole command, warm (parquet)                 3.09 s = 114x (92-121)
+kernels in-process, warm                      0.41 s = 804x (655-881)
+whole command, cold numba cache (csv)         47.8 s = 6.4x (load_s 43.9 s)
+planar2 22,801 poses, whole command warm      1.31 s = 27x (numpy engine)
+planar2 564,001 poses, whole command warm     5.3 s = 269x (206-300)
+planar2 564,001 poses, cold                   10.8 s (load_s 5.9 s)
+============================================  ================================
+
 The previous round (e612e10 -> 946fb56, the closed-form margin of
 ``kernels.hsm_small``): kernel CPU per IPAnema 3 pose 5.8-6.1 us -> 3.7-3.9 us in
 interleaved runs; cold (an empty numba cache, every kernel compiled) 36 s ->
