@@ -53,7 +53,7 @@ from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.geometry import rotate_attachments, structure_matrix
 from cdpr_design.kernels.hsm import make_scratch
-from cdpr_design.kernels.pose import eval_general, eval_square
+from cdpr_design.kernels.pose import eval_row
 
 #: A stable equilibrium with both tensions >= 0 was found.
 TILT_OK = 0
@@ -357,17 +357,4 @@ def rotated_block(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feas
         ok = structure_matrix(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
         for i in range(m):
             lengths[k, i] = L[i]
-        if not ok:
-            feasible[k] = 0
-            margin[k] = np.nan
-            for i in range(m):
-                tensions[k, i] = np.nan
-            continue
-        if m == n:
-            f, mg = eval_square(W, wreq[k], tmin, tmax, kind, t)
-        else:
-            f, mg = eval_general(W, wreq[k], tmin, tmax, combos, kind, t, scr)
-        feasible[k] = 1 if f else 0
-        margin[k] = mg + 0.0
-        for i in range(m):
-            tensions[k, i] = t[i]
+        eval_row(k, ok, W, wreq[k], tmin, tmax, combos, kind, t, scr, feasible, margin, tensions)

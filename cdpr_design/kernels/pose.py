@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import njit, njit_inline
 from cdpr_design.kernels.hsm import basis_factor, hsm_factored, make_scratch, square_eval
 from cdpr_design.kernels.tension_qp import goldfarb_idnani, null_space_setup
 
@@ -120,3 +120,30 @@ def eval_square(W, wreq, tmin, tmax, kind, t_out):
     # m = n columns can never positively span R^n: no wrench closure
     feasible = kind != KIND_WRENCH_CLOSURE and margin >= 0.0
     return feasible, margin
+
+
+@njit_inline
+def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin, tensions):
+    """Row ``k`` of a sweep's outputs from the pose's structure matrix ``W`` (n, m).
+
+    ``ok`` False (a zero-length cable): infeasible, margin and tensions NaN.
+    Otherwise :func:`eval_square` (m = n) or :func:`eval_general` with the
+    block's scratch ``scr`` and tension buffer ``t`` (m,), written to
+    ``feasible[k]`` (uint8), ``margin[k]`` (-0.0 as 0.0: one zero in the CSV,
+    whatever the engine) [N] and ``tensions[k]`` [N].
+    """
+    n, m = W.shape
+    if not ok:
+        feasible[k] = 0
+        margin[k] = np.nan
+        for i in range(m):
+            tensions[k, i] = np.nan
+        return
+    if m == n:
+        f, mg = eval_square(W, wreq, tmin, tmax, kind, t)
+    else:
+        f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr)
+    feasible[k] = 1 if f else 0
+    margin[k] = mg + 0.0
+    for i in range(m):
+        tensions[k, i] = t[i]

@@ -11,7 +11,7 @@ from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.linalg import RANK_TOL
 from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
 from cdpr_design.kernels.hsm import make_scratch
-from cdpr_design.kernels.pose import eval_general, eval_square
+from cdpr_design.kernels.pose import eval_row
 from cdpr_design.kernels.interference import interference_pose
 from cdpr_design.kernels.parallel import run_blocks
 
@@ -51,20 +51,7 @@ def grid_block(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax,
         ok = structure_matrix(px, py, pz, Rb, A, rows, W, L)
         for i in range(m):
             lengths[k, i] = L[i]
-        if not ok:
-            feasible[k] = 0
-            margin[k] = np.nan
-            for i in range(m):
-                tensions[k, i] = np.nan
-            continue
-        if m == n:
-            f, mg = eval_square(W, wreq, tmin, tmax, kind, t)
-        else:
-            f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr)
-        feasible[k] = 1 if f else 0
-        margin[k] = mg + 0.0  # -0.0 -> 0.0: one zero in the CSV, whatever the engine
-        for i in range(m):
-            tensions[k, i] = t[i]
+        eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin, tensions)
 
 
 def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax,
@@ -222,17 +209,4 @@ def points_block(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, comb
                                          tol, full, hits, s0, s1, cp)
         else:
             cmask[k] = 0
-        if not ok:
-            feasible[k] = 0
-            margin[k] = np.nan
-            for i in range(m):
-                tensions[k, i] = np.nan
-            continue
-        if m == n:
-            f, mg = eval_square(W, wreq, tmin, tmax, kind, t)
-        else:
-            f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr)
-        feasible[k] = 1 if f else 0
-        margin[k] = mg + 0.0  # -0.0 -> 0.0: one zero in the CSV, whatever the engine
-        for i in range(m):
-            tensions[k, i] = t[i]
+        eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin, tensions)
