@@ -100,13 +100,18 @@ def test_bad_step_option(tmp_path):
     ("- just\n- a list\n", "expected a mapping of keys at the top"),
     ("name: a\nname: b\n", "given twice"),
     ("!!python/object/apply:os.system ['echo hi']", "not valid YAML"),
+    # explicit tags the value does not fit: ValueError / TypeError inside PyYAML (found by test_fuzz)
+    ("!!float cables:\n- a\nname: x\n", "a tagged value cannot be read"),
+    ("name: !!int twelve\n", "a tagged value cannot be read"),
+    ("name: !!float 1e999999999999\n", None),
+    ("name: !!timestamp 2026-13-45\n", "a tagged value cannot be read"),
 ])
 def test_bad_yaml(tmp_path, text, message):
     p = tmp_path / "bad.yaml"
     p.write_text(text)
     res = invoke("workspace", p, "--out", tmp_path / "o")
     assert res.exit_code == 2
-    assert message in res.output
+    assert message is None or message in res.output
     assert "Traceback" not in res.output
 
 

@@ -97,6 +97,9 @@ def read_yaml(path: str | Path) -> Any:
         return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
         raise SpecError([("", f"not valid YAML: {_short(str(exc))}")], source=str(path)) from None
+    except (ValueError, TypeError, OverflowError) as exc:  # a tag the value does not fit: !!float cables
+        raise SpecError([("", f"not valid YAML: a tagged value cannot be read ({_short(str(exc))})")],
+                        source=str(path)) from None
     except RecursionError:  # not reached within MAX_YAML_DEPTH; a last guard
         raise SpecError([("", "the YAML nests too deeply")], source=str(path)) from None
 
