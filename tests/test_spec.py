@@ -105,6 +105,10 @@ def test_bad_step_option(tmp_path):
     ("name: !!int twelve\n", "a tagged value cannot be read"),
     ("name: !!float 1e999999999999\n", None),
     ("name: !!timestamp 2026-13-45\n", "a tagged value cannot be read"),
+    ("!!float ", "a tagged value cannot be read"),
+    ("name: !!float\n", "a tagged value cannot be read"),
+    ("name: !!binary '@@@'\n", None),  # reads as b'': the schema refuses it
+    ("name: !!bool maybe\n", "a tagged value cannot be read"),
 ])
 def test_bad_yaml(tmp_path, text, message):
     p = tmp_path / "bad.yaml"

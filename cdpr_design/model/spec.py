@@ -97,11 +97,15 @@ def read_yaml(path: str | Path) -> Any:
         return yaml.load(text, Loader=_UniqueKeyLoader)  # noqa: S506 - a SafeLoader subclass
     except yaml.YAMLError as exc:
         raise SpecError([("", f"not valid YAML: {_short(str(exc))}")], source=str(path)) from None
-    except (ValueError, TypeError, OverflowError) as exc:  # a tag the value does not fit: !!float cables
-        raise SpecError([("", f"not valid YAML: a tagged value cannot be read ({_short(str(exc))})")],
-                        source=str(path)) from None
     except RecursionError:  # not reached within MAX_YAML_DEPTH; a last guard
         raise SpecError([("", "the YAML nests too deeply")], source=str(path)) from None
+    except MemoryError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - PyYAML's constructors raise what the value gives them
+        # an explicit tag the value does not fit (``!!float cables``, ``!!float`` with no value,
+        # ``!!int twelve``, a bad ``!!timestamp``): ValueError, IndexError, TypeError ... inside PyYAML
+        raise SpecError([("", f"not valid YAML: a tagged value cannot be read ({type(exc).__name__}: "
+                              f"{_short(str(exc))})")], source=str(path)) from None
 
 
 def _short(text: str, width: int = 400) -> str:
