@@ -3,7 +3,6 @@ comparison, two objectives, interrupted runs resumed, bad input."""
 
 from __future__ import annotations
 
-import itertools
 import json
 import math
 import os
