@@ -20,8 +20,8 @@ Execution backends
 
 Parallelism is across variants: each worker runs the kernels on one
 thread (:func:`cdpr_design.kernels.parallel.set_threads`), which also avoids
-oversubscribing the cores.  Results do not depend on the thread count (each pose is computed on
-its own; the reductions are min / max / counts).  Variants travel in chunks
+oversubscribing the cores.  Results do not depend on the thread count (each
+pose is computed on its own; the reductions are min / max / counts).  Variants travel in chunks
 so that scheduling overhead stays small.
 """
 

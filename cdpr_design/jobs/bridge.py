@@ -62,8 +62,6 @@ def _endpoint(design, test_plc: str | None, local_net_id: str | None) -> _Endpoi
     return _Endpoint(host, design.plc.ams_net_id, design.plc.port, local_net_id)
 
 
-
-
 @contextmanager
 def _stop_on_signal():
     """A stop flag set by the first Ctrl-C, SIGTERM or SIGHUP (a second one interrupts); the

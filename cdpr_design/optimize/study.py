@@ -232,11 +232,11 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
     job = problem.job()
     lock = Path(folder) / CLAIM_LOCK
     done = 0
+    if single_thread:
+        prepare_worker(False)  # the kernels on one thread: parallelism is across processes
     while deadline is None or time.time() < deadline:
         if parent is not None and os.getppid() != parent:
             break  # the run was killed: leave the rest to a resumed run
-        if single_thread:
-            prepare_worker(False)  # the kernels on one thread: parallelism is across processes
         trial = None
         try:
             with _signals_held():  # a trial created is a trial in hand

@@ -41,10 +41,13 @@ LOADED = "cdpr_design.kernels.sweep"
 
 
 def kernels():
-    """The numba kernels, imported on first use (importing numba takes ~0.4 s)."""
-    from cdpr_design import kernels as K
-    from cdpr_design.kernels import sweep  # noqa: F401 - numba and the sweep kernels, now (the package is lazy)
+    """The numba kernels, imported on first use (importing numba takes ~0.4 s): :data:`LOADED`
+    now, the rest of the (lazy) package as its names are used."""
+    import importlib
 
+    from cdpr_design import kernels as K
+
+    importlib.import_module(LOADED)
     return K
 
 
