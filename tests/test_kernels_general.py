@@ -332,3 +332,54 @@ def test_small_redundancy_closed_forms_match_enumeration(r):
         counts["closure"] += int(ref[2])
         counts["degenerate"] += int(trial % 3 == 1 or trial % 5 == 2)
     assert counts["cases"] > 400 and 0 < counts["closure"] < counts["cases"] and counts["degenerate"] > 150, counts
+
+
+@pytest.mark.parametrize("r", [1, 2])
+def test_small_redundancy_tensions_match_the_active_set_method(r):
+    """project_one / project_two (m - n = 1, 2, behind project_null) against the general dual
+    active-set method goldfarb_idnani on the same null space: the same verdict and the same
+    tensions, on random problems and on degenerate ones (exact zeros in W, parallel columns,
+    an unbounded t_max, a required wrench at a corner of the feasible set); and, on a sample,
+    against cvxpy's minimum and scipy's feasibility."""
+    rng = np.random.default_rng(70 + r)
+    counts = dict(feasible=0, infeasible=0, degenerate=0, active=0)
+    for trial in range(3000):
+        n = int(rng.choice([2, 3, 4, 6]))
+        m = n + r
+        W = rng.normal(size=(n, m))
+        if trial % 3 == 1:
+            W[rng.random((n, m)) < 0.3] = 0.0
+        if trial % 5 == 2:
+            W[:, 1] = 2.0 * W[:, 0]
+        tmin = rng.uniform(0.0, 5.0, m)
+        tmax = tmin + rng.uniform(1.0, 30.0, m)
+        t0 = rng.uniform(tmin - 4.0, tmax + 4.0)
+        if trial % 7 == 3:
+            t0 = np.where(rng.random(m) < 0.5, tmin, tmax)  # a corner: several bounds met exactly
+        if trial % 11 == 4:
+            tmax[rng.integers(m)] = np.inf
+        w = W @ t0
+        scr = K.make_scratch(n, m, 1)
+        if not K.basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+            continue
+        K.null_space_setup(n, m, w, scr)
+        t_ref, t = np.empty(m), np.empty(m)
+        ok_ref = K.goldfarb_idnani(m, r, tmin, tmax, t_ref, scr)
+        ok = K.project_null(m, r, tmin, tmax, t, scr)
+        assert ok == ok_ref, (trial, ok, ok_ref)
+        if ok:
+            assert np.max(np.abs(t - t_ref)) <= 1e-9 * max(1.0, float(np.max(np.abs(t_ref)))), trial
+            assert np.all(t >= tmin) and np.all(t <= tmax)
+            counts["active"] += int(np.any(np.isclose(t, tmin) | np.isclose(t, tmax)))
+        else:
+            assert np.all(np.isnan(t))
+        counts["feasible" if ok else "infeasible"] += 1
+        counts["degenerate"] += int(trial % 3 == 1 or trial % 5 == 2 or trial % 7 == 3)
+        if trial % 20 == 0 and np.all(np.isfinite(tmax)):
+            ref = hsm_bruteforce(W, w[None, :], tmin, tmax)[0]
+            if np.isfinite(ref) and abs(ref) > 1e-7 * tmax.max():
+                assert ok == lp_feasible(W, w, tmin, tmax)
+                if ok:
+                    assert np.max(np.abs(t - MinNormOracle(n, m)(W, w, tmin, tmax))) <= 1e-6
+    assert counts["feasible"] > 500 and counts["infeasible"] > 500, counts
+    assert counts["active"] > 300 and counts["degenerate"] > 1000, counts

@@ -218,7 +218,8 @@ def make_scratch(n, m, nv):
             np.empty(m),                # 26 facet: l_j
             np.empty(m),                # 27 t_max - t_min
             np.empty((2, m)),           # 28 hsm_small: range and closure tolerance per position
-            np.empty((n, n)))           # 29 hsm_small: 2 x 2 minors of F
+            np.empty((n, n)),           # 29 hsm_small: 2 x 2 minors of F
+            np.empty((3, 4)))           # 30 project_two: half-planes (g0, g1, h, bound)
 
 
 @njit

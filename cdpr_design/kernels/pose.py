@@ -6,7 +6,7 @@ import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_inline
 from cdpr_design.kernels.hsm import basis_factor, hsm_factored, make_scratch, square_eval
-from cdpr_design.kernels.tension_qp import goldfarb_idnani, null_space_setup
+from cdpr_design.kernels.tension_qp import null_space_setup, project_null
 
 
 KIND_STATIC = 0
@@ -25,7 +25,7 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr):
     ``scr`` comes from :func:`make_scratch` (n, m, wreq rows).  The margin is
     the fast hyperplane-shifting one (:func:`hsm_factored`) over ``wreq[0]``
     (static) or every row (wrench-feasible, wrench-closure); the tensions at
-    ``wreq[0]`` come from the exact QP (:func:`goldfarb_idnani`), run only
+    ``wreq[0]`` come from the exact QP (:func:`project_null`), run only
     where the margin of ``wreq[0]`` is >= 0.  Static and wrench-feasible
     poses are feasible when the margin is >= 0 *and* the QP found tensions,
     so a feasible pose always has tensions; wrench-closure poses when W
@@ -59,7 +59,7 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr):
                 t_out[bcol[s]] = min(max(acc, tmin[bcol[s]]), tmax[bcol[s]])
         else:
             null_space_setup(n, m, wreq[0], scr)
-            qp_ok = goldfarb_idnani(m, m - n, tmin, tmax, t_out, scr)
+            qp_ok = project_null(m, m - n, tmin, tmax, t_out, scr)
     if kind == KIND_WRENCH_CLOSURE:
         return closure and m > n, margin
     return margin >= 0.0 and qp_ok, margin

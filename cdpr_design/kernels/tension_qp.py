@@ -65,6 +65,170 @@ def null_space_setup(n, m, w, scr):
 
 
 @njit
+def qp_tolerance(m, tmin, tmax):
+    """The bound tolerance of the QPs [N]: ``QP_TOL`` times the largest finite bound (at least 1 N)."""
+    scale = 1.0
+    for j in range(m):  # the finite bounds only: t_max = inf means no upper bound
+        if math.isfinite(tmin[j]):
+            scale = max(scale, abs(tmin[j]))
+        if math.isfinite(tmax[j]):
+            scale = max(scale, abs(tmax[j]))
+    return QP_TOL * scale
+
+
+@njit
+def project_null(m, r, tmin, tmax, t, scr):
+    """The projection of :func:`goldfarb_idnani` (same inputs in ``scr``, same result): in closed
+    form for one or two redundant cables (:func:`project_one`, :func:`project_two`), by the dual
+    active-set method otherwise.  Returns False (``t`` NaN) when no tensions exist."""
+    if r == 1:
+        return project_one(m, tmin, tmax, t, scr)
+    if r == 2:
+        return project_two(m, tmin, tmax, t, scr)
+    return goldfarb_idnani(m, r, tmin, tmax, t, scr)
+
+
+@njit
+def _finish(m, r, tmin, tmax, t, scr, z0, z1, ok):
+    """t = t_p + N z clipped into the bounds (``ok``), else NaN; returns ``ok``."""
+    N, tp = scr[8], scr[9]
+    for j in range(m):
+        if not ok:
+            t[j] = np.nan
+            continue
+        s = tp[j] + N[j, 0] * z0
+        if r == 2:
+            s += N[j, 1] * z1
+        t[j] = min(max(s, tmin[j]), tmax[j])
+    return ok
+
+
+@njit
+def project_one(m, tmin, tmax, t, scr):
+    """:func:`goldfarb_idnani` for r = 1: the balancing tensions are t_p + z n, z on a line.
+
+    z starts at 0 and moves to meet the most violated bound exactly, as long
+    as every violated bound asks for the same direction; a bound violated the
+    other way (or one z cannot change) proves that no tensions exist.  Every
+    bound met at one step stays met at the next (z only moves away from it),
+    so z ends at the end of the feasible interval nearest 0.  Violations up to
+    :func:`qp_tolerance` count as met, as in the general method.
+    """
+    N, tp = scr[8], scr[9]
+    tol = qp_tolerance(m, tmin, tmax)
+    z = 0.0
+    way = 0.0  # the direction z moves in: +1, -1 (0: not moved yet)
+    for _ in range(m + 1):
+        p = -1
+        worst = tol
+        up = True
+        for j in range(m):
+            v = tp[j] + N[j, 0] * z
+            if tmin[j] - v > worst:
+                worst, p, up = tmin[j] - v, j, True
+            if v - tmax[j] > worst:
+                worst, p, up = v - tmax[j], j, False
+        if p < 0:
+            return _finish(m, 1, tmin, tmax, t, scr, z, 0.0, True)
+        a = N[p, 0]
+        need = (1.0 if a > 0.0 else -1.0) * (1.0 if up else -1.0)
+        if a == 0.0 or need * way < 0.0:
+            break
+        way = need
+        z = ((tmin[p] if up else tmax[p]) - tp[p]) / a
+    return _finish(m, 1, tmin, tmax, t, scr, 0.0, 0.0, False)
+
+
+@njit
+def _half_plane(N, tp, tmin, tmax, m, c):
+    """Bound ``c`` (c < m: t_c >= t_min; else t_(c-m) <= t_max) as g . z <= h: (g0, g1, h)."""
+    if c < m:
+        return -N[c, 0], -N[c, 1], tp[c] - tmin[c]
+    j = c - m
+    return N[j, 0], N[j, 1], tmax[j] - tp[j]
+
+
+@njit
+def _inside(H, k, z0, z1, tol):
+    """Whether z meets the first ``k`` half-planes ``H`` (rows g0, g1, h) to ``tol``."""
+    for a in range(k):
+        if H[a, 0] * z0 + H[a, 1] * z1 - H[a, 2] > tol:
+            return False
+    return True
+
+
+@njit
+def project_two(m, tmin, tmax, t, scr):
+    """:func:`goldfarb_idnani` for r = 2: the point nearest the origin of a polygon, in closed form.
+
+    The dual active-set idea in the plane: z starts at 0; while a bound is
+    violated, the most violated one joins the (at most two) bounds active at
+    z, and z becomes the point nearest the origin of those at most three
+    half-planes -- the best of the feet of the perpendiculars on their lines
+    and of the corners of pairs, among those inside all of them.  Each step
+    moves z further from the origin, so no set of active bounds repeats; at
+    the end z is nearest the origin in a region containing the polygon, and
+    inside it, hence the answer.  No candidate inside the half-planes proves
+    that no tensions exist.  Violations up to :func:`qp_tolerance` count as met.
+    """
+    N, tp, H = scr[8], scr[9], scr[30]
+    tol = qp_tolerance(m, tmin, tmax)
+    z0 = 0.0
+    z1 = 0.0
+    act0 = -1
+    act1 = -1
+    for _ in range(4 * m * m + 8):  # a guard: each step leaves z further from the origin
+        # the most violated bound at z
+        p = -1
+        worst = tol
+        for j in range(m):
+            v = tp[j] + N[j, 0] * z0 + N[j, 1] * z1
+            if tmin[j] - v > worst:
+                worst = tmin[j] - v
+                p = j
+            if v - tmax[j] > worst:
+                worst = v - tmax[j]
+                p = j + m
+        if p < 0:
+            return _finish(m, 2, tmin, tmax, t, scr, z0, z1, True)
+        k = 0
+        for c in (act0, act1, p):
+            if c >= 0:
+                H[k, 0], H[k, 1], H[k, 2] = _half_plane(N, tp, tmin, tmax, m, c)
+                H[k, 3] = c
+                k += 1
+        best = np.inf
+        z0n = z1n = 0.0
+        new0 = -1
+        new1 = -1
+        for a in range(k):  # feet of the perpendiculars (only a line the origin is outside of)
+            g2 = H[a, 0] * H[a, 0] + H[a, 1] * H[a, 1]
+            if H[a, 2] < 0.0 and g2 > 0.0:
+                s = H[a, 2] / g2
+                c0 = s * H[a, 0]
+                c1 = s * H[a, 1]
+                d = c0 * c0 + c1 * c1
+                if d < best and _inside(H, k, c0, c1, tol):
+                    best, z0n, z1n, new0, new1 = d, c0, c1, int(H[a, 3]), -1
+        for a in range(k):  # corners
+            for b in range(a + 1, k):
+                det = H[a, 0] * H[b, 1] - H[a, 1] * H[b, 0]
+                na = H[a, 0] * H[a, 0] + H[a, 1] * H[a, 1]
+                nb = H[b, 0] * H[b, 0] + H[b, 1] * H[b, 1]
+                if not abs(det) > 1e-12 * math.sqrt(na * nb):
+                    continue
+                c0 = (H[a, 2] * H[b, 1] - H[b, 2] * H[a, 1]) / det
+                c1 = (H[a, 0] * H[b, 2] - H[b, 0] * H[a, 2]) / det
+                d = c0 * c0 + c1 * c1
+                if d < best and _inside(H, k, c0, c1, tol):
+                    best, z0n, z1n, new0, new1 = d, c0, c1, int(H[a, 3]), int(H[b, 3])
+        if new0 < 0:  # the half-planes have no common point: neither has the polygon
+            break
+        z0, z1, act0, act1 = z0n, z1n, new0, new1
+    return _finish(m, 2, tmin, tmax, t, scr, 0.0, 0.0, False)
+
+
+@njit
 def _refactor(N, m, r, active, q, J, RA, NA, VA):
     """QR of the active constraint normals N_A (r, q) = J [R; 0]."""
     for a in range(q):
@@ -93,13 +257,7 @@ def goldfarb_idnani(m, r, tmin, tmax, t, scr):
     """
     N, tp, J, RA, NA, VA = scr[8], scr[9], scr[10], scr[11], scr[12], scr[13]
     z, d, rdir, u, active = scr[14], scr[15], scr[16], scr[17], scr[24]
-    scale = 1.0
-    for j in range(m):  # the finite bounds only: t_max = inf means no upper bound
-        if math.isfinite(tmin[j]):
-            scale = max(scale, abs(tmin[j]))
-        if math.isfinite(tmax[j]):
-            scale = max(scale, abs(tmax[j]))
-    tol = QP_TOL * scale
+    tol = qp_tolerance(m, tmin, tmax)
     for i in range(r):
         z[i] = 0.0
         for k in range(r):
@@ -210,7 +368,7 @@ def min_norm_tensions(W, w, tmin, tmax, t, scr):
     The null-space reduction of algorithms.md: t = t_p + N z with t_p = W^+ w
     and N an orthonormal null basis, so |t|^2 = |t_p|^2 + |z|^2 and the QP is
     the projection of the origin onto an r-dimensional polytope, solved
-    exactly by :func:`goldfarb_idnani`.  Writes ``t`` (m) [N]; returns False
+    exactly by :func:`project_null`.  Writes ``t`` (m) [N]; returns False
     (``t`` NaN) when the bounds admit no solution or rank W < n.  ``scr``
     from :func:`make_scratch`.
     """
@@ -220,4 +378,4 @@ def min_norm_tensions(W, w, tmin, tmax, t, scr):
     if not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
         return False
     null_space_setup(n, m, w, scr)
-    return goldfarb_idnani(m, m - n, tmin, tmax, t, scr)
+    return project_null(m, m - n, tmin, tmax, t, scr)
