@@ -1,14 +1,75 @@
-"""The jit options of every kernel, set once.
+"""The jit options of every kernel, set once, and where numba caches them.
 
 ``cache=True`` so users pay the compile time once per machine (numba's on-disk
 cache), ``nogil`` so sweeps run their blocks of poses on threads
 (:mod:`cdpr_design.kernels.parallel`; no kernel uses ``parallel=True``), ``error_model='numpy'`` so a
 division by zero gives inf/NaN as in numpy instead of raising.
+
+Cache validity.  numba keys a function's cached machine code on its own
+source file only (modification time and size), but that code has every
+kernel it calls compiled into it.  After an edit -- or a ``git pull`` in an
+editable install -- that changes ``hsm.py`` and not ``sweep.py``, numba would
+load ``sweep.py``'s stale sweep: old numbers, or a crash where a shared data
+layout changed (seen: a scratch tuple grown by one array segfaulted).  So the
+kernels' cache entries are stamped with a digest of the *contents* of every
+module of this package instead (:func:`source_digest`): any change to any
+kernel recompiles them all, and a copy with the same sources reuses the cache.
+numba offers no public hook for this; :func:`_register_locators` puts
+subclasses of its cache locators first in its list (the classes and the list
+have the same roles in numba 0.59 to 0.68; ``tests/test_jit_cache.py`` fails if
+that stops working).
 """
 
 from __future__ import annotations
 
+import functools
+import hashlib
+import os
+
 import numba as nb
+
+_HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+@functools.lru_cache(maxsize=None)
+def source_digest(folder: str = _HERE) -> str:
+    """SHA-256 (hex) of the names and contents of the ``.py`` files in ``folder`` (this package)."""
+    h = hashlib.sha256()
+    for name in sorted(os.listdir(folder)):
+        if name.endswith(".py"):
+            h.update(name.encode() + b"\0")
+            with open(os.path.join(folder, name), "rb") as fh:
+                h.update(fh.read())
+            h.update(b"\0")
+    return h.hexdigest()
+
+
+class _PackageStamp:
+    """Cache-locator mixin: kernels of this package only, stamped with :func:`source_digest`."""
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if os.path.dirname(os.path.abspath(py_file)) != _HERE:
+            return None  # not a kernel of this package: numba's own locators take it
+        return super().from_function(py_func, py_file)
+
+    def get_source_stamp(self):
+        return ("cdpr-design kernels", source_digest())
+
+
+def _register_locators() -> None:
+    """Put the stamped locators before numba's own (NUMBA_CACHE_DIR, in-tree, user-wide, in that order)."""
+    from numba.core import caching
+
+    impl = getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl")
+    ours = []
+    for name in ("UserProvidedCacheLocator", "InTreeCacheLocator", "UserWideCacheLocator"):
+        base = getattr(caching, name, None) or getattr(caching, "_" + name)
+        ours.append(type("Kernel" + name, (_PackageStamp, base), {"__module__": __name__}))
+    impl._locator_classes = ours + [c for c in impl._locator_classes if not issubclass(c, _PackageStamp)]
+
+
+_register_locators()
 
 JIT = dict(cache=True, nogil=True, error_model="numpy")
 njit = nb.njit(**JIT)
