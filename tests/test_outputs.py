@@ -25,7 +25,7 @@ from .helpers import DESIGNS, ROOT, invoke, subprocess_env
 
 #: The previous writer's files (generated with 7c8ae5c).  ipanema1-ws and ipanema2-ws were generated
 #: again when the closed-form tension QP (project_two) replaced the active-set method for two redundant
-#: cables: 171 tension cells moved by at most 1.3e-13 N (a few ulps of tensions up to 700 N), every
+#: cables: 170 tension cells moved by at most 1.3e-13 N (a few ulps of tensions up to 700 N), every
 #: other cell -- coordinates, feasibility, margins -- was unchanged.  A kernel change regenerates a file
 #: only after such a cell-by-cell numeric comparison; the writer itself is held to the cell-by-cell
 #: reference (reference_text) below.
