@@ -294,6 +294,21 @@ def test_min_norm_kernel_detects_infeasibility_and_is_exact():
     assert outcomes == {True, False}, "both feasible and infeasible cases must be compared"
 
 
+def small_redundancy_problem(rng, trial: int, r: int):
+    """(n, m, W, tmin, tmax): a random n x (n + r) structure matrix with bounds; every third
+    trial has exact zeros in W, every fifth two parallel columns (degenerate facets)."""
+    n = int(rng.choice([2, 3, 4, 6]))
+    m = n + r
+    W = rng.normal(size=(n, m))
+    if trial % 3 == 1:
+        W[rng.random((n, m)) < 0.3] = 0.0
+    if trial % 5 == 2:
+        W[:, 1] = 2.0 * W[:, 0]
+    tmin = rng.uniform(0.0, 5.0, m)
+    tmax = tmin + rng.uniform(1.0, 30.0, m)
+    return n, m, W, tmin, tmax
+
+
 @pytest.mark.parametrize("r", [1, 2])
 def test_small_redundancy_closed_forms_match_enumeration(r):
     """hsm_one / hsm_two (m - n = 1, 2, behind hsm_factored) against the general enumeration
@@ -304,15 +319,7 @@ def test_small_redundancy_closed_forms_match_enumeration(r):
     rng = np.random.default_rng(50 + r)
     counts = dict(cases=0, closure=0, degenerate=0)
     for trial in range(600):
-        n = int(rng.choice([2, 3, 4, 6]))
-        m = n + r
-        W = rng.normal(size=(n, m))
-        if trial % 3 == 1:
-            W[rng.random((n, m)) < 0.3] = 0.0
-        if trial % 5 == 2:
-            W[:, 1] = 2.0 * W[:, 0]
-        tmin = rng.uniform(0.0, 5.0, m)
-        tmax = tmin + rng.uniform(1.0, 30.0, m)
+        n, m, W, tmin, tmax = small_redundancy_problem(rng, trial, r)
         wreq = np.array([W @ rng.uniform(tmin - 3.0, tmax + 3.0) for _ in range(3)])
         scr = K.make_scratch(n, m, 3)
         if not K.basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
@@ -344,15 +351,7 @@ def test_small_redundancy_tensions_match_the_active_set_method(r):
     rng = np.random.default_rng(70 + r)
     counts = dict(feasible=0, infeasible=0, degenerate=0, active=0)
     for trial in range(3000):
-        n = int(rng.choice([2, 3, 4, 6]))
-        m = n + r
-        W = rng.normal(size=(n, m))
-        if trial % 3 == 1:
-            W[rng.random((n, m)) < 0.3] = 0.0
-        if trial % 5 == 2:
-            W[:, 1] = 2.0 * W[:, 0]
-        tmin = rng.uniform(0.0, 5.0, m)
-        tmax = tmin + rng.uniform(1.0, 30.0, m)
+        n, m, W, tmin, tmax = small_redundancy_problem(rng, trial, r)
         t0 = rng.uniform(tmin - 4.0, tmax + 4.0)
         if trial % 7 == 3:
             t0 = np.where(rng.random(m) < 0.5, tmin, tmax)  # a corner: several bounds met exactly
