@@ -84,7 +84,28 @@ cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
 of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
 lowered to 130,000 poses.
 
-This round (54fea28 -> this version): the parallel kernels run their blocks
+This round (1576a64 -> this version): the minimum-norm tensions in closed form
+for one or two redundant cables (``kernels.tension_qp.project_two``): 0.97-1.04
+-> 0.64-0.76 us a pose of IPAnema 3 on one core, in interleaved runs over the
+grid's 142,237 feasible poses, out of 3.7-4.1 us for the whole pose.  In this
+script the gain is below the machine's noise; two runs (load average 0.8 and
+0.9 at the start; median round and range of three):
+
+============================================  ==================  ==================
+IPAnema 3, 154,440 poses, static              run 1               run 2
+============================================  ==================  ==================
+per-pose linprog over the rounds              1.78-2.18 ms        1.94-2.15 ms
+whole command, warm (csv)                     2.66 s = 105x       2.65 s = 119x
+  its sweep_s                                 0.41 s = 689x       0.47 s = 704x
+  fastest run: load / sweep / write / pics    0.81/0.48/0.57/0.75 0.75/0.47/0.35/0.58
+whole command, warm (parquet)                 2.58 s = 125x       3.06 s = 103x
+kernels in-process, warm                      0.47 s = 704x       0.39 s = 808x
+  range over the rounds                       598-867x            722-933x
+whole command, cold numba cache (csv)         50.8 s (load 47.3)  -
+planar2 564,001 poses, whole command warm     5.7 s = 186x        6.5 s = 189x
+============================================  ==================  ==================
+
+The round before (54fea28 -> 1576a64): the parallel kernels run their blocks
 of poses on a thread pool (``kernels/parallel.py``) instead of numba's
 ``prange``, and the sweeps call the square-case evaluation directly.  Cold
 (an empty numba cache), the IPAnema 3 command took 77.2 s wall before (its
@@ -92,11 +113,11 @@ of poses on a thread pool (``kernels/parallel.py``) instead of numba's
 two run side by side on the two cores; after the second change, alone on the
 machine, 47.8 s (``load_s`` 43.9 s).  Warm, the same within the machine's
 noise: in five interleaved pairs the whole command took 2.21-2.75 s before and
-2.22-2.69 s after.  One run of this script on this version (load average
+2.22-2.69 s after.  One run of this script on 1576a64 (load average
 1.6 at the start; median round and range of three):
 
 ============================================  ================================
-IPAnema 3, 154,440 poses, static              this version
+IPAnema 3, 154,440 poses, static              1576a64
 ============================================  ================================
 per-pose linprog over the rounds              1.87-2.29 ms
 whole command, warm (csv)                     2.75 s = 117x (115-119)
