@@ -88,22 +88,27 @@ This round (1576a64 -> this version): the minimum-norm tensions in closed form
 for one or two redundant cables (``kernels.tension_qp.project_two``): 0.97-1.04
 -> 0.64-0.76 us a pose of IPAnema 3 on one core, in interleaved runs over the
 grid's 142,237 feasible poses, out of 3.7-4.1 us for the whole pose.  In this
-script the gain is below the machine's noise; two runs (load average 0.8 and
-0.9 at the start; median round and range of three):
+script the gain is below the machine's noise; three runs (load average 0.8,
+0.9 and 1.25 at the start; median round and range of three):
 
-============================================  ==================  ==================
-IPAnema 3, 154,440 poses, static              run 1               run 2
-============================================  ==================  ==================
-per-pose linprog over the rounds              1.78-2.18 ms        1.94-2.15 ms
-whole command, warm (csv)                     2.66 s = 105x       2.65 s = 119x
-  its sweep_s                                 0.41 s = 689x       0.47 s = 704x
-  fastest run: load / sweep / write / pics    0.81/0.48/0.57/0.75 0.75/0.47/0.35/0.58
-whole command, warm (parquet)                 2.58 s = 125x       3.06 s = 103x
-kernels in-process, warm                      0.47 s = 704x       0.39 s = 808x
-  range over the rounds                       598-867x            722-933x
-whole command, cold numba cache (csv)         50.8 s (load 47.3)  -
-planar2 564,001 poses, whole command warm     5.7 s = 186x        6.5 s = 189x
-============================================  ==================  ==================
+============================================  ==================  ==================  ==================
+IPAnema 3, 154,440 poses, static              run 1               run 2               run 3
+============================================  ==================  ==================  ==================
+per-pose linprog over the rounds              1.78-2.18 ms        1.94-2.15 ms        1.68-1.74 ms
+whole command, warm (csv)                     2.66 s = 105x       2.65 s = 119x       2.36 s = 114x
+  its sweep_s                                 0.41 s = 689x       0.47 s = 704x       0.41 s = 658x
+  fastest run: load / sweep / write / pics    0.81/0.48/0.57/0.75 0.75/0.47/0.35/0.58 0.69/0.35/0.58/0.58
+whole command, warm (parquet)                 2.58 s = 125x       3.06 s = 103x       2.40 s = 112x
+kernels in-process, warm                      0.47 s = 704x       0.39 s = 808x       0.32 s = 844x
+  range over the rounds                       598-867x            722-933x            645-901x
+whole command, cold numba cache (csv)         50.8 s (load 47.3)  -                   -
+planar2 564,001 poses, whole command warm     5.7 s = 186x        6.5 s = 189x        4.7 s = 183x
+============================================  ==================  ==================  ==================
+
+In five interleaved pairs of the IPAnema 3 command, 1576a64 against this version,
+``sweep_s`` was 0.34-0.44 s (median 0.356) before and 0.32-0.39 s (median 0.328)
+after; planar2's 564,001 poses in three pairs 2.71-2.92 s before and 2.62-2.73 s
+after (no change there: m = n).
 
 The round before (54fea28 -> 1576a64): the parallel kernels run their blocks
 of poses on a thread pool (``kernels/parallel.py``) instead of numba's
