@@ -222,6 +222,12 @@ def test_parquet_streams_row_groups_with_types_and_metadata(tmp_path):
     import cdpr_design
 
     assert m["name"] == "demo" and m["grid"] == {"step": [0.1]} and m["version"] == cdpr_design.__version__
+    # dictionary pages only where they pay: integers (and text), not the floating-point figures
+    # (booleans are bit-packed, never dictionary-encoded)
+    group = f.metadata.row_group(0)
+    dictionary = {group.column(i).path_in_schema: group.column(i).has_dictionary_page
+                  for i in range(group.num_columns)}
+    assert dictionary == {"x": False, "feasible": False, "count": True, "margin": False}
 
 
 def test_csv_and_parquet_of_the_same_chunks_agree(tmp_path):
