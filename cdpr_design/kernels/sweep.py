@@ -102,17 +102,13 @@ def planar2_block(k0, k1, start, lower, step, shape, Rb, A, wreq, tmin, tmax, fe
         L1 = math.sqrt(lx1 * lx1 + ly1 * ly1)
         lengths[k, 0] = L0
         lengths[k, 1] = L1
-        if L0 <= 1e-12 or L1 <= 1e-12:
-            feasible[k] = 0
-            margin[k] = np.nan
-            tensions[k, 0] = np.nan
-            tensions[k, 1] = np.nan
-            continue
-        u0x = lx0 / L0
-        u0y = ly0 / L0
-        u1x = lx1 / L1
-        u1y = ly1 / L1
-        det = u0x * u1y - u1x * u0y
+        u0x = u0y = u1x = u1y = det = 0.0  # a zero-length cable: no structure matrix
+        if L0 > 1e-12 and L1 > 1e-12:
+            u0x = lx0 / L0
+            u0y = ly0 / L0
+            u1x = lx1 / L1
+            u1y = ly1 / L1
+            det = u0x * u1y - u1x * u0y
         if abs(det) <= RANK_TOL:
             feasible[k] = 0
             margin[k] = np.nan
