@@ -84,7 +84,40 @@ cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
 of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
 lowered to 130,000 poses.
 
-This round (1576a64 -> this version): the minimum-norm tensions in closed form
+This round (d76ba24 -> this version): Parquet pages dictionary-encoded only
+for non-float columns (``io.columns._parquet_writer``): writing IPAnema 3's
+workspace table (154,440 x 24) took 0.26 s and made 22.1 MB with dictionaries
+on every column, 0.06 s and 19.0 MB now; the command's ``write_s`` with
+``--format parquet`` went from 0.62 s (previous run of this script) to
+0.12-0.21 s, and that command is now the faster of the two formats.  One run,
+an idle machine (load average 0.5 at the start; median round and range of
+three):
+
+============================================  ================================
+IPAnema 3, 154,440 poses, static              this version
+============================================  ================================
+per-pose linprog over the rounds              1.57-1.69 ms
+whole command, warm (csv)                     1.87 s = 134x (131-134)
+  its sweep_s                                 0.33 s = 763x (719-780)
+  fastest run: load / sweep / write / pics    0.52 / 0.32 / 0.40 / 0.46 s
+whole command, warm (parquet)                 1.83 s = 139x (134-142)
+  fastest run: load / sweep / write / pics    0.53 / 0.34 / 0.16 / 0.37 s
+kernels in-process, warm                      0.28 s = 864x (861-898), 544,000 poses/s
+whole command, cold numba cache (csv)         37.3 s = 6.5x (load_s 35.0 s)
+planar2 564,001 poses, whole command warm     4.49 s = 199x csv, 4.21 s = 208x parquet
+============================================  ================================
+
+The LP ran faster than in earlier runs (1.6 ms a pose against 1.7-2.6), which
+lowers every ratio: at 1.6 ms the 200x budget of the whole command is 1.24 s,
+and a process that only starts Python, imports numpy and numba and calls one
+small cached kernel takes 0.79 s of it.  Tried and dropped this round: skipping
+numba's registry refresh when a kernel comes from the cache (0.4 s of
+``load_s``; the process segfaults -- the refresh also registers the helper
+symbols the compiled code links to), and testing each HSM facet against the
+running minimum before its square root (hsm 1.41 -> 1.31 us a pose, 2.5 % of
+the pose: below the noise, not worth the code).
+
+The round before (1576a64 -> d76ba24): the minimum-norm tensions in closed form
 for one or two redundant cables (``kernels.tension_qp.project_two``): 0.97-1.04
 -> 0.64-0.76 us a pose of IPAnema 3 on one core, in interleaved runs over the
 grid's 142,237 feasible poses, out of 3.7-4.1 us for the whole pose.  In this
