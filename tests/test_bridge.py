@@ -442,3 +442,29 @@ def test_test_plc_run_writes_compare_ready_log(tmp_path, loop_data):
     assert header == plc_rows.csv_header(spec.from_dict(loop_data))
     assert data.shape[0] == summary["cycles"]
     assert set(summary["delay"]) == {"length_c1", "length_c2"}
+
+
+@pytest.mark.serial
+@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
+def test_test_plc_plays_the_unstretched_lengths_of_elastic_cables(tmp_path, loop_data):
+    """With elastic cables the test PLC commands what `simulate` commands: the unstretched lengths,
+    which the simulated winches pay out (the chords would let the effector sink by the stretch)."""
+    data = {**loop_data, "cable": {**loop_data["cable"], "model": "elastic"}}
+    p = write_spec(tmp_path, data)
+    d = spec.load(p)
+    samples = trajectory.sample(d, "probe")
+    L0, chords = samples.cables.unstretched, samples.lengths
+    assert np.all(chords - L0 > 1e-4)  # the stretch is there to see (planar2: EA = 2e4 N)
+    out = tmp_path / "o"
+    r = invoke("bridge", p, "--test-plc", "probe", "--out", out, "--json")
+    assert r.exit_code == 0, r.output
+    header, log = _read_csv(out / "bridge.csv")
+    col = {h: i for i, h in enumerate(header)}
+    targets = log[:, [col["length_c1_target"], col["length_c2_target"]]]
+    # after the path the PLC holds its last set-point: L0 (to bridge.csv's 10 digits), not the chord
+    np.testing.assert_allclose(targets[-1], L0[-1], rtol=1e-9, atol=0)
+    # every set-point read lies on the played polyline of L0 (linear in time between samples)
+    near = np.min(np.max(np.abs(targets[:, None, :] - L0[None, :, :]), axis=2), axis=1)
+    assert near.max() < 0.3 * 0.01 + 1e-9  # at most one PLC cycle of travel (0.3 m/s, 10 ms) from a sample
+    # and the robot ends where the path ends (within the ideal run's 2 mm: still settling there)
+    np.testing.assert_allclose(log[-1, [col["x"], col["y"]]], [0.85, 0.95], atol=2e-3)

@@ -147,10 +147,11 @@ def bridge(design, test_plc: str | None = None, duration: float | None = None, c
         raise InputError(f"{design.source}: plc: the spec has no plc: section (bridge needs its symbols)")
     dt, tmo = _settings(design, cycle_time, duration, reconnect, timeout)
     layout = PlcLayout.from_design(design)
-    samples = None
+    samples = plc_lengths = None
     if test_plc is not None:
         require_trajectory(design, test_plc, "--test-plc")
         samples = trajectory_samples(design, test_plc)
+        plc_lengths = _test_plc_setpoints(samples, test_plc)
         if duration is None:
             duration = samples.duration + 0.5
     where = _endpoint(design, test_plc, local_net_id)
@@ -161,16 +162,30 @@ def bridge(design, test_plc: str | None = None, duration: float | None = None, c
     with _stop_on_signal() as stop:
         transport = AdsTransport(layout, where.net_id, where.port, where.host, timeout=tmo,
                                  local_net_id=where.local_net_id)
-        res, rows, plc_log = _session(design, transport, layout, samples, test_plc, where, dt, duration,
-                                      reconnect, out_dir, stop, log, status or (lambda msg: None))
+        res, rows, plc_log = _session(design, transport, layout, samples, plc_lengths, test_plc, where, dt,
+                                      duration, reconnect, out_dir, stop, log, status or (lambda msg: None))
     summary = _summary(design, res, rows, plc_log, test_plc)
     out_dir.write_json("bridge.json", summary)
     return BridgeRun(res, summary, dt, out_dir)
 
 
-def _session(design, transport, layout, samples, test_plc, where, dt, duration, reconnect, out_dir, stop,
-             log, status):
-    """Test PLC (if any), connection, the loop; (result, row maker, test PLC log or None).
+def _test_plc_setpoints(samples, name: str):
+    """The set-points (k, m) [m] the test PLC plays for the sampled trajectory ``name``: those
+    ``simulate`` commands (:func:`cdpr_design.motion.run.cable_setpoints`: the chords with ideal
+    cables, the unstretched lengths with elastic or sagging ones, which the simulated robot's
+    winches pay out).  A sample without a set-point is an :class:`InputError` naming the option."""
+    from cdpr_design.motion.run import cable_setpoints
+
+    try:
+        return cable_setpoints(samples)[0]
+    except ValueError as exc:
+        raise InputError(f"--test-plc {name}: {exc}") from None
+
+
+def _session(design, transport, layout, samples, plc_lengths, test_plc, where, dt, duration, reconnect,
+             out_dir, stop, log, status):
+    """Test PLC (if any, playing ``plc_lengths`` at the sample times), connection, the loop;
+    (result, row maker, test PLC log or None).
 
     Whatever happens, the link is closed, the test PLC stopped and the rows
     logged so far kept in bridge.csv (every row is whole).
@@ -183,7 +198,7 @@ def _session(design, transport, layout, samples, test_plc, where, dt, duration, 
     try:
         if test_plc is not None:
             log(f"test PLC on {LOOPBACK} playing {test_plc!r} ({samples.duration:.3g} s)")
-            plc = TestPlc(layout, samples.time, samples.lengths, task_cycle=max(samples.cycle_time, 1e-3)).start()
+            plc = TestPlc(layout, samples.time, plc_lengths, task_cycle=max(samples.cycle_time, 1e-3)).start()
         _connect(transport, reconnect, stop, log)
         sim = br.make_simulator(design, dt, transport.read_setpoints())
         rows = RowMaker(design)

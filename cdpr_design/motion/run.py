@@ -117,8 +117,11 @@ class SimulationResult:
         return any(c in self.coords for c in ("phi", "rx", "ry", "rz"))
 
 
-def _setpoints(samples, compensate_stretch: bool):
-    """(set-points (k, m) [m], speeds (k, m) [m/s], real-cable model or None) of a sampled path.
+def cable_setpoints(samples, compensate_stretch: bool = True):
+    """(set-points (k, m) [m], speeds (k, m) [m/s], real-cable model or None) of a sampled path:
+    what a winch is commanded, by ``simulate`` and by the gateway's test PLC alike.
+    Ideal cables (or ``compensate_stretch`` off): the chord lengths; elastic or sagging
+    cables: the cable model's unstretched lengths.
 
     The speeds are the chord speeds in every case: the unstretched lengths follow them but for
     their stretch and sag, which step with the tensions where the path's acceleration does.
@@ -165,7 +168,7 @@ def simulate(design: Design, samples, *, timestep: float = 5e-4, servo_bandwidth
     """
     from cdpr_design.motion.simulation import DEFAULT_CABLE_SEGMENTS, Simulator
 
-    sp, vel, cs = _setpoints(samples, compensate_stretch)
+    sp, vel, cs = cable_setpoints(samples, compensate_stretch)
     sim = Simulator(design, timestep=timestep, servo_bandwidth=servo_bandwidth, delay=delay,
                     cable_damping=cable_damping, joint_damping=joint_damping,
                     feedforward=feedforward, compensate_stretch=compensate_stretch,
