@@ -150,6 +150,14 @@ def test_a_sample_without_a_solution_is_flagged_never_a_number(tmp_path):
     assert res.exit_code == 2
     assert "trajectories.down" in res.output and "no sagging cable set-points" in res.output
     assert "Traceback" not in res.output
+    # the gateway's test PLC would play the same set-points: refused before any connection or file
+    data["plc"] = {"ams_net_id": "127.0.0.1.1.1", "port": 851, "host": "127.0.0.1", "cycle_time": 0.01,
+                   "setpoints": ["MAIN.fLen1", "MAIN.fLen2"], "actuals": ["MAIN.fAct1", "MAIN.fAct2"]}
+    p = write_spec(tmp_path, data, "plc.yaml")
+    res = invoke("bridge", p, "--test-plc", "down", "--out", tmp_path / "b", "--quiet")
+    assert res.exit_code == 2, res.output
+    assert "--test-plc down" in res.output and "no sagging cable set-points" in res.output
+    assert "Traceback" not in res.output and not (tmp_path / "b").exists()
 
 
 def trajectory_header(model=None) -> list:
