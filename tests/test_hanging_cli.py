@@ -75,6 +75,22 @@ def test_fixed_workspace_rows_are_the_plain_engines(planar2):
     np.testing.assert_allclose(tilt, np.where(status == 0, np.degrees(np.abs(phi)), np.nan), atol=1e-12)
 
 
+def test_without_tilt_a_held_design_is_the_plain_sweep_and_a_free_one_still_hangs(tmp_path, planar2):
+    """``run(tilt=False)`` (what the evaluation and the sizing envelope use): a held design's
+    sweep without the hanging solve -- the same rows and summary as the plain engines, no tilt --
+    while a ``free`` design is still swept at its hanging orientation (its statics need it)."""
+    res, chunks = collect_chunks(ws.run, planar2, step=0.02, chunk=1000, tilt=False)
+    g = ws.make_grid(planar2, 0.02)
+    ref, ref_chunks = collect_chunks(straight_sweep, planar2, "static", g, np.zeros(3), chunk=1000)
+    for name in ("poses", "feasible", "margin", "tensions", "lengths"):
+        np.testing.assert_array_equal(stacked(chunks, name), stacked(ref_chunks, name))
+    assert res.hanging is None and not chunks[0].extra and "max_tilt" not in res.summary()
+    free = spec.load(free_planar2(tmp_path))
+    a, b = ws.run(free, step=0.05), ws.run(free, step=0.05, tilt=False)
+    assert b.hanging is not None and b.summary()["max_tilt"] == a.summary()["max_tilt"]
+    assert (b.feasible, b.min_margin) == (a.feasible, a.min_margin)
+
+
 def test_fixed_pose_and_fk_unchanged(planar2):
     res = invoke("pose", PLANAR2, "--at", "0.3,0.5", "--json")
     assert res.exit_code == 0, res.output

@@ -94,7 +94,7 @@ def task_sweep(design: Design, step: float | None = None, progress=None, engine:
             least[0] = min(least[0], float(mg.min()))
 
     res = ws.run(design, kind=_task_kind(design), grid=g, on_chunk=on_chunk, progress=progress,
-                 keep_maps=False, engine=engine)
+                 keep_maps=False, engine=engine, tilt=False)
     return res, least[0]
 
 
@@ -156,7 +156,9 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catal
     need_ws, need_sizing = parts_needed(design, figures, motor)
     wres = workspace_result
     if wres is None and need_ws:
-        wres = ws.run(design, "static", step=step, keep_maps=keep_maps, progress=progress, engine=engine)
+        # the figures and checks use no hanging tilt of a held effector (report passes its own sweep)
+        wres = ws.run(design, "static", step=step, keep_maps=keep_maps, progress=progress, engine=engine,
+                      tilt=False)
     task, task_least = task_sweep(design, step, engine=engine)
     sizing = sz.size_motors(design, catalogue, step=step, samples=samples, safety_factor=safety_factor,
                             motor=motor, engine=engine) if need_sizing else None

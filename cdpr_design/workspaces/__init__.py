@@ -45,7 +45,7 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         orientation=None, on_chunk: Callable[[Chunk], None] | None = None,
         progress: Callable[[int, int], None] | None = None, force: bool = False,
         chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False,
-        engine: str = "auto", max_tilt: float | None = None) -> WorkspaceResult:
+        engine: str = "auto", max_tilt: float | None = None, tilt: bool = True) -> WorkspaceResult:
     """Sweep the workspace grid and return the summary and maps.
 
     Parameters
@@ -83,6 +83,11 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     max_tilt : float, optional
         Largest hanging tilt [deg] of a feasible pose (under-constrained designs
         with ``effector.orientation: free``; default ``requirements.max_tilt``).
+    tilt : bool
+        False: leave out the tilt a *held* under-constrained effector would hang
+        with (a figure only, and the costliest part of such a sweep: callers that
+        use just feasibility, margins and tensions pass False).  A ``free``
+        design's hanging orientation is always found: its statics depend on it.
 
     Under-constrained designs with ideal cables (:mod:`~cdpr_design.workspaces.hanging`)
     add the tilt their effector hangs with; with ``effector.orientation: free`` their
@@ -99,7 +104,7 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     """
     check_engine(engine)
     g, ori = _setup(design, kind, step, grid, orientation, force)
-    if hanging.applies(design):  # under-constrained: the tilt it hangs with (`free`: its statics there)
+    if hanging.wanted(design, tilt):  # under-constrained: the tilt it hangs with (`free`: its statics there)
         return hanging.sweep(design, kind, g, ori, lambda oc: _fixed(design, kind, g, ori, oc, progress, chunk,
                                                                      keep_maps, interference, engine),
                              on_chunk=on_chunk, progress=progress, chunk=chunk, keep_maps=keep_maps,

@@ -58,6 +58,14 @@ class HangingMaps:
     tilt_limit: float | None = None
 
 
+def wanted(design: Design, tilt: bool = True) -> bool:
+    """Whether a sweep of ``design`` goes through :func:`sweep`: it :func:`applies`, and either its
+    effector hangs freely (its feasibility is judged at the hanging orientation) or ``tilt``
+    asks for the tilt a held effector would hang with (only a figure: sweeps that use just
+    feasibility, margins and tensions leave it out)."""
+    return applies(design) and (tilt or H.hangs_freely(design))
+
+
 def applies(design: Design) -> bool:
     """Whether a sweep of ``design`` goes through :func:`sweep`: under-constrained, with point
     outlets and ideal cables (the hanging solvers model neither swivel pulleys nor elastic or
