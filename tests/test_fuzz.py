@@ -682,3 +682,22 @@ def test_found_a_resumed_seed_near_the_top_stays_a_seed(tmp_path):
     from cdpr_design.optimize.study import make_sampler
 
     assert make_sampler(2 ** 32 - 1 + 5) is not None
+
+
+def test_found_check_of_a_held_three_cable_body_skips_the_tilt():
+    # a 3-cable 3T body with a size: under-constrained and held, so every sweep also solved the tilt
+    # it would hang with (a figure only) -- twice in `check` (workspace and sizing envelope), 113 s at
+    # this 99,750-pose grid; the evaluation never uses the tilt and now skips it
+    from cdpr_design.jobs import sizing as job
+    from cdpr_design.model import spec
+
+    design = spec.from_dict({
+        "name": "fz", "motion": "3T", "frame": {"lower": [0.0, 0.0, 0.0], "upper": [0.93, 3.47298, 3.72752]},
+        "effector": {"mass": 5.99069, "size": [0.212162, 0.0636041, 0.217465]}, "tension": [3.07262, 225.044],
+        "cables": [{"name": "c1", "outlet": [0.920118, 1.1044, 3.72752], "attachment": [-0.0701782, 0.010774, -0.0248456]},
+                   {"name": "c2", "outlet": [1.39897e-59, 2.21296, 1.53864],
+                    "attachment": [0.0115591, 0.00745506, 1.49373e-244]},
+                   {"name": "c3", "outlet": [0.04, 1.30734, 2.13765], "attachment": [0.101763, 0.00731415, -0.0134948]}],
+        "workspace": {"grid": {"step": 0.621253}}})
+    res, exc = outcome(job.check, design, None, None, None, None, 0.05)
+    assert exc is None and res.evaluation.row["poses"] == 99750
