@@ -701,3 +701,24 @@ def test_found_check_of_a_held_three_cable_body_skips_the_tilt():
         "workspace": {"grid": {"step": 0.621253}}})
     res, exc = outcome(job.check, design, None, None, None, None, 0.05)
     assert exc is None and res.evaluation.row["poses"] == 99750
+
+
+def test_found_cable_models_picture_skips_the_tilt(tmp_path):
+    # a held 4-cable 3T body with sagging cables: cable_models.png sweeps the grid again with ideal
+    # cables, and that sweep solved the hanging tilt of all 27,720 poses (100 s) for a picture that
+    # compares feasible cells only
+    from cdpr_design.jobs import workspace as job
+    from cdpr_design.model import spec
+
+    design = spec.from_dict({
+        "name": "fz", "motion": "3T", "frame": {"lower": [0.0, 0.0, 0.0], "upper": [3.55878, 3.84512, 3.30068]},
+        "effector": {"mass": 6.61985, "size": [0.0493498, 5e-206, 1e-08]}, "tension": [0.178797, 265.15],
+        "cables": [{"name": "c1", "outlet": [2.74967, 3.16376, 1.8238], "attachment": [0.0, 1e-300, 4.51592e-09]},
+                   {"name": "c2", "outlet": [0.520182, 1.42119, 1.54758], "attachment": [0.0, 0.0, -3.12716e-09]},
+                   {"name": "c3", "outlet": [6.07044e-290, 2.72754, 0.645148], "attachment": [-0.000201246, 0.0, 0.0],
+                    "model": "elastic", "axial_stiffness": 1000.0},
+                   {"name": "c4", "outlet": [1.04371, 2.92235, 0.160674], "attachment": [-1.17549e-38, 0.0, 1e-10]}],
+        "workspace": {"grid": {"step": 0.640853}},
+        "cable": {"model": "sagging", "axial_stiffness": 1015150.0, "mass_per_length": 0.436277}})
+    (res, _), exc = outcome(job.workspace, design, tmp_path / "o", step=0.11935492729705242)
+    assert exc is None and res.poses == 27720 and (tmp_path / "o" / "cable_models.png").stat().st_size > 0

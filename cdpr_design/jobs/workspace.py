@@ -160,8 +160,10 @@ def cable_model_picture(result, engine: str = "auto", collisions: bool = False) 
     from cdpr_design import workspaces as ws
     from cdpr_design.model.spec import with_cable_model
 
+    # only the feasible cells are compared: no hanging tilt of a held under-constrained effector
     ideal = ws.run(with_cable_model(result.design, "ideal"), kind=result.kind, grid=result.grid,
-                   orientation=result.orientation, force=True, interference=collisions, engine=engine)
+                   orientation=result.orientation, force=True, interference=collisions, engine=engine,
+                   tilt=False)
     return ("cable_models.png", wsplots.cable_model_figure, (result, ideal))
 
 
