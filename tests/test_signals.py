@@ -92,7 +92,10 @@ def test_stale_temporary_files_of_live_processes_are_kept(tmp_path):
 
 
 def test_sigterm_during_a_sweep_keeps_the_journal_and_resume_is_identical(tmp_path):
-    args = ["sweep", PLANAR2, "--vary", "effector.mass=0.5:2:6", "--step", "0.05", "--workers", "1",
+    # 48 variants of about 50 ms each (numpy engine, 0.005 m): the signal, sent once the first variant is in
+    # the journal, lands seconds before the end. (With 6 variants of 6 ms the whole sweep could finish between
+    # two polls and write sweep.csv before the signal arrived: CI failed on that race.)
+    args = ["sweep", PLANAR2, "--vary", "effector.mass=0.5:2:48", "--step", "0.005", "--workers", "1",
             "--no-picture", "--quiet"]
     ref = subprocess.run([sys.executable, "-m", "cdpr_design", *map(str, args), "--out", tmp_path / "ref"],
                          capture_output=True, text=True, timeout=300, env=subprocess_env(CDPR_DESIGN_PICTURE_WORKER="0"))
