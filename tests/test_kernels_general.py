@@ -171,7 +171,7 @@ def test_against_references(motion, extra):
 
         # --- static: row 0 only
         f, mg = K.eval_pose(W, wreq, tmin, tmax, combos, K.KIND_STATIC, t)
-        f2, mg2 = K.eval_general(W, wreq, tmin, tmax, combos, K.KIND_STATIC, t.copy(), scr)
+        f2, mg2 = K.eval_general(W, wreq, tmin, tmax, combos, K.KIND_STATIC, t.copy(), scr, m - n)
         refs = hsm_bruteforce(W, wreq, tmin, tmax, subsets)
         ref = refs[0]
         assert np.isfinite(mg) and np.isfinite(ref)
@@ -231,7 +231,7 @@ def test_square_matches_closed_form():
             ok, mg = K.square_eval(W, w[None, :], tmin, tmax, t1)
             t2 = np.empty(n)
             f, mg2 = K.eval_general(W, w[None, :], tmin, tmax, combinations(n, n), 0, t2,
-                                    K.make_scratch(n, n, 1))
+                                    K.make_scratch(n, n, 1), 0)
             assert abs(mg - mg2) <= 1e-9 * max(1.0, abs(mg))
             assert f == (mg2 >= 0)
             if f:
@@ -382,3 +382,50 @@ def test_small_redundancy_tensions_match_the_active_set_method(r):
                     assert np.max(np.abs(t - MinNormOracle(n, m)(W, w, tmin, tmax))) <= 1e-6
     assert counts["feasible"] > 500 and counts["infeasible"] > 500, counts
     assert counts["active"] > 300 and counts["degenerate"] > 1000, counts
+
+
+@pytest.mark.parametrize("motion,extra", CASES, ids=[f"{mo}-m=n+{k}" for mo, k in CASES])
+def test_grid_kernel_of_each_redundancy_equals_the_pose_kernel(motion, extra):
+    """The grid sweep runs one kernel per m - n (0, 1, 2, any other: ``sweep.grid_block``), each
+    compiled with its own methods; every row equals the per-pose kernel (``eval_pose``, whose
+    choice of method happens at run time, checked against the references above), bit for bit,
+    for all three kinds -- including poses on an outlet (zero-length cable)."""
+    rng = np.random.default_rng(700 + 10 * extra + list(MOTIONS).index(motion))
+    dim, _ = MOTIONS[motion]
+    n = len(MOTIONS[motion][1])
+    m = n + extra
+    A, B, rows, tmin, tmax = random_robot(rng, motion, m)
+    _, R = random_pose(rng, motion)
+    Rb = np.ascontiguousarray(B @ R.T)
+    shape = np.array([7, 6, 4 if dim == 3 else 1])
+    lower = np.array([-1.0, -1.0, -1.0 if dim == 3 else 0.0])
+    step = np.array([1 / 3, 0.4, 2 / 3])
+    A[0] = lower + step * np.array([2, 3, 1 if dim == 3 else 0]) + Rb[0]  # grid pose 2,3,(1) reaches outlet 0
+    count = int(np.prod(shape))
+    combos = combinations(m, n)
+    W0 = plain_W(A, B, lower + step * np.array([3, 2, 1 if dim == 3 else 0]), R, rows)
+    for kind in (K.KIND_STATIC, K.KIND_WRENCH_FEASIBLE, K.KIND_WRENCH_CLOSURE):
+        # balanced by tensions inside the bounds at grid pose 3,2,(1): feasible there
+        wreq = np.array([W0 @ rng.uniform(tmin + 1.0, tmax - 1.0) for _ in range(3)])
+        got = (np.empty(count, np.uint8), np.empty(count), np.empty((count, m)), np.empty((count, m)))
+        K.sweep_grid(0, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind, *got)
+        W = np.empty((n, m))
+        L = np.empty(m)
+        t = np.empty(m)
+        on_outlet = 0
+        for k, (ix, iy, iz) in enumerate(itertools.product(*map(range, shape))):
+            p = lower + step * np.array([ix, iy, iz])
+            ok = K.structure_matrix(p[0], p[1], p[2], Rb, A, rows, W, L)
+            if ok:
+                f, mg = K.eval_pose(W, wreq, tmin, tmax, combos, kind, t)
+            else:
+                on_outlet += 1
+                f, mg, t[:] = False, np.nan, np.nan
+            np.testing.assert_array_equal(got[3][k], L)
+            assert got[0][k] == f, (kind, k)
+            np.testing.assert_array_equal(got[1][k], mg + 0.0)
+            np.testing.assert_array_equal(got[2][k], t)
+        assert on_outlet == 1
+        if kind != K.KIND_WRENCH_CLOSURE:
+            assert got[0][3 * shape[1] * shape[2] + 2 * shape[2] + (1 if dim == 3 else 0)]
+            assert not got[0].all()

@@ -357,4 +357,4 @@ def rotated_block(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feas
         ok = structure_matrix(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
         for i in range(m):
             lengths[k, i] = L[i]
-        eval_row(k, ok, W, wreq[k], tmin, tmax, combos, kind, t, scr, feasible, margin, tensions)
+        eval_row(k, ok, W, wreq[k], tmin, tmax, combos, kind, t, scr, feasible, margin, tensions, m - n)

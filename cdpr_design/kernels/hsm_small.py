@@ -67,7 +67,7 @@ def _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure):
             sv[1, p] = CLOSURE_TOL * math.sqrt(s)
 
 
-@njit_fast
+@njit_inline
 def _width(la, lb, lc, da, db, dc, ka, kb, kc, nrm2, want_closure):
     """One facet's half width / ||nu||, 1 / ||nu|| and closure test, from scalars only.
 

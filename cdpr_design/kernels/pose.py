@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_inline
-from cdpr_design.kernels.hsm import basis_factor, hsm_factored, make_scratch, square_eval
-from cdpr_design.kernels.tension_qp import null_space_setup, project_null
+from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval
+from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
+from cdpr_design.kernels.tension_qp import goldfarb_idnani, null_space_setup, project_one, project_two
 
 
 KIND_STATIC = 0
@@ -19,24 +20,26 @@ KIND_WRENCH_CLOSURE = 2
 
 
 @njit_inline
-def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr):
-    """:func:`eval_pose` for any m >= n with caller-provided scratch (no allocation).
+def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
+    """:func:`eval_pose` for any m >= n with caller-provided scratch (no allocation); ``r`` = m - n.
 
     ``scr`` comes from :func:`make_scratch` (n, m, wreq rows).  The margin is
-    the fast hyperplane-shifting one (:func:`hsm_factored`) over ``wreq[0]``
-    (static) or every row (wrench-feasible, wrench-closure); the tensions at
-    ``wreq[0]`` come from the exact QP (:func:`project_null`), run only
-    where the margin of ``wreq[0]`` is >= 0.  Static and wrench-feasible
-    poses are feasible when the margin is >= 0 *and* the QP found tensions,
-    so a feasible pose always has tensions; wrench-closure poses when W
-    positively spans R^n.  Rank W < n or a zero column (zero-length cable):
-    (False, NaN), tensions NaN.
+    the fast hyperplane-shifting one over ``wreq[0]`` (static) or every row
+    (wrench-feasible, wrench-closure); the tensions at ``wreq[0]`` come from
+    the exact QP, run only where the margin of ``wreq[0]`` is >= 0.  Static
+    and wrench-feasible poses are feasible when the margin is >= 0 *and* the
+    QP found tensions, so a feasible pose always has tensions; wrench-closure
+    poses when W positively spans R^n.  Rank W < n or a zero column
+    (zero-length cable): (False, NaN), tensions NaN.
 
-    Inlined into its callers (the sweeps' pose loops), as is the QP's
-    dispatch on m - n: called as a function, with the scratch tuple and every
-    QP compiled in behind one call, a pose of IPAnema 3 took 3.56 us instead
-    of 2.90 us (one core; scripts/bench_outputs.py).  The tensions are written
-    once, on every path (NaN where there are none).
+    The methods are chosen by ``r`` as in :func:`~cdpr_design.kernels.hsm.hsm_factored`
+    and :func:`~cdpr_design.kernels.tension_qp.project_null` (closed forms for
+    r = 1, 2), but called here directly, and this function is inlined into its
+    callers: a caller passing ``r`` as a constant
+    (:func:`cdpr_design.kernels.sweep.grid_block`) compiles only the methods it
+    needs, and no inlined layer carries the scratch tuple (each such layer
+    cost 0.1-0.2 us a pose).  A pose of IPAnema 3 took 3.56 us on one core
+    through those two dispatching functions, 2.62 us this way.
     """
     n, m = W.shape
     nv = wreq.shape[0] if kind != KIND_STATIC else 1
@@ -49,11 +52,17 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr):
     if zero_column or not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
         _no_tensions(m, t_out)
         return False, np.nan
-    margin0, margin, closure = hsm_factored(W, wreq, nv, tmin, tmax, scr, kind == KIND_WRENCH_CLOSURE)
+    closure_wanted = kind == KIND_WRENCH_CLOSURE
+    if r == 2:
+        margin0, margin, closure = hsm_two(W, wreq, nv, tmin, tmax, scr, closure_wanted)
+    elif r == 1:
+        margin0, margin, closure = hsm_one(W, wreq, nv, tmin, tmax, scr, closure_wanted)
+    else:
+        margin0, margin, closure = hsm_enumerate(W, wreq, nv, tmin, tmax, scr)
     qp_ok = False
     if not margin0 >= 0.0:
         _no_tensions(m, t_out)
-    elif m == n:
+    elif r == 0:
         # unique tensions t = G w
         tab = scr[0]
         bcol = scr[20]
@@ -65,9 +74,14 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr):
             t_out[bcol[s]] = min(max(acc, tmin[bcol[s]]), tmax[bcol[s]])
     else:  # writes t_out, NaN where no tensions exist
         null_space_setup(n, m, wreq[0], scr)
-        qp_ok = project_null(m, m - n, tmin, tmax, t_out, scr)
+        if r == 2:
+            qp_ok = project_two(m, tmin, tmax, t_out, scr)
+        elif r == 1:
+            qp_ok = project_one(m, tmin, tmax, t_out, scr)
+        else:
+            qp_ok = goldfarb_idnani(m, r, tmin, tmax, t_out, scr)
     if kind == KIND_WRENCH_CLOSURE:
-        return closure and m > n, margin
+        return closure and r > 0, margin
     return margin >= 0.0 and qp_ok, margin
 
 
@@ -103,7 +117,7 @@ def eval_pose(W, wreq, tmin, tmax, combos, kind, t_out):
     # any m != n: basis-factored HSM + exact Goldfarb-Idnani min-norm QP
     # (allocates its scratch: sweeps call eval_general with per-block scratch)
     return eval_general(W, wreq, tmin, tmax, combos, kind, t_out,
-                        make_scratch(n, m, wreq.shape[0]))
+                        make_scratch(n, m, wreq.shape[0]), m - n)
 
 
 @njit
@@ -135,8 +149,9 @@ def eval_square(W, wreq, tmin, tmax, kind, t_out):
 
 
 @njit_inline
-def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin, tensions):
-    """Row ``k`` of a sweep's outputs from the pose's structure matrix ``W`` (n, m).
+def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin, tensions, r):
+    """Row ``k`` of a sweep's outputs from the pose's structure matrix ``W`` (n, m); ``r`` = m - n
+    (a constant where the caller specialises on it, see :func:`eval_general`).
 
     ``ok`` False (a zero-length cable): infeasible, margin and tensions NaN.
     Otherwise :func:`eval_square` (m = n) or :func:`eval_general` with the
@@ -144,17 +159,17 @@ def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin,
     ``feasible[k]`` (uint8), ``margin[k]`` (-0.0 as 0.0: one zero in the CSV,
     whatever the engine) [N] and ``tensions[k]`` [N].
     """
-    n, m = W.shape
+    m = W.shape[1]
     if not ok:
         feasible[k] = 0
         margin[k] = np.nan
         for i in range(m):
             tensions[k, i] = np.nan
         return
-    if m == n:
+    if r == 0:
         f, mg = eval_square(W, wreq, tmin, tmax, kind, t)
     else:
-        f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr)
+        f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr, r)
     feasible[k] = 1 if f else 0
     margin[k] = mg + 0.0
     for i in range(m):

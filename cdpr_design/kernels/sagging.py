@@ -316,7 +316,7 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     if m == n:
         feasible, margin = eval_square(W, wreq, lo, hi, kind, t)
     else:
-        feasible, margin = eval_general(W, wreq, lo, hi, combos, kind, t, scr)
+        feasible, margin = eval_general(W, wreq, lo, hi, combos, kind, t, scr, m - n)
     feasible = feasible and bounded == 2
     for i in range(m):
         t[i] = tq[i] if feasible else math.nan

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_inline
+from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.linalg import householder_qr
 from cdpr_design.kernels.hsm import basis_factor
 
@@ -76,12 +76,12 @@ def qp_tolerance(m, tmin, tmax):
     return QP_TOL * scale
 
 
-@njit_inline
+@njit
 def project_null(m, r, tmin, tmax, t, scr):
     """The projection of :func:`goldfarb_idnani` (same inputs in ``scr``, same result): in closed
     form for one or two redundant cables (:func:`project_one`, :func:`project_two`), by the dual
-    active-set method otherwise.  Returns False (``t`` NaN) when no tensions exist.  Inlined, so
-    that the caller calls the one solver it needs directly."""
+    active-set method otherwise.  Returns False (``t`` NaN) when no tensions exist.  The sweeps'
+    pose function makes the same choice inline (:func:`cdpr_design.kernels.pose.eval_general`)."""
     if r == 1:
         return project_one(m, tmin, tmax, t, scr)
     if r == 2:
