@@ -42,6 +42,16 @@ def test_worker_draws_the_same_bytes(result):
     assert remote[0][1][:8] == b"\x89PNG\r\n\x1a\n"
 
 
+@pytest.mark.skipif(not hasattr(os, "getpriority"), reason="POSIX priorities")
+def test_worker_runs_at_a_lower_cpu_priority_than_its_parent(result):
+    """The child yields the CPU to the command's sweep (pw.NICENESS), and still draws."""
+    mine = os.getpriority(os.PRIO_PROCESS, 0)
+    with pw.PictureWorker(force=True) as worker:
+        assert worker.render(jobs(result)[:1])[0][0] == "workspace.png"  # warmed up: nice'd by now
+        theirs = os.getpriority(os.PRIO_PROCESS, worker.proc.pid)
+    assert theirs == min(mine + pw.NICENESS, 19)
+
+
 def test_error_in_worker_is_raised_in_process():
     """A figure that fails in the child is drawn again here, so the real error surfaces."""
     with pw.PictureWorker(force=True) as worker:
