@@ -84,17 +84,42 @@ cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
 of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
 lowered to 130,000 poses.
 
-This round (d76ba24 -> this version): Parquet pages dictionary-encoded only
+This round (c518a27 -> this version): the pose function's margin and QP methods
+called directly, with the function inlined into the sweeps' loops, and one grid
+kernel per redundancy m - n chosen in Python (``kernels.sweep.grid_block``):
+3.56 -> 2.62 us a pose of IPAnema 3 on one core; the picture process at a
+lower CPU priority (``plots.worker.NICENESS``).  One run, idle machine (load
+average 0.7 at the start; median round and range of three):
+
+============================================  ================================
+IPAnema 3, 154,440 poses, static              this version
+============================================  ================================
+per-pose linprog over the rounds              1.54 ms
+whole command, warm (csv)                     1.62 s = 147x (144-150)
+  its sweep_s                                 0.249 s = 955x (914-985)
+  fastest run: load / sweep / write / pics    0.48 / 0.24 / 0.22 / 0.41 s
+whole command, warm (parquet)                 1.56 s = 153x (149-153)
+  its sweep_s                                 0.254 s = 934x (917-958)
+kernels in-process, warm                      0.216 s = 1102x (1097-1106), 717,000 poses/s
+whole command, cold numba cache (csv)         32.1 s = 7.5x (load_s 30.1 s; 23.6 s in a run an hour earlier)
+planar2 564,001 poses, whole command warm     3.97 s = 201x csv, 3.87 s = 206x parquet
+============================================  ================================
+
+The kernels pass 1000x in this process; the command's ``sweep_s`` is 0.03 s
+longer (its first sweep in a fresh process, next to the picture process's
+start) and stays just under.
+
+The round before (d76ba24 -> c518a27): Parquet pages dictionary-encoded only
 for non-float columns (``io.columns._parquet_writer``): writing IPAnema 3's
 workspace table (154,440 x 24) took 0.26 s and made 22.1 MB with dictionaries
-on every column, 0.06 s and 19.0 MB now; the command's ``write_s`` with
+on every column, 0.06 s and 19.0 MB after; the command's ``write_s`` with
 ``--format parquet`` went from 0.62 s (previous run of this script) to
 0.12-0.21 s, and that command is now the faster of the two formats.  One run,
 an idle machine (load average 0.5 at the start; median round and range of
 three):
 
 ============================================  ================================
-IPAnema 3, 154,440 poses, static              this version
+IPAnema 3, 154,440 poses, static              c518a27
 ============================================  ================================
 per-pose linprog over the rounds              1.57-1.69 ms
 whole command, warm (csv)                     1.87 s = 134x (131-134)
