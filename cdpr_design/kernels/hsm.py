@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_fast, njit_inline
+from cdpr_design.kernels._jit import njit, njit_fast
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
 from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, det_small, gram_of_inverse, inverse_small
 
@@ -329,7 +329,7 @@ def _null_vector(A, k, mu, minor):
     return bound2 > 0.0 and nrm2 > RANK_TOL * RANK_TOL * bound2
 
 
-@njit_inline
+@njit
 def _next_comb(idx, k, nn):
     """Advance idx[:k] to the next k-subset of range(nn) (lexicographic); False at the end."""
     i = k - 1
