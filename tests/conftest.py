@@ -3,10 +3,26 @@
 from __future__ import annotations
 
 import os
+import signal
 
 import pytest
 
 from .helpers import DESIGNS, PLANAR2, ROOT, planar2_raw, random_planar_data, write_spec  # noqa: F401
+
+
+def _sigint_handled() -> None:
+    """A test session started with SIGINT ignored (``nohup``, a shell's background job) would pass
+    that on to every command the tests start, and the tests of Ctrl-C would see no interrupt (exit
+    0, not 130). Handle SIGINT as usual here: a child then starts with the default disposition, as
+    from a terminal."""
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        try:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+        except ValueError:  # not the main thread: nothing can be changed from here
+            pass
+
+
+_sigint_handled()
 
 
 @pytest.fixture
