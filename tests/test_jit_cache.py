@@ -12,6 +12,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numba as nb
+import numpy as np
+import pytest
+
 from cdpr_design import kernels as K
 from cdpr_design.kernels import _jit
 
@@ -67,3 +71,39 @@ def test_an_edit_to_a_called_module_recompiles_its_callers(tmp_path):
     assert head in text
     hsm.write_text(text.replace(head, head + "    W = W * 2.0  # edited by the test\n", 1))
     assert _probe(tmp_path) == ([1.5, 2.0], 0)  # W doubled: halved tensions, compiled again
+
+
+def _scaled_py(a, scr, k):
+    return a[k] * scr[0][0] + scr[1][0]
+
+
+_scaled = nb.njit(inline="always")(_scaled_py)
+
+
+def _pass_on(a, out, scr):
+    for k in range(a.shape[0]):
+        out[k] = _scaled(a, scr, k)
+
+
+def test_noref_loops_are_compiled_without_reference_counting():
+    """numba honours the option behind ``njit_noref``: the same loop, passing a tuple of arrays on to
+    an inlined helper, counts references with the kernels' usual options and not with NOREF."""
+    usual = nb.njit(**dict(_jit.JIT, cache=False))(_pass_on)
+    noref = nb.njit(**dict(_jit.NOREF, cache=False))(_pass_on)
+    a, scr = np.arange(5.0), (np.full(2, 2.0), np.full(3, 1.0))
+    for f in (usual, noref):
+        out = np.empty(5)
+        f(a, out, scr)
+        assert out.tolist() == [1.0, 3.0, 5.0, 7.0, 9.0]
+    ir = {f: "".join(f.inspect_llvm().values()) for f in (usual, noref)}
+    assert "NRT_decref" in ir[usual]
+    assert "NRT_incref" not in ir[noref] and "NRT_decref" not in ir[noref]
+
+
+def test_a_noref_loop_cannot_allocate():
+    """An allocation in a loop without reference counting is refused when it compiles, not leaked."""
+    def allocates(n):
+        return np.empty(n).sum()
+
+    with pytest.raises(nb.errors.TypingError):
+        nb.njit(**dict(_jit.NOREF, cache=False))(allocates)(3)

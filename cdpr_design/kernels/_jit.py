@@ -78,3 +78,15 @@ FAST = {"reassoc", "contract", "arcp"}
 njit_fast = nb.njit(fastmath=FAST, **JIT)
 #: Small helpers of the hot loops, inlined into their callers (no call, no reference counting per call).
 njit_inline = nb.njit(fastmath=FAST, inline="always", **JIT)
+#: The loops over poses: compiled without numba's reference counting (``_nrt=False``).
+#: numba counts references to every array a function binds or passes on -- an atomic
+#: increment and decrement per array per pose, the scratch tuple alone holding 31 -- and
+#: the kernels' block loops spent more than half their time on it (IPAnema 3: 2.66 ->
+#: 1.21 us a pose on one core without).  Such a loop gets its arrays from a block function
+#: that allocates them and outlives the loop.  Neither the loop nor anything it calls may
+#: allocate: numba compiles the calls with the same option, and refuses an allocation there
+#: when it compiles (so the kernels that solve a polynomial's roots or a Newton step with
+#: fresh arrays, the hanging tilt and the sagging cables, keep reference counting).
+#: ``tests/test_jit_cache.py`` fails if numba stops honouring the option.
+NOREF = dict(JIT, _nrt=False)
+njit_noref = nb.njit(**NOREF)

@@ -50,7 +50,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import njit, njit_noref
 from cdpr_design.kernels.parallel import run_blocks
 
 #: Status codes of :func:`catenary_inverse`.
@@ -661,7 +661,7 @@ def catenary_ends_batch(H, VB, L0, w, EA):
     return X, Z
 
 
-@njit
+@njit_noref
 def _ends_block(k0, k1, H, VB, L0, w, EA, X, Z):
     for i in range(k0, k1):
         X[i], Z[i] = catenary_ends(H[i], VB[i], L0[i], w[i], EA[i])
@@ -677,7 +677,7 @@ def catenary_inverse_batch(X, Z, L0, w, EA, H0, VB0, tol, maxit):
     return H, VB, status, iters
 
 
-@njit
+@njit_noref
 def _inverse_block(k0, k1, X, Z, L0, w, EA, H0, VB0, tol, maxit, H, VB, status, iters):
     for i in range(k0, k1):
         H[i], VB[i], status[i], iters[i] = catenary_inverse(X[i], Z[i], L0[i], w[i], EA[i], H0[i], VB0[i], tol,

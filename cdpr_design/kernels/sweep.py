@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_inline
+from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
 from cdpr_design.kernels.linalg import RANK_TOL
 from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
 from cdpr_design.kernels.hsm import make_scratch
@@ -33,54 +33,83 @@ def grid_block(r: int):
     """The kernel computing rows k0..k1-1 of :func:`sweep_grid` for m - n = ``r``.
 
     One per redundancy of 0, 1 and 2, each with ``r`` a constant in
-    :func:`_grid_rows` and so compiled with only its own margin and QP method
+    :func:`_grid_loop` and so compiled with only its own margin and QP method
     (:func:`~cdpr_design.kernels.pose.eval_general`); any other ``r`` takes the
     general one.  Chosen here, in Python, so that a design compiles only the
     kernel it uses.  A pose of IPAnema 3 (r = 2) took 3.56 us on one core
     with one kernel for every r, 2.62 us with its own.
+
+    For r = 1 and 2 the block function allocates the block's buffers
+    (:func:`_buffers`) and hands them to its loop over the poses, compiled
+    without reference counting (:data:`~cdpr_design.kernels._jit.njit_noref`):
+    every array a pose's code binds or passes on (the scratch tuple alone holds
+    31) otherwise costs an atomic increment and decrement per pose.  IPAnema 3:
+    2.66 -> 1.21 us a pose on one core.  r = 0 and r > 2 keep reference
+    counting: their code reaches the square case, whose inverse allocates
+    (:func:`~cdpr_design.kernels.hsm.square_eval`).
     """
     return {0: _grid_rows_0, 1: _grid_rows_1, 2: _grid_rows_2}.get(r, _grid_rows_any)
+
+
+@njit_inline
+def _buffers(n, m, nv):
+    """A block's structure matrix W (n, m), tensions t (m,), lengths L (m,) and scratch
+    (:func:`~cdpr_design.kernels.hsm.make_scratch`)."""
+    return np.empty((n, m)), np.empty(m), np.empty(m), make_scratch(n, m, nv)
 
 
 @njit
 def _grid_rows_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths):
-    _grid_rows(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-               feasible, margin, tensions, lengths, 2)
+    W, t, L, scr = _buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+    _grid_loop_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+                 feasible, margin, tensions, lengths, W, t, L, scr)
+
+
+@njit_noref
+def _grid_loop_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+                 feasible, margin, tensions, lengths, W, t, L, scr):
+    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+               feasible, margin, tensions, lengths, W, t, L, scr, 2)
 
 
 @njit
 def _grid_rows_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths):
-    _grid_rows(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-               feasible, margin, tensions, lengths, 1)
+    W, t, L, scr = _buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+    _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+                 feasible, margin, tensions, lengths, W, t, L, scr)
+
+
+@njit_noref
+def _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+                 feasible, margin, tensions, lengths, W, t, L, scr):
+    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+               feasible, margin, tensions, lengths, W, t, L, scr, 1)
 
 
 @njit
 def _grid_rows_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths):
-    _grid_rows(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-               feasible, margin, tensions, lengths, 0)
+    W, t, L, scr = _buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+               feasible, margin, tensions, lengths, W, t, L, scr, 0)
 
 
 @njit
 def _grid_rows_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                    feasible, margin, tensions, lengths):
-    _grid_rows(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-               feasible, margin, tensions, lengths, A.shape[0] - rows.shape[0])
+    W, t, L, scr = _buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+               feasible, margin, tensions, lengths, W, t, L, scr, A.shape[0] - rows.shape[0])
 
 
 @njit_inline
-def _grid_rows(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos,
-               kind, feasible, margin, tensions, lengths, r):
-    """Rows k0..k1-1 of :func:`sweep_grid` (grid poses start+k0 .. start+k1-1), with their own
-    scratch, for m - n = ``r``."""
-    n = rows.shape[0]
+def _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos,
+               kind, feasible, margin, tensions, lengths, W, t, L, scr, r):
+    """Rows k0..k1-1 of :func:`sweep_grid` (grid poses start+k0 .. start+k1-1) with the block's
+    buffers (:func:`_buffers`), for m - n = ``r``."""
     m = A.shape[0]
-    W = np.empty((n, m))
-    t = np.empty(m)
-    L = np.empty(m)
-    scr = make_scratch(n, m, wreq.shape[0])  # general m != n kernels
     ny = shape[1]
     nz = shape[2]
     # grid indices of the block's first pose, then counted up (no division per pose)
@@ -113,7 +142,7 @@ def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax
                feasible, margin, tensions, lengths, grain=4096)
 
 
-@njit
+@njit_noref
 def planar2_block(k0, k1, start, lower, step, shape, Rb, A, wreq, tmin, tmax, feasible, margin, tensions, lengths):
     """Rows k0..k1-1 of :func:`sweep_grid_planar2`."""
     ny = shape[1]
@@ -179,7 +208,7 @@ def planar2_block(k0, k1, start, lower, step, shape, Rb, A, wreq, tmin, tmax, fe
         tensions[k, 1] = t1 if inb else np.nan
 
 
-@njit
+@njit_noref
 def chunk_stats(feasible, margin, tensions, count, tpeak):
     """Feasible count and margin extremes over the feasible rows 0..count-1; ``tpeak`` (m) is
     raised to each cable's largest feasible tension.  Returns (count, min, max) (-0.0 is returned as
@@ -223,16 +252,13 @@ def points_block(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, comb
     """Rows k0..k1-1 of :func:`sweep_points`, with their own scratch."""
     n = rows.shape[0]
     m = A.shape[0]
-    W = np.empty((n, m))
-    t = np.empty(m)
-    L = np.empty(m)
+    W, t, L, scr = _buffers(n, m, wreq.shape[0])
     C = np.empty((m, 3))
     S0 = np.empty((m, 3))
     hits = np.zeros((m + 2, m + 2), dtype=np.uint8)
     s0 = np.empty(3)
     s1 = np.empty(3)
     cp = np.empty(3)
-    scr = make_scratch(n, m, wreq.shape[0])
     for k in range(k0, k1):
         px, py, pz = P[k, 0], P[k, 1], P[k, 2]
         ok = structure_matrix_pulley(px, py, pz, Rb, A, K, Eref, rad, rows, W, L, C)
