@@ -67,7 +67,7 @@ def test_an_edit_to_a_called_module_recompiles_its_callers(tmp_path):
     assert _probe(tmp_path) == ([3.0, 4.0], 1)  # loaded from the cache
     hsm = tmp_path / "cdpr_design" / "kernels" / "hsm.py"
     text = hsm.read_text()
-    head = "def square_eval(W, wreq, tmin, tmax, t):\n"
+    head = "def square_eval_into(W, wreq, tmin, tmax, t, Winv, rn, a):\n"
     assert head in text
     hsm.write_text(text.replace(head, head + "    W = W * 2.0  # edited by the test\n", 1))
     assert _probe(tmp_path) == ([1.5, 2.0], 0)  # W doubled: halved tensions, compiled again
@@ -107,3 +107,59 @@ def test_a_noref_loop_cannot_allocate():
 
     with pytest.raises(nb.errors.TypingError):
         nb.njit(**dict(_jit.NOREF, cache=False))(allocates)(3)
+
+
+# Each loop compiled without reference counting, called first thing in a new process: whatever it
+# calls is then compiled without reference counting too, and would fail there if it allocated.
+_ROBOT = """
+import numpy as np
+from cdpr_design import kernels as K
+from cdpr_design.statics.pose import combinations
+rng = np.random.default_rng(5)
+m = {m}
+A = rng.uniform(-2.0, 2.0, (m, 3)); Bp = rng.uniform(-0.3, 0.3, (m, 3)); rows = np.arange({n})
+tmin, tmax = np.zeros(m), np.full(m, 100.0)
+wreq = np.array([[0.0, 0.0, -9.81, 0.0, 0.0, 0.0][:{n}]])
+feas, marg, ten, L = np.empty(64, np.uint8), np.empty(64), np.empty((64, m)), np.empty((64, m))
+"""
+NOREF_PROBES = {
+    **{f"grid m-n={r}": _ROBOT.format(m=3 + r, n=3) + """
+K.sweep_grid(0, 64, np.full(3, -0.5), np.full(3, 0.3), np.array([4, 4, 4]), Bp, A, rows, wreq, tmin, tmax,
+             combinations(m, 3), K.KIND_WRENCH_FEASIBLE, feas, marg, ten, L)
+""" for r in (0, 1, 2, 4)},
+    "planar2": _ROBOT.format(m=2, n=2) + """
+K.sweep_grid_planar2(0, 64, np.full(3, -0.5), np.full(3, 0.3), np.array([8, 8, 1]), Bp, A, wreq, tmin, tmax,
+                     feas, marg, ten, L)
+K.chunk_stats(feas, marg, ten, 64, np.zeros(m))
+""",
+    "rotated": _ROBOT.format(m=8, n=6) + """
+from cdpr_design.kernels.hanging import eval_rotated
+P = rng.uniform(-0.5, 0.5, (64, 3)); R = np.tile(np.eye(3), (64, 1, 1))
+eval_rotated(P, R, A, Bp, rows, np.tile(wreq, (64, 1, 1)), tmin, tmax, combinations(m, 6),
+               K.KIND_STATIC, feas, marg, ten, L)
+""",
+    "points": """
+import numpy as np
+from cdpr_design.model import spec
+from cdpr_design.workspaces.hardware import Evaluator
+d = spec.load("designs/planar4.yaml")
+Evaluator(d, "static", True)(np.zeros((16, 3)), [0.0, 0.0, 0.0])
+""",
+    "catenary": """
+import numpy as np
+from cdpr_design.kernels import catenary as c
+one = np.ones(16)
+X, Z = c.catenary_ends_batch(100.0 * one, 20.0 * one, 5.0 * one, one, 1e5 * one)
+c.catenary_inverse_batch(X, Z, 5.0 * one, one, 1e5 * one, np.full(16, np.nan), np.full(16, np.nan), 1e-10, 50)
+""",
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(NOREF_PROBES))
+def test_each_noref_loop_compiles_first_in_a_new_process(name, tmp_path):
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    r = subprocess.run([sys.executable, "-c", NOREF_PROBES[name] + "\nprint('done')"], cwd=PACKAGE.parent, env=env,
+                       capture_output=True, text=True)
+    assert r.returncode == 0 and r.stdout.strip().endswith("done"), r.stderr[-3000:]

@@ -49,7 +49,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import njit, njit_noref
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.geometry import rotate_attachments, structure_matrix
 from cdpr_design.kernels.hsm import make_scratch
@@ -337,14 +337,20 @@ def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, mar
 
 @njit
 def rotated_block(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths):
-    """Rows k0..k1-1 of :func:`eval_rotated`, with their own scratch."""
+    """Rows k0..k1-1 of :func:`eval_rotated`: the block's scratch, then :func:`_rotated_loop`."""
     n = rows.shape[0]
     m = A.shape[0]
-    W = np.empty((n, m))
-    t = np.empty(m)
-    L = np.empty(m)
-    Rb = np.empty((m, 3))
-    scr = make_scratch(n, m, wreq.shape[1])
+    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths,
+                  np.empty((n, m)), np.empty(m), np.empty(m), np.empty((m, 3)), make_scratch(n, m, wreq.shape[1]))
+
+
+@njit_noref
+def _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths,
+                  W, t, L, Rb, scr):
+    """The poses of :func:`rotated_block` with its scratch (no reference counting, see
+    :func:`cdpr_design.kernels.sweep.grid_block`)."""
+    n = rows.shape[0]
+    m = A.shape[0]
     for k in range(k0, k1):
         if not np.isfinite(R[k, 0, 0]):
             feasible[k] = 0

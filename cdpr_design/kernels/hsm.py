@@ -13,7 +13,7 @@ import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_fast
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
-from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, det_small, gram_of_inverse, inverse_small
+from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, det_in_place, det_small, gram_of_inverse, inverse_into
 
 
 @njit
@@ -27,6 +27,14 @@ def square_eval(W, wreq, tmin, tmax, t):
     hyperplane-shifting margin (the facet normals of a parallelotope are the
     rows of W^-1).
     """
+    n = W.shape[0]
+    return square_eval_into(W, wreq, tmin, tmax, t, np.empty((n, n)), np.empty(n), np.empty((n, 2 * n)))
+
+
+@njit
+def square_eval_into(W, wreq, tmin, tmax, t, Winv, rn, a):
+    """:func:`square_eval` with its work arrays given (allocates nothing): ``Winv`` (n, n),
+    ``rn`` (n,) and ``a`` (n, >= 2n)."""
     n = W.shape[0]
     nv = wreq.shape[0]
     if n == 2:
@@ -53,12 +61,10 @@ def square_eval(W, wreq, tmin, tmax, t):
             s1 = min(t1 - tmin[1], tmax[1] - t1) / r1
             margin = min(margin, min(s0, s1))
         return True, margin
-    Winv = np.empty((n, n))
-    if not inverse_small(W, Winv):
+    if not inverse_into(W, Winv, a):
         for i in range(n):
             t[i] = np.nan
         return False, np.nan
-    rn = np.empty(n)
     for i in range(n):
         s = 0.0
         for j in range(n):
@@ -313,7 +319,7 @@ def _null_vector(A, k, mu, minor):
                         continue
                     minor[e, cc] = A[e, g]
                     cc += 1
-            mu[f] = sign * det_small(minor, k)
+            mu[f] = sign * det_in_place(minor, k)  # minor is rebuilt for each f
             sign = -sign
     if k == 1:  # |mu| equals |A_0|: only a zero row makes it vanish
         return mu[0] != 0.0 or mu[1] != 0.0

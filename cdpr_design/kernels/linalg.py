@@ -32,11 +32,18 @@ def gram_of_inverse(tab, n, m, M):
 
 @njit
 def det_small(M, k):
-    """Determinant of the leading k x k block of ``M`` (copied; partial pivoting)."""
+    """Determinant of the leading k x k block of ``M`` (copied, then :func:`det_in_place`)."""
     a = np.empty((k, k))
     for i in range(k):
         for j in range(k):
             a[i, j] = M[i, j]
+    return det_in_place(a, k)
+
+
+@njit
+def det_in_place(a, k):
+    """Determinant of the leading k x k block of ``a``, which it overwrites (partial pivoting;
+    allocates nothing)."""
     d = 1.0
     for c in range(k):
         piv = c
@@ -68,8 +75,13 @@ def inverse_small(W, Winv):
     Returns False when W is singular to working precision (relative pivot
     below ``RANK_TOL``).
     """
+    return inverse_into(W, Winv, np.empty((W.shape[0], 2 * W.shape[0])))
+
+
+@njit
+def inverse_into(W, Winv, a):
+    """:func:`inverse_small` with the work array ``a`` (n, >= 2n) given (allocates nothing)."""
     n = W.shape[0]
-    a = np.empty((n, 2 * n))
     scale = 0.0
     for i in range(n):
         for j in range(n):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_inline
-from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval
+from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
 from cdpr_design.kernels.tension_qp import goldfarb_idnani, null_space_setup, project_one, project_two
 
@@ -130,11 +130,19 @@ def eval_square(W, wreq, tmin, tmax, kind, t_out):
     compiled function carries the code of everything it calls, so going
     through ``eval_pose`` would compile ``eval_general`` into it twice.
     """
+    n = W.shape[0]
+    return eval_square_into(W, wreq, tmin, tmax, kind, t_out, np.empty((n, n)), np.empty(n), np.empty((n, 2 * n)))
+
+
+@njit
+def eval_square_into(W, wreq, tmin, tmax, kind, t_out, Winv, rn, a):
+    """:func:`eval_square` with the work arrays of
+    :func:`~cdpr_design.kernels.hsm.square_eval_into` given (allocates nothing)."""
     m = W.shape[1]
     nv = wreq.shape[0] if kind == KIND_WRENCH_FEASIBLE else 1
     for i in range(m):
         t_out[i] = np.nan
-    rank_ok, margin = square_eval(W, wreq[:nv], tmin, tmax, t_out)
+    rank_ok, margin = square_eval_into(W, wreq[:nv], tmin, tmax, t_out, Winv, rn, a)
     if not rank_ok:
         return False, np.nan
     # t = W^-1 w is unique: it is the tension distribution where it
@@ -155,7 +163,7 @@ def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin,
     (a constant where the caller specialises on it, see :func:`eval_general`).
 
     ``ok`` False (a zero-length cable): infeasible, margin and tensions NaN.
-    Otherwise :func:`eval_square` (m = n) or :func:`eval_general` with the
+    Otherwise :func:`eval_square_into` (m = n, its work arrays from ``scr``) or :func:`eval_general` with the
     block's scratch ``scr`` and tension buffer ``t`` (m,), written to
     ``feasible[k]`` (uint8), ``margin[k]`` (-0.0 as 0.0: one zero in the CSV,
     whatever the engine) [N] and ``tensions[k]`` [N].
@@ -167,8 +175,8 @@ def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin,
         for i in range(m):
             tensions[k, i] = np.nan
         return
-    if r == 0:
-        f, mg = eval_square(W, wreq, tmin, tmax, kind, t)
+    if r == 0:  # the square case's work arrays from the scratch: (n, n), (n,) and (n, m + n = 2n)
+        f, mg = eval_square_into(W, wreq, tmin, tmax, kind, t, scr[4], scr[3], scr[0])
     else:
         f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr, r)
     feasible[k] = 1 if f else 0

@@ -39,14 +39,12 @@ def grid_block(r: int):
     kernel it uses.  A pose of IPAnema 3 (r = 2) took 3.56 us on one core
     with one kernel for every r, 2.62 us with its own.
 
-    For r = 1 and 2 the block function allocates the block's buffers
-    (:func:`_buffers`) and hands them to its loop over the poses, compiled
-    without reference counting (:data:`~cdpr_design.kernels._jit.njit_noref`):
-    every array a pose's code binds or passes on (the scratch tuple alone holds
-    31) otherwise costs an atomic increment and decrement per pose.  IPAnema 3:
-    2.66 -> 1.21 us a pose on one core.  r = 0 and r > 2 keep reference
-    counting: their code reaches the square case, whose inverse allocates
-    (:func:`~cdpr_design.kernels.hsm.square_eval`).
+    Each block function allocates the block's buffers (:func:`_buffers`) and
+    hands them to its loop over the poses, compiled without reference counting
+    (:data:`~cdpr_design.kernels._jit.njit_noref`): every array a pose's code
+    binds or passes on (the scratch tuple alone holds 31) otherwise costs an
+    atomic increment and decrement per pose.  IPAnema 3: 2.66 -> 1.21 us a pose
+    on one core.
     """
     return {0: _grid_rows_0, 1: _grid_rows_1, 2: _grid_rows_2}.get(r, _grid_rows_any)
 
@@ -92,6 +90,13 @@ def _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tma
 def _grid_rows_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths):
     W, t, L, scr = _buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+    _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+                 feasible, margin, tensions, lengths, W, t, L, scr)
+
+
+@njit_noref
+def _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+                 feasible, margin, tensions, lengths, W, t, L, scr):
     _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                feasible, margin, tensions, lengths, W, t, L, scr, 0)
 
@@ -100,6 +105,13 @@ def _grid_rows_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tma
 def _grid_rows_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                    feasible, margin, tensions, lengths):
     W, t, L, scr = _buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+    _grid_loop_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+                   feasible, margin, tensions, lengths, W, t, L, scr)
+
+
+@njit_noref
+def _grid_loop_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+                   feasible, margin, tensions, lengths, W, t, L, scr):
     _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                feasible, margin, tensions, lengths, W, t, L, scr, A.shape[0] - rows.shape[0])
 
@@ -249,16 +261,22 @@ def sweep_points(P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind
 @njit
 def points_block(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
                  check, Bp, half, rho, flo, fhi, dim, tol, full, feasible, margin, tensions, lengths, cmask):
-    """Rows k0..k1-1 of :func:`sweep_points`, with their own scratch."""
+    """Rows k0..k1-1 of :func:`sweep_points`: the block's buffers, then :func:`_points_loop`."""
+    m = A.shape[0]
+    W, t, L, scr = _buffers(rows.shape[0], m, wreq.shape[0])
+    _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
+                 check, Bp, half, rho, flo, fhi, dim, tol, full, feasible, margin, tensions, lengths, cmask,
+                 W, t, L, scr, np.empty((m, 3)), np.empty((m, 3)), np.zeros((m + 2, m + 2), dtype=np.uint8),
+                 np.empty(3), np.empty(3), np.empty(3))
+
+
+@njit_noref
+def _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
+                 check, Bp, half, rho, flo, fhi, dim, tol, full, feasible, margin, tensions, lengths, cmask,
+                 W, t, L, scr, C, S0, hits, s0, s1, cp):
+    """The poses of :func:`points_block` with its buffers (no reference counting, see :func:`grid_block`)."""
     n = rows.shape[0]
     m = A.shape[0]
-    W, t, L, scr = _buffers(n, m, wreq.shape[0])
-    C = np.empty((m, 3))
-    S0 = np.empty((m, 3))
-    hits = np.zeros((m + 2, m + 2), dtype=np.uint8)
-    s0 = np.empty(3)
-    s1 = np.empty(3)
-    cp = np.empty(3)
     for k in range(k0, k1):
         px, py, pz = P[k, 0], P[k, 1], P[k, 2]
         ok = structure_matrix_pulley(px, py, pz, Rb, A, K, Eref, rad, rows, W, L, C)
