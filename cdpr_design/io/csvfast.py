@@ -38,8 +38,12 @@ _TENS = np.array([float(f"1e{k}") for k in range(_TENS_X0, -_TENS_X0 + 1)])
 # the tables as int64 (every entry < 2^40): no unsigned arithmetic in the kernel
 _TABLES = (_P10, _TENS, _DIGITS.astype(np.int64), _TZ5, _SUFFIX.astype(np.int64))
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
-#: The cell helpers are inlined into the row loop (no call, no reference counting per cell).
+#: The cell helpers are inlined into the row loop (no call per cell).
 _INLINE = dict(_JIT, inline="always")
+#: The row loop allocates nothing and is compiled without reference counting, which would
+#: otherwise count every table array handed to the inlined helpers, cell by cell (as the
+#: kernels' loops, :data:`cdpr_design.kernels._jit.NOREF`).
+_NOREF = dict(_JIT, _nrt=False)
 
 
 @nb.njit(**_INLINE)
@@ -120,7 +124,7 @@ def _put_cell(out, p, m, X, neg, digits, tz5, suffix):
     return p
 
 
-@nb.njit(**_JIT)
+@nb.njit(**_NOREF)
 def format_rows(values, bits, is_int, out, slow, p10, tens, digits, tz5, suffix, lo, hi, int_limit, tie):
     """CSV rows of a block into out [uint8]; returns (bytes used, cells left to Python).
 
