@@ -163,3 +163,36 @@ def test_each_noref_loop_compiles_first_in_a_new_process(name, tmp_path):
     r = subprocess.run([sys.executable, "-c", NOREF_PROBES[name] + "\nprint('done')"], cwd=PACKAGE.parent, env=env,
                        capture_output=True, text=True)
     assert r.returncode == 0 and r.stdout.strip().endswith("done"), r.stderr[-3000:]
+
+
+LEAK_PROBE = """
+from numba.core.runtime import rtsys
+from cdpr_design import workspaces as ws
+from cdpr_design.model import spec
+for name, step, collisions in (("ipanema3", 0.5, False), ("pointmass3", 0.2, False), ("planar4", 0.1, True),
+                               ("crane4", 0.5, False)):
+    d = spec.load(f"designs/{name}.yaml")
+    g = ws.make_grid(d, step, True)
+    run = lambda: ws.run(d, kind="static", grid=g, force=True, engine="numba", interference=collisions)
+    run()
+    a = rtsys.get_allocation_stats()
+    run()
+    b = rtsys.get_allocation_stats()
+    print(name, g.size, b.alloc - a.alloc, b.free - a.free, b.mi_alloc - a.mi_alloc, b.mi_free - a.mi_free)
+"""
+
+
+@pytest.mark.slow
+def test_sweeps_free_every_array_they_allocate():
+    """numba's allocation counts over a second sweep (grid m = n and m > n, explicit positions with
+    interference, hanging orientations): every array allocated is freed, and the loops without
+    reference counting allocate nothing per pose (a few buffers a block)."""
+    env = dict(os.environ, NUMBA_NRT_STATS="1")
+    env.pop("NUMBA_DISABLE_JIT", None)
+    r = subprocess.run([sys.executable, "-c", LEAK_PROBE], cwd=PACKAGE.parent, env=env, capture_output=True,
+                       text=True)
+    assert r.returncode == 0, r.stderr[-3000:]
+    for line in r.stdout.strip().splitlines():
+        name, poses, alloc, free, mi_alloc, mi_free = line.split()
+        assert alloc == free and mi_alloc == mi_free, line
+        assert 0 < int(alloc) < int(poses), line  # per block, not per pose
