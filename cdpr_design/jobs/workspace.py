@@ -112,7 +112,7 @@ def finish_workspace(out: OutputDir, result, pending, timings: Timings) -> None:
 
 
 #: What the load stage says while it runs (shown once it has taken a while).
-LOAD_HINT = "a first run compiles them: about a minute"
+LOAD_HINT = "a first run compiles them: up to a minute"
 
 
 def _sweep(design, grid, kind, collisions, orientations, engine, progress, writer, timings, max_tilt=None):
