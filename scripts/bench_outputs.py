@@ -113,8 +113,13 @@ The kernel target (1000x) is met in this process and by the command's
 ``sweep_s``.  The whole-command target (200x) allows 0.70 s at 0.9 ms a pose:
 a process that only imports numpy and numba and calls one small cached kernel
 took 0.52-0.75 s in these runs, so at this grid size a fresh process per
-command cannot reach it on this machine.  planar2 is unchanged (its hanging
-tilt keeps reference counting: its polynomial roots allocate).
+command cannot reach it on this machine.  Larger IPAnema 3 grids (one round
+each, LP 0.89-0.92 ms): 425,971 poses (step 0.1 m) 1.35 s = 291x csv, 1.22 s =
+321x parquet, ``sweep_s`` 1159x / 1062x; 1,192,605 poses (step 0.07 m) 2.74 s =
+390x csv, 2.16 s = 494x parquet, ``sweep_s`` 736x / 918x (the table's writer
+shares the two cores with the sweep; the kernels alone 1478x).  planar2 is
+unchanged (its hanging tilt keeps reference counting: its polynomial roots
+allocate).
 
 The round before (c518a27 -> 703c4fd): the pose function's margin and QP methods
 called directly, with the function inlined into the sweeps' loops, and one grid
