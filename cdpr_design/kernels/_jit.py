@@ -89,8 +89,8 @@ njit_inline = nb.njit(fastmath=FAST, inline="always", **JIT)
 #: fresh arrays, the hanging tilt and the sagging cables, keep reference counting; for the
 #: sagging cables, whose 70 us a pose go to catenary solves, doing without it gained nothing).  A
 #: callee compiled first from such a loop is compiled without counting too, so a callee
-#: that allocates fails wherever it is first reached that way: ``tests/test_jit_cache.py``
-#: compiles each loop first, in a new process with an empty cache.
-#: ``tests/test_jit_cache.py`` fails if numba stops honouring the option.
+#: that allocates fails wherever it is first reached that way.  ``tests/test_jit_cache.py``
+#: compiles each loop first, in a new process with an empty cache, and fails if numba stops
+#: honouring the option.
 NOREF = dict(JIT, _nrt=False)
 njit_noref = nb.njit(**NOREF)

@@ -52,8 +52,7 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_noref
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.geometry import rotate_attachments, structure_matrix
-from cdpr_design.kernels.hsm import make_scratch
-from cdpr_design.kernels.pose import eval_row
+from cdpr_design.kernels.pose import eval_row, row_buffers
 
 #: A stable equilibrium with both tensions >= 0 was found.
 TILT_OK = 0
@@ -338,10 +337,10 @@ def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, mar
 @njit
 def rotated_block(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths):
     """Rows k0..k1-1 of :func:`eval_rotated`: the block's scratch, then :func:`_rotated_loop`."""
-    n = rows.shape[0]
     m = A.shape[0]
+    W, t, L, scr = row_buffers(rows.shape[0], m, wreq.shape[1])
     _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths,
-                  np.empty((n, m)), np.empty(m), np.empty(m), np.empty((m, 3)), make_scratch(n, m, wreq.shape[1]))
+                  W, t, L, np.empty((m, 3)), scr)
 
 
 @njit_noref

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_fast
+from cdpr_design.kernels._jit import njit, njit_fast, njit_inline
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
 from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, det_in_place, det_small, gram_of_inverse, inverse_into
 
@@ -27,8 +27,15 @@ def square_eval(W, wreq, tmin, tmax, t):
     hyperplane-shifting margin (the facet normals of a parallelotope are the
     rows of W^-1).
     """
-    n = W.shape[0]
-    return square_eval_into(W, wreq, tmin, tmax, t, np.empty((n, n)), np.empty(n), np.empty((n, 2 * n)))
+    Winv, rn, a = square_work(W.shape[0])
+    return square_eval_into(W, wreq, tmin, tmax, t, Winv, rn, a)
+
+
+@njit_inline
+def square_work(n):
+    """The work arrays of :func:`square_eval_into`: W^-1 (n, n), its row norms (n,) and the
+    Gauss-Jordan tableau (n, 2n)."""
+    return np.empty((n, n)), np.empty(n), np.empty((n, 2 * n))
 
 
 @njit

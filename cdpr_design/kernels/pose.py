@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_inline
-from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into
+from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
 from cdpr_design.kernels.tension_qp import goldfarb_idnani, null_space_setup, project_one, project_two
 
@@ -130,8 +130,8 @@ def eval_square(W, wreq, tmin, tmax, kind, t_out):
     compiled function carries the code of everything it calls, so going
     through ``eval_pose`` would compile ``eval_general`` into it twice.
     """
-    n = W.shape[0]
-    return eval_square_into(W, wreq, tmin, tmax, kind, t_out, np.empty((n, n)), np.empty(n), np.empty((n, 2 * n)))
+    Winv, rn, a = square_work(W.shape[0])
+    return eval_square_into(W, wreq, tmin, tmax, kind, t_out, Winv, rn, a)
 
 
 @njit
@@ -183,3 +183,11 @@ def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin,
     margin[k] = mg + 0.0
     for i in range(m):
         tensions[k, i] = t[i]
+
+
+@njit_inline
+def row_buffers(n, m, nv):
+    """What :func:`eval_row` works in, for one block of poses: the structure matrix W (n, m),
+    tensions t (m,) [N], lengths L (m,) [m] and the scratch (:func:`make_scratch`, ``nv``
+    required-wrench rows)."""
+    return np.empty((n, m)), np.empty(m), np.empty(m), make_scratch(n, m, nv)

@@ -10,8 +10,7 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
 from cdpr_design.kernels.linalg import RANK_TOL
 from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
-from cdpr_design.kernels.hsm import make_scratch
-from cdpr_design.kernels.pose import eval_row
+from cdpr_design.kernels.pose import eval_row, row_buffers
 from cdpr_design.kernels.interference import interference_pose
 from cdpr_design.kernels.parallel import run_blocks
 
@@ -39,8 +38,9 @@ def grid_block(r: int):
     kernel it uses.  A pose of IPAnema 3 (r = 2) took 3.56 us on one core
     with one kernel for every r, 2.62 us with its own.
 
-    Each block function allocates the block's buffers (:func:`_buffers`) and
-    hands them to its loop over the poses, compiled without reference counting
+    Each block function allocates the block's buffers
+    (:func:`~cdpr_design.kernels.pose.row_buffers`) and hands them to its loop
+    over the poses, compiled without reference counting
     (:data:`~cdpr_design.kernels._jit.njit_noref`): every array a pose's code
     binds or passes on (the scratch tuple alone holds 31) otherwise costs an
     atomic increment and decrement per pose.  IPAnema 3: 2.66 -> 1.21 us a pose
@@ -49,17 +49,10 @@ def grid_block(r: int):
     return {0: _grid_rows_0, 1: _grid_rows_1, 2: _grid_rows_2}.get(r, _grid_rows_any)
 
 
-@njit_inline
-def _buffers(n, m, nv):
-    """A block's structure matrix W (n, m), tensions t (m,), lengths L (m,) and scratch
-    (:func:`~cdpr_design.kernels.hsm.make_scratch`)."""
-    return np.empty((n, m)), np.empty(m), np.empty(m), make_scratch(n, m, nv)
-
-
 @njit
 def _grid_rows_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths):
-    W, t, L, scr = _buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+    W, t, L, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
     _grid_loop_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths, W, t, L, scr)
 
@@ -74,7 +67,7 @@ def _grid_loop_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tma
 @njit
 def _grid_rows_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths):
-    W, t, L, scr = _buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+    W, t, L, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
     _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths, W, t, L, scr)
 
@@ -89,7 +82,7 @@ def _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tma
 @njit
 def _grid_rows_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths):
-    W, t, L, scr = _buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+    W, t, L, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
     _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths, W, t, L, scr)
 
@@ -104,7 +97,7 @@ def _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tma
 @njit
 def _grid_rows_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                    feasible, margin, tensions, lengths):
-    W, t, L, scr = _buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+    W, t, L, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
     _grid_loop_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                    feasible, margin, tensions, lengths, W, t, L, scr)
 
@@ -120,7 +113,7 @@ def _grid_loop_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, t
 def _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos,
                kind, feasible, margin, tensions, lengths, W, t, L, scr, r):
     """Rows k0..k1-1 of :func:`sweep_grid` (grid poses start+k0 .. start+k1-1) with the block's
-    buffers (:func:`_buffers`), for m - n = ``r``."""
+    buffers (:func:`~cdpr_design.kernels.pose.row_buffers`), for m - n = ``r``."""
     m = A.shape[0]
     ny = shape[1]
     nz = shape[2]
@@ -263,7 +256,7 @@ def points_block(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, comb
                  check, Bp, half, rho, flo, fhi, dim, tol, full, feasible, margin, tensions, lengths, cmask):
     """Rows k0..k1-1 of :func:`sweep_points`: the block's buffers, then :func:`_points_loop`."""
     m = A.shape[0]
-    W, t, L, scr = _buffers(rows.shape[0], m, wreq.shape[0])
+    W, t, L, scr = row_buffers(rows.shape[0], m, wreq.shape[0])
     _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
                  check, Bp, half, rho, flo, fhi, dim, tol, full, feasible, margin, tensions, lengths, cmask,
                  W, t, L, scr, np.empty((m, 3)), np.empty((m, 3)), np.zeros((m + 2, m + 2), dtype=np.uint8),
