@@ -67,10 +67,10 @@ def test_an_edit_to_a_called_module_recompiles_its_callers(tmp_path):
     assert _probe(tmp_path) == ([3.0, 4.0], 1)  # loaded from the cache
     hsm = tmp_path / "cdpr_design" / "kernels" / "hsm.py"
     text = hsm.read_text()
-    head = "def square_eval_into(W, wreq, tmin, tmax, t, Winv, rn, a):\n"
-    assert head in text
-    hsm.write_text(text.replace(head, head + "    W = W * 2.0  # edited by the test\n", 1))
-    assert _probe(tmp_path) == ([1.5, 2.0], 0)  # W doubled: halved tensions, compiled again
+    head = "        det = W[0, 0] * W[1, 1] - W[0, 1] * W[1, 0]\n"  # square_eval_into, n = 2
+    assert text.count(head) == 1
+    hsm.write_text(text.replace(head, head + "        det = det * 2.0  # edited by the test\n", 1))
+    assert _probe(tmp_path) == ([1.5, 2.0], 0)  # det doubled: halved tensions, compiled again
 
 
 def _scaled_py(a, scr, k):
@@ -196,3 +196,43 @@ def test_sweeps_free_every_array_they_allocate():
         name, poses, alloc, free, mi_alloc, mi_free = line.split()
         assert alloc == free and mi_alloc == mi_free, line
         assert 0 < int(alloc) < int(poses), line  # per block, not per pose
+
+
+ORDER_PROBE = """
+import numba as nb
+from numba.core import types
+from cdpr_design.kernels import catenary, geometry, hanging, hsm, hsm_small, interference, linalg, pose, sweep
+from cdpr_design.kernels import tension_qp
+t = np.empty(m)
+K.eval_pose(rng.normal(size=(3, m)), wreq, tmin, tmax, combinations(m, 3), K.KIND_STATIC, t)  # its callees first
+K.sweep_grid(0, 64, np.full(3, -0.5), np.full(3, 0.3), np.array([4, 4, 4]), Bp, A, rows, wreq, tmin, tmax,
+             combinations(m, 3), K.KIND_STATIC, feas, marg, ten, L)
+loop = {0: sweep._grid_loop_0, 1: sweep._grid_loop_1, 2: sweep._grid_loop_2}.get(m - 3, sweep._grid_loop_any)
+ir = "".join(loop.inspect_llvm().values())
+print("counting calls in the loop", ir.count("NRT_incref") + ir.count("NRT_decref"))
+
+def arrays_in(ty):
+    return isinstance(ty, types.Array) or any(arrays_in(x) for x in getattr(ty, "types", ()))
+
+for mod in (catenary, geometry, hanging, hsm, hsm_small, interference, linalg, pose, sweep, tension_qp):
+    for name, f in vars(mod).items():
+        if isinstance(f, nb.core.registry.CPUDispatcher) and f.targetoptions.get("_nrt") is False:
+            for sig in f.nopython_signatures:
+                assert not arrays_in(sig.return_type), (mod.__name__, name, sig)
+print("done")
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("r", [0, 1, 2, 4])
+def test_the_loops_run_without_reference_counting_whatever_compiled_first(r, tmp_path):
+    """The per-pose kernel compiled first (its callees with it), then the grid loop, in a new process
+    with an empty cache: the loop and every callee linked into it still count no references (they
+    are declared without it, not left to inherit the first caller's choice), and no function
+    declared so returns an array (its caller would release a reference it was never given)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    r_ = subprocess.run([sys.executable, "-c", _ROBOT.format(m=3 + r, n=3) + ORDER_PROBE], cwd=PACKAGE.parent, env=env,
+                        capture_output=True, text=True)
+    assert r_.returncode == 0, r_.stderr[-3000:]
+    assert r_.stdout.split()[-1] == "done" and "counting calls in the loop 0" in r_.stdout, r_.stdout

@@ -88,9 +88,13 @@ njit_inline = nb.njit(fastmath=FAST, inline="always", **JIT)
 #: when it compiles (so the kernels that solve a polynomial's roots or a Newton step with
 #: fresh arrays, the hanging tilt and the sagging cables, keep reference counting; for the
 #: sagging cables, whose 70 us a pose go to catenary solves, doing without it gained nothing).  A
-#: callee compiled first from such a loop is compiled without counting too, so a callee
-#: that allocates fails wherever it is first reached that way.  ``tests/test_jit_cache.py``
-#: compiles each loop first, in a new process with an empty cache, and fails if numba stops
-#: honouring the option.
+#: callee that does not set the option itself takes its first caller's, for good (numba's
+#: cache keeps it): an allocating callee fails where it is first reached from such a loop,
+#: and a counting one reached first from elsewhere would slow the loop down (IPAnema 3 1.2
+#: -> 1.9 us a pose).  So every kernel that allocates nothing is declared without counting
+#: (``njit_noref``, ``njit_fast_noref``), and only the ones that allocate use ``njit``.
+#: ``tests/test_jit_cache.py`` compiles each loop first, and after the per-pose kernel, in
+#: a new process with an empty cache, and fails if numba stops honouring the option.
 NOREF = dict(JIT, _nrt=False)
 njit_noref = nb.njit(**NOREF)
+njit_fast_noref = nb.njit(fastmath=FAST, **NOREF)

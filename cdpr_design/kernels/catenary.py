@@ -73,7 +73,7 @@ _GL_X = np.ascontiguousarray(_GL_X)
 _GL_W = np.ascontiguousarray(_GL_W)
 
 
-@njit
+@njit_noref
 def _asinhc(u):
     """asinh(u) / u, with the value 1 at u = 0."""
     if abs(u) < 1e-3:
@@ -82,7 +82,7 @@ def _asinhc(u):
     return math.asinh(u) / u
 
 
-@njit
+@njit_noref
 def _ratio(v, t):
     """v / t with 0/0 -> 0 (sign of a vertical component at zero tension)."""
     if t > 0.0:
@@ -90,7 +90,7 @@ def _ratio(v, t):
     return 0.0
 
 
-@njit
+@njit_noref
 def _closure(H, VB, L0, w, EA):
     """The four pieces of the closure: (Xcat, Zcat, Xel, Zel), X = Xcat + Xel.
 
@@ -123,7 +123,7 @@ def _closure(H, VB, L0, w, EA):
     return Xcat, Zcat, Xel, Zel
 
 
-@njit
+@njit_noref
 def catenary_ends(H, VB, L0, w, EA):
     """Horizontal span X [m] and height Z [m] of A above B from the end forces.
 
@@ -138,7 +138,7 @@ def catenary_ends(H, VB, L0, w, EA):
     return Xcat + Xel, Zcat + Zel
 
 
-@njit
+@njit_noref
 def _gprime_mean(a, b):
     """Mean of t^2 / (1 + t^2)^(3/2) over [b, a] (12-point Gauss-Legendre)."""
     m = 0.5 * (a + b)
@@ -152,7 +152,7 @@ def _gprime_mean(a, b):
     return 0.5 * acc
 
 
-@njit
+@njit_noref
 def _closure_jac(H, VB, L0, w, EA):
     """(X, Z, dX/dH, dX/dVB, dZ/dH, dZ/dVB) in one pass (dX/dVB = dZ/dH)."""
     wl = w * L0
@@ -201,7 +201,7 @@ def _closure_jac(H, VB, L0, w, EA):
     return X, Z, J11, J12, J12, J22
 
 
-@njit
+@njit_noref
 def catenary_jacobian(H, VB, L0, w, EA):
     """Analytic flexibility d(X, Z)/d(H, VB) [m/N]: (dX/dH, dX/dVB, dZ/dH, dZ/dVB).
 
@@ -214,7 +214,7 @@ def catenary_jacobian(H, VB, L0, w, EA):
     return a, b, c, d
 
 
-@njit
+@njit_noref
 def catenary_end_tensions(H, VB, L0, w):
     """Tensions [N] at the outlet A and at the attachment B: (T_A, T_B).
 
@@ -228,7 +228,7 @@ def catenary_end_tensions(H, VB, L0, w):
 # inverse problem
 # ---------------------------------------------------------------------------
 
-@njit
+@njit_noref
 def _log_sinhc(lam):
     """ln(sinh(lam)/lam) for lam >= 0 and its derivative coth(lam) - 1/lam."""
     if lam < 1e-3:
@@ -239,7 +239,7 @@ def _log_sinhc(lam):
     return lam - math.log(2.0 * lam) + math.log1p(-math.exp(-2.0 * lam)), 1.0 / math.tanh(lam) - 1.0 / lam
 
 
-@njit
+@njit_noref
 def _shape_parameter(rho):
     """lam > 0 with sinh(lam)/lam = rho (rho > 1): the inextensible catenary's
     half span over its parameter, lam = w X / (2 H)."""
@@ -263,7 +263,7 @@ def _shape_parameter(rho):
     return lam
 
 
-@njit
+@njit_noref
 def _start_catenary(X, Z, L0, w, EA, c):
     """Start from the inextensible catenary of length L0 (1 + mean tension/EA)."""
     Leff = L0
@@ -285,13 +285,13 @@ def _start_catenary(X, Z, L0, w, EA, c):
     return H, VB
 
 
-@njit
+@njit_noref
 def _residual(H, VB, X, Z, L0, w, EA):
     Xc, Zc = catenary_ends(H, VB, L0, w, EA)
     return Xc - X, Zc - Z
 
 
-@njit
+@njit_noref
 def _solve_vb(H, Z, L0, w, EA, VB0, scale_f):
     """VB with Z(H, VB) = Z at fixed H > 0 (Z increasing in VB): bracket, then
     Newton safeguarded by bisection.  Returns (VB, ok, iterations)."""
@@ -340,7 +340,7 @@ def _solve_vb(H, Z, L0, w, EA, VB0, scale_f):
     return v, False, it
 
 
-@njit
+@njit_noref
 def _fallback(X, Z, L0, w, EA, H0, VB0, scale_f, floor, maxit):
     """Nested bracketed solve: outer on y = ln H (the span is increasing in H
     along the curve Z(H, VB(H)) = Z), inner :func:`_solve_vb`.  ``maxit`` bounds
@@ -423,7 +423,7 @@ def _fallback(X, Z, L0, w, EA, H0, VB0, scale_f, floor, maxit):
     return math.nan, math.nan, False, it
 
 
-@njit
+@njit_noref
 def _vertical(Z, L0, w, EA):
     """H = 0: VB solving the piecewise-linear height of a vertical cable.
 
@@ -449,7 +449,7 @@ def _vertical(Z, L0, w, EA):
     return 0.5 * (s - wl), CAT_CONVERGED
 
 
-@njit
+@njit_noref
 def catenary_inverse(X, Z, L0, w, EA, H0, VB0, tol, maxit):
     """End forces (H, VB) [N] of a cable of unstretched length L0 spanning X, Z.
 
@@ -621,7 +621,7 @@ def catenary_profile(H, VB, L0, w, EA, s):
     return x, z
 
 
-@njit
+@njit_noref
 def catenary_sag(H, VB, L0, w, EA):
     """Largest distance [m] of the cable from its chord line B-A.
 
@@ -684,7 +684,7 @@ def _inverse_block(k0, k1, X, Z, L0, w, EA, H0, VB0, tol, maxit, H, VB, status, 
                                                             maxit)
 
 
-@njit
+@njit_noref
 def span_height(ax, ay, az, bx, by, bz):
     """The cable's vertical plane from outlet A and attachment B [m] (z up).
 

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_fast, njit_inline
+from cdpr_design.kernels._jit import njit, njit_fast_noref, njit_inline, njit_noref
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
 from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, det_in_place, det_small, gram_of_inverse, inverse_into
 
@@ -38,7 +38,7 @@ def square_work(n):
     return np.empty((n, n)), np.empty(n), np.empty((n, 2 * n))
 
 
-@njit
+@njit_noref
 def square_eval_into(W, wreq, tmin, tmax, t, Winv, rn, a):
     """:func:`square_eval` with its work arrays given (allocates nothing): ``Winv`` (n, n),
     ``rn`` (n,) and ``a`` (n, >= 2n)."""
@@ -235,7 +235,7 @@ def make_scratch(n, m, nv):
             np.empty((3, 4)))           # 30 project_two: half-planes (g0, g1, h, bound)
 
 
-@njit
+@njit_noref
 def basis_factor(W, tab, slot, nbc, bcol):
     """Basis factorisation W P = W_B [I F] by Gauss-Jordan with complete pivoting.
 
@@ -298,7 +298,7 @@ def basis_factor(W, tab, slot, nbc, bcol):
     return True
 
 
-@njit
+@njit_noref
 def _null_vector(A, k, mu, minor):
     """Null vector mu (k+1) of A (k, k+1) by the generalised cross product.
 
@@ -342,7 +342,7 @@ def _null_vector(A, k, mu, minor):
     return bound2 > 0.0 and nrm2 > RANK_TOL * RANK_TOL * bound2
 
 
-@njit
+@njit_noref
 def _next_comb(idx, k, nn):
     """Advance idx[:k] to the next k-subset of range(nn) (lexicographic); False at the end."""
     i = k - 1
@@ -356,7 +356,7 @@ def _next_comb(idx, k, nn):
     return True
 
 
-@njit_fast
+@njit_fast_noref
 def hsm_factored(W, wreq, nv, tmin, tmax, scr, want_closure):
     """Capacity margins and wrench closure of the factored W: (margin0, margin, closure).
 
@@ -375,7 +375,7 @@ def hsm_factored(W, wreq, nv, tmin, tmax, scr, want_closure):
     return hsm_enumerate(W, wreq, nv, tmin, tmax, scr)
 
 
-@njit_fast
+@njit_fast_noref
 def hsm_enumerate(W, wreq, nv, tmin, tmax, scr):
     """Hyperplane shifting on the factored W: capacity margins and wrench closure.
 

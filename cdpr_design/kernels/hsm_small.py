@@ -36,11 +36,11 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_fast, njit_inline
+from cdpr_design.kernels._jit import njit_fast_noref, njit_inline, njit_noref
 from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, gram_of_inverse
 
 
-@njit_fast
+@njit_fast_noref
 def _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure):
     """Per-pose quantities in basis-slot order: M = G G^T, e_v = G (W t_mid - w_v) (``e`` row v),
     and per position p (slots 0..n-1, then the non-basic columns) the tension range ``sv[0, p]``
@@ -88,7 +88,7 @@ def _width(la, lb, lc, da, db, dc, ka, kb, kc, nrm2, want_closure):
     return (abs(la) * da + abs(lb) * db + abs(lc) * dc) * (0.5 * inv), inv, closes
 
 
-@njit
+@njit_noref
 def _other_rows(e, nv, a, b, c, la, lb, lc, half, inv, margin):
     """``margin`` lowered by rows 1..nv-1 of the required wrenches (centre l_a e_a + l_b e_b + l_c e_c)."""
     for v in range(1, nv):
@@ -97,7 +97,7 @@ def _other_rows(e, nv, a, b, c, la, lb, lc, half, inv, margin):
     return margin
 
 
-@njit_fast
+@njit_fast_noref
 def hsm_one(W, wreq, nv, tmin, tmax, scr, want_closure):
     """:func:`~cdpr_design.kernels.hsm.hsm_enumerate` for m = n + 1: (margin0, margin, closure);
     ``closure`` is tested only when ``want_closure`` (else returned True)."""
@@ -145,7 +145,7 @@ def _one(W, wreq, nv, tmin, tmax, scr, want_closure):
     return margin0, margin, closure
 
 
-@njit_fast
+@njit_fast_noref
 def hsm_two(W, wreq, nv, tmin, tmax, scr, want_closure):
     """:func:`~cdpr_design.kernels.hsm.hsm_enumerate` for m = n + 2: (margin0, margin, closure);
     ``closure`` is tested only when ``want_closure`` (else returned True)."""

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import njit_noref
 
 
 #: Bits of the interference mask returned by :func:`interference_pose`.
@@ -25,12 +25,12 @@ HIT_EFFECTOR_FRAME = 4
 HIT_CABLE_FRAME = 8
 
 
-@njit
+@njit_noref
 def _clamp01(v):
     return 0.0 if v < 0.0 else (1.0 if v > 1.0 else v)
 
 
-@njit
+@njit_noref
 def seg_seg_dist2(p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z):
     """Squared minimum distance [m^2] between segments [p0, p1] and [q0, q1].
 
@@ -72,12 +72,12 @@ def seg_seg_dist2(p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z):
     return dx * dx + dy * dy + dz * dz
 
 
-@njit
+@njit_noref
 def _pt_seg_dist2(x, y, z, ax, ay, az, bx, by, bz):
     return seg_seg_dist2(x, y, z, x, y, z, ax, ay, az, bx, by, bz)
 
 
-@njit
+@njit_noref
 def cable_cable_dist(S0, S1, i, j, tol):
     """Distance [m] between the free segments of cables i and j (S0 attachments, S1 exits).
 
@@ -102,7 +102,7 @@ def cable_cable_dist(S0, S1, i, j, tol):
                                    S0[j, 0], S0[j, 1], S0[j, 2], S1[j, 0], S1[j, 1], S1[j, 2]))
 
 
-@njit
+@njit_noref
 def segment_box_chord(s0, s1, half, dim, shrink):
     """Length [m] of the part of segment [s0, s1] inside the open box |x_k| < half_k - shrink.
 
@@ -139,7 +139,7 @@ def segment_box_chord(s0, s1, half, dim, shrink):
     return (t1 - t0) * math.sqrt(seg2)
 
 
-@njit
+@njit_noref
 def cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1):
     """Length [m] of cable i's free segment inside the effector box, its own attachment excepted.
 
@@ -167,7 +167,7 @@ def cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1):
     return segment_box_chord(s0, s1, half, dim, tol)
 
 
-@njit
+@njit_noref
 def interference_pose(S0, S1, Bp, R, px, py, pz, half, rho, flo, fhi, dim, tol, full, hits,
                       s0, s1, cp):
     """Interference at one pose; returns a bit mask (0: collision free).

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_inline
+from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
 from cdpr_design.kernels.tension_qp import goldfarb_idnani, null_space_setup, project_one, project_two
@@ -134,7 +134,7 @@ def eval_square(W, wreq, tmin, tmax, kind, t_out):
     return eval_square_into(W, wreq, tmin, tmax, kind, t_out, Winv, rn, a)
 
 
-@njit
+@njit_noref
 def eval_square_into(W, wreq, tmin, tmax, kind, t_out, Winv, rn, a):
     """:func:`eval_square` with the work arrays of
     :func:`~cdpr_design.kernels.hsm.square_eval_into` given (allocates nothing)."""

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import njit_noref
 from cdpr_design.kernels.linalg import householder_qr
 from cdpr_design.kernels.hsm import basis_factor
 
@@ -15,7 +15,7 @@ from cdpr_design.kernels.hsm import basis_factor
 QP_TOL = 1e-11
 
 
-@njit
+@njit_noref
 def null_space_setup(n, m, w, scr):
     """Orthonormal null basis N (m, r) and t_p = W^+ w from the basis factorisation.
 
@@ -64,7 +64,7 @@ def null_space_setup(n, m, w, scr):
             tp[j] -= d * N[j, k]
 
 
-@njit
+@njit_noref
 def qp_tolerance(m, tmin, tmax):
     """The bound tolerance of the QPs [N]: ``QP_TOL`` times the largest finite bound (at least 1 N)."""
     scale = 1.0
@@ -76,7 +76,7 @@ def qp_tolerance(m, tmin, tmax):
     return QP_TOL * scale
 
 
-@njit
+@njit_noref
 def project_null(m, r, tmin, tmax, t, scr):
     """The projection of :func:`goldfarb_idnani` (same inputs in ``scr``, same result): in closed
     form for one or two redundant cables (:func:`project_one`, :func:`project_two`), by the dual
@@ -89,7 +89,7 @@ def project_null(m, r, tmin, tmax, t, scr):
     return goldfarb_idnani(m, r, tmin, tmax, t, scr)
 
 
-@njit
+@njit_noref
 def _finish(m, r, tmin, tmax, t, scr, z0, z1, ok):
     """t = t_p + N z clipped into the bounds (``ok``), else NaN; returns ``ok``."""
     N, tp = scr[8], scr[9]
@@ -104,7 +104,7 @@ def _finish(m, r, tmin, tmax, t, scr, z0, z1, ok):
     return ok
 
 
-@njit
+@njit_noref
 def project_one(m, tmin, tmax, t, scr):
     """:func:`goldfarb_idnani` for r = 1: the balancing tensions are t_p + z n, z on a line.
 
@@ -140,7 +140,7 @@ def project_one(m, tmin, tmax, t, scr):
     return _finish(m, 1, tmin, tmax, t, scr, 0.0, 0.0, False)
 
 
-@njit
+@njit_noref
 def _half_plane(N, tp, tmin, tmax, m, c):
     """Bound ``c`` (c < m: t_c >= t_min; else t_(c-m) <= t_max) as g . z <= h: (g0, g1, h)."""
     if c < m:
@@ -149,7 +149,7 @@ def _half_plane(N, tp, tmin, tmax, m, c):
     return N[j, 0], N[j, 1], tmax[j] - tp[j]
 
 
-@njit
+@njit_noref
 def _inside(H, k, z0, z1, tol):
     """Whether z meets the first ``k`` half-planes ``H`` (rows g0, g1, h) to ``tol``."""
     for a in range(k):
@@ -158,7 +158,7 @@ def _inside(H, k, z0, z1, tol):
     return True
 
 
-@njit
+@njit_noref
 def project_two(m, tmin, tmax, t, scr):
     """:func:`goldfarb_idnani` for r = 2: the point nearest the origin of a polygon, in closed form.
 
@@ -229,7 +229,7 @@ def project_two(m, tmin, tmax, t, scr):
     return _finish(m, 2, tmin, tmax, t, scr, 0.0, 0.0, False)
 
 
-@njit
+@njit_noref
 def _refactor(N, m, r, active, q, J, RA, NA, VA):
     """QR of the active constraint normals N_A (r, q) = J [R; 0]."""
     for a in range(q):
@@ -241,7 +241,7 @@ def _refactor(N, m, r, active, q, J, RA, NA, VA):
     householder_qr(NA, r, q, J, RA, VA)
 
 
-@njit
+@njit_noref
 def goldfarb_idnani(m, r, tmin, tmax, t, scr):
     """Project the origin onto {z : t_min <= t_p + N z <= t_max}; t = t_p + N z.
 
@@ -362,7 +362,7 @@ def goldfarb_idnani(m, r, tmin, tmax, t, scr):
     return True
 
 
-@njit
+@njit_noref
 def min_norm_tensions(W, w, tmin, tmax, t, scr):
     """Minimum 2-norm tensions with bounds: min 1/2 |t|^2, W t = w, t_min <= t <= t_max.
 
