@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import importlib
 import importlib.machinery
 import importlib.util
 import os
@@ -110,7 +111,7 @@ def _load_blas_check() -> bool:
         return False
     sys.modules[_BLAS_MODULE] = module
     try:
-        import numba.np.arraymath  # noqa: F401 -- the import is the point: its check finds the module
+        importlib.import_module("numba.np.arraymath")  # its check finds the module
     finally:
         del sys.modules[_BLAS_MODULE]
     return True
