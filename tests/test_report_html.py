@@ -268,7 +268,39 @@ def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
         rows = sorted({(round(ax.get_position().y0, 3), round(ax.get_position().y1, 3)) for ax in maps})
         filled = sum(y1 - y0 for y0, y1 in rows)
         assert filled > 0.6, (fig.get_suptitle(), filled)
+        _assert_inside(fig)
         pyplot().close(fig)
+
+
+def _assert_inside(fig) -> None:
+    """Every tick label, label and title of ``fig`` lies inside it (nothing cut at an edge) [in]."""
+    box = fig.get_tightbbox(fig.canvas.get_renderer())
+    width, height = fig.get_size_inches()
+    assert box.x0 >= 0 and box.y0 >= 0 and box.x1 <= width and box.y1 <= height, (box.bounds, width, height)
+
+
+def test_a_colour_bar_with_long_tick_labels_widens_its_figure():
+    """The colour bar's room is fixed; 7-digit tensions need more, and the figure grows by that."""
+    from cdpr_design import workspaces as ws
+    from cdpr_design.model import spec
+    from cdpr_design.plots import workspace as wsplots
+    from cdpr_design.plots._style import pyplot
+
+    r = ws.run(spec.load(DESIGNS / "planar2.yaml"), step=0.05)
+    fig = wsplots.tension_figure(r)
+    fig.canvas.draw()
+    width = fig.get_figwidth()
+    _assert_inside(fig)
+    panels = [ax.get_position().width * width for ax in fig.axes[:-1]]
+    r.tension_maps = r.tension_maps * 1e4
+    big = wsplots.tension_figure(r)
+    big.canvas.draw()
+    _assert_inside(big)
+    assert big.get_figwidth() > width + 0.2
+    # the panels keep their size in inches
+    assert [ax.get_position().width * big.get_figwidth() for ax in big.axes[:-1]] == pytest.approx(panels)
+    pyplot().close(fig)
+    pyplot().close(big)
 
 
 def test_submitted_pictures_are_drawn_while_the_caller_works():

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from cdpr_design.plots._frame import contourable, extent, frame_rect, pad_limits, panel_grid, slices, z_slices
+from cdpr_design.plots._frame import (colour_bar, contourable, extent, frame_rect, pad_limits, panel_grid, slices,
+                                      z_slices)
 from cdpr_design.plots._style import cmap_grey_bad, pyplot
 
 #: Tilt contours drawn on planar maps [deg].
@@ -45,7 +46,7 @@ def tilt_figure(result, ax=None):
     title = _title(result)
     fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), d, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, tilt, feas, zs, cmap_grey_bad("plasma"), vmax)
-    fig.colorbar(im, cax=cax, label="tilt from level [deg] (grey: it cannot hang there)")
+    colour_bar(fig, im, cax, "tilt from level [deg] (grey: it cannot hang there)")
     fig.suptitle(title, fontsize=9)
     return fig
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from cdpr_design.plots._frame import (contourable, draw_robot, extent, frame_aspect, frame_rect, pad_limits,
-                                      panel_grid, pose_txt, single_panel, slices, used_panels, z_slices)
+from cdpr_design.plots._frame import (colour_bar, contourable, draw_robot, extent, frame_aspect, frame_rect,
+                                      pad_limits, panel_grid, pose_txt, single_panel, slices, used_panels, z_slices)
 from cdpr_design.plots._style import BLUE, VERMILLION, cmap_grey_bad, pyplot
 
 _KIND_TEXT = {"static": "static-equilibrium", "wrench-feasible": "wrench-feasible",
@@ -96,7 +96,7 @@ def _spatial_workspace(result, feas, marg, vmax, title):
     zs = slices(result)
     fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), d, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, marg, feas, zs, cmap_grey_bad("viridis"), vmax)
-    fig.colorbar(im, cax=cax, label="capacity margin [N] (grey: infeasible)")
+    colour_bar(fig, im, cax, "capacity margin [N] (grey: infeasible)")
     fig.suptitle(title, fontsize=10)
     return fig
 
@@ -135,7 +135,7 @@ def tension_figure(result):
         pad_limits(ax, d)
         c = d.cables[i]
         ax.set_title(f"{c.name}: {c.tension_min:g}–{c.tension_max:g} N", fontsize=9, y=1.0)
-    fig.colorbar(im, cax=cax, label="cable tension [N] (grey: infeasible)")
+    colour_bar(fig, im, cax, "cable tension [N] (grey: infeasible)")
     fig.suptitle(f"{d.name}: minimum-norm cable tensions, {result.kind} workspace{sub}", fontsize=10)
     return fig
 
@@ -143,7 +143,7 @@ def tension_figure(result):
 def _colorbar(fig, im, cax, ax, label: str) -> None:
     """The colour bar in ``cax`` (a figure of our own), else beside ``ax`` (a caller's axes)."""
     if cax is not None:
-        fig.colorbar(im, cax=cax, label=label)
+        colour_bar(fig, im, cax, label)
     else:
         fig.colorbar(im, ax=ax, shrink=0.85, label=label)
 
@@ -207,7 +207,7 @@ def _spatial_orientation(result, val, feas, title, label):
     zs = slices(result)
     fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), result.design, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, val, feas, zs, cmap_grey_bad("cividis"), 1.0)
-    fig.colorbar(im, cax=cax, label=label)
+    colour_bar(fig, im, cax, label)
     fig.suptitle(title, fontsize=9)
     return fig
 
