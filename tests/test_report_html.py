@@ -273,10 +273,29 @@ def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
 
 
 def _assert_inside(fig) -> None:
-    """Every tick label, label and title of ``fig`` lies inside it (nothing cut at an edge) [in]."""
+    """Every tick label, label and title of ``fig``, drawn at the PNGs' resolution, lies inside it
+    with at least 0.02 in (2 pixels) to spare: nothing cut at an edge."""
+    from cdpr_design.plots._style import DPI
+
+    fig.set_dpi(DPI)
     box = fig.get_tightbbox(fig.canvas.get_renderer())
     width, height = fig.get_size_inches()
-    assert box.x0 >= 0 and box.y0 >= 0 and box.x1 <= width and box.y1 <= height, (box.bounds, width, height)
+    room = min(box.x0, box.y0, width - box.x1, height - box.y1)
+    assert room >= 0.02, (box.bounds, width, height)
+
+
+def test_the_cable_model_picture_lies_inside_its_figure():
+    from cdpr_design import workspaces as ws
+    from cdpr_design.jobs.workspace import cable_model_picture
+    from cdpr_design.model import spec
+    from cdpr_design.plots._style import pyplot
+
+    r = ws.run(spec.load(DESIGNS / "sagging40.yaml"), step=4.0)
+    name, builder, args = cable_model_picture(r)
+    fig = builder(*args)
+    fig.canvas.draw()
+    _assert_inside(fig)
+    pyplot().close(fig)
 
 
 def test_a_colour_bar_with_long_tick_labels_widens_its_figure():

@@ -176,28 +176,39 @@ def _tick_marks(ax, locs, which: str) -> None:
                        color=rc[f"{which}tick.color"], zorder=2.5))
 
 
-#: Room kept between the colour bar's label and the figure's right edge [in].
+#: Room kept between the outermost text and the figure's left and right edges [in].
 _EDGE = 0.06
 
 
 def colour_bar(fig, im, cax, label: str) -> None:
-    """The colour bar of ``im`` in ``cax`` (:func:`panel_grid`'s), labelled ``label``.
-
-    :func:`panel_grid` leaves fixed room for the bar, its tick labels and its
-    label; where they need more (long tick labels, or the label's descenders at
-    the edge) the figure is widened to the right by what they need, every axes
-    keeping its size and place in inches.  Measured on the figure's renderer (the
-    bar's ticks and texts only, a few ms)."""
+    """The colour bar of ``im`` in ``cax`` (:func:`panel_grid`'s), labelled ``label``; then
+    :func:`fit_width`."""
     fig.colorbar(im, cax=cax, label=label)
+    fit_width(fig, cax)
+
+
+def fit_width(fig, cax=None) -> None:
+    """Widen a :func:`panel_grid` figure where its texts would pass the left or right edge.
+
+    :func:`panel_grid` leaves fixed room for the left column's y tick labels
+    and label and for the colour bar ``cax`` with its tick labels and label;
+    where they need more (long tick labels, a minus sign, the descenders of a
+    label at the edge) the figure grows on that side by what they need, every
+    axes keeping its size and place in inches.  Measured on the figure's
+    renderer (those axes' ticks and texts only, a few ms); call it once the
+    figure is complete."""
+    renderer = fig.canvas.get_renderer()
     width, height = fig.get_size_inches()
-    over = cax.get_tightbbox(fig.canvas.get_renderer()).x1 / fig.dpi + _EDGE - width
-    if over <= 0:
+    labelled = [ax for ax in fig.axes if ax is not cax and ax.get_visible() and ax.get_ylabel()]
+    left = max([_EDGE - ax.yaxis.get_tightbbox(renderer).x0 / fig.dpi for ax in labelled] + [0.0])
+    right = max(cax.get_tightbbox(renderer).x1 / fig.dpi + _EDGE - width, 0.0) if cax is not None else 0.0
+    if left == 0.0 and right == 0.0:
         return
-    scale = width / (width + over)
+    new = width + left + right
     for ax in fig.axes:
         x0, y0, w, h = ax.get_position(original=True).bounds
-        ax.set_position((x0 * scale, y0, w * scale, h))
-    fig.set_size_inches(width + over, height)
+        ax.set_position(((x0 * width + left) / new, y0, w * width / new, h))
+    fig.set_size_inches(new, height)
 
 
 def single_panel(design, width: float = 5.8, title_lines: int = 1):

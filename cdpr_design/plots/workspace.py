@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from cdpr_design.plots._frame import (colour_bar, contourable, draw_robot, extent, frame_aspect, frame_rect,
-                                      pad_limits, panel_grid, pose_txt, single_panel, slices, used_panels, z_slices)
+from cdpr_design.plots._frame import (colour_bar, contourable, draw_robot, extent, fit_width, frame_aspect,
+                                      frame_rect, pad_limits, panel_grid, pose_txt, single_panel, slices,
+                                      used_panels, z_slices)
 from cdpr_design.plots._style import BLUE, VERMILLION, cmap_grey_bad, pyplot
 
 _KIND_TEXT = {"static": "static-equilibrium", "wrench-feasible": "wrench-feasible",
@@ -259,4 +260,5 @@ def cable_model_figure(result, ideal):
     fig.legend(handles=handles, loc="upper center", ncol=4, fontsize=8,
                bbox_to_anchor=(0.5, 1 - (0.3 * lines + 0.06) / height))
     fig.suptitle(title, fontsize=10)
+    fit_width(fig)
     return fig
