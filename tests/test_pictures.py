@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import pickle
 import subprocess
 import sys
 
@@ -17,7 +18,7 @@ from cdpr_design.plots import workspace as wsplots
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
 
-from .helpers import PLANAR2
+from .helpers import PLANAR2, ROOT
 
 
 @pytest.fixture(scope="module")
@@ -50,6 +51,21 @@ def test_worker_runs_at_a_lower_cpu_priority_than_its_parent(result):
         assert worker.render(jobs(result)[:1])[0][0] == "workspace.png"  # warmed up: nice'd by now
         theirs = os.getpriority(os.PRIO_PROCESS, worker.proc.pid)
     assert theirs == min(mine + pw.NICENESS, 19)
+
+
+def test_the_worker_warms_up_with_what_a_request_needs_and_without_numba(result):
+    """After the warm-up, a workspace request unpickles without importing anything, and the
+    worker can still fork to draw (it refuses to with numba loaded)."""
+    code = ("import pickle, sys; from cdpr_design.plots import worker as pw; pw._warm_up(); "
+            "before = set(sys.modules); pickle.loads(sys.stdin.buffer.read()); "
+            "print(sorted(set(sys.modules) - before), 'numba' in sys.modules)")
+    from cdpr_design.jobs.workspace import workspace_pictures
+
+    request = pickle.dumps(pw._with_dpi(workspace_pictures(result)))
+    r = subprocess.run([sys.executable, "-c", code], input=request, capture_output=True, cwd=ROOT,
+                       env=dict(os.environ, PYTHONPATH=str(ROOT)), timeout=300)
+    assert r.returncode == 0, r.stderr.decode()[-2000:]
+    assert r.stdout.decode().split() == ["[]", "False"]
 
 
 def test_error_in_worker_is_raised_in_process():

@@ -314,15 +314,26 @@ def discard() -> None:
 # ----------------------------------------------------------------------------
 
 
+#: What a request of the ``workspace`` and ``report`` commands unpickles: its result's classes
+#: (the design, the grid) and the figure functions.  :func:`_warm_up` imports them while the
+#: parent still sweeps, not once the request is there (40-50 ms, then on the command's
+#: critical path).  None of them imports numba (:func:`draw_parallel` forks).
+PRELOAD = ("cdpr_design.workspaces.grid", "cdpr_design.plots.workspace", "cdpr_design.plots.hanging")
+
+
 def _warm_up() -> None:
-    """Import matplotlib and load the font the pictures' text needs; then put everything
-    loaded so far (modules, fonts, caches: about 70,000 objects that live as long as the
-    worker) out of the cyclic garbage collector's sight (:func:`gc.freeze`), so that no
+    """Import matplotlib, :data:`PRELOAD`, and load the font the pictures' text needs; then put
+    everything loaded so far (modules, fonts, caches: about 70,000 objects that live as long as
+    the worker) out of the cyclic garbage collector's sight (:func:`gc.freeze`), so that no
     collection walks them again.  Frozen objects are still freed when their reference counts
     drop to zero."""
+    import importlib
+
     from cdpr_design.plots._style import pyplot
 
     plt = pyplot()
+    for name in PRELOAD:
+        importlib.import_module(name)
     fig = plt.figure(figsize=(1, 1))
     fig.text(0.5, 0.5, "x [m]")
     fig.savefig(io.BytesIO(), format="png", dpi=20)
