@@ -84,7 +84,45 @@ cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
 of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
 lowered to 130,000 poses.
 
-This round (703c4fd -> this version): every straight-cable loop over poses,
+This round (811e3e9 -> this version), on a third machine, about twice as slow
+as the second (per-pose LP 1.6-2.6 ms): numba's start-up without
+``scipy.linalg`` (``kernels._jit._load_blas_check``: its BLAS check answered
+by the one extension module it looks for), and the picture process importing
+the figure modules while it waits.  A process that only imports numpy and
+numba and calls one cached kernel: 1.09 -> 0.83 s; its first call 0.45-0.53 ->
+0.17-0.23 s.  IPAnema 3's command in 10 interleaved pairs against 811e3e9
+(medians): 1.89 -> 1.76 s wall, ``load_s`` 0.63 -> 0.45 s (an earlier run of 8
+pairs: 2.09 -> 1.78 s).  This script, one run each (median round and range of
+three; before at the start of the session, after at its end):
+
+============================================  ==========================  ==========================
+IPAnema 3, 154,440 poses, static              811e3e9                     this version
+============================================  ==========================  ==========================
+per-pose linprog over the rounds              1.68-2.63 ms                1.81-2.02 ms
+kernels in-process, first call                0.722 s                     0.526 s
+kernels in-process, warm                      0.191 s = 1431x (1203-1511) 0.180 s = 1647x (1196-1763)
+whole command, warm (csv)                     2.04 s = 142x (134-152)     1.85 s = 166x (151-174)
+  its sweep_s                                 0.248 s = 1118x             0.252 s = 1238x (1052-1369)
+whole command, warm (parquet)                 1.83 s = 150x (146-163)     1.85 s = 161x (149-182)
+  fastest run: load / sweep / write / pics    0.56 / 0.21 / 0.24 / 0.46   0.44 / 0.22 / 0.22 / 0.53 s
+whole command, cold numba cache (csv)         -                           20.7 s = 13x (load_s 18.2 s)
+fixed: python, numpy, numba, one kernel       1.09 s                      0.83 s
+planar2 564,001 poses, whole command          178x csv, 195x parquet      196x csv, 194x parquet
+============================================  ==========================  ==========================
+
+Where the whole command's time goes now (timestamps in the process, two
+cores): start-up to the spec loaded 0.45-0.5 s (Python and site 0.1, numpy
+0.08, typer and the command modules 0.15, pydantic and the spec schema
+0.2); numba's start-up 0.45 s (its import 0.22-0.35, its array functions
+0.08, the first call's registry refresh 0.2, the cached kernels 0.03); the
+sweep 0.22 s; then the two pictures (0.3 s of CPU each, in two processes)
+with the table's last chunks (about 0.25 s of CPU) in 0.45 s, which is what
+the two cores can do; the exit 0.05 s.  The picture process imports
+matplotlib (0.7-1.0 s of CPU) on the second core meanwhile and is ready
+before the sweep ends.  200x allows 1.49 s at this LP: the fixed costs and
+the pictures are past it at this grid size, the kernels far below.
+
+The round before (703c4fd -> 811e3e9): every straight-cable loop over poses,
 and the CSV row formatter, compiled without numba's reference counting
 (``kernels._jit.njit_noref``; ``io.csvfast._NOREF``).  One core, in-process,
 old against new on the same grid: IPAnema 3 2.66 -> 1.21 us a pose, IPAnema 2
