@@ -199,8 +199,9 @@ def fit_width(fig, cax=None) -> None:
     figure is complete."""
     renderer = fig.canvas.get_renderer()
     width, height = fig.get_size_inches()
-    labelled = [ax for ax in fig.axes if ax is not cax and ax.get_visible() and ax.get_ylabel()]
-    left = max([_EDGE - ax.yaxis.get_tightbbox(renderer).x0 / fig.dpi for ax in labelled] + [0.0])
+    boxes = [ax.yaxis.get_tightbbox(renderer) for ax in fig.axes
+             if ax is not cax and ax.get_visible() and ax.axison and ax.get_ylabel()]
+    left = max([_EDGE - box.x0 / fig.dpi for box in boxes if box is not None] + [0.0])
     right = max(cax.get_tightbbox(renderer).x1 / fig.dpi + _EDGE - width, 0.0) if cax is not None else 0.0
     if left == 0.0 and right == 0.0:
         return
