@@ -113,8 +113,9 @@ planar2 564,001 poses, whole command          178x csv, 195x parquet      196x c
 Where the whole command's time goes now (timestamps in the process, two
 cores): start-up to the spec loaded 0.45-0.5 s (Python and site 0.1, numpy
 0.08, typer and the command modules 0.15, pydantic and the spec schema
-0.2); numba's start-up 0.45 s (its import 0.22-0.35, its array functions
-0.08, the first call's registry refresh 0.2, the cached kernels 0.03); the
+0.2); numba's start-up, ``load_s``, 0.45 s (measured apart in a fresh
+process, 0.53-0.66 s: its import 0.22-0.35, its array functions 0.08, the
+first call's registry refresh 0.2, the cached kernels 0.03); the
 sweep 0.22 s; then the two pictures (0.3 s of CPU each, in two processes)
 with the table's last chunks (about 0.25 s of CPU) in 0.45 s, which is what
 the two cores can do; the exit 0.05 s.  The picture process imports

@@ -53,14 +53,23 @@ def test_worker_runs_at_a_lower_cpu_priority_than_its_parent(result):
     assert theirs == min(mine + pw.NICENESS, 19)
 
 
-def test_the_worker_warms_up_with_what_a_request_needs_and_without_numba(result):
-    """After the warm-up, a workspace request unpickles without importing anything, and the
-    worker can still fork to draw (it refuses to with numba loaded)."""
+@pytest.mark.parametrize("case", ["planar2", "orientations", "hanging"])
+def test_the_worker_warms_up_with_what_a_request_needs_and_without_numba(case, result):
+    """After the warm-up, a workspace request (plain, of an orientation sweep, of a hanging
+    spatial design) unpickles without importing anything, and the worker can still fork to draw
+    (it refuses to with numba loaded)."""
     code = ("import pickle, sys; from cdpr_design.plots import worker as pw; pw._warm_up(); "
             "before = set(sys.modules); pickle.loads(sys.stdin.buffer.read()); "
             "print(sorted(set(sys.modules) - before), 'numba' in sys.modules)")
     from cdpr_design.jobs.workspace import workspace_pictures
 
+    from .helpers import DESIGNS
+
+    if case == "orientations":
+        d = spec.load(DESIGNS / "planar4.yaml")
+        result = ws.run_orientations(d, "total", grid=ws.make_grid(d, 0.25))
+    elif case == "hanging":
+        result = ws.run(spec.load(DESIGNS / "crane4.yaml"), step=0.6)
     request = pickle.dumps(pw._with_dpi(workspace_pictures(result)))
     r = subprocess.run([sys.executable, "-c", code], input=request, capture_output=True, cwd=ROOT,
                        env=dict(os.environ, PYTHONPATH=str(ROOT)), timeout=300)

@@ -284,13 +284,15 @@ def _assert_inside(fig) -> None:
     assert room >= 0.02, (box.bounds, width, height)
 
 
-def test_the_cable_model_picture_lies_inside_its_figure():
+@pytest.mark.parametrize("design,step", [("sagging40", 4.0), ("cogiro", 3.0)])
+def test_the_cable_model_picture_lies_inside_its_figure(design, step):
+    """Planar (a single panel) and spatial (z-slice panels, :func:`~cdpr_design.plots._frame.fit_width`)."""
     from cdpr_design import workspaces as ws
     from cdpr_design.jobs.workspace import cable_model_picture
     from cdpr_design.model import spec
     from cdpr_design.plots._style import pyplot
 
-    r = ws.run(spec.load(DESIGNS / "sagging40.yaml"), step=4.0)
+    r = ws.run(spec.with_cable_model(spec.load(DESIGNS / f"{design}.yaml"), "sagging"), step=step)
     name, builder, args = cable_model_picture(r)
     fig = builder(*args)
     fig.canvas.draw()

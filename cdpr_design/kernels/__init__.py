@@ -18,6 +18,7 @@ module             what
 ``tension_qp``     exact minimum-2-norm tensions (Goldfarb-Idnani)
 ``pose``           one pose for any m, n: feasibility, margin, tensions
 ``interference``   cable / effector / frame contacts
+``codes``          the bit codes kernels return (no numba: the layers above name them freely)
 ``sweep``          grid and point sweeps, per-chunk statistics
 ``parallel``       blocks of rows on threads (every parallel kernel)
 ``hanging``        hanging orientation of a planar two-cable body; statics at per-pose orientations
@@ -37,8 +38,8 @@ _EXPORTS = {
     **dict.fromkeys(("CLOSURE_TOL", "basis_factor", "facet_normal", "hsm_enumerate", "hsm_factored",
                      "hsm_margin", "make_scratch", "square_eval"), "hsm"),
     **dict.fromkeys(("hsm_one", "hsm_two"), "hsm_small"),
-    **dict.fromkeys(("HIT_CABLE_CABLE", "HIT_CABLE_EFFECTOR", "HIT_CABLE_FRAME", "HIT_EFFECTOR_FRAME",
-                     "cable_cable_dist", "cable_effector_chord", "interference_pose", "seg_seg_dist2",
+    **dict.fromkeys(("HIT_CABLE_CABLE", "HIT_CABLE_EFFECTOR", "HIT_CABLE_FRAME", "HIT_EFFECTOR_FRAME"), "codes"),
+    **dict.fromkeys(("cable_cable_dist", "cable_effector_chord", "interference_pose", "seg_seg_dist2",
                      "segment_box_chord"), "interference"),
     **dict.fromkeys(("RANK_TOL", "det_small", "householder_qr", "inverse_small"), "linalg"),
     **dict.fromkeys(("KIND_STATIC", "KIND_WRENCH_CLOSURE", "KIND_WRENCH_FEASIBLE", "eval_general",
@@ -48,7 +49,7 @@ _EXPORTS = {
                      "project_one", "project_two", "qp_tolerance"), "tension_qp"),
 }
 
-_SUBMODULES = {"cable_shape", "catenary", "geometry", "hanging", "hsm", "hsm_small", "interference", "linalg",
+_SUBMODULES = {"cable_shape", "catenary", "codes", "geometry", "hanging", "hsm", "hsm_small", "interference", "linalg",
                "parallel", "pose", "sag_path", "sagging", "sweep", "tension_qp"}
 
 __all__ = sorted(_EXPORTS)

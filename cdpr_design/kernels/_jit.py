@@ -113,7 +113,8 @@ def _load_blas_check() -> bool:
     try:
         importlib.import_module("numba.np.arraymath")  # its check finds the module
     finally:
-        del sys.modules[_BLAS_MODULE]
+        if sys.modules.get(_BLAS_MODULE) is module:  # not if another thread imported scipy.linalg meanwhile
+            del sys.modules[_BLAS_MODULE]
     return True
 
 

@@ -10,19 +10,7 @@ import math
 import numpy as np
 
 from cdpr_design.kernels._jit import njit_noref
-
-
-#: Bits of the interference mask returned by :func:`interference_pose`.
-HIT_CABLE_CABLE = 1
-
-
-HIT_CABLE_EFFECTOR = 2
-
-
-HIT_EFFECTOR_FRAME = 4
-
-
-HIT_CABLE_FRAME = 8
+from cdpr_design.kernels.codes import HIT_CABLE_CABLE, HIT_CABLE_EFFECTOR, HIT_CABLE_FRAME, HIT_EFFECTOR_FRAME
 
 
 @njit_noref

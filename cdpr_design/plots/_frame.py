@@ -209,6 +209,7 @@ def fit_width(fig, cax=None) -> None:
     for ax in fig.axes:
         x0, y0, w, h = ax.get_position(original=True).bounds
         ax.set_position(((x0 * width + left) / new, y0, w * width / new, h))
+        ax.set_in_layout(True)  # set_position takes the axes out of any later layout engine's hands
     fig.set_size_inches(new, height)
 
 

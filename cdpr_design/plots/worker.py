@@ -315,10 +315,12 @@ def discard() -> None:
 
 
 #: What a request of the ``workspace`` and ``report`` commands unpickles: its result's classes
-#: (the design, the grid) and the figure functions.  :func:`_warm_up` imports them while the
-#: parent still sweeps, not once the request is there (40-50 ms, then on the command's
-#: critical path).  None of them imports numba (:func:`draw_parallel` forks).
-PRELOAD = ("cdpr_design.workspaces.grid", "cdpr_design.plots.workspace", "cdpr_design.plots.hanging")
+#: (the design, the grid, an orientation sweep's maps) and the figure functions.
+#: :func:`_warm_up` imports them while the parent still sweeps, not once the request is there
+#: (40-50 ms, then on the command's critical path).  None of them imports numba
+#: (:func:`draw_parallel` forks only without it).
+PRELOAD = ("cdpr_design.workspaces.grid", "cdpr_design.workspaces.orientation", "cdpr_design.plots.workspace",
+           "cdpr_design.plots.hanging")
 
 
 def _warm_up() -> None:
