@@ -180,9 +180,13 @@ def _tick_marks(ax, locs, which: str) -> None:
 _EDGE = 0.06
 
 
-def colour_bar(fig, im, cax, label: str) -> None:
-    """The colour bar of ``im`` in ``cax`` (:func:`panel_grid`'s), labelled ``label``; then
-    :func:`fit_width`."""
+def colour_bar(fig, im, cax, label: str, ax=None) -> None:
+    """The colour bar of ``im``, labelled ``label``: in ``cax`` (:func:`panel_grid`'s), then
+    :func:`fit_width`; without ``cax``, beside ``ax`` (a caller's axes, in a figure laid out
+    by the caller)."""
+    if cax is None:
+        fig.colorbar(im, ax=ax, shrink=0.85, label=label)
+        return
     fig.colorbar(im, cax=cax, label=label)
     fit_width(fig, cax)
 
@@ -195,8 +199,8 @@ def fit_width(fig, cax=None) -> None:
     where they need more (long tick labels, a minus sign, the descenders of a
     label at the edge) the figure grows on that side by what they need, every
     axes keeping its size and place in inches.  Measured on the figure's
-    renderer (those axes' ticks and texts only, a few ms); call it once the
-    figure is complete."""
+    renderer (those axes' ticks and texts only, a few ms); call it once they
+    are set."""
     renderer = fig.canvas.get_renderer()
     width, height = fig.get_size_inches()
     boxes = [ax.yaxis.get_tightbbox(renderer) for ax in fig.axes

@@ -73,6 +73,6 @@ def _planar(result, tilt, feas, vmax, ax):
     pad_limits(ax, d)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    fig.colorbar(im, ax=ax, shrink=0.85, label="tilt from level [deg] (white line: feasible region)")
+    colour_bar(fig, im, None, "tilt from level [deg] (white line: feasible region)", ax)
     ax.set_title(_title(result), fontsize=9)
     return fig

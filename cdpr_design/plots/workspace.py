@@ -82,7 +82,7 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
     pad_limits(ax, d)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    _colorbar(fig, im, cax, ax, "capacity margin [N] (grey: infeasible)")
+    colour_bar(fig, im, cax, "capacity margin [N] (grey: infeasible)", ax)
     ax.legend(loc="best", fontsize=8, framealpha=0.9)
     ax.set_title(title, fontsize=10, y=1.0)
     if rep is not None:
@@ -141,14 +141,6 @@ def tension_figure(result):
     return fig
 
 
-def _colorbar(fig, im, cax, ax, label: str) -> None:
-    """The colour bar in ``cax`` (a figure of our own), else beside ``ax`` (a caller's axes)."""
-    if cax is not None:
-        colour_bar(fig, im, cax, label)
-    else:
-        fig.colorbar(im, ax=ax, shrink=0.85, label=label)
-
-
 def orientation_figure(result, ax=None):
     """Orientation workspace picture: the fraction of the orientation set that is
     feasible (``total``; the total orientation workspace outlined) or the
@@ -199,7 +191,7 @@ def _planar_orientation(result, val, feas, title, label, ax):
     pad_limits(ax, d)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    _colorbar(fig, im, cax, ax, label)
+    colour_bar(fig, im, cax, label, ax)
     ax.set_title(title, fontsize=9, y=1.0)
     return fig
 
