@@ -300,6 +300,37 @@ def test_the_cable_model_picture_lies_inside_its_figure(design, step):
     pyplot().close(fig)
 
 
+@pytest.mark.parametrize("design", ["cogiro", "crane4"])
+def test_a_spatial_grid_of_one_z_level_keeps_its_titles_inside(design):
+    """One z-slice makes a one-panel figure narrower than its title: the figure widens to the
+    title, the legend (the cable-model picture) and the colour bar; the panel keeps its size."""
+    from cdpr_design import workspaces as ws
+    from cdpr_design.jobs.workspace import cable_model_picture
+    from cdpr_design.model import spec
+    from cdpr_design.plots import workspace as wsplots
+    from cdpr_design.plots._style import pyplot
+    from cdpr_design.plots.hanging import tilt_figure
+    from cdpr_design.model.design import Grid
+
+    d = spec.load(DESIGNS / f"{design}.yaml")
+    g = d.workspace.grid
+    z = 0.5 * (g.lower[2] + g.upper[2])
+    one = Grid((g.lower[0], g.lower[1], z), (g.upper[0], g.upper[1], z), (0.5, 0.5, 0.5))
+    r = ws.run(d, grid=one)
+    figures = [wsplots.workspace_figure(r), wsplots.tension_figure(r)]
+    if getattr(r, "hanging", None) is not None:
+        figures.append(tilt_figure(r))
+    else:
+        sag = ws.run(spec.with_cable_model(d, "sagging"), grid=one)
+        name, builder, args = cable_model_picture(sag)
+        figures.append(builder(*args))
+    for fig in figures:
+        fig.canvas.draw()
+        _assert_inside(fig)
+        assert fig.get_suptitle()
+        pyplot().close(fig)
+
+
 def test_a_colour_bar_with_long_tick_labels_widens_its_figure():
     """The colour bar's room is fixed; 7-digit tensions need more, and the figure grows by that."""
     from cdpr_design import workspaces as ws

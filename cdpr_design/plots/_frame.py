@@ -198,15 +198,22 @@ def fit_width(fig, cax=None) -> None:
     and label and for the colour bar ``cax`` with its tick labels and label;
     where they need more (long tick labels, a minus sign, the descenders of a
     label at the edge) the figure grows on that side by what they need, every
-    axes keeping its size and place in inches.  Measured on the figure's
-    renderer (those axes' ticks and texts only, a few ms); call it once they
-    are set."""
+    axes keeping its size and place in inches.  The figure's own texts and
+    legends (a suptitle, a legend row over the panels) stay where they are as a
+    fraction of its width (centred, as drawn here); where one is wider than the
+    figure with that room (the title over a single panel), the figure grows by
+    the difference, half on either side.  Measured on the figure's renderer
+    (those axes' ticks and texts only, a few ms); call it once all of them are
+    set."""
     renderer = fig.canvas.get_renderer()
     width, height = fig.get_size_inches()
     boxes = [ax.yaxis.get_tightbbox(renderer) for ax in fig.axes
              if ax is not cax and ax.get_visible() and ax.axison and ax.get_ylabel()]
     left = max([_EDGE - box.x0 / fig.dpi for box in boxes if box is not None] + [0.0])
     right = max(cax.get_tightbbox(renderer).x1 / fig.dpi + _EDGE - width, 0.0) if cax is not None else 0.0
+    spare = _figure_text_width(fig, renderer, width) - (width + left + right)
+    if spare > 0.0:
+        left, right = left + spare / 2, right + spare / 2
     if left == 0.0 and right == 0.0:
         return
     new = width + left + right
@@ -215,6 +222,21 @@ def fit_width(fig, cax=None) -> None:
         ax.set_position(((x0 * width + left) / new, y0, w * width / new, h))
         ax.set_in_layout(True)  # set_position takes the axes out of any later layout engine's hands
     fig.set_size_inches(new, height)
+
+
+def _figure_text_width(fig, renderer, width: float) -> float:
+    """The figure width [in] its own texts and legends need to keep :data:`_EDGE` from both edges,
+    each staying centred where it is now as a fraction of the width (0 without any)."""
+    need = 0.0
+    for artist in (*fig.texts, *fig.legends):
+        if not artist.get_visible():
+            continue
+        box = artist.get_window_extent(renderer)
+        x0, x1 = box.x0 / fig.dpi, box.x1 / fig.dpi
+        at = min(max(0.5 * (x0 + x1) / width, 0.05), 0.95)  # its centre, as a fraction of the width
+        half = 0.5 * (x1 - x0) + _EDGE
+        need = max(need, half / at, half / (1.0 - at))
+    return need
 
 
 def single_panel(design, width: float = 5.8, title_lines: int = 1):

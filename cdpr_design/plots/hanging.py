@@ -46,8 +46,8 @@ def tilt_figure(result, ax=None):
     title = _title(result)
     fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), d, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, tilt, feas, zs, cmap_grey_bad("plasma"), vmax)
-    colour_bar(fig, im, cax, "tilt from level [deg] (grey: it cannot hang there)")
     fig.suptitle(title, fontsize=9)
+    colour_bar(fig, im, cax, "tilt from level [deg] (grey: it cannot hang there)")
     return fig
 
 

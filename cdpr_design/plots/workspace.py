@@ -97,8 +97,8 @@ def _spatial_workspace(result, feas, marg, vmax, title):
     zs = slices(result)
     fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), d, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, marg, feas, zs, cmap_grey_bad("viridis"), vmax)
-    colour_bar(fig, im, cax, "capacity margin [N] (grey: infeasible)")
     fig.suptitle(title, fontsize=10)
+    colour_bar(fig, im, cax, "capacity margin [N] (grey: infeasible)")
     return fig
 
 
@@ -136,8 +136,8 @@ def tension_figure(result):
         pad_limits(ax, d)
         c = d.cables[i]
         ax.set_title(f"{c.name}: {c.tension_min:g}–{c.tension_max:g} N", fontsize=9, y=1.0)
-    colour_bar(fig, im, cax, "cable tension [N] (grey: infeasible)")
     fig.suptitle(f"{d.name}: minimum-norm cable tensions, {result.kind} workspace{sub}", fontsize=10)
+    colour_bar(fig, im, cax, "cable tension [N] (grey: infeasible)")
     return fig
 
 
@@ -200,8 +200,8 @@ def _spatial_orientation(result, val, feas, title, label):
     zs = slices(result)
     fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), result.design, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, val, feas, zs, cmap_grey_bad("cividis"), 1.0)
-    colour_bar(fig, im, cax, label)
     fig.suptitle(title, fontsize=9)
+    colour_bar(fig, im, cax, label)
     return fig
 
 
