@@ -318,3 +318,96 @@ def test_eval_rotated_equals_evaluate_pose(name):
         np.testing.assert_allclose(L[i], ref.lengths, rtol=1e-12)
         np.testing.assert_allclose(ten[i], ref.tensions, rtol=1e-9, atol=1e-9)
     assert n_feasible >= 3
+
+
+def _random_geometry(rng, m):
+    return hc.Geometry(rng.normal(size=(m, 3)) * 3.0, rng.normal(size=(m, 3)) * 0.4, rng.normal(size=3) * 0.2,
+                       rng.uniform(1.0, 50.0), np.array([0.0, 0.0, -9.81]))
+
+
+def _lagrangian(geo, t, p, R, x):
+    """U + sum t_i |l_i| at p + dp, exp([dw]) R (scipy's rotation), x = (dp, dw) [m, rad]."""
+    R2 = Rotation.from_rotvec(x[3:]).as_matrix() @ R
+    q = p + x[:3]
+    lengths = np.linalg.norm(geo.A - q - geo.B @ R2.T, axis=1)
+    return -geo.mass * geo.g @ (q + R2 @ geo.c) + t @ lengths
+
+
+def _reduced_hessian_min_fd(geo, p, R, t, taut, dofs, h=1e-4):
+    """The reduced Hessian's smallest eigenvalue from central finite differences: the Hessian of
+    the Lagrangian and the taut lengths' gradients in (dp, dw), the tangent space by scipy."""
+    from scipy.linalg import null_space
+
+    f = lambda x: _lagrangian(geo, t, p, R, x)  # noqa: E731
+    E = np.eye(6) * h
+    Hfd = np.array([[(f(E[i] + E[j]) - f(E[i] - E[j]) - f(E[j] - E[i]) + f(-E[i] - E[j])) / (4 * h * h)
+                     for j in range(6)] for i in range(6)])
+    lengths = lambda x: np.linalg.norm(  # noqa: E731
+        geo.A - p - x[:3] - geo.B @ (Rotation.from_rotvec(x[3:]).as_matrix() @ R).T, axis=1)
+    G = np.array([(lengths(E[j]) - lengths(-E[j])) / (2 * h) for j in range(6)]).T[taut][:, dofs]
+    N = null_space(G, rcond=1e-10) if G.size else np.eye(len(dofs))
+    if N.shape[1] == 0:
+        return math.inf
+    Hd = Hfd[np.ix_(dofs, dofs)]
+    return float(np.linalg.eigvalsh(N.T @ Hd @ N)[0])
+
+
+def test_batched_reduced_hessian_against_finite_differences():
+    """Geometry.reduced_hessian_min_many (one batch of random robots' configurations, any taut
+    set, spatial and planar dofs) against finite differences of the Lagrangian and the lengths."""
+    rng = np.random.default_rng(11)
+    checked = 0
+    for trial in range(60):
+        m = int(rng.integers(1, 7))
+        geo = _random_geometry(rng, m)
+        dofs = list(hc.DOFS_SPATIAL if trial % 2 else hc.DOFS_PLANAR)
+        k = 4
+        P = rng.normal(size=(k, 3))
+        R = Rotation.from_rotvec(rng.normal(size=(k, 3)) * 0.6).as_matrix()
+        t = rng.uniform(0.0, 100.0, (k, m)) * (rng.random((k, m)) < 0.8)
+        taut = rng.random((k, m)) < 0.7
+        got = geo.reduced_hessian_min_many(P, R, t, taut, dofs)
+        for n in range(k):
+            want = _reduced_hessian_min_fd(geo, P[n], R[n], t[n], taut[n], dofs)
+            one = geo.reduced_hessian_min(P[n], R[n], t[n], np.flatnonzero(taut[n]), dofs)
+            assert one == pytest.approx(got[n], rel=1e-12, abs=1e-9) or (math.isinf(one) and math.isinf(got[n]))
+            if math.isinf(want):
+                assert math.isinf(got[n]), (trial, n, got[n])
+                continue
+            scale = 1.0 + np.abs(t[n]).sum() + geo.weight
+            assert got[n] == pytest.approx(want, abs=1e-5 * scale), (trial, n)
+            checked += 1
+    assert checked > 150
+
+
+@pytest.mark.parametrize("planar", [False, True])
+def test_newton_jacobian_against_finite_differences(planar):
+    """The balance Jacobian of the batched Newton search (closed forms summed with einsum)
+    against central differences of its residual in the rotation coordinates and tensions."""
+    rng = np.random.default_rng(5 + planar)
+    for trial in range(40):
+        m = int(rng.integers(1, 7))
+        geo = _random_geometry(rng, m)
+        bal = ha._Balance(geo, planar)
+        k = 6
+        P = rng.normal(size=(k, 3))
+        w = rng.normal(size=(k, 3)) * 0.7
+        if planar:
+            w[:, :2] = 0.0
+        R0 = Rotation.from_rotvec(rng.normal(size=3) * 0.3).as_matrix()
+        t = rng.uniform(0.0, 100.0, (k, m))
+        J = bal.jacobian(P, hc.rotvec(w) @ R0, t, w)
+        h = 1e-6
+        cols = []
+        for j in bal.rot:
+            e = np.zeros(3)
+            e[j] = h
+            up = bal.residual(P, Rotation.from_rotvec(w + e).as_matrix() @ R0, t)
+            down = bal.residual(P, Rotation.from_rotvec(w - e).as_matrix() @ R0, t)
+            cols.append((up - down) / (2 * h))
+        for i in range(m):
+            e = np.zeros(m)
+            e[i] = h * geo.weight  # the unknowns are the tensions over the weight
+            R = Rotation.from_rotvec(w).as_matrix() @ R0
+            cols.append((bal.residual(P, R, t + e) - bal.residual(P, R, t - e)) / (2 * h))
+        np.testing.assert_allclose(J, np.stack(cols, axis=2), rtol=1e-5, atol=1e-6)

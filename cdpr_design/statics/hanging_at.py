@@ -308,11 +308,17 @@ class _Balance:
         """d(scaled residual)/d(rotation coordinates, tensions / weight) (N, r, nr + m)."""
         geo = self.geo
         W, wg, Rb, L, u = self.parts(P, R)
-        Pm = (np.eye(3) - u[..., :, None] * u[..., None, :]) / L[..., None, None]
-        Bx = hc.skew(Rb)
-        tt = t[..., None, None]
-        Jf = np.sum(tt * Pm @ Bx, axis=1)
-        Jm = np.sum(tt * (hc.skew(u) @ Bx + Bx @ Pm @ Bx), axis=1)
+        # with S = [R b]_x, P = (I - u u^T) / L and c = R b x u, the force and moment rows of
+        # sum t (P S, [u]_x S + S P S) in closed form ([a]_x [b]_x = b a^T - (a . b) I):
+        # P S = (S + u c^T) / L and [u]_x S + S P S = R b u^T - (u . R b) I + (R b (R b)^T
+        # - |R b|^2 I + c c^T) / L, summed over the cables with einsum (no (k, m, 3, 3) stacks)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            tL = t / L
+        c = _cross(Rb, u)
+        outer = lambda wt, a, b: np.einsum("nm,nmi,nmj->nij", wt, a, b)  # noqa: E731
+        Jf = hc.skew(np.einsum("nm,nmi->ni", tL, Rb)) + outer(tL, u, c)
+        diag = np.einsum("nm,nmi,nmi->n", t, u, Rb) + np.einsum("nm,nmi,nmi->n", tL, Rb, Rb)
+        Jm = outer(t, Rb, u) + outer(tL, Rb, Rb) + outer(tL, c, c) - diag[:, None, None] * np.eye(3)
         Jm = Jm + hc.skew(geo.mass * geo.g) @ hc.skew(R @ geo.c)
         Jw = np.concatenate([Jf, Jm], axis=1) @ hc.left_jacobian(w)
         J = np.concatenate([Jw[:, :, self.rot], W * geo.weight], axis=2)[:, self.rows]
@@ -484,11 +490,12 @@ def _hang_planar2(geo, P, engine, alternatives):
     return rot_z_many(phis[rows, j]), np.maximum(ts[rows, j], 0.0), status, hs[rows, j].copy(), alts
 
 
-def _stable(geo, p, R, t, dofs):
-    """(stable, smallest reduced-Hessian eigenvalue) of a balanced pose with tensions t."""
-    taut = [i for i in range(geo.m) if t[i] > 1e-9 * geo.weight]
-    h = geo.reduced_hessian_min(p, R, np.maximum(t, 0.0), taut, dofs)
-    return bool(h > 1e-9 * geo.weight), h
+def _stable(geo, P, R, t, dofs):
+    """(stable (k,), smallest reduced-Hessian eigenvalue (k,)) of k balanced poses: positions
+    P (k, 3) [m], rotations R (k, 3, 3), tensions t (k, m) [N]; the taut cables are those
+    above 1e-9 of the weight."""
+    h = geo.reduced_hessian_min_many(P, R, np.maximum(t, 0.0), t > 1e-9 * geo.weight, dofs)
+    return h > 1e-9 * geo.weight, h
 
 
 def taut_sets(m: int, planar: bool) -> list[tuple[int, ...]]:
@@ -543,15 +550,19 @@ def _choose_general(geo, P, planar, todo, Rs, ts, balanced, seen, found, alterna
     dofs = hc.DOFS_PLANAR if planar else hc.DOFS_SPATIAL
     pull = balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)
     tilt = tilt_many(Rs, -geo.g / np.linalg.norm(geo.g))
+    # the stability of every pulling candidate at once (the loop below may skip some of them)
+    stable, h = np.zeros(pull.shape, bool), np.full(pull.shape, np.nan)
+    n_, s_ = np.nonzero(pull)
+    if n_.size:
+        stable[n_, s_], h[n_, s_] = _stable(geo, P[todo[n_]], Rs[n_, s_], ts[n_, s_], dofs)
     for n, i in enumerate(todo):
         for s in np.argsort(np.where(pull[n], tilt[n], np.inf), kind="stable"):
             if not pull[n, s] or (found[i] and not alternatives):
                 break
             if any(hc.rotation_angle(Rs[n, s] @ c[0].T) < 1e-7 for c in seen[i]):
                 continue
-            st, h = _stable(geo, P[i], Rs[n, s], ts[n, s], dofs)
-            seen[i].append((Rs[n, s], np.maximum(ts[n, s], 0.0), st, tilt[n, s], h))
-            found[i] |= st
+            seen[i].append((Rs[n, s], np.maximum(ts[n, s], 0.0), bool(stable[n, s]), tilt[n, s], h[n, s]))
+            found[i] |= stable[n, s]
 
 
 def _hang_point(geo, P, planar, nominal, alternatives):
@@ -561,8 +572,9 @@ def _hang_point(geo, P, planar, nominal, alternatives):
     dofs = hc.DOFS_POINT2 if planar else hc.DOFS_POINT3
     k = len(P)
     found, hmin = np.zeros(k, bool), np.full(k, np.nan)
-    for i in np.flatnonzero(pull):
-        found[i], hmin[i] = _stable(geo, P[i], R0, t[i], dofs)
+    rows = np.flatnonzero(pull)
+    if rows.size:
+        found[rows], hmin[rows] = _stable(geo, P[rows], np.broadcast_to(R0, (rows.size, 3, 3)), t[rows], dofs)
     alts = [[(R0, np.maximum(t[i], 0.0), False)] if pull[i] and not found[i] else [] for i in range(k)] \
         if alternatives else []
     R = np.broadcast_to(R0, (k, 3, 3)).copy()

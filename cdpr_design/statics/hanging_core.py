@@ -282,40 +282,87 @@ class Geometry:
         return Jz, Jt, G
 
     def lagrangian_hessian(self, p, R, t) -> np.ndarray:
-        """Hessian (6, 6) of U + sum t_i |l_i| in (dp, w) at a configuration."""
-        Rb, _, L, u = self.cables(p, R)
+        """Hessian (6, 6) of U + sum t_i |l_i| in (dp, w) at a configuration (t [N])."""
+        return self.lagrangian_hessian_many(np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3)),
+                                            np.reshape(t, (1, self.m)))[0]
+
+    def lagrangian_hessian_many(self, P, R, t) -> np.ndarray:
+        """:meth:`lagrangian_hessian` at k configurations: P (k, 3) [m], R (k, 3, 3), t (k, m)
+        [N] -> (k, 6, 6).
+
+        With S_i = [R b_i]_x, P_i = (I - u_i u_i^T) / L_i and J_i = [-I, S_i] (the
+        derivative of l_i), cable i adds t_i (J_i^T P_i J_i + [0, 0; 0, (u_i . R b_i) I -
+        (u_i (R b_i)^T + R b_i u_i^T) / 2]); the weight adds m ((g . R c) I - (g (R c)^T +
+        R c g^T) / 2) to the rotation block.
+        """
+        P = np.asarray(P, float).reshape(-1, 3)
+        R = np.asarray(R, float).reshape(-1, 3, 3)
+        t = np.asarray(t, float).reshape(-1, self.m)
+        Rb = np.einsum("kij,mj->kmi", R, self.B)
+        l = self.A[None] - P[:, None, :] - Rb
+        L = np.sqrt(np.einsum("kmi,kmi->km", l, l))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            u = l / L[..., None]
+            Pm = (np.eye(3) - u[..., :, None] * u[..., None, :]) / L[..., None, None]
+        S = skew(Rb)
+        PS = Pm @ S
+        sym = 0.5 * (u[..., :, None] * Rb[..., None, :] + Rb[..., :, None] * u[..., None, :])
+        dot = np.einsum("kmi,kmi->km", u, Rb)[..., None, None] * np.eye(3)
+        w = t[..., None, None]
+
+        def total(block):  # sum over the cables with tension (one of length 0 and none adds no NaN)
+            return np.sum(np.where(w != 0.0, w * block, 0.0), axis=1)
+
+        H = np.zeros((len(P), 6, 6))
+        H[:, :3, :3] = total(Pm)
+        H[:, :3, 3:] = -total(PS)
+        H[:, 3:, :3] = total(S @ Pm)
+        H[:, 3:, 3:] = total(dot - sym - S @ PS)
         cR = R @ self.c
         g = self.g
-        H = np.zeros((6, 6))
-        H[3:, 3:] = -0.5 * self.mass * (np.outer(g, cR) + np.outer(cR, g)) + self.mass * (g @ cR) * np.eye(3)
-        for i in range(self.m):
-            if t[i] == 0.0:
-                continue
-            J = np.hstack([-np.eye(3), skew(Rb[i])])
-            P = (np.eye(3) - np.outer(u[i], u[i])) / L[i]
-            Hi = J.T @ P @ J
-            Hi[3:, 3:] += -0.5 * (np.outer(u[i], Rb[i]) + np.outer(Rb[i], u[i])) + (u[i] @ Rb[i]) * np.eye(3)
-            H += t[i] * Hi
+        H[:, 3:, 3:] += self.mass * ((cR @ g)[:, None, None] * np.eye(3)
+                                     - 0.5 * (g[:, None] * cR[:, None, :] + cR[:, :, None] * g[None, :]))
         return H
 
     def reduced_hessian_min(self, p, R, t, taut, dofs) -> float:
         """Smallest eigenvalue of the Lagrangian's Hessian on the tangent space of the
         taut cables' length constraints (restricted to ``dofs``); +inf when that
-        space is {0} (the taut cables lock the effector)."""
+        space is {0} (the taut cables lock the effector).  ``taut``: cable indices."""
+        mask = np.zeros((1, self.m), bool)
+        mask[0, list(taut)] = True
+        return float(self.reduced_hessian_min_many(np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3)),
+                                                   np.reshape(t, (1, self.m)), mask, dofs)[0])
+
+    def reduced_hessian_min_many(self, P, R, t, taut, dofs) -> np.ndarray:
+        """:meth:`reduced_hessian_min` at k configurations: P (k, 3) [m], R (k, 3, 3), t (k, m)
+        [N], ``taut`` (k, m) bool -> (k,).
+
+        The tangent space is the null space of the taut cables' length gradients
+        G_i = (-u_i, -(R b_i) x u_i) restricted to ``dofs`` (right singular vectors past the
+        numerical rank, singular values > 1e-10 max(1, the largest)); a slack cable's row is
+        zero and changes neither.  The answer does not depend on the basis chosen for it.
+        """
         dofs = list(dofs)
-        H = self.lagrangian_hessian(p, R, t)[np.ix_(dofs, dofs)]
-        S = list(taut)
-        if S:
-            _, _, G = self.jacobian(p, R, np.zeros(self.m), S)
-            G = G[:, dofs]
-            _, sv, Vt = np.linalg.svd(G)
-            rank = int(np.sum(sv > 1e-10 * max(1.0, sv[0])))
-            N = Vt[rank:].T
-        else:
-            N = np.eye(len(dofs))
-        if N.shape[1] == 0:
-            return math.inf
-        return float(np.linalg.eigvalsh(N.T @ H @ N)[0])
+        P = np.asarray(P, float).reshape(-1, 3)
+        R = np.asarray(R, float).reshape(-1, 3, 3)
+        taut = np.asarray(taut, bool).reshape(-1, self.m)
+        k, d = len(P), len(dofs)
+        H = self.lagrangian_hessian_many(P, R, t)[:, dofs][:, :, dofs]
+        Rb = np.einsum("kij,mj->kmi", R, self.B)
+        l = self.A[None] - P[:, None, :] - Rb
+        with np.errstate(invalid="ignore", divide="ignore"):
+            u = l / np.linalg.norm(l, axis=2)[..., None]
+        G = -np.concatenate([u, np.cross(Rb, u)], axis=2)[:, :, dofs]
+        G = np.where(taut[..., None], G, 0.0)
+        _, sv, Vt = np.linalg.svd(G)
+        rank = np.sum(sv > 1e-10 * np.maximum(1.0, sv[:, :1]), axis=1)
+        M = Vt @ H @ Vt.transpose(0, 2, 1)  # H in the singular-vector basis: the tangent space last
+        out = np.full(k, np.inf)
+        for r in np.unique(rank):
+            if r < d:
+                rows = np.flatnonzero(rank == r)
+                out[rows] = np.linalg.eigvalsh(M[rows, r:, r:])[:, 0]
+        return out
 
 
 # ----------------------------------------------------------------------------
