@@ -52,6 +52,9 @@ def test_results_do_not_depend_on_the_thread_count(path, step):
             np.testing.assert_array_equal(a.margin, b.margin)  # NaN where NaN, bit for bit elsewhere
             np.testing.assert_array_equal(a.tensions, b.tensions)
             np.testing.assert_array_equal(a.lengths, b.lengths)
+            assert a.extra.keys() == b.extra.keys()  # crane4: the hanging tilt and orientation
+            for name in a.extra:
+                np.testing.assert_array_equal(a.extra[name], b.extra[name])
 
 
 def test_every_block_runs_on_the_pool_and_fills_its_rows():
