@@ -301,3 +301,99 @@ def test_cli_pose_collisions_and_workspace_flag(tmp_path):
     # after the contract's columns; planar2 is under-constrained, so its hanging tilt follows
     assert header[:4] == ["x", "y", "feasible", "margin"]
     assert header[8:] == ["collision_free", "tilt", "orientation_phi"]
+
+
+def design2t(cables, diameter=0.004, size=(0.1, 0.1)):
+    """A planar (2T) design: cables (name, outlet, attachment, plane_offset)."""
+    return spec.from_dict({
+        "name": "flat", "motion": "2T", "gravity": [0.0, -9.81], "frame": {"lower": [-3, -3], "upper": [3, 3]},
+        "effector": {"mass": 1.0, "size": list(size)}, "tension": [0, 100], "cable": {"diameter": diameter},
+        "cables": [{"name": n, "outlet": list(a), "attachment": list(b), "plane_offset": z}
+                   for n, a, b, z in cables],
+    })
+
+
+def _kernel_pairs(d, pose):
+    """The cable-cable verdicts of the sweep kernel (workspaces.hardware) at one position."""
+    from cdpr_design.workspaces.hardware import Evaluator
+
+    P = np.zeros((1, 3))
+    P[0, :2] = pose
+    *_, mask = Evaluator(d, "static", True)(P, [0.0, 0.0, 0.0])
+    return bool(mask[0] & K.HIT_CABLE_CABLE)
+
+
+@pytest.mark.parametrize("h, hit", [(0.0, True), (0.002 - 1e-6, True), (0.002 + 1e-6, False), (0.01, False)])
+def test_crossed_planar_cables_in_offset_planes(h, hit):
+    """Two planar cables cross above the effector at (0, 0.0976): in planes z = +h and -h they
+    are 2 h apart there, and 4 mm cables (radii sum 4 mm) touch when 2 h <= 4 mm; the pose
+    check and the sweep kernel agree."""
+    d = design2t([("c1", (-2.0, 2.0), (0.05, 0.05), h), ("c2", (2.0, 2.0), (-0.05, 0.05), -h)])
+    r = itf.check_pose(d, [0.0, 0.0])
+    assert r.cable_distances[0, 1] == pytest.approx(2 * h, abs=1e-12)
+    assert (("c1", "c2") in r.pairs) is hit
+    assert r.effector_chords.max() == 0.0
+    assert _kernel_pairs(d, [0.0, 0.0]) is hit
+
+
+def test_plane_offsets_change_the_interference_only():
+    """planar4's crossed lower cables run in offset planes: no cable-cable contact anywhere on
+    the grid; without the offsets they meet at every position.  Feasibility, margins, tensions
+    and lengths are the same with and without them (the offsets are out of the motion plane)."""
+    from cdpr_design.workspaces.hardware import Evaluator
+    from .helpers import DESIGNS
+
+    data = spec.read_yaml(DESIGNS / "planar4.yaml")
+    with_offsets = spec.from_dict(data)
+    assert [c.plane_offset for c in with_offsets.cables] == [0.005, -0.005, 0.0, 0.0]
+    for c in data["cables"]:
+        c.pop("plane_offset", None)
+    flat = spec.from_dict(data)
+    g = ws.make_grid(with_offsets, 0.05)
+    from cdpr_design.workspaces.grid import positions3
+
+    P = positions3(g, 0, g.size)
+    a = Evaluator(with_offsets, "static", True)(P, [0.0, 0.0, 0.0])
+    b = Evaluator(flat, "static", True)(P, [0.0, 0.0, 0.0])
+    for x, y in zip(a[:4], b[:4]):
+        np.testing.assert_array_equal(x, y)
+    assert not np.any(a[4] & K.HIT_CABLE_CABLE)
+    assert np.all(b[4] & K.HIT_CABLE_CABLE)
+    assert np.any(a[4] == 0)  # collision-free positions exist now
+
+
+def test_random_planar_robots_with_plane_offsets_against_the_slow_distance():
+    """Random planar robots whose cables lie in random planes: the kernel's and the pose check's
+    cable-cable verdicts against the slow segment distance of the 3-D segments."""
+    rng = np.random.default_rng(9)
+    checked = hits = 0
+    for _ in range(25):
+        m = int(rng.integers(2, 6))
+        diameter = float(rng.uniform(0.0, 0.02))
+        z = rng.choice([0.0, 0.004, -0.004, 0.02], m)
+        cables = [(f"c{i}", tuple(rng.uniform(-2.5, 2.5, 2)), tuple(rng.uniform(-0.05, 0.05, 2)), float(z[i]))
+                  for i in range(m)]
+        d = design2t(cables, diameter=diameter)
+        for _ in range(4):
+            pose = rng.uniform(-0.5, 0.5, 2)
+            r = itf.check_pose(d, pose)
+            g = kin.cable_geometry(d, pose)
+            slow = set()
+            for i in range(m):
+                for j in range(i + 1, m):
+                    p0, p1 = g.anchors[i] + [0, 0, z[i]], g.exits[i] + [0, 0, z[i]]
+                    q0, q1 = g.anchors[j] + [0, 0, z[j]], g.exits[j] + [0, 0, z[j]]
+                    dist = seg_dist_slow(p0, p1, q0, q1)
+                    assert r.cable_distances[i, j] == pytest.approx(dist, abs=1e-6)
+                    if abs(dist - diameter) < 1e-6:
+                        continue  # borderline: the optimiser cannot decide
+                    if dist <= diameter:
+                        slow.add((f"c{i}", f"c{j}"))
+            fast = {p for p in r.pairs if "effector" not in p and "frame" not in p}
+            if any(abs(r.cable_distances[i, j] - diameter) < 1e-6 for i in range(m) for j in range(i + 1, m)):
+                continue
+            assert fast == slow
+            assert _kernel_pairs(d, pose) is bool(fast)
+            checked += 1
+            hits += len(fast)
+    assert checked > 80 and hits > 5

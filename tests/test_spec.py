@@ -57,6 +57,8 @@ BAD = [
     ("workspace.external_wrench", {"lower": [0, 0, 0], "upper": [1, 1, 1]},
      "workspace.external_wrench.lower: expected 2 numbers (fx, fy) for motion 2T, got 3"),
     ("effector.inertia", [[1, 0, 0], [0, 1, 0]], "effector.inertia: expected a 3x3 matrix"),
+    ("cables.0.plane_offset", "front", "cables[0].plane_offset: expected a number, got 'front'"),
+    ("cables.1.plane_offset", float("nan"), "cables[1].plane_offset: expected a finite number"),
 ]
 
 
@@ -72,6 +74,19 @@ def test_bad_spec_exit_2_names_key(tmp_path, planar2_data, path, value, message)
     assert not (tmp_path / "o" / "workspace.csv").exists()
     with pytest.raises(SpecError):
         spec.load(p)
+
+
+def test_a_spatial_cable_has_no_plane_offset(tmp_path):
+    """plane_offset places a planar design's cable out of the motion plane; a spatial cable's
+    outlet and attachment already give its height: refused, naming the key (exit 2)."""
+    data = spec.read_yaml(DESIGNS / "ipanema3.yaml")
+    data["cables"][2]["plane_offset"] = 0.01
+    with pytest.raises(SpecError) as exc:
+        spec.from_dict(data)
+    assert [p for p, _ in exc.value.problems] == ["cables[2].plane_offset"]
+    res = invoke("workspace", write_spec(tmp_path, data), "--out", tmp_path / "o")
+    assert res.exit_code == 2 and "cables[2].plane_offset: only for planar motions" in res.output, res.output
+    assert "Traceback" not in res.output
 
 
 def test_several_problems_are_all_reported(tmp_path, planar2_data):

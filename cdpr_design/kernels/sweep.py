@@ -238,34 +238,36 @@ def chunk_stats(feasible, margin, tensions, count, tpeak):
 
 
 def sweep_points(P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
-                 check, Bp, half, rho, flo, fhi, dim, tol, full,
+                 check, Bp, half, rho, flo, fhi, dim, tol, full, zoff,
                  feasible, margin, tensions, lengths, cmask):
     """Evaluate explicit positions ``P`` (count, 3) at one orientation, pulley- and interference-aware.
 
     Same outputs as :func:`sweep_grid` for rows 0..count-1 (statics only:
     ``feasible`` does not include interference), plus ``cmask`` (uint8): the
     :func:`interference_pose` bits when ``check`` (0 when not checked).
-    Outlets with ``rad[i]`` > 0 are swivel pulleys (:func:`structure_matrix_pulley`).
+    Outlets with ``rad[i]`` > 0 are swivel pulleys (:func:`structure_matrix_pulley`).  ``zoff`` (m,)
+    [m]: each cable's plane offset (planar designs; zeros otherwise) added to the z of its free
+    segment's ends for the interference check only (``Bp`` given in those planes already).
     """
     run_blocks(points_block, P.shape[0], P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
-               check, Bp, half, rho, flo, fhi, dim, tol, full, feasible, margin, tensions, lengths, cmask)
+               check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask)
 
 
 @njit
 def points_block(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
-                 check, Bp, half, rho, flo, fhi, dim, tol, full, feasible, margin, tensions, lengths, cmask):
+                 check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask):
     """Rows k0..k1-1 of :func:`sweep_points`: the block's buffers, then :func:`_points_loop`."""
     m = A.shape[0]
     W, t, L, scr = row_buffers(rows.shape[0], m, wreq.shape[0])
     _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
-                 check, Bp, half, rho, flo, fhi, dim, tol, full, feasible, margin, tensions, lengths, cmask,
+                 check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask,
                  W, t, L, scr, np.empty((m, 3)), np.empty((m, 3)), np.zeros((m + 2, m + 2), dtype=np.uint8),
                  np.empty(3), np.empty(3), np.empty(3))
 
 
 @njit_noref
 def _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
-                 check, Bp, half, rho, flo, fhi, dim, tol, full, feasible, margin, tensions, lengths, cmask,
+                 check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask,
                  W, t, L, scr, C, S0, hits, s0, s1, cp):
     """The poses of :func:`points_block` with its buffers (no reference counting, see :func:`grid_block`)."""
     n = rows.shape[0]
@@ -279,7 +281,8 @@ def _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, comb
             for i in range(m):
                 S0[i, 0] = px + Rb[i, 0]
                 S0[i, 1] = py + Rb[i, 1]
-                S0[i, 2] = pz + Rb[i, 2]
+                S0[i, 2] = pz + Rb[i, 2] + zoff[i]
+                C[i, 2] += zoff[i]  # the statics are done with C: the row's W and L hold them
             cmask[k] = interference_pose(S0, C, Bp, R, px, py, pz, half, rho, flo, fhi, dim,
                                          tol, full, hits, s0, s1, cp)
         else:

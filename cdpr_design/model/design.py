@@ -152,6 +152,8 @@ class Cable:
     winch: Winch = field(default_factory=Winch)
     pulley: Pulley | None = None
     props: CableProps = field(default_factory=CableProps)
+    #: planar designs: the cable's plane is z = plane_offset [m] (interference only; 0 for spatial ones)
+    plane_offset: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -78,6 +78,9 @@ class CableSpec(StrictModel):
     diameter: NonNegFloat | None = None
     axial_stiffness: PosFloat | None = None
     mass_per_length: NonNegFloat | None = None
+    plane_offset: FiniteFloat | None = Field(
+        None, description="Planar motions: how far [m] the cable's plane lies from the motion plane (along z); "
+                          "crossed cables run in offset planes.  Used by the interference check only")
 
 
 class EffectorSpec(StrictModel):

@@ -287,7 +287,7 @@ def _cables(s: DesignSpec) -> tuple[Cable, ...]:
         cables.append(Cable(
             name=c.name, outlet=_t3(c.outlet), attachment=_t3(c.attachment),
             tension_min=float(t[0]), tension_max=float(t[1]), winch=_winch(s.winch, c.winch),
-            pulley=pulley, props=props,
+            pulley=pulley, props=props, plane_offset=float(c.plane_offset or 0.0),
         ))
     return tuple(cables)
 

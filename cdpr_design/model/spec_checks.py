@@ -151,6 +151,9 @@ def _check_cables(p: Problems, s: DesignSpec) -> None:
             elif dim == 2 and c.pulley.radius > 0 and c.pulley.axis[2] != 0:
                 p.append((f"{base}.pulley.axis", "a planar design needs a swivel axis in the x-y plane "
                           f"(z = 0; the direction the cable runs into the pulley), got {list(c.pulley.axis)}"))
+        if c.plane_offset is not None and dim != 2:
+            p.append((f"{base}.plane_offset", "only for planar motions (a spatial cable's outlet and "
+                      "attachment give its height)"))
     _check_cable_models(p, s)
     for path, w in [("winch", s.winch)] + [(f"cables[{i}].winch", c.winch) for i, c in enumerate(s.cables)]:
         if w is not None and w.motor is not None and not w.motor.strip():

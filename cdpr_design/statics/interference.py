@@ -26,6 +26,14 @@ What counts as a collision
 - **cable - frame**: an attachment point lies outside the frame box (the free
   cable leaves the frame).
 
+Planar designs live in the z = 0 plane, but crossed cables run in offset
+planes on a real machine.  A planar cable's ``plane_offset`` [m] puts its
+free segment, outlet and attachment point in the plane z = plane_offset for
+this check only: two cables in planes further apart than their radii' sum
+never meet, and cables in one plane are checked as before.  The statics do not
+change (a cable's force stays parallel to the motion plane; the out-of-plane
+moments this makes are the planar guides' to take, as in every planar model).
+
 Pairs are named as ``cli.md`` says: two cable names, a cable name and
 ``effector`` or ``frame``, and ``("effector", "frame")``.
 """
@@ -57,6 +65,7 @@ class HardwareArrays:
     frame_upper: np.ndarray
     dim: int
     tol: float
+    zoff: np.ndarray      # (m,) planar designs: each cable's plane_offset [m] (zeros for spatial ones)
 
 
 def hardware_arrays(design: Design) -> HardwareArrays:
@@ -79,7 +88,16 @@ def hardware_arrays(design: Design) -> HardwareArrays:
         half=np.asarray(design.effector.size, float) / 2.0,
         rho=np.array([c.props.diameter / 2.0 for c in design.cables]),
         frame_lower=lo.copy(), frame_upper=hi.copy(), dim=design.motion.dim, tol=1e-9 * scale,
+        zoff=np.array([c.plane_offset for c in design.cables], dtype=float),
     )
+
+
+def in_cable_planes(points, zoff) -> np.ndarray:
+    """``points`` (m, 3) [m] (a planar design's, in the z = 0 plane) moved to their cables'
+    planes, z = ``zoff`` [m]: the free segments' 3-D places for the interference check."""
+    out = np.array(points, dtype=float)
+    out[:, 2] += zoff
+    return out
 
 
 @dataclass(frozen=True)
@@ -122,9 +140,9 @@ def check_pose(design: Design, pose) -> Interference:
     full = design.full_pose(pose)
     R = kin.rotation_matrix(*full[3:])
     g = kin.cable_geometry(design, pose)
-    S0 = np.ascontiguousarray(g.anchors)
-    S1 = np.ascontiguousarray(g.exits)
-    Bp = np.ascontiguousarray(design.attachments)
+    S0 = np.ascontiguousarray(in_cable_planes(g.anchors, hw.zoff))
+    S1 = np.ascontiguousarray(in_cable_planes(g.exits, hw.zoff))
+    Bp = np.ascontiguousarray(in_cable_planes(design.attachments, hw.zoff))
     m = design.m
     hits = np.zeros((m + 2, m + 2), dtype=np.uint8)
     s0, s1, cp = np.empty(3), np.empty(3), np.empty(3)

@@ -19,7 +19,7 @@ import numpy as np
 from cdpr_design import kernels as K
 from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.interference import HIT_NAMES, hardware_arrays
+from cdpr_design.statics.interference import HIT_NAMES, hardware_arrays, in_cable_planes
 from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices
 from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, chunk_poses, positions3
 
@@ -35,6 +35,7 @@ class Evaluator:
         self.hw = hardware_arrays(design)
         self.A = np.ascontiguousarray(design.outlets)
         self.Bp = np.ascontiguousarray(design.attachments)
+        self.Bp_planes = np.ascontiguousarray(in_cable_planes(design.attachments, self.hw.zoff))  # interference
         self.rows = design.rows
         self.tmin, self.tmax = design.tension_min, design.tension_max
         self.combos = combinations(design.m, design.n)
@@ -64,8 +65,8 @@ class Evaluator:
         hw = self.hw
         K.sweep_points(np.ascontiguousarray(P, dtype=float), Rb, R, self.A, hw.axes, hw.eref,
                        hw.radii, self.rows, self.wrench(ori), self.tmin, self.tmax, self.combos,
-                       self.kcode, self.interference, self.Bp, hw.half, hw.rho, hw.frame_lower,
-                       hw.frame_upper, hw.dim, hw.tol, full, feas, marg, ten, L, mask)
+                       self.kcode, self.interference, self.Bp_planes, hw.half, hw.rho, hw.frame_lower,
+                       hw.frame_upper, hw.dim, hw.tol, full, hw.zoff, feas, marg, ten, L, mask)
         return feas, marg, ten, L, mask
 
 def chunk_stats(feas, marg, ten, tpeak):
