@@ -164,7 +164,8 @@ The round before (c518a27 -> 703c4fd): the pose function's margin and QP methods
 called directly, with the function inlined into the sweeps' loops, and one grid
 kernel per redundancy m - n chosen in Python (``kernels.sweep.grid_block``):
 3.56 -> 2.62 us a pose of IPAnema 3 on one core; the picture process at a
-lower CPU priority (``plots.worker.NICENESS``).  One run, idle machine (load
+lower CPU priority (``nice`` +10, taken back since: on a busy machine it left the
+pictures waiting behind every other process).  One run, idle machine (load
 average 0.7 at the start; median round and range of three):
 
 ============================================  ================================

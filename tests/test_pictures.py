@@ -44,13 +44,13 @@ def test_worker_draws_the_same_bytes(result):
 
 
 @pytest.mark.skipif(not hasattr(os, "getpriority"), reason="POSIX priorities")
-def test_worker_runs_at_a_lower_cpu_priority_than_its_parent(result):
-    """The child yields the CPU to the command's sweep (pw.NICENESS), and still draws."""
+def test_worker_runs_at_its_parents_cpu_priority(result):
+    """No lowered priority: on a busy machine a niced worker waits behind every other process
+    (planar4's command 5x slower beside three busy processes, see the module's description)."""
     mine = os.getpriority(os.PRIO_PROCESS, 0)
     with pw.PictureWorker(force=True) as worker:
-        assert worker.render(jobs(result)[:1])[0][0] == "workspace.png"  # warmed up: nice'd by now
-        theirs = os.getpriority(os.PRIO_PROCESS, worker.proc.pid)
-    assert theirs == min(mine + pw.NICENESS, 19)
+        assert worker.render(jobs(result)[:1])[0][0] == "workspace.png"  # warmed up and drawn
+        assert os.getpriority(os.PRIO_PROCESS, worker.proc.pid) == mine
 
 
 @pytest.mark.parametrize("case", ["planar2", "orientations", "hanging"])

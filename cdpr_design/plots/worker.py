@@ -9,6 +9,13 @@ hands it the figure functions and their data and gets PNG bytes back.  The
 parent writes the files itself (atomic, manifest-checked, see
 :class:`cdpr_design.io.files.OutputDir`).
 
+The child runs at its parent's CPU priority.  It once lowered its own
+(``nice`` +10), so that the parent's sweep threads went first where the two
+overlap: 3 % of IPAnema 3's command on an idle two-core machine.  But a
+lowered priority is lowered against every other process too: with three busy
+processes beside it, planar4's ``workspace`` took 17.6 s instead of 3.4 s
+(medians of four), the pictures waiting behind them.
+
 Whenever the child cannot be used (it failed to start, died, or a figure
 raised there) ``render`` draws in-process instead, so errors surface exactly
 as without the worker.  No child is started when matplotlib is already
@@ -344,28 +351,9 @@ def _warm_up() -> None:
     gc.freeze()
 
 
-#: How much lower the child's CPU priority is than its parent's (POSIX ``nice`` increment).
-NICENESS = 10
-
-
-def _yield_cpu() -> None:
-    """Lower this process's CPU priority by :data:`NICENESS`: the pictures need the whole sweep,
-    so while the parent loads the kernels and sweeps, its threads (the critical path) go first and
-    the child imports and warms up on what is left over.  IPAnema 3's workspace command, 154,440
-    poses, medians of 12 warm runs each, interleaved: 1.73 s -> 1.67 s of wall time, ``sweep_s``
-    0.253 -> 0.247 s (scripts/bench_outputs.py's figures are this version's).  Not on Windows (no
-    ``os.nice``); a refusal leaves the priority as it was."""
-    if hasattr(os, "nice"):
-        try:
-            os.nice(NICENESS)
-        except OSError:
-            pass
-
-
 def main() -> None:
     inp, outp = sys.stdin.buffer, sys.stdout.buffer
     sys.stdout = sys.stderr  # nothing but answers on the pipe
-    _yield_cpu()
     try:
         _warm_up()
         while True:
