@@ -84,7 +84,19 @@ cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
 of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
 lowered to 130,000 poses.
 
-This round (811e3e9 -> this version), on a third machine, about twice as slow
+This round (bdf8ba0 -> this version), the same machine: the picture process
+back at the command's CPU priority (niced +10 it waited behind every other
+process on a busy machine: planar4's command beside three busy processes
+17.6 s, now 3.4 s; IPAnema 3's on an idle machine 1.60 -> 1.65 s, medians of
+ten).  One run of this script at the end, median round and range of three,
+per-pose linprog 1.60-1.64 ms that hour (faster than in the round below, so
+the same command times give lower ratios): IPAnema 3 kernels warm 0.168 s =
+1500x (1473-1508), whole command 1.665 s = 149x csv (147-153) and 1.590 s =
+156x parquet (153-160), its sweep_s 1219x / 1190x; fastest csv run load 0.46
+/ sweep 0.19 / write 0.41 / pictures 0.47 s; planar2 564,001 poses 199x csv,
+202x parquet; fixed: python, numpy, numba, one kernel 0.69 s.
+
+The round before (811e3e9 -> bdf8ba0), on a third machine, about twice as slow
 as the second (per-pose LP 1.6-2.6 ms): numba's start-up without
 ``scipy.linalg`` (``kernels._jit._load_blas_check``: its BLAS check answered
 by the one extension module it looks for), and the picture process importing
@@ -96,7 +108,7 @@ pairs: 2.09 -> 1.78 s).  This script, one run each (median round and range of
 three; before at the start of the session, after at its end):
 
 ============================================  ==========================  ==========================
-IPAnema 3, 154,440 poses, static              811e3e9                     this version
+IPAnema 3, 154,440 poses, static              811e3e9                     bdf8ba0
 ============================================  ==========================  ==========================
 per-pose linprog over the rounds              1.68-2.63 ms                1.81-2.02 ms
 kernels in-process, first call                0.722 s                     0.526 s
