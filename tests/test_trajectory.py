@@ -312,3 +312,18 @@ def test_redundant_robot_min_norm_tensions_against_cvxpy():
         w_req = kin.required_wrench(d, p) - kin.inertial_wrench(
             d, p, a[:2], angular_velocity=[0, 0, v[2]], angular_acceleration=[0, 0, a[2]])
         np.testing.assert_allclose(w, w_req, atol=1e-8)
+
+
+def test_summary_tension_extremes_skip_nan_samples_without_a_warning():
+    """A cable whose every sample is infeasible (NaN tension) has no extreme (None), and the
+    summary says so without numpy's all-NaN RuntimeWarning (which np.nanmax gave)."""
+    import warnings
+
+    from cdpr_design.motion.trajectory import _column_extreme
+
+    T = np.array([[1.0, np.nan], [3.0, np.nan], [np.nan, np.nan]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert _column_extreme(T, ["a", "b"], np.max) == {"a": 3.0, "b": None}
+        assert _column_extreme(T, ["a", "b"], np.min) == {"a": 1.0, "b": None}
+        assert _column_extreme(np.empty((0, 2)), ["a", "b"], np.max) == {"a": None, "b": None}

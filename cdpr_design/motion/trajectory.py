@@ -184,8 +184,8 @@ class Samples:
                 "infeasible_samples": int(np.count_nonzero(~self.feasible)),
                 "max_speed": float(speed.max()) if speed.size else 0.0,
                 "max_acceleration": float(acc.max()) if acc.size else 0.0,
-                "max_tension": _nan_to_none(np.nanmax(self.tensions, axis=0), self.cable_names),
-                "min_tension": _nan_to_none(np.nanmin(self.tensions, axis=0), self.cable_names),
+                "max_tension": _column_extreme(self.tensions, self.cable_names, np.max),
+                "min_tension": _column_extreme(self.tensions, self.cable_names, np.min),
                 "max_cable_speed": dict(zip(self.cable_names, map(float, np.abs(self.cable_speed).max(axis=0)))),
                 "segments": len(self.segments),
             }
@@ -194,8 +194,17 @@ class Samples:
         return out
 
 
-def _nan_to_none(values, names):
-    return {n: (None if not np.isfinite(v) else float(v)) for n, v in zip(names, values)}
+def _column_extreme(values, names, pick) -> dict:
+    """``pick`` (np.max or np.min) of each column of ``values`` (samples, cables) [N] over its
+    samples that are not NaN, by cable name; None where a cable has none (or the answer is not
+    finite).  Unlike np.nanmax, no warning for a column that is NaN throughout."""
+    out = {}
+    for j, name in enumerate(names):
+        col = values[:, j]
+        col = col[~np.isnan(col)]
+        v = pick(col) if col.size else np.nan
+        out[name] = float(v) if np.isfinite(v) else None
+    return out
 
 
 
