@@ -58,8 +58,9 @@ from cdpr_design.workspaces.grid import positions3  # noqa: E402
 DESIGN = os.path.join(os.path.dirname(__file__), "..", "designs", "crane4.yaml")
 
 
-def scipy_hanging(A, B, c, mass, g, p, starts):
-    """(tilt [deg] or None) of the least tilted stable pulling orientation at p, per-position scipy."""
+def scipy_hanging(A, B, c, mass, g, p, starts, size):
+    """(tilt [deg] or None) of the least tilted stable pulling orientation at p, per-position scipy;
+    ``size`` [m] scales the moments (the effector's length scale)."""
     f = mass * g
     weight = mass * np.linalg.norm(g)
     up = -g / np.linalg.norm(g)
@@ -72,7 +73,7 @@ def scipy_hanging(A, B, c, mass, g, p, starts):
             Rb = B[S] @ R.T
             l = A[S] - p - Rb
             u = l / np.linalg.norm(l, axis=1)[:, None]
-            return np.concatenate([u.T @ x[3:] + f, (np.cross(Rb, u).T @ x[3:] + np.cross(R @ c, f)) / 0.3]) / weight
+            return np.concatenate([u.T @ x[3:] + f, (np.cross(Rb, u).T @ x[3:] + np.cross(R @ c, f)) / size]) / weight
 
         found = []
         for w0 in starts:
@@ -86,7 +87,6 @@ def scipy_hanging(A, B, c, mass, g, p, starts):
             found.append(R)
             t = np.zeros(len(A))
             t[S] = s.x[3:]
-            # the other cable must not be shorter than its length there: it is slack, not stretched
             if _stable(A, B, c, mass, g, p, R, t, S):
                 tilt = math.degrees(math.acos(np.clip(up @ R @ up, -1.0, 1.0)))
                 best = tilt if best is None else min(best, tilt)
@@ -112,6 +112,7 @@ def _stable(A, B, c, mass, g, p, R, t, S, h=1e-4):
                     for j in range(6)] for i in range(6)])
     G = np.array([(lengths(E[j]) - lengths(-E[j])) / (2 * h) for j in range(6)]).T
     N = null_space(G)
+    # above the finite differences' noise (the library's own margin is 1e-9 of the weight)
     return float(np.linalg.eigvalsh(N.T @ Hm @ N)[0]) > 1e-6 * mass * np.linalg.norm(g)
 
 
@@ -149,7 +150,7 @@ def main() -> None:
     idx = rng.choice(len(P), size=min(a.n_scipy, len(P)), replace=False)
     starts = [np.zeros(3)] + [rng.normal(size=3) * 0.7 for _ in range(a.starts - 1)]
     t0 = time.perf_counter()
-    ref = [scipy_hanging(A, B, c, mass, grav, P[i], starts) for i in idx]
+    ref = [scipy_hanging(A, B, c, mass, grav, P[i], starts, geo.size) for i in idx]
     per_scipy = (time.perf_counter() - t0) / len(idx)
 
     n = len(P)

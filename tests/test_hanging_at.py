@@ -395,7 +395,7 @@ def test_newton_jacobian_against_finite_differences(planar):
         if planar:
             w[:, :2] = 0.0
         R0 = Rotation.from_rotvec(rng.normal(size=3) * 0.3).as_matrix()
-        t = rng.uniform(0.0, 100.0, (k, m))
+        t = rng.uniform(0.0, 100.0, (k, m)) * (rng.random((k, m)) < 0.8)  # some slack (t = 0)
         J = bal.jacobian(P, hc.rotvec(w) @ R0, t, w)
         h = 1e-6
         cols = []
@@ -411,3 +411,20 @@ def test_newton_jacobian_against_finite_differences(planar):
             R = Rotation.from_rotvec(w).as_matrix() @ R0
             cols.append((bal.residual(P, R, t + e) - bal.residual(P, R, t - e)) / (2 * h))
         np.testing.assert_allclose(J, np.stack(cols, axis=2), rtol=1e-5, atol=1e-6)
+
+
+def test_a_cable_of_zero_length_adds_nothing_without_tension_and_nan_with_it():
+    """The batched Lagrangian Hessian where a cable has length 0 (its attachment on its outlet):
+    slack (t = 0) it adds nothing - the Hessian of the other cables alone, finite; pulling, its
+    direction is undefined and the Hessian says so (NaN), never a finite number."""
+    rng = np.random.default_rng(2)
+    A, B = rng.normal(size=(3, 3)) * 2.0, rng.normal(size=(3, 3)) * 0.3
+    B[0] = 0.0
+    c, mass = np.array([0.0, 0.0, -0.2]), 10.0
+    R, p = np.eye(3), A[0].copy()  # cable 0 has length 0, exactly
+    geo = hc.Geometry(A, B, c, mass, G3)
+    rest = hc.Geometry(A[1:], B[1:], c, mass, G3)
+    H = geo.lagrangian_hessian(p, R, np.array([0.0, 40.0, 70.0]))
+    assert np.all(np.isfinite(H))
+    np.testing.assert_allclose(H, rest.lagrangian_hessian(p, R, np.array([40.0, 70.0])), rtol=1e-14, atol=1e-12)
+    assert np.isnan(geo.lagrangian_hessian(p, R, np.array([5.0, 40.0, 70.0]))).any()

@@ -397,3 +397,15 @@ def test_random_planar_robots_with_plane_offsets_against_the_slow_distance():
             checked += 1
             hits += len(fast)
     assert checked > 80 and hits > 5
+
+
+@pytest.mark.parametrize("dz", [0.0, 0.002, 0.01])
+def test_planar_cables_on_one_pin_at_two_heights_meet_there_by_design(dz):
+    """Two planar cables share their attachment point in x and y, in planes dz apart: they touch
+    at the pin by construction (as on one plane), and do not collide while their far ends stay
+    apart; the pose check and the sweep kernel agree."""
+    d = design2t([("c1", (-2.0, 2.0), (0.0, 0.05), dz / 2), ("c2", (2.0, 2.0), (0.0, 0.05), -dz / 2)])
+    r = itf.check_pose(d, [0.0, 0.0])
+    assert ("c1", "c2") not in r.pairs
+    assert r.cable_distances[0, 1] > 1.0  # the far ends' distance to the other segment
+    assert _kernel_pairs(d, [0.0, 0.0]) is False

@@ -66,17 +66,20 @@ def _pt_seg_dist2(x, y, z, ax, ay, az, bx, by, bz):
 
 
 @njit_noref
-def cable_cable_dist(S0, S1, i, j, tol):
+def cable_cable_dist(S0, S1, i, j, tol, dim):
     """Distance [m] between the free segments of cables i and j (S0 attachments, S1 exits).
 
     Cables that share an endpoint (attachment or outlet within ``tol``) touch
     there by construction: for them the distance is that of the far
     endpoints to the other segment (zero only when they run along each other).
+    ``dim`` 2 (a planar design, its cables in planes z = their offsets): an
+    endpoint is shared when x and y are, whatever the planes (two cables on
+    one pin at two heights).
     """
     sa = (abs(S0[i, 0] - S0[j, 0]) <= tol and abs(S0[i, 1] - S0[j, 1]) <= tol
-          and abs(S0[i, 2] - S0[j, 2]) <= tol)
+          and (dim == 2 or abs(S0[i, 2] - S0[j, 2]) <= tol))
     sb = (abs(S1[i, 0] - S1[j, 0]) <= tol and abs(S1[i, 1] - S1[j, 1]) <= tol
-          and abs(S1[i, 2] - S1[j, 2]) <= tol)
+          and (dim == 2 or abs(S1[i, 2] - S1[j, 2]) <= tol))
     if sa or sb:
         if sa and sb:
             return 0.0
@@ -230,7 +233,7 @@ def interference_pose(S0, S1, Bp, R, px, py, pz, half, rho, flo, fhi, dim, tol, 
             hits[m, i] = 1
     for i in range(m):
         for j in range(i + 1, m):
-            if cable_cable_dist(S0, S1, i, j, tol) <= rho[i] + rho[j] + tol:
+            if cable_cable_dist(S0, S1, i, j, tol, dim) <= rho[i] + rho[j] + tol:
                 mask |= HIT_CABLE_CABLE
                 if not full:
                     return mask

@@ -5,7 +5,9 @@ A parallel kernel is a compiled, ``nogil`` *block* function that fills rows
 result), and a thin Python function of the old name that calls
 :func:`run_blocks`.  The blocks run on a pool of threads that lives as long as
 the process; numba releases the GIL inside the block, so the threads run on
-separate cores.
+separate cores.  A plain Python block whose work is numpy's (stacked linear algebra,
+einsum: they release the GIL on large arrays) can share them too, in few large blocks
+(:func:`cdpr_design.workspaces.hanging._hang_in_blocks`).
 
 Why threads here rather than numba's ``prange``:
 

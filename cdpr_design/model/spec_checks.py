@@ -130,7 +130,8 @@ def _check_inertia(p: Problems, inertia, dim: int) -> None:
 
 
 def _check_cables(p: Problems, s: DesignSpec) -> None:
-    """Unique names, outlet/attachment lengths, tension ranges, pulley axes, winch motor names."""
+    """Unique names, outlet/attachment lengths, tension ranges, pulley axes, plane offsets (planar
+    motions only), winch motor names."""
     dim = MOTIONS[s.motion].dim
     seen: dict[str, int] = {}
     for i, c in enumerate(s.cables):

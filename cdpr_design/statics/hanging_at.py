@@ -289,11 +289,7 @@ class _Balance:
     def parts(self, P, R):
         """W (N, 6, m), gravity wrench (N, 6), Rb, L, u of the cables."""
         geo = self.geo
-        Rb = np.einsum("nij,mj->nmi", R, geo.B)
-        l = geo.A[None] - P[:, None, :] - Rb
-        L = np.sqrt(np.einsum("nmi,nmi->nm", l, l))
-        with np.errstate(invalid="ignore", divide="ignore"):
-            u = l / L[..., None]
+        Rb, _, L, u = geo.cables_many(P, R)
         W = np.concatenate([u, _cross(Rb, u)], axis=2).transpose(0, 2, 1)
         f = geo.mass * geo.g
         wg = np.concatenate([np.broadcast_to(f, (len(P), 3)), _cross(R @ geo.c, f)], axis=1)
@@ -490,11 +486,20 @@ def _hang_planar2(geo, P, engine, alternatives):
     return rot_z_many(phis[rows, j]), np.maximum(ts[rows, j], 0.0), status, hs[rows, j].copy(), alts
 
 
+#: Configurations whose stability is judged in one stacked call (bounds its memory: about ten
+#: (n, m, 3, 3) arrays).
+STABLE_BATCH = 32768
+
+
 def _stable(geo, P, R, t, dofs):
     """(stable (k,), smallest reduced-Hessian eigenvalue (k,)) of k balanced poses: positions
     P (k, 3) [m], rotations R (k, 3, 3), tensions t (k, m) [N]; the taut cables are those
-    above 1e-9 of the weight."""
-    h = geo.reduced_hessian_min_many(P, R, np.maximum(t, 0.0), t > 1e-9 * geo.weight, dofs)
+    above 1e-9 of the weight.  In slices of :data:`STABLE_BATCH`."""
+    h = np.empty(len(P))
+    for a in range(0, len(P), STABLE_BATCH):
+        b = a + STABLE_BATCH
+        h[a:b] = geo.reduced_hessian_min_many(P[a:b], R[a:b], np.maximum(t[a:b], 0.0),
+                                              t[a:b] > 1e-9 * geo.weight, dofs)
     return h > 1e-9 * geo.weight, h
 
 
@@ -545,8 +550,9 @@ def _hang_general(geo, P, planar, nominal, alternatives):
 
 
 def _choose_general(geo, P, planar, todo, Rs, ts, balanced, seen, found, alternatives):
-    """Stability of the pulling candidates in order of tilt, until a stable one (all of
-    them with ``alternatives``); appends (R, t, stable, tilt, h) to ``seen``."""
+    """Appends to ``seen`` the pulling candidates of each position in order of tilt, until a
+    stable one (all of them with ``alternatives``), skipping those already seen, as (R, t,
+    stable, tilt, h); the stability of every pulling candidate is judged first, in one batch."""
     dofs = hc.DOFS_PLANAR if planar else hc.DOFS_SPATIAL
     pull = balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)
     tilt = tilt_many(Rs, -geo.g / np.linalg.norm(geo.g))

@@ -281,6 +281,16 @@ class Geometry:
         G = np.hstack([-u[S], -np.cross(Rb[S], u[S])])
         return Jz, Jt, G
 
+    def cables_many(self, P, R):
+        """:meth:`cables` at k configurations: P (k, 3) [m], R (k, 3, 3) -> (Rb, l (k, m, 3) [m],
+        L (k, m) [m], u (k, m, 3); NaN directions where a cable has length 0)."""
+        Rb = np.einsum("kij,mj->kmi", R, self.B)
+        l = self.A[None] - P[:, None, :] - Rb
+        L = np.sqrt(np.einsum("kmi,kmi->km", l, l))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            u = l / L[..., None]
+        return Rb, l, L, u
+
     def lagrangian_hessian(self, p, R, t) -> np.ndarray:
         """Hessian (6, 6) of U + sum t_i |l_i| in (dp, w) at a configuration (t [N])."""
         return self.lagrangian_hessian_many(np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3)),
@@ -298,11 +308,8 @@ class Geometry:
         P = np.asarray(P, float).reshape(-1, 3)
         R = np.asarray(R, float).reshape(-1, 3, 3)
         t = np.asarray(t, float).reshape(-1, self.m)
-        Rb = np.einsum("kij,mj->kmi", R, self.B)
-        l = self.A[None] - P[:, None, :] - Rb
-        L = np.sqrt(np.einsum("kmi,kmi->km", l, l))
+        Rb, _, L, u = self.cables_many(P, R)
         with np.errstate(invalid="ignore", divide="ignore"):
-            u = l / L[..., None]
             Pm = (np.eye(3) - u[..., :, None] * u[..., None, :]) / L[..., None, None]
         S = skew(Rb)
         PS = Pm @ S
@@ -348,10 +355,7 @@ class Geometry:
         taut = np.asarray(taut, bool).reshape(-1, self.m)
         k, d = len(P), len(dofs)
         H = self.lagrangian_hessian_many(P, R, t)[:, dofs][:, :, dofs]
-        Rb = np.einsum("kij,mj->kmi", R, self.B)
-        l = self.A[None] - P[:, None, :] - Rb
-        with np.errstate(invalid="ignore", divide="ignore"):
-            u = l / np.linalg.norm(l, axis=2)[..., None]
+        Rb, _, _, u = self.cables_many(P, R)
         G = -np.concatenate([u, np.cross(Rb, u)], axis=2)[:, :, dofs]
         G = np.where(taut[..., None], G, 0.0)
         _, sv, Vt = np.linalg.svd(G)

@@ -152,7 +152,7 @@ def check_pose(design: Design, pose) -> Interference:
     dist = np.zeros((m, m))
     for i in range(m):
         for j in range(i + 1, m):
-            dist[i, j] = dist[j, i] = K.cable_cable_dist(S0, S1, i, j, hw.tol)
+            dist[i, j] = dist[j, i] = K.cable_cable_dist(S0, S1, i, j, hw.tol, hw.dim)
     chords = np.zeros(m)
     for i in range(m):
         cpi = R.T @ (S1[i] - full[:3])
