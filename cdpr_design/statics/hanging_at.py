@@ -95,6 +95,14 @@ class Hanging:
     up: np.ndarray
     alternatives: list = field(default_factory=list)
 
+    @classmethod
+    def joined(cls, parts: list["Hanging"]) -> "Hanging":
+        """The answers of consecutive runs of positions (``parts`` in order) as one."""
+        first = parts[0]
+        return cls(*(np.concatenate([getattr(h, name) for h in parts])
+                     for name in ("rotation", "tensions", "status", "hessian_min")),
+                   first.planar, first.up, [a for h in parts for a in h.alternatives])
+
     @property
     def feasible(self) -> np.ndarray:
         return self.status == OK

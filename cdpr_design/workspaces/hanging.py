@@ -164,17 +164,15 @@ def _hang_in_blocks(geo: hc.Geometry, P, planar: bool, nominal) -> ha.Hanging:
     from cdpr_design.kernels.parallel import run_blocks, threads
 
     k = len(P)
-    R, t = np.empty((k, 3, 3)), np.empty((k, geo.m))
-    status, hmin = np.empty(k, np.int8), np.empty(k)
-    up = []
+    if k == 0:
+        return ha.hang(geo, P, planar, nominal=nominal)
+    parts: dict[int, ha.Hanging] = {}
 
     def block(k0, k1):
-        h = ha.hang(geo, P[k0:k1], planar, nominal=nominal)
-        R[k0:k1], t[k0:k1], status[k0:k1], hmin[k0:k1] = h.rotation, h.tensions, h.status, h.hessian_min
-        up.append(h.up)
+        parts[k0] = ha.hang(geo, P[k0:k1], planar, nominal=nominal)  # one key a block: no race
 
     run_blocks(block, k, grain=max(HANG_GRAIN, min(-(-k // threads()), HANG_BLOCK)))
-    return ha.Hanging(R, t, status, hmin, planar, up[0] if up else -geo.g / np.linalg.norm(geo.g))
+    return ha.Hanging.joined([parts[k0] for k0 in sorted(parts)])
 
 
 class _Stats:
