@@ -311,20 +311,8 @@ class _Balance:
     def jacobian(self, P, R, t, w):
         """d(scaled residual)/d(rotation coordinates, tensions / weight) (N, r, nr + m)."""
         geo = self.geo
-        W, wg, Rb, L, u = self.parts(P, R)
-        # with S = [R b]_x, P = (I - u u^T) / L and c = R b x u, the force and moment rows of
-        # sum t (P S, [u]_x S + S P S) in closed form ([a]_x [b]_x = b a^T - (a . b) I):
-        # P S = (S + u c^T) / L and [u]_x S + S P S = R b u^T - (u . R b) I + (R b (R b)^T
-        # - |R b|^2 I + c c^T) / L, summed over the cables with einsum (no (k, m, 3, 3) stacks)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            tL = t / L
-        c = _cross(Rb, u)
-        outer = lambda wt, a, b: np.einsum("nm,nmi,nmj->nij", wt, a, b)  # noqa: E731
-        Jf = hc.skew(np.einsum("nm,nmi->ni", tL, Rb)) + outer(tL, u, c)
-        diag = np.einsum("nm,nmi,nmi->n", t, u, Rb) + np.einsum("nm,nmi,nmi->n", tL, Rb, Rb)
-        Jm = outer(t, Rb, u) + outer(tL, Rb, Rb) + outer(tL, c, c) - diag[:, None, None] * np.eye(3)
-        Jm = Jm + hc.skew(geo.mass * geo.g) @ hc.skew(R @ geo.c)
-        Jw = np.concatenate([Jf, Jm], axis=1) @ hc.left_jacobian(w)
+        W = self.parts(P, R)[0]
+        Jw = geo.balance_jacobian_many(P, R, t)[:, :, 3:] @ hc.left_jacobian(w)
         J = np.concatenate([Jw[:, :, self.rot], W * geo.weight], axis=2)[:, self.rows]
         return J / self.scale[:, None]
 

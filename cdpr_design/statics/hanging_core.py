@@ -243,12 +243,7 @@ class Geometry:
 
     def cables(self, p, R):
         """(Rb (m, 3), l (m, 3), L (m,), u (m, 3)) at a configuration."""
-        Rb = self.B @ R.T
-        l = self.A - p - Rb
-        L = np.linalg.norm(l, axis=1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            u = l / L[:, None]
-        return Rb, l, L, u
+        return tuple(x[0] for x in self.cables_many(np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3))))
 
     def wrenches(self, p, R):
         """Cable wrenches (6, m) [u_i; R b_i x u_i] and the weight's (6,) [N, N m]."""
@@ -264,22 +259,43 @@ class Geometry:
 
     def jacobian(self, p, R, t, S):
         """d(balance)/d(dp, w) (6, 6), d(balance)/dt_S (6, |S|) and d|l_S|/d(dp, w) (|S|, 6)."""
-        Rb, _, L, u = self.cables(p, R)
-        Jz = np.zeros((6, 6))
-        f = self.mass * self.g
-        Jz[3:, 3:] = skew(f) @ skew(R @ self.c)
-        for i in range(self.m):
-            if t[i] == 0.0:
-                continue
-            P = (np.eye(3) - np.outer(u[i], u[i])) / L[i]
-            Bx = skew(Rb[i])
-            Jz[:3, :3] -= t[i] * P
-            Jz[:3, 3:] += t[i] * P @ Bx
-            Jz[3:, :3] -= t[i] * Bx @ P
-            Jz[3:, 3:] += t[i] * (skew(u[i]) @ Bx + Bx @ P @ Bx)
+        Jz = self.balance_jacobian_many(np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3)),
+                                        np.reshape(t, (1, self.m)))[0]
+        Rb, _, _, u = self.cables(p, R)
         Jt = np.vstack([u[S].T, np.cross(Rb[S], u[S]).T])
         G = np.hstack([-u[S], -np.cross(Rb[S], u[S])])
         return Jz, Jt, G
+
+    def balance_jacobian_many(self, P, R, t) -> np.ndarray:
+        """d(balance)/d(dp, w) at k configurations, the tensions t (k, m) [N] held: (k, 6, 6).
+
+        With S = [R b]_x, P = (I - u u^T) / L and c = R b x u, cable i adds t_i times
+        [[-P, P S], [-S P, [u]_x S + S P S]], in closed form ([a]_x [b]_x = b a^T - (a . b) I):
+        P S = (S + u c^T) / L, S P = (S - c u^T) / L and [u]_x S + S P S = R b u^T - (u . R b) I
+        + (R b (R b)^T - |R b|^2 I + c c^T) / L, summed over the cables with einsum; the weight adds
+        [f]_x [R c]_x to the rotation block.  A cable without tension adds nothing (also at length
+        0, where its direction is undefined); one pulling at length 0 makes the answer NaN.
+        """
+        P = np.asarray(P, float).reshape(-1, 3)
+        R = np.asarray(R, float).reshape(-1, 3, 3)
+        t = np.asarray(t, float).reshape(-1, self.m)
+        Rb, _, L, u = self.cables_many(P, R)
+        pulls = (t != 0.0)[..., None]
+        u = np.where(pulls, u, 0.0)
+        c = np.cross(Rb, u)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            tL = np.where(pulls[..., 0], t / L, 0.0)
+        outer = lambda w, a, b: np.einsum("km,kmi,kmj->kij", w, a, b)  # noqa: E731
+        eye = np.eye(3)
+        sRb = skew(np.einsum("km,kmi->ki", tL, Rb))
+        J = np.empty((len(P), 6, 6))
+        J[:, :3, :3] = outer(tL, u, u) - tL.sum(axis=1)[:, None, None] * eye
+        J[:, :3, 3:] = sRb + outer(tL, u, c)
+        J[:, 3:, :3] = outer(tL, c, u) - sRb
+        diag = np.einsum("km,kmi,kmi->k", t, u, Rb) + np.einsum("km,kmi,kmi->k", tL, Rb, Rb)
+        J[:, 3:, 3:] = (outer(t, Rb, u) + outer(tL, Rb, Rb) + outer(tL, c, c) - diag[:, None, None] * eye
+                        + skew(self.mass * self.g) @ skew(R @ self.c))
+        return J
 
     def cables_many(self, P, R):
         """:meth:`cables` at k configurations: P (k, 3) [m], R (k, 3, 3) -> (Rb, l (k, m, 3) [m],
