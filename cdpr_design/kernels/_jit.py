@@ -19,25 +19,21 @@ subclasses of its cache locators first in its list (the classes and the list
 have the same roles in numba 0.59 to 0.68; ``tests/test_jit_cache.py`` fails if
 that stops working).
 
-Start-up.  numba's first compile or cache load in a process imports
-``scipy.linalg.cython_blas`` only to learn that BLAS is there, and importing
-it by name runs the whole of ``scipy.linalg`` first: 0.2-0.3 s, a tenth of a
-``workspace`` command, for a module no kernel here calls.
-:func:`_load_blas_check` answers numba's check with that one extension module
-instead (see there).
+Start-up.  Importing this module installs the package's numba start-up
+shortcuts (:func:`cdpr_design.numba_startup.install_lazy_loading`): cached
+kernels load without numba's compiler set-up, and a compile does without
+importing ``scipy.linalg``.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
-import importlib
-import importlib.machinery
-import importlib.util
 import os
-import sys
 
 import numba as nb
+
+from cdpr_design import numba_startup
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -81,44 +77,8 @@ def _register_locators() -> None:
 
 
 _register_locators()
+numba_startup.install_lazy_loading()
 
-_BLAS_MODULE = "scipy.linalg.cython_blas"
-
-
-def _load_blas_check() -> bool:
-    """Import numba's array functions with their BLAS check answered cheaply; True if it was.
-
-    ``numba.np.arraymath`` checks at import -- during numba's first compile or
-    cache load -- that ``scipy.linalg.cython_blas`` imports.  Here that
-    extension module is loaded from its file (4 ms) and stands in ``sys.modules``
-    while ``numba.np.arraymath`` is imported, then is taken out again, so the
-    process has no half-imported ``scipy.linalg``: code that uses BLAS or LAPACK
-    later (``np.linalg`` in a kernel, ``scipy.linalg``) imports it in full as
-    without this, and gets the same module object (Cython keeps one per process).
-    Anything unexpected (no scipy, another layout): returns False and numba
-    imports ``scipy.linalg`` itself, as without this."""
-    if "numba.np.arraymath" in sys.modules or "scipy.linalg" in sys.modules:
-        return False
-    try:
-        scipy = importlib.util.find_spec("scipy")  # locates the package without importing it
-        folder = os.path.join(scipy.submodule_search_locations[0], "linalg")
-        path = next(p for p in (os.path.join(folder, "cython_blas" + suffix)
-                                for suffix in importlib.machinery.EXTENSION_SUFFIXES) if os.path.exists(p))
-        spec = importlib.util.spec_from_file_location(_BLAS_MODULE, path)
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-    except Exception:  # noqa: BLE001 -- any failure leaves numba's own import to run
-        return False
-    sys.modules[_BLAS_MODULE] = module
-    try:
-        importlib.import_module("numba.np.arraymath")  # its check finds the module
-    finally:
-        if sys.modules.get(_BLAS_MODULE) is module:  # not if another thread imported scipy.linalg meanwhile
-            del sys.modules[_BLAS_MODULE]
-    return True
-
-
-_load_blas_check()
 
 JIT = dict(cache=True, nogil=True, error_model="numpy")
 njit = nb.njit(**JIT)
