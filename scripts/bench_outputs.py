@@ -62,7 +62,7 @@ s (23x) before, 1.67-1.73 s (29-32x) after; 564,001 poses 9.6 s (95x) before,
 6.0-6.1 s (154-234x) after -- ``auto`` now gives grids over 130,000 poses to
 the kernels, not to numpy.
 
-Where the time goes now (IPAnema 3, 154,440 poses, fastest run, wall): Python
+Where the time went in that version (IPAnema 3, 154,440 poses, fastest run, wall): Python
 start-up and the command's modules 0.3-0.45 s (numpy 0.1, typer with the
 pydantic adapters it builds per option 0.1-0.2, the spec schema's pydantic
 models 0.1); numba's start-up 0.63-0.78 s (``load_s``; a process that only
@@ -84,7 +84,40 @@ cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
 of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
 lowered to 130,000 poses.
 
-This round (bdf8ba0 -> this version), the same machine: the picture process
+This round (82599a7 -> this version), the same machine: the cached kernels
+load without numba's compiler set-up (``cdpr_design.numba_startup``: numba
+refreshed its whole target context -- every implementation module it has --
+before each cache load, 0.15-0.2 s of a command).  IPAnema 3's command in 10
+interleaved pairs against 82599a7 (medians): 2.03 -> 1.72 s wall (fastest 1.75
+-> 1.61 s), ``load_s`` 0.53 -> 0.32 s, ``total_s`` 1.43 -> 1.13 s; CPU of the
+command and its picture process 3.3 -> 2.9 s.  This script, once each in the
+same slow hour (per-pose linprog 1.83-2.50 ms; a process that imports numpy
+and numba and calls one cached kernel: 0.82 s before, 0.67 s after):
+
+============================================  ==========================  ==========================
+IPAnema 3, 154,440 poses, static              82599a7                     this version
+============================================  ==========================  ==========================
+kernels in-process, warm                      0.307 s = 1235x (1078-1474) 0.265 s = 1347x (1096-1427)
+whole command, warm (csv)                     2.63 s = 130x (125-147)     2.05 s = 159x (131-184)
+  its sweep_s                                 0.348 s = 967x (960-1111)   0.294 s = 1131x (926-1337)
+whole command, warm (parquet)                                             2.04 s = 153x (151-185)
+fastest csv run: load / sweep / write / pics  0.69 / 0.34 / 0.63 / 0.73 s 0.33 / 0.31 / 0.44 / 0.53 s
+============================================  ==========================  ==========================
+
+Where the time goes now (IPAnema 3, a faster hour, the command 1.53-1.61 s
+from the shell, timeline of the main process): Python, numpy, typer and the
+command's modules 0.20 s; the options' pydantic adapters, the spec and its
+schema 0.23 s; numba's import and the kernels' load 0.27 s (``load_s``); the
+sweep 0.21 s; the table's last chunks 0.27 s and the pictures' last 0.17 s
+(the two pictures, 0.57 s of CPU, drawn by the picture process and a fork of
+it beside the table's writer); the exit 0.05 s.  The first 0.9 s keep both
+cores busy (the picture process imports matplotlib meanwhile, 0.7 s).
+
+planar2 564,001 poses, this version: 183x csv (166-199), 195x parquet (192-205).
+``auto``'s numpy limit lowered to 70,000 poses (the crossover with the cheaper
+start-up; ``workspaces/engine.py``).
+
+The round before (bdf8ba0 -> 82599a7), the same machine: the picture process
 back at the command's CPU priority (niced +10 it waited behind every other
 process on a busy machine: planar4's command beside three busy processes
 17.6 s, now 3.4 s; IPAnema 3's on an idle machine 1.60 -> 1.65 s, medians of

@@ -29,9 +29,12 @@ from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, WorkspaceResult, gri
 #: Engines (see the module docstring).
 ENGINES = ("auto", "numba", "numpy")
 #: Largest closed-form grid ``auto`` gives to numpy while the kernels are not loaded.  Measured
-#: on planar2 (with its hanging tilt), warm, one process: numpy 16 us a pose, numba 8.6 us a pose
-#: on two threads plus about 1 s of numba start-up, so numba pays off from ~130,000 poses.
-NUMPY_MAX_POSES = 130_000
+#: on planar2 (with its hanging tilt), warm, the whole ``workspace`` command in a new process:
+#: numpy 13-18 us a pose, numba 5-7 us a pose on two threads plus 0.45-0.5 s of numba start-up
+#: (``load_s``); numpy was 0.25 s faster at 63,001 poses, numba 0.3-0.5 s faster at 74,529 and
+#: 0.6-0.8 s at 90,601, so numba pays off from ~70,000 poses (130,000 when numba's start-up
+#: took 1 s, before :mod:`cdpr_design.numba_startup`).
+NUMPY_MAX_POSES = 70_000
 
 
 #: The kernel module whose presence means "the kernels are loaded in this process": the package
