@@ -21,9 +21,10 @@ earlier run does not need:
 Neither changes what runs: numba refreshes its context itself before any
 compilation (``CompilerBase``) and when a lowering is first looked up
 (``BaseContext.get_function``), so a cache miss, or numba code of another
-library in the same process, gets numba's full set-up as without this.  Both
-step aside where numba's or scipy's internals are laid out otherwise (checked
-for numba 0.59 to 0.68).  Tests: ``tests/test_numba_startup.py`` (what a fresh
+library in the same process, gets numba's full set-up as without this.  The
+lazy load is installed only on the numba versions it was read against and
+tested with (:data:`TESTED_NUMBA`); any other version loads as numba does,
+and so does anything laid out otherwise.  Tests: ``tests/test_numba_startup.py`` (what a fresh
 process imports, cached and compiled, and a user's compile after a lazy load)
 and ``tests/test_jit_cache.py`` (the same numbers loaded as compiled).
 
@@ -41,7 +42,9 @@ import os
 import sys
 
 #: The package whose functions load lazily (their module's name starts with it).
-PACKAGE = __name__.partition(".")[0] + "."
+PACKAGE = __name__.rpartition(".")[0] + "."
+#: numba releases whose ``Cache.load_overload`` the lazy load replaces (read and tested: 0.68.1).
+TESTED_NUMBA = ((0, 68),)
 
 _BLAS_MODULE = "scipy.linalg.cython_blas"
 
@@ -74,32 +77,52 @@ def load_blas_check() -> bool:
     try:
         importlib.import_module("numba.np.arraymath")  # its check finds the module
     finally:
-        if sys.modules.get(_BLAS_MODULE) is module:  # not if another thread imported scipy.linalg meanwhile
+        # Out again, unless scipy.linalg got imported meanwhile (by another thread: this runs
+        # at a compile, on whichever thread compiles): then the entry is scipy's own, the
+        # same module object (Cython keeps one per process), and stays.
+        if sys.modules.get(_BLAS_MODULE) is module and "scipy.linalg" not in sys.modules:
             del sys.modules[_BLAS_MODULE]
     return True
 
 
-def ours(cache) -> bool:
-    """True if numba ``cache`` (a function's on-disk cache) belongs to a function of this package."""
-    return getattr(getattr(cache, "_py_func", None), "__module__", "").startswith(PACKAGE)
+def ours(cache, target_context=None) -> bool:
+    """True if numba ``cache`` is the on-disk cache of a CPU function (``@njit``) of this
+    package (and ``target_context``, if given, numba's CPU context): the loads made lazy."""
+    from numba.core import caching
+    from numba.core.cpu import CPUContext
+
+    return (isinstance(cache, caching.FunctionCache)
+            and (target_context is None or isinstance(target_context, CPUContext))
+            and getattr(getattr(cache, "_py_func", None), "__module__", "").startswith(PACKAGE))
+
+
+def _numba_tested() -> bool:
+    import numba
+
+    try:
+        version = tuple(int(part) for part in numba.__version__.split(".")[:2])
+    except ValueError:  # a development build: not one of the tested releases
+        return False
+    return version in TESTED_NUMBA
 
 
 def install_lazy_loading() -> bool:
     """Make numba load this package's cached functions without its compiler set-up (see the
-    module's description); True if installed (now or before)."""
+    module's description); True if installed (now or before), False where numba is not one of
+    :data:`TESTED_NUMBA` or is laid out otherwise (numba then loads them its own way)."""
     from numba.core import caching
 
     cache = getattr(caching, "Cache", None)
     numba_load = getattr(cache, "load_overload", None)
-    if numba_load is None or not hasattr(cache, "_load_overload") \
-            or not hasattr(cache, "_guard_against_spurious_io_errors"):
-        return False
     if getattr(numba_load, "_lazy_for", None) == PACKAGE:
         return True
+    if numba_load is None or not _numba_tested() or not hasattr(cache, "_load_overload") \
+            or not hasattr(cache, "_guard_against_spurious_io_errors"):
+        return False
     from numba.core.runtime import rtsys
 
     def load_overload(self, sig, target_context):
-        if not ours(self):
+        if not ours(self, target_context):
             return numba_load(self, sig, target_context)
         rtsys.initialize(target_context)
         cres = None
@@ -110,6 +133,7 @@ def install_lazy_loading() -> bool:
         return cres
 
     load_overload._lazy_for = PACKAGE
+    load_overload.__wrapped__ = numba_load
     load_overload.__doc__ = numba_load.__doc__
     cache.load_overload = load_overload
     return True

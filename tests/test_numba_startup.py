@@ -79,6 +79,8 @@ def test_only_this_packages_functions_load_lazily(tmp_path):
 import sys
 sys.path.insert(0, %r)
 from cdpr_design import kernels as K, numba_startup
+from cdpr_design.kernels import _jit  # installs the lazy load, before otherpkg's
+assert numba_startup.install_lazy_loading()
 import otherpkg
 print(otherpkg.twice(2.0), sum(otherpkg.twice.stats.cache_hits.values()), 'numba.typed.typeddict' in sys.modules,
       numba_startup.ours(otherpkg.twice._cache), numba_startup.ours(K.eval_square._cache))
@@ -86,6 +88,33 @@ print(otherpkg.twice(2.0), sum(otherpkg.twice.stats.cache_hits.values()), 'numba
     _run(code, tmp_path)
     # cached and loaded by numba's own method: its set-up ran in full
     assert _run(code, tmp_path).split() == ["4.0", "1", "True", "False", "True"]
+
+
+def test_a_lazy_load_on_a_thread_then_an_error_then_a_compile_of_ours(tmp_path):
+    """The first load on a worker thread (as the sweeps' thread pool and the CSV writer do), an
+    error raised inside a lazily loaded kernel, and one of our kernels compiled in the same
+    process afterwards (a cache miss after a lazy load)."""
+    _run(DET, tmp_path)
+    out = _run("""
+import sys, threading
+import numpy as np
+from cdpr_design import kernels as K
+from cdpr_design.kernels.linalg import det_small
+got = []
+thread = threading.Thread(target=lambda: got.append(det_small(np.array([[2.0, 1.0], [1.0, 3.0]]), 2)))
+thread.start(); thread.join()
+print(got[0], sum(det_small.stats.cache_hits.values()), 'numba.typed.typeddict' in sys.modules)
+try:
+    det_small(np.eye(2), -1)  # np.empty((-1, -1)) inside the kernel
+except ValueError as exc:
+    print('ValueError')
+t = np.empty(2)
+K.eval_square(np.array([[1.0, 0.0], [0.0, 1.0]]), np.array([[3.0, 4.0]]), np.zeros(2), np.full(2, 100.0), 0, t)
+print(*t, sum(K.eval_square.stats.cache_misses.values()), 'numba.typed.typeddict' in sys.modules)
+""", tmp_path).split()
+    assert out[:3] == ["5.0", "1", "False"]  # loaded lazily, on the thread
+    assert out[3] == "ValueError"
+    assert out[4:] == ["3.0", "4.0", "1", "True"]  # compiled, after numba's full set-up
 
 
 def test_a_compile_after_a_cached_load_sets_numba_up_in_full(tmp_path):

@@ -95,15 +95,22 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
     return stats
 
 
+#: Grid poses of a whole sweep (all variants) from which every process loads the numba kernels.
+#: Not ``engine.NUMPY_MAX_POSES`` (70,000), measured on one ``workspace`` command with the
+#: kernels on two threads: a sweep's processes run them on one thread each and each pays numba's
+#: start-up, so the kernels pay off later.  This is the limit the sweeps had when both were
+#: one (then 130,000); not re-measured since numba's start-up got cheaper.
+KERNELS_FROM_POSES = 130_000
+
+
 def _worth_kernels(plan: Plan, options: Options, variants: int) -> bool:
-    """Whether the sweep holds more grid poses than the numpy engine is worth (about
-    ``workspace.NUMPY_MAX_POSES``): then every process loads the numba kernels first."""
+    """Whether the sweep holds more grid poses than the numpy engine is worth
+    (:data:`KERNELS_FROM_POSES`): then every process loads the numba kernels first."""
     from cdpr_design.model import spec
     from cdpr_design import workspaces as ws
-    from cdpr_design.workspaces import engine as eng
 
     try:
         poses = ws.make_grid(spec.from_dict(plan.base), options.step, force=True).size
     except Exception:  # noqa: BLE001 - a bad base shows up as the variants' errors
         return True
-    return variants * poses > eng.NUMPY_MAX_POSES
+    return variants * poses > KERNELS_FROM_POSES

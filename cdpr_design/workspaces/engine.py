@@ -8,8 +8,8 @@ Two engines compute the same rows:
   results, tested).
 
 ``auto`` takes numpy for closed-form grids up to :data:`NUMPY_MAX_POSES` poses
-while the kernels are not loaded in this process: numba's start-up (import
-and first-call set-up, about 1 s) would cost more than the sweep itself.
+while the kernels are not loaded in this process: numba's start-up (its
+import and the cached kernels' load, 0.3-0.5 s) would cost more than the sweep itself.
 """
 
 from __future__ import annotations
@@ -29,11 +29,13 @@ from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, WorkspaceResult, gri
 #: Engines (see the module docstring).
 ENGINES = ("auto", "numba", "numpy")
 #: Largest closed-form grid ``auto`` gives to numpy while the kernels are not loaded.  Measured
-#: on planar2 (with its hanging tilt), warm, the whole ``workspace`` command in a new process:
-#: numpy 13-18 us a pose, numba 5-7 us a pose on two threads plus 0.45-0.5 s of numba start-up
-#: (``load_s``); numpy was 0.25 s faster at 63,001 poses, numba 0.3-0.5 s faster at 74,529 and
-#: 0.6-0.8 s at 90,601, so numba pays off from ~70,000 poses (130,000 when numba's start-up
-#: took 1 s, before :mod:`cdpr_design.numba_startup`).
+#: on planar2 (with its hanging tilt), warm, the whole ``workspace`` command in a new process,
+#: two runs an engine and size: numpy 13-18 us a pose, numba 5-7 us a pose on two threads plus
+#: 0.45-0.5 s of numba start-up (``load_s``), which puts the crossover at 45,000-90,000 poses;
+#: the commands measured it there, loosely (the machine's speed drifted between runs): numpy
+#: 0.25 s faster at 63,001 poses, numba 0.3-0.5 s faster at 74,529 and 0.6-0.8 s at 90,601.
+#: (130,000 when numba's start-up took 1 s, before :mod:`cdpr_design.numba_startup`.)  Batch
+#: sweeps decide apart (``batch.sweep.KERNELS_FROM_POSES``).
 NUMPY_MAX_POSES = 70_000
 
 
