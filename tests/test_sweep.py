@@ -455,9 +455,12 @@ def test_engines_give_the_identical_sweep_csv(tmp_path, monkeypatch):
 def test_big_sweeps_load_the_kernels():
     design_data = planar2_raw()
     plan = sw.make_plan(spec.from_dict(design_data), [("effector.mass", sw.parse_values("0.5:2:3"))])
-    assert not bsweep._worth_kernels(plan, sw.Options(), len(plan))  # 3 x 22,801 poses
-    assert bsweep._worth_kernels(plan, sw.Options(), 1000)  # 22.8 M poses
-    assert bsweep._worth_kernels(plan, sw.Options(step=0.001), 3)  # 3 x 2.25 M poses
+    assert not bsweep._worth_kernels(plan, sw.Options(), len(plan), 2)  # 3 x 22,801 poses
+    assert not bsweep._worth_kernels(plan, sw.Options(), 40, 2)  # 456,000 poses a process
+    assert bsweep._worth_kernels(plan, sw.Options(), 40, 1)  # 912,000 poses in one process
+    assert not bsweep._worth_kernels(plan, sw.Options(), 40, 4)  # 228,000 poses a process
+    assert bsweep._worth_kernels(plan, sw.Options(), 1000, 8)  # 2.85 M poses a process
+    assert bsweep._worth_kernels(plan, sw.Options(step=0.001), 3, 8)  # 2.25 M poses a process (3 used)
 
 
 def _worker_settings():

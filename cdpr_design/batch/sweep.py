@@ -79,10 +79,10 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
         from cdpr_design.model import spec
 
         options = with_catalogue(options, spec.load_catalogue())
-    job = Job(plan, options, kernels=_worth_kernels(plan, options, len(todo)))
     w = workers if workers is not None else default_workers()
     if w < 1:
         raise InputError(f"--workers: expected at least 1, got {w}")
+    job = Job(plan, options, kernels=_worth_kernels(plan, options, len(todo), 1 if w == 1 or len(todo) <= 1 else w))
     if scheduler:
         run_dask(job, todo, scheduler, w, chunk, emit, stats, connect_timeout)
     elif not pool and (w == 1 or len(todo) <= 1):
@@ -95,17 +95,21 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
     return stats
 
 
-#: Grid poses of a whole sweep (all variants) from which every process loads the numba kernels.
-#: Not ``engine.NUMPY_MAX_POSES`` (70,000), measured on one ``workspace`` command with the
-#: kernels on two threads: a sweep's processes run them on one thread each and each pays numba's
-#: start-up, so the kernels pay off later.  This is the limit the sweeps had when both were
-#: one (then 130,000); not re-measured since numba's start-up got cheaper.
-KERNELS_FROM_POSES = 130_000
+#: Grid poses a sweep process evaluates from which every process loads the numba kernels.  A
+#: sweep's processes run the kernels on one thread each, each pays numba's start-up (0.45-0.5 s
+#: for planar2's kernels), and a variant's sweep computes no tilt map and writes no rows, so
+#: numpy's closed form costs only ~3 us a pose there: measured with planar2's variants (22,801
+#: poses each, 2 processes, the whole ``sweep`` command, two runs an engine): numpy faster by
+#: 0.1-0.9 s from 4 to 20 variants (91,000-456,000 poses, 0.2 s at 10), even at 40 (912,000:
+#: 3.3-3.6 s either way), numba faster at 80 (1.8 M poses: 3.3 s against 3.4-4.0 s).  Not
+#: ``engine.NUMPY_MAX_POSES`` (one ``workspace`` command, kernels on two threads).
+KERNELS_FROM_POSES = 500_000
 
 
-def _worth_kernels(plan: Plan, options: Options, variants: int) -> bool:
-    """Whether the sweep holds more grid poses than the numpy engine is worth
-    (:data:`KERNELS_FROM_POSES`): then every process loads the numba kernels first."""
+def _worth_kernels(plan: Plan, options: Options, variants: int, workers: int = 1) -> bool:
+    """Whether each of the sweep's processes (``workers``, at most one a variant) evaluates more
+    grid poses than the numpy engine is worth (:data:`KERNELS_FROM_POSES`): then every process
+    loads the numba kernels first."""
     from cdpr_design.model import spec
     from cdpr_design import workspaces as ws
 
@@ -113,4 +117,4 @@ def _worth_kernels(plan: Plan, options: Options, variants: int) -> bool:
         poses = ws.make_grid(spec.from_dict(plan.base), options.step, force=True).size
     except Exception:  # noqa: BLE001 - a bad base shows up as the variants' errors
         return True
-    return variants * poses > KERNELS_FROM_POSES
+    return variants * poses / max(1, min(workers, variants)) > KERNELS_FROM_POSES
