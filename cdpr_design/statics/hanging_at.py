@@ -311,8 +311,8 @@ class _Balance:
     def jacobian(self, P, R, t, w):
         """d(scaled residual)/d(rotation coordinates, tensions / weight) (N, r, nr + m)."""
         geo = self.geo
-        W = self.parts(P, R)[0]
-        Jw = geo.balance_jacobian_many(P, R, t)[:, :, 3:] @ hc.left_jacobian(w)
+        W, _, Rb, L, u = self.parts(P, R)
+        Jw = geo.balance_jacobian_many(P, R, t, (Rb, None, L, u))[:, :, 3:] @ hc.left_jacobian(w)
         J = np.concatenate([Jw[:, :, self.rot], W * geo.weight], axis=2)[:, self.rows]
         return J / self.scale[:, None]
 

@@ -259,14 +259,15 @@ class Geometry:
 
     def jacobian(self, p, R, t, S):
         """d(balance)/d(dp, w) (6, 6), d(balance)/dt_S (6, |S|) and d|l_S|/d(dp, w) (|S|, 6)."""
-        Jz = self.balance_jacobian_many(np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3)),
-                                        np.reshape(t, (1, self.m)))[0]
-        Rb, _, _, u = self.cables(p, R)
+        P1, R1 = np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3))
+        cables = self.cables_many(P1, R1)
+        Jz = self.balance_jacobian_many(P1, R1, np.reshape(t, (1, self.m)), cables)[0]
+        Rb, u = cables[0][0], cables[3][0]
         Jt = np.vstack([u[S].T, np.cross(Rb[S], u[S]).T])
         G = np.hstack([-u[S], -np.cross(Rb[S], u[S])])
         return Jz, Jt, G
 
-    def balance_jacobian_many(self, P, R, t) -> np.ndarray:
+    def balance_jacobian_many(self, P, R, t, cables=None) -> np.ndarray:
         """d(balance)/d(dp, w) at k configurations, the tensions t (k, m) [N] held: (k, 6, 6).
 
         With S = [R b]_x, P = (I - u u^T) / L and c = R b x u, cable i adds t_i times
@@ -275,11 +276,12 @@ class Geometry:
         + (R b (R b)^T - |R b|^2 I + c c^T) / L, summed over the cables with einsum; the weight adds
         [f]_x [R c]_x to the rotation block.  A cable without tension adds nothing (also at length
         0, where its direction is undefined); one pulling at length 0 makes the answer NaN.
+        ``cables``: :meth:`cables_many` of (P, R), where the caller has them already.
         """
         P = np.asarray(P, float).reshape(-1, 3)
         R = np.asarray(R, float).reshape(-1, 3, 3)
         t = np.asarray(t, float).reshape(-1, self.m)
-        Rb, _, L, u = self.cables_many(P, R)
+        Rb, _, L, u = cables if cables is not None else self.cables_many(P, R)
         pulls = (t != 0.0)[..., None]
         u = np.where(pulls, u, 0.0)
         c = np.cross(Rb, u)
@@ -312,19 +314,20 @@ class Geometry:
         return self.lagrangian_hessian_many(np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3)),
                                             np.reshape(t, (1, self.m)))[0]
 
-    def lagrangian_hessian_many(self, P, R, t) -> np.ndarray:
+    def lagrangian_hessian_many(self, P, R, t, cables=None) -> np.ndarray:
         """:meth:`lagrangian_hessian` at k configurations: P (k, 3) [m], R (k, 3, 3), t (k, m)
         [N] -> (k, 6, 6).
 
         With S_i = [R b_i]_x, P_i = (I - u_i u_i^T) / L_i and J_i = [-I, S_i] (the
         derivative of l_i), cable i adds t_i (J_i^T P_i J_i + [0, 0; 0, (u_i . R b_i) I -
         (u_i (R b_i)^T + R b_i u_i^T) / 2]); the weight adds m ((g . R c) I - (g (R c)^T +
-        R c g^T) / 2) to the rotation block.
+        R c g^T) / 2) to the rotation block.  ``cables``: :meth:`cables_many` of (P, R), where
+        the caller has them already.
         """
         P = np.asarray(P, float).reshape(-1, 3)
         R = np.asarray(R, float).reshape(-1, 3, 3)
         t = np.asarray(t, float).reshape(-1, self.m)
-        Rb, _, L, u = self.cables_many(P, R)
+        Rb, _, L, u = cables if cables is not None else self.cables_many(P, R)
         with np.errstate(invalid="ignore", divide="ignore"):
             Pm = (np.eye(3) - u[..., :, None] * u[..., None, :]) / L[..., None, None]
         S = skew(Rb)
@@ -370,8 +373,9 @@ class Geometry:
         R = np.asarray(R, float).reshape(-1, 3, 3)
         taut = np.asarray(taut, bool).reshape(-1, self.m)
         k, d = len(P), len(dofs)
-        H = self.lagrangian_hessian_many(P, R, t)[:, dofs][:, :, dofs]
-        Rb, _, _, u = self.cables_many(P, R)
+        cables = self.cables_many(P, R)
+        H = self.lagrangian_hessian_many(P, R, t, cables)[:, dofs][:, :, dofs]
+        Rb, _, _, u = cables
         G = -np.concatenate([u, np.cross(Rb, u)], axis=2)[:, :, dofs]
         G = np.where(taut[..., None], G, 0.0)
         _, sv, Vt = np.linalg.svd(G)
