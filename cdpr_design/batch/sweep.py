@@ -82,7 +82,7 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
     w = workers if workers is not None else default_workers()
     if w < 1:
         raise InputError(f"--workers: expected at least 1, got {w}")
-    job = Job(plan, options, kernels=_worth_kernels(plan, options, len(todo), 1 if w == 1 or len(todo) <= 1 else w))
+    job = Job(plan, options, kernels=_worth_kernels(plan, options, len(todo), w))
     if scheduler:
         run_dask(job, todo, scheduler, w, chunk, emit, stats, connect_timeout)
     elif not pool and (w == 1 or len(todo) <= 1):
