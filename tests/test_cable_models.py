@@ -83,6 +83,36 @@ def test_sagging_refuses_pulleys_and_interference(tmp_path, planar2_data):
     assert r.exit_code == 2 and "swivel pulleys" in r.output
     r = invoke("workspace", SAG40, "--collisions", "--out", tmp_path / "o2", "-q")
     assert r.exit_code == 2 and "interference" in r.output
+    # every analysis that builds the catenaries from point outlets refuses the pulley, none ignores it
+    spec_path = write_spec(tmp_path, planar2_data)
+    r = invoke("size-motors", spec_path, "--out", tmp_path / "o3", "-q")
+    assert r.exit_code == 2 and "swivel pulleys" in r.output, r.output
+    for model in ("sagging", "elastic"):
+        r = invoke("fk", spec_path, "--lengths", "1.0,1.0", "--cable-model", model)
+        assert r.exit_code == 2 and "swivel pulleys" in r.output and model in r.output, r.output
+    assert invoke("fk", spec_path, "--lengths", "1.0,1.0", "--cable-model", "ideal").exit_code == 0
+
+
+@pytest.mark.parametrize("mode", ["total", "range"])
+def test_orientation_workspaces_take_elastic_cables_and_refuse_sagging(tmp_path, mode):
+    cogiro = DESIGNS / "cogiro.yaml"
+    r = invoke("workspace", cogiro, "--orientations", mode, "--cable-model", "sagging", "--step", "2",
+               "--out", tmp_path / "s", "-q")
+    assert r.exit_code == 2 and "orientation workspaces" in r.output, r.output
+    runs = {}
+    for model in ("ideal", "elastic"):
+        r = invoke("workspace", cogiro, "--orientations", mode, "--cable-model", model, "--step", "2",
+                   "--out", tmp_path / model, "-q")
+        assert r.exit_code == 0, r.output
+        runs[model] = (read_csv(tmp_path / model / "workspace.csv"),
+                       json.loads((tmp_path / model / "summary.json").read_text()))
+    (ideal_rows, ideal_sum), (el_rows, el_sum) = runs["ideal"], runs["elastic"]
+    # straight elastic cables have the ideal statics; the rows stand for a set of orientations, so no
+    # per-pose cable columns; the summary names the model
+    assert el_rows == ideal_rows
+    assert el_sum["cable_model"] == "elastic" and "cable_model" not in ideal_sum
+    assert el_sum["max_outlet_tension_per_cable"] == ideal_sum["max_tension_per_cable"]
+    assert el_sum["feasible"] == ideal_sum["feasible"] > 0
 
 
 # ----------------------------------------------------------------------------

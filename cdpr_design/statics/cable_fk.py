@@ -94,8 +94,12 @@ def forward(design: Design, unstretched, guess=None) -> CableFK:
     """
     from scipy.optimize import least_squares
 
-    if design_model(design) == "ideal":
+    model = design_model(design)
+    if model == "ideal":
         raise InputError("cable model 'ideal': the forward kinematics of straight cables is kinematics.forward_kinematics")
+    if kin.has_pulleys(design):  # the cables below run from point outlets
+        raise InputError(f"cable model {model!r}: the forward kinematics of elastic and sagging cables takes point "
+                         "outlets, not swivel pulleys; use --cable-model ideal for this design")
     L0 = np.asarray(unstretched, float).reshape(-1)
     if L0.size != design.m or not np.all(np.isfinite(L0)) or np.any(L0 <= 0):
         raise InputError(f"--lengths: expected {design.m} positive unstretched lengths [m], got {list(L0)}")

@@ -155,6 +155,7 @@ def sagging_structures(design: Design, positions3: np.ndarray, orientation) -> t
     from cdpr_design.statics import kinematics as kin
     from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices
 
+    check_supported(design, pulleys=kin.has_pulleys(design))  # the catenaries start at point outlets
     arr = cable_arrays(design)
     k, m, n = positions3.shape[0], design.m, design.n
     Rb = np.ascontiguousarray(design.attachments @ kin.rotation_matrix(*orientation).T)

@@ -154,12 +154,17 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     """
     check_engine(engine)
     hanging.refuse_commanded_orientations(design)
+    cable_models.check_supported(design, pulleys=kin.has_pulleys(design), interference=interference,
+                                 orientations=True)
     g, nominal = _setup(design, kind, step, grid, orientation, force)
     from cdpr_design.workspaces.orientation import sweep_orientations  # numba kernels, loaded on first use
 
-    return sweep_orientations(design, mode, kind, g, nominal, orientations=orientations,
-                              on_chunk=on_chunk, progress=progress, chunk=chunk,
-                              keep_maps=keep_maps, interference=interference)
+    res = sweep_orientations(design, mode, kind, g, nominal, orientations=orientations,
+                             on_chunk=on_chunk, progress=progress, chunk=chunk,
+                             keep_maps=keep_maps, interference=interference)
+    if cable_models.design_model(design) != "ideal":  # elastic: straight, so the same statics
+        res.extra.update(cable_summary(design, None, res.max_tension))
+    return res
 
 
 def warm_up(design: Design, kind: str = "static", grid: Grid | None = None, orientations: str | None = None,

@@ -330,11 +330,14 @@ def column_names(design: Design) -> list[str]:
 
 
 def extra_columns(design: Design, interference: bool, mode: str | None) -> list[str]:
-    """Names of the extra ``workspace.csv`` columns, in the order :func:`chunk_extra` gives them."""
+    """Names of the extra ``workspace.csv`` columns, in the order :func:`chunk_extra` gives them.
+
+    An orientation workspace (``mode``) has no cable-model columns: its rows stand for a set of
+    orientations (the largest tension over it), not for one pose whose cables a winch pays out."""
     from cdpr_design.workspaces import hanging
 
     cols = ["collision_free"] if interference else []
-    cols += cables.column_names(design)
+    cols += cables.column_names(design) if mode is None else []
     if mode == "total":
         cols.append("orientations_feasible")
     elif mode == "range":
