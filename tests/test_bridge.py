@@ -442,6 +442,10 @@ def test_test_plc_run_writes_compare_ready_log(tmp_path, loop_data):
     assert header == plc_rows.csv_header(spec.from_dict(loop_data))
     assert data.shape[0] == summary["cycles"]
     assert set(summary["delay"]) == {"length_c1", "length_c2"}
+    t = summary["timings"]  # the loop and its log's writing, apart
+    assert set(t) == {"sweep_s", "write_s", "pictures_s", "total_s"}
+    assert 0 < t["write_s"] < t["sweep_s"] <= t["total_s"] and t["pictures_s"] == 0
+    assert json.loads((out / "bridge.json").read_text())["timings"] == t
 
 
 @pytest.mark.serial

@@ -339,6 +339,37 @@ def test_one_worker_with_a_seed_is_repeatable(tmp_path, light_spec):
     assert header[-1] == "seconds" and tables[0] == tables[1]
 
 
+def test_parquet_tables_are_the_csv_ones_and_the_summary_has_timings(tmp_path, light_spec):
+    from cdpr_design.io.columns import read_table, table_metadata
+
+    base = ["optimize", light_spec, *OUTLETS, "--maximize", "task_min_margin", "--minimize", "peak_tension",
+            "--trials", 10, "--seed", 5, "--no-picture", "--json"]
+    runs = {}
+    for fmt_ in ("csv", "parquet"):
+        r = invoke(*base, "--format", fmt_, "--out", tmp_path / fmt_)
+        assert r.exit_code == 0, r.output
+        runs[fmt_] = json.loads(r.stdout)
+        t = runs[fmt_]["timings"]
+        assert set(t) == {"sweep_s", "write_s", "pictures_s", "total_s"} and t["total_s"] >= t["sweep_s"] > 0
+    assert not (tmp_path / "parquet" / "optimize.csv").exists()
+    for stem in ("optimize", "pareto"):
+        a, b = read_table(tmp_path / "csv" / f"{stem}.csv"), read_table(tmp_path / "parquet" / f"{stem}.parquet")
+        assert list(a) == list(b) and len(b["trial"]) > 0
+        for name in a:
+            if name == "seconds":  # the evaluations' own wall time
+                continue
+            if b[name].dtype.kind in "biuf":
+                np.testing.assert_allclose(b[name].astype(float), a[name], rtol=1e-9)  # CSV: 10 digits
+            else:  # text; an empty cell is None in Parquet and NaN in a CSV column without text
+                def cells(col):
+                    return ["" if v is None or (isinstance(v, float) and math.isnan(v)) else v for v in col]
+
+                assert cells(b[name]) == cells(a[name]), name
+        meta = table_metadata(tmp_path / "parquet" / f"{stem}.parquet")
+        assert meta["table"] == stem and meta["keys"] == [OUTLETS[1][:17], OUTLETS[3][:17]]
+    assert b["trial"].dtype == np.int64
+
+
 def test_two_workers_end_with_exactly_the_trials_asked(tmp_path, light_spec):
     """This process (worker 0) and a spawned worker share the study: exactly N trials, each once."""
     out = tmp_path / "opt"

@@ -7,9 +7,9 @@ from typing import Annotated, Optional
 import typer
 from rich.table import Table
 
-from cdpr_design.cli.common import (CatalogueOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt, SafetyOpt,
-                                    SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt, info,
-                                    load_design, out_console, summary_table)
+from cdpr_design.cli.common import (CatalogueOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt,
+                                    QuietOpt, SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command,
+                                    emit_json, fmt, info, load_design, out_console, summary_table)
 from cdpr_design.errors import CheckFailed
 from cdpr_design.model.limits import MAX_TRIALS, MAX_WORKERS, SEED_LIMIT
 
@@ -87,6 +87,7 @@ def optimize(
     motor: MotorOpt = None,
     step: StepOpt = None,
     no_picture: Annotated[bool, typer.Option("--no-picture", help="Do not draw optimize.png.")] = False,
+    format: FormatOpt = Format.csv,
     out: OutOpt = None,
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
@@ -102,7 +103,7 @@ def optimize(
     run = job.optimize(design, vary, maximize, minimize, require, trials, workers, seed, timeout, resume,
                        catalogue, trajectory, safety_factor, motor, step, not no_picture, out, overwrite,
                        progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg),
-                       engine=env.engine())
+                       engine=env.engine(), format=format.value)
     if json_:
         emit_json(run.summary)
     else:

@@ -21,6 +21,7 @@ from cdpr_design.io.files import OutputDir
 from cdpr_design.io.tables import fmt
 from cdpr_design.jobs.common import output_dir
 from cdpr_design.jobs.motion import require_trajectory, trajectory_samples
+from cdpr_design.jobs.tables import Timings
 
 
 class BridgeRun(NamedTuple):
@@ -98,16 +99,19 @@ def _connect(transport, reconnect: int, stop: dict, log: Callable[[str], None]) 
             wait = min(2 * wait, 2.0)
 
 
-def _row_logger(log_file, rows):
-    """``on_row`` of the run: one bridge.csv line per cycle, flushed every 0.1 s of model time."""
+def _row_logger(log_file, rows, timings: Timings):
+    """``on_row`` of the run: one bridge.csv line per cycle, flushed every 0.1 s of model time;
+    the time it takes goes to ``timings.write_s``."""
     last_flush = [0.0]
 
     def on_row(sp, state):
+        t = time.perf_counter()
         log_file.write(",".join(fmt(v) for v in rows.values(sp, state)) + "\n")
         now = state.time
         if now - last_flush[0] >= 0.1:
             log_file.flush()
             last_flush[0] = now
+        timings.write_s += time.perf_counter() - t
 
     return on_row
 
@@ -145,6 +149,7 @@ def bridge(design, test_plc: str | None = None, duration: float | None = None, c
 
     if design.plc is None:
         raise InputError(f"{design.source}: plc: the spec has no plc: section (bridge needs its symbols)")
+    timings = Timings()
     dt, tmo = _settings(design, cycle_time, duration, reconnect, timeout)
     layout = PlcLayout.from_design(design)
     samples = plc_lengths = None
@@ -162,9 +167,13 @@ def bridge(design, test_plc: str | None = None, duration: float | None = None, c
     with _stop_on_signal() as stop:
         transport = AdsTransport(layout, where.net_id, where.port, where.host, timeout=tmo,
                                  local_net_id=where.local_net_id)
+        t0 = time.perf_counter()
         res, rows, plc_log = _session(design, transport, layout, samples, plc_lengths, test_plc, where, dt,
-                                      duration, reconnect, out_dir, stop, log, status or (lambda msg: None))
+                                      duration, reconnect, out_dir, stop, log, status or (lambda msg: None),
+                                      timings)
+        timings.sweep_s = time.perf_counter() - t0 - timings.write_s  # the loop, without its log's writing
     summary = _summary(design, res, rows, plc_log, test_plc)
+    summary["timings"] = timings.as_dict()
     out_dir.write_json("bridge.json", summary)
     return BridgeRun(res, summary, dt, out_dir)
 
@@ -183,7 +192,7 @@ def _test_plc_setpoints(samples, name: str):
 
 
 def _session(design, transport, layout, samples, plc_lengths, test_plc, where, dt, duration, reconnect,
-             out_dir, stop, log, status):
+             out_dir, stop, log, status, timings):
     """Test PLC (if any, playing ``plc_lengths`` at the sample times), connection, the loop;
     (result, row maker, test PLC log or None).
 
@@ -206,7 +215,7 @@ def _session(design, transport, layout, samples, plc_lengths, test_plc, where, d
         log_file.write(",".join(csv_header(design)) + "\n")
         log(f"bridge running: {where.net_id}:{where.port} at {where.host}, cycle {dt * 1e3:.3g} ms"
             + (f", {duration:.3g} s" if duration else ", Ctrl-C to stop"))
-        res = br.run(transport, sim, cycle_time=dt, duration=duration, on_row=_row_logger(log_file, rows),
+        res = br.run(transport, sim, cycle_time=dt, duration=duration, on_row=_row_logger(log_file, rows, timings),
                      should_stop=lambda: stop["flag"], reconnect=reconnect, on_status=status)
         if stop["flag"] and res.stopped == "stop":
             res.stopped = "interrupted"

@@ -1,5 +1,5 @@
 """The ``optimize`` job: a design search (optuna study in ``optimize.db``), then optimize.csv,
-pareto.csv (several objectives), best.yaml and optimize.png."""
+pareto.csv (several objectives; ``.parquet`` with ``format='parquet'``), best.yaml and optimize.png."""
 
 from __future__ import annotations
 
@@ -8,14 +8,16 @@ from pathlib import Path
 from typing import Callable, NamedTuple, Sequence
 
 from cdpr_design.errors import InputError
+from cdpr_design.io.columns import check_format, file_name
 from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage
 from cdpr_design.jobs.motion import require_trajectory
+from cdpr_design.jobs.tables import Timings, write_rows
 from cdpr_design.model.limits import MAX_TRIALS, MAX_WORKERS, SEED_LIMIT
 from cdpr_design.plots import optimize as optimize_plots
 
-#: Files the job writes (the study's SQLite file besides).
-OUTPUTS = ("optimize.csv", "pareto.csv", "best.yaml", "optimize.png")
+#: Files the job writes besides its tables (``optimize``, ``pareto``) and the study's SQLite file.
+OUTPUTS = ("best.yaml", "optimize.png")
 
 
 class OptimizeRun(NamedTuple):
@@ -72,19 +74,24 @@ def _picture_data(design, problem, rows, best, front, importances) -> dict:
             "importances": importances}
 
 
-def write_outputs(out: OutputDir, design, problem, rows, best, front, importances, picture: bool) -> list[Path]:
-    """optimize.csv, pareto.csv (several objectives), best.yaml (when a trial is complete), optimize.png."""
+def write_outputs(out: OutputDir, design, problem, rows, best, front, importances, picture: bool,
+                  format: str = "csv", timings: Timings | None = None) -> list[Path]:
+    """optimize.csv, pareto.csv (several objectives; ``format='parquet'``: ``.parquet``), best.yaml
+    (when a trial is complete), optimize.png; ``timings`` gets their ``write_s`` and ``pictures_s``."""
     from cdpr_design import optimize as opt
 
-    header, table = opt.table(problem, rows)
-    paths = [out.write_csv("optimize.csv", header, table)]
-    if len(problem.objectives) > 1:
-        paths.append(out.write_csv("pareto.csv", *opt.table(problem, front)))
-    if best is not None:
-        paths.append(out.write_text("best.yaml", best_spec_text(design, problem, best)))
+    timings = timings if timings is not None else Timings()
+    keys = list(problem.space.keys)
+    with timings.phase("write_s"):
+        paths = [write_rows(out, "optimize", *opt.table(problem, rows), format, design, keys=keys)]
+        if len(problem.objectives) > 1:
+            paths.append(write_rows(out, "pareto", *opt.table(problem, front), format, design, keys=keys))
+        if best is not None:
+            paths.append(out.write_text("best.yaml", best_spec_text(design, problem, best)))
     if picture and rows:
         paths += save_pictures(out, [("optimize.png", optimize_plots.optimize_figure,
-                                      (_picture_data(design, problem, rows, best, front, importances),))])
+                                      (_picture_data(design, problem, rows, best, front, importances),))],
+                               timings=timings)
     return paths
 
 
@@ -114,16 +121,19 @@ def optimize(design, vary: Sequence[str], maximize: Sequence[str] | None = None,
              safety_factor: float | None = None, motor: str | None = None, step: float | None = None,
              picture: bool = True, out: str | Path | None = None, overwrite: bool = False,
              progress: Progress | None = None, log: Callable[[str], None] | None = None,
-             engine: str = "auto") -> OptimizeRun:
+             engine: str = "auto", format: str = "csv") -> OptimizeRun:
     """The ``optimize`` command: search ``vary`` (KEY=LO:HI[:log] / KEY=a,b,c) for the objectives
     ``maximize`` / ``minimize`` under the spec's requirements and ``require`` (FIGURE>=X / FIGURE<=X),
     ``trials`` trials in ``workers`` processes (``resume`` continues the study in ``out``; ``timeout`` [s]
-    stops starting trials), then write optimize.csv, pareto.csv, best.yaml and optimize.png.
-    ``step`` [m]: grid step of the evaluations; ``log`` receives messages."""
+    stops starting trials), then write optimize.csv, pareto.csv (``format='parquet'``: ``.parquet``),
+    best.yaml and optimize.png.  ``step`` [m]: grid step of the evaluations; ``log`` receives messages.
+    The summary's ``timings``: ``sweep_s`` the search, ``write_s`` the files, ``pictures_s`` optimize.png."""
     from cdpr_design import batch
     from cdpr_design import optimize as opt
     from cdpr_design.model import spec
 
+    timings = Timings()
+    check_format(format)
     if trajectory is not None and require_trajectory(design, trajectory, "--trajectory").type == "csv":
         raise InputError(f"--trajectory {trajectory}: a csv trajectory cannot follow the varied design; "
                          "use a square, polyline or circle path")
@@ -132,17 +142,19 @@ def optimize(design, vary: Sequence[str], maximize: Sequence[str] | None = None,
     problem = opt.make_problem(design, vary, maximize, minimize, require, options)
     workers = _check_options(trials, workers, seed, timeout, step)
     out_dir = output_dir(design, out, overwrite)
-    for name in (*OUTPUTS, opt.DB):
+    for name in (file_name("optimize", format), file_name("pareto", format), *OUTPUTS, opt.DB):
         out_dir.target(name)  # refuse foreign files before any work
     out_dir.wrote(opt.DB)
-    with stage(progress, f"optimize {design.name}") as cb:
-        stats = opt.run(problem, out_dir.path, trials, workers=workers, seed=seed, timeout=timeout,
-                        resume=resume, progress=cb, log=log)
-    study = opt.study.load(out_dir.path)
-    rows = opt.results.trials(opt.finished(study))
-    front = opt.pareto(problem, rows) if len(problem.objectives) > 1 else []
-    best = opt.best(problem, rows)
-    importances = opt.importances(study, problem)
-    write_outputs(out_dir, design, problem, rows, best, front, importances, picture)
+    with timings.phase("sweep_s"):
+        with stage(progress, f"optimize {design.name}") as cb:
+            stats = opt.run(problem, out_dir.path, trials, workers=workers, seed=seed, timeout=timeout,
+                            resume=resume, progress=cb, log=log)
+        study = opt.study.load(out_dir.path)
+        rows = opt.results.trials(opt.finished(study))
+        front = opt.pareto(problem, rows) if len(problem.objectives) > 1 else []
+        best = opt.best(problem, rows)
+        importances = opt.importances(study, problem)
+    write_outputs(out_dir, design, problem, rows, best, front, importances, picture, format, timings)
     summary = _summary(design, problem, stats, rows, best, front, importances, out_dir)
+    summary["timings"] = timings.as_dict()
     return OptimizeRun(summary, problem, stats, rows, best, front, out_dir)

@@ -12,7 +12,7 @@ from cdpr_design.io.files import OutputDir
 from cdpr_design.io.journal import SweepJournal
 from cdpr_design.io.tables import read_csv_table, text_rows
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
-from cdpr_design.jobs.tables import Timings, write_table
+from cdpr_design.jobs.tables import Timings, write_rows
 from cdpr_design.jobs.motion import require_trajectory
 from cdpr_design.plots import sweep as sweep_plots
 
@@ -29,16 +29,11 @@ def write_sweep(out: OutputDir, header: list[str], rows: list[list], best_header
         pending = submit_pictures(out, [("sweep.png", sweep_plots.sweep_figure,
                                          (header, rows, keys, title, None, rank_by))], timings=timings)
     with timings.phase("write_s"):
-        paths = [_write_rows(out, "sweep", header, rows, format, design, keys),
-                 _write_rows(out, "sweep_best", best_header, best_rows, format, design, keys)]
+        paths = [write_rows(out, "sweep", header, rows, format, design, keys=list(keys)),
+                 write_rows(out, "sweep_best", best_header, best_rows, format, design, keys=list(keys))]
     if pending is not None:
         paths += pending.wait()
     return paths
-
-
-def _write_rows(out: OutputDir, stem: str, header: list[str], rows: list[list], format: str, design, keys) -> Path:
-    cols = list(zip(*rows)) if rows else [()] * len(header)
-    return write_table(out, stem, dict(zip(header, cols)), format, design, names=header, keys=list(keys))
 
 
 class SweepRun(NamedTuple):

@@ -75,6 +75,13 @@ def write_table(out, stem: str, columns: dict, format: str = "csv", design=None,
                              metadata=table_metadata(design, stem, names, **meta))
 
 
+def write_rows(out, stem: str, header: list[str], rows: list[list], format: str = "csv", design=None,
+               **meta) -> Path:
+    """:func:`write_table` of a table held as rows (lists of cells in ``header``'s order)."""
+    cols = list(zip(*rows)) if rows else [()] * len(header)
+    return write_table(out, stem, dict(zip(header, cols)), format, design, names=header, **meta)
+
+
 def grid_metadata(grid) -> dict:
     """``lower``, ``upper``, ``step`` [m] and ``shape`` of a workspace grid."""
     return {"lower": list(grid.lower), "upper": list(grid.upper), "step": list(grid.step),
