@@ -126,7 +126,7 @@ def add_pulleys(cables: list, radius, axes) -> list:
     return cables
 
 
-# IPAnema 3 (reference/robots.md, cdpyr sample ipanema_3): outlet, attachment
+# IPAnema 3 (docs/sources.md: cdpyr sample ipanema_3): outlet, attachment
 IPANEMA3 = [
     ((-8.544, 5.463, 3.202), (-0.07, 0.648, -0.26)),
     ((8.184, 5.692, 3.236), (0.06, 0.648, -0.262)),

@@ -213,7 +213,7 @@ IP1 = [((-2, 1.5, 2), (-0.06, 0.06, 0)), ((2, 1.5, 2), (0.06, 0.06, 0)), ((2, -1
 
 
 def ipanema1(shift=(0, 0, 0), diameter=0.01):
-    """IPAnema 1 (reference/robots.md): cables i and i+4 share an attachment point."""
+    """IPAnema 1 (docs/sources.md: the WireX robot file): cables i and i+4 share an attachment point."""
     sh = np.asarray(shift, float)
     return spec.from_dict({
         "name": "ip1", "motion": "3R3T", "gravity": [0, 0, -9.81],

@@ -23,7 +23,7 @@ def planar4(**wsx):
 
 
 def ipanema3(**wsx):
-    """IPAnema 3 (reference/robots.md, cdpyr sample) on a coarse grid."""
+    """IPAnema 3 (docs/sources.md: cdpyr sample) on a coarse grid."""
     return spec.from_dict(ipanema3_data(
         "ip3", cable={"diameter": 0.006},
         workspace={"grid": {"lower": [-7, -4.5, 0], "upper": [7, 4.5, 2.5], "step": [2.0, 1.5, 1.25]},

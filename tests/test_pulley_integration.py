@@ -69,7 +69,7 @@ def planar4(radius=None, axes=None):
 
 
 def ipanema3(radius=None):
-    """IPAnema 3 (reference/robots.md, cdpyr sample); upper cables come up their posts (+z),
+    """IPAnema 3 (docs/sources.md: cdpyr sample); upper cables come up their posts (+z),
     lower cables come down (-z)."""
     return spec.from_dict(ipanema3_data(
         "ip3", radius,

@@ -21,7 +21,7 @@ PLANAR4 = cd.load(DESIGNS / "planar4.yaml")
 
 
 def test_wirex_ipanema1_cable_lengths():
-    """WireX unit test values for IPAnema 1 (config/robots/IPAnema.wcrfx; reference/robots.md)."""
+    """WireX unit test values for IPAnema 1 (config/robots/IPAnema.wcrfx; docs/sources.md)."""
     L = kin.inverse_kinematics(IPANEMA1, [0, 0, 1, 0, 0, 0])
     assert np.allclose(L, 2.6148040079516472, rtol=0, atol=1e-12)
     L = kin.inverse_kinematics(IPANEMA1, [0.1, 0.2, 1, 0, 0, 0])
