@@ -39,7 +39,11 @@ BAD = [
     ("tension", [30.0, 20.0], "tension: expected min <= max"),
     ("effector.mass", -1.0, "effector.mass: expected a value greater than or equal to 0"),
     ("cables.1.name", "c1", "cables[1].name: duplicate cable name 'c1'"),
-    ("cables", [], "cables: expected at least 1 entries"),
+    ("cables", [], "cables: expected at least 1 entry"),
+    ("winch.drum_radius", [], "winch.drum_radius: expected at least 1 entry, got 0"),
+    ("winch.gear_ratio", [], "winch.gear_ratio: expected at least 1 entry, got 0"),
+    ("winch.gear_ratio", 1e-300, "winch.gear_ratio[0]: expected a value in [0.001, 1e+06]"),
+    ("winch.drum_radius", [0.03, 1e-300], "winch.drum_radius[1]: expected a value in [0.0001, 10000] m"),
     ("workspace.grid.step", 0.0, "workspace.grid.step[0]: expected a value greater than 0"),
     ("workspace.grid.step", -0.1, "workspace.grid.step[0]: expected a value greater than 0"),
     ("workspace.grid.step", [0.1, 0.1, 0.1], "workspace.grid.step: expected a scalar or 2 numbers"),
@@ -172,3 +176,14 @@ def test_schema_command():
     assert schema["title"] == "cdpr-design spec"
     assert {"motion", "frame", "effector", "cables"} <= set(schema["properties"])
     assert set(schema["required"]) >= {"name", "motion", "frame", "effector", "cables"}
+
+
+def test_an_underconstrained_effector_without_weight_names_the_keys(tmp_path, planar2_data):
+    """planar2 hangs from two cables: with no mass its hanging pose does not exist, and the
+    message names the spec's keys (not the command's options)."""
+    planar2_data["effector"]["mass"] = 0.0
+    p = write_spec(tmp_path, planar2_data)
+    for args in (("pose", p, "--at", "0.75,0.75"), ("fk", p, "--lengths", "1,1")):
+        r = invoke(*args)
+        assert r.exit_code == 2 and "Traceback" not in r.output, r.output
+        assert "effector.mass, gravity:" in r.output and "--lengths" not in r.output, r.output

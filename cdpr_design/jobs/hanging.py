@@ -68,6 +68,7 @@ def fk_data(design, lengths, guess=None) -> dict:
     options = {}
     if guess is not None and design.motion.rotational:
         options["nominal"] = kin.pose_rotation(design, guess)
+    H.check_weight(design.effector.mass, design.gravity)  # the spec's fault, not the lengths'
     try:
         e = H.equilibrium(design, rho, **options)
     except InputError as exc:  # unreachable, too short or miscounted lengths

@@ -86,9 +86,11 @@ BOUNDS: dict[str, tuple[float, float, str]] = {
     "tension": (0.0, FORCE, "N"), "cables.tension": (0.0, FORCE, "N"),
     "cables.outlet": (-LENGTH, LENGTH, "m"), "cables.attachment": (-LENGTH, LENGTH, "m"),
     "cables.pulley.radius": (0.0, LENGTH, "m"), "cables.pulley.axis": (-ANY, ANY, "(a direction)"),
-    "winch.drum_radius": (0.0, LENGTH, "m"), "cables.winch.drum_radius": (0.0, LENGTH, "m"),
-    "winch.gear_ratio": (0.0, 1e6, "(motor turns per drum turn)"),
-    "cables.winch.gear_ratio": (0.0, 1e6, "(motor turns per drum turn)"),
+    # a drum of 0.1 mm and a gear ratio of 1/1000: far beyond any winch, yet the sizing's
+    # speeds (v / r i) and reflected inertias (J i^2) stay finite
+    "winch.drum_radius": (1e-4, LENGTH, "m"), "cables.winch.drum_radius": (1e-4, LENGTH, "m"),
+    "winch.gear_ratio": (1e-3, 1e6, "(motor turns per drum turn)"),
+    "cables.winch.gear_ratio": (1e-3, 1e6, "(motor turns per drum turn)"),
     "cable.diameter": (0.0, LENGTH, "m"), "cables.diameter": (0.0, LENGTH, "m"),
     "cable.axial_stiffness": (0.0, ANY, "N"), "cables.axial_stiffness": (0.0, ANY, "N"),
     "cable.mass_per_length": (0.0, 1e4, "kg/m"), "cables.mass_per_length": (0.0, 1e4, "kg/m"),

@@ -29,7 +29,7 @@ def _as_list(v):
 Vec = list[FiniteFloat]
 PosFloat = Annotated[FiniteFloat, Field(gt=0)]
 NonNegFloat = Annotated[FiniteFloat, Field(ge=0)]
-ScalarOrList = Annotated[list[PosFloat], BeforeValidator(_as_list)]
+ScalarOrList = Annotated[list[PosFloat], BeforeValidator(_as_list), Field(min_length=1)]
 #: A design, cable or trajectory name (model.limits.NAME_PATTERN: never ".", ".." or a path)
 Name = Annotated[str, StringConstraints(min_length=1, max_length=MAX_NAME_LENGTH, pattern=NAME_PATTERN)]
 
@@ -261,7 +261,8 @@ def _message(e: dict) -> str:
     if kind == "model_type" or kind == "dict_type":
         return f"expected a mapping of keys, got {quote(got)}"
     if kind == "too_short":
-        return f"expected at least {e.get('ctx', {}).get('min_length', 1)} entries, got {_count(got)}"
+        least = e.get("ctx", {}).get("min_length", 1)
+        return f"expected at least {least} {'entry' if least == 1 else 'entries'}, got {_count(got)}"
     if kind in ("string_pattern_mismatch", "string_too_long"):
         return (f"expected a name of 1 to {MAX_NAME_LENGTH} letters, digits and _ . + - not starting "
                 f"with a dot, got {quote(got)}")

@@ -69,6 +69,16 @@ from cdpr_design.statics.hanging_results import (  # noqa: F401 - re-exported
 # classification
 # ----------------------------------------------------------------------------
 
+def check_weight(mass: float, g) -> None:
+    """An :class:`InputError` naming ``effector.mass`` and ``gravity`` unless the effector has a weight:
+    an under-constrained effector hangs from its cables under it (mass [kg] > 0, |g| [m/s^2] > 0)."""
+    gn = float(np.linalg.norm(np.asarray(g, float)))
+    if not (mass > 0 and gn > 0):
+        raise InputError(f"effector.mass, gravity: an under-constrained effector hangs from its cables under its "
+                         f"weight, so it needs effector.mass > 0 and a non-zero gravity (got {mass:g} kg and "
+                         f"|gravity| = {gn:g} m/s^2)")
+
+
 def _prepare(A, B, c, mass, g, planar):
     A = np.atleast_2d(np.asarray(A, float))
     B = np.atleast_2d(np.asarray(B, float))
@@ -78,8 +88,7 @@ def _prepare(A, B, c, mass, g, planar):
     g = np.concatenate([np.asarray(g, float).ravel(), np.zeros(3)])[:3]
     if A.shape != B.shape or A.shape[0] < 1:
         raise InputError(f"outlets {A.shape} and attachments {B.shape} must both be (m, 3)")
-    if not (mass > 0 and np.linalg.norm(g) > 0):
-        raise InputError("the effector needs a positive mass and a non-zero gravity")
+    check_weight(mass, g)
     if planar and (np.any(A[:, 2] != 0) or np.any(B[:, 2] != 0) or c[2] != 0 or g[2] != 0):
         raise InputError("a planar design lives in the z = 0 plane")
     return hc.Geometry(A, B, c, mass, g)
