@@ -79,6 +79,8 @@ def test_pose_json_keys():
 @pytest.mark.parametrize("args,message", [
     (["pose", str(PLANAR2), "--at", "0.75"], "--at: expected 2 numbers (x,y) for motion 2T, got 1"),
     (["pose", str(PLANAR2), "--at", "a,b"], "--at: expected comma-separated numbers"),
+    (["pose", str(PLANAR2), "--at", "0.75,,0.75"], "--at: expected comma-separated numbers, got an empty field"),
+    (["fk", str(PLANAR2), "--lengths", "1,1,"], "--lengths: expected comma-separated numbers, got an empty field"),
     (["pose", str(PLANAR2), "--at", "nan,1"], "--at: expected finite numbers"),
     (["fk", str(PLANAR2), "--lengths", "1,2,3"], "--lengths: expected 2 cable lengths"),
     (["fk", str(PLANAR2), "--lengths", "-1,2"], "--lengths: cable lengths must be non-negative"),

@@ -132,9 +132,12 @@ def load_design(path: Path, cable_model: CableModel | None = None):
 def parse_numbers(text: str, option: str, count: int | None = None, what: str = "numbers",
                   limit: float = 1e12) -> list[float]:
     """Comma-separated numbers of an option (``--at 0.75,0.75``), each finite and of magnitude at most
-    ``limit``; bad text is exit 2."""
+    ``limit``; bad text (an empty field too: ``0.75,,0.75`` is a typo, not two numbers) is exit 2."""
+    fields = text.replace(" ", "").split(",")
+    if "" in fields:
+        raise InputError(f"{option}: expected comma-separated numbers, got an empty field in {quote(text)}")
     try:
-        vals = [float(v) for v in text.replace(" ", "").split(",") if v != ""]
+        vals = [float(v) for v in fields]
     except ValueError:
         raise InputError(f"{option}: expected comma-separated numbers, got {quote(text)}") from None
     if not all(math.isfinite(v) and abs(v) <= limit for v in vals):
