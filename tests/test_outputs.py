@@ -10,6 +10,7 @@ import json
 import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,7 +22,7 @@ from cdpr_design.io.csvtext import csv_rows
 from cdpr_design.io.files import OutputDir
 from cdpr_design.io.tables import fmt
 
-from .helpers import DESIGNS, ROOT, invoke, subprocess_env
+from .helpers import DESIGNS, PLANAR2, ROOT, invoke, subprocess_env
 
 #: The previous writer's files (generated with 7c8ae5c).  ipanema1-ws and ipanema2-ws were generated
 #: again when the closed-form tension QP (project_two) replaced the active-set method for two redundant
@@ -311,3 +312,29 @@ def test_summaries_carry_timings(tmp_path, no_pictures):
         t = s["timings"]
         assert set(t) == {"load_s", "sweep_s", "write_s", "pictures_s", "total_s"}
         assert all(v >= 0 for v in t.values()) and t["total_s"] >= t["sweep_s"]
+
+
+#: Commands whose JSON summary is written last: their arguments and that file's name.
+LAST_JSON = {"workspace": (["--step", "0.25"], "summary.json"), "report": (["--step", "0.25"], "report.json"),
+             "trajectory": (["square_fast"], "trajectory.json"), "simulate": (["square_fast"], "simulation.json")}
+
+
+@pytest.mark.parametrize("command", sorted(LAST_JSON))
+def test_a_foreign_json_summary_is_refused_before_anything_is_written(tmp_path, command):
+    args, name = LAST_JSON[command]
+    (tmp_path / name).write_text("mine\n")
+    r = invoke(command, PLANAR2, *args, "--out", tmp_path, "--quiet")
+    assert r.exit_code == 2 and f"{tmp_path / name} exists and was not written" in r.output, r.output
+    assert [p.name for p in tmp_path.iterdir()] == [name]  # was: the table, the PNGs and the manifest
+    assert (tmp_path / name).read_text() == "mine\n"
+
+
+@pytest.mark.parametrize("name", ["summary.json", "workspace.csv", "workspace.png"])
+def test_a_folder_where_an_output_goes_is_refused_even_with_overwrite(tmp_path, name):
+    out = tmp_path / "out"
+    (out / name).mkdir(parents=True)
+    (out / name / "notes.txt").write_text("mine\n")
+    r = invoke("workspace", PLANAR2, "--step", "0.25", "--out", out, "--overwrite", "--quiet")
+    assert r.exit_code == 2 and f"{out / name} is a folder" in r.output, r.output  # was: IsADirectoryError
+    assert sorted(p.relative_to(out) for p in out.rglob("*")) == [Path(name), Path(name) / "notes.txt"]
+    assert (out / name / "notes.txt").read_text() == "mine\n"

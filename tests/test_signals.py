@@ -67,28 +67,50 @@ def test_a_run_in_the_same_out_removes_what_a_killed_run_left(tmp_path):
     proc.communicate(timeout=60)
     left = temps(out)
     assert left, "SIGKILL left no temporary file to clean"
-    foreign = out / ".notes.tmp"  # not ours (no writer's pid in the name): kept
-    foreign.write_text("mine")
+    foreign = [out / ".notes.tmp", out / f".thesis.{proc.pid}.v2.tmp"]  # not ours (no marker), even with a dead pid
+    for p in foreign:
+        p.write_text("mine")
     done = subprocess.run([sys.executable, "-m", "cdpr_design", "workspace", PLANAR2, "--step", "0.05", "--out",
                            out, "--quiet"], capture_output=True, text=True, timeout=120,
                           env=subprocess_env(CDPR_DESIGN_PICTURE_WORKER="0"))
     assert done.returncode == 0, done.stderr
-    assert temps(out) == [foreign] and (out / "workspace.csv").is_file()
+    assert temps(out) == sorted(foreign) and (out / "workspace.csv").is_file()
+
+
+def dead_pid() -> str:
+    """The id of a process that has ended."""
+    return subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True).stdout.strip()
 
 
 def test_stale_temporary_files_of_live_processes_are_kept(tmp_path):
     from cdpr_design.io.files import OutputDir
     from cdpr_design.io.preflight import remove_stale
 
-    gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
-                          text=True).stdout.strip()
-    dead = tmp_path / f".workspace.csv.{gone}.abcd1234.tmp"
-    live = tmp_path / f".workspace.csv.{os.getppid()}.efgh5678.tmp"  # our parent runs
+    gone = dead_pid()
+    dead = tmp_path / f".workspace.csv.cdpr-design-tmp.{gone}.abcd1234.tmp"
+    live = tmp_path / f".workspace.csv.cdpr-design-tmp.{os.getppid()}.efgh5678.tmp"  # our parent runs
     for p in (dead, live):
         p.write_text("partial")
     OutputDir(tmp_path).write_text("x.txt", "x")  # the first write cleans
     assert not dead.exists() and live.exists()
     assert remove_stale(tmp_path) == []
+
+
+def test_hidden_files_of_the_user_with_a_number_in_the_name_are_kept(tmp_path):
+    """Only names with cdpr-design's marker are leftovers: a user's ``.thesis.<n>.v2.tmp`` is not,
+    whether or not a process ``n`` runs (such files were deleted)."""
+    from cdpr_design.io.files import OutputDir
+    from cdpr_design.io.preflight import remove_stale
+
+    gone = dead_pid()
+    mine = [tmp_path / f".thesis.{gone}.v2.tmp", tmp_path / f".editor-swap.{gone}.x.tmp",
+            tmp_path / f".workspace.csv.{gone}.abcd1234.tmp"]
+    for p in mine:
+        p.write_text("precious")
+    OutputDir(tmp_path).write_text("x.txt", "x")  # the first write cleans
+    assert remove_stale(tmp_path) == []
+    assert [p.read_text() for p in mine] == ["precious"] * 3
 
 
 def test_sigterm_during_a_sweep_keeps_the_journal_and_resume_is_identical(tmp_path):

@@ -62,8 +62,11 @@ class OutputDir:
         return self.path
 
     def target(self, name: str) -> Path:
-        """The path for output ``name``, after checking it may be (over)written."""
+        """The path for output ``name``, after checking it may be (over)written: a folder of
+        that name is refused even with ``overwrite`` (that replaces files, never a folder)."""
         p = self.path / name
+        if p.is_dir():
+            raise InputError(f"--out: {p} is a folder, not a file cdpr-design can replace; move it away")
         if p.exists() and name not in self._ours and not self.overwrite:
             raise InputError(
                 f"{p} exists and was not written by cdpr-design; move it away or pass --overwrite")
@@ -142,7 +145,7 @@ class AtomicFile:
         self.path = Path(path)
         self.on_commit = on_commit
         self.keep_partial = keep_partial
-        # the writer's pid in the name: a later run removes what a killed one left (io.preflight)
+        # a marked name with the writer's pid: a later run removes what a killed one left (io.preflight)
         fd, tmp = tempfile.mkstemp(prefix=temp_prefix(self.path.name), suffix=".tmp", dir=self.path.parent)
         self.tmp = Path(tmp)
         os.chmod(self.tmp, 0o666 & ~_umask())

@@ -5,10 +5,12 @@ and is writable, or it can be created (its nearest existing ancestor is a
 writable folder, not a file).  Nothing is created by the check, so a command
 that then refuses its input leaves no trace.
 
-Temporary files carry the id of the process writing them
-(:func:`temp_prefix`); :func:`remove_stale` deletes those whose process is
-gone, which is what a run killed by SIGKILL (or a power cut) leaves behind.
-The temporary files of a run still going in the same folder are left alone.
+Temporary files carry a marker of their own (``cdpr-design-tmp``) and the id
+of the process writing them (:func:`temp_prefix`); :func:`remove_stale`
+deletes those whose process is gone, which is what a run killed by SIGKILL
+(or a power cut) leaves behind.  Nothing without the marker is touched (a
+hidden file of the user's whose name happens to hold a number is not a
+leftover), nor the temporary files of a run still going in the same folder.
 """
 
 from __future__ import annotations
@@ -19,13 +21,15 @@ from pathlib import Path
 
 from cdpr_design.errors import InputError
 
-#: ``.<name>.<pid>.<random>.tmp``: the temporary files of :class:`cdpr_design.io.files.AtomicFile`.
-_TEMP = re.compile(r"^\..+\.(\d+)\.[A-Za-z0-9_]+\.tmp$")
+#: What only cdpr-design's temporary files carry in their names.
+TEMP_MARKER = "cdpr-design-tmp"
+#: ``.<name>.cdpr-design-tmp.<pid>.<random>.tmp``: the temporary files of :class:`cdpr_design.io.files.AtomicFile`.
+_TEMP = re.compile(rf"^\..+\.{re.escape(TEMP_MARKER)}\.(\d+)\.[A-Za-z0-9_]+\.tmp$")
 
 
 def temp_prefix(name: str) -> str:
     """The prefix of this process's temporary files for output ``name``."""
-    return f".{name}.{os.getpid()}."
+    return f".{name}.{TEMP_MARKER}.{os.getpid()}."
 
 
 def check_folder(path: str | Path, option: str = "--out") -> None:
@@ -67,7 +71,8 @@ def _alive(pid: int) -> bool:
 
 
 def remove_stale(folder: str | Path) -> list[Path]:
-    """Delete the temporary files in ``folder`` whose writing process no longer runs; the paths removed."""
+    """Delete cdpr-design's temporary files in ``folder`` (the marked names of :func:`temp_prefix`)
+    whose writing process no longer runs; the paths removed."""
     removed = []
     try:
         entries = list(os.scandir(folder))

@@ -131,7 +131,8 @@ def trajectory(design, name: str, cycle_time: float | None = None, out: str | Pa
     with timings.phase("sweep_s"):
         samples = sample_named(design, name, cycle_time)
     out_dir = output_dir(design, out, overwrite)
-    out_dir.target(file_name("trajectory", format))
+    for f in (file_name("trajectory", format), "trajectory.json", "trajectory.png", "trajectory_axes.png"):
+        out_dir.target(f)  # a foreign file (or a folder) of that name: refused before any work
     with timings.phase("pictures_s"):
         pmap = path_map(design, engine)
     pending = submit_pictures(out_dir, [
@@ -192,7 +193,8 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
     if samples.cycle_time < timestep:
         raise InputError(f"--timestep: {timestep} s is longer than the cycle time {samples.cycle_time} s")
     out_dir = output_dir(design, out, overwrite)
-    out_dir.target(file_name("simulation", format))
+    for f in (file_name("simulation", format), "simulation.json", "simulation.png"):
+        out_dir.target(f)  # a foreign file (or a folder) of that name: refused before the simulation
     with stage(progress, f"simulate {name}") as cb, timings.phase("sweep_s"):
         try:
             result = sim.simulate(design, samples, feedforward=feedforward, compensate_stretch=compensate_stretch,

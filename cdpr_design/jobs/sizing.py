@@ -124,9 +124,8 @@ def report(design, catalogue: Path | None = None, trajectory: str | None = None,
     if step is not None:
         check_step(step, "--step")
     out_dir = output_dir(design, out, overwrite)
-    for stem in ("motor_sizing", "design_report"):
-        out_dir.target(file_name(stem, format))
-    out_dir.target("report.html")
+    for name in (file_name("motor_sizing", format), file_name("design_report", format), "report.html", "report.json"):
+        out_dir.target(name)
     wres, drawing = start_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
                                     progress=progress, format=format, timings=timings)
     with timings.phase("sweep_s"):  # while the workspace pictures are drawn

@@ -86,8 +86,8 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
     names = ws.column_names(design) + ws.extra_columns(design, collisions, orientations)
     meta = table_metadata(design, "workspace", names, kind=kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])
-    for name in ["workspace.png", "tension_map.png"] + (["orientation_workspace.png"] if orientations else []) \
-            + (["report.html"] if html else []):
+    for name in ["workspace.png", "tension_map.png", "summary.json"] \
+            + (["orientation_workspace.png"] if orientations else []) + (["report.html"] if html else []):
         out.target(name)  # a foreign file of that name: refused before any work
     writer = out.table("workspace", format, metadata=meta, names=names, background=True)
     try:
