@@ -514,3 +514,192 @@ def test_guided_chunks_cover_every_variant_once(n, size, workers, minimum):
     sizes = [len(p) for p in parts[:-1]]
     assert sizes == sorted(sizes, reverse=True)  # shrinking towards the end
     assert all(len(p) >= min(minimum, size) for p in parts[:-1])
+
+
+# ----------------------------------------------------------------------------
+# Failed variants, damaged journals and baselines, refused runs
+# ----------------------------------------------------------------------------
+
+SMALL = ["sweep", PLANAR2, "--vary", "effector.mass=0.8,1.2", "--step", "0.1", "--workers", "1", "--quiet"]
+
+
+def _refused(r, *needles):
+    """A clean refusal: exit 2, one short message naming each needle, no traceback."""
+    assert r.exit_code == 2, r.output
+    assert "Traceback" not in r.output and not isinstance(r.exception, (ZeroDivisionError, TypeError,
+                                                                        KeyError, AttributeError)), r.output
+    for n in needles:
+        assert str(n) in r.output, (n, r.output)
+
+
+@pytest.mark.parametrize("vary", [["winch.motor=NOPE"], ["winch.motor=NOPE,NOPE2", "effector.mass=1,2"],
+                                  ["winch.motor=NOPE", "effector.mass=1,2", "tension.1=15,20"]])
+def test_every_variant_failed_still_draws_the_picture(tmp_path, vary):
+    args = [a for v in vary for a in ("--vary", v)]
+    r = invoke("sweep", PLANAR2, *args, "--step", "0.5", "--workers", "1", "--out", tmp_path, "--json")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout)
+    assert s["errors"] == s["variants"] and s["passed"] == 0
+    header, rows = read_csv(tmp_path / "sweep.csv")
+    assert all("NOPE" in row[header.index("error")] for row in rows)
+    assert (tmp_path / "sweep.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_unknown_motor_option_is_refused_before_any_work(tmp_path):
+    r = invoke("sweep", PLANAR2, "--vary", "effector.mass=1", "--motor", "NOPE", "--step", "0.5",
+               "--workers", "1", "--out", tmp_path / "o")
+    _refused(r, "--motor", "NOPE", "not in the motor catalogue")
+    assert not (tmp_path / "o").exists()
+    long_name = "M" * 5000
+    r = invoke("sweep", PLANAR2, "--vary", "effector.mass=1", "--motor", long_name, "--out", tmp_path / "o")
+    _refused(r, "--motor")
+    assert len(r.output) < 600 and not (tmp_path / "o").exists()
+
+
+@pytest.fixture(scope="module")
+def finished_sweep(tmp_path_factory):
+    """A finished two-variant sweep's folder (sweep.csv and its journal)."""
+    out = tmp_path_factory.mktemp("finished")
+    r = invoke(*SMALL, "--no-picture", "--out", out)
+    assert r.exit_code == 0, r.output
+    return out
+
+
+@pytest.mark.parametrize("damage", [
+    lambda lines: lines + ['{"variant": "x", "values": [1.2], "figures": {}, "error": ""}'],
+    lambda lines: lines + ['{"variant": 1.5, "values": [1.2], "figures": {}, "error": ""}'],
+    lambda lines: lines + ['{"variant": true, "values": [1.2], "figures": {}, "error": ""}'],
+    lambda lines: lines + ['{"variant": 7, "values": [1.2], "figures": {}, "error": ""}'],
+    lambda lines: lines[:2] + [lines[2].replace('"values": [1.2]', '"values": [3.5]')] + lines[3:],
+    lambda lines: lines[:2] + [lines[2].replace('"values": [1.2]', '"values": 1.2')] + lines[3:],
+    lambda lines: [lines[0], json.dumps({**json.loads(lines[1]), "figures": 5})] + lines[2:],
+    lambda lines: [lines[0], json.dumps({**json.loads(lines[1]), "figures": {"fraction": [1, 2]}})] + lines[2:],
+    lambda lines: [lines[0], json.dumps({**json.loads(lines[1]), "error": 3})] + lines[2:],
+    lambda lines: [lines[0], json.dumps({k: v for k, v in json.loads(lines[1]).items() if k != "figures"})]
+    + lines[2:],
+])
+def test_resume_refuses_a_damaged_journal(tmp_path, finished_sweep, damage):
+    out = tmp_path / "o"
+    shutil.copytree(finished_sweep, out)
+    journal = out / "sweep.journal.jsonl"
+    lines = damage(journal.read_text().splitlines())
+    bad_line = next(k + 1 for k, line in enumerate(lines) if line not in journal.read_text().splitlines())
+    journal.write_text("\n".join(lines) + "\n")
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    r = invoke(*SMALL, "--no-picture", "--out", out, "--resume")
+    _refused(r, "--resume", "sweep.journal.jsonl", f"line {bad_line}")
+    assert len(r.output) < 600
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # nothing rewritten
+
+
+def _baseline(tmp_path, base, edit, name="edited.csv"):
+    header, rows = read_csv(base)
+    header, rows = edit(header, [list(r) for r in rows])
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerows([header] + rows)
+    p = tmp_path / name
+    p.write_text(buf.getvalue())
+    return p
+
+
+def _set(col, value, row=1):
+    def edit(header, rows):
+        rows[row][header.index(col)] = value
+        return header, rows
+    return edit
+
+
+@pytest.mark.parametrize("edit,needles", [
+    (lambda h, rows: (["index"] + h[1:], rows), ["'variant' column"]),
+    (lambda h, rows: (h, []), ["no variant rows"]),
+    (_set("fraction", "abc"), ["row 2", "variant 1", "fraction", "'abc'"]),
+    (_set("fraction", "nan"), ["row 2", "variant 1", "fraction", "'nan'"]),
+    (_set("peak_tension", "inf", row=0), ["row 1", "variant 0", "peak_tension", "'inf'"]),
+    (_set("poses", "-inf", row=0), ["row 1", "variant 0", "poses", "'-inf'"]),
+    (lambda h, rows: (h, [rows[0], list(rows[0])]), ["variant 0", "rows 1 and 2"]),  # and variant 1 missing
+    (_set("variant", "x"), ["row 2", "'x'"]),
+    (_set("variant", "9"), ["row 2", "variant 9", "another sweep"]),
+    (_set("effector.mass", "5"), ["row 2", "variant 1", "effector.mass", "another sweep"]),
+    (lambda h, rows: (h, rows[:1]), ["no row for variant 1"]),
+    (lambda h, rows: (h, [rows[0], rows[1][:-1]]), ["row 2", "cells"]),
+    (lambda h, rows: (h + ["fraction"], [r + [r[h.index("fraction")]] for r in rows]), ["'fraction'", "twice"]),
+])
+def test_broken_baseline_is_refused_before_any_work(tmp_path, finished_sweep, edit, needles):
+    base = _baseline(tmp_path, finished_sweep / "sweep.csv", edit)
+    r = invoke(*SMALL, "--out", tmp_path / "o", "--check-against", base)
+    _refused(r, "--check-against", base, *needles)
+    assert not (tmp_path / "o").exists()
+
+
+def test_legitimate_baselines_still_pass(tmp_path, finished_sweep):
+    """Empty cells where the sweep leaves the figure empty too are no damage."""
+    header, rows = read_csv(finished_sweep / "sweep.csv")
+    empty = [c for c in header if all(r[header.index(c)] == "" for r in rows)]
+    assert "error" in empty and len(empty) > 1  # the sweep itself leaves figures empty
+    r = invoke(*SMALL, "--no-picture", "--out", tmp_path / "o", "--check-against", finished_sweep / "sweep.csv",
+               "--json")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["regressions"] == [] == json.loads(r.stdout)["improvements"]
+
+
+def _interrupted(tmp_path, finished_sweep):
+    """A folder holding an interrupted sweep: its journal with one of two variants done."""
+    out = tmp_path / "o"
+    shutil.copytree(finished_sweep, out)
+    journal = out / "sweep.journal.jsonl"
+    journal.write_text("\n".join(journal.read_text().splitlines()[:2]) + "\n")
+    (out / "sweep.csv").unlink()
+    return out, journal.read_bytes()
+
+
+@pytest.mark.parametrize("bad", [
+    ["--scheduler", "garbage"], ["--scheduler", "tcp://"], ["--scheduler", "tcp://host:port"],
+    ["--scheduler", "nonsense://host:8786"], ["--scheduler", "tcp://:8786"], ["--scheduler", "tcp://host:99999"],
+    ["--rank-by", "nonsense"], ["--check-against", "missing.csv"], ["--motor", "NOPE"],
+])
+def test_refused_run_leaves_the_folder_as_it_was(tmp_path, finished_sweep, bad):
+    out, journal = _interrupted(tmp_path, finished_sweep)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    r = invoke(*SMALL, "--no-picture", "--out", out, *bad)
+    _refused(r, bad[0])
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # the journal is not truncated
+    r = invoke(*SMALL, "--no-picture", "--out", tmp_path / "fresh", *bad)
+    _refused(r, bad[0])
+    assert not (tmp_path / "fresh").exists()
+
+
+def test_backend_refusing_to_start_keeps_the_journal(tmp_path, finished_sweep, monkeypatch):
+    """A run refused while its backend starts (an unreachable scheduler) has not touched the journal."""
+    out, journal = _interrupted(tmp_path, finished_sweep)
+
+    def unreachable(*args, **kwargs):
+        raise InputError("--scheduler: cannot connect to tcp://127.0.0.1:1: timed out")
+
+    monkeypatch.setattr(sw, "run", unreachable)
+    for resume in ([], ["--resume"]):
+        r = invoke(*SMALL, "--no-picture", "--out", out, *resume)
+        _refused(r, "cannot connect")
+        assert (out / "sweep.journal.jsonl").read_bytes() == journal
+    r = invoke(*SMALL, "--no-picture", "--out", tmp_path / "fresh")
+    _refused(r, "cannot connect")
+    assert not (tmp_path / "fresh").exists()
+
+
+def test_long_values_are_shortened_in_messages(tmp_path):
+    long = "x" * 5000
+    for extra, needle in (
+            (["--vary", f"effector.mass={long}"], "variant 0 (effector.mass=xxx"),
+            (["--vary", f"{long}=1"], "unknown key"),
+            (["--vary", f"effector.mass=1,{long},{long}2"], "variant 1 (effector.mass=xxx"),
+            (["--vary", f"cables.{long}.outlet.0=1"], "--vary cables.xxx"),
+            (["--vary", f"effector.mass.{long}=1"], "--vary effector.mass.xxx"),
+            (["--vary", f"effector.mass={'1' * 5000}"], "--vary effector.mass"),
+            (["--vary", f"effector.mass=1:2:{'1' * 5000}"], "--vary effector.mass"),
+            (["--vary", f"{long}=1", "--vary", f"{long}=2"], "the same key"),
+            (["--vary", f"effector.{long}=1", "--vary", "effector.mass=1"], "unknown key"),
+            (["--vary", "effector.mass=1", "--rank-by", long], "--rank-by"),
+            (["--vary", "effector.mass=1", "--rank-by", f"fraction:{long}"], "--rank-by")):
+        r = invoke("sweep", PLANAR2, *extra, "--out", tmp_path / "o", "--quiet")
+        _refused(r, needle)
+        assert len(r.output) < 600, (extra[-1][:40], len(r.output), r.output[:300])
+    assert not (tmp_path / "o").exists()

@@ -15,15 +15,17 @@ Nothing here touches files: the command line journals the rows and writes
 the tables (:mod:`cdpr_design.jobs.sweep`).
 """
 
+from cdpr_design.batch.dask import check_scheduler
 from cdpr_design.batch.local import (JOURNAL_VERSION, Options, RunStats, chunk_size, chunks, default_workers,
                                      guided_chunks, record, wait_closed)
 from cdpr_design.batch.sweep import run
-from cdpr_design.batch.table import (HEADLINE, HIGHER_IS_BETTER, KNOWN_FIGURES, LOWER_IS_BETTER, Difference, best,
-                                     compare, parse_rank, table)
+from cdpr_design.batch.table import (HEADLINE, HIGHER_IS_BETTER, KNOWN_FIGURES, LOWER_IS_BETTER, NUMERIC_FIGURES,
+                                     Difference, best, check_baseline, compare, parse_rank, table)
 from cdpr_design.batch.variants import (HARD_MAX_VARIANTS, MAX_VARIANTS, Axis, Plan, make_plan, parse_path,
                                         parse_values, parse_vary, resolve, vary_from_spec, with_value)
 
-__all__ = ["HARD_MAX_VARIANTS", "MAX_VARIANTS", "HEADLINE", "HIGHER_IS_BETTER", "JOURNAL_VERSION", "KNOWN_FIGURES", "LOWER_IS_BETTER", "Axis",
-           "Difference", "Options", "Plan", "RunStats", "best", "chunk_size", "chunks", "compare",
+__all__ = ["HARD_MAX_VARIANTS", "MAX_VARIANTS", "HEADLINE", "HIGHER_IS_BETTER", "JOURNAL_VERSION", "KNOWN_FIGURES",
+           "LOWER_IS_BETTER", "NUMERIC_FIGURES", "Axis", "Difference", "Options", "Plan", "RunStats", "best",
+           "check_baseline", "check_scheduler", "chunk_size", "chunks", "compare",
            "default_workers", "guided_chunks", "make_plan", "parse_path", "parse_rank", "parse_values",
            "parse_vary", "record", "resolve", "run", "table", "vary_from_spec", "wait_closed", "with_value"]

@@ -8,7 +8,8 @@ import threading
 
 from cdpr_design.batch.local import Job, RunStats, chunk_size, chunks, closing, evaluate_chunk, guided_chunks, \
     prepare_process
-from cdpr_design.errors import InputError
+from cdpr_design.batch.variants import short
+from cdpr_design.errors import InputError, quote
 
 
 #: Settings of the LocalCluster: the nannies hand dask's configuration to
@@ -34,6 +35,32 @@ LOCAL_WORKER_ENV = {"NUMBA_NUM_THREADS": "1"}
 
 #: A job pickling to fewer bytes goes with every Dask task instead of being scattered.
 INLINE_JOB_BYTES = 1_000_000
+
+
+#: Schemes of Dask addresses that name a host and a TCP port (``tcp://host:8786``).
+HOST_PORT_SCHEMES = ("tcp", "tls", "ws", "wss")
+
+
+def check_scheduler(address: str) -> None:
+    """Refuse a ``--scheduler`` value that is neither ``local`` nor a Dask address with a known
+    scheme (``tcp://host:port``, a port 1-65535), before any work; whether a scheduler
+    answers there is found when the sweep connects."""
+    try:
+        from distributed.comm import get_address_host_port, parse_address, registry
+    except ImportError as exc:  # pragma: no cover - a dependency
+        raise InputError(f"--scheduler: dask.distributed is not installed ({exc})") from None
+    if address == "local":
+        return
+    expected = f"--scheduler {quote(address)}: expected 'local' or a Dask scheduler address such as tcp://host:8786"
+    try:
+        scheme, _ = parse_address(address)
+        registry.get_backend(scheme)
+        if scheme in HOST_PORT_SCHEMES:
+            host, port = get_address_host_port(address)
+            if not host or not 0 < port < 65536:
+                raise ValueError("no host, or a port outside 1-65535")
+    except ValueError as exc:
+        raise InputError(f"{expected} ({short(exc)})") from None
 
 
 def start_local_cluster(LocalCluster, workers: int):

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
-from typing import Iterable, Sequence
+from typing import Callable, Collection, Iterable, Sequence
 
-from cdpr_design.batch.variants import Plan
-from cdpr_design.errors import InputError
+from cdpr_design.batch.variants import Plan, short
+from cdpr_design.errors import InputError, quote
+from cdpr_design.io.tables import text_rows
 
 
 #: Figures where a larger value is better (ranking, regression checks).
@@ -31,6 +33,14 @@ LOWER_IS_BETTER = frozenset({
 KNOWN_FIGURES = HIGHER_IS_BETTER | LOWER_IS_BETTER | frozenset({
     "name", "motion", "cables", "kind", "poses", "task_poses", "sizing_poses", "motor",
     "tension_max", "drum_radius", "gear_ratio", "safety_factor", "duty_cycle",
+    "req_min_margin", "req_min_fraction",
+})
+
+
+#: Figures that are numbers (a ``sweep.csv`` cell of theirs is a finite number or empty) besides
+#: those with a direction; ``drum_radius`` and ``gear_ratio`` are text (``0.03;0.036``).
+NUMERIC_FIGURES = HIGHER_IS_BETTER | LOWER_IS_BETTER | frozenset({
+    "cables", "poses", "task_poses", "sizing_poses", "tension_max", "safety_factor",
     "req_min_margin", "req_min_fraction",
 })
 
@@ -75,10 +85,10 @@ def parse_rank(text: str | None) -> tuple[str, bool]:
     name, _, direction = text.partition(":")
     name = name.strip()
     if direction not in ("", "asc", "desc"):
-        raise InputError(f"--rank-by {text!r}: expected FIGURE, FIGURE:asc or FIGURE:desc")
+        raise InputError(f"--rank-by {quote(text)}: expected FIGURE, FIGURE:asc or FIGURE:desc")
     if not (name in KNOWN_FIGURES or name.startswith(("peak_tension_", "motor_"))):
         known = ", ".join(sorted(HIGHER_IS_BETTER | LOWER_IS_BETTER))
-        raise InputError(f"--rank-by {name!r}: not a figure of design_report.csv (numbers: {known})")
+        raise InputError(f"--rank-by {quote(name)}: not a figure of design_report.csv (numbers: {known})")
     if direction:
         return name, direction == "desc"
     return name, not (name in LOWER_IS_BETTER or name.startswith("peak_tension_"))
@@ -141,9 +151,108 @@ def _direction(column: str) -> int:
     return 0
 
 
+def check_baseline(base_header: list[str], base_rows: list[list[str]], plan: Plan,
+                   source: str = "the baseline") -> None:
+    """Refuse a baseline ``sweep.csv`` (cells as CSV text) that cannot be compared with a sweep of
+    ``plan``, before any variant is evaluated: what :func:`compare` refuses, checked against the
+    plan's variants and varied values.
+
+    Raises
+    ------
+    InputError
+        Naming ``source`` (the file) and the row, variant and column at fault.
+    """
+    n = len(plan)
+
+    def key_cells(i: int) -> list[str] | None:
+        return text_rows([plan.values(i)])[0] if 0 <= i < n else None
+
+    _check_baseline(base_header, base_rows, plan.keys, key_cells, range(n), source)
+
+
+def _check_baseline(base_header: list[str], base_rows: list[list[str]], keys: Sequence[str],
+                    key_cells: Callable[[int], list[str] | None], variants: Collection[int], source: str) -> None:
+    """A baseline that can be compared: a sweep table of the same keys holding each of ``variants``
+    exactly once, with the varied values ``key_cells(variant)`` gives (None: no such variant here)
+    and numbers (or empty cells) where figures are numbers.  InputError otherwise."""
+    where = f"--check-against {source}"
+    _check_baseline_header(base_header, keys, where)
+    if not base_rows:
+        raise InputError(f"{where}: no variant rows, only a header (a baseline holds every variant of the sweep)")
+    col = {c: j for j, c in enumerate(base_header)}
+    seen: dict[int, int] = {}
+    for k, row in enumerate(base_rows, 1):
+        v = _check_baseline_row(base_header, row, k, col, keys, key_cells, where)
+        if v in seen:
+            raise InputError(f"{where}: variant {v} is in rows {seen[v]} and {k} (each variant once)")
+        seen[v] = k
+    if len(seen) < len(variants):
+        missing = [str(v) for v in variants if v not in seen]
+        shown = ", ".join(missing[:5]) + (f" and {len(missing) - 5} more" if len(missing) > 5 else "")
+        raise InputError(f"{where}: no row for variant {shown} (it is from another sweep, or rows were lost)")
+
+
+def _check_baseline_header(base_header: list[str], keys: Sequence[str], where: str) -> None:
+    """The header of a sweep table of ``keys``: ``variant``, the keys, no column twice."""
+    if "variant" not in base_header:
+        raise InputError(f"{where}: the baseline has no 'variant' column (not a sweep.csv)")
+    twice = next((c for j, c in enumerate(base_header) if c in base_header[:j]), None)
+    if twice is not None:
+        raise InputError(f"{where}: the column {quote(twice)} is in the header twice")
+    missing_keys = [short(k) for k in keys if k not in base_header]
+    if missing_keys:
+        raise InputError(f"{where}: the baseline does not vary {', '.join(missing_keys)} "
+                         "(it is from another sweep)")
+
+
+_VARIANT = re.compile(r"^[0-9]+$")
+
+
+def _check_baseline_row(base_header: list[str], row: list[str], k: int, col: dict, keys: Sequence[str],
+                        key_cells: Callable[[int], list[str] | None], where: str) -> int:
+    """Row ``k`` (1-based, after the header) of a baseline: its variant, after checking its cells."""
+    if len(row) != len(base_header):
+        raise InputError(f"{where}: row {k} has {len(row)} cells, the header {len(base_header)}")
+    text = row[col["variant"]].strip()
+    if not (_VARIANT.match(text) and len(text) < 10):
+        raise InputError(f"{where}: row {k}: the variant {quote(text)} is not a variant index (a whole number)")
+    v = int(text)
+    cells = key_cells(v)
+    if cells is None:
+        raise InputError(f"{where}: row {k}: variant {v} is not a variant of this sweep (it is from another sweep)")
+    for key, now in zip(keys, cells):
+        if not _same_value(row[col[key]], now):
+            raise InputError(f"{where}: row {k}: variant {v} has {short(key)}={quote(row[col[key]])} in the "
+                             f"baseline, {short(now)} here (it is from another sweep)")
+    for name, cell in zip(base_header, row):
+        if name in NUMERIC_FIGURES or name.startswith("peak_tension_"):
+            problem = _number_problem(cell)
+            if problem:
+                raise InputError(f"{where}: row {k} (variant {v}), column {short(name)}: {quote(cell)} {problem}")
+    return v
+
+
+def _number_problem(cell: str) -> str | None:
+    """What is wrong with a baseline cell of a numeric figure (None: a number, or empty as
+    ``sweep.csv`` leaves a figure it has not got)."""
+    if not cell.strip():
+        return None
+    try:
+        x = float(cell)
+    except ValueError:
+        return "is not a number"
+    return None if math.isfinite(x) else "is not a finite number (sweep.csv leaves a missing figure empty)"
+
+
+def _same_value(base: str, now: str) -> bool:
+    """Whether a varied value of the baseline (CSV text) is this sweep's (CSV text)."""
+    a, b = _num(base), _num(now)
+    return (a is not None and b is not None and math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12)) or base == now
+
+
 def compare(header: list[str], rows: list[list[str]], base_header: list[str], base_rows: list[list[str]],
             keys: Sequence[str], tolerance: float = 1e-6, abs_tolerance: float = 1e-9,
-            strict: bool = False) -> tuple[list[Difference], list[Difference]]:
+            strict: bool = False, source: str = "the baseline") -> tuple[list[Difference], list[Difference]]:
     """Compare a sweep table with a baseline table (cells as CSV text).
 
     Variants are matched by index, and their varied values must agree.  A
@@ -162,35 +271,24 @@ def compare(header: list[str], rows: list[list[str]], base_header: list[str], ba
     Raises
     ------
     InputError
-        The baseline is not a sweep table, or it is from another sweep
-        (other varied keys or values, or variants this sweep does not have).
+        The baseline (``source``, for the message) is not a sweep table, or it is
+        from another sweep (other varied keys or values, variants this sweep does
+        not have or it lacks), or it is damaged (a variant twice, a numeric figure
+        that is neither a finite number nor empty): see :func:`check_baseline`.
     """
-    if "variant" not in base_header:
-        raise InputError("--check-against: the baseline has no 'variant' column (not a sweep.csv)")
-    missing_keys = [k for k in keys if k not in base_header]
-    if missing_keys:
-        raise InputError(f"--check-against: the baseline does not vary {', '.join(missing_keys)} "
-                         "(it is from another sweep)")
-    cur = {str(r[0]): r for r in rows}
+    cur = {int(r[0]): r for r in rows}
     bi = {c: j for j, c in enumerate(base_header)}
     ci = {c: j for j, c in enumerate(header)}
+
+    def key_cells(i: int) -> list[str] | None:
+        return [cur[i][ci[k]] for k in keys] if i in cur else None
+
+    _check_baseline(base_header, base_rows, keys, key_cells, cur, source)
     worse: list[Difference] = []
     better: list[Difference] = []
     for br in base_rows:
-        if len(br) != len(base_header):
-            raise InputError(f"--check-against: a baseline row has {len(br)} cells, the header {len(base_header)}")
-        v = br[bi["variant"]]
-        r = cur.get(v)
-        if r is None:
-            raise InputError(f"--check-against: the baseline has variant {v}, this sweep does not "
-                             "(it is from another sweep)")
-        for k in keys:
-            a, b = _num(br[bi[k]]), _num(r[ci[k]])
-            same = (a is not None and b is not None and math.isclose(a, b, rel_tol=1e-9, abs_tol=1e-12)) \
-                or br[bi[k]] == r[ci[k]]
-            if not same:
-                raise InputError(f"--check-against: variant {v} has {k}={br[bi[k]]} in the baseline, "
-                                 f"{r[ci[k]]} here (it is from another sweep)")
+        v = br[bi["variant"]].strip()
+        r = cur[int(v)]
         for col in base_header:
             if col in keys or col == "variant":
                 continue

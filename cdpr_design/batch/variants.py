@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass
 from typing import Any, Iterable, Iterator, Sequence
 
-from cdpr_design.errors import InputError, SpecError, quote
+from cdpr_design.errors import QUOTE_WIDTH, InputError, SpecError, quote
 
 #: Largest sweep run without ``max_variants`` raised (variants): a day of planar2 variants on one core.
 MAX_VARIANTS = 100_000
@@ -28,11 +28,27 @@ HARD_MAX_VARIANTS = 1_000_000
 _INT = re.compile(r"^[+-]?\d+$")
 
 
+def short(text) -> str:
+    """``str(text)`` cut to about :data:`~cdpr_design.errors.QUOTE_WIDTH` characters for a message
+    (a key or value as given, without the quotes of :func:`~cdpr_design.errors.quote`)."""
+    text = str(text)
+    return text if len(text) <= QUOTE_WIDTH else text[: QUOTE_WIDTH - 3] + "..."
+
+
+def _whole(text: str) -> int:
+    """A whole number written in ``text`` (digits); ValueError naming it when Python refuses
+    its size (more than 4,300 digits)."""
+    try:
+        return int(text)
+    except ValueError:
+        raise ValueError(f"{quote(text.strip())} has too many digits for a whole number") from None
+
+
 def _scalar(text: str):
     """``"2"`` -> 2, ``"0.5"`` -> 0.5, anything else stays text (a motor name)."""
     t = text.strip()
     if _INT.match(t):
-        return int(t)
+        return _whole(t)
     try:
         v = float(t)
     except ValueError:
@@ -68,11 +84,12 @@ def parse_values(text: str) -> tuple:
             raise ValueError(f"expected numbers in start:stop:count, got {quote(text)}") from None
         if not (math.isfinite(start) and math.isfinite(stop)):
             raise ValueError(f"expected finite start and stop, got {quote(text)}")
-        if not _INT.match(parts[2].strip()) or int(parts[2]) < 1:
+        if not _INT.match(parts[2].strip()) or _whole(parts[2]) < 1:
             raise ValueError(f"expected a whole count >= 1 in start:stop:count, got {quote(parts[2])}")
-        if int(parts[2]) > HARD_MAX_VARIANTS:
-            raise ValueError(f"expected a count of at most {HARD_MAX_VARIANTS:,} in start:stop:count, got {parts[2]}")
-        n = int(parts[2])
+        n = _whole(parts[2])
+        if n > HARD_MAX_VARIANTS:
+            raise ValueError(f"expected a count of at most {HARD_MAX_VARIANTS:,} in start:stop:count, "
+                             f"got {quote(parts[2].strip())}")
         if n == 1:
             return (_tidy(start),)
         return tuple(_tidy(start + (stop - start) * k / (n - 1)) for k in range(n))
@@ -98,7 +115,7 @@ def parse_vary(option: str) -> tuple[str, tuple]:
     try:
         return key, parse_values(values)
     except ValueError as exc:
-        raise InputError(f"--vary {key}: {exc}") from None
+        raise InputError(f"--vary {short(key)}: {exc}") from None
 
 
 def vary_from_spec(section: dict | None) -> list[tuple[str, tuple]]:
@@ -111,7 +128,7 @@ def vary_from_spec(section: dict | None) -> list[tuple[str, tuple]]:
     out = []
     problems = []
     for key, v in vary.items():
-        where = f"sweep.vary.{key}"
+        where = f"sweep.vary.{short(key)}"
         if isinstance(v, str):
             try:
                 out.append((str(key), parse_values(v)))
@@ -137,7 +154,7 @@ def parse_path(key: str) -> tuple:
     parts = text.split(".")
     if not text or any(p == "" for p in parts):
         raise ValueError(f"expected a dotted key path such as effector.mass, got {quote(key)}")
-    return tuple(int(p) if _INT.match(p) else p for p in parts)
+    return tuple(_whole(p) if _INT.match(p) else p for p in parts)
 
 
 def _locate(container, part, trail: str):
@@ -149,13 +166,14 @@ def _locate(container, part, trail: str):
     if isinstance(container, list):
         if isinstance(part, int):
             if not -len(container) <= part < len(container):
-                raise ValueError(f"{trail}: index {part} is out of range (the spec has {len(container)} entries)")
+                raise ValueError(f"{short(trail)}: index {short(part)} is out of range "
+                                 f"(the spec has {len(container)} entries)")
             return part % len(container)
         for i, item in enumerate(container):
             if isinstance(item, dict) and item.get("name") == part:
                 return i
-        raise ValueError(f"{trail}: no entry named {quote(part)}")
-    raise ValueError(f"{trail} is a value ({quote(container)}), not a section or a list")
+        raise ValueError(f"{short(trail)}: no entry named {quote(part)}")
+    raise ValueError(f"{short(trail)} is a value ({quote(container)}), not a section or a list")
 
 
 def resolve(base: dict, path: tuple) -> tuple:
@@ -175,7 +193,7 @@ def resolve(base: dict, path: tuple) -> tuple:
         if isinstance(node, dict) and idx not in node:
             rest = path[k + 1:]
             if any(isinstance(p, int) for p in rest):
-                raise ValueError(f"{trail} is not in the spec; vary the whole key rather than its entries")
+                raise ValueError(f"{short(trail)} is not in the spec; vary the whole key rather than its entries")
             out.extend(rest)
             return tuple(out)
         node = node[idx]
@@ -256,7 +274,8 @@ class Plan:
     def describe(self, index: int, values: Sequence | None = None) -> str:
         """``variant 3 (effector.mass=2, frame.upper.0=1.8)``."""
         values = self.values(index) if values is None else values
-        return f"variant {index} (" + ", ".join(f"{a.key}={_show(v)}" for a, v in zip(self.axes, values)) + ")"
+        return f"variant {index} (" + ", ".join(f"{short(a.key)}={short(_show(v))}"
+                                                for a, v in zip(self.axes, values)) + ")"
 
     def fingerprint(self, options) -> str:
         """A hash of everything that decides the rows (for resuming the right sweep);
@@ -314,14 +333,14 @@ def make_plan(design, vary: Sequence[tuple[str, Sequence]], max_problems: int = 
         try:
             path = resolve(base, parse_path(key))
         except ValueError as exc:
-            problems.append((f"--vary {key}", str(exc)))
+            problems.append((f"--vary {short(key)}", str(exc)))
             continue
         if path in seen:
-            problems.append((f"--vary {key}", f"the same key as {seen[path]}"))
+            problems.append((f"--vary {short(key)}", f"the same key as {short(seen[path])}"))
             continue
         seen[path] = key
         if not values:
-            problems.append((f"--vary {key}", "expected at least one value"))
+            problems.append((f"--vary {short(key)}", "expected at least one value"))
             continue
         axes.append(Axis(key, path, tuple(values)))
     if problems:
@@ -341,7 +360,7 @@ def make_plan(design, vary: Sequence[tuple[str, Sequence]], max_problems: int = 
             if not new:
                 hidden += 1  # the same problem as a variant already named (an unknown key)
             elif bad - hidden <= max_problems:
-                problems.extend((f"{plan.describe(i, vals)}: {p}" if p else plan.describe(i, vals), m)
+                problems.extend((f"{plan.describe(i, vals)}: {short(p)}" if p else plan.describe(i, vals), m)
                                 for p, m in new)
     if bad:
         shown = min(bad - hidden, max_problems)

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 from typing import Callable, NamedTuple, Sequence
 
-from cdpr_design.errors import InputError
+from cdpr_design.errors import InputError, quote
 from cdpr_design.io.columns import file_name
 from cdpr_design.io.files import OutputDir
 from cdpr_design.io.journal import SweepJournal
@@ -68,8 +69,102 @@ def _check_options(design, workers, step, tolerance, abs_tolerance, trajectory) 
     return workers
 
 
+def _check_motor(design, catalogue, safety_factor: float | None, motor: str | None) -> None:
+    """``--motor`` (every variant's motor) must be in ``catalogue`` and ``--safety-factor`` at least 1,
+    before any work.  The spec's own ``winch.motor`` is not checked here: a ``--vary`` may replace
+    it, and a motor a variant names is that variant's (unknown: the variant's ``error``)."""
+    from cdpr_design.design import sizing as sz
+
+    if motor is not None:
+        sz.check_options(design, catalogue, safety_factor, motor)
+    elif safety_factor is not None and not (math.isfinite(safety_factor) and safety_factor >= 1):
+        raise InputError(f"--safety-factor: expected a number >= 1, got {safety_factor}")
+
+
+def _read_baseline(check_against: Path | None, plan) -> tuple[list[str], list[list[str]]] | None:
+    """The ``--check-against`` baseline (header, rows), refused (exit 2) before any work unless it
+    can be compared with a sweep of ``plan`` (:func:`cdpr_design.batch.table.check_baseline`)."""
+    from cdpr_design import batch as sw
+
+    if check_against is None:
+        return None
+    header, rows = read_csv_table(check_against)
+    sw.check_baseline(header, rows, plan, str(check_against))
+    return header, rows
+
+
+def _record_problem(rec: dict, plan) -> str | None:
+    """What is wrong with a journal record of a sweep of ``plan`` (None: nothing): a variant
+    index of the plan, that variant's values, figures by name (numbers, text or null), an
+    error text (:func:`cdpr_design.batch.local.record`)."""
+    v = rec.get("variant")
+    if not isinstance(v, int) or isinstance(v, bool):
+        return f"the variant {quote(v)} is not a variant index"
+    if not 0 <= v < len(plan):
+        return f"variant {v} is not a variant of this sweep (0 to {len(plan) - 1})"
+    values = rec.get("values")
+    if not isinstance(values, list) or values != list(plan.values(v)):
+        return f"the values {quote(values)} are not those of {plan.describe(v)}"
+    figures = rec.get("figures")
+    if not isinstance(figures, dict) or not all(
+            isinstance(x, (int, float, str)) or x is None for x in figures.values()):
+        return f"the figures {quote(figures)} are not figure names with numbers, text or null"
+    if not isinstance(rec.get("error"), str):
+        return f"the error {quote(rec.get('error'))} is not a text"
+    return None
+
+
+def _record_lines(journal: SweepJournal) -> list[int]:
+    """The line numbers (1-based) of the journal's records, in the order
+    :meth:`~cdpr_design.io.journal.SweepJournal.read` returns them."""
+    lines = journal.path.read_text(encoding="utf-8").split("\n")
+    out, meta = [], False
+    for k, line in enumerate(lines):
+        if not line.strip():
+            continue
+        try:
+            obj = json.loads(line)
+        except json.JSONDecodeError:
+            break  # the torn last line (read() refuses any other)
+        if meta and isinstance(obj, dict) and "variant" in obj:
+            out.append(k + 1)
+        meta = True
+    return out
+
+
+def _check_records(journal: SweepJournal, records: list[dict], plan) -> None:
+    """Refuse (exit 2, naming the journal's line) a damaged record before anything is written."""
+    for k, rec in enumerate(records):
+        problem = _record_problem(rec, plan)
+        if problem is not None:
+            lines = _record_lines(journal)
+            line = f" line {lines[k]}" if k < len(lines) else ""
+            raise InputError(f"--resume: {journal.path}{line} is damaged: {problem}; delete that line "
+                             "(the variant is evaluated again) or run without --resume to start over")
+
+
+class _LazyJournal:
+    """The journal written afresh (its meta and the records kept) only at the first finished
+    variant, or when the run ends: a run refused while its backend starts (an unreachable
+    ``--scheduler``) leaves the folder, and a journal already in it, as they were."""
+
+    def __init__(self, journal: SweepJournal, meta: dict, kept: list[dict]):
+        self.journal, self.meta, self.kept = journal, meta, kept
+        self.started = False
+
+    def start(self) -> None:
+        if not self.started:
+            self.journal.start(self.meta, self.kept)
+            self.started = True
+
+    def append(self, rec: dict) -> None:
+        self.start()
+        self.journal.append(rec)
+
+
 def _kept_records(journal: SweepJournal, meta: dict, plan, resume: bool, log: Callable[[str], None]) -> list[dict]:
-    """The journal's finished variants to keep (``resume``), after checking it is this sweep's."""
+    """The journal's finished variants to keep (``resume``), after checking it is this sweep's
+    and no record is damaged."""
     if not resume:
         return []
     old_meta, old = journal.read()
@@ -79,7 +174,8 @@ def _kept_records(journal: SweepJournal, meta: dict, plan, resume: bool, log: Ca
     if old_meta.get("fingerprint") != meta["fingerprint"]:
         raise InputError(f"--resume: the journal in {journal.out.path} is from another sweep (other spec, "
                          "keys, values or options); run without --resume to start over")
-    kept = [r for r in old if 0 <= int(r["variant"]) < len(plan)]
+    _check_records(journal, old, plan)
+    kept = old
     log(f"resuming: {len(kept)} of {len(plan)} variants already done")
     return kept
 
@@ -92,12 +188,13 @@ def _run_journalled(design, plan, options, out_dir, workers, scheduler, resume, 
     meta = {"journal": "cdpr-design sweep", "version": sw.JOURNAL_VERSION, "name": design.name,
             "keys": plan.keys, "variants": len(plan), "fingerprint": plan.fingerprint(options)}
     kept = _kept_records(journal, meta, plan, resume, log)
-    journal.start(meta, kept)
-    done = {int(r["variant"]) for r in kept}
+    lazy = _LazyJournal(journal, meta, kept)
+    done = {r["variant"] for r in kept}
     try:
         with stage(progress, f"sweep {design.name}") as cb:
             stats = sw.run(plan, options, workers=workers, scheduler=scheduler, skip=done,
-                           on_record=journal.append, progress=cb)
+                           on_record=lazy.append, progress=cb)
+        lazy.start()
     finally:
         journal.close()
     return stats, journal.read()[1]
@@ -125,12 +222,16 @@ def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None,
                         max_variants=max_variants or sw.MAX_VARIANTS)
     rank_name, descending = sw.parse_rank(rank_by or section.get("rank_by"))
     workers = _check_options(design, workers, step, tolerance, abs_tolerance, trajectory)
-    baseline = read_csv_table(check_against) if check_against is not None else None
+    if scheduler:
+        sw.check_scheduler(scheduler)
+    baseline = _read_baseline(check_against, plan)
+    cat = spec.load_catalogue(catalogue)
+    _check_motor(design, cat, safety_factor, motor)
     options = sw.Options(step=step, safety_factor=safety_factor, motor=motor, trajectory=trajectory,
-                         catalogue=spec.load_catalogue(catalogue), engine=engine)
+                         catalogue=cat, engine=engine)
     timings = Timings()
     out_dir = output_dir(design, out, overwrite)
-    for name in (file_name("sweep", format), file_name("sweep_best", format), "sweep.png"):
+    for name in (file_name("sweep", format), file_name("sweep_best", format), "sweep.png", SweepJournal.NAME):
         out_dir.target(name)  # refuse foreign files before any work
     with timings.phase("sweep_s"):
         stats, records = _run_journalled(design, plan, options, out_dir, workers, scheduler, resume,
@@ -143,7 +244,7 @@ def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None,
     regressions, improvements = [], []
     if baseline is not None:
         regressions, improvements = sw.compare(header, text_rows(rows), baseline[0], baseline[1], plan.keys,
-                                               tolerance, abs_tolerance, strict)
+                                               tolerance, abs_tolerance, strict, str(check_against))
     failed = [r for r in rows if r[header.index("error")]]
     summary = {
         "name": design.name, "keys": plan.keys, "variants": len(plan), "evaluated": stats.evaluated,

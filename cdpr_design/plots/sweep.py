@@ -8,6 +8,7 @@ Figure; nothing is written.
 from __future__ import annotations
 
 import math
+import textwrap
 from typing import Sequence
 
 import numpy as np
@@ -87,7 +88,8 @@ def sweep_figure(header: list[str], rows: list[list], keys: Sequence[str], title
     failing red crosses, failed evaluations as gaps).  Two keys: a heat map
     per figure (failing cells marked ×).  More: a parallel-coordinates view of
     the varied keys and the figures, lines coloured by ``rank_by``, variants
-    failing a requirement in grey.
+    failing a requirement in grey.  No figure at all (every variant failed to
+    evaluate): a panel saying so, with the first error.
     """
     from cdpr_design import batch as sw
 
@@ -95,7 +97,9 @@ def sweep_figure(header: list[str], rows: list[list], keys: Sequence[str], title
     if not figs:
         figs = [h for h in header if h not in keys and h not in ("variant", "error")][:1]
     ok = _passing(header, rows)
-    if len(keys) == 1:
+    if not figs:
+        fig = _no_figures(header, rows)
+    elif len(keys) == 1:
         fig = _line_panels(header, rows, keys[0], figs, ok)
     elif len(keys) == 2:
         fig = _heat_maps(header, rows, keys, figs, ok)
@@ -104,6 +108,20 @@ def sweep_figure(header: list[str], rows: list[list], keys: Sequence[str], title
     npass = int(ok.sum())
     fig.suptitle((title + "\n" if title else "") +
                  f"{len(rows)} variants, {npass} pass every requirement", fontsize=10)
+    return fig
+
+
+def _no_figures(header, rows):
+    """No figure to draw: a panel naming the variants that failed to evaluate and the first error."""
+    ie = header.index("error")
+    errors = [str(r[ie]) for r in rows if r[ie]]
+    text = f"nothing to draw: {len(errors)} of {len(rows)} variants failed to evaluate"
+    if errors:
+        text += "\n\nfirst error:\n" + "\n".join(textwrap.wrap(textwrap.shorten(errors[0], 300), 70))
+    fig, ax = pyplot().subplots(figsize=(6.4, 3.2))
+    fig.subplots_adjust(left=0.05, right=0.95, bottom=0.05, top=0.8)
+    ax.axis("off")
+    ax.text(0.5, 0.5, text, ha="center", va="center", fontsize=8, color=FAIL, transform=ax.transAxes)
     return fig
 
 
