@@ -30,6 +30,11 @@ class SweepJournal:
 
     def read(self) -> tuple[dict | None, list[dict]]:
         """(meta, records) of the journal on disk; (None, []) when there is none."""
+        meta, numbered = self.read_numbered()
+        return meta, [rec for _, rec in numbered]
+
+    def read_numbered(self) -> tuple[dict | None, list[tuple[int, dict]]]:
+        """:meth:`read` with each record's line number in the file (from 1): (meta, [(line, record)])."""
         try:
             text = self.path.read_text(encoding="utf-8")
         except FileNotFoundError:
@@ -52,7 +57,7 @@ class SweepJournal:
                     raise InputError(f"--resume: {self.path} is not a sweep journal")
                 meta = obj
             elif isinstance(obj, dict) and "variant" in obj:
-                records.append(obj)
+                records.append((k + 1, obj))
         return meta, records
 
     def start(self, meta: dict, records: Sequence[dict] = ()) -> None:

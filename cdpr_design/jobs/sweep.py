@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Callable, NamedTuple, Sequence
@@ -114,32 +113,12 @@ def _record_problem(rec: dict, plan) -> str | None:
     return None
 
 
-def _record_lines(journal: SweepJournal) -> list[int]:
-    """The line numbers (1-based) of the journal's records, in the order
-    :meth:`~cdpr_design.io.journal.SweepJournal.read` returns them."""
-    lines = journal.path.read_text(encoding="utf-8").split("\n")
-    out, meta = [], False
-    for k, line in enumerate(lines):
-        if not line.strip():
-            continue
-        try:
-            obj = json.loads(line)
-        except json.JSONDecodeError:
-            break  # the torn last line (read() refuses any other)
-        if meta and isinstance(obj, dict) and "variant" in obj:
-            out.append(k + 1)
-        meta = True
-    return out
-
-
-def _check_records(journal: SweepJournal, records: list[dict], plan) -> None:
+def _check_records(journal: SweepJournal, numbered: list[tuple[int, dict]], plan) -> None:
     """Refuse (exit 2, naming the journal's line) a damaged record before anything is written."""
-    for k, rec in enumerate(records):
+    for line, rec in numbered:
         problem = _record_problem(rec, plan)
         if problem is not None:
-            lines = _record_lines(journal)
-            line = f" line {lines[k]}" if k < len(lines) else ""
-            raise InputError(f"--resume: {journal.path}{line} is damaged: {problem}; delete that line "
+            raise InputError(f"--resume: {journal.path} line {line} is damaged: {problem}; delete that line "
                              "(the variant is evaluated again) or run without --resume to start over")
 
 
@@ -167,15 +146,15 @@ def _kept_records(journal: SweepJournal, meta: dict, plan, resume: bool, log: Ca
     and no record is damaged."""
     if not resume:
         return []
-    old_meta, old = journal.read()
+    old_meta, numbered = journal.read_numbered()
     if old_meta is None:
         log(f"--resume: no journal in {journal.out.path}; starting the sweep")
         return []
     if old_meta.get("fingerprint") != meta["fingerprint"]:
         raise InputError(f"--resume: the journal in {journal.out.path} is from another sweep (other spec, "
                          "keys, values or options); run without --resume to start over")
-    _check_records(journal, old, plan)
-    kept = old
+    _check_records(journal, numbered, plan)
+    kept = [rec for _, rec in numbered]
     log(f"resuming: {len(kept)} of {len(plan)} variants already done")
     return kept
 
