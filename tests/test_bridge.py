@@ -309,6 +309,25 @@ def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, c
     assert not (tmp_path / "o" / "bridge.csv").exists()
 
 
+@pytest.mark.parametrize("net_id", ["garbage", "1.2.3.4.5", "1.2.3.4.5.256", "1.2.3.4.5.-6", "1.2.3.4.5.6.7",
+                                    "1.2.3.4.5.6 ", "1.2.3.4.5.0256", pytest.param("1" * 5000, id="long"),
+                                    pytest.param("1.2.3.4.5." + "1" * 5000, id="long-number")])
+def test_a_bad_net_id_is_refused_before_any_work(tmp_path, loop_data, net_id):
+    """--local-net-id and the spec's plc.ams_net_id: six numbers 0-255 joined by dots, else exit 2 naming
+    the option or the key and the spec file (the value shortened), no PLC started, nothing written."""
+    p = write_spec(tmp_path, loop_data)
+    r = invoke("bridge", p, "--test-plc", "probe", "--local-net-id", net_id, "--duration", "0.1",
+               "--out", tmp_path / "o")
+    assert r.exit_code == 2 and "--local-net-id" in r.output and "Traceback" not in r.output, r.output
+    assert "1" * 100 not in r.output
+    bad = dict(loop_data, plc=dict(PLC, ams_net_id=net_id))
+    p = write_spec(tmp_path, bad, "bad_net_id.yaml")
+    r = invoke("bridge", p, "--duration", "0.1", "--timeout", "0.05", "--out", tmp_path / "o")
+    assert r.exit_code == 2 and "Traceback" not in r.output, r.output
+    assert "plc.ams_net_id" in r.output and "bad_net_id.yaml" in r.output and "1" * 100 not in r.output
+    assert not (tmp_path / "o").exists()
+
+
 @pytest.mark.serial
 @pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 def test_no_plc_at_all_is_a_clean_error(tmp_path, loop_data):

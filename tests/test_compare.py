@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from cdpr_design.motion import compare as C
@@ -158,3 +158,77 @@ def test_cli_compare_scope_export(tmp_path, fast):
     bad.write_text("a,b\n1,2\n3,4\n")
     res = invoke("compare", tgt, bad)
     assert res.exit_code == 2 and "time" in res.output
+
+
+# ----------------------------------------------------------------------------
+# The searched window (--max-delay)
+# ----------------------------------------------------------------------------
+
+
+def _sines(delay: float, dt: float = 0.01):
+    t = np.arange(0, 20, dt)
+    return t, np.sin(t), np.sin(t - delay)
+
+
+@pytest.mark.parametrize("delay", [0.5, -0.5, 0.3, -0.12])
+@pytest.mark.parametrize("max_delay", [1e-6, 0.003, 0.1, 0.105, 0.11])
+def test_a_delay_beyond_max_delay_is_flagged_not_reported(delay, max_delay):
+    """sin(t) against sin(t - delay), |delay| > max_delay: no number (NaN), the column flagged; never a
+    delay outside the window searched."""
+    t, x, y = _sines(delay)
+    assert np.isnan(C.estimate_delay(0.01, x, y, max_delay))
+    res = C.compare(t, {"x": x}, t, {"x": y}, max_delay=max_delay)
+    assert np.isnan(res.delay["x"]) and res.beyond == ("x",)
+    assert res.to_json()["delay"]["x"] is None and res.to_json()["delay_beyond_window"] == ["x"]
+    d, beyond = C.search_delay(0.01, x, y, max_delay)  # the window's edge, flagged
+    assert beyond and abs(d) <= max_delay
+
+
+@settings(max_examples=40, deadline=None)
+@given(delay=st.floats(-0.6, 0.6), max_delay=st.floats(1e-6, 0.8))
+@example(delay=0.5, max_delay=0.6)
+@example(delay=0.098, max_delay=0.1)
+@example(delay=-0.098, max_delay=0.1)
+@example(delay=0.104, max_delay=0.105)
+@example(delay=0.0, max_delay=1e-6)
+@example(delay=0.002, max_delay=0.003)
+def test_the_delay_never_exceeds_max_delay(delay, max_delay):
+    """Whatever the window: a delay reported is within it (and right: within 1e-5 s when the true
+    delay is inside), else it is flagged (NaN) and the true delay lies at most a sample inside."""
+    _, x, y = _sines(delay)
+    d = C.estimate_delay(0.01, x, y, max_delay)
+    if np.isfinite(d):
+        assert abs(d) <= max_delay and abs(d - delay) < (1e-5 if abs(delay) < max_delay else 0.01)
+    else:
+        assert abs(delay) > max_delay - 0.01
+
+
+def test_cli_max_delay_flags_a_delay_beyond_it(tmp_path):
+    import json
+
+    t, x, y = _sines(0.5)
+    for name, v in (("target.csv", x), ("actual.csv", y)):
+        (tmp_path / name).write_text("time,x\n" + "\n".join(f"{a:.17g},{b:.17g}" for a, b in zip(t, v)))
+    for max_delay, expect in (("0.1", None), ("1e-6", None), ("0.6", 0.5)):
+        r = invoke("compare", tmp_path / "target.csv", tmp_path / "actual.csv", "--max-delay", max_delay, "--json")
+        assert r.exit_code == 0, r.output
+        s = json.loads(r.stdout)
+        if expect is None:
+            assert s["delay"]["x"] is None and s["delay_beyond_window"] == ["x"]
+        else:
+            assert s["delay"]["x"] == pytest.approx(expect, abs=1e-5) and s["delay_beyond_window"] == []
+
+
+LONG = "a" * 5000
+
+
+@pytest.mark.parametrize("args", [["--columns", LONG], ["--columns", "x," + LONG], ["--map", LONG],
+                                  ["--map", LONG + "=x"], ["--map", "x=" + LONG]])
+def test_cli_compare_shortens_long_values(tmp_path, args):
+    """A 5,000-character column or --map item is quoted shortened, never whole."""
+    t, x, y = _sines(0.0)
+    for name, v in (("target.csv", x), ("actual.csv", y)):
+        (tmp_path / name).write_text("time,x\n" + "\n".join(f"{a:.17g},{b:.17g}" for a, b in zip(t, v)))
+    r = invoke("compare", tmp_path / "target.csv", tmp_path / "actual.csv", *args)
+    assert r.exit_code == 2 and "Traceback" not in r.output
+    assert "a" * 100 not in r.output and len(r.output) < 400, r.output

@@ -430,12 +430,84 @@ def test_no_feasible_trial_exits_1_without_best(tmp_path, light_spec):
     (["--vary", "cables.0.outlet.0=0:1", "--maximize", "task_min_margin", "--require", "frac>=1"], "--require"),
     (["--vary", "cables.0.outlet.0=0:1", "--maximize", "fraction", "--minimize", "fraction"], "--minimize"),
     (["--vary", "cables.0.outlet.0=0:1", "--maximize", "task_min_margin", "--trajectory", "nope"], "--trajectory"),
+    (["--vary", "cables.0.outlet.0=0:1", "--maximize", "task_min_margin", "--motor", "NOPE"], "--motor"),
 ])
 def test_bad_input_exits_2_naming_the_option(tmp_path, args, option):
     r = invoke("optimize", PLANAR2, *args, "--out", tmp_path / "o")
     assert r.exit_code == 2, r.output
     assert option in r.output and "Traceback" not in r.output
     assert not (tmp_path / "o" / "optimize.db").exists()  # refused before any work
+
+
+LONG = "a" * 5000
+
+
+@pytest.mark.parametrize("args, option", [
+    (["--vary", "cables.0.outlet.0=0:1", "--maximize", LONG], "--maximize"),
+    (["--vary", "cables.0.outlet.0=0:1", "--minimize", LONG], "--minimize"),
+    (["--vary", "cables.0.outlet.0=0:1", "--maximize", "fraction", "--require", LONG], "--require"),
+    (["--vary", "cables.0.outlet.0=0:1", "--maximize", "fraction", "--require", "fraction>=" + LONG], "--require"),
+    (["--vary", "effector.mass=" + LONG, "--maximize", "fraction"], "--vary"),
+    (["--vary", "effector.mass=1:" + LONG, "--maximize", "fraction"], "--vary"),
+    (["--vary", LONG + "=1:2", "--maximize", "fraction"], "--vary"),
+    (["--vary", "winch.motor=" + LONG, "--maximize", "fraction"], "--vary"),
+])
+def test_long_values_are_shortened_in_messages(tmp_path, args, option):
+    """An offending value of 5,000 characters is quoted shortened (errors.quote), never whole."""
+    r = invoke("optimize", PLANAR2, *args, "--out", tmp_path / "o")
+    assert r.exit_code == 2 and option in r.output and "Traceback" not in r.output
+    assert "a" * 100 not in r.output and len(r.output) < 600, r.output
+
+
+def _damaged_study(tmp_path, light_spec):
+    """A study of two trials, its pages then overwritten in the middle (the header intact)."""
+    out = tmp_path / "opt"
+    r = invoke("optimize", light_spec, *OUTLETS, "--maximize", "task_min_margin", "--trials", 2, "--out", out,
+               "--quiet", "--no-picture", "--seed", 0)
+    assert r.exit_code == 0, r.output
+    con = sqlite3.connect(out / "optimize.db")
+    con.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+    con.close()
+    data = bytearray((out / "optimize.db").read_bytes())
+    data[2 * 4096: 3 * 4096] = b"\xff" * 4096
+    (out / "optimize.db").write_bytes(data)
+    return out
+
+
+def _sqlite_of_another_tool(tmp_path):
+    out = tmp_path / "opt"
+    out.mkdir()
+    con = sqlite3.connect(out / "optimize.db")
+    con.execute("CREATE TABLE samples (x REAL)")
+    con.commit()
+    con.close()
+    return out
+
+
+def _garbage(tmp_path):
+    out = tmp_path / "opt"
+    out.mkdir()
+    (out / "optimize.db").write_text("garbage\n")
+    return out
+
+
+@pytest.mark.parametrize("make, extra, words", [
+    (lambda tmp, spec: _garbage(tmp), ["--overwrite"], "not a readable optuna study"),
+    (lambda tmp, spec: _garbage(tmp), ["--overwrite", "--resume"], "not a readable optuna study"),
+    (_damaged_study, ["--resume"], "not a readable optuna study"),
+    (lambda tmp, spec: _sqlite_of_another_tool(tmp), ["--overwrite"], "not an optuna study"),
+])
+def test_an_optimize_db_that_is_no_study_is_refused_and_kept(tmp_path, light_spec, make, extra, words):
+    """optimize.db not an SQLite file, a damaged study, another tool's SQLite file: exit 2 naming it before
+    any work, the file left as it was (--overwrite never replaces a study file), no file added."""
+    out = make(tmp_path, light_spec)
+    db = out / "optimize.db"
+    before = {f.name: f.read_bytes() for f in out.iterdir()}
+    r = invoke("optimize", light_spec, *OUTLETS, "--maximize", "task_min_margin", "--trials", 2, "--out", out,
+               "--no-picture", *extra)
+    assert r.exit_code == 2, r.output
+    assert str(db) in r.output and words in r.output and "Traceback" not in r.output
+    assert {f.name: f.read_bytes() for f in out.iterdir()} == before
 
 
 def test_a_task_figure_needs_a_task_box(tmp_path):

@@ -277,6 +277,14 @@ def test_cli_trajectory_bad_input_and_check(tmp_path, planar2_data):
     assert res.exit_code == 2 and "nothere.csv" in res.output
 
 
+@pytest.mark.parametrize("command", ["trajectory", "simulate"])
+def test_cli_a_long_trajectory_name_is_shortened(tmp_path, command):
+    """An unknown name of 5,000 characters is quoted shortened in the message, never whole."""
+    res = invoke(command, PLANAR2, "a" * 5000, "--out", tmp_path)
+    assert res.exit_code == 2 and "square_fast" in res.output and "Traceback" not in res.output
+    assert "a" * 100 not in res.output and len(res.output) < 400, res.output
+
+
 def redundant_4_cable():
     """A planar 1R2T robot with 4 crossed cables (m = 4 > n = 3)."""
     return spec.from_dict({

@@ -169,6 +169,9 @@ def compare(
         t.add_row(c, fmt(None if s["delay"][c] is None else 1e3 * s["delay"][c]), fmt(st["mean"]),
                   fmt(st["rms"]), fmt(st["max"]))
     out_console.print(t)
+    if res.beyond:
+        info(quiet, f"{', '.join(res.beyond)}: the delay lies beyond the window searched (--max-delay, default "
+                    "half the record): no delay is given; search a wider window")
     pos = res.position_columns
     if pos:
         out_console.print(summary_table("position error (" + ",".join(pos) + ")",

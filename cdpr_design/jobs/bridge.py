@@ -53,10 +53,21 @@ class _Endpoint(NamedTuple):
     local_net_id: str | None
 
 
+def _check_net_ids(design, local_net_id: str | None) -> None:
+    """``--local-net-id`` is an AMS net id, else exit 2 naming it (the spec's ``plc.ams_net_id``
+    was checked when the spec was read)."""
+    from cdpr_design.model.limits import net_id_problem
+
+    if local_net_id is not None and (problem := net_id_problem(local_net_id)) is not None:
+        raise InputError(f"--local-net-id: {problem}")
+
+
 def _endpoint(design, test_plc: str | None, local_net_id: str | None) -> _Endpoint:
-    """Where the PLC is: the built-in test PLC on the loopback, else the spec's plc section."""
+    """Where the PLC is: the built-in test PLC on the loopback, else the spec's plc section
+    (the net ids checked first)."""
     from cdpr_design.plc.testplc import LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID
 
+    _check_net_ids(design, local_net_id)
     if test_plc is not None:
         return _Endpoint(LOOPBACK, TEST_PLC_NET_ID, design.plc.port, local_net_id or TEST_LOCAL_NET_ID)
     host = design.plc.host or ".".join(design.plc.ams_net_id.split(".")[:4])
@@ -151,6 +162,7 @@ def bridge(design, test_plc: str | None = None, duration: float | None = None, c
         raise InputError(f"{design.source}: plc: the spec has no plc: section (bridge needs its symbols)")
     timings = Timings()
     dt, tmo = _settings(design, cycle_time, duration, reconnect, timeout)
+    where = _endpoint(design, test_plc, local_net_id)
     layout = PlcLayout.from_design(design)
     samples = plc_lengths = None
     if test_plc is not None:
@@ -159,7 +171,6 @@ def bridge(design, test_plc: str | None = None, duration: float | None = None, c
         plc_lengths = _test_plc_setpoints(samples, test_plc)
         if duration is None:
             duration = samples.duration + 0.5
-    where = _endpoint(design, test_plc, local_net_id)
     out_dir = output_dir(design, out, overwrite)
     out_dir.target("bridge.csv")
     out_dir.target("bridge.json")

@@ -24,7 +24,7 @@ def require_trajectory(design, name: str, option: str):
     traj = design.trajectories.get(name)
     if traj is None:
         known = ", ".join(design.trajectories) or "none"
-        raise InputError(f"{option}: no trajectory named {name!r} in the spec (known: {known})")
+        raise InputError(f"{option}: no trajectory named {quote(name)} in the spec (known: {known})")
     return traj
 
 
@@ -219,22 +219,22 @@ def _compare_columns(tgt: dict, act: dict, columns: str | None, rename) -> list[
     """Apply ``--map`` renames to the ACTUAL columns; the columns to compare."""
     for item in rename or []:
         if item.count("=") != 1 or not all(item.split("=")):
-            raise InputError(f"--map: expected TARGET_COL=ACTUAL_COL, got {item!r}")
+            raise InputError(f"--map: expected TARGET_COL=ACTUAL_COL, got {quote(item)}")
         a, b = item.split("=")
         if b not in act:
-            raise InputError(f"--map: ACTUAL has no column {b!r}")
+            raise InputError(f"--map: ACTUAL has no column {quote(b)}")
         act[a] = act.pop(b)
     if columns is not None:
         cols = [c.strip() for c in columns.split(",") if c.strip()]
         for c in cols:
             for what, d in (("TARGET", tgt), ("ACTUAL", act)):
                 if c not in d:
-                    raise InputError(f"--columns: {what} has no numeric column {c!r}")
+                    raise InputError(f"--columns: {what} has no numeric column {quote(c)}")
         return cols
     cols = [c for c in tgt if c in act and c not in ("segment", "feasible")]
     if not cols:
         raise InputError(f"TARGET and ACTUAL have no value column in common "
-                         f"(TARGET: {', '.join(tgt)}; ACTUAL: {', '.join(act)}); use --map")
+                         f"(TARGET: {quote(', '.join(tgt))}; ACTUAL: {quote(', '.join(act))}); use --map")
     return cols
 
 

@@ -144,6 +144,7 @@ def optimize(design, vary: Sequence[str], maximize: Sequence[str] | None = None,
     out_dir = output_dir(design, out, overwrite)
     for name in (file_name("optimize", format), file_name("pareto", format), *OUTPUTS, opt.DB):
         out_dir.target(name)  # refuse foreign files before any work
+    opt.study.check_file(out_dir.path, resume)  # and an optimize.db that is no study to continue (kept)
     out_dir.wrote(opt.DB)
     with timings.phase("sweep_s"):
         with stage(progress, f"optimize {design.name}") as cb:

@@ -75,6 +75,15 @@ FORCE = 1e9
 #: Any other number: magnitude at most 1e12, so that products of two stay finite.
 ANY = 1e12
 
+def net_id_problem(text) -> str | None:
+    """What is wrong with ``text`` as an AMS net id (six numbers 0 to 255 joined by dots, as
+    ``5.80.201.232.1.1``); None when nothing is."""
+    parts = text.split(".") if isinstance(text, str) else []
+    if len(parts) == 6 and all(p.isascii() and p.isdigit() and len(p) <= 3 and int(p) <= 255 for p in parts):
+        return None
+    return f"expected an AMS net id, six numbers 0 to 255 joined by dots (e.g. 5.80.201.232.1.1), got {quote(text)}"
+
+
 #: Physical bounds per key (path without indices; ``*`` a trajectory's name):
 #: (lowest, highest, what).
 BOUNDS: dict[str, tuple[float, float, str]] = {

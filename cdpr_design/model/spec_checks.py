@@ -14,6 +14,7 @@ import numpy as np
 
 from cdpr_design.errors import quote
 from cdpr_design.model.design import MOTIONS
+from cdpr_design.model.limits import net_id_problem
 from cdpr_design.model.schema import DesignSpec, WorkspaceSpecModel
 
 Problems = list[tuple[str, str]]
@@ -38,6 +39,8 @@ def check_semantics(s: DesignSpec) -> Problems:
                                            "held at its commanded orientation and does not tilt)"))
     _check_trajectories(p, s)
     if s.plc is not None:
+        if (problem := net_id_problem(s.plc.ams_net_id)) is not None:
+            p.append(("plc.ams_net_id", problem))
         m = len(s.cables)
         for key in ("setpoints", "actuals", "tensions"):
             v = getattr(s.plc, key)

@@ -85,7 +85,9 @@ def estimate_delay(dt: float, target, actual, max_delay: float | None = None,
     lag on a short record, but stays in the right basin), then (``refine``) polished
     by minimising the variance of actual(t) - target(t - d) (offset removed,
     target linearly interpolated): a downhill walk over whole samples from
-    the peak, then a bounded scalar search within one sample of the best.  Returns NaN when either signal does not move.
+    the peak, then a bounded scalar search within one sample of the best.
+    Returns NaN when either signal does not move, and when the delay lies
+    beyond the searched window (:func:`search_delay`): never a delay outside it.
 
     Parameters
     ----------
@@ -95,12 +97,42 @@ def estimate_delay(dt: float, target, actual, max_delay: float | None = None,
     max_delay : float, optional
         Largest |delay| searched [s]; default: half the record.
     """
+    d, beyond = search_delay(dt, target, actual, max_delay, refine)
+    return float("nan") if beyond else d
+
+
+def search_delay(dt: float, target, actual, max_delay: float | None = None,
+                 refine: bool = True) -> tuple[float, bool]:
+    """(delay [s], beyond) of ``actual`` behind ``target`` (:func:`estimate_delay`), the delay
+    within the window [-max_delay, max_delay] (default: half the record); ``beyond``: the best
+    fit sits at the window's edge and the fit improves past it, so the true delay lies outside
+    the window and the delay returned is only its edge.  (NaN, False) when a signal does not move."""
+    xy = _common_stretch(target, actual)
+    if xy is None:
+        return float("nan"), False
+    x, y = xy
+    dx, dy = np.diff(x), np.diff(y)
+    n = dx.size
+    if max_delay is None:
+        maxlag = n // 2
+        limit = maxlag * dt
+    else:
+        maxlag = min(int(np.floor(max_delay / dt + 1e-9)), n - 1)
+        limit = float(max_delay)
+    lag, rising = _correlation_peak(dx, dy, maxlag)
+    if not refine:
+        return float(np.clip(lag * dt, -limit, limit)), rising
+    return _polish(dt, x, y, lag * dt, maxlag, limit)
+
+
+def _common_stretch(target, actual):
+    """(x, y): the stretch where both are finite, inner gaps interpolated; None when either
+    does not move (or fewer than 8 common samples)."""
     x = np.asarray(target, float)
     y = np.asarray(actual, float)
     ok = np.isfinite(x) & np.isfinite(y)
     if ok.sum() < 8:
-        return float("nan")
-    # keep the common finite stretch
+        return None
     idx = np.flatnonzero(ok)
     x, y = x[idx[0]: idx[-1] + 1], y[idx[0]: idx[-1] + 1]
     x = np.where(np.isfinite(x), x, np.interp(np.arange(x.size), np.flatnonzero(np.isfinite(x)), x[np.isfinite(x)]))
@@ -108,13 +140,18 @@ def estimate_delay(dt: float, target, actual, max_delay: float | None = None,
     dx, dy = np.diff(x), np.diff(y)
     scale = max(np.abs(x).max(), np.abs(y).max(), 1e-300)
     if np.sqrt(np.mean(dx ** 2)) <= 1e-12 * scale or np.sqrt(np.mean(dy ** 2)) <= 1e-12 * scale:
-        return float("nan")
+        return None
+    return x, y
+
+
+def _correlation_peak(dx, dy, maxlag: int) -> tuple[float, bool]:
+    """(lag [samples], sub-sample, of the correlation peak within |lag| <= maxlag; whether that
+    peak is the window's edge with the correlation still rising past it)."""
     n = dx.size
-    maxlag = n // 2 if max_delay is None else min(int(np.ceil(max_delay / dt)), n - 1)
-    c = correlate(dy, dx, mode="full", method="auto")  # c[n-1+k] = sum dy[i+k] dx[i]
+    full = correlate(dy, dx, mode="full", method="auto")  # full[n-1+k] = sum dy[i+k] dx[i]
     lags = np.arange(-(n - 1), n)
     sel = np.abs(lags) <= maxlag
-    c, lags = c[sel], lags[sel]
+    c, lags = full[sel], lags[sel]
     i = int(np.argmax(c))
     frac = 0.0
     if 0 < i < c.size - 1:
@@ -122,9 +159,12 @@ def estimate_delay(dt: float, target, actual, max_delay: float | None = None,
         den = a - 2 * b + d
         if den < 0:
             frac = 0.5 * (a - d) / den
-    d0 = (lags[i] + frac) * dt
-    if not refine:
-        return float(d0)
+    outside = [k for k in (lags[i] - 1, lags[i] + 1) if maxlag < abs(k) < n]  # neighbours past the edge
+    return float(lags[i] + frac), any(full[n - 1 + k] > c[i] for k in outside)
+
+
+def _polish(dt: float, x, y, d0: float, maxlag: int, limit: float) -> tuple[float, bool]:
+    """Least-squares polish of the delay ``d0`` [s] within [-limit, limit] (:func:`search_delay`)."""
     t = dt * np.arange(x.size)
 
     def cost(d):
@@ -145,12 +185,22 @@ def estimate_delay(dt: float, target, actual, max_delay: float | None = None,
             if not cn < cb:
                 break
             kb, cb = kb + step, cn
-    res = minimize_scalar(cost, bounds=((kb - 1) * dt, (kb + 1) * dt), method="bounded",
-                          options={"xatol": 1e-6 * dt})
-    best = float(kb * dt)
-    if res.success and np.isfinite(res.fun) and res.fun <= cost(best):
-        best = float(res.x)
-    return best
+    lo, hi = max((kb - 1) * dt, -limit), min((kb + 1) * dt, limit)
+    best = float(np.clip(kb * dt, -limit, limit))
+    if lo < hi:
+        res = minimize_scalar(cost, bounds=(lo, hi), method="bounded", options={"xatol": 1e-6 * dt})
+        if res.success and np.isfinite(res.fun) and res.fun <= cost(best):
+            best = float(res.x)
+    return best, _beyond(cost, best, dt, limit)
+
+
+def _beyond(cost, best: float, dt: float, limit: float) -> bool:
+    """Whether the fit is better half a sample past an edge of [-limit, limit] (within one sample
+    of ``best``) than half a sample inside it: the cost falls across the edge, so the true delay
+    lies outside the window.  (Equal offsets: the overlap of the two records, hence the cost's
+    small steps, is alike at both points.)"""
+    edges = [e for e in (-limit, limit) if abs(e - best) < dt]
+    return any(cost(e + np.copysign(dt / 2, e)) < cost(e - np.copysign(dt / 2, e)) for e in edges)
 
 
 # ----------------------------------------------------------------------------
@@ -293,7 +343,8 @@ class Comparison:
     Attributes
     ----------
     delay : dict
-        Column -> delay [s] of the actual behind the target (NaN: no motion).
+        Column -> delay [s] of the actual behind the target (NaN: no motion, or a delay beyond
+        the searched window).
     rms_error, max_error : float
         Position error [m] (Euclidean over x, y, z) or, without position
         columns, the largest per-column RMS and max error.
@@ -302,6 +353,9 @@ class Comparison:
     segments : list of SegmentRow
     time : (k,) array
         The common uniform time grid [s] both logs were resampled to.
+    beyond : tuple of str
+        Columns whose delay lies beyond the searched window (``max_delay``, default half the
+        record): the best fit is at its edge and improves past it; their delay is NaN.
     """
 
     delay: dict
@@ -312,6 +366,7 @@ class Comparison:
     position_columns: tuple[str, ...] = ()
     time: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     error: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    beyond: tuple[str, ...] = ()
 
     def to_json(self) -> dict:
         def num(v):
@@ -319,6 +374,7 @@ class Comparison:
 
         return {
             "delay": {k: num(v) for k, v in self.delay.items()},
+            "delay_beyond_window": list(self.beyond),
             "rms_error": num(self.rms_error),
             "max_error": num(self.max_error),
             "columns": self.columns,
@@ -343,7 +399,8 @@ def compare(t_target, target: dict, t_actual, actual: dict, *, columns=None,
         Segment id per *target* sample (-1: none); default: detected from the
         target's position columns (:func:`detect_segments`).
     max_delay : float, optional
-        Largest delay searched [s].
+        Largest |delay| searched [s] (default: half the record); a column whose delay lies
+        beyond it has a NaN delay and is listed in ``beyond``.
     """
     tt = np.asarray(t_target, float)
     ta = np.asarray(t_actual, float)
@@ -358,7 +415,9 @@ def compare(t_target, target: dict, t_actual, actual: dict, *, columns=None,
     dt = float(grid[1] - grid[0]) if grid.size > 1 else 1.0
     X = {c: resample(tt, target[c], grid) for c in columns}
     Y = {c: resample(ta, actual[c], grid) for c in columns}
-    delay = {c: estimate_delay(dt, X[c], Y[c], max_delay) for c in columns}
+    found = {c: search_delay(dt, X[c], Y[c], max_delay) for c in columns}
+    delay = {c: float("nan") if out else d for c, (d, out) in found.items()}
+    beyond = tuple(c for c, (_, out) in found.items() if out)
     stats = {c: column_stats(X[c], Y[c]) for c in columns}
     pos = tuple(c for c in POSITION_COORDS if c in columns)
     err = np.zeros(0)
@@ -382,8 +441,8 @@ def compare(t_target, target: dict, t_actual, actual: dict, *, columns=None,
         rms = max(rmss) if rmss else float("nan")
         mx = max(maxs) if maxs else float("nan")
         segs = []
-    return Comparison(delay, rms, mx, stats, segs, pos, grid, err)
+    return Comparison(delay, rms, mx, stats, segs, pos, grid, err, beyond)
 
 
 __all__ = ["Comparison", "SegmentRow", "column_stats", "compare", "detect_segments",
-           "estimate_delay", "resample", "segment_table", "uniform_grid"]
+           "estimate_delay", "resample", "search_delay", "segment_table", "uniform_grid"]

@@ -25,7 +25,7 @@ from typing import Sequence
 
 from cdpr_design.batch.table import HIGHER_IS_BETTER, LOWER_IS_BETTER
 from cdpr_design.design.evaluate import CHECKS
-from cdpr_design.errors import InputError
+from cdpr_design.errors import InputError, quote
 
 #: Numeric figures of design_report.csv an objective or a limit may name (with ``peak_tension_<cable>``).
 FIGURES = tuple(sorted(f for f in HIGHER_IS_BETTER | LOWER_IS_BETTER
@@ -94,7 +94,7 @@ def check_figure(design, name: str, option: str) -> str:
     """``name`` if it is a numeric figure for this design; else exit 2 naming ``option``."""
     name = name.strip()
     if name not in known_figures(design):
-        raise InputError(f"{option} {name!r}: not a numeric figure of design_report.csv; one of "
+        raise InputError(f"{option} {quote(name)}: not a numeric figure of design_report.csv; one of "
                          f"{', '.join(FIGURES)}, peak_tension_<cable>")
     if name in TASK_FIGURES and design.requirements.task_box is None:
         raise InputError(f"{option} {name}: the spec has no requirements.task_box, so {name} is not computed")
@@ -123,14 +123,15 @@ def parse_limit(design, text: str) -> Limit:
     """One ``--require FIGURE>=X`` / ``FIGURE<=X``; exit 2 naming ``--require``."""
     m = _LIMIT.match(text)
     if not m:
-        raise InputError(f"--require {text!r}: expected FIGURE>=X or FIGURE<=X (e.g. torque_margin>=1)")
+        raise InputError(f"--require {quote(text)}: expected FIGURE>=X or FIGURE<=X (e.g. torque_margin>=1)")
     name = check_figure(design, m.group(1), "--require")
     try:
         bound = float(m.group(3))
     except ValueError:
-        raise InputError(f"--require {text!r}: expected a number after {m.group(2)}, got {m.group(3)!r}") from None
+        raise InputError(f"--require {quote(text)}: expected a number after {m.group(2)}, "
+                         f"got {quote(m.group(3))}") from None
     if not math.isfinite(bound):
-        raise InputError(f"--require {text!r}: expected a finite number")
+        raise InputError(f"--require {quote(text)}: expected a finite number")
     return Limit(name, m.group(2) == ">=", bound)
 
 

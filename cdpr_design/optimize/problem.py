@@ -24,9 +24,9 @@ from dataclasses import dataclass, field
 from typing import Sequence
 
 from cdpr_design.batch.local import Job, Options, evaluate_variant
-from cdpr_design.errors import InputError
+from cdpr_design.errors import InputError, quote
 from cdpr_design.optimize import objectives as obj
-from cdpr_design.optimize.space import Space, make_space
+from cdpr_design.optimize.space import Space, make_space, vary_name
 
 
 @dataclass(frozen=True)
@@ -95,7 +95,9 @@ def make_problem(design, vary: Sequence[str], maximize: Sequence[str] | None, mi
     from cdpr_design.design.evaluate import parts_needed
 
     space = make_space(design, vary)
-    _check_motor_choices(space, options.catalogue)
+    catalogue = _catalogue(options)
+    _check_motor_option(options.motor, catalogue)
+    _check_motor_choices(space, catalogue)
     objectives = obj.make_objectives(design, maximize, minimize)
     limits = tuple(obj.parse_limit(design, t) for t in require or ())
     checks = tuple(obj.spec_checks(design, options.motor))
@@ -105,19 +107,32 @@ def make_problem(design, vary: Sequence[str], maximize: Sequence[str] | None, mi
     return Problem(design.name, space, tuple(objectives), limits, checks, options, workspace)
 
 
+def _catalogue(options: Options):
+    """The motor catalogue of the evaluations (``options.catalogue``, else the shipped one)."""
+    if options.catalogue is not None:
+        return options.catalogue
+    from cdpr_design.model import spec
+
+    return spec.load_catalogue()
+
+
+def _check_motor_option(motor: str | None, catalogue) -> None:
+    """``--motor`` (every trial's motor) must be in the catalogue, else exit 2, as for ``report``."""
+    if motor is not None and catalogue.motor(motor) is None:
+        known = ", ".join(m.name for m in catalogue.motors)
+        raise InputError(f"--motor: {quote(motor)} is not in the motor catalogue (known: {known}; "
+                         "add it with --catalogue FILE)")
+
+
 def _check_motor_choices(space: Space, catalogue) -> None:
     """A motor choice (``winch.motor``, ``cables.i.winch.motor``) must be in the catalogue, else exit 2."""
-    if catalogue is None:
-        from cdpr_design.model import spec
-
-        catalogue = spec.load_catalogue()
     for p in space.params:
         if p.kind == "categorical" and p.path[-1] == "motor":
             bad = [c for c in p.choices if catalogue.motor(str(c)) is None]
             if bad:
                 known = ", ".join(m.name for m in catalogue.motors)
-                raise InputError(f"--vary {p.key}: the choice {bad[0]!r} makes the spec invalid (not in the motor "
-                                 f"catalogue; known: {known}; add it with --catalogue FILE)")
+                raise InputError(f"{vary_name(p.key)}: the choice {quote(bad[0])} makes the spec invalid (not in the "
+                                 f"motor catalogue; known: {known}; add it with --catalogue FILE)")
 
 
 @dataclass

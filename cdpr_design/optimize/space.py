@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Sequence
 
 from cdpr_design.batch.variants import Axis, Plan, parse_path, parse_values, resolve
-from cdpr_design.errors import InputError, SpecError
+from cdpr_design.errors import QUOTE_WIDTH, InputError, SpecError, quote
 
 
 @dataclass(frozen=True)
@@ -74,11 +74,16 @@ class Space:
         return self.plan.data([values[p.key] for p in self.params])
 
 
+def vary_name(key: str) -> str:
+    """``--vary KEY`` for a message, KEY cut to about :data:`~cdpr_design.errors.QUOTE_WIDTH` characters."""
+    return "--vary " + (key if len(key) <= QUOTE_WIDTH else key[: QUOTE_WIDTH - 3] + "...")
+
+
 def _split_option(option: str) -> tuple[str, str]:
     key, sep, text = option.partition("=")
     key = key.strip()
     if not sep or not key or not text.strip():
-        raise InputError(f"--vary {option!r}: expected KEY=LO:HI, KEY=LO:HI:log or KEY=a,b,c "
+        raise InputError(f"--vary {quote(option)}: expected KEY=LO:HI, KEY=LO:HI:log or KEY=a,b,c "
                          "(e.g. cables.0.outlet.0=-0.5:0.5)")
     return key, text.strip()
 
@@ -87,28 +92,28 @@ def _number(text: str, where: str) -> float:
     try:
         v = float(text)
     except ValueError:
-        raise InputError(f"{where}: expected a number, got {text!r}") from None
+        raise InputError(f"{where}: expected a number, got {quote(text)}") from None
     if not math.isfinite(v):
-        raise InputError(f"{where}: expected a finite number, got {text!r}")
+        raise InputError(f"{where}: expected a finite number, got {quote(text)}")
     return v
 
 
 def parse_range(key: str, text: str, integer: bool) -> Param:
     """``LO:HI`` or ``LO:HI:log`` of ``--vary KEY`` (``integer``: the spec format's type)."""
-    where = f"--vary {key}"
+    where = vary_name(key)
     parts = [t.strip() for t in text.split(":")]
     if len(parts) not in (2, 3) or (len(parts) == 3 and parts[2] != "log"):
-        raise InputError(f"{where}: expected LO:HI or LO:HI:log, got {text!r}")
+        raise InputError(f"{where}: expected LO:HI or LO:HI:log, got {quote(text)}")
     lo, hi = _number(parts[0], where), _number(parts[1], where)
     log = len(parts) == 3
     if not lo < hi:
-        raise InputError(f"{where}: expected LO < HI, got {text!r}")
+        raise InputError(f"{where}: expected LO < HI, got {quote(text)}")
     if log and lo <= 0:
-        raise InputError(f"{where}: a log range needs LO > 0, got {text!r}")
+        raise InputError(f"{where}: a log range needs LO > 0, got {quote(text)}")
     if integer:
         if lo != int(lo) or hi != int(hi):
             raise InputError(f"{where}: {key} is an integer in the spec format; expected whole LO and HI, "
-                             f"got {text!r}")
+                             f"got {quote(text)}")
         return Param(key, (), "int", int(lo), int(hi), log)
     return Param(key, (), "float", lo, hi, log)
 
@@ -118,9 +123,9 @@ def parse_choices(key: str, text: str) -> Param:
     try:
         values = parse_values(text)
     except ValueError as exc:
-        raise InputError(f"--vary {key}: {exc}") from None
+        raise InputError(f"{vary_name(key)}: {exc}") from None
     if len(set(map(repr, values))) != len(values):
-        raise InputError(f"--vary {key}: a choice is given twice in {text!r}")
+        raise InputError(f"{vary_name(key)}: a choice is given twice in {quote(text)}")
     return Param(key, (), "categorical", choices=tuple(values))
 
 
@@ -188,7 +193,7 @@ def _resolve(base: dict, key: str) -> tuple:
     try:
         return resolve(base, parse_path(key))
     except ValueError as exc:
-        raise InputError(f"--vary {key}: {exc}") from None
+        raise InputError(f"{vary_name(key)}: {exc}") from None
 
 
 def _loc(path: tuple) -> str:
@@ -211,7 +216,7 @@ def _check_scalar_list(design, param: Param) -> None:
     except SpecError as exc:
         here = [m for p, m in exc.problems if p == _loc(param.path)]
         if here:
-            raise InputError(f"--vary {param.key}: a range needs a numeric key; at {mid:g} the spec "
+            raise InputError(f"{vary_name(param.key)}: a range needs a numeric key; at {mid:g} the spec "
                              f"says: {here[0]}") from None
 
 
@@ -225,7 +230,8 @@ def _check_choices(design, param: Param) -> None:
             spec.validate(with_value(design.raw, param.path, c), design.source)
         except SpecError as exc:
             problems = "; ".join(f"{p}: {m}" if p else m for p, m in exc.problems)
-            raise InputError(f"--vary {param.key}: the choice {c!r} makes the spec invalid ({problems})") from None
+            raise InputError(f"{vary_name(param.key)}: the choice {quote(c)} makes the spec invalid "
+                             f"({problems})") from None
 
 
 def make_space(design, vary: Sequence[str]) -> Space:
@@ -246,15 +252,15 @@ def make_space(design, vary: Sequence[str]) -> Space:
         key, text = _split_option(option)
         path = _resolve(design.raw, key)
         if path in seen:
-            raise InputError(f"--vary {key}: the same key as --vary {seen[path]}")
+            raise InputError(f"{vary_name(key)}: the same key as {vary_name(seen[path])}")
         seen[path] = key
         types = key_types(path)
         if types is None:
-            raise InputError(f"--vary {key}: not a key of the spec format (see docs/spec-format.md)")
+            raise InputError(f"{vary_name(key)}: not a key of the spec format (see docs/spec-format.md)")
         if ":" in text and "," not in text:
             numeric = types & {"number", "integer", "any"}
             if not numeric and "array" not in types:
-                raise InputError(f"--vary {key}: a range needs a numeric key; {key} is not a number "
+                raise InputError(f"{vary_name(key)}: a range needs a numeric key; the key is not a number "
                                  f"({'/'.join(sorted(types))})")
             p = parse_range(key, text, integer=numeric == {"integer"})
         else:

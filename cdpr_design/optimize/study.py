@@ -115,6 +115,48 @@ def storage(folder: Path):
     return st
 
 
+def check_file(folder: Path, resume: bool) -> None:
+    """Refuse, before any work, an ``optimize.db`` in ``folder`` that is no usable study file (exit 2
+    naming it): a folder, a file that is not an SQLite database or a damaged one, another SQLite
+    database, or (without ``resume``) a study.  It is never replaced, even with ``--overwrite``:
+    a study is moved away by hand.  Read only; no file is created."""
+    path = Path(folder) / DB
+    if not path.exists():
+        return
+    if not path.is_file():
+        raise InputError(f"{path}: not a file; move it away or choose another --out")
+    tables, names = _contents(path)
+    if tables and "studies" not in tables:
+        raise InputError(f"{path}: an SQLite database but not an optuna study; move it away or choose another --out")
+    if STUDY in names and not resume:
+        _refuse_existing(path)
+
+
+def _contents(path: Path) -> tuple[set[str], set[str]]:
+    """(tables, study names) of the SQLite file ``path``, opened read-only; exit 2 naming it when it
+    is not an SQLite database, is damaged or cannot be read."""
+    import sqlite3
+
+    try:
+        con = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True, timeout=BUSY_TIMEOUT_S)
+        try:
+            if con.execute("PRAGMA quick_check(1)").fetchone() != ("ok",):
+                raise sqlite3.DatabaseError("database disk image is malformed")
+            tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+            names = {r[0] for r in con.execute("SELECT study_name FROM studies")} if "studies" in tables else set()
+        finally:
+            con.close()
+    except sqlite3.Error as exc:
+        raise InputError(f"{path}: not a readable optuna study ({exc}); it is left as it is: move it away "
+                         "or choose another --out") from None
+    return tables, names
+
+
+def _refuse_existing(path: Path) -> None:
+    """Exit 2: ``path`` holds a study and ``--resume`` was not given (it is never replaced)."""
+    raise InputError(f"--resume: {path} already holds a study; pass --resume to continue it, or choose another --out")
+
+
 def load(folder: Path):
     """The study in ``folder`` (after a run)."""
     optuna = _optuna()
@@ -321,8 +363,7 @@ def open_study(problem: Problem, folder: Path, resume: bool, log: Callable[[str]
     st = storage(folder)
     names = optuna.get_all_study_names(st)
     if STUDY in names and not resume:
-        raise InputError(f"--resume: {Path(folder) / DB} already holds a study; pass --resume to continue it, "
-                         "or choose another --out")
+        _refuse_existing(Path(folder) / DB)
     if STUDY not in names:
         if resume:
             log(f"--resume: no study in {folder}; starting one")

@@ -16,7 +16,8 @@ import numpy as np
 def _delays_on_grid(names, step: float, targets, actuals, max_delay: float) -> dict:
     """Delay [s] of each axis's ``actuals[j]`` behind ``targets[j]`` (series sampled every ``step`` [s]).
 
-    Keyed ``length_<cable>``; None where an axis did not move.
+    Keyed ``length_<cable>``; None where an axis did not move or lags by more than ``max_delay``
+    (:func:`~cdpr_design.motion.compare.estimate_delay` gives no delay beyond its window).
     """
     from cdpr_design.motion.compare import estimate_delay
 

@@ -81,7 +81,7 @@ class RowMaker:
 
         Cross-correlation of the logged set-point and actual length
         (:func:`cdpr_design.motion.compare.estimate_delay`); None where an axis did
-        not move.
+        not move or lags by more than the window searched.
         """
         return axis_delays(self.design.cable_names, self._buf[: self.n, 0],
                            self._buf[: self.n, 1: 1 + self.design.m],
