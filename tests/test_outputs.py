@@ -338,3 +338,13 @@ def test_a_folder_where_an_output_goes_is_refused_even_with_overwrite(tmp_path, 
     assert r.exit_code == 2 and f"{out / name} is a folder" in r.output, r.output  # was: IsADirectoryError
     assert sorted(p.relative_to(out) for p in out.rglob("*")) == [Path(name), Path(name) / "notes.txt"]
     assert (out / name / "notes.txt").read_text() == "mine\n"
+
+
+def test_a_dangling_symbolic_link_where_an_output_goes_is_a_foreign_file(tmp_path):
+    """A link of the user's that points nowhere (yet) is theirs: not replaced without --overwrite."""
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "summary.json").symlink_to(tmp_path / "elsewhere" / "summary.json")
+    r = invoke("workspace", PLANAR2, "--step", "0.25", "--out", out, "--quiet")
+    assert r.exit_code == 2 and "exists and was not written by cdpr-design" in r.output, r.output
+    assert (out / "summary.json").is_symlink() and sorted(p.name for p in out.iterdir()) == ["summary.json"]

@@ -67,7 +67,8 @@ class OutputDir:
         p = self.path / name
         if p.is_dir():
             raise InputError(f"--out: {p} is a folder, not a file cdpr-design can replace; move it away")
-        if p.exists() and name not in self._ours and not self.overwrite:
+        # a symbolic link counts even when it points nowhere: the write would replace the link itself
+        if (p.exists() or p.is_symlink()) and name not in self._ours and not self.overwrite:
             raise InputError(
                 f"{p} exists and was not written by cdpr-design; move it away or pass --overwrite")
         return p
