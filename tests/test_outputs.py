@@ -348,3 +348,37 @@ def test_a_dangling_symbolic_link_where_an_output_goes_is_a_foreign_file(tmp_pat
     r = invoke("workspace", PLANAR2, "--step", "0.25", "--out", out, "--quiet")
     assert r.exit_code == 2 and "exists and was not written by cdpr-design" in r.output, r.output
     assert (out / "summary.json").is_symlink() and sorted(p.name for p in out.iterdir()) == ["summary.json"]
+
+
+#: Designs whose workspace run draws an extra picture, and that picture.
+EXTRA_PICTURE = {"crane4": "tilt_map.png", "planar2": "tilt_map.png", "sagging40": "cable_models.png"}
+
+
+@pytest.mark.parametrize("name", sorted(p.stem for p in DESIGNS.glob("*.yaml")))
+def test_every_file_a_workspace_run_writes_is_known_before_the_sweep(tmp_path, name):
+    """The names checked for foreign files up front are exactly the files the run writes."""
+    from cdpr_design.jobs.workspace import output_names
+    from cdpr_design.model.spec import load
+
+    design = load(DESIGNS / f"{name}.yaml")
+    r = invoke("workspace", DESIGNS / f"{name}.yaml", "--step", "0.5", "--out", tmp_path, "--quiet")
+    assert r.exit_code == 0, r.output
+    written = sorted(p.name for p in tmp_path.iterdir())
+    assert written == sorted(output_names(design) + ["workspace.csv", ".cdpr-design-outputs"]), written
+    assert (EXTRA_PICTURE.get(name) in written) if name in EXTRA_PICTURE else \
+        not {"tilt_map.png", "cable_models.png"} & set(written)
+
+
+@pytest.mark.parametrize("name, picture", sorted(EXTRA_PICTURE.items()))
+def test_a_foreign_extra_picture_is_refused_before_the_sweep(tmp_path, monkeypatch, name, picture):
+    from cdpr_design.jobs import workspace as job
+
+    def no_sweep(*args, **kwargs):
+        raise AssertionError("swept before the outputs were checked")
+
+    monkeypatch.setattr(job, "_sweep", no_sweep)
+    (tmp_path / picture).write_text("mine\n")
+    r = invoke("workspace", DESIGNS / f"{name}.yaml", "--step", "0.5", "--out", tmp_path, "--quiet")
+    assert r.exit_code == 2 and f"{tmp_path / picture} exists and was not written" in r.output, r.output
+    assert [p.name for p in tmp_path.iterdir()] == [picture]  # was: refused after the sweep
+    assert (tmp_path / picture).read_text() == "mine\n"

@@ -86,8 +86,7 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
     names = ws.column_names(design) + ws.extra_columns(design, collisions, orientations)
     meta = table_metadata(design, "workspace", names, kind=kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])
-    for name in ["workspace.png", "tension_map.png", "summary.json"] \
-            + (["orientation_workspace.png"] if orientations else []) + (["report.html"] if html else []):
+    for name in output_names(design, orientations, html):
         out.target(name)  # a foreign file of that name: refused before any work
     writer = out.table("workspace", format, metadata=meta, names=names, background=True)
     try:
@@ -102,6 +101,24 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
         raise
     timings.write_s += writer.busy_s
     return result, pending
+
+
+def output_names(design, orientations: str | None = None, html: bool = False) -> list[str]:
+    """Every file :func:`start_workspace` writes besides its table, known before the sweep: the
+    names :func:`workspace_pictures` and :func:`cable_model_picture` will draw, ``summary.json``
+    and, with ``html``, ``report.html``."""
+    from cdpr_design import workspaces as ws
+    from cdpr_design.statics import cables as cable_models
+
+    names = ["workspace.png", "tension_map.png", "summary.json"]
+    if orientations:
+        names.append("orientation_workspace.png")
+    else:
+        if ws.hanging.wanted(design):
+            names.append("tilt_map.png")
+        if cable_models.design_model(design) == "sagging":
+            names.append("cable_models.png")
+    return names + (["report.html"] if html else [])
 
 
 def finish_workspace(out: OutputDir, result, pending, timings: Timings) -> None:
