@@ -183,7 +183,49 @@ def test_an_underconstrained_effector_without_weight_names_the_keys(tmp_path, pl
     message names the spec's keys (not the command's options)."""
     planar2_data["effector"]["mass"] = 0.0
     p = write_spec(tmp_path, planar2_data)
-    for args in (("pose", p, "--at", "0.75,0.75"), ("fk", p, "--lengths", "1,1")):
+    r = invoke("fk", p, "--lengths", "1,1")
+    assert r.exit_code == 2 and "Traceback" not in r.output, r.output
+    assert "effector.mass, gravity:" in r.output and "--lengths" not in r.output, r.output
+
+
+def test_a_held_weightless_effector_gets_its_statics_and_no_tilt(tmp_path, planar2_data):
+    """effector.orientation: fixed holds the effector, so its statics stand without a weight; the tilt
+    it would hang with does not exist, and pose and workspace agree on leaving it out (pose refused
+    the pose while workspace swept it, with a tilt of nan everywhere)."""
+    planar2_data["effector"]["mass"] = 0.0
+    p = write_spec(tmp_path, planar2_data)
+    r = invoke("pose", p, "--at", "0.75,0.75", "--json")
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)
+    assert d["feasible"] and d["tilt"] is None and d["hanging"] is None
+    assert all(t == 0 for t in d["tensions"].values())  # nothing to carry
+    r = invoke("pose", p, "--at", "0.75,0.75")
+    assert r.exit_code == 0 and "weightless effector" in r.output, r.output
+    r = invoke("workspace", p, "--step", "0.25", "--out", tmp_path / "ws", "--quiet")
+    assert r.exit_code == 0, r.output
+    header = (tmp_path / "ws" / "workspace.csv").read_text().splitlines()[0].split(",")
+    assert "tilt" not in header and not (tmp_path / "ws" / "tilt_map.png").exists()
+
+
+@pytest.mark.parametrize("mass, gravity", [(0.0, [0.0, -9.81]), (1.0, [0.0, 0.0])])
+def test_a_hanging_effector_without_weight_is_refused_when_the_spec_is_read(tmp_path, planar2_data, mass, gravity):
+    """effector.orientation: free on an under-constrained design: every analysis needs the hanging
+    pose, which a weightless effector does not have (workspace reported every pose infeasible)."""
+    planar2_data["effector"].update(mass=mass, orientation="free")
+    planar2_data["gravity"] = gravity
+    p = write_spec(tmp_path, planar2_data)
+    for args in (("workspace", p, "--out", tmp_path / "ws"), ("pose", p, "--at", "0.75,0.75"), ("fk", p, "--lengths", "1,1")):
         r = invoke(*args)
-        assert r.exit_code == 2 and "Traceback" not in r.output, r.output
-        assert "effector.mass, gravity:" in r.output and "--lengths" not in r.output, r.output
+        assert r.exit_code == 2 and "effector.mass: effector.orientation: free" in r.output, (args, r.output)
+        assert "non-zero gravity" in r.output and "Traceback" not in r.output
+    assert not (tmp_path / "ws").exists()
+
+
+def test_a_held_fully_constrained_design_needs_no_weight_even_when_free(tmp_path):
+    """A fully constrained design is held whatever effector.orientation says: no weight needed."""
+    import yaml
+
+    data = yaml.safe_load((DESIGNS / "ipanema3.yaml").read_text())
+    data["effector"].update(mass=0.0, orientation="free")
+    d = spec.load(write_spec(tmp_path, data))
+    assert d.effector.mass == 0.0 and d.effector.orientation == "free"

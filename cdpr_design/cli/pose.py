@@ -102,6 +102,9 @@ def _pose_table(design, at: str, data: dict) -> None:
         out_console.print(f"cable model: {model} (tensions at the effector end; status {data['cable_status']})")
     if data.get("effector_orientation") == "free" and data["orientation"] is not None:
         out_console.print(f"hangs with orientation {fmt(data['orientation'])}, tilt {fmt(data['tilt'])}°")
+    elif data.get("hanging", 0) is None:
+        out_console.print("hanging: no tilt — a weightless effector (effector.mass 0 or zero gravity) hangs in no "
+                          "particular orientation")
     elif "hanging" in data:
         h = data["hanging"]
         out_console.print(f"hanging: the free body would tilt by {fmt(h['tilt'])}° here"

@@ -91,9 +91,12 @@ def fk_data(design, lengths, guess=None) -> dict:
 
 def hanging_fields(design, position) -> dict:
     """``pose --json``'s ``tilt`` and ``hanging`` keys for a ``fixed`` under-constrained design:
-    the orientation the free body would hang in at ``position`` [m] (:func:`statics.hanging.pose_at`)."""
+    the orientation the free body would hang in at ``position`` [m] (:func:`statics.hanging.pose_at`);
+    both null for a weightless effector, which hangs in no particular orientation."""
     from cdpr_design.statics import hanging as H
 
+    if not H.has_weight(design.effector.mass, design.gravity):
+        return {"tilt": None, "hanging": None}
     at = H.pose_at(design, position, nominal=H.nominal_rotation(design))
     return {"tilt": _num(at.tilt_deg), "hanging": {
         "feasible": bool(at.feasible), "reason": at.reason, "orientation": _orientation(at.orientation),

@@ -88,6 +88,26 @@ def pad3(v, dim: int | None = None) -> np.ndarray:
     return out
 
 
+def default_gravity(dim: int) -> list[float]:
+    """The spec's gravity when it gives none [m/s^2]: -9.81 along the last of ``dim`` axes."""
+    return [0.0] * (dim - 1) + [-9.81]
+
+
+def is_point_mass(B, tol: float = 1e-12) -> bool:
+    """True when every attachment (rows of ``B`` [m]) is the same point: rotations change no length."""
+    B = np.atleast_2d(np.asarray(B, float))
+    return bool(np.all(np.linalg.norm(B - B[0], axis=1) <= tol))
+
+
+def is_underconstrained(m: int, B, planar: bool) -> bool:
+    """Fewer cables (``m``) than the free degrees of freedom they would have to fix, with
+    attachments ``B`` [m]: a planar rigid body < 3, a spatial one < 6, a point mass < its
+    dimension (its orientation then hangs: docs/spec-format.md, under-constrained designs)."""
+    if is_point_mass(B):
+        return m < (2 if planar else 3)
+    return m < (3 if planar else 6)
+
+
 # ----------------------------------------------------------------------------
 # Components
 # ----------------------------------------------------------------------------

@@ -32,7 +32,7 @@ from cdpr_design.model import limits
 from cdpr_design.model.catalogue import Catalogue, catalogue_from_dict, shipped_catalogue_path
 from cdpr_design.model.design import (  # noqa: I001
     MOTIONS, Cable, CableProps, Design, Effector, Grid, Motion, OrientationRange, OrientationSet, Plc, Pulley,
-    Requirements, Trajectory, Winch, WorkspaceSpec, WrenchBox, pad3,
+    Requirements, Trajectory, Winch, WorkspaceSpec, WrenchBox, default_gravity, pad3,
 )
 from cdpr_design.model.schema import (
     CablePhysSpec, DesignSpec, GridSpec, RequirementsSpec, WinchSpec, WorkspaceSpecModel, parse,
@@ -212,7 +212,7 @@ def build(s: DesignSpec, raw: dict | None = None, source: str | None = None) -> 
     """Build the frozen :class:`~cdpr_design.model.design.Design` from a validated spec."""
     mot = MOTIONS[s.motion]
     d = mot.dim
-    g = pad3(s.gravity) if s.gravity is not None else pad3([0.0] * (d - 1) + [-9.81])
+    g = pad3(s.gravity if s.gravity is not None else default_gravity(d))
     frame_lo, frame_hi = pad3(s.frame.lower), pad3(s.frame.upper)
     return Design(
         name=s.name, motion=mot, gravity=_t3(g), frame_lower=_t3(frame_lo),

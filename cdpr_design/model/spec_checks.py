@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design.errors import quote
-from cdpr_design.model.design import MOTIONS
+from cdpr_design.model.design import MOTIONS, default_gravity, is_underconstrained
 from cdpr_design.model.limits import net_id_problem
 from cdpr_design.model.schema import DesignSpec, WorkspaceSpecModel
 
@@ -34,6 +34,7 @@ def check_semantics(s: DesignSpec) -> Problems:
         b = _motion_vec(p, s, "requirements.task_box.upper", r.task_box.upper)
         if a and b:
             _check_ordered(p, "requirements.task_box", r.task_box.lower, r.task_box.upper)
+    _check_hanging_weight(p, s)
     if r is not None and r.max_tilt is not None and s.effector.orientation != "free":
         p.append(("requirements.max_tilt", "a tilt limit needs effector.orientation: free (a fixed effector is "
                                            "held at its commanded orientation and does not tilt)"))
@@ -105,6 +106,23 @@ def _check_frame_effector(p: Problems, s: DesignSpec) -> None:
         p.append(("effector.size", "expected non-negative extents"))
     _motion_vec(p, s, "effector.center_of_mass", s.effector.center_of_mass)
     _check_inertia(p, s.effector.inertia, MOTIONS[s.motion].dim)
+
+
+def _check_hanging_weight(p: Problems, s: DesignSpec) -> None:
+    """An under-constrained design with ``effector.orientation: free`` hangs under its weight: it
+    needs effector.mass > 0 and a non-zero gravity (a fully constrained one is held either way)."""
+    mot = MOTIONS[s.motion]
+    B = [c.attachment for c in s.cables]
+    gravity = s.gravity if s.gravity is not None else default_gravity(mot.dim)
+    if s.effector.orientation != "free" or any(len(b) != mot.dim for b in B) or len(gravity) != mot.dim:
+        return
+    if not is_underconstrained(len(B), B, mot.planar):
+        return
+    g = float(np.linalg.norm(gravity))
+    if not (s.effector.mass > 0 and g > 0):
+        p.append(("effector.mass", f"effector.orientation: free on an under-constrained design: the effector "
+                  f"hangs from its cables under its weight, so it needs effector.mass > 0 and a non-zero "
+                  f"gravity (got {s.effector.mass:g} kg and |gravity| = {g:g} m/s^2)"))
 
 
 def _check_inertia(p: Problems, inertia, dim: int) -> None:

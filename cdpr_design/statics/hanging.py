@@ -69,11 +69,16 @@ from cdpr_design.statics.hanging_results import (  # noqa: F401 - re-exported
 # classification
 # ----------------------------------------------------------------------------
 
+def has_weight(mass: float, g) -> bool:
+    """Whether an effector of ``mass`` [kg] under gravity ``g`` [m/s^2] has a weight to hang under."""
+    return bool(mass > 0 and np.linalg.norm(np.asarray(g, float)) > 0)
+
+
 def check_weight(mass: float, g) -> None:
     """An :class:`InputError` naming ``effector.mass`` and ``gravity`` unless the effector has a weight:
     an under-constrained effector hangs from its cables under it (mass [kg] > 0, |g| [m/s^2] > 0)."""
     gn = float(np.linalg.norm(np.asarray(g, float)))
-    if not (mass > 0 and gn > 0):
+    if not has_weight(mass, g):
         raise InputError(f"effector.mass, gravity: an under-constrained effector hangs from its cables under its "
                          f"weight, so it needs effector.mass > 0 and a non-zero gravity (got {mass:g} kg and "
                          f"|gravity| = {gn:g} m/s^2)")

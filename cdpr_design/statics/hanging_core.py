@@ -24,6 +24,8 @@ import math
 
 import numpy as np
 
+from cdpr_design.model.design import is_point_mass, is_underconstrained  # noqa: F401 - in the model: the spec checks use it
+
 DOFS_PLANAR = (0, 1, 5)
 DOFS_SPATIAL = (0, 1, 2, 3, 4, 5)
 DOFS_POINT2 = (0, 1)
@@ -198,24 +200,6 @@ def lowest_points(C, rho, down, tol):
     ok = feas[rows, k]
     x = np.where(ok[:, None], X[rows, k], np.nan)
     return x, ok, viol.min(axis=1)
-
-
-# ----------------------------------------------------------------------------
-# classification
-# ----------------------------------------------------------------------------
-
-def is_point_mass(B, tol: float = 1e-12) -> bool:
-    """True when every attachment is the same point (rotations change no length)."""
-    B = np.atleast_2d(np.asarray(B, float))
-    return bool(np.all(np.linalg.norm(B - B[0], axis=1) <= tol))
-
-
-def is_underconstrained(m: int, B, planar: bool) -> bool:
-    """Fewer cables than the free degrees of freedom they would have to fix:
-    a planar rigid body < 3, a spatial one < 6, a point mass < its dimension."""
-    if is_point_mass(B):
-        return m < (2 if planar else 3)
-    return m < (3 if planar else 6)
 
 
 # ----------------------------------------------------------------------------

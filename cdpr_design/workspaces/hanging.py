@@ -67,10 +67,15 @@ def wanted(design: Design, tilt: bool = True) -> bool:
 
 
 def applies(design: Design) -> bool:
-    """Whether a sweep of ``design`` goes through :func:`sweep`: under-constrained, with point
-    outlets and ideal cables (the hanging solvers model neither swivel pulleys nor elastic or
-    sagging cables; ``free`` with either is refused)."""
+    """Whether a sweep of ``design`` goes through :func:`sweep`: under-constrained, with a weight
+    (a weightless ``fixed`` effector hangs in no particular orientation: no tilt), point outlets and
+    ideal cables (the hanging solvers model neither swivel pulleys nor elastic or sagging cables;
+    ``free`` with either, or without a weight, is refused)."""
     if not H.underconstrained(design):
+        return False
+    if not H.has_weight(design.effector.mass, design.gravity):
+        if H.hangs_freely(design):
+            H.check_weight(design.effector.mass, design.gravity)  # the spec checks refuse it at load
         return False
     if kin.has_pulleys(design) or not is_ideal(design):
         if H.hangs_freely(design):
