@@ -60,11 +60,37 @@ def test_numpy_twin_equals_the_kernel():
         np.testing.assert_allclose(got.orientation[ok], phi[ok], rtol=0, atol=1e-12)
         np.testing.assert_allclose(got.tensions[ok], t[ok], rtol=1e-10, atol=1e-10 * mass)
         np.testing.assert_allclose(got.hessian_min[ok], h[ok], rtol=1e-8)
-        # the numba engine of hang() is the kernel itself
+        # the numba engine of hang() is the kernel itself, run for a unit weight and scaled back
         nb = ha.hang(geo, P, True, engine="numba")
-        assert np.array_equal(nb.status, status)
-        np.testing.assert_allclose(nb.orientation[ok], phi[ok], rtol=0, atol=1e-15)
+        g = np.asarray(G2, float)
+        phi1, t1, h1, status1, _ = K.hanging_tilt_batch(A, B, c, 1.0, g / np.linalg.norm(g), P)
+        assert np.array_equal(nb.status, status1) and np.array_equal(status1, status)
+        np.testing.assert_allclose(nb.orientation[ok], phi1[ok], rtol=0, atol=1e-15)  # via a rotation matrix
+        np.testing.assert_array_equal(nb.tensions[ok], t1[ok] * geo.weight)
+        np.testing.assert_allclose(nb.orientation[ok], phi[ok], rtol=0, atol=1e-13)
     assert compared > 2000
+
+
+@pytest.mark.parametrize("name", ["planar2", "crane4", "pointmass3"])
+def test_the_weight_scales_the_tensions_and_leaves_the_orientation(name):
+    """Balance is linear in the weight: any mass hangs in the same orientation, with tensions and
+    reduced Hessian in proportion.  The smallest masses used to underflow the solvers' tolerances
+    (2.2e-308 kg: a LinAlgError traceback from the planar two-cable roots)."""
+    design = spec.load(DESIGNS / f"{name}.yaml")
+    A, B, c, mass, g, planar = H.design_arrays(design)
+    rng = np.random.default_rng(5)
+    lo, hi = np.asarray(design.frame_lower), np.asarray(design.frame_upper)
+    P = lo + rng.uniform(0.1, 0.9, (60, 3)) * (hi - lo)
+    P = P[:, :2] if planar else P
+    ref = ha.hang(hc.Geometry(A, B, c, 1.0, g), P, planar)
+    ok = ref.status == ha.OK
+    assert ok.sum() >= 10
+    for m in (2.2250738585072014e-308, 1e-200, 1e-3, 1e6, 1e200):
+        got = ha.hang(hc.Geometry(A, B, c, m, g), P, planar)
+        assert np.array_equal(got.status, ref.status), m
+        np.testing.assert_allclose(got.rotation[ok], ref.rotation[ok], rtol=0, atol=1e-15)
+        np.testing.assert_allclose(got.tensions[ok] / m, ref.tensions[ok], rtol=1e-14, atol=0)
+        np.testing.assert_allclose(got.hessian_min[ok] / m, ref.hessian_min[ok], rtol=1e-14, atol=0)
 
 
 # ---------------------------------------------------------------------------

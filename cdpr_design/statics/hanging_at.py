@@ -447,16 +447,22 @@ def hang(geo: hc.Geometry, P, planar: bool, *, nominal=None, engine: str = "nump
     P3 = np.zeros((len(P), 3))
     P3[:, : P.shape[1]] = P[:, :3]
     up = -geo.g / np.linalg.norm(geo.g)
-    if hc.is_point_mass(geo.B):
-        out = _hang_point(geo, P3, planar, nominal, alternatives)
-    elif planar and geo.m == 2:
-        out = _hang_planar2(geo, P3, engine, alternatives)
+    # The orientations do not depend on the weight W, and the tensions and the reduced Hessian are
+    # linear in it: solved for a unit weight (mass 1, |g| = 1) and scaled back, no weight is too small
+    # or too large for the solvers' tolerances (2e-308 kg underflowed them: a traceback).
+    w = geo.weight
+    unit = hc.Geometry(geo.A, geo.B, geo.c, 1.0, up * -1.0)
+    if hc.is_point_mass(unit.B):
+        out = _hang_point(unit, P3, planar, nominal, alternatives)
+    elif planar and unit.m == 2:
+        out = _hang_planar2(unit, P3, engine, alternatives)
     else:
-        out = _hang_general(geo, P3, planar, nominal, alternatives)
+        out = _hang_general(unit, P3, planar, nominal, alternatives)
     R, t, status, hmin, alts = out
     bad = status != OK
     R[bad], t[bad], hmin[bad] = np.nan, np.nan, np.nan
-    return Hanging(R, t, status, hmin, planar, up, alts)
+    alts = [[(Ra, ta * w, st) for Ra, ta, st in per] for per in alts]
+    return Hanging(R, t * w, status, hmin * w, planar, up, alts)
 
 
 def _statuses(found, pull, balanced):

@@ -278,7 +278,9 @@ def free_rows(design: Design, P, hanger: "_Hanger", limit: float | None) -> Free
     t, tol = h.tensions, 1e-9 * max(1.0, hanger.geo.weight)
     with np.errstate(invalid="ignore"):
         within = h.feasible & np.all((t >= design.tension_min - tol) & (t <= design.tension_max + tol), axis=1)
-        within &= (feas == 1) | ~np.isfinite(marg)  # the margin's verdict where the motion's rows have one
+        # the margin's verdict where the motion's rows have one, with the hanging tensions' tolerance: a
+        # cable that hangs slack in theory (tension 0 at its bound 0) is not decided by rounding
+        within &= (feas == 1) | (marg >= -tol) | ~np.isfinite(marg)
         upright = within if limit is None else within & (extra["tilt"] <= limit)
     return FreeRows(h, extra, upright.astype(np.uint8), marg, np.where(upright[:, None], t, np.nan), L, within)
 
