@@ -109,8 +109,9 @@ def test_a_noref_loop_cannot_allocate():
         nb.njit(**dict(_jit.NOREF, cache=False))(allocates)(3)
 
 
-# Each loop compiled without reference counting, called first thing in a new process: whatever it
-# calls is then compiled without reference counting too, and would fail there if it allocated.
+# Each loop compiled without reference counting, called in a new process before anything else calls
+# what it calls: whatever it calls is then compiled without reference counting too, and would fail
+# there if it allocated.
 _ROBOT = """
 import numpy as np
 from cdpr_design import kernels as K
@@ -169,13 +170,19 @@ c.catenary_inverse_batch(X, Z, 5.0 * one, one, 1e5 * one, np.full(16, np.nan), n
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", sorted(NOREF_PROBES))
-def test_each_noref_loop_compiles_first_in_a_new_process(name, tmp_path):
+def test_the_noref_loops_compile_in_a_new_process_with_an_empty_cache(tmp_path):
+    """Every probe of NOREF_PROBES in turn, in one new process: each loop is compiled by its own first
+    call, and each callee by the first loop that calls it -- a loop without reference counting
+    whichever it is, as in _GRID_LOOPS -- so one process checks what a process a probe would (about
+    130 s of compiling instead of 240: the loops share most of their callees).  The order the other
+    way round, a kernel with reference counting first, is test_the_loops_run_without_reference_counting_..."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
     env.pop("NUMBA_DISABLE_JIT", None)
-    r = subprocess.run([sys.executable, "-c", NOREF_PROBES[name] + "\nprint('done')"], cwd=PACKAGE.parent, env=env,
-                       capture_output=True, text=True)
-    assert r.returncode == 0 and r.stdout.strip().endswith("done"), r.stderr[-3000:]
+    probe = "".join(f"{NOREF_PROBES[name]}\nprint('compiled', {name!r}, flush=True)\n"
+                    for name in sorted(NOREF_PROBES))
+    r = subprocess.run([sys.executable, "-c", probe], cwd=PACKAGE.parent, env=env, capture_output=True, text=True)
+    assert r.returncode == 0, f"after {r.stdout.splitlines()[-1:]}: {r.stderr[-3000:]}"
+    assert r.stdout.splitlines() == [f"compiled {name}" for name in sorted(NOREF_PROBES)], r.stdout
 
 
 LEAK_PROBE = """

@@ -451,7 +451,7 @@ def hang(geo: hc.Geometry, P, planar: bool, *, nominal=None, engine: str = "nump
     # linear in it: solved for a unit weight (mass 1, |g| = 1) and scaled back, no weight is too small
     # or too large for the solvers' tolerances (2e-308 kg underflowed them: a traceback).
     w = geo.weight
-    unit = hc.Geometry(geo.A, geo.B, geo.c, 1.0, up * -1.0)
+    unit = hc.Geometry(geo.A, geo.B, geo.c, 1.0, -up)
     if hc.is_point_mass(unit.B):
         out = _hang_point(unit, P3, planar, nominal, alternatives)
     elif planar and unit.m == 2:
