@@ -447,17 +447,20 @@ def hang(geo: hc.Geometry, P, planar: bool, *, nominal=None, engine: str = "nump
     P3 = np.zeros((len(P), 3))
     P3[:, : P.shape[1]] = P[:, :3]
     up = -geo.g / np.linalg.norm(geo.g)
-    # The orientations do not depend on the weight W, and the tensions and the reduced Hessian are
-    # linear in it: solved for a unit weight (mass 1, |g| = 1) and scaled back, no weight is too small
-    # or too large for the solvers' tolerances (2e-308 kg underflowed them: a traceback).
+    # The closed forms (a point mass, a planar body on two cables) are solved for a unit weight (mass 1,
+    # |g| = 1) and scaled back: their orientations do not depend on the weight W and their tensions and
+    # reduced Hessian are linear in it, so no mass is too small for their tolerances (2e-308 kg
+    # underflowed the planar roots: a traceback).  The Newton search of other bodies runs at the real
+    # weight, as before: which member of a family it reaches from the nominal start can turn on rounding
+    # (docs/hanging-pose.md, Limits), so a unit weight would move some answers without improving them.
     w = geo.weight
     unit = hc.Geometry(geo.A, geo.B, geo.c, 1.0, -up)
-    if hc.is_point_mass(unit.B):
+    if hc.is_point_mass(geo.B):
         out = _hang_point(unit, P3, planar, nominal, alternatives)
-    elif planar and unit.m == 2:
+    elif planar and geo.m == 2:
         out = _hang_planar2(unit, P3, engine, alternatives)
     else:
-        out = _hang_general(unit, P3, planar, nominal, alternatives)
+        out, w = _hang_general(geo, P3, planar, nominal, alternatives), 1.0
     R, t, status, hmin, alts = out
     bad = status != OK
     R[bad], t[bad], hmin[bad] = np.nan, np.nan, np.nan
