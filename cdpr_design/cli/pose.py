@@ -102,7 +102,7 @@ def _pose_table(design, at: str, data: dict) -> None:
         out_console.print(f"cable model: {model} (tensions at the effector end; status {data['cable_status']})")
     if data.get("effector_orientation") == "free" and data["orientation"] is not None:
         out_console.print(f"hangs with orientation {fmt(data['orientation'])}, tilt {fmt(data['tilt'])}°")
-    elif data.get("hanging", 0) is None:
+    elif "hanging" in data and data["hanging"] is None:
         out_console.print("hanging: no tilt — a weightless effector (effector.mass 0 or zero gravity) hangs in no "
                           "particular orientation")
     elif "hanging" in data:

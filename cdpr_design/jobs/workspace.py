@@ -86,13 +86,14 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
     names = ws.column_names(design) + ws.extra_columns(design, collisions, orientations)
     meta = table_metadata(design, "workspace", names, kind=kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])
-    for name in output_names(design, orientations, html):
+    files = output_names(design, orientations, html)
+    for name in files:
         out.target(name)  # a foreign file of that name: refused before any work
     writer = out.table("workspace", format, metadata=meta, names=names, background=True)
     try:
         result = _sweep(design, grid, kind, collisions, orientations, engine, progress, writer, timings, max_tilt)
         pics = workspace_pictures(result) + ([("report.html", report_html, (result,))] if html else [])
-        if result.extra.get("cable_model") == "sagging" and not orientations:
+        if "cable_models.png" in files:
             pics.append(cable_model_picture(result, engine, collisions))
         pending = submit_pictures(out, pics, pictures, timings)
         writer.close()

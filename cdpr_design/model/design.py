@@ -93,6 +93,11 @@ def default_gravity(dim: int) -> list[float]:
     return [0.0] * (dim - 1) + [-9.81]
 
 
+def has_weight(mass: float, g) -> bool:
+    """Whether an effector of ``mass`` [kg] under gravity ``g`` [m/s^2] has a weight to hang under."""
+    return bool(mass > 0 and np.linalg.norm(np.asarray(g, float)) > 0)
+
+
 def is_point_mass(B, tol: float = 1e-12) -> bool:
     """True when every attachment (rows of ``B`` [m]) is the same point: rotations change no length."""
     B = np.atleast_2d(np.asarray(B, float))

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design.errors import quote
-from cdpr_design.model.design import MOTIONS, default_gravity, is_underconstrained
+from cdpr_design.model.design import MOTIONS, default_gravity, has_weight, is_underconstrained
 from cdpr_design.model.limits import net_id_problem
 from cdpr_design.model.schema import DesignSpec, WorkspaceSpecModel
 
@@ -118,11 +118,10 @@ def _check_hanging_weight(p: Problems, s: DesignSpec) -> None:
         return
     if not is_underconstrained(len(B), B, mot.planar):
         return
-    g = float(np.linalg.norm(gravity))
-    if not (s.effector.mass > 0 and g > 0):
+    if not has_weight(s.effector.mass, gravity):
         p.append(("effector.mass", f"effector.orientation: free on an under-constrained design: the effector "
                   f"hangs from its cables under its weight, so it needs effector.mass > 0 and a non-zero "
-                  f"gravity (got {s.effector.mass:g} kg and |gravity| = {g:g} m/s^2)"))
+                  f"gravity (got {s.effector.mass:g} kg and |gravity| = {np.linalg.norm(gravity):g} m/s^2)"))
 
 
 def _check_inertia(p: Problems, inertia, dim: int) -> None:

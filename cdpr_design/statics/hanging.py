@@ -59,6 +59,7 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.statics import hanging_at as ha
 from cdpr_design.statics import hanging_core as hc
+from cdpr_design.model.design import has_weight
 from cdpr_design.statics.hanging_core import is_point_mass, is_underconstrained  # noqa: F401 - re-exported
 from cdpr_design.statics.hanging_results import (  # noqa: F401 - re-exported
     Equilibrium, HangingAt, HangingFK, NotUnderconstrained, TiltMap, UnreachableLengths, orientation_of, tilt_of,
@@ -68,11 +69,6 @@ from cdpr_design.statics.hanging_results import (  # noqa: F401 - re-exported
 # ----------------------------------------------------------------------------
 # classification
 # ----------------------------------------------------------------------------
-
-def has_weight(mass: float, g) -> bool:
-    """Whether an effector of ``mass`` [kg] under gravity ``g`` [m/s^2] has a weight to hang under."""
-    return bool(mass > 0 and np.linalg.norm(np.asarray(g, float)) > 0)
-
 
 def check_weight(mass: float, g) -> None:
     """An :class:`InputError` naming ``effector.mass`` and ``gravity`` unless the effector has a weight:

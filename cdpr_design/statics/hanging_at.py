@@ -453,14 +453,15 @@ def hang(geo: hc.Geometry, P, planar: bool, *, nominal=None, engine: str = "nump
     # underflowed the planar roots: a traceback).  The Newton search of other bodies runs at the real
     # weight, as before: which member of a family it reaches from the nominal start can turn on rounding
     # (docs/hanging-pose.md, Limits), so a unit weight would move some answers without improving them.
-    w = geo.weight
-    unit = hc.Geometry(geo.A, geo.B, geo.c, 1.0, -up)
-    if hc.is_point_mass(geo.B):
-        out = _hang_point(unit, P3, planar, nominal, alternatives)
-    elif planar and geo.m == 2:
-        out = _hang_planar2(unit, P3, engine, alternatives)
+    point = hc.is_point_mass(geo.B)
+    if point or (planar and geo.m == 2):
+        w = geo.weight
+        unit = hc.Geometry(geo.A, geo.B, geo.c, 1.0, -up)
+        out = (_hang_point(unit, P3, planar, nominal, alternatives) if point
+               else _hang_planar2(unit, P3, engine, alternatives))
     else:
-        out, w = _hang_general(geo, P3, planar, nominal, alternatives), 1.0
+        w = 1.0
+        out = _hang_general(geo, P3, planar, nominal, alternatives)
     R, t, status, hmin, alts = out
     bad = status != OK
     R[bad], t[bad], hmin[bad] = np.nan, np.nan, np.nan

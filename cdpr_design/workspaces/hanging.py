@@ -280,7 +280,7 @@ def free_rows(design: Design, P, hanger: "_Hanger", limit: float | None) -> Free
         within = h.feasible & np.all((t >= design.tension_min - tol) & (t <= design.tension_max + tol), axis=1)
         # the margin's verdict where the motion's rows have one, with the hanging tensions' tolerance: a
         # cable that hangs slack in theory (tension 0 at its bound 0) is not decided by rounding
-        within &= (feas == 1) | (marg >= -tol) | ~np.isfinite(marg)
+        within &= (marg >= -tol) | ~np.isfinite(marg)
         upright = within if limit is None else within & (extra["tilt"] <= limit)
     return FreeRows(h, extra, upright.astype(np.uint8), marg, np.where(upright[:, None], t, np.nan), L, within)
 
