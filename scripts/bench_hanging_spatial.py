@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Benchmark: crane4's hanging orientations, the batched search against per-position scipy.
 
-crane4 (a 60 kg load on four cables, ``effector.orientation: free``) hangs
-from three of its cables at most positions; at each position of its 0.25 m
+crane4 (a 60 kg load on four cables, ``effector.orientation: free``) is
+found hanging from three of its cables at most positions; at each position of its 0.25 m
 grid (2,873 positions) the library finds the least tilted stable orientation
 with every cable pulling (:func:`cdpr_design.statics.hanging_at.hang`: batched
 numpy Newton per set of taut cables, then the stability of the candidates).
