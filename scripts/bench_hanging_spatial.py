@@ -2,10 +2,11 @@
 """Benchmark: crane4's hanging orientations, the batched search against per-position scipy.
 
 crane4 (a 60 kg load on four cables, ``effector.orientation: free``) is
-found hanging from three of its cables at most positions; at each position of its 0.25 m
+found hanging from three of its cables or all four; at each position of its 0.25 m
 grid (2,873 positions) the library finds the least tilted stable orientation
 with every cable pulling (:func:`cdpr_design.statics.hanging_at.hang`: batched
-numpy Newton per set of taut cables, then the stability of the candidates).
+numpy Newton per set of taut cables, a march along the four-cable family, then the
+stability of the candidates).
 This times
 
 * the whole ``free`` workspace sweep (:func:`cdpr_design.workspaces.run`:
@@ -22,8 +23,8 @@ This times
 
 Prints the times per position, the ratios to scipy, and how well the two
 agree on the subsample (status, tilt) where the library's answer hangs from
-three cables: on the bay's two symmetry planes all four pull, their balanced
-orientations form a family (the library takes the member nearest to level,
+three cables: where all four pull, their balanced orientations form a family
+(the library marches along it to its least tilted pulling member,
 docs/hanging-pose.md), and this baseline, which solves three-cable sets only,
 then finds a more tilted three-cable answer or none.
 

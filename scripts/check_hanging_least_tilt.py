@@ -6,9 +6,10 @@ At a commanded position a body on four taut cables has a one-parameter family
 of balanced orientations (the lengths can still choose among them); its
 members with every tension >= 0 end where one tension reaches zero, which is a
 three-cable answer.  :func:`cdpr_design.statics.hanging_at.hang` reports the
-least tilted stable answer among the ones its Newton search finds: the family
-member nearest the nominal orientation and the three-cable answers from the
-nominal start (docs/hanging-pose.md).  This script measures, at random
+least tilted stable answer among the ones its search finds: Newton's method
+for every three taut cables and for all four, then a march along the
+four-cable family from each of them (docs/hanging-pose.md).  This script
+measures, at random
 positions inside the middle 80 % of the design's frame, how much more tilted
 that answer is than an independent search for the least tilted balanced
 orientation with every tension >= 0: scipy SLSQP minimising 1 - cos(tilt)
@@ -108,7 +109,7 @@ def main(argv=None) -> int:
         both = np.isfinite(gap)
         worse = both & (gap > args.tol)
         print(f"  library at {m:g} kg: more tilted than the reference by > {args.tol:g} deg at {worse.sum()}, "
-              f"by up to {np.max(gap[both], initial=0.0):.3f} deg; less tilted at {np.sum(both & (gap < -args.tol))}; "
+              f"by up to {np.max(gap[both], initial=0.0):.3g} deg; less tilted at {np.sum(both & (gap < -args.tol))}; "
               f"feasible only in the library {np.sum(np.isfinite(h.tilt_deg) & ~np.isfinite(tilt_ref))}, "
               f"only in the reference {np.sum(~np.isfinite(h.tilt_deg) & np.isfinite(tilt_ref))}")
     return 0

@@ -21,9 +21,14 @@ for many positions at once, with numpy:
   four or five cables a spatial body's balanced orientations at one position
   form a family (m - 3 parameters: the lengths can still choose among them);
   there each step is the minimum-norm Newton step plus a pull along the
-  family towards the nominal orientation, so the iteration ends at the member
-  nearest to the nominal orientation (the KKT point of min |w|^2 subject to
-  balance, R = exp([w]) R_nominal).
+  family towards the nominal orientation, so the iteration heads for the
+  member nearest to the nominal orientation (the KKT point of min |w|^2
+  subject to balance, R = exp([w]) R_nominal).  On four cables the family is
+  a curve, and :func:`~cdpr_design.statics.hanging_family.march_family`
+  follows it from every balanced pulling
+  candidate (predictor-corrector continuation) to its least tilted member
+  with every tension >= 0, and to where its pulling members end (a cable
+  just slack).
 
 Of the balanced orientations found with tensions >= 0 and stable, the least
 tilted one is the answer (``tilt`` = angle between the platform's vertical and
@@ -47,6 +52,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cdpr_design.statics import hanging_core as hc
+from cdpr_design.statics.hanging_core import tilt_many
+from cdpr_design.statics.hanging_family import with_marches
+from cdpr_design.statics.hanging_newton import Balance, newton_many, solve_sym, subset
 
 #: A stable equilibrium with every tension >= 0 was found.
 OK = 0
@@ -118,15 +126,6 @@ class Hanging:
         if self.planar:
             return np.arctan2(self.rotation[:, 1, 0], self.rotation[:, 0, 0])
         return hc.euler_xyz(self.rotation)
-
-
-def tilt_many(R, up) -> np.ndarray:
-    """Angles [deg] between R up and up for rotations R (..., 3, 3) (atan2 of the sine and
-    cosine: accurate near level too, where acos loses half the digits)."""
-    up = np.asarray(up, float)
-    v = np.einsum("...ij,j->...i", R, up)
-    s = np.linalg.norm(np.cross(v, up), axis=-1)
-    return np.degrees(np.arctan2(s, v @ up))
 
 
 def _cr(ax, ay, bx, by):
@@ -273,138 +272,16 @@ def _choose_planar2(phi, t, h, ok, degenerate, weight):
 
 
 # ----------------------------------------------------------------------------
-# other rigid bodies: batched Newton from several starts
+# a point mass (other rigid bodies: hanging_newton, hanging_family)
 # ----------------------------------------------------------------------------
-
-def _cross(a, b):
-    """a x b over the last axis (broadcast), without np.cross's overhead."""
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-
-
-class _Balance:
-    """Force and moment balance at many (position, rotation) pairs, scaled: forces by the
-    weight, moments by the weight times the effector's length scale."""
-
-    def __init__(self, geo: hc.Geometry, planar: bool):
-        self.geo = geo
-        self.rows = [0, 1, 5] if planar else list(range(6))
-        self.rot = [2] if planar else [0, 1, 2]
-        sc = np.array([1.0, 1.0, 1.0, geo.size, geo.size, geo.size]) * geo.weight
-        self.scale = sc[self.rows]
-
-    def parts(self, P, R):
-        """W (N, 6, m), gravity wrench (N, 6), Rb, L, u of the cables."""
-        geo = self.geo
-        Rb, _, L, u = geo.cables_many(P, R)
-        W = np.concatenate([u, _cross(Rb, u)], axis=2).transpose(0, 2, 1)
-        f = geo.mass * geo.g
-        wg = np.concatenate([np.broadcast_to(f, (len(P), 3)), _cross(R @ geo.c, f)], axis=1)
-        return W, wg, Rb, L, u
-
-    def residual(self, P, R, t):
-        W, wg, *_ = self.parts(P, R)
-        F = np.einsum("nrm,nm->nr", W, t) + wg
-        return F[:, self.rows] / self.scale
-
-    def jacobian(self, P, R, t, w):
-        """d(scaled residual)/d(rotation coordinates, tensions / weight) (N, r, nr + m)."""
-        geo = self.geo
-        W, _, Rb, L, u = self.parts(P, R)
-        Jw = geo.balance_jacobian_many(P, R, t, (Rb, None, L, u))[:, :, 3:] @ hc.left_jacobian(w)
-        J = np.concatenate([Jw[:, :, self.rot], W * geo.weight], axis=2)[:, self.rows]
-        return J / self.scale[:, None]
-
-
-def _solve_sym(G, b):
-    """G x = b for symmetric positive semi-definite stacks, with a tiny ridge (never singular)."""
-    n = G.shape[-1]
-    ridge = 1e-14 * (np.trace(G, axis1=-2, axis2=-1)[..., None, None] / n + 1e-300)
-    return np.linalg.solve(G + ridge * np.eye(n), b[..., None])[..., 0]
-
-
-def _step(J, F, w, nr):
-    """Newton step (N, nr + m): Gauss-Newton where the rows outnumber the unknowns, else the
-    minimum-norm step plus, near balance, a pull along the family towards w = 0."""
-    N, r, c = J.shape
-    JT = J.transpose(0, 2, 1)
-    if c <= r:
-        return -_solve_sym(JT @ J, np.einsum("nrc,nr->nc", J, F))
-    G = J @ JT
-    dz = -np.einsum("ncr,nr->nc", JT, _solve_sym(G, F))
-    v = np.zeros((N, c))
-    v[:, :nr] = w
-    pull = v - np.einsum("ncr,nr->nc", JT, _solve_sym(G, np.einsum("nrc,nc->nr", J, v)))
-    size = np.linalg.norm(pull, axis=1, keepdims=True)
-    pull = pull * np.minimum(1.0, 0.3 / np.maximum(size, 1e-300))
-    near = (np.abs(F).max(axis=1) <= 1e-8)[:, None]
-    return dz - np.where(near, pull, 0.0)
-
-
-def newton_many(geo: hc.Geometry, P, planar: bool, R0, starts, iterations: int = 40):
-    """Balanced orientations from each start: (R (k, S, 3, 3), t (k, S, m) [N], balanced (k, S)).
-
-    ``P`` (k, 3) positions [m]; ``R0`` the nominal rotation; ``starts`` (S, 3)
-    rotation vectors [rad] (frame axes) about it.  A pair is balanced when the
-    largest force / moment imbalance is at most 1e-8 max(1, weight) [N, N m].
-    Each iteration works on the pairs not yet converged; a pair whose step
-    the line search cannot accept twice in a row is given up.
-    """
-    bal = _Balance(geo, planar)
-    k, S = len(P), len(starts)
-    nr = len(bal.rot)
-    Pn = np.repeat(np.asarray(P, float), S, axis=0)
-    full = np.tile(np.asarray(starts, float), (k, 1))
-    R = hc.rotvec(full) @ R0
-    W, wg, *_ = bal.parts(Pn, R)
-    Wr = W[:, bal.rows] / bal.scale[:, None]
-    t = -_solve_sym(Wr.transpose(0, 2, 1) @ Wr, np.einsum("nrm,nr->nm", Wr, wg[:, bal.rows] / bal.scale))
-    t = np.nan_to_num(t) * geo.weight
-    F = np.nan_to_num(bal.residual(Pn, R, t), nan=np.inf)
-    active = np.ones(len(Pn), bool)
-    fails = np.zeros(len(Pn), int)
-    for _ in range(iterations):
-        idx = np.flatnonzero(active)
-        if not idx.size:
-            break
-        Pa, Ra, ta, wa, Fa = Pn[idx], R[idx], t[idx], full[idx], F[idx]
-        merit = np.abs(Fa).max(axis=1)
-        dz = _step(np.nan_to_num(bal.jacobian(Pa, Ra, ta, wa)), np.where(np.isfinite(Fa), Fa, 0.0),
-                   wa[:, bal.rot], nr)
-        near = merit <= 1e-8
-        done = (merit <= 1e-14) & (np.abs(dz).max(axis=1) <= 1e-12)
-        lam = np.ones(len(idx))
-        pending = ~done
-        for _ in range(8):
-            sub = np.flatnonzero(pending)
-            if not sub.size:
-                break
-            w2 = wa[sub].copy()
-            w2[:, bal.rot] += lam[sub, None] * dz[sub, :nr]
-            t2 = ta[sub] + lam[sub, None] * dz[sub, nr:] * geo.weight
-            R2 = hc.rotvec(w2) @ R0
-            F2 = np.nan_to_num(bal.residual(Pa[sub], R2, t2), nan=np.inf)
-            ok = (np.abs(F2).max(axis=1) < merit[sub]) | near[sub]
-            g = idx[sub[ok]]
-            full[g], t[g], R[g], F[g] = w2[ok], t2[ok], R2[ok], F2[ok]
-            pending[sub[ok]] = False
-            lam[sub] *= 0.5
-        fails[idx] = np.where(pending, fails[idx] + 1, 0)
-        active[idx[done]] = False
-        active &= fails < 2
-    unscaled = np.abs(F * bal.scale).max(axis=1)
-    ok = unscaled <= 1e-8 * max(1.0, geo.weight)
-    return R.reshape(k, S, 3, 3), t.reshape(k, S, geo.m), ok.reshape(k, S)
-
 
 def point_mass_many(geo: hc.Geometry, P, planar: bool, R):
     """A point mass at positions P (k, 3): tensions (k, m) [N] balancing its weight with the
     cables from the common attachment (least squares) and whether they do (k,)."""
-    W, wg, *_ = _Balance(geo, planar).parts(np.asarray(P, float), np.broadcast_to(R, (len(P), 3, 3)))
+    W, wg, *_ = Balance(geo, planar).parts(np.asarray(P, float), np.broadcast_to(R, (len(P), 3, 3)))
     d = 2 if planar else 3
     Wf, f = W[:, :d], -wg[:, :d]
-    t = _solve_sym(Wf.transpose(0, 2, 1) @ Wf, np.einsum("ndm,nd->nm", Wf, f))
+    t = solve_sym(Wf.transpose(0, 2, 1) @ Wf, np.einsum("ndm,nd->nm", Wf, f))
     res = np.abs(np.einsum("ndm,nm->nd", Wf, t) - f).max(axis=1)
     return t, res <= 1e-8 * max(1.0, geo.weight)
 
@@ -451,8 +328,7 @@ def hang(geo: hc.Geometry, P, planar: bool, *, nominal=None, engine: str = "nump
     # |g| = 1) and scaled back: their orientations do not depend on the weight W and their tensions and
     # reduced Hessian are linear in it, so no mass is too small for their tolerances (2e-308 kg
     # underflowed the planar roots: a traceback).  The Newton search of other bodies runs at the real
-    # weight, as before: which member of a family it reaches from the nominal start can turn on rounding
-    # (docs/hanging-pose.md, Limits), so a unit weight would move some answers without improving them.
+    # weight, its tolerances in N; its answers agree over masses to about 1e-9 deg (the tests).
     point = hc.is_point_mass(geo.B)
     if point or (planar and geo.m == 2):
         w = geo.weight
@@ -534,14 +410,15 @@ def _hang_general(geo, P, planar, nominal, alternatives):
             continue
         cands = []
         for S in taut_sets(geo.m, planar):
-            sub = hc.Geometry(geo.A[list(S)], geo.B[list(S)], geo.c, geo.mass, geo.g)
-            Rs, tS, ok = newton_many(sub, P[todo], planar, R0, stage)
+            Rs, tS, ok = newton_many(subset(geo, S), P[todo], planar, R0, stage)
             ts = np.zeros(tS.shape[:2] + (geo.m,))
             ts[:, :, list(S)] = tS
             cands.append((Rs, ts, ok))
         Rs = np.concatenate([c[0] for c in cands], axis=1)
         ts = np.concatenate([c[1] for c in cands], axis=1)
         balanced = np.concatenate([c[2] for c in cands], axis=1)
+        if not planar and geo.m == 4:
+            Rs, ts, balanced = with_marches(geo, P[todo], Rs, ts, balanced)
         _choose_general(geo, P, planar, todo, Rs, ts, balanced, seen, found, alternatives)
         pull_any[todo] |= (balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)).any(1)
         bal_any[todo] |= balanced.any(1)

@@ -113,6 +113,15 @@ def align(v, target) -> np.ndarray:
 # the convex inner problem: lowest point of an intersection of balls
 # ----------------------------------------------------------------------------
 
+def tilt_many(R, up) -> np.ndarray:
+    """Angles [deg] between R up and up for rotations R (..., 3, 3) (atan2 of the sine and
+    cosine: accurate near level too, where acos loses half the digits)."""
+    up = np.asarray(up, float)
+    v = np.einsum("...ij,j->...i", R, up)
+    s = np.linalg.norm(np.cross(v, up), axis=-1)
+    return np.degrees(np.arctan2(s, v @ up))
+
+
 def _pairs(C, rho, down, tol):
     """Stationary points of the height on the intersection of two spheres (per pair)."""
     _, m, d = C.shape

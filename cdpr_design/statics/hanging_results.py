@@ -186,7 +186,7 @@ def orientation_of(R, planar: bool):
 
 def tilt_of(R, up) -> float:
     """The angle [deg] between R up and up (up a unit vector): the tilt from level."""
-    from cdpr_design.statics.hanging_at import tilt_many
+    from cdpr_design.statics.hanging_core import tilt_many
 
     return float(tilt_many(np.asarray(R, float), up))
 

@@ -1,0 +1,233 @@
+"""The march along the family of balanced orientations of a spatial body on four cables.
+
+With four taut cables the balanced orientations of a spatial body at one
+position form a curve (the lengths can still choose among them).  Its members
+with every tension >= 0 end where one tension reaches zero: there the body
+hangs from the other three.  :func:`march_family` follows the curve from a
+balanced pulling point by predictor-corrector continuation to its least
+tilted pulling member and to where a cable goes slack; :func:`with_marches`
+adds what the marches find to a search's candidates.
+
+Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging_core`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cdpr_design.statics import hanging_core as hc
+from cdpr_design.statics.hanging_core import tilt_many
+from cdpr_design.statics.hanging_newton import Balance, newton_many, solve_sym, subset
+
+
+#: Arc-length step of the march along a four-cable family (rotation [rad] and tension / weight
+#: together), its largest number of steps, and the refinements of its least tilted member.
+MARCH_STEP = 0.1
+MARCH_STEPS = 40
+MARCH_REFINE = 16
+
+
+def _null_vector(J, prev):
+    """Unit null vectors (N, c) of J (N, r, c), c = r + 1 (by SVD), signed along ``prev``."""
+    v = np.linalg.svd(J)[2][:, -1, :]
+    return v * np.where(np.einsum("nc,nc->n", v, prev) < 0.0, -1.0, 1.0)[:, None]
+
+
+def _tangent(J, prev):
+    """The tangents (N, c) of the family where J (N, r, c) is its balance Jacobian: ``prev``
+    (a tangent one step back) projected onto the null space of J, made unit."""
+    JT = J.transpose(0, 2, 1)
+    v = prev - np.einsum("ncr,nr->nc", JT, solve_sym(J @ JT, np.einsum("nrc,nc->nr", J, prev)))
+    return v / np.maximum(np.linalg.norm(v, axis=1, keepdims=True), 1e-300)
+
+
+def _correct(bal, P, R, t, tol, iterations: int = 4):
+    """Minimum-norm Newton steps back onto the family, each row until its scaled residual is
+    at most ``tol``: (R, t, scaled residual (N,), J (N, r, c) at each row's last iterate)."""
+    R, t = R.copy(), t.copy()
+    w0 = np.zeros((len(P), 3))
+    F = np.nan_to_num(bal.residual(P, R, t), nan=1e300)
+    J = np.zeros((len(P), len(bal.rows), 3 + bal.geo.m))
+    todo = np.arange(len(P))
+    for it in range(iterations):
+        if it:
+            todo = todo[np.abs(F[todo]).max(axis=1) > tol]
+        if not todo.size:
+            break
+        Jt = np.nan_to_num(bal.jacobian(P[todo], R[todo], t[todo], w0[todo]))
+        JT = Jt.transpose(0, 2, 1)
+        dz = -np.einsum("ncr,nr->nc", JT, solve_sym(Jt @ JT, F[todo]))
+        R[todo] = hc.rotvec(dz[:, :3]) @ R[todo]
+        t[todo] += dz[:, 3:] * bal.geo.weight
+        F[todo] = np.nan_to_num(bal.residual(P[todo], R[todo], t[todo]), nan=1e300)
+        J[todo] = Jt
+    return R, t, np.abs(F).max(axis=1), J
+
+
+def _advance(bal, P, R, t, tau, h, tol):
+    """The family point h [scaled arc length] along the tangent tau from (R, t), corrected
+    (:func:`_correct`)."""
+    R1 = hc.rotvec(h[:, None] * tau[:, :3]) @ R
+    return _correct(bal, P, R1, t + h[:, None] * tau[:, 3:] * bal.geo.weight, tol)
+
+
+def march_family(geo: hc.Geometry, P, R, t, direction):
+    """The least tilted member with every tension >= 0 of the one-parameter family of
+    balanced orientations of a spatial body on four taut cables, along the family from
+    balanced pulling points (R (N, 3, 3), t (N, 4) [N]) at positions P (N, 3) [m], in
+    ``direction`` (N, 7) (rotation, tension / weight; only its sign along the tangent
+    counts).  Predictor-corrector continuation in steps of :data:`MARCH_STEP` until a
+    tension turns negative (the pulling members end where one cable goes slack) or
+    :data:`MARCH_STEPS`, then :data:`MARCH_REFINE` parabolas through the least tilted
+    step and its neighbours.  Returns candidates (R (N, 2, 3, 3), t (N, 2, 4) [N],
+    balanced (N, 2)): the least tilted member found (the start where no step improved on
+    it), and where a cable went slack the orientation with it just slack
+    (:func:`_slack_ends`; unbalanced where the march did not end so)."""
+    bal = Balance(geo, False)
+    up = -geo.g / np.linalg.norm(geo.g)
+    N = len(P)
+    tol = 1e-10
+    w0 = np.zeros((N, 3))
+    tau = _null_vector(np.nan_to_num(bal.jacobian(P, R, t, w0)), direction)
+    f = tilt_many(R, up)
+    best = [R.copy(), t.copy(), f.copy(), tau.copy()]
+    # the bracket of the least tilted step: arc lengths and tilts of (previous, best, next)
+    x = np.stack([np.full(N, -1.0), np.zeros(N), np.full(N, 1.0)], axis=1) * MARCH_STEP
+    fx = np.stack([np.full(N, np.inf), f, np.full(N, np.inf)], axis=1)
+    s = np.zeros(N)
+    f_prev = f.copy()
+    after = np.ones(N, bool)  # the step after the best is still to be recorded
+    last, cable = np.zeros(N, bool), np.zeros(N, int)  # marches ended by a cable going slack
+    active = np.ones(N, bool)
+    for _ in range(MARCH_STEPS):
+        idx = np.flatnonzero(active)
+        if not idx.size:
+            break
+        h = np.full(idx.size, MARCH_STEP)
+        R1, t1, res, J1 = _advance(bal, P[idx], R[idx], t[idx], tau[idx], h, tol)
+        f1 = tilt_many(R1, up)
+        ok_t = np.all(t1 >= -1e-9 * geo.weight, axis=1)
+        ok = (res <= tol) & ok_t
+        f1 = np.where(ok, f1, np.inf)
+        s1 = s[idx] + MARCH_STEP
+        rec = after[idx]
+        j = idx[rec]
+        x[j, 2], fx[j, 2] = s1[rec], f1[rec]
+        after[j] = False
+        better = ok & (f1 < best[2][idx])
+        g = idx[better]
+        x[g] = np.stack([s[g], s1[better], np.full(g.size, np.inf)], axis=1)
+        fx[g] = np.stack([f_prev[g], f1[better], np.full(g.size, np.inf)], axis=1)
+        after[g] = True
+        live = idx[ok]
+        tau_new = _tangent(J1[ok], tau[live])
+        best[0][g], best[1][g], best[2][g] = R1[better], t1[better], f1[better]
+        R[live], t[live], tau[live], s[live], f_prev[live] = R1[ok], t1[ok], tau_new, s1[ok], f1[ok]
+        best[3][g] = tau[g]
+        # a tension turned negative: the pulling members end between the last step and this one
+        end = (res <= tol) & ~ok_t
+        e = idx[end]
+        last[e], cable[e] = True, np.argmin(t1[end], axis=1)
+        active[idx[~ok]] = False
+    # successive parabolas about the least tilted step (from it, along its tangent)
+    x[:, 2] = np.where(np.isfinite(x[:, 2]), x[:, 2], x[:, 1] + MARCH_STEP)
+    todo = np.flatnonzero(np.isfinite(fx[:, 0]) | np.isfinite(fx[:, 2]))
+    xb = x[:, 1].copy()
+    for _ in range(MARCH_REFINE):
+        if not todo.size:
+            break
+        xn = _parabola_vertex(x[todo], fx[todo])
+        moved = np.abs(xn - x[todo, 1]) > 1e-7  # a smaller step moves the tilt by ~1e-14 rad
+        Rn, tn, res, _ = _advance(bal, P[todo], best[0][todo], best[1][todo], best[3][todo], xn - xb[todo], tol)
+        fn = np.where((res <= tol) & np.all(tn >= -1e-9 * geo.weight, axis=1), tilt_many(Rn, up), np.inf)
+        x[todo], fx[todo] = _bracket(x[todo], fx[todo], xn, fn)
+        better = fn < best[2][todo]
+        g = todo[better]
+        best[0][g], best[1][g], best[2][g] = Rn[better], tn[better], fn[better]
+        xb[g] = xn[better]
+        todo = todo[moved & ((x[todo, 2] - x[todo, 0]) > 1e-7)]
+    res = np.abs(np.nan_to_num(bal.residual(P, best[0], best[1]), nan=np.inf) * bal.scale).max(axis=1)
+    Re, te, oke = _slack_ends(geo, P, R, last, cable)
+    return (np.stack([best[0], Re], axis=1), np.stack([best[1], te], axis=1),
+            np.stack([res <= 1e-8 * max(1.0, geo.weight), oke], axis=1))
+
+
+def _slack_ends(geo, P, R, last, cable):
+    """Where a march ended with cable ``cable`` going slack (rows ``last``): the balanced
+    orientation with that cable just slack, by Newton's method on the other three from the
+    march's last orientation ``R``.  (R (N, 3, 3), t (N, m) [N], balanced (N,))."""
+    N, m = len(P), geo.m
+    Re, te, oke = np.full((N, 3, 3), np.nan), np.zeros((N, m)), np.zeros(N, bool)
+    for j in range(m):
+        rows = np.flatnonzero(last & (cable == j))
+        if not rows.size:
+            continue
+        keep = [i for i in range(m) if i != j]
+        Rn, tn, okn = newton_many(subset(geo, keep), P[rows], False, R[rows][:, None], [(0.0, 0.0, 0.0)])
+        Re[rows], oke[rows] = Rn[:, 0], okn[:, 0]
+        te[rows[:, None], keep] = tn[:, 0]
+    return Re, te, oke
+
+
+def _parabola_vertex(x, f):
+    """The vertex of the parabola through (x, f) (k, 3), x ascending, f[:, 1] the least; the
+    midpoint of the wider side where the parabola is not convex or f is infinite (x's units)."""
+    a, b, c = x.T
+    fa, fb, fc = f.T
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        num = (b - a) ** 2 * (fb - fc) - (b - c) ** 2 * (fb - fa)
+        den = (b - a) * (fb - fc) - (b - c) * (fb - fa)
+        v = b - 0.5 * num / den
+    wide = np.where(b - a > c - b, 0.5 * (a + b), 0.5 * (b + c))
+    good = np.isfinite(v) & (v > a) & (v < c) & (np.abs(v - b) > 1e-9)
+    return np.where(good, v, wide)
+
+
+def _bracket(x, f, xn, fn):
+    """The new bracket (a, b, c) around the least value after evaluating fn at xn."""
+    a, b, c = x.T.copy()
+    fa, fb, fc = f.T.copy()
+    left = xn < b
+    win = fn < fb
+    # xn better: it becomes the middle, b the side it came from; else xn replaces that side
+    na = np.where(win, np.where(left, a, b), np.where(left, xn, a))
+    nb = np.where(win, xn, b)
+    nc = np.where(win, np.where(left, b, c), np.where(left, c, xn))
+    nfa = np.where(win, np.where(left, fa, fb), np.where(left, fn, fa))
+    nfb = np.where(win, fn, fb)
+    nfc = np.where(win, np.where(left, fb, fc), np.where(left, fc, fn))
+    return np.stack([na, nb, nc], axis=1), np.stack([nfa, nfb, nfc], axis=1)
+
+
+def with_marches(geo, P, Rs, ts, balanced):
+    """The candidates (k, S) of a spatial body on four cables with, appended, the least
+    tilted pulling member of its family reached by :func:`march_family` from each balanced
+    pulling candidate: from one on three cables (the fourth just slack) in the direction
+    that tightens the fourth, from one on all four in both directions; and where a march
+    ended with a cable going slack, the orientation with it just slack.  Candidates
+    (R, t [N], balanced) with S + M columns, M = 2 x the most marches at one position
+    (unbalanced where a position has fewer)."""
+    k = len(P)
+    pull = balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)
+    slack = ts <= 0.0
+    n_, s_ = np.nonzero(pull & (slack.sum(axis=2) <= 1))
+    one = slack[n_, s_].any(axis=1)
+    d = np.zeros((n_.size, 7))
+    d[one, 3 + np.argmax(slack[n_[one], s_[one]], axis=1)] = 1.0
+    four = np.flatnonzero(~one)
+    if four.size:  # both ways along the family from a member on all four
+        bal = Balance(geo, False)
+        J = bal.jacobian(P[n_[four]], Rs[n_[four], s_[four]], ts[n_[four], s_[four]], np.zeros((four.size, 3)))
+        d[four] = _null_vector(np.nan_to_num(J), np.ones((four.size, 7)))
+        n_, s_, d = np.concatenate([n_, n_[four]]), np.concatenate([s_, s_[four]]), np.concatenate([d, -d[four]])
+    cols = 2 * int(np.bincount(n_, minlength=k).max()) if n_.size else 0
+    Rm, tm, bm = np.full((k, cols, 3, 3), np.nan), np.zeros((k, cols, geo.m)), np.zeros((k, cols), bool)
+    if n_.size:
+        Rb, tb, ok = march_family(geo, P[n_], Rs[n_, s_].copy(), ts[n_, s_].copy(), d)
+        order = np.argsort(n_, kind="stable")
+        slot = np.empty(n_.size, int)
+        slot[order] = 2 * (np.arange(n_.size) - np.searchsorted(n_[order], n_[order]))
+        for e in (0, 1):
+            Rm[n_, slot + e], tm[n_, slot + e], bm[n_, slot + e] = Rb[:, e], np.maximum(tb[:, e], 0.0), ok[:, e]
+    return (np.concatenate([Rs, Rm], axis=1), np.concatenate([ts, tm], axis=1),
+            np.concatenate([balanced, bm], axis=1))
