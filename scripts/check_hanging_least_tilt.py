@@ -47,9 +47,12 @@ from cdpr_design.statics import hanging_at as ha
 from cdpr_design.statics import hanging_core as hc
 
 
-def least_tilt_reference(A, B, c, mass, g, p, starts: int, rng) -> tuple[float, np.ndarray]:
-    """(least tilt [deg], its tensions [N]) over SLSQP runs from random starts; (inf, nan)
-    when no run ends balanced with tensions >= 0."""
+def least_tilt_reference(A, B, c, mass, g, p, starts: int, rng) -> tuple[float, np.ndarray | None, np.ndarray]:
+    """(least tilt [deg], its rotation, its tensions [N]) over SLSQP runs from random starts
+    (``rng``), each minimising 1 - cos(tilt) over (rotation vector, tensions) subject to force
+    and moment balance and tensions >= 0; (inf, None, nan) when no run ends balanced with
+    tensions >= 0.  Not a global method: it can miss orientations, never invent one.  (The
+    tests use it too.)"""
     f = mass * g
     up = -g / np.linalg.norm(g)
     weight = mass * float(np.linalg.norm(g))
@@ -65,18 +68,19 @@ def least_tilt_reference(A, B, c, mass, g, p, starts: int, rng) -> tuple[float, 
     def one_minus_cos_tilt(x):
         return 1.0 - Rotation.from_rotvec(x[:3]).as_matrix() @ up @ up
 
-    best, tensions = math.inf, np.full(len(A), np.nan)
+    best, rotation, tensions = math.inf, None, np.full(len(A), np.nan)
     for _ in range(starts):
         x0 = np.concatenate([rng.normal(size=3) * 0.4, rng.uniform(0.0, 2.0 * weight / len(A), len(A))])
         r = minimize(one_minus_cos_tilt, x0, method="SLSQP", bounds=[(None, None)] * 3 + [(0.0, None)] * len(A),
                      constraints=[{"type": "eq", "fun": balance}], options={"ftol": 1e-12, "maxiter": 400})
         if not (np.abs(balance(r.x)).max() < 1e-9 and np.all(r.x[3:] >= -1e-9 * weight)):
             continue
-        v = Rotation.from_rotvec(r.x[:3]).as_matrix() @ up
+        R = Rotation.from_rotvec(r.x[:3]).as_matrix()
+        v = R @ up
         tilt = math.degrees(math.atan2(np.linalg.norm(np.cross(v, up)), v @ up))
         if tilt < best:
-            best, tensions = tilt, r.x[3:].copy()
-    return best, tensions
+            best, rotation, tensions = tilt, R, r.x[3:].copy()
+    return best, rotation, tensions
 
 
 def main(argv=None) -> int:
@@ -100,7 +104,7 @@ def main(argv=None) -> int:
     ref = [least_tilt_reference(A, B, c, mass, g, p, args.starts, np.random.default_rng(args.seed + 1 + i))
            for i, p in enumerate(P)]
     tilt_ref = np.array([r[0] for r in ref])
-    four = sum(bool(np.all(r[1] > 1e-6 * mass * np.linalg.norm(g))) for r in ref)
+    four = sum(bool(np.all(r[2] > 1e-6 * mass * np.linalg.norm(g))) for r in ref)
     print(f"{design.name}: {args.n} positions (seed {args.seed}), reference {time.perf_counter() - t0:.0f} s; "
           f"the reference's least tilted answer has all four cables pulling at {four}")
     for m in [mass] + ([args.mass] if args.mass is not None else []):

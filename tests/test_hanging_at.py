@@ -16,6 +16,7 @@ References (none shares code with the implementation):
 
 from __future__ import annotations
 
+import importlib.util
 import itertools
 import math
 
@@ -32,7 +33,7 @@ from cdpr_design.statics import hanging_core as hc
 from cdpr_design.statics import hanging_newton as hn
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.pose import evaluate_pose
-from tests.helpers import DESIGNS
+from tests.helpers import DESIGNS, ROOT
 from tests.test_hanging import G2, G3, check_equilibrium, random_planar2
 
 UP3 = np.array([0.0, 0.0, 1.0])
@@ -191,34 +192,13 @@ def test_spatial_hanging_against_scipy(case):
         assert not better, (p, got.tilt_deg[k], better)
 
 
-def ref_least_tilt(A, B, c, mass, g, p, rng, starts: int = 12):
-    """(tilt [deg], rotation) of the least tilted balanced orientation with tensions >= 0 over
-    scipy SLSQP runs from random starts: 1 - cos(tilt) minimised over (rotation vector,
-    tensions) subject to force and moment balance (scipy's rotations, its own kinematics)
-    and tensions >= 0.  Not a global method: it can only miss orientations, never invent one."""
-    f = mass * g
-    weight = mass * np.linalg.norm(g)
-    up = -g / np.linalg.norm(g)
-
-    def balance(x):
-        R = Rotation.from_rotvec(x[:3]).as_matrix()
-        Rb = B @ R.T
-        l = A - p - Rb
-        u = l / np.linalg.norm(l, axis=1)[:, None]
-        return np.concatenate([u.T @ x[3:] + f, (np.cross(Rb, u).T @ x[3:] + np.cross(R @ c, f)) / 0.5]) / weight
-
-    best = (math.inf, None)
-    for _ in range(starts):
-        x0 = np.concatenate([rng.normal(size=3) * 0.4, rng.uniform(0.0, weight / 2, len(A))])
-        s = minimize(lambda x: 1.0 - Rotation.from_rotvec(x[:3]).as_matrix() @ up @ up, x0, method="SLSQP",
-                     bounds=[(None, None)] * 3 + [(0.0, None)] * len(A), constraints=[{"type": "eq", "fun": balance}],
-                     options={"ftol": 1e-12, "maxiter": 400})
-        if np.abs(balance(s.x)).max() < 1e-9 and np.all(s.x[3:] >= -1e-9 * weight):
-            R = Rotation.from_rotvec(s.x[:3]).as_matrix()
-            tilt = math.degrees(math.atan2(np.linalg.norm(np.cross(R @ up, up)), R @ up @ up))
-            if tilt < best[0]:
-                best = (tilt, R)
-    return best
+def ref_least_tilt():
+    """The independent least-tilt search of scripts/check_hanging_least_tilt.py (scipy SLSQP)."""
+    spec_ = importlib.util.spec_from_file_location("check_hanging_least_tilt",
+                                                   ROOT / "scripts" / "check_hanging_least_tilt.py")
+    module = importlib.util.module_from_spec(spec_)
+    spec_.loader.exec_module(module)
+    return module.least_tilt_reference
 
 
 def test_four_cables_hang_in_their_least_tilted_pulling_orientation():
@@ -234,9 +214,10 @@ def test_four_cables_hang_in_their_least_tilted_pulling_orientation():
     P = lo + rng.uniform(0.1, 0.9, (10, 3)) * (hi - lo)
     got = ha.hang(geo, P, False)
     assert np.all(got.status == ha.OK)
+    reference = ref_least_tilt()
     same = four = 0
     for k, p in enumerate(P):
-        tilt, R = ref_least_tilt(A, B, c, mass, G3, p, rng, starts=8)
+        tilt, R, _ = reference(A, B, c, mass, G3, p, 8, rng)
         assert math.isfinite(tilt)
         if tilt < got.tilt_deg[k] - 1e-4:  # only an unstable orientation may be less tilted
             assert not ref_is_local_minimum(A, B, c, mass, G3, p, R, rng), (p, got.tilt_deg[k], tilt)

@@ -25,10 +25,9 @@ for many positions at once, with numpy:
   member nearest to the nominal orientation (the KKT point of min |w|^2
   subject to balance, R = exp([w]) R_nominal).  On four cables the family is
   a curve, and :func:`~cdpr_design.statics.hanging_family.march_family`
-  follows it from every balanced pulling
-  candidate (predictor-corrector continuation) to its least tilted member
-  with every tension >= 0, and to where its pulling members end (a cable
-  just slack).
+  follows it from every balanced pulling candidate (predictor-corrector
+  continuation) to its least tilted member with every tension >= 0, and to
+  where its pulling members end (a cable just slack).
 
 Of the balanced orientations found with tensions >= 0 and stable, the least
 tilted one is the answer (``tilt`` = angle between the platform's vertical and

@@ -86,6 +86,7 @@ def march_family(geo: hc.Geometry, P, R, t, direction):
     bal = Balance(geo, False)
     up = -geo.g / np.linalg.norm(geo.g)
     N = len(P)
+    R, t = np.array(R, float), np.array(t, float)  # the march's current points (copies)
     tol = 1e-10
     w0 = np.zeros((N, 3))
     tau = _null_vector(np.nan_to_num(bal.jacobian(P, R, t, w0)), direction)
@@ -223,7 +224,7 @@ def with_marches(geo, P, Rs, ts, balanced):
     cols = 2 * int(np.bincount(n_, minlength=k).max()) if n_.size else 0
     Rm, tm, bm = np.full((k, cols, 3, 3), np.nan), np.zeros((k, cols, geo.m)), np.zeros((k, cols), bool)
     if n_.size:
-        Rb, tb, ok = march_family(geo, P[n_], Rs[n_, s_].copy(), ts[n_, s_].copy(), d)
+        Rb, tb, ok = march_family(geo, P[n_], Rs[n_, s_], ts[n_, s_], d)
         order = np.argsort(n_, kind="stable")
         slot = np.empty(n_.size, int)
         slot[order] = 2 * (np.arange(n_.size) - np.searchsorted(n_[order], n_[order]))
