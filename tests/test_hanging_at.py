@@ -248,6 +248,30 @@ def test_crane4s_orientation_does_not_depend_on_its_mass():
         np.testing.assert_allclose(got.tensions / m, ref.tensions / mass, rtol=0, atol=1e-6 * 9.81, err_msg=str(m))
 
 
+def test_crane_below_its_centre_hangs_level_in_its_nominal_yaw():
+    """Straight below the middle of its bay crane4 hangs level at every yaw of a range (its
+    four-cable family is a turn about the vertical, every member equally tilted); the answer
+    is the member nearest the nominal orientation: yaw 0 and four equal tensions, each
+    W / (4 u_z) with u_z the vertical component of a cable's unit vector.  Before ties were
+    broken the march stopped at whichever member rounding made least tilted (at z = 2.25 m
+    yaw -0.03 rad, tensions 10.6 and 530.7 N instead of 270.7 N each).  With another nominal
+    yaw in the range, the answer turns to it."""
+    d, (A, B, c, mass, g, _) = crane()
+    geo = hc.Geometry(A, B, c, mass, g)
+    P = np.array([[2.5, 2.0, z] for z in (0.5, 1.0, 1.5, 2.25, 2.75, 3.5)])
+    got = ha.hang(geo, P, False)
+    assert np.all(got.status == ha.OK)
+    np.testing.assert_allclose(got.rotation, np.broadcast_to(np.eye(3), got.rotation.shape), rtol=0, atol=1e-8)
+    for k, p in enumerate(P):
+        u = A - p - B
+        uz = u[:, 2] / np.linalg.norm(u, axis=1)
+        np.testing.assert_allclose(got.tensions[k], geo.weight / (4 * uz), rtol=1e-7)
+    turned = ha.hang(geo, P[3:4], False, nominal=hc.rot_z(0.02))
+    assert turned.status[0] == ha.OK and turned.tilt_deg[0] < 1e-9
+    np.testing.assert_allclose(turned.rotation[0], hc.rot_z(0.02), rtol=0, atol=1e-8)
+    assert np.ptp(turned.tensions[0]) > 50.0  # a member off the symmetric one carries unequal tensions
+
+
 @pytest.mark.parametrize("position, tilt, slack", [
     ([1.0, 1.0, 2.0], 24.787, (1,)),   # the least tilted pulling orientation has c2 just slack
     ([1.5, 1.5, 2.0], 14.415, ()),     # off the symmetry planes too, all four can pull

@@ -31,7 +31,9 @@ for many positions at once, with numpy:
 
 Of the balanced orientations found with tensions >= 0 and stable, the least
 tilted one is the answer (``tilt`` = angle between the platform's vertical and
-the frame's, |phi| for planar bodies).  Status codes (:data:`OK`, ...) say why
+the frame's, |phi| for planar bodies); of equally tilted ones (a level body
+that could hang at any yaw) the one nearest the nominal orientation
+(:func:`~cdpr_design.statics.hanging_core.tilt_rank`).  Status codes (:data:`OK`, ...) say why
 a position has none; they equal the kernel's ``TILT_*`` codes (a test checks).
 
 Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging_core`.
@@ -51,7 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cdpr_design.statics import hanging_core as hc
-from cdpr_design.statics.hanging_core import tilt_many
+from cdpr_design.statics.hanging_core import tilt_many, tilt_rank
 from cdpr_design.statics.hanging_family import with_marches
 from cdpr_design.statics.hanging_newton import Balance, newton_many, solve_sym, subset
 
@@ -417,8 +419,8 @@ def _hang_general(geo, P, planar, nominal, alternatives):
         ts = np.concatenate([c[1] for c in cands], axis=1)
         balanced = np.concatenate([c[2] for c in cands], axis=1)
         if not planar and geo.m == 4:
-            Rs, ts, balanced = with_marches(geo, P[todo], Rs, ts, balanced)
-        _choose_general(geo, P, planar, todo, Rs, ts, balanced, seen, found, alternatives)
+            Rs, ts, balanced = with_marches(geo, P[todo], Rs, ts, balanced, R0)
+        _choose_general(geo, P, planar, todo, Rs, ts, balanced, R0, seen, found, alternatives)
         pull_any[todo] |= (balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)).any(1)
         bal_any[todo] |= balanced.any(1)
     alts = []
@@ -431,25 +433,26 @@ def _hang_general(geo, P, planar, nominal, alternatives):
     return R, t, _statuses(found, pull_any, bal_any), hmin, alts
 
 
-def _choose_general(geo, P, planar, todo, Rs, ts, balanced, seen, found, alternatives):
-    """Appends to ``seen`` the pulling candidates of each position in order of tilt, until a
-    stable one (all of them with ``alternatives``), skipping those already seen, as (R, t,
-    stable, tilt, h); the stability of every pulling candidate is judged first, in one batch."""
+def _choose_general(geo, P, planar, todo, Rs, ts, balanced, R0, seen, found, alternatives):
+    """Appends to ``seen`` the pulling candidates of each position in order of tilt (of equally
+    tilted ones the nearest the nominal rotation R0 first: :func:`tilt_rank`), until a stable
+    one (all of them with ``alternatives``), skipping those already seen, as (R, t, stable,
+    rank, h); the stability of every pulling candidate is judged first, in one batch."""
     dofs = hc.DOFS_PLANAR if planar else hc.DOFS_SPATIAL
     pull = balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)
-    tilt = tilt_many(Rs, -geo.g / np.linalg.norm(geo.g))
+    rank = tilt_rank(Rs, -geo.g / np.linalg.norm(geo.g), R0)
     # the stability of every pulling candidate at once (the loop below may skip some of them)
     stable, h = np.zeros(pull.shape, bool), np.full(pull.shape, np.nan)
     n_, s_ = np.nonzero(pull)
     if n_.size:
         stable[n_, s_], h[n_, s_] = _stable(geo, P[todo[n_]], Rs[n_, s_], ts[n_, s_], dofs)
     for n, i in enumerate(todo):
-        for s in np.argsort(np.where(pull[n], tilt[n], np.inf), kind="stable"):
+        for s in np.argsort(np.where(pull[n], rank[n], np.inf), kind="stable"):
             if not pull[n, s] or (found[i] and not alternatives):
                 break
             if any(hc.rotation_angle(Rs[n, s] @ c[0].T) < 1e-7 for c in seen[i]):
                 continue
-            seen[i].append((Rs[n, s], np.maximum(ts[n, s], 0.0), bool(stable[n, s]), tilt[n, s], h[n, s]))
+            seen[i].append((Rs[n, s], np.maximum(ts[n, s], 0.0), bool(stable[n, s]), rank[n, s], h[n, s]))
             found[i] |= stable[n, s]
 
 

@@ -109,10 +109,6 @@ def align(v, target) -> np.ndarray:
     return rotvec(axis / s * math.atan2(s, co))
 
 
-# ----------------------------------------------------------------------------
-# the convex inner problem: lowest point of an intersection of balls
-# ----------------------------------------------------------------------------
-
 def tilt_many(R, up) -> np.ndarray:
     """Angles [deg] between R up and up for rotations R (..., 3, 3) (atan2 of the sine and
     cosine: accurate near level too, where acos loses half the digits)."""
@@ -121,6 +117,28 @@ def tilt_many(R, up) -> np.ndarray:
     s = np.linalg.norm(np.cross(v, up), axis=-1)
     return np.degrees(np.arctan2(s, v @ up))
 
+
+#: Weight of the tie-break between equally tilted orientations in :func:`tilt_rank` (deg of
+#: rank per deg of rotation from the nominal orientation).
+TIE = 1e-7
+
+
+def tilt_rank(R, up, R0) -> np.ndarray:
+    """The order [deg] in which the hanging search prefers orientations R (..., 3, 3): the
+    tilt (:func:`tilt_many`) plus :data:`TIE` x the angle [deg] from the nominal rotation
+    R0 (3, 3).  Of orientations equally tilted (a level body that could hang at any yaw,
+    say) the one nearest R0 comes first; the term reorders orientations only where their
+    tilts differ by less than 180 x TIE deg.  The angle is 2 asin(|R - R0|_F / sqrt 8),
+    accurate near R0 (where acos of the trace loses half the digits): the term outweighs
+    the rounding of the tilt (about 1e-15 deg) from about 1e-10 rad away."""
+    d = np.asarray(R, float) - np.asarray(R0, float)
+    chord = np.sqrt(np.einsum("...ij,...ij->...", d, d) / 8.0)
+    return tilt_many(R, up) + TIE * np.degrees(2.0 * np.arcsin(np.minimum(chord, 1.0)))
+
+
+# ----------------------------------------------------------------------------
+# the convex inner problem: lowest point of an intersection of balls
+# ----------------------------------------------------------------------------
 
 def _pairs(C, rho, down, tol):
     """Stationary points of the height on the intersection of two spheres (per pair)."""

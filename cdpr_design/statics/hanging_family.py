@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design.statics import hanging_core as hc
-from cdpr_design.statics.hanging_core import tilt_many
+from cdpr_design.statics.hanging_core import tilt_rank
 from cdpr_design.statics.hanging_newton import Balance, newton_many, solve_sym, subset
 
 
@@ -71,12 +71,13 @@ def _advance(bal, P, R, t, tau, h, tol):
     return _correct(bal, P, R1, t + h[:, None] * tau[:, 3:] * bal.geo.weight, tol)
 
 
-def march_family(geo: hc.Geometry, P, R, t, direction):
+def march_family(geo: hc.Geometry, P, R, t, direction, R0):
     """The least tilted member with every tension >= 0 of the one-parameter family of
-    balanced orientations of a spatial body on four taut cables, along the family from
-    balanced pulling points (R (N, 3, 3), t (N, 4) [N]) at positions P (N, 3) [m], in
-    ``direction`` (N, 7) (rotation, tension / weight; only its sign along the tangent
-    counts).  Predictor-corrector continuation in steps of :data:`MARCH_STEP` until a
+    balanced orientations of a spatial body on four taut cables (ranked by
+    :func:`~cdpr_design.statics.hanging_core.tilt_rank`: of equally tilted members the
+    nearest the nominal rotation R0 (3, 3)), along the family from balanced pulling points
+    (R (N, 3, 3), t (N, 4) [N]) at positions P (N, 3) [m], in ``direction`` (N, 7)
+    (rotation, tension / weight; only its sign along the tangent counts).  Predictor-corrector continuation in steps of :data:`MARCH_STEP` until a
     tension turns negative (the pulling members end where one cable goes slack) or
     :data:`MARCH_STEPS`, then :data:`MARCH_REFINE` parabolas through the least tilted
     step and its neighbours.  Returns candidates (R (N, 2, 3, 3), t (N, 2, 4) [N],
@@ -90,7 +91,7 @@ def march_family(geo: hc.Geometry, P, R, t, direction):
     tol = 1e-10
     w0 = np.zeros((N, 3))
     tau = _null_vector(np.nan_to_num(bal.jacobian(P, R, t, w0)), direction)
-    f = tilt_many(R, up)
+    f = tilt_rank(R, up, R0)
     best = [R.copy(), t.copy(), f.copy(), tau.copy()]
     # the bracket of the least tilted step: arc lengths and tilts of (previous, best, next)
     x = np.stack([np.full(N, -1.0), np.zeros(N), np.full(N, 1.0)], axis=1) * MARCH_STEP
@@ -106,7 +107,7 @@ def march_family(geo: hc.Geometry, P, R, t, direction):
             break
         h = np.full(idx.size, MARCH_STEP)
         R1, t1, res, J1 = _advance(bal, P[idx], R[idx], t[idx], tau[idx], h, tol)
-        f1 = tilt_many(R1, up)
+        f1 = tilt_rank(R1, up, R0)
         ok_t = np.all(t1 >= -1e-9 * geo.weight, axis=1)
         ok = (res <= tol) & ok_t
         f1 = np.where(ok, f1, np.inf)
@@ -140,7 +141,7 @@ def march_family(geo: hc.Geometry, P, R, t, direction):
         xn = _parabola_vertex(x[todo], fx[todo])
         moved = np.abs(xn - x[todo, 1]) > 1e-7  # a smaller step moves the tilt by ~1e-14 rad
         Rn, tn, res, _ = _advance(bal, P[todo], best[0][todo], best[1][todo], best[3][todo], xn - xb[todo], tol)
-        fn = np.where((res <= tol) & np.all(tn >= -1e-9 * geo.weight, axis=1), tilt_many(Rn, up), np.inf)
+        fn = np.where((res <= tol) & np.all(tn >= -1e-9 * geo.weight, axis=1), tilt_rank(Rn, up, R0), np.inf)
         x[todo], fx[todo] = _bracket(x[todo], fx[todo], xn, fn)
         better = fn < best[2][todo]
         g = todo[better]
@@ -200,9 +201,10 @@ def _bracket(x, f, xn, fn):
     return np.stack([na, nb, nc], axis=1), np.stack([nfa, nfb, nfc], axis=1)
 
 
-def with_marches(geo, P, Rs, ts, balanced):
+def with_marches(geo, P, Rs, ts, balanced, R0):
     """The candidates (k, S) of a spatial body on four cables with, appended, the least
-    tilted pulling member of its family reached by :func:`march_family` from each balanced
+    tilted pulling member of its family (nearest the nominal rotation R0 (3, 3) among equally
+    tilted ones) reached by :func:`march_family` from each balanced
     pulling candidate: from one on three cables (the fourth just slack) in the direction
     that tightens the fourth, from one on all four in both directions; and where a march
     ended with a cable going slack, the orientation with it just slack.  Candidates
@@ -224,7 +226,7 @@ def with_marches(geo, P, Rs, ts, balanced):
     cols = 2 * int(np.bincount(n_, minlength=k).max()) if n_.size else 0
     Rm, tm, bm = np.full((k, cols, 3, 3), np.nan), np.zeros((k, cols, geo.m)), np.zeros((k, cols), bool)
     if n_.size:
-        Rb, tb, ok = march_family(geo, P[n_], Rs[n_, s_], ts[n_, s_], d)
+        Rb, tb, ok = march_family(geo, P[n_], Rs[n_, s_], ts[n_, s_], d, R0)
         order = np.argsort(n_, kind="stable")
         slot = np.empty(n_.size, int)
         slot[order] = 2 * (np.arange(n_.size) - np.searchsorted(n_[order], n_[order]))
