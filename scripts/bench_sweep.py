@@ -133,7 +133,7 @@ def main() -> None:
         paired = sorted(d / p for d, p in zip(walls["Dask LocalCluster, 2 workers"],
                                               walls["process pool, 2 workers"]))
         if len(paired) > 1:
-            print(f"  Dask / pool 2 round by round: " + ", ".join(f"{100 * (r - 1):+.0f} %" for r in paired))
+            print("  Dask / pool 2 round by round: " + ", ".join(f"{100 * (r - 1):+.0f} %" for r in paired))
     if len(sizes) == 2:
         big, small = len(plan_of(sizes[0][0])), len(plan_of(sizes[1][0]))
         print(f"\nfixed cost and throughput from the {big} and {small} variant sweeps "
