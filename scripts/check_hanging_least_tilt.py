@@ -1,15 +1,16 @@
 #!/usr/bin/env python3
-"""Accuracy check: how far the hanging search of a spatial body on four cables is from the
-least tilted orientation it could hang in.
+"""Accuracy check: how far the hanging search of a spatial body on four or five cables is
+from the least tilted orientation it could hang in.
 
 At a commanded position a body on four taut cables has a one-parameter family
 of balanced orientations (the lengths can still choose among them); its
 members with every tension >= 0 end where one tension reaches zero, which is a
-three-cable answer.  :func:`cdpr_design.statics.hanging_at.hang` reports the
-least tilted stable answer among the ones its search finds: Newton's method
-for every three taut cables and for all four, then a march along the
-four-cable family from each of them (docs/hanging-pose.md).  This script
-measures, at random
+three-cable answer.  On five cables the family has two parameters, and the
+edges of its pulling region are arcs of four-cable families.
+:func:`cdpr_design.statics.hanging_at.hang` reports the least tilted stable
+answer among the ones its search finds: Newton's method for every three taut
+cables and for all of them, then marches along the four-cable families from
+them (docs/hanging-pose.md).  This script measures, at random
 positions inside the middle 80 % of the design's frame, how much more tilted
 that answer is than an independent search for the least tilted balanced
 orientation with every tension >= 0: scipy SLSQP minimising 1 - cos(tilt)
@@ -23,8 +24,10 @@ reference can only be less tilted, never wrongly more.
 Prints, for the design's mass and for ``--mass`` if given: the positions
 where the library is more tilted than the reference by more than
 ``--tol`` degrees, the largest such gap, the positions where it is less
-tilted, and how many of the reference's answers have all four cables
-pulling.  Takes about 1.5 s a position.
+tilted, and how many of the reference's answers have every cable
+pulling.  A less tilted reference orientation turned more than 90 degrees
+about the vertical (the body's cables then cross; the search starts there only
+where nothing else balances) is counted apart.  Takes about 1.5 s a position.
 
 Usage:  python scripts/check_hanging_least_tilt.py [designs/crane4.yaml] [--n 60] [--seed 5]
         [--starts 16] [--mass 0.5] [--tol 0.01]
@@ -83,6 +86,17 @@ def least_tilt_reference(A, B, c, mass, g, p, starts: int, rng) -> tuple[float, 
     return best, rotation, tensions
 
 
+def half_turned(R, g) -> bool:
+    """Whether rotation R (3, 3) turns the body more than 90 deg about the vertical (-g) from
+    the level orientation: a horizontal direction of the body points the other way, and its
+    cables cross (the search looks for such orientations only where nothing else balances)."""
+    up = -np.asarray(g, float) / np.linalg.norm(g)
+    e = np.eye(3)[int(np.argmin(np.abs(up)))]
+    e = e - (e @ up) * up
+    e /= np.linalg.norm(e)
+    return bool((R @ e) @ e < 0.0)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("design", nargs="?", default="designs/crane4.yaml")
@@ -94,8 +108,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     design = load(args.design)
     A, B, c, mass, g, planar = H.design_arrays(design)
-    if planar or len(A) != 4:
-        print("this check is for spatial bodies on four cables", file=sys.stderr)
+    if planar or len(A) not in (4, 5):
+        print("this check is for spatial bodies on four or five cables", file=sys.stderr)
         return 2
     lo, hi = np.asarray(design.frame_lower, float), np.asarray(design.frame_upper, float)
     rng = np.random.default_rng(args.seed)
@@ -104,16 +118,19 @@ def main(argv=None) -> int:
     ref = [least_tilt_reference(A, B, c, mass, g, p, args.starts, np.random.default_rng(args.seed + 1 + i))
            for i, p in enumerate(P)]
     tilt_ref = np.array([r[0] for r in ref])
-    four = sum(bool(np.all(r[2] > 1e-6 * mass * np.linalg.norm(g))) for r in ref)
+    turned = np.array([r[1] is not None and half_turned(r[1], g) for r in ref])
+    every = sum(bool(np.all(r[2] > 1e-6 * mass * np.linalg.norm(g))) for r in ref)
     print(f"{design.name}: {args.n} positions (seed {args.seed}), reference {time.perf_counter() - t0:.0f} s; "
-          f"the reference's least tilted answer has all four cables pulling at {four}")
+          f"the reference's least tilted answer has every cable pulling at {every}")
     for m in [mass] + ([args.mass] if args.mass is not None else []):
         h = ha.hang(hc.Geometry(A, B, c, m, g), P, False)
         gap = h.tilt_deg - tilt_ref
         both = np.isfinite(gap)
         worse = both & (gap > args.tol)
-        print(f"  library at {m:g} kg: more tilted than the reference by > {args.tol:g} deg at {worse.sum()}, "
-              f"by up to {np.max(gap[both], initial=0.0):.3g} deg; less tilted at {np.sum(both & (gap < -args.tol))}; "
+        print(f"  library at {m:g} kg: more tilted than the reference by > {args.tol:g} deg at {worse.sum()} "
+              f"(at {np.sum(worse & turned)} of them the reference's orientation is turned more than 90 deg about "
+              f"the vertical), by up to {np.max(gap[both], initial=0.0):.3g} deg; "
+              f"less tilted at {np.sum(both & (gap < -args.tol))}; "
               f"feasible only in the library {np.sum(np.isfinite(h.tilt_deg) & ~np.isfinite(tilt_ref))}, "
               f"only in the reference {np.sum(~np.isfinite(h.tilt_deg) & np.isfinite(tilt_ref))}")
     return 0
