@@ -27,7 +27,10 @@ for many positions at once, with numpy:
   a curve, and :func:`~cdpr_design.statics.hanging_family.march_family`
   follows it from every balanced pulling candidate (predictor-corrector
   continuation) to its least tilted member with every tension >= 0, and to
-  where its pulling members end (a cable just slack).
+  where its pulling members end (a cable just slack).  On five cables the
+  marches walk the edges of the two-parameter family's pulling region, which
+  are arcs of four-cable families
+  (:func:`~cdpr_design.statics.hanging_family.with_marches`).
 
 Of the balanced orientations found with tensions >= 0 and stable, the least
 tilted one is the answer (``tilt`` = angle between the platform's vertical and
@@ -418,7 +421,7 @@ def _hang_general(geo, P, planar, nominal, alternatives):
         Rs = np.concatenate([c[0] for c in cands], axis=1)
         ts = np.concatenate([c[1] for c in cands], axis=1)
         balanced = np.concatenate([c[2] for c in cands], axis=1)
-        if not planar and geo.m == 4:
+        if not planar and geo.m in (4, 5):
             Rs, ts, balanced = with_marches(geo, P[todo], Rs, ts, balanced, R0)
         _choose_general(geo, P, planar, todo, Rs, ts, balanced, R0, seen, found, alternatives)
         pull_any[todo] |= (balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)).any(1)

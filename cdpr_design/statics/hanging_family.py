@@ -13,6 +13,8 @@ Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging_core`.
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 
 from cdpr_design.statics import hanging_core as hc
@@ -202,15 +204,35 @@ def _bracket(x, f, xn, fn):
 
 
 def with_marches(geo, P, Rs, ts, balanced, R0):
-    """The candidates (k, S) of a spatial body on four cables with, appended, the least
-    tilted pulling member of its family (nearest the nominal rotation R0 (3, 3) among equally
-    tilted ones) reached by :func:`march_family` from each balanced
-    pulling candidate: from one on three cables (the fourth just slack) in the direction
-    that tightens the fourth, from one on all four in both directions; and where a march
-    ended with a cable going slack, the orientation with it just slack.  Candidates
-    (R, t [N], balanced) with S + M columns, M = 2 x the most marches at one position
-    (unbalanced where a position has fewer)."""
-    k = len(P)
+    """The candidates (k, S) of a spatial body on four or five cables with, appended, what
+    :func:`march_family` finds from them: on four cables along their family
+    (:func:`_marches`), on five along the edges of the pulling region of their family
+    (:func:`_walks`).  Candidates (R, t [N], balanced) with the marches' columns after the S
+    given (unbalanced where a position has fewer)."""
+    Rm, tm, bm = (_marches if geo.m == 4 else _walks)(geo, P, Rs, ts, balanced, R0)
+    return (np.concatenate([Rs, Rm], axis=1), np.concatenate([ts, tm], axis=1),
+            np.concatenate([balanced, bm], axis=1))
+
+
+def _columns(k, n_, R, t, ok):
+    """Candidates per row (R (N, 3, 3), t (N, m), ok (N,)) of positions n_ (N,) as columns
+    (k, M, ...), M the most rows of one position (unbalanced where a position has fewer)."""
+    cols = int(np.bincount(n_, minlength=k).max()) if n_.size else 0
+    Rm, tm, bm = np.full((k, cols, 3, 3), np.nan), np.zeros((k, cols, t.shape[1])), np.zeros((k, cols), bool)
+    if n_.size:
+        order = np.argsort(n_, kind="stable")
+        slot = np.empty(n_.size, int)
+        slot[order] = np.arange(n_.size) - np.searchsorted(n_[order], n_[order])
+        Rm[n_, slot], tm[n_, slot], bm[n_, slot] = R, np.maximum(t, 0.0), ok
+    return Rm, tm, bm
+
+
+def _marches(geo, P, Rs, ts, balanced, R0):
+    """The least tilted pulling member of a four-cable body's family reached by
+    :func:`march_family` from each balanced pulling candidate (k, S) (R, t [N], balanced):
+    from one on three cables (the fourth just slack) in the direction that tightens the
+    fourth, from one on all four in both directions; and where a march ended with a cable
+    going slack, the orientation with it just slack.  (R, t [N], balanced) (k, M)."""
     pull = balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)
     slack = ts <= 0.0
     n_, s_ = np.nonzero(pull & (slack.sum(axis=2) <= 1))
@@ -223,14 +245,74 @@ def with_marches(geo, P, Rs, ts, balanced, R0):
         J = bal.jacobian(P[n_[four]], Rs[n_[four], s_[four]], ts[n_[four], s_[four]], np.zeros((four.size, 3)))
         d[four] = _null_vector(np.nan_to_num(J), np.ones((four.size, 7)))
         n_, s_, d = np.concatenate([n_, n_[four]]), np.concatenate([s_, s_[four]]), np.concatenate([d, -d[four]])
-    cols = 2 * int(np.bincount(n_, minlength=k).max()) if n_.size else 0
-    Rm, tm, bm = np.full((k, cols, 3, 3), np.nan), np.zeros((k, cols, geo.m)), np.zeros((k, cols), bool)
-    if n_.size:
-        Rb, tb, ok = march_family(geo, P[n_], Rs[n_, s_], ts[n_, s_], d, R0)
-        order = np.argsort(n_, kind="stable")
-        slot = np.empty(n_.size, int)
-        slot[order] = 2 * (np.arange(n_.size) - np.searchsorted(n_[order], n_[order]))
-        for e in (0, 1):
-            Rm[n_, slot + e], tm[n_, slot + e], bm[n_, slot + e] = Rb[:, e], np.maximum(tb[:, e], 0.0), ok[:, e]
-    return (np.concatenate([Rs, Rm], axis=1), np.concatenate([ts, tm], axis=1),
-            np.concatenate([balanced, bm], axis=1))
+    if not n_.size:
+        return _columns(len(P), n_, np.zeros((0, 3, 3)), np.zeros((0, geo.m)), np.zeros(0, bool))
+    Rb, tb, ok = march_family(geo, P[n_], Rs[n_, s_], ts[n_, s_], d, R0)
+    return _columns(len(P), np.repeat(n_, ok.shape[1]), Rb.reshape(-1, 3, 3), tb.reshape(-1, geo.m), ok.reshape(-1))
+
+
+def _walks(geo, P, Rs, ts, balanced, R0):
+    """What marches find along the edges of the pulling region of a five-cable body's
+    two-parameter family, from each balanced pulling candidate (k, S) (R, t [N], balanced)
+    on three cables.
+
+    The region's edges are arcs of four-cable families (the fifth cable slack), its
+    corners three-cable answers.  From a corner with taut cables T and slack x, y a walk
+    marches along the family T + x tightening x (:func:`march_family`), another along
+    T + y.  Where a march ends with a cable z going slack, at a corner, the walk goes on
+    along the family of that corner and the cable that was slack, tightening it; until
+    it is back at the corner it started from, or after as many corners as there are (10).
+    A family is marched once from each corner a walk enters it at.  Every march adds its
+    least tilted member and its end.  (R, t [N], balanced) (k, M).  The interior (all
+    five cables pulling) is not searched."""
+    m, k = geo.m, len(P)
+    bit = 1 << np.arange(m)
+    pull = balanced & np.all(ts >= -1e-9 * geo.weight, axis=2)
+    n_, s_ = np.nonzero(pull & ((ts > 0.0).sum(axis=2) == 3))
+    slack = ts[n_, s_] <= 0.0
+    x, y = np.argmax(slack, axis=1), m - 1 - np.argmax(slack[:, ::-1], axis=1)
+    # the walks: position, orientation, tensions, the cable to tighten, the one outside the
+    # family (left slack), the taut cables where the walk started
+    wn, wR, wt = np.concatenate([n_, n_]), np.concatenate([Rs[n_, s_]] * 2), np.concatenate([ts[n_, s_]] * 2)
+    wa, wo = np.concatenate([x, y]), np.concatenate([y, x])
+    start = (wt > 0.0) @ bit
+    # each family is marched once from each corner a walk enters it at: (position, family (by
+    # the cable outside it), the corner's taut cables)
+    seen = np.zeros((k, m, 1 << m), bool)
+    found = []
+    for _ in range(len(list(itertools.combinations(range(m), 3)))):
+        key = (wn, wo, (wt > 0.0) @ bit)
+        first = np.zeros(wn.size, bool)
+        first[np.unique(np.ravel_multi_index(key, seen.shape), return_index=True)[1]] = True
+        new = first & ~seen[key]
+        seen[key] = True
+        wn, wR, wt, wa, wo, start = wn[new], wR[new], wt[new], wa[new], wo[new], start[new]
+        if not wn.size:
+            break
+        nxt = []
+        for Q in itertools.combinations(range(m), 4):
+            out = (set(range(m)) - set(Q)).pop()
+            r = np.flatnonzero(wo == out)
+            if not r.size:
+                continue
+            Qs = list(Q)
+            d = np.zeros((r.size, 7))
+            d[np.arange(r.size), 3 + np.searchsorted(Qs, wa[r])] = 1.0
+            Rb, tb, ok = march_family(subset(geo, Q), P[wn[r]], wR[r], wt[r][:, Qs], d, R0)
+            tf = np.zeros(tb.shape[:2] + (m,))
+            tf[:, :, Qs] = tb
+            found.append((np.repeat(wn[r], ok.shape[1]), Rb.reshape(-1, 3, 3), tf.reshape(-1, m), ok.reshape(-1)))
+            # on from the march's end where a cable went slack (a corner): that cable stays
+            # slack, the walk tightens the fifth
+            e = np.flatnonzero(ok[:, 1] & np.all(tb[:, 1] >= -1e-9 * geo.weight, axis=1))
+            te = tf[e, 1]
+            z = np.array(Qs)[np.argmin(tb[e, 1], axis=1)]
+            go = (te > 0.0) @ bit != start[r[e]]
+            g = e[go]
+            nxt.append((wn[r[g]], Rb[g, 1], te[go], np.full(g.size, out), z[go], start[r[g]]))
+        if not nxt:
+            break
+        wn, wR, wt, wa, wo, start = (np.concatenate([q[j] for q in nxt]) for j in range(6))
+    if not found:
+        return _columns(k, np.zeros(0, int), np.zeros((0, 3, 3)), np.zeros((0, m)), np.zeros(0, bool))
+    return _columns(k, *(np.concatenate([f[j] for f in found]) for j in range(4)))
