@@ -346,6 +346,20 @@ def test_pose_free(tmp_path):
     assert res.exit_code == 2 and "--kind wrench-closure" in res.output
 
 
+def test_pose_table_shows_the_tensions_an_infeasible_load_hangs_with():
+    """crane4 at (1.5, 1.5, 2) hangs tilted 14.4 deg, more than its max_tilt of 10: the
+    pose is infeasible (no tensions in the table), yet the load hangs there, and the table's
+    text gives the tensions it hangs with (the JSON's hanging_tensions)."""
+    data = json.loads(invoke("pose", CRANE4, "--at", "1.5,1.5,2", "--json").stdout)
+    assert not data["feasible"] and "max_tilt" in data["reason"]
+    assert all(v is None for v in data["tensions"].values())
+    text = invoke("pose", CRANE4, "--at", "1.5,1.5,2").output.replace("\n", " ")
+    shown = ", ".join(f"{c} {v:.6g}" for c, v in data["hanging_tensions"].items())
+    assert f"and tensions [N] {shown}" in text
+    feasible = invoke("pose", CRANE4, "--at", "2.5,2,2").output
+    assert "and tensions" not in feasible  # the table has them
+
+
 def test_free_needs_ideal_cables(tmp_path):
     """The hanging solvers model rigid weightless cables: a free design with another cable model is
     refused; under fixed the other models' outputs come without the tilt."""
