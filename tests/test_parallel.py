@@ -35,7 +35,7 @@ def test_blocks_cover_the_rows_once_in_order(count, grain, nthreads):
 
 
 @pytest.mark.parametrize("path, step", [("designs/ipanema3.yaml", 0.25), (PLANAR2, 0.01),
-                                        ("designs/crane4.yaml", 0.2)])
+                                        ("designs/crane4.yaml", 0.25)])
 def test_results_do_not_depend_on_the_thread_count(path, step):
     d = spec.load(path)
     if "crane4" in str(path):  # its hanging search runs on the kernels' threads, in blocks
@@ -46,10 +46,10 @@ def test_results_do_not_depend_on_the_thread_count(path, step):
     for n in (1, 2, 3, 8):
         got = []
         parallel.set_threads(n)
-        ws.run(d, step=step, engine="numba", on_chunk=got.append, chunk=5000)
+        ws.run(d, step=step, engine="numba", on_chunk=got.append, chunk=2000)  # more than one chunk each
         rows.append(got)
     ref = rows[0]
-    assert sum(len(c.feasible) for c in ref) > 1000
+    assert sum(len(c.feasible) for c in ref) > 1000 and len(ref) > 1
     for other in rows[1:]:
         for a, b in zip(ref, other, strict=True):
             np.testing.assert_array_equal(a.feasible, b.feasible)
