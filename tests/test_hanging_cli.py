@@ -75,6 +75,25 @@ def test_fixed_workspace_rows_are_the_plain_engines(planar2):
     np.testing.assert_allclose(tilt, np.where(status == 0, np.degrees(np.abs(phi)), np.nan), atol=1e-12)
 
 
+def test_an_underconstrained_design_without_a_hanging_solve_is_still_classified(tmp_path):
+    """cli.md: an under-constrained design's summary has effector_orientation and
+    underconstrained, also where there is no hanging solve (sagging cables, a weightless
+    effector): then without the tilt keys.  A fully constrained design has neither."""
+    data = planar2_raw()
+    data["effector"]["mass"] = 0.0
+    for path in (DESIGNS / "sagging40.yaml", write_spec(tmp_path, data, "weightless.yaml")):
+        s = json.loads(invoke("workspace", path, "--step", "1.0" if "sagging" in path.name else "0.1",
+                              "--out", tmp_path / path.stem, "--json").stdout)
+        assert s["effector_orientation"] == "fixed" and s["underconstrained"] is True, path
+        assert "hangs" not in s and "max_tilt" not in s, path
+        res = invoke("workspace", path, "--step", "1.0" if "sagging" in path.name else "0.1",
+                     "--out", tmp_path / path.stem, "--overwrite")
+        assert res.exit_code == 0 and "effector orientation" in res.output and "hangs at" not in res.output
+    s = json.loads(invoke("workspace", DESIGNS / "ipanema1.yaml", "--step", "0.5", "--out", tmp_path / "i",
+                          "--json").stdout)
+    assert "underconstrained" not in s and "effector_orientation" not in s
+
+
 def test_without_tilt_a_held_design_is_the_plain_sweep_and_a_free_one_still_hangs(tmp_path, planar2):
     """``run(tilt=False)`` (what the evaluation and the sizing envelope use): a held design's
     sweep without the hanging solve -- the same rows and summary as the plain engines, no tilt --

@@ -72,8 +72,9 @@ def workspace(
             ("feasible before interference", f"{s['feasible_statics']:,}")] if "collision_free" in s else [])
         + ([("orientations", f"{s['orientation_mode']} ({s['orientation_count']} samples)")]
            if "orientation_mode" in s else [])
-        + ([("effector orientation", s["effector_orientation"]), ("hangs at", f"{s['hangs']:,} positions"),
-            ("max tilt (feasible) [deg]", s["max_tilt"])] if "effector_orientation" in s else [])
+        + ([("effector orientation", s["effector_orientation"])] if "effector_orientation" in s else [])
+        + ([("hangs at", f"{s['hangs']:,} positions"), ("max tilt (feasible) [deg]", s["max_tilt"])]
+           if "hangs" in s else [])
         + ([("cable model", s["cable_model"])] if "cable_model" in s else [])
         + ([("cable status", ", ".join(f"{k} {v:,}" for k, v in s["cable_status"].items() if v))]
            if "cable_status" in s else [])

@@ -111,7 +111,10 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
                              interference=interference, engine=engine, max_tilt=max_tilt)
     if max_tilt is not None:
         hanging.tilt_limit(design, max_tilt)  # refused: the design does not hang
-    return _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interference, engine)
+    result = _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interference, engine)
+    if tilt:  # an under-constrained design without a hanging solve is still classified
+        result.extra.update(hanging.classification(design))
+    return result
 
 
 def _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interference, engine):

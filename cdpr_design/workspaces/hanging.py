@@ -108,6 +108,15 @@ def columns(design: Design) -> list[str]:
     return ["tilt"] + [f"orientation_{a}" for a in axes]
 
 
+def classification(design: Design) -> dict:
+    """The summary keys of an under-constrained design's sweep, ``effector_orientation`` and
+    ``underconstrained`` (cli.md), whether or not it hangs (a weightless effector, swivel
+    pulleys and elastic or sagging cables have no hanging solve); none for other designs."""
+    if not H.underconstrained(design):
+        return {}
+    return {"effector_orientation": design.effector.orientation, "underconstrained": True}
+
+
 def tilt_limit(design: Design, max_tilt: float | None) -> float | None:
     """The tilt limit [deg] of a sweep: ``max_tilt``, else ``requirements.max_tilt`` (free designs)."""
     if max_tilt is not None:
@@ -197,7 +206,7 @@ class _Stats:
 
     def summary(self, design, limit) -> dict:
         num = lambda x: float(x) if np.isfinite(x) else None  # noqa: E731
-        out = {"effector_orientation": design.effector.orientation, "underconstrained": True,
+        out = {**classification(design),
                "hangs": self.hangs, "max_tilt": num(self.max_feasible), "max_tilt_hanging": num(self.max_hanging)}
         if design.effector.orientation == "free":
             out.update(tilt_limit=limit, tilt_limited=self.limited if limit is not None else None)
