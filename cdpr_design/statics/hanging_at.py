@@ -36,8 +36,9 @@ Of the balanced orientations found with tensions >= 0 and stable, the least
 tilted one is the answer (``tilt`` = angle between the platform's vertical and
 the frame's, |phi| for planar bodies); of equally tilted ones (a level body
 that could hang at any yaw) the one nearest the nominal orientation
-(:func:`~cdpr_design.statics.hanging_core.tilt_rank`).  Status codes (:data:`OK`, ...) say why
-a position has none; they equal the kernel's ``TILT_*`` codes (a test checks).
+(:func:`~cdpr_design.statics.hanging_core.tilt_rank`).  Status codes
+(:data:`OK`, ...) say why a position has none; they equal the kernel's
+``TILT_*`` codes (a test checks).
 
 Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging_core`.
 
@@ -453,7 +454,7 @@ def _choose_general(geo, P, planar, todo, Rs, ts, balanced, R0, seen, found, alt
         for s in np.argsort(np.where(pull[n], rank[n], np.inf), kind="stable"):
             if not pull[n, s] or (found[i] and not alternatives):
                 break
-            if any(hc.rotation_angle(Rs[n, s] @ c[0].T) < 1e-7 for c in seen[i]):
+            if any(hc.angle_from(Rs[n, s], c[0]) < 1e-7 for c in seen[i]):
                 continue
             seen[i].append((Rs[n, s], np.maximum(ts[n, s], 0.0), bool(stable[n, s]), rank[n, s], h[n, s]))
             found[i] |= stable[n, s]

@@ -90,9 +90,17 @@ def from_euler_xyz(rx: float, ry: float, rz: float) -> np.ndarray:
     return rotvec([rx, 0, 0]) @ rotvec([0, ry, 0]) @ rotvec([0, 0, rz])
 
 
+def angle_from(R, R0) -> np.ndarray:
+    """The angles [rad] of rotations R (..., 3, 3) from R0 (3, 3 or ..., 3, 3): 2 asin(|R -
+    R0|_F / sqrt 8), accurate near R0 too (where acos of the trace loses half the digits)."""
+    d = np.asarray(R, float) - np.asarray(R0, float)
+    chord = np.sqrt(np.einsum("...ij,...ij->...", d, d) / 8.0)
+    return 2.0 * np.arcsin(np.minimum(chord, 1.0))
+
+
 def rotation_angle(R) -> float:
     """The angle [rad] of a rotation matrix."""
-    return math.acos(max(-1.0, min(1.0, 0.5 * (np.trace(R) - 1.0))))
+    return float(angle_from(R, np.eye(3)))
 
 
 def align(v, target) -> np.ndarray:
@@ -128,12 +136,10 @@ def tilt_rank(R, up, R0) -> np.ndarray:
     tilt (:func:`tilt_many`) plus :data:`TIE` x the angle [deg] from the nominal rotation
     R0 (3, 3).  Of orientations equally tilted (a level body that could hang at any yaw,
     say) the one nearest R0 comes first; the term reorders orientations only where their
-    tilts differ by less than 180 x TIE deg.  The angle is 2 asin(|R - R0|_F / sqrt 8),
-    accurate near R0 (where acos of the trace loses half the digits): the term outweighs
-    the rounding of the tilt (about 1e-15 deg) from about 1e-10 rad away."""
-    d = np.asarray(R, float) - np.asarray(R0, float)
-    chord = np.sqrt(np.einsum("...ij,...ij->...", d, d) / 8.0)
-    return tilt_many(R, up) + TIE * np.degrees(2.0 * np.arcsin(np.minimum(chord, 1.0)))
+    tilts differ by less than 180 x TIE deg.  The angle (:func:`angle_from`) is accurate
+    near R0, so the term outweighs the rounding of the tilt (about 1e-15 deg) from about
+    1e-10 rad away."""
+    return tilt_many(R, up) + TIE * np.degrees(angle_from(R, R0))
 
 
 # ----------------------------------------------------------------------------
