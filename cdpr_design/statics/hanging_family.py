@@ -14,6 +14,7 @@ Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging_core`.
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 
@@ -79,8 +80,9 @@ def march_family(geo: hc.Geometry, P, R, t, direction, R0):
     :func:`~cdpr_design.statics.hanging_core.tilt_rank`: of equally tilted members the
     nearest the nominal rotation R0 (3, 3)), along the family from balanced pulling points
     (R (N, 3, 3), t (N, 4) [N]) at positions P (N, 3) [m], in ``direction`` (N, 7)
-    (rotation, tension / weight; only its sign along the tangent counts).  Predictor-corrector continuation in steps of :data:`MARCH_STEP` until a
-    tension turns negative (the pulling members end where one cable goes slack) or
+    (rotation, tension / weight; only its sign along the tangent counts).
+    Predictor-corrector continuation in steps of :data:`MARCH_STEP` until a tension
+    turns negative (the pulling members end where one cable goes slack) or
     :data:`MARCH_STEPS`, then :data:`MARCH_REFINE` parabolas through the least tilted
     step and its neighbours.  Returns candidates (R (N, 2, 3, 3), t (N, 2, 4) [N],
     balanced (N, 2)): the least tilted member found (the start where no step improved on
@@ -214,16 +216,21 @@ def with_marches(geo, P, Rs, ts, balanced, R0):
             np.concatenate([balanced, bm], axis=1))
 
 
-def _columns(k, n_, R, t, ok):
-    """Candidates per row (R (N, 3, 3), t (N, m), ok (N,)) of positions n_ (N,) as columns
-    (k, M, ...), M the most rows of one position (unbalanced where a position has fewer)."""
+def _columns(k, m, found):
+    """The candidates of marches at positions 0..k-1 as columns (k, M, ...), M the most at
+    one position (unbalanced where a position has fewer).  ``found``: a list of (positions
+    (N,), R (N, E, 3, 3), t (N, E, m) [N], balanced (N, E)), E candidates a march
+    (:func:`march_family`)."""
+    n_ = np.concatenate([np.repeat(f[0], f[3].shape[1]) for f in found]) if found else np.zeros(0, int)
     cols = int(np.bincount(n_, minlength=k).max()) if n_.size else 0
-    Rm, tm, bm = np.full((k, cols, 3, 3), np.nan), np.zeros((k, cols, t.shape[1])), np.zeros((k, cols), bool)
+    Rm, tm, bm = np.full((k, cols, 3, 3), np.nan), np.zeros((k, cols, m)), np.zeros((k, cols), bool)
     if n_.size:
         order = np.argsort(n_, kind="stable")
         slot = np.empty(n_.size, int)
         slot[order] = np.arange(n_.size) - np.searchsorted(n_[order], n_[order])
-        Rm[n_, slot], tm[n_, slot], bm[n_, slot] = R, np.maximum(t, 0.0), ok
+        Rm[n_, slot] = np.concatenate([f[1].reshape(-1, 3, 3) for f in found])
+        tm[n_, slot] = np.maximum(np.concatenate([f[2].reshape(-1, m) for f in found]), 0.0)
+        bm[n_, slot] = np.concatenate([f[3].reshape(-1) for f in found])
     return Rm, tm, bm
 
 
@@ -245,10 +252,8 @@ def _marches(geo, P, Rs, ts, balanced, R0):
         J = bal.jacobian(P[n_[four]], Rs[n_[four], s_[four]], ts[n_[four], s_[four]], np.zeros((four.size, 3)))
         d[four] = _null_vector(np.nan_to_num(J), np.ones((four.size, 7)))
         n_, s_, d = np.concatenate([n_, n_[four]]), np.concatenate([s_, s_[four]]), np.concatenate([d, -d[four]])
-    if not n_.size:
-        return _columns(len(P), n_, np.zeros((0, 3, 3)), np.zeros((0, geo.m)), np.zeros(0, bool))
-    Rb, tb, ok = march_family(geo, P[n_], Rs[n_, s_], ts[n_, s_], d, R0)
-    return _columns(len(P), np.repeat(n_, ok.shape[1]), Rb.reshape(-1, 3, 3), tb.reshape(-1, geo.m), ok.reshape(-1))
+    found = [(n_, *march_family(geo, P[n_], Rs[n_, s_], ts[n_, s_], d, R0))] if n_.size else []
+    return _columns(len(P), geo.m, found)
 
 
 def _walks(geo, P, Rs, ts, balanced, R0):
@@ -272,21 +277,21 @@ def _walks(geo, P, Rs, ts, balanced, R0):
     slack = ts[n_, s_] <= 0.0
     x, y = np.argmax(slack, axis=1), m - 1 - np.argmax(slack[:, ::-1], axis=1)
     # the walks: position, orientation, tensions, the cable to tighten, the one outside the
-    # family (left slack), the taut cables where the walk started
+    # family (left slack)
     wn, wR, wt = np.concatenate([n_, n_]), np.concatenate([Rs[n_, s_]] * 2), np.concatenate([ts[n_, s_]] * 2)
     wa, wo = np.concatenate([x, y]), np.concatenate([y, x])
-    start = (wt > 0.0) @ bit
     # each family is marched once from each corner a walk enters it at: (position, family (by
-    # the cable outside it), the corner's taut cables)
+    # the cable outside it), the corner's taut cables); a walk back at its first corner enters
+    # a family already marched from there, and ends
     seen = np.zeros((k, m, 1 << m), bool)
     found = []
-    for _ in range(len(list(itertools.combinations(range(m), 3)))):
+    for _ in range(math.comb(m, 3)):
         key = (wn, wo, (wt > 0.0) @ bit)
         first = np.zeros(wn.size, bool)
         first[np.unique(np.ravel_multi_index(key, seen.shape), return_index=True)[1]] = True
         new = first & ~seen[key]
         seen[key] = True
-        wn, wR, wt, wa, wo, start = wn[new], wR[new], wt[new], wa[new], wo[new], start[new]
+        wn, wR, wt, wa, wo = wn[new], wR[new], wt[new], wa[new], wo[new]
         if not wn.size:
             break
         nxt = []
@@ -301,18 +306,13 @@ def _walks(geo, P, Rs, ts, balanced, R0):
             Rb, tb, ok = march_family(subset(geo, Q), P[wn[r]], wR[r], wt[r][:, Qs], d, R0)
             tf = np.zeros(tb.shape[:2] + (m,))
             tf[:, :, Qs] = tb
-            found.append((np.repeat(wn[r], ok.shape[1]), Rb.reshape(-1, 3, 3), tf.reshape(-1, m), ok.reshape(-1)))
+            found.append((wn[r], Rb, tf, ok))
             # on from the march's end where a cable went slack (a corner): that cable stays
             # slack, the walk tightens the fifth
             e = np.flatnonzero(ok[:, 1] & np.all(tb[:, 1] >= -1e-9 * geo.weight, axis=1))
-            te = tf[e, 1]
             z = np.array(Qs)[np.argmin(tb[e, 1], axis=1)]
-            go = (te > 0.0) @ bit != start[r[e]]
-            g = e[go]
-            nxt.append((wn[r[g]], Rb[g, 1], te[go], np.full(g.size, out), z[go], start[r[g]]))
+            nxt.append((wn[r[e]], Rb[e, 1], tf[e, 1], np.full(e.size, out), z))
         if not nxt:
             break
-        wn, wR, wt, wa, wo, start = (np.concatenate([q[j] for q in nxt]) for j in range(6))
-    if not found:
-        return _columns(k, np.zeros(0, int), np.zeros((0, 3, 3)), np.zeros((0, m)), np.zeros(0, bool))
-    return _columns(k, *(np.concatenate([f[j] for f in found]) for j in range(4)))
+        wn, wR, wt, wa, wo = (np.concatenate([q[j] for q in nxt]) for j in range(5))
+    return _columns(k, m, found)
