@@ -31,10 +31,15 @@ def jobs(result):
             ("tension_map.png", wsplots.tension_figure, (result,))]
 
 
-def test_worker_draws_the_same_bytes(result):
+#: The two ways a child starts: a copy of this process, a new interpreter.
+HOW = pytest.mark.parametrize("fork", [True, False], ids=["forked", "new"])
+
+
+@HOW
+def test_worker_draws_the_same_bytes(result, fork):
     local = pw.PictureWorker(enabled=False).render(jobs(result))
-    with pw.PictureWorker(force=True) as worker:
-        assert worker.proc is not None
+    with pw.PictureWorker(force=True, fork=fork) as worker:
+        assert isinstance(worker.proc, pw.ForkedChild) == fork
         remote = worker.render(jobs(result))
         again = worker.render(jobs(result)[1:])  # the worker serves several requests
     assert [n for n, _ in remote] == ["workspace.png", "tension_map.png"]
@@ -77,16 +82,18 @@ def test_the_worker_warms_up_with_what_a_request_needs_and_without_numba(case, r
     assert r.stdout.decode().split() == ["[]", "False"]
 
 
-def test_error_in_worker_is_raised_in_process():
+@HOW
+def test_error_in_worker_is_raised_in_process(fork):
     """A figure that fails in the child is drawn again here, so the real error surfaces."""
-    with pw.PictureWorker(force=True) as worker:
+    with pw.PictureWorker(force=True, fork=fork) as worker:
         with pytest.raises(AttributeError):
             worker.render([("x.png", wsplots.workspace_figure, (None,))])
         assert worker.proc is None  # not trusted again
 
 
-def test_dead_worker_falls_back(result):
-    with pw.PictureWorker(force=True) as worker:
+@HOW
+def test_dead_worker_falls_back(result, fork):
+    with pw.PictureWorker(force=True, fork=fork) as worker:
         worker.proc.kill()
         worker.proc.wait()
         out = worker.render(jobs(result)[:1])
@@ -143,14 +150,79 @@ def test_worker_refuses_foreign_file_before_drawing(tmp_path, result):
     assert (tmp_path / "tension_map.png").read_text() == "mine"
 
 
-def test_hung_worker_is_given_up(result, monkeypatch):
+@HOW
+def test_hung_worker_is_given_up(result, fork):
     """A child that does not answer in time is killed and the pictures are drawn here."""
     import signal
 
-    with pw.PictureWorker(force=True) as worker:
+    with pw.PictureWorker(force=True, fork=fork) as worker:
         worker.timeout = 0.5
         os.kill(worker.proc.pid, signal.SIGSTOP)  # frozen, not dead
         proc = worker.proc
         out = worker.render(jobs(result)[:1])
         assert worker.proc is None and proc.poll() is not None
     assert out == pw.PictureWorker(enabled=False).render(jobs(result)[:1])
+
+
+def _noisy_figure():
+    """A figure function that writes to the standard streams (a library's warning, a print)."""
+    from cdpr_design.plots._style import pyplot
+
+    print("NOISE on stdout", flush=True)
+    print("NOISE on stderr", file=sys.stderr, flush=True)
+    os.write(1, b"NOISE on fd 1")
+    return pyplot().figure(figsize=(1, 1))
+
+
+def test_a_forked_child_writes_nothing_to_its_parents_streams(capfd):
+    """The copy's standard streams are /dev/null, as a new child's stderr is: nothing it prints
+    reaches the command's output (its --json on stdout), and it holds no copy of the parent's
+    stdout, whose reader would otherwise wait for the child too."""
+    with pw.PictureWorker(force=True, fork=True) as worker:
+        out = worker.render([("a.png", _noisy_figure, ())])
+        assert worker.proc is not None  # drawn by the child, not again here
+    assert out[0][1][:8] == b"\x89PNG\r\n\x1a\n"
+    captured = capfd.readouterr()
+    assert "NOISE" not in captured.out + captured.err
+
+
+def test_a_forked_child_let_go_of_is_reaped():
+    """A closed worker's forked child ends at the end of its input and is collected, not left a
+    zombie for the rest of a long-lived process."""
+    import time
+
+    worker = pw.PictureWorker(force=True, fork=True)
+    child = worker.proc
+    worker.close()
+    deadline = time.monotonic() + 60
+    while child in pw._leaving and time.monotonic() < deadline:
+        time.sleep(0.05)
+        pw._reap()
+    assert child not in pw._leaving and child.returncode == 0
+    with pytest.raises(ChildProcessError):
+        os.waitpid(child.pid, os.WNOHANG)  # collected already
+
+
+def test_a_copy_is_made_only_where_it_is_safe(monkeypatch):
+    """No fork with another thread running, with numba loaded, beside another live child, or
+    off Linux; the worker then starts a new interpreter (``fork=None``, the default)."""
+    import threading
+
+    monkeypatch.delitem(sys.modules, "numba", raising=False)
+    monkeypatch.setattr(threading, "active_count", lambda: 1)
+    monkeypatch.setattr(sys, "platform", "linux")
+    assert pw.can_fork()
+    with pw.PictureWorker(force=True) as first:
+        assert isinstance(first.proc, pw.ForkedChild)
+        assert not pw.can_fork()  # its request pipe would stay open in a second copy
+        with pw.PictureWorker(force=True) as second:
+            assert isinstance(second.proc, subprocess.Popen)
+    assert pw.can_fork()
+    monkeypatch.setattr(threading, "active_count", lambda: 2)
+    assert not pw.can_fork()
+    monkeypatch.setattr(threading, "active_count", lambda: 1)
+    monkeypatch.setitem(sys.modules, "numba", object())
+    assert not pw.can_fork()
+    monkeypatch.delitem(sys.modules, "numba")
+    monkeypatch.setattr(sys, "platform", "darwin")
+    assert not pw.can_fork()
