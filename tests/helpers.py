@@ -11,9 +11,15 @@ import os
 from pathlib import Path
 
 import numpy as np
+import pytest
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
+
+#: A test of a file the JIT-off CI run repeats (.ci/run) that calls no numba kernel (checked by
+#: profiling which functions of cdpr_design.kernels and io.csvfast each test calls): the same
+#: numpy code twice, so that run leaves it out (``-m "not no_kernels"``).
+NO_KERNELS = pytest.mark.no_kernels
 DESIGNS = ROOT / "designs"
 PLANAR2 = DESIGNS / "planar2.yaml"
 

@@ -33,7 +33,7 @@ from cdpr_design.statics import hanging_core as hc
 from cdpr_design.statics import hanging_newton as hn
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.pose import evaluate_pose
-from tests.helpers import DESIGNS, ROOT
+from tests.helpers import DESIGNS, NO_KERNELS, ROOT
 from tests.test_hanging import G2, G3, check_equilibrium, random_planar2
 
 UP3 = np.array([0.0, 0.0, 1.0])
@@ -73,6 +73,7 @@ def test_numpy_twin_equals_the_kernel():
     assert compared > 2000
 
 
+@NO_KERNELS
 @pytest.mark.parametrize("name", ["planar2", "pointmass3"])
 def test_the_weight_scales_the_tensions_and_leaves_the_orientation(name):
     """Balance is linear in the weight: any mass hangs in the same orientation, with tensions and
@@ -158,6 +159,7 @@ def crane():
     return d, H.design_arrays(d)
 
 
+@NO_KERNELS
 @pytest.mark.parametrize("case", ["three", "crane"])
 def test_spatial_hanging_against_scipy(case):
     """The least tilted stable pulling orientation at random positions: nothing the reference
@@ -201,6 +203,7 @@ def ref_least_tilt():
     return module.least_tilt_reference
 
 
+@NO_KERNELS
 def test_four_cables_hang_in_their_least_tilted_pulling_orientation():
     """crane4 at random positions: no balanced orientation with every tension >= 0 that is
     stable is less tilted than the answer (scipy SLSQP from 8 random starts, least tilt
@@ -234,6 +237,7 @@ def no_less_tilted_stable(A, B, c, mass, P, got, rng) -> int:
     return same
 
 
+@NO_KERNELS
 def test_five_cables_hang_in_their_least_tilted_pulling_orientation():
     """tests/data/crane5.yaml (crane4 with a fifth cable from the middle of its front top
     edge to the middle of the lifting frame's front edge) at random positions: as for four
@@ -259,6 +263,7 @@ def test_five_cables_hang_in_their_least_tilted_pulling_orientation():
     assert same >= 8, same
 
 
+@NO_KERNELS
 def test_crane4s_orientation_does_not_depend_on_its_mass():
     """Balance is linear in the weight, so any mass hangs in the same orientation with
     tensions in proportion.  The Newton search from the nominal orientation alone did not
@@ -281,6 +286,7 @@ def test_crane4s_orientation_does_not_depend_on_its_mass():
         np.testing.assert_allclose(got.tensions / m, ref.tensions / mass, rtol=0, atol=1e-6 * 9.81, err_msg=str(m))
 
 
+@NO_KERNELS
 def test_crane_below_its_centre_hangs_level_in_its_nominal_yaw():
     """Straight below the middle of its bay crane4 hangs level at every yaw of a range (its
     four-cable family is a turn about the vertical, every member equally tilted); the answer
@@ -305,6 +311,7 @@ def test_crane_below_its_centre_hangs_level_in_its_nominal_yaw():
     assert np.ptp(turned.tensions[0]) > 50.0  # a member off the symmetric one carries unequal tensions
 
 
+@NO_KERNELS
 @pytest.mark.parametrize("position, tilt, slack", [
     ([1.0, 1.0, 2.0], 24.787, (1,)),   # the least tilted pulling orientation has c2 just slack
     ([1.5, 1.5, 2.0], 14.415, ()),     # off the symmetry planes too, all four can pull
@@ -323,6 +330,7 @@ def test_crane_hangs_from_three_or_four_cables_off_centre(position, tilt, slack)
     assert back.slack == slack
 
 
+@NO_KERNELS
 def test_point_mass_positions():
     """A point mass on two cables in space hangs only in the vertical plane of its outlets
     (where the weight is in the cables' span), straight below them on one."""
@@ -354,6 +362,7 @@ def ref_held(A, B, c, mass, g, rho, d, rng, starts=12):
     return best
 
 
+@NO_KERNELS
 def test_held_fk_against_slsqp_and_the_closed_form():
     """planar-two-cable designs with the orientation held: the lowest point of the two discs
     (SLSQP reference), the paper's closed form wherever both cables pull, a slack cable
@@ -385,6 +394,7 @@ def test_held_fk_against_slsqp_and_the_closed_form():
     assert slack >= 3 and both >= 10
 
 
+@NO_KERNELS
 def test_held_point_mass_fk_equals_the_free_one():
     """A point mass's orientation changes no cable: held and free give the same position."""
     A = np.array([[0.0, 0.0, 3.0], [2.0, 0.0, 3.0], [1.0, 1.5, 3.0]])
@@ -468,6 +478,7 @@ def _reduced_hessian_min_fd(geo, p, R, t, taut, dofs, h=1e-4):
     return float(np.linalg.eigvalsh(N.T @ Hd @ N)[0])
 
 
+@NO_KERNELS
 def test_batched_reduced_hessian_against_finite_differences():
     """Geometry.reduced_hessian_min_many (one batch of random robots' configurations, any taut
     set, spatial and planar dofs) against finite differences of the Lagrangian and the lengths."""
@@ -496,6 +507,7 @@ def test_batched_reduced_hessian_against_finite_differences():
     assert checked > 150
 
 
+@NO_KERNELS
 @pytest.mark.parametrize("planar", [False, True])
 def test_newton_jacobian_against_finite_differences(planar):
     """The balance Jacobian of the batched Newton search (closed forms summed with einsum)
@@ -529,6 +541,7 @@ def test_newton_jacobian_against_finite_differences(planar):
         np.testing.assert_allclose(J, np.stack(cols, axis=2), rtol=1e-5, atol=1e-6)
 
 
+@NO_KERNELS
 def test_a_cable_of_zero_length_adds_nothing_without_tension_and_nan_with_it():
     """The batched Lagrangian Hessian where a cable has length 0 (its attachment on its outlet):
     slack (t = 0) it adds nothing - the Hessian of the other cables alone, finite; pulling, its
