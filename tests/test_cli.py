@@ -147,3 +147,36 @@ def test_lazy_api_never_shadows_a_module():
     assert not set(cdpr_design._LAZY) & modules
     for name in cdpr_design._LAZY:
         assert getattr(cdpr_design, name) is not None
+
+
+def test_every_command_is_registered_by_the_module_cli_app_names():
+    """``cli.app.COMMANDS`` (which module to import for a command line) is what the modules
+    register, in the help's order; a command line naming one command gets that command alone,
+    still under the program's group (``cdpr-design workspace ...``), the others everything."""
+    import typer.main
+
+    from cdpr_design.cli import app as cli_app
+
+    every = typer.main.get_command(cli_app.make_app())
+    assert list(every.commands) == list(cli_app.COMMANDS)
+    for name, module in cli_app.COMMANDS.items():
+        assert every.commands[name].callback.__module__.startswith(f"cdpr_design.cli.{module}"), name
+        one = typer.main.get_command(cli_app.make_app([name, "--help"]))
+        assert set(one.commands) == {n for n, m in cli_app.COMMANDS.items() if m == module}
+    for argv in ([], ["--help"], ["worksp", "x.yaml"]):
+        assert list(typer.main.get_command(cli_app.make_app(argv)).commands) == list(cli_app.COMMANDS)
+
+
+def test_a_command_line_imports_only_its_commands_module(tmp_path):
+    """``cdpr-design pose`` does not import the other commands' modules (their options are not
+    built either); ``--help`` lists every command as before."""
+    code = ("import sys; from cdpr_design.cli import app; app.make_app(['schema']); "
+            "print(sorted(m for m in sys.modules if m.startswith('cdpr_design.cli.')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
+    loaded = eval(out.stdout)
+    assert "cdpr_design.cli.pose" in loaded
+    assert not {"cdpr_design.cli.sweep", "cdpr_design.cli.optimize", "cdpr_design.cli.motion",
+                "cdpr_design.cli.bridge", "cdpr_design.cli.sizing", "cdpr_design.cli.workspace"} & set(loaded)
+    res = subprocess.run([sys.executable, "-m", "cdpr_design", "--help"], capture_output=True, text=True,
+                         check=True, cwd=tmp_path)
+    assert all(f"  {name} " in res.stdout for name in ("workspace", "size-motors", "optimize", "compare"))
