@@ -30,6 +30,7 @@ from cdpr_design.model import spec
 from cdpr_design.statics import hanging as H
 from cdpr_design.statics import kinematics as kin
 from tests.conftest import DESIGNS
+from tests.helpers import NO_KERNELS
 
 G2 = np.array([0.0, -9.81, 0.0])
 G3 = np.array([0.0, 0.0, -9.81])
@@ -302,6 +303,7 @@ def random_lengths(rng, A, B, c, W, Hh, slack_bias=0.3):
     return rho
 
 
+@NO_KERNELS
 def test_fk_planar2_against_curve_scan():
     """Random designs and lengths: the global minimum and every stable equilibrium of the
     brute-force scan, including single-cable (slack) modes."""
@@ -398,6 +400,7 @@ def check_equilibrium(A, B, c, mass, g, rho, e, planar):
     assert e.stable or abs(e.hessian_min) <= 1e-8 * scale  # stable, or neutral (a zero mode)
 
 
+@NO_KERNELS
 @pytest.mark.parametrize("planar,m,trials", [(True, 1, 3), (True, 2, 4), (True, 3, 4), (True, 4, 3),
                                              (False, 2, 2), (False, 3, 3), (False, 4, 2)])
 def test_fk_against_multistart_slsqp(planar, m, trials):
@@ -440,6 +443,7 @@ def test_fk_against_multistart_slsqp(planar, m, trials):
 # point mass: the convex problem
 # ---------------------------------------------------------------------------
 
+@NO_KERNELS
 def test_point_mass_against_cvxpy():
     cp = pytest.importorskip("cvxpy")
     rng = np.random.default_rng(4)
@@ -536,6 +540,7 @@ def planar2_level_scan(cy, margin=0.12, step=0.02):
     return worst, where, err
 
 
+@NO_KERNELS
 @pytest.mark.parametrize("cy,tilt,pos_err", [(0.0, 33.4, 0.043), (0.03, 45.3, 0.057)])
 def test_planar2_level_lengths_tilt(cy, tilt, pos_err):
     """The issue's figures (~33 and ~44 deg), reproduced by this scan: the current tool
@@ -624,6 +629,7 @@ def wrench_closure(d, pose):
     return res.status == 0
 
 
+@NO_KERNELS
 @pytest.mark.parametrize("name,poses", [
     ("planar4.yaml", [[1.0, 0.75, 0.0], [1.3, 1.0, -0.2], [0.8, 0.6, 0.05]]),
     ("ipanema1.yaml", [[0, 0, 1, 0, 0, 0], [0.3, -0.2, 0.9, 0.05, -0.03, 0.1]]),
@@ -659,6 +665,7 @@ def test_unreachable_lengths_raise():
         H.fk(d, [0.0, 1.38])
 
 
+@NO_KERNELS
 def test_pose_at():
     d = spec.load(DESIGNS / "planar2.yaml")
     r = H.pose_at(d, [0.75, 0.8])
