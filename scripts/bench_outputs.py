@@ -84,7 +84,35 @@ cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
 of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
 lowered to 130,000 poses.
 
-This round (82599a7 -> this version), the same machine: the cached kernels
+The latest round (38e9c27 -> this version), a fourth machine (per-pose linprog 2.4-3.5 ms,
+drifting by the hour): the picture worker is a copy of the command (``os.fork`` once numpy
+is imported; it skipped Python's start-up, its site and numpy: its CPU to the end of its
+warm-up 1.03-1.15 -> 0.80-0.91 s), and a command line builds only its own command's options
+(``cli.app.make_app``; the command's modules 0.33 -> 0.28 s in the fixed costs below).  The
+command is CPU-bound on two cores: its processes use 3.7-4.5 CPU-s in 2.0-2.5 s (``perf stat``
+task-clock), the picture worker's warm-up ending about when the sweep does, so no core
+waits idle for long (figure layouts built in the worker while the sweep ran, 0.18 of a
+spatial picture's 0.52 CPU-s, were tried and gained nothing).  IPAnema 3 in 12 interleaved
+pairs: 2.185 -> 2.042 s wall (medians), 4.02 -> 3.74 CPU-s.  This script, back to back in one
+hour:
+
+============================================  ==========================  ==========================
+IPAnema 3, 154,440 poses, static              38e9c27                     this version
+============================================  ==========================  ==========================
+per-pose linprog over the rounds              2.37-2.45 ms                2.47-2.69 ms
+kernels in-process, warm                      0.284 s = 1306x (1291-1371) 0.276 s = 1406x (1393-1447)
+whole command, warm (csv)                     2.169 s = 174x (168-174)    2.029 s = 193x (187-204)
+  its sweep_s                                 0.325 s = 1163x             0.334 s = 1196x (1092-1243)
+whole command, warm (parquet)                                             1.976 s = 195x (193-210)
+fixed: python and the command's modules       0.331 s                     0.284 s
+planar2 564,001 poses, whole command          204x csv                    207x csv, 212x parquet
+============================================  ==========================  ==========================
+
+The same script earlier that day, in an hour when linprog took 3.1-3.5 ms a pose: 38e9c27 207x
+(206-208), this version 197x (186-205, load average 1.6): the ratio moves with the hour more
+than with a change of 6 %, hence the interleaved pairs above.
+
+The round before (from 82599a7), on the third machine: the cached kernels
 load without numba's compiler set-up (``cdpr_design.numba_startup``: numba
 refreshed its whole target context -- every implementation module it has --
 before each cache load, 0.15-0.2 s of a command).  IPAnema 3's command in 10
