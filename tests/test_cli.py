@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import csv
 import json
 import subprocess
@@ -173,7 +174,7 @@ def test_a_command_line_imports_only_its_commands_module(tmp_path):
     code = ("import sys; from cdpr_design.cli import app; app.make_app(['schema']); "
             "print(sorted(m for m in sys.modules if m.startswith('cdpr_design.cli.')))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
-    loaded = eval(out.stdout)
+    loaded = ast.literal_eval(out.stdout)
     assert "cdpr_design.cli.pose" in loaded
     assert not {"cdpr_design.cli.sweep", "cdpr_design.cli.optimize", "cdpr_design.cli.motion",
                 "cdpr_design.cli.bridge", "cdpr_design.cli.sizing", "cdpr_design.cli.workspace"} & set(loaded)

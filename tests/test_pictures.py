@@ -203,6 +203,7 @@ def test_a_forked_child_let_go_of_is_reaped():
         os.waitpid(child.pid, os.WNOHANG)  # collected already
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="it forks for real once the conditions hold")
 def test_a_copy_is_made_only_where_it_is_safe(monkeypatch):
     """No fork with another thread running, with numba loaded, beside another live child, or
     off Linux; the worker then starts a new interpreter (``fork=None``, the default)."""

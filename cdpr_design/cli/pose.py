@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import sys
 from enum import Enum
 from typing import Annotated, Optional
@@ -103,7 +102,7 @@ def _pose_table(design, at: str, data: dict) -> None:
         out_console.print(f"cable model: {model} (tensions at the effector end; status {data['cable_status']})")
     if data.get("effector_orientation") == "free" and data["orientation"] is not None:
         out_console.print(f"hangs with orientation {fmt(data['orientation'])}, tilt {fmt(data['tilt'])}°")
-        if not any(v is not None and math.isfinite(v) for v in data["tensions"].values()):
+        if all(v is None for v in data["tensions"].values()):
             # infeasible (tilted too far, or a tension out of bounds): the tensions it still hangs with
             out_console.print("and tensions [N] " + ", ".join(f"{c} {fmt(v, 6)}"
                                                               for c, v in data["hanging_tensions"].items()))
