@@ -15,6 +15,8 @@ def main() -> None:
     # the worker is a copy of this process where it can be (plots.worker.can_fork), which
     # then has numpy, Python and its site already (0.3 s of CPU less than a new interpreter)
     from cdpr_design.cli import env
+
+    env.settle_blas_threads()  # before anything imports numpy
     from cdpr_design.plots import worker as _picture_worker
 
     if _picture_worker.wanted(sys.argv[1:]):

@@ -181,3 +181,32 @@ def test_a_command_line_imports_only_its_commands_module(tmp_path):
     res = subprocess.run([sys.executable, "-m", "cdpr_design", "--help"], capture_output=True, text=True,
                          check=True, cwd=tmp_path)
     assert all(f"  {name} " in res.stdout for name in ("workspace", "size-motors", "optimize", "compare"))
+
+
+def test_blas_threads_settled_unless_the_user_chose(monkeypatch):
+    """A command's OpenBLAS threads sleep at once when idle (``OPENBLAS_THREAD_TIMEOUT``, set
+    before numpy loads), unless the user set the variable."""
+    from cdpr_design.cli import env
+
+    environ = {}
+    env.settle_blas_threads(environ)
+    assert environ == {"OPENBLAS_THREAD_TIMEOUT": env.BLAS_THREAD_TIMEOUT}
+    environ = {"OPENBLAS_THREAD_TIMEOUT": "20"}
+    env.settle_blas_threads(environ)
+    assert environ == {"OPENBLAS_THREAD_TIMEOUT": "20"}
+    # the entry point sets it before anything imports numpy (OpenBLAS reads it when it loads)
+    code = ("import os, sys; from cdpr_design.__main__ import main; sys.argv = ['cdpr-design', 'schema'];\n"
+            "seen = []\n"
+            "class Spy:\n"
+            "    def find_spec(self, name, *a):\n"
+            "        if name == 'numpy' and not seen: seen.append(os.environ.get('OPENBLAS_THREAD_TIMEOUT'))\n"
+            "sys.meta_path.insert(0, Spy())\n"
+            "try: main()\n"
+            "except SystemExit: pass\n"
+            "print(seen)")
+    for given, expected in ((None, env.BLAS_THREAD_TIMEOUT), ("12", "12")):
+        monkeypatch.delenv("OPENBLAS_THREAD_TIMEOUT", raising=False)
+        if given is not None:
+            monkeypatch.setenv("OPENBLAS_THREAD_TIMEOUT", given)
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+        assert ast.literal_eval(out.stdout.strip().splitlines()[-1]) == [expected]
