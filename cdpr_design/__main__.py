@@ -6,10 +6,12 @@ import sys
 
 
 def main() -> None:
-    # a command allocates most of its objects once, at start-up (numba alone builds ~10^6):
-    # collecting the youngest generation every 50,000 allocations instead of every 700 saves
-    # 0.15-0.2 s of CPU there (measured); cycles made later are still collected
-    gc.set_threshold(50_000, 20, 20)
+    # a command allocates most of its objects once, at start-up (typer, pydantic, numba), and
+    # keeps them: collecting the youngest generation every 200,000 allocations instead of every
+    # 700 saves 0.2-0.25 s of CPU there (measured on IPAnema 3's workspace command: at 50,000,
+    # three collections, 31-35 ms in all, still ran in the command and two, 40 ms, in the
+    # picture worker's warm-up; at 200,000, one of 0.2 ms).  Cycles made later are still collected
+    gc.set_threshold(200_000, 20, 20)
     # start the picture worker before importing the command line (typer, rich, pydantic):
     # its matplotlib import then overlaps the rest of the parent's start-up.  numpy first:
     # the worker is a copy of this process where it can be (plots.worker.can_fork), which

@@ -62,7 +62,7 @@ def bridge(
 
     design = load_design(spec)
     # a real-time loop: Python's default collection thresholds (short pauses, often) rather than the
-    # start-up's (cdpr_design.__main__: a pause of a few ms every 50,000 allocations)
+    # start-up's (cdpr_design.__main__: a pause of tens of ms every 200,000 allocations)
     gc.set_threshold(700, 10, 10)
     try:
         res, summary, dt, out_dir = job.bridge(
