@@ -331,6 +331,31 @@ def test_a_spatial_grid_of_one_z_level_keeps_its_titles_inside(design):
         pyplot().close(fig)
 
 
+def test_fit_width_measures_what_reaches_furthest():
+    """:func:`~cdpr_design.plots._frame.fit_width` measures the first labelled panel of the left
+    column (all of them carry the same y ticks and label at the same x) and the colour bar's y
+    axis and frame: on a figure of two rows of panels, that is where every panel's y axis and
+    the whole colour bar (all its artists) end."""
+    from cdpr_design import workspaces as ws
+    from cdpr_design.model import spec
+    from cdpr_design.plots import workspace as wsplots
+    from cdpr_design.plots._style import pyplot
+
+    r = ws.run(spec.load(DESIGNS / "ipanema3.yaml"), step=0.5)
+    for fig in (wsplots.tension_figure(r), wsplots.workspace_figure(r)):
+        renderer = fig.canvas.get_renderer()
+        cax = fig.axes[-1]
+        labelled = [ax for ax in fig.axes[:-1] if ax.get_visible() and ax.get_ylabel()]
+        assert len(labelled) >= 2
+        x0 = [ax.yaxis.get_tightbbox(renderer).x0 for ax in labelled]
+        assert x0 == pytest.approx([x0[0]] * len(x0), abs=1e-9)
+        assert min(ax.get_tightbbox(renderer).x0 for ax in fig.axes[:-1] if ax.get_visible()) >= x0[0] - 1e-9
+        whole = cax.get_tightbbox(renderer).x1
+        assert whole == pytest.approx(max(cax.yaxis.get_tightbbox(renderer).x1,
+                                          cax.get_window_extent(renderer).x1), abs=1e-9)
+        pyplot().close(fig)
+
+
 def test_a_colour_bar_with_long_tick_labels_widens_its_figure():
     """The colour bar's room is fixed; 7-digit tensions need more, and the figure grows by that."""
     from cdpr_design import workspaces as ws

@@ -202,15 +202,22 @@ def fit_width(fig, cax=None) -> None:
     legends (a suptitle, a legend row over the panels) stay where they are as a
     fraction of its width (centred, as drawn here); where one is wider than the
     figure with that room (the title over a single panel), the figure grows by
-    the difference, half on either side.  Measured on the figure's renderer
-    (those axes' ticks and texts only, a few ms); call it once all of them are
-    set."""
+    the difference, half on either side.  Measured on the figure's renderer;
+    call it once all of them are set.  It measures the first panel of the left
+    column with a y label (every one carries the same ticks and label at the
+    same x: :func:`_outer_ticks`) and the colour bar's y axis and frame (nothing
+    else of it reaches further right), so the other panels' y axes are laid out
+    once, when drawn, and not also here."""
     renderer = fig.canvas.get_renderer()
     width, height = fig.get_size_inches()
-    boxes = [ax.yaxis.get_tightbbox(renderer) for ax in fig.axes
-             if ax is not cax and ax.get_visible() and ax.axison and ax.get_ylabel()]
-    left = max([_EDGE - box.x0 / fig.dpi for box in boxes if box is not None] + [0.0])
-    right = max(cax.get_tightbbox(renderer).x1 / fig.dpi + _EDGE - width, 0.0) if cax is not None else 0.0
+    labelled = [ax for ax in fig.axes if ax is not cax and ax.get_visible() and ax.axison and ax.get_ylabel()]
+    box = labelled[0].yaxis.get_tightbbox(renderer) if labelled else None
+    left = max(_EDGE - box.x0 / fig.dpi, 0.0) if box is not None else 0.0
+    if cax is not None:
+        x1 = max(cax.yaxis.get_tightbbox(renderer).x1, cax.get_window_extent(renderer).x1)
+        right = max(x1 / fig.dpi + _EDGE - width, 0.0)
+    else:
+        right = 0.0
     spare = _figure_text_width(fig, renderer, width) - (width + left + right)
     if spare > 0.0:
         left, right = left + spare / 2, right + spare / 2
