@@ -51,13 +51,19 @@ BLOCK = 16384
 
 
 def _tables():
-    five = np.arange(100_000, dtype=np.int64)
-    digits = np.zeros(100_000, dtype=_U)
-    for j in range(5):  # byte j (little-endian) holds the j-th digit's character
-        digits |= ((five // 10 ** (4 - j)) % 10 + 48).astype(_U) << _U(8 * j)
-    tz = np.zeros(100_000, dtype=np.int64)
-    for k in range(1, 6):
-        tz[five % 10 ** k == 0] = k
+    # the five-digit numbers 00000..99999 as a (10,) * 5 grid, the j-th digit from the left
+    # along axis j (in row-major order the flat index is the number): no division (2 ms, not 15)
+    char = np.arange(48, 58, dtype=_U)  # "0".."9"
+    first = np.arange(10) == 0
+    digits = np.zeros((10,) * 5, dtype=_U)  # byte j (little-endian) holds the j-th digit's character
+    tz = np.zeros((10,) * 5, dtype=np.int64)  # trailing zeros (5 for 00000)
+    zeros = np.ones((10,) * 5, dtype=bool)  # digits j.. all "0"
+    for j in range(5):
+        digits |= char.reshape(_axis(j)) << _U(8 * j)
+    for j in range(4, -1, -1):
+        zeros = zeros & first.reshape(_axis(j))
+        tz += zeros
+    digits, tz = digits.ravel(), tz.ravel()
     # masks of bytes 0..b of a 128-bit value split in (lo, hi) words, at index b + 1 (b = -1 .. 15)
     keep_lo = np.array([2 ** (8 * min(b + 1, 8)) - 1 for b in range(-1, 16)], dtype=_U)
     keep_hi = np.array([2 ** (8 * max(b - 7, 0)) - 1 for b in range(-1, 16)], dtype=_U)
@@ -69,6 +75,11 @@ def _tables():
     # exponent suffixes "e-05" .. "e+308" for X = -400 .. 400
     suffix = np.array([int.from_bytes(f"e{x:+03d}".encode(), "little") for x in range(-400, 401)], dtype=_U)
     return digits, tz, keep_lo, keep_hi, dot_lo, dot_hi, pre, suffix
+
+
+def _axis(j: int) -> tuple:
+    """The shape (1, .., 10, .., 1) of a ten-entry table laid along axis ``j`` of five."""
+    return tuple(10 if i == j else 1 for i in range(5))
 
 
 _DIGITS, _TZ5, _KEEP_LO, _KEEP_HI, _DOT_LO, _DOT_HI, _PRE, _SUFFIX = _tables()
