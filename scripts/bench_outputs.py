@@ -84,7 +84,37 @@ cells formatted by a numba kernel when numba is loaded; the pictures 0.52-0.62
 of their CPU time (``scripts/bench_pictures.py``); ``auto``'s numpy limit
 lowered to 130,000 poses.
 
-The latest round (38e9c27 -> this version), a fourth machine (per-pose linprog 2.4-3.5 ms,
+The latest round (b78f933 -> this version), the same machine: a profile of every thread of the
+command (``perf record`` at 2 kHz) found CPU spent on nothing.  numpy's OpenBLAS started a thread
+that busy-waited 0.1 s for work that never came (a process that only imports numpy: 0.41 CPU-s,
+0.27 with ``OPENBLAS_THREAD_TIMEOUT=4``, which the command line now sets unless the user did);
+the garbage collector ran three collections in the command (31-35 ms) and two in the picture
+worker's warm-up (40 ms) at a threshold of 50,000 (none at 200,000), and a full one (35-50 ms)
+before the worker froze its objects (now frozen without it); ``fit_width`` measured every left
+panel's y axis.  IPAnema 3 in 16 interleaved pairs (medians): CPU of all its processes 4.02 ->
+3.81 s, wall 2.19 -> 2.15 s.  The wall gains less than the CPU: the picture worker now ends its
+warm-up 0.83-0.86 s after the start and waits about 0.1 s for the sweep (0.94-0.98 s to
+1.25-1.31 s, timestamps without a profiler), so what sets the command's time is the main
+process's way to its sweep (Python and numpy 0.19 s, the command's modules and spec 0.35 s,
+numba's start-up 0.4 s, one after the other) and the two pictures after it (0.5 CPU-s each,
+beside the table's last chunks: 0.74 s).  This script, twice in one hour (per-pose linprog
+2.96-3.20 and 3.10-3.20 ms):
+
+============================================  ==========================  ==========================
+IPAnema 3, 154,440 poses, static              first run                   second run
+============================================  ==========================  ==========================
+kernels in-process, warm                      0.288 s = 1666x (1647-1713) 0.299 s = 1651x (1615-1666)
+whole command, warm (csv)                     2.205 s = 217x (215-224)    2.172 s = 227x (224-227)
+  its sweep_s                                 0.333 s = 1411x (1393-1474) 0.333 s = 1487x (1477-1500)
+whole command, warm (parquet)                 2.156 s = 221x (221-228)    2.094 s = 236x (224-236)
+planar2 564,001 poses, whole command          252x csv, 253x parquet      257x csv, 263x parquet
+============================================  ==========================  ==========================
+
+b78f933 in this script's run just before them (linprog 3.21-3.28 ms): 233x (226-233).  The
+ratio follows the hour's linprog more than a change of 2 % (the interleaved pairs above);
+the round before measured 193x in an hour when linprog took 2.5-2.7 ms.
+
+The round before (38e9c27 -> b78f933), a fourth machine (per-pose linprog 2.4-3.5 ms,
 drifting by the hour): the picture worker is a copy of the command (``os.fork`` once numpy
 is imported; it skipped Python's start-up, its site and numpy: its CPU to the end of its
 warm-up 1.03-1.15 -> 0.80-0.91 s), and a command line builds only its own command's options
