@@ -210,3 +210,21 @@ def test_blas_threads_settled_unless_the_user_chose(monkeypatch):
             monkeypatch.setenv("OPENBLAS_THREAD_TIMEOUT", given)
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
         assert ast.literal_eval(out.stdout.strip().splitlines()[-1]) == [expected]
+
+
+def test_a_command_printing_only_json_never_imports_rich(tmp_path):
+    """rich draws what a person reads (tables, messages, progress bars): with ``--json`` nothing
+    is drawn and rich is not imported (40 ms of a command's start-up); without it, the table."""
+    code = ("import sys; from cdpr_design.__main__ import main; sys.argv = ['cdpr-design'] + sys.argv[1:]\n"
+            "try: main()\n"
+            "except SystemExit: pass\n"
+            "sys.stderr.write(repr(sorted(m for m in sys.modules if m.split('.')[0] == 'rich')))")
+    args = ["workspace", str(PLANAR2), "--step", "0.05", "--out", str(tmp_path / "out")]
+    res = subprocess.run([sys.executable, "-c", code, *args, "--json"], capture_output=True, text=True,
+                         check=True, cwd=tmp_path)
+    assert json.loads(res.stdout)["poses"] > 0
+    assert ast.literal_eval(res.stderr.strip().splitlines()[-1]) == []
+    res = subprocess.run([sys.executable, "-c", code, *args, "--overwrite"], capture_output=True, text=True,
+                         check=True, cwd=tmp_path)
+    assert "rich.table" in ast.literal_eval(res.stderr.strip().splitlines()[-1])
+    assert "feasible" in res.stdout

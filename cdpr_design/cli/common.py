@@ -16,19 +16,56 @@ import warnings
 from contextlib import contextmanager
 from enum import Enum
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import TYPE_CHECKING, Annotated, Optional
 
 import typer
-from rich.console import Console
-from rich.table import Table
-from rich.text import Text
 
 from cdpr_design.errors import CheckFailed, InputError, SpecError, quote
 from cdpr_design.io.tables import timing_phases
 
+if TYPE_CHECKING:
+    from rich.console import Console
+    from rich.table import Table
+
+
+class _Console:
+    """A rich ``Console`` made when first used: a command that prints nothing for a person
+    (``--json``: no table, message or progress bar) never imports rich, 40 ms of CPU on its
+    way to its work."""
+
+    def __init__(self, **options):
+        self._options = options
+        self._made = None
+
+    @property
+    def made(self) -> Console:
+        """The rich ``Console`` itself (made now if it was not yet)."""
+        if self._made is None:
+            from rich.console import Console
+
+            self._made = Console(**self._options)
+        return self._made
+
+    def __getattr__(self, name):  # print, is_terminal, ... of the Console
+        return getattr(self.made, name)
+
+
+def _rich_console(console) -> Console:
+    """The rich ``Console`` of :data:`err` or :data:`out_console` (or ``console`` itself, a rich
+    ``Console`` put in their place): for rich's own objects that draw on it (progress bars)."""
+    return console.made if isinstance(console, _Console) else console
+
+
 # markup off: messages, names and paths are printed as they are ("[min, max]" stays, "[/x]" is text)
-err = Console(stderr=True, highlight=False, markup=False)
-out_console = Console(highlight=False, markup=False)
+err = _Console(stderr=True, highlight=False, markup=False)
+out_console = _Console(highlight=False, markup=False)
+
+
+def table(title: str, **options) -> Table:
+    """A rich table titled ``title``, left-justified as every table the command line prints."""
+    from rich.table import Table
+
+    return Table(title=title, title_justify="left", **options)
 
 SpecArg = Annotated[Path, typer.Argument(help="Design spec (YAML).", show_default=False)]
 OutOpt = Annotated[Optional[Path], typer.Option("--out", help="Output folder (default out/<design name>/).")]
@@ -83,6 +120,8 @@ FormatOpt = Annotated[Format, typer.Option(
 
 def error(message: str, head: str = "error:") -> None:
     """Print ``error: message`` on stderr, the message as plain text (no markup)."""
+    from rich.text import Text
+
     err.print(Text.assemble((head, "bold red"), " ", str(message)), soft_wrap=True)
 
 
@@ -191,7 +230,7 @@ def progress_bar(description: str, quiet: bool, min_total: int = 0):
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                  TimeRemainingColumn(), console=err, transient=True) as prog:
+                  TimeRemainingColumn(), console=_rich_console(err), transient=True) as prog:
         task = None
         lock = threading.Lock()
 
@@ -241,7 +280,7 @@ def fmt(v, digits=4):
 
 def summary_table(title: str, rows: list[tuple[str, object]]) -> Table:
     """A two-column table of (name, value) rows."""
-    t = Table(title=title, show_header=False, title_justify="left")
+    t = table(title, show_header=False)
     t.add_column("", style="bold")
     t.add_column("")
     for k, v in rows:

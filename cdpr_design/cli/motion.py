@@ -3,14 +3,17 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import TYPE_CHECKING, Annotated, Optional
 
 import typer
-from rich.table import Table
 
-from cdpr_design.cli.common import (CableModelOpt, Format, FormatOpt, JsonOpt, OutOpt, OverwriteOpt, QuietOpt, SpecArg, bars, command, emit_json,
-                                    fmt, info, load_design, out_console, summary_table)
+from cdpr_design.cli.common import (CableModelOpt, Format, FormatOpt, JsonOpt, OutOpt, OverwriteOpt, QuietOpt,
+                                    SpecArg, bars, command, emit_json, fmt, info, load_design, out_console,
+                                    summary_table, table)
 from cdpr_design.errors import CheckFailed
+
+if TYPE_CHECKING:
+    from rich.table import Table
 
 CycleOpt = Annotated[Optional[float], typer.Option(
     "--cycle-time", help="Sample period [s] (default: the trajectory's cycle_time, else 0.001).", min=1e-5, max=1.0)]
@@ -24,7 +27,7 @@ def tension_ranges(summary: dict, cables) -> str:
 
 def segments_table(title: str, segments: list[dict]) -> Table:
     """The paper's Table 2 layout: mean target and mean actual position per straight segment."""
-    t = Table(title=title, title_justify="left")
+    t = table(title)
     for head in ("segment", "axis", "mean target [mm]", "mean actual [mm]", "error [mm]", "error [%]"):
         t.add_column(head, justify="right")
     for r in segments:
@@ -161,7 +164,7 @@ def compare(
     if json_:
         emit_json(s)
         return
-    t = Table(title=f"compare {target.name} → {actual.name}", title_justify="left")
+    t = table(f"compare {target.name} → {actual.name}")
     for head in ("column", "delay [ms]", "mean error", "RMS error", "max error"):
         t.add_column(head, justify="right")
     for c in cols:

@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Optional
+from typing import TYPE_CHECKING, Annotated, Optional
 
 import typer
-from rich.table import Table
 
 from cdpr_design.cli.common import (CatalogueOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt,
                                     QuietOpt, SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command,
-                                    emit_json, fmt, info, load_design, out_console, summary_table)
+                                    emit_json, fmt, info, load_design, out_console, summary_table, table)
 from cdpr_design.errors import CheckFailed
 from cdpr_design.model.limits import MAX_TRIALS, MAX_WORKERS, SEED_LIMIT
+
+if TYPE_CHECKING:
+    from rich.table import Table
 
 _FIGURES = ("task_min_margin, min_margin_figure, task_fraction, task_feasible, fraction, measure, feasible, "
             "min_margin, max_margin, max_tension, peak_tension, peak_tension_<cable>, peak_cable_speed, "
@@ -23,7 +25,7 @@ def best_table(run) -> Table:
     """The best trial (one objective) or the Pareto front (several, knee first)."""
     pb = run.problem
     several = len(pb.objectives) > 1
-    t = Table(title="Pareto front (★ best.yaml: the knee)" if several else "best trial", title_justify="left")
+    t = table("Pareto front (★ best.yaml: the knee)" if several else "best trial")
     cols = ["trial"] + pb.space.keys + [o.figure for o in pb.objectives]
     for c in cols:
         t.add_column(c)

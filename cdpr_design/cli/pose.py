@@ -7,10 +7,10 @@ from enum import Enum
 from typing import Annotated, Optional
 
 import typer
-from rich.table import Table
 
-from cdpr_design.cli.common import (CableModelOpt, JsonOpt, Kind, KindOpt, QuietOpt, SpecArg, command, emit_json, fmt,
-                                    load_design, out_console, parse_numbers, parse_pose, summary_table)
+from cdpr_design.cli.common import (CableModelOpt, JsonOpt, Kind, KindOpt, QuietOpt, SpecArg, command,
+                                    emit_json, fmt, load_design, out_console, parse_numbers, parse_pose,
+                                    summary_table, table)
 from cdpr_design.errors import InputError
 from cdpr_design.model.limits import LENGTH
 
@@ -87,7 +87,7 @@ def _pose_table(design, at: str, data: dict) -> None:
     verdict = "feasible" if data["feasible"] else "infeasible"
     if "reason" in data and not data["feasible"]:
         verdict += f" ({data['reason']})"
-    t = Table(title=f"{design.name} at ({at}) — {verdict}, margin {fmt(data['margin'])} N", title_justify="left")
+    t = table(f"{design.name} at ({at}) — {verdict}, margin {fmt(data['margin'])} N")
     model = data.get("cable_model")
     extra = [("outlet tension [N]", "outlet_tensions"), ("unstretched [m]", "unstretched_lengths"),
              ("sag [m]", "sag")] if model else []

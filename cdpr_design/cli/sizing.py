@@ -2,19 +2,24 @@
 
 from __future__ import annotations
 
-import typer
-from rich.table import Table
+from typing import TYPE_CHECKING
 
-from cdpr_design.cli.common import (CableModelOpt, CatalogueOpt, ForceOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt,
-                                    SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt,
-                                    info, load_design, out_console)
+import typer
+
+from cdpr_design.cli.common import (CableModelOpt, CatalogueOpt, ForceOpt, Format, FormatOpt, JsonOpt,
+                                    MotorOpt, OutOpt, OverwriteOpt, QuietOpt, SafetyOpt, SpecArg, StepOpt,
+                                    TrajectoryOpt, bars, command, emit_json, fmt, info, load_design,
+                                    out_console, table)
 from cdpr_design.errors import CheckFailed
+
+if TYPE_CHECKING:
+    from rich.table import Table
 
 
 def sizing_table(design, result) -> Table:
     """One row per cable: peak tension, motor torques and speed, the motor and its margins."""
-    t = Table(title=f"{design.name} — motor sizing ({result.envelope.poses:,} {result.envelope.source} poses, "
-                    f"safety factor {result.safety_factor:g})", title_justify="left")
+    t = table(f"{design.name} — motor sizing ({result.envelope.poses:,} {result.envelope.source} poses, "
+              f"safety factor {result.safety_factor:g})")
     cols = [("cable", "cable"), ("T [N]", "peak_tension"), ("τ pk", "peak_motor_torque"),
             ("τ rms", "rms_motor_torque"), ("rpm", "peak_motor_speed"),
             ("motor", "motor"), ("τ mrg", "torque_margin"), ("n mrg", "speed_margin"),
@@ -36,7 +41,7 @@ def sizing_table(design, result) -> Table:
 
 def checks_table(design, rows: list[dict]) -> Table:
     """One row per requirement: its figure, its limit, pass or FAIL."""
-    t = Table(title=f"{design.name} — requirements", title_justify="left")
+    t = table(f"{design.name} — requirements")
     for col in ("requirement", "figure", "limit", "result"):
         t.add_column(col)
     for r in rows:

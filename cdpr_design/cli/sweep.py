@@ -3,22 +3,24 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import TYPE_CHECKING, Annotated, Optional
 
 import typer
-from rich.table import Table
 
-from cdpr_design.cli.common import (CatalogueOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt, QuietOpt,
-                                    SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command, emit_json, fmt, info,
-                                    load_design, out_console, summary_table, timings_row)
+from cdpr_design.cli.common import (CatalogueOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt,
+                                    QuietOpt, SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command,
+                                    emit_json, fmt, info, load_design, out_console, summary_table, table,
+                                    timings_row)
 from cdpr_design.batch.variants import HARD_MAX_VARIANTS, MAX_VARIANTS
 from cdpr_design.errors import CheckFailed
+
+if TYPE_CHECKING:
+    from rich.table import Table
 
 
 def best_table(run, top: int) -> Table:
     """The ``top`` variants passing every requirement, ranked."""
-    t = Table(title=f"best variants by {run.rank_by} ({'descending' if run.descending else 'ascending'})",
-              title_justify="left")
+    t = table(f"best variants by {run.rank_by} ({'descending' if run.descending else 'ascending'})")
     cols = ["rank", "variant"] + run.plan.keys + [run.rank_by]
     for c in cols:
         t.add_column(c)
@@ -29,7 +31,7 @@ def best_table(run, top: int) -> Table:
 
 def regressions_table(run, baseline: Path) -> Table:
     """Up to 30 figures that regressed against the baseline."""
-    t = Table(title=f"regressions against {baseline}", title_justify="left")
+    t = table(f"regressions against {baseline}")
     for c in ("variant", "figure", "baseline", "now", "change"):
         t.add_column(c)
     for d in run.regressions[:30]:
