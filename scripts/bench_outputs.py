@@ -91,28 +91,40 @@ that busy-waited 0.1 s for work that never came (a process that only imports num
 the garbage collector ran three collections in the command (31-35 ms) and two in the picture
 worker's warm-up (40 ms) at a threshold of 50,000 (none at 200,000), and a full one (35-50 ms)
 before the worker froze its objects (now frozen without it); ``fit_width`` measured every left
-panel's y axis.  IPAnema 3 in 16 interleaved pairs (medians): CPU of all its processes 4.02 ->
-3.81 s, wall 2.19 -> 2.15 s.  The wall gains less than the CPU: the picture worker now ends its
-warm-up 0.83-0.86 s after the start and waits about 0.1 s for the sweep (0.94-0.98 s to
-1.25-1.31 s, timestamps without a profiler), so what sets the command's time is the main
-process's way to its sweep (Python and numpy 0.19 s, the command's modules and spec 0.35 s,
-numba's start-up 0.4 s, one after the other) and the two pictures after it (0.5 CPU-s each,
-beside the table's last chunks: 0.74 s).  This script, twice in one hour (per-pose linprog
-2.96-3.20 and 3.10-3.20 ms):
+panel's y axis.  Then the main process's way to its sweep, which is what sets the command's
+time now (below): rich imported only when something is printed for a person (40 ms less with
+``--json``), the CSV writer's digit tables built without division (19 -> 8 ms).  IPAnema 3 in
+16 interleaved pairs (medians): with the first four changes (7bda670), CPU of all its processes
+4.02 -> 3.81 s and wall 2.19 -> 2.15 s; with all (in a faster half hour), 3.84 -> 3.57 s and
+2.094 -> 2.010 s (-4 %).
 
-============================================  ==========================  ==========================
-IPAnema 3, 154,440 poses, static              first run                   second run
-============================================  ==========================  ==========================
-kernels in-process, warm                      0.288 s = 1666x (1647-1713) 0.299 s = 1651x (1615-1666)
-whole command, warm (csv)                     2.205 s = 217x (215-224)    2.172 s = 227x (224-227)
-  its sweep_s                                 0.333 s = 1411x (1393-1474) 0.333 s = 1487x (1477-1500)
-whole command, warm (parquet)                 2.156 s = 221x (221-228)    2.094 s = 236x (224-236)
-planar2 564,001 poses, whole command          252x csv, 253x parquet      257x csv, 263x parquet
-============================================  ==========================  ==========================
+The wall gains less than the CPU: the picture worker now ends its warm-up 0.83-0.86 s after the
+start and waits about 0.1 s for the sweep (0.94-0.98 s to 1.25-1.31 s, timestamps without a
+profiler), so CPU saved in it before the sweep shortens nothing.  What sets the time is the main
+process's way to its sweep (Python and numpy 0.19 s, the command's modules and spec 0.3 s,
+numba's start-up 0.4 s -- 43 ms of it ``numba.np.arrayobj``, imported to rebuild the environment
+of ``np.empty`` in the cached sweep, and 20 ms ``numpy.ma``, which numba's ``typeof`` looks at --,
+one after the other) and the two pictures after it (0.5 CPU-s each, beside the table's last
+chunks: 0.6-0.7 s).  This script three times (medians, ranges of the rounds):
 
-b78f933 in this script's run just before them (linprog 3.21-3.28 ms): 233x (226-233).  The
-ratio follows the hour's linprog more than a change of 2 % (the interleaved pairs above);
-the round before measured 193x in an hour when linprog took 2.5-2.7 ms.
+============================================  =============================  =========================
+IPAnema 3, 154,440 poses, static              7bda670, two runs in one hour  this version
+============================================  =============================  =========================
+per-pose linprog over the rounds              2.96-3.20 / 3.10-3.20 ms       2.85-2.95 ms
+kernels in-process, warm                      1666x / 1651x                  0.290 s = 1547x (1450-1589)
+whole command, warm (csv)                     2.205 s = 217x (215-224) /     2.069 s = 217x (208-226)
+                                              2.172 s = 227x (224-227)
+  its sweep_s                                 1411x / 1487x                  0.324 s = 1359x (1306-1412)
+whole command, warm (parquet)                 2.156 s = 221x (221-228) /     1.972 s = 225x (221-227)
+                                              2.094 s = 236x (224-236)
+planar2 564,001 poses, whole command          252x / 257x csv,               237x csv, 246x parquet
+                                              253x / 263x parquet            (linprog 2.3-2.6 ms)
+============================================  =============================  =========================
+
+b78f933 in this script's run just before the first (linprog 3.21-3.28 ms): 233x (226-233).  The
+ratio follows the hour's linprog more than a change of a few per cent (hence the interleaved
+pairs): the round before measured b78f933 at 193x in an hour when linprog took 2.5-2.7 ms a
+pose; 4 % less wall would make that about 200x.
 
 The round before (38e9c27 -> b78f933), a fourth machine (per-pose linprog 2.4-3.5 ms,
 drifting by the hour): the picture worker is a copy of the command (``os.fork`` once numpy
