@@ -121,6 +121,22 @@ planar2 564,001 poses, whole command          252x / 257x csv,               237
                                               253x / 263x parquet            (linprog 2.3-2.6 ms)
 ============================================  =============================  =========================
 
+At the end of the round, this script with the cold run, then with ``--root`` at 946fb56 (the
+version before the columnar writer, the timings and the picture process), 20 minutes apart:
+
+============================================  ==========================  ==========================
+                                              946fb56                     this version
+============================================  ==========================  ==========================
+IPAnema 3: per-pose linprog                   2.79-2.80 ms                2.88-3.12 ms
+  whole command, cold numba cache (csv)       69.1 s = 5.4x               30.3 s = 16x (load_s 26.7 s)
+  whole command, warm (csv)                   3.945 s = 109x (108-110)    2.044 s = 230x (218-231)
+  its sweep_s                                 1.471 s = 294x              0.326 s = 1413x (1409-1477)
+  whole command, warm (parquet)               -                           2.067 s = 227x (221-233)
+planar2 22,801 poses, warm (csv)              2.089 s = 29x               1.762 s = 39x
+planar2 564,001 poses, cold (csv)             12.6 s = 116x               16.1 s = 104x
+planar2 564,001 poses, warm (csv / parquet)   12.5 s = 123x / -           6.42 s = 245x / 6.27 s = 260x
+============================================  ==========================  ==========================
+
 b78f933 in this script's run just before the first (linprog 3.21-3.28 ms): 233x (226-233).  The
 ratio follows the hour's linprog more than a change of a few per cent (hence the interleaved
 pairs): the round before measured b78f933 at 193x in an hour when linprog took 2.5-2.7 ms a
@@ -588,7 +604,8 @@ def bench_design(name: str, step: float | None, args, rng) -> dict:
             lp = lp_seconds_per_pose(d, poses)
             (wall, cpu), s = command(root, path, step, "csv", f"{tmp}/cold", tempfile.mkdtemp(dir=tmp))
             add("whole command, cold numba cache (csv)", wall, cpu, lp)
-            add("  its load_s (numba compiling)", s.get("timings", {}).get("load_s", 0.0), None, lp)
+            if "load_s" in s.get("timings", {}):  # (a version before load_s compiled inside its sweep)
+                add("  its load_s (numba compiling)", s["timings"]["load_s"], None, lp)
         for fmt in fmts:
             command(root, path, step, fmt, f"{tmp}/prime", None)  # numba's cache and the bytecode warm
         add("kernels in-process, first call", *first_call, lp_seconds_per_pose(d, poses))
