@@ -36,6 +36,7 @@ def settle_blas_threads(environ=os.environ) -> None:
     """
     environ.setdefault("OPENBLAS_THREAD_TIMEOUT", BLAS_THREAD_TIMEOUT)
 
+
 def picture_worker_enabled(environ=os.environ) -> bool:
     """Whether pictures may be drawn in a helper process (not ``CDPR_DESIGN_PICTURE_WORKER=0``)."""
     return environ.get("CDPR_DESIGN_PICTURE_WORKER", "1").strip() != "0"
