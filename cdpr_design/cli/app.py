@@ -60,12 +60,11 @@ def __getattr__(name: str):
 
 
 def main() -> None:
-    """Console-script entry point (``cdpr_design.__main__.main`` starts the picture worker earlier)."""
-    from cdpr_design.cli import env
+    """Run the command line on ``sys.argv``: called by :func:`cdpr_design.__main__.main` (the console
+    script), which has set up the process first (collection thresholds, BLAS threads, the picture
+    worker started before these imports)."""
     from cdpr_design.plots import worker as _picture_worker
 
-    if _picture_worker.wanted(sys.argv[1:]):
-        _picture_worker.prestart(enabled=env.picture_worker_enabled())
     try:
         make_app(sys.argv[1:])()
     except KeyboardInterrupt:

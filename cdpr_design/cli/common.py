@@ -67,6 +67,7 @@ def table(title: str, **options) -> Table:
 
     return Table(title=title, title_justify="left", **options)
 
+
 SpecArg = Annotated[Path, typer.Argument(help="Design spec (YAML).", show_default=False)]
 OutOpt = Annotated[Optional[Path], typer.Option("--out", help="Output folder (default out/<design name>/).")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout and nothing else there.")]

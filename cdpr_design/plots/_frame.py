@@ -210,14 +210,14 @@ def fit_width(fig, cax=None) -> None:
     once, when drawn, and not also here."""
     renderer = fig.canvas.get_renderer()
     width, height = fig.get_size_inches()
-    labelled = [ax for ax in fig.axes if ax is not cax and ax.get_visible() and ax.axison and ax.get_ylabel()]
-    box = labelled[0].yaxis.get_tightbbox(renderer) if labelled else None
+    first = next((ax for ax in fig.axes if ax is not cax and ax.get_visible() and ax.axison and ax.get_ylabel()),
+                 None)
+    box = first.yaxis.get_tightbbox(renderer) if first is not None else None
     left = max(_EDGE - box.x0 / fig.dpi, 0.0) if box is not None else 0.0
+    right = 0.0
     if cax is not None:
         x1 = max(cax.yaxis.get_tightbbox(renderer).x1, cax.get_window_extent(renderer).x1)
         right = max(x1 / fig.dpi + _EDGE - width, 0.0)
-    else:
-        right = 0.0
     spare = _figure_text_width(fig, renderer, width) - (width + left + right)
     if spare > 0.0:
         left, right = left + spare / 2, right + spare / 2
