@@ -155,7 +155,7 @@ pairs: 2.185 -> 2.042 s wall (medians), 4.02 -> 3.74 CPU-s.  This script, back t
 hour:
 
 ============================================  ==========================  ==========================
-IPAnema 3, 154,440 poses, static              38e9c27                     this version
+IPAnema 3, 154,440 poses, static              38e9c27                     b78f933
 ============================================  ==========================  ==========================
 per-pose linprog over the rounds              2.37-2.45 ms                2.47-2.69 ms
 kernels in-process, warm                      0.284 s = 1306x (1291-1371) 0.276 s = 1406x (1393-1447)
@@ -167,7 +167,7 @@ planar2 564,001 poses, whole command          204x csv                    207x c
 ============================================  ==========================  ==========================
 
 The same script earlier that day, in an hour when linprog took 3.1-3.5 ms a pose: 38e9c27 207x
-(206-208), this version 197x (186-205, load average 1.6): the ratio moves with the hour more
+(206-208), b78f933 197x (186-205, load average 1.6): the ratio moves with the hour more
 than with a change of 6 %, hence the interleaved pairs above.
 
 The round before (from 82599a7), on the third machine: the cached kernels
