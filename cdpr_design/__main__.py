@@ -2,6 +2,7 @@
 
 import gc
 import importlib
+import signal
 import sys
 
 
@@ -12,6 +13,11 @@ def main() -> None:
     # three collections, 31-35 ms in all, still ran in the command and two, 40 ms, in the
     # picture worker's warm-up; at 200,000, one of 0.2 ms).  Cycles made later are still collected
     gc.set_threshold(200_000, 20, 20)
+    # past a file-size limit (``ulimit -f``) a write fails with EFBIG, which the command reports (exit 2
+    # naming the file), instead of SIGXFSZ ending the process: Python ignores it at start-up, said here
+    # for an interpreter embedded without its signal set-up
+    if hasattr(signal, "SIGXFSZ"):
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
     # start the picture worker before importing the command line (typer, rich, pydantic):
     # its matplotlib import then overlaps the rest of the parent's start-up.  numpy first:
     # the worker is a copy of this process where it can be (plots.worker.can_fork), which

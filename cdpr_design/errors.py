@@ -1,7 +1,8 @@
 """Typed errors of cdpr-design.
 
 Only the command line turns these into exit codes: :class:`SpecError` and
-:class:`InputError` mean bad input (exit 2), :class:`CheckFailed` means a design
+:class:`InputError` mean bad input (exit 2; :class:`WriteError`, an output that cannot be
+written, too), :class:`CheckFailed` means a design
 failed a check it was asked to pass (exit 1).
 """
 
@@ -69,6 +70,18 @@ class SpecError(CdprError, ValueError):
 
 class InputError(CdprError, ValueError):
     """A bad command-line value or input file other than a spec."""
+
+
+class WriteError(InputError):
+    """A file could not be written or put in place: a full disk or a file-size limit, a path too
+    long, no permission, a read-only or immutable file.  Exit status 2 like bad input: the message
+    names the file and the cause on one line."""
+
+    @classmethod
+    def of(cls, path, exc: BaseException, verb: str = "write") -> "WriteError":
+        """``cannot write PATH: CAUSE`` of an OSError (``verb``: what could not be done)."""
+        cause = getattr(exc, "strerror", None) or " ".join(str(exc).split()) or type(exc).__name__
+        return cls(f"cannot {verb} {path}: {cause}")
 
 
 class CheckFailed(CdprError):

@@ -364,7 +364,9 @@ def test_every_file_a_workspace_run_writes_is_known_before_the_sweep(tmp_path, n
     r = invoke("workspace", DESIGNS / f"{name}.yaml", "--step", "0.5", "--out", tmp_path, "--quiet")
     assert r.exit_code == 0, r.output
     written = sorted(p.name for p in tmp_path.iterdir())
-    assert written == sorted(output_names(design) + ["workspace.csv", ".cdpr-design-outputs"]), written
+    # besides them: the record of what cdpr-design wrote, and the folder's lock file (issue 40)
+    assert written == sorted(output_names(design) + ["workspace.csv", ".cdpr-design-outputs",
+                                                     ".cdpr-design.lock"]), written
     assert (EXTRA_PICTURE.get(name) in written) if name in EXTRA_PICTURE else \
         not {"tilt_map.png", "cable_models.png"} & set(written)
 

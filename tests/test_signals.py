@@ -191,7 +191,7 @@ def test_optimize_holds_every_stop_signal_through_a_trials_record():
     """SIGTERM (like SIGINT) during a trial's creation or record is delivered after it, to the
     handler in place (here one raising Stop), so no trial is left RUNNING; with raise_after=False
     it is dropped."""
-    from cdpr_design.optimize.study import _signals_held
+    from cdpr_design.io.locks import signals_held as _signals_held
 
     class Stop(Exception):
         pass

@@ -14,8 +14,9 @@ Execution backends
 - a process pool (``workers > 1``, default one per core).  Workers are
   started with ``spawn``, which is safe whatever the parent ran before (its
   threads, its open files, a caller's OpenMP library: a ``fork`` copies the
-  process in the middle of all that).  Workers load the kernels from numba's
-  on-disk cache (``cache=True``).
+  process in the middle of all that), with the stop signals held until they
+  are ready (:mod:`cdpr_design.batch.processes`).  Workers load the kernels
+  from numba's on-disk cache (``cache=True``).
 - Dask distributed (:mod:`cdpr_design.batch.dask`).
 
 Parallelism is across variants: each worker runs the kernels on one
@@ -201,15 +202,15 @@ def run_serial(job: Job, todo, emit) -> None:
 def run_pool(job: Job, todo, w: int, chunk: int | None, emit, stats: RunStats, start_method: str) -> None:
     """Evaluate ``todo`` in a process pool of ``w`` workers started with ``start_method``."""
     import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor
+
+    from cdpr_design.batch.processes import pool
 
     w = min(w, len(todo))
     size = chunk or chunk_size(len(todo), w)
     stats.backend, stats.workers, stats.chunk = f"processes ({start_method})", w, size
     parts = chunks(todo, size) if chunk else guided_chunks(todo, size, w, minimum=2)
     before = set(mp.active_children())
-    ex = ProcessPoolExecutor(max_workers=w, mp_context=mp.get_context(start_method),
-                             initializer=_init_worker, initargs=(job,))
+    ex = pool(w, start_method, _init_worker, (job,))  # workers a Ctrl-C does not catch half-started
     try:
         _submit_bounded(ex, parts, 4 * w, emit)
     except BaseException:

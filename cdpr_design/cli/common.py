@@ -8,6 +8,7 @@ stdout; progress and messages go to stderr.
 
 from __future__ import annotations
 
+import errno
 import functools
 import math
 import os
@@ -126,23 +127,36 @@ def error(message: str, head: str = "error:") -> None:
     err.print(Text.assemble((head, "bold red"), " ", str(message)), soft_wrap=True)
 
 
+#: What a file system says when it refuses a write (a full disk or quota, a file-size limit, a
+#: read-only or immutable file, a path too long): exit 2 with one line, as bad input, wherever it
+#: comes from (the library names the file where it writes; this is the net below it).
+FILE_SYSTEM_ERRORS = frozenset({errno.ENOSPC, errno.EFBIG, errno.EDQUOT, errno.EROFS, errno.EIO,
+                                errno.ENAMETOOLONG, errno.EACCES, errno.EPERM})
+
+
 def command(fn):
     """Turn the package's errors into exit codes and messages (no tracebacks for bad input).
 
     SIGTERM and SIGHUP interrupt the command like Ctrl-C (:mod:`cdpr_design.cli.signals`);
-    with ``--quiet`` warnings (numpy's overflow, ...) are not printed either.
+    with ``--quiet`` warnings (numpy's overflow, ...) are not printed either.  Notes the library
+    logs (:func:`notes`) are printed on stderr.
     """
     from cdpr_design.cli.signals import interruptible
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         try:
-            with interruptible(), warnings.catch_warnings():
+            with interruptible(), warnings.catch_warnings(), notes(bool(kwargs.get("quiet") or kwargs.get("json_"))):
                 if kwargs.get("quiet"):
                     quiet_warnings()
                 return fn(*args, **kwargs)
         except (SpecError, InputError) as exc:
             error(str(exc))
+            raise typer.Exit(2) from None
+        except OSError as exc:
+            if exc.errno not in FILE_SYSTEM_ERRORS:
+                raise
+            error(f"{exc.filename}: {exc.strerror}" if exc.filename else f"{exc.strerror} (a file of the command)")
             raise typer.Exit(2) from None
         except CheckFailed as exc:
             if str(exc):
@@ -153,6 +167,26 @@ def command(fn):
             raise typer.Exit(130) from None
 
     return wrapper
+
+
+@contextmanager
+def notes(quiet: bool):
+    """What the library logs on the ``cdpr_design`` logger (a command waiting for another one that
+    is writing into its ``--out``) printed on stderr as notes (:func:`info`; none when ``quiet``)."""
+    import logging
+
+    class Note(logging.Handler):
+        def emit(self, record):
+            info(quiet, record.getMessage())
+
+    logger, handler = logging.getLogger("cdpr_design"), Note()
+    logger.addHandler(handler)
+    propagate, logger.propagate = logger.propagate, False
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.propagate = propagate
 
 
 def quiet_warnings() -> None:

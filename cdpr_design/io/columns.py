@@ -20,8 +20,10 @@ group (memory stays bounded whatever the table's length), and carries the
 version) and each column's unit (field metadata ``unit``).
 
 The file appears under its name only when :meth:`ColumnWriter.close` succeeds
-(:class:`~cdpr_design.io.files.AtomicFile`); an exception inside the ``with``
-block leaves nothing.
+(:class:`~cdpr_design.io.files.AtomicFile`; in an output folder's ``with``
+block, when the block ends); an exception inside the ``with`` block leaves
+nothing.  A write that fails (a full disk, a file-size limit) is a
+:class:`~cdpr_design.errors.WriteError` naming the file.
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from cdpr_design.errors import InputError, quote
+from cdpr_design.errors import InputError, WriteError, quote
 from cdpr_design.io.csvtext import csv_rows
 from cdpr_design.io.files import AtomicFile
 from cdpr_design.io.tables import fmt, json_default
@@ -108,7 +110,8 @@ class ColumnWriter:
         design's name, the grid, ``units`` (column -> unit string).
     names : the columns in order, when known before the first chunk (the
         header of a table with no rows); chunks must then carry exactly these.
-    on_commit : called once the file is in place (the output folder's manifest).
+    stage : given the finished temporary file instead of renaming it into place (an
+        output folder puts it in place with the command's other files).
     before_open : called just before the temporary file is made, at the first
         write or at :meth:`close` (the output folder's creation): a sweep that
         refuses its input before its first chunk leaves nothing behind.
@@ -122,7 +125,7 @@ class ColumnWriter:
     """
 
     def __init__(self, path: str | Path, format: str = "csv", metadata: Mapping | None = None,
-                 names: Sequence[str] | None = None, on_commit: Callable[[], None] | None = None,
+                 names: Sequence[str] | None = None, stage: Callable[[AtomicFile], None] | None = None,
                  background: bool = False, before_open: Callable[[], object] | None = None):
         check_format(format)
         self.path = Path(path)
@@ -131,7 +134,7 @@ class ColumnWriter:
         self.names = list(names) if names is not None else None
         self.rows = 0
         self._atomic: AtomicFile | None = None
-        self._on_commit = on_commit
+        self._stage = stage
         self._before_open = before_open
         self._schema = None
         self._parquet = None
@@ -152,7 +155,7 @@ class ColumnWriter:
         if self._atomic is None:
             if self._before_open is not None:
                 self._before_open()
-            self._atomic = AtomicFile(self.path, binary=True, on_commit=self._on_commit)
+            self._atomic = AtomicFile(self.path, binary=True, stage=self._stage)
         return self._atomic
 
     # -- writing -----------------------------------------------------------
@@ -171,6 +174,8 @@ class ColumnWriter:
         t = time.perf_counter()
         try:
             self._write_columns(data)
+        except OSError as exc:  # pyarrow's writes into the file
+            raise WriteError.of(self.path, exc) from None
         finally:
             self.busy_s += time.perf_counter() - t
 
@@ -267,6 +272,9 @@ class ColumnWriter:
         try:
             self._raise_error()
             return self._finish()
+        except OSError as exc:  # pyarrow's last writes
+            self.abort()
+            raise WriteError.of(self.path, exc) from None
         except BaseException:
             self.abort()
             raise

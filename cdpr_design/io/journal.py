@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from typing import Sequence
 
-from cdpr_design.errors import InputError
+from cdpr_design.errors import InputError, WriteError
 from cdpr_design.io.files import OutputDir, write_text_atomic
+from cdpr_design.io.locks import check_free, one_run
 
 
 class SweepJournal:
@@ -18,15 +20,26 @@ class SweepJournal:
     and flushed as it finishes, so an interrupted sweep loses at most the
     variants in flight.  A torn last line (the process was killed while
     writing it) is dropped when the journal is read back.
+
+    From :meth:`start` to :meth:`close` the sweep holds the folder's
+    ``.sweep.lock`` (:func:`~cdpr_design.io.locks.one_run`): a second sweep
+    into the same folder is refused, naming the first, instead of writing
+    the same journal.
     """
 
     NAME = "sweep.journal.jsonl"
+    LOCK = ".sweep.lock"
 
     def __init__(self, out: OutputDir, name: str | None = None):
         self.out = out
         self.name = name or self.NAME
         self.path = out.path / self.name
         self.fh = None
+        self._lock = contextlib.ExitStack()
+
+    def check_free(self) -> None:
+        """Refuse at once (exit 2 naming it) when another sweep is writing this folder's journal."""
+        check_free(self.out.path / self.LOCK, "sweep")
 
     def read(self) -> tuple[dict | None, list[dict]]:
         """(meta, records) of the journal on disk; (None, []) when there is none."""
@@ -64,23 +77,37 @@ class SweepJournal:
         """Write the journal afresh (meta and the records kept), then keep it open for appending."""
         self.out.target(self.name)
         self.out.ensure()
+        self._lock.enter_context(one_run(self.out.path / self.LOCK, "sweep"))
         body = json.dumps(meta, sort_keys=True) + "\n" + "".join(
             json.dumps(r) + "\n" for r in records)
         write_text_atomic(self.path, body)
         self.out.wrote(self.name)
-        self.fh = open(self.path, "a", encoding="utf-8", newline="")
+        try:
+            self.fh = open(self.path, "a", encoding="utf-8", newline="")
+        except OSError as exc:
+            raise WriteError.of(self.path, exc) from None
 
     def append(self, rec: dict) -> None:
-        """Add one finished variant and flush it to the file."""
-        self.fh.write(json.dumps(rec) + "\n")
-        self.fh.flush()
+        """Add one finished variant and flush it to the file (a :class:`WriteError` when it cannot be:
+        the lines before it stay whole, a torn one is dropped when read)."""
+        try:
+            self.fh.write(json.dumps(rec) + "\n")
+            self.fh.flush()
+        except OSError as exc:
+            raise WriteError.of(self.path, exc) from None
 
     def close(self) -> None:
+        """Flush, sync and close (what cannot be written any more is dropped: the journal is read back
+        up to its last whole line)."""
         if self.fh is not None:
-            self.fh.flush()
+            fh, self.fh = self.fh, None
             try:
-                os.fsync(self.fh.fileno())
+                fh.flush()
+                os.fsync(fh.fileno())
             except OSError:
                 pass
-            self.fh.close()
-            self.fh = None
+            try:
+                fh.close()
+            except OSError:
+                pass
+        self._lock.close()

@@ -32,6 +32,37 @@ def temp_prefix(name: str) -> str:
     return f".{name}.{TEMP_MARKER}.{os.getpid()}."
 
 
+#: Characters a temporary name adds to the longest name it stands for: ``.`` + name +
+#: ``.cdpr-design-tmp.<pid>.<8 random>_old.tmp`` (the backup of a replaced file, io.files), with room for pids.
+_TEMP_EXTRA = 1 + len(TEMP_MARKER) + 2 + 10 + 1 + 8 + len("_old.tmp")
+
+
+def _limit(folder: Path, name: str, default: int) -> int:
+    """``os.pathconf`` of the nearest existing ancestor of ``folder`` (``default`` where unknown)."""
+    for anc in [folder, *folder.parents]:
+        try:
+            if anc.exists():
+                return os.pathconf(anc, name)
+        except (OSError, ValueError):
+            break
+    return default
+
+
+def check_name(path: str | Path, longest: str = "") -> None:
+    """Refuse (an :class:`InputError` naming ``--out``) an output ``path`` whose temporary name
+    (:func:`temp_prefix`; ``longest``: a longer name written beside it) does not fit the file
+    system's limits: a name of at most ``NAME_MAX`` bytes, a path of less than ``PATH_MAX``."""
+    p = Path(path)
+    name = max(p.name, longest, key=len)
+    tmp = len(os.fsencode(name)) + _TEMP_EXTRA
+    whole = len(os.fsencode(str(p.parent))) + 1 + tmp
+    name_max = _limit(p.parent, "PC_NAME_MAX", 255)
+    path_max = _limit(p.parent, "PC_PATH_MAX", 4096)
+    if tmp > name_max or whole >= path_max:
+        raise InputError(f"--out: {p} is too long for its temporary file ({whole} bytes; a path must stay "
+                         f"under {path_max} bytes and a name within {name_max}): choose a shorter --out")
+
+
 def check_folder(path: str | Path, option: str = "--out") -> None:
     """Raise an :class:`InputError` naming ``option`` unless ``path`` is (or can be made) a writable folder.
 

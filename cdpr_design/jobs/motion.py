@@ -135,17 +135,18 @@ def trajectory(design, name: str, cycle_time: float | None = None, out: str | Pa
         out_dir.target(f)  # a foreign file (or a folder) of that name: refused before any work
     with timings.phase("pictures_s"):
         pmap = path_map(design, engine)
-    pending = submit_pictures(out_dir, [
-        ("trajectory.png", motion_plots.trajectory_path_figure, (design, samples, pmap)),
-        ("trajectory_axes.png", motion_plots.trajectory_axes_figure, (samples,)),
-    ], timings=timings)
-    with timings.phase("write_s"):
-        write_table(out_dir, "trajectory", samples.columns(), format, design, trajectory=name,
-                    cycle_time=samples.cycle_time)
-    pending.wait()
-    s = samples.summary()
-    s["timings"] = timings.as_dict()
-    out_dir.write_json("trajectory.json", s)
+    with out_dir:  # every file put in place together at the end
+        pending = submit_pictures(out_dir, [
+            ("trajectory.png", motion_plots.trajectory_path_figure, (design, samples, pmap)),
+            ("trajectory_axes.png", motion_plots.trajectory_axes_figure, (samples,)),
+        ], timings=timings)
+        with timings.phase("write_s"):
+            write_table(out_dir, "trajectory", samples.columns(), format, design, trajectory=name,
+                        cycle_time=samples.cycle_time)
+        pending.wait()
+        s = samples.summary()
+        s["timings"] = timings.as_dict()
+        out_dir.write_json("trajectory.json", s)
     return TrajectoryRun(samples, s, out_dir)
 
 
@@ -203,15 +204,17 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
             raise InputError(f"--timestep / --servo-bandwidth / --cable-damping: {exc}") from None
         except ValueError as exc:  # samples without set-points (the cable model has no solution there)
             raise InputError(f"trajectories.{name}: {exc}") from None
-    pending = submit_pictures(out_dir, [("simulation.png", motion_plots.simulation_figure, (result,))],
-                              timings=timings)
-    with timings.phase("write_s"):
-        write_table(out_dir, "simulation", result.columns(), format, design, trajectory=name, settings=settings)
-    pending.wait()
-    s = result.summary()
-    s["trajectory_feasible"] = samples.all_feasible
-    s["timings"] = timings.as_dict()
-    out_dir.write_json("simulation.json", s)
+    with out_dir:  # every file put in place together at the end
+        pending = submit_pictures(out_dir, [("simulation.png", motion_plots.simulation_figure, (result,))],
+                                  timings=timings)
+        with timings.phase("write_s"):
+            write_table(out_dir, "simulation", result.columns(), format, design, trajectory=name,
+                        settings=settings)
+        pending.wait()
+        s = result.summary()
+        s["trajectory_feasible"] = samples.all_feasible
+        s["timings"] = timings.as_dict()
+        out_dir.write_json("simulation.json", s)
     return SimulationRun(result, s, samples, out_dir)
 
 

@@ -3,11 +3,12 @@ pareto.csv (several objectives; ``.parquet`` with ``format='parquet'``), best.ya
 
 from __future__ import annotations
 
+import contextlib
 import math
 from pathlib import Path
 from typing import Callable, NamedTuple, Sequence
 
-from cdpr_design.errors import InputError
+from cdpr_design.errors import InputError, WriteError
 from cdpr_design.io.columns import check_format, file_name
 from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage
@@ -82,16 +83,17 @@ def write_outputs(out: OutputDir, design, problem, rows, best, front, importance
 
     timings = timings if timings is not None else Timings()
     keys = list(problem.space.keys)
-    with timings.phase("write_s"):
-        paths = [write_rows(out, "optimize", *opt.table(problem, rows), format, design, keys=keys)]
-        if len(problem.objectives) > 1:
-            paths.append(write_rows(out, "pareto", *opt.table(problem, front), format, design, keys=keys))
-        if best is not None:
-            paths.append(out.write_text("best.yaml", best_spec_text(design, problem, best)))
-    if picture and rows:
-        paths += save_pictures(out, [("optimize.png", optimize_plots.optimize_figure,
-                                      (_picture_data(design, problem, rows, best, front, importances),))],
-                               timings=timings)
+    with out:  # put in place together at the end
+        with timings.phase("write_s"):
+            paths = [write_rows(out, "optimize", *opt.table(problem, rows), format, design, keys=keys)]
+            if len(problem.objectives) > 1:
+                paths.append(write_rows(out, "pareto", *opt.table(problem, front), format, design, keys=keys))
+            if best is not None:
+                paths.append(out.write_text("best.yaml", best_spec_text(design, problem, best)))
+        if picture and rows:
+            paths += save_pictures(out, [("optimize.png", optimize_plots.optimize_figure,
+                                          (_picture_data(design, problem, rows, best, front, importances),))],
+                                   timings=timings)
     return paths
 
 
@@ -148,8 +150,14 @@ def optimize(design, vary: Sequence[str], maximize: Sequence[str] | None = None,
     out_dir.wrote(opt.DB)
     with timings.phase("sweep_s"):
         with stage(progress, f"optimize {design.name}") as cb:
-            stats = opt.run(problem, out_dir.path, trials, workers=workers, seed=seed, timeout=timeout,
-                            resume=resume, progress=cb, log=log)
+            try:
+                stats = opt.run(problem, out_dir.path, trials, workers=workers, seed=seed, timeout=timeout,
+                                resume=resume, progress=cb, log=log)
+            except WriteError:
+                if not (out_dir.path / opt.DB).exists():  # a new study that could not be written: removed
+                    with contextlib.suppress(InputError):
+                        out_dir.forget(opt.DB)
+                raise
         study = opt.study.load(out_dir.path)
         rows = opt.results.trials(opt.finished(study))
         front = opt.pareto(problem, rows) if len(problem.objectives) > 1 else []

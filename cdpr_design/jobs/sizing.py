@@ -57,7 +57,7 @@ def size_motors(design, catalogue: Path | None = None, trajectory: str | None = 
     with timings.phase("sweep_s"):
         result = sz.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor,
                                 motor=motor, engine=engine)
-    with timings.phase("write_s"):
+    with timings.phase("write_s"), out_dir:
         write_motor_sizing(out_dir, result, format, design)
     return SizingRun(result, out_dir, {**result.summary(), "timings": timings.as_dict()})
 
@@ -126,17 +126,19 @@ def report(design, catalogue: Path | None = None, trajectory: str | None = None,
     out_dir = output_dir(design, out, overwrite)
     for name in (file_name("motor_sizing", format), file_name("design_report", format), "report.html", "report.json"):
         out_dir.target(name)
-    wres, drawing = start_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
-                                    progress=progress, format=format, timings=timings)
-    with timings.phase("sweep_s"):  # while the workspace pictures are drawn
-        e = evaluate(design, cat, samples, safety_factor, motor, step, wres, progress, engine)
-        checks = ev.check_table(e.row)
-    finish_workspace(out_dir, wres, drawing, timings)
-    page = submit_pictures(out_dir, [("report.html", report_html, (wres, e.sizing, checks))], pictures, timings)
-    with timings.phase("write_s"):
-        write_motor_sizing(out_dir, e.sizing, format, design)
-        write_design_report(out_dir, e.row, format=format, design=design)
-    page.wait()
-    t = timings.as_dict()
-    out_dir.write_json("report.json", {"report": e.row, "checks": checks, "sizing": e.sizing.summary(), "timings": t})
+    with out_dir:  # every file put in place together at the end
+        wres, drawing = start_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
+                                        progress=progress, format=format, timings=timings)
+        with timings.phase("sweep_s"):  # while the workspace pictures are drawn
+            e = evaluate(design, cat, samples, safety_factor, motor, step, wres, progress, engine)
+            checks = ev.check_table(e.row)
+        finish_workspace(out_dir, wres, drawing, timings)
+        page = submit_pictures(out_dir, [("report.html", report_html, (wres, e.sizing, checks))], pictures, timings)
+        with timings.phase("write_s"):
+            write_motor_sizing(out_dir, e.sizing, format, design)
+            write_design_report(out_dir, e.row, format=format, design=design)
+        page.wait()
+        t = timings.as_dict()
+        out_dir.write_json("report.json", {"report": e.row, "checks": checks, "sizing": e.sizing.summary(),
+                                           "timings": t})
     return ReportRun(e, checks, out_dir, t)

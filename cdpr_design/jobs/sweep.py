@@ -21,18 +21,19 @@ def write_sweep(out: OutputDir, header: list[str], rows: list[list], best_header
                 best_rows: list[list], keys: Sequence[str], title: str = "",
                 rank_by: str | None = None, picture: bool = True, format: str = "csv",
                 design=None, timings: Timings | None = None) -> list[Path]:
-    """``sweep.csv`` (``format='parquet'``: ``sweep.parquet``), ``sweep_best`` and ``sweep.png``
-    (atomically); the picture is drawn while the tables are written."""
+    """``sweep.csv`` (``format='parquet'``: ``sweep.parquet``), ``sweep_best`` and ``sweep.png``,
+    put in place together; the picture is drawn while the tables are written."""
     timings = timings or Timings()
     pending = None
-    if picture and rows:
-        pending = submit_pictures(out, [("sweep.png", sweep_plots.sweep_figure,
-                                         (header, rows, keys, title, None, rank_by))], timings=timings)
-    with timings.phase("write_s"):
-        paths = [write_rows(out, "sweep", header, rows, format, design, keys=list(keys)),
-                 write_rows(out, "sweep_best", best_header, best_rows, format, design, keys=list(keys))]
-    if pending is not None:
-        paths += pending.wait()
+    with out:
+        if picture and rows:
+            pending = submit_pictures(out, [("sweep.png", sweep_plots.sweep_figure,
+                                             (header, rows, keys, title, None, rank_by))], timings=timings)
+        with timings.phase("write_s"):
+            paths = [write_rows(out, "sweep", header, rows, format, design, keys=list(keys)),
+                     write_rows(out, "sweep_best", best_header, best_rows, format, design, keys=list(keys))]
+        if pending is not None:
+            paths += pending.wait()
     return paths
 
 
@@ -164,6 +165,7 @@ def _run_journalled(design, plan, options, out_dir, workers, scheduler, resume, 
     from cdpr_design import batch as sw
 
     journal = SweepJournal(out_dir)
+    journal.check_free()  # another sweep writing this folder: refused before any work
     meta = {"journal": "cdpr-design sweep", "version": sw.JOURNAL_VERSION, "name": design.name,
             "keys": plan.keys, "variants": len(plan), "fingerprint": plan.fingerprint(options)}
     kept = _kept_records(journal, meta, plan, resume, log)
@@ -174,9 +176,10 @@ def _run_journalled(design, plan, options, out_dir, workers, scheduler, resume, 
             stats = sw.run(plan, options, workers=workers, scheduler=scheduler, skip=done,
                            on_record=lazy.append, progress=cb)
         lazy.start()
+        records = journal.read()[1]  # while the folder's journal is still this sweep's (its lock held)
     finally:
         journal.close()
-    return stats, journal.read()[1]
+    return stats, records
 
 
 def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None, scheduler: str | None = None,

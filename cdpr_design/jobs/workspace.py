@@ -38,9 +38,12 @@ def workspace_columns(design, chunk) -> dict:
 def workspace(design, out: str | Path | None = None, overwrite: bool = False, **options):
     """The ``workspace`` command: :func:`run_workspace` into the folder ``out``
     (default ``out/<design name>/``; ``overwrite``: replace foreign files).
-    Returns (result, output folder)."""
+    Returns (result, output folder).  The files are put in place together when all are written
+    (:class:`~cdpr_design.io.files.OutputDir`): a failure leaves the folder's earlier files whole."""
     out_dir = output_dir(design, out, overwrite)
-    return run_workspace(design, out_dir, **options), out_dir
+    with out_dir:
+        result = run_workspace(design, out_dir, **options)
+    return result, out_dir
 
 
 def run_workspace(design, out: OutputDir, kind: str = "static", step: float | None = None, force: bool = False,

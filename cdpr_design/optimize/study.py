@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import signal
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -49,8 +48,10 @@ from pathlib import Path
 from typing import Callable
 
 from cdpr_design.batch.local import prepare_worker
+from cdpr_design.batch.processes import pool, stop_raises
 from cdpr_design.kernels import parallel
-from cdpr_design.errors import STOP_SIGNALS, InputError
+from cdpr_design.errors import InputError, WriteError
+from cdpr_design.io.locks import flock, one_run, signals_held
 from cdpr_design.model.limits import SEED_LIMIT
 from cdpr_design.optimize.problem import Problem, evaluate
 
@@ -134,11 +135,17 @@ def check_file(folder: Path, resume: bool) -> None:
 
 def _contents(path: Path) -> tuple[set[str], set[str]]:
     """(tables, study names) of the SQLite file ``path``, opened read-only; exit 2 naming it when it
-    is not an SQLite database, is damaged or cannot be read."""
+    is not an SQLite database, is damaged or cannot be read.
+
+    Nothing is created beside it: without a write-ahead log (``-wal``) beside the file there is
+    nothing newer than the file to read, and SQLite is told the file does not change (``immutable``),
+    so it makes no ``-wal`` or ``-shm`` of its own (a damaged file is left exactly as it was).  With
+    a log there, the file is read with it, as SQLite reads a study another run left."""
     import sqlite3
 
+    flags = "mode=ro" if Path(f"{path}-wal").exists() else "mode=ro&immutable=1"
     try:
-        con = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True, timeout=BUSY_TIMEOUT_S)
+        con = sqlite3.connect(f"{path.resolve().as_uri()}?{flags}", uri=True, timeout=BUSY_TIMEOUT_S)
         try:
             if con.execute("PRAGMA quick_check(1)").fetchone() != ("ok",):
                 raise sqlite3.DatabaseError("database disk image is malformed")
@@ -170,27 +177,6 @@ def make_sampler(seed: int | None):
     seed = None if seed is None else seed % SEED_LIMIT  # a resumed run's or a worker's offset may pass the top
     return optuna.samplers.TPESampler(seed=seed, n_startup_trials=STARTUP_TRIALS, n_ei_candidates=EI_CANDIDATES,
                                       constant_liar=True)
-
-
-@contextlib.contextmanager
-def _flock(path: Path, blocking: bool = True, shared: bool = False):
-    """An exclusive (``shared``: shared) lock on ``path`` (POSIX ``flock``); yields False when not
-    ``blocking`` and taken."""
-    import fcntl
-
-    fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-    try:
-        try:
-            fcntl.flock(fd, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | (0 if blocking else fcntl.LOCK_NB))
-        except BlockingIOError:
-            yield False
-            return
-        try:
-            yield True
-        finally:
-            fcntl.flock(fd, fcntl.LOCK_UN)
-    finally:
-        os.close(fd)
 
 
 def _interrupted(t) -> bool:
@@ -233,7 +219,7 @@ def _claim(study, total: int, lock: Path, interrupted: int, queued: bool):
     (TPE over every trial so far, the slow part of optuna's ``ask``) runs outside it, so workers
     sample in parallel.  This is ``Study.ask`` split in two (optuna 5; its private helpers)."""
     optuna = _optuna()
-    with _flock(lock):
+    with flock(lock):
         if counted(study, interrupted) >= total:
             return None, queued
         study._thread_local.cached_all_trials = None
@@ -281,18 +267,18 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
             break  # the run was killed: leave the rest to a resumed run
         trial = None
         try:
-            with _signals_held():  # a trial created is a trial in hand
+            with signals_held():  # a trial created is a trial in hand
                 trial, queued = _claim(study, total, lock, interrupted, queued)
             if trial is None:
                 break
             values = {p.key: p.suggest(trial) for p in problem.space.params}
             t0 = time.perf_counter()
             outcome = evaluate(problem, job, trial.number, values)
-            with _signals_held():  # told whole
+            with signals_held():  # told whole
                 _tell(study, trial, problem, outcome, time.perf_counter() - t0, worker)
         except BaseException:
             if trial is not None:
-                with _signals_held(raise_after=False), contextlib.suppress(Exception):
+                with signals_held(raise_after=False), contextlib.suppress(Exception):
                     trial.set_user_attr("interrupted", True)
                     study.tell(trial, state=optuna.trial.TrialState.FAIL)
             raise
@@ -302,41 +288,63 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
     return done
 
 
-@contextlib.contextmanager
-def _signals_held(raise_after: bool = True):
-    """The stop signals (:data:`cdpr_design.errors.STOP_SIGNALS`: Ctrl-C, a run stopping its workers, ``kill``, a
-    closed terminal) held while a step that must not be cut runs (a trial's creation, its record in
-    the study): each one that came is delivered again after the step, to the handler that was there
-    before (Python's KeyboardInterrupt, the command line's, or the default action)
-    (``raise_after``; else dropped: the caller is stopping already).  Only the main thread
-    receives signals; elsewhere nothing changes."""
-    import threading
-
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    got = []
-    old = {s: signal.signal(s, lambda signum, _: got.append(signum)) for s in STOP_SIGNALS}
-    try:
-        yield
-    finally:
-        for s, h in old.items():  # None: a handler not set from Python, put back as Python's default
-            signal.signal(s, h if h is not None else
-                          signal.default_int_handler if s == signal.SIGINT else signal.SIG_DFL)
-    if raise_after:
-        for s in dict.fromkeys(got):
-            signal.raise_signal(s)
-
-
 def _worker_main(problem: Problem, folder: str, total: int, seed: int | None, deadline: float | None,
                  worker: int, parent: int) -> int:
     """A worker process: holds a shared lock on ``.optimize.workers`` while it works (a later run
-    waits for it, :func:`_wait_for_orphans`)."""
-    with _flock(Path(folder) / WORKERS_LOCK, shared=True):
+    waits for it, :func:`_wait_for_orphans`); a stop signal interrupts its trial (which is recorded
+    so), one before or after that ends the process quietly (:mod:`cdpr_design.batch.processes`)."""
+    with stop_raises(), flock(Path(folder) / WORKERS_LOCK, shared=True), _db_errors(Path(folder)):
         done = work(problem, Path(folder), total, seed, deadline, worker, single_thread=True, parent=parent)
     if os.getppid() != parent:
         os._exit(0)  # the run was killed: nobody will hand this pool worker more work or collect it
     return done
+
+
+@contextlib.contextmanager
+def _db_errors(folder: Path):
+    """SQLite's failures on the study (a full disk or a file-size limit: "disk I/O error", "database
+    or disk is full") as a :class:`WriteError` naming ``optimize.db``, on one line."""
+    import sqlite3
+
+    try:
+        yield
+    except sqlite3.Error as exc:
+        raise _db_error(folder, exc) from None
+    except Exception as exc:
+        orig = getattr(exc, "orig", None)  # SQLAlchemy's DBAPIError around sqlite3's error
+        if isinstance(orig, sqlite3.Error):
+            raise _db_error(folder, orig) from None
+        raise
+
+
+def _db_error(folder: Path, exc: BaseException) -> WriteError:
+    return WriteError(f"cannot write {Path(folder) / DB}: {' '.join(str(exc).split())} (SQLite)")
+
+
+def _drop_new_study(folder: Path, exc: WriteError) -> WriteError:
+    """After a write error on a study this run created: the file and its SQLite companions removed
+    when no trial finished in it (the folder as it was), else kept for ``--resume`` (the message
+    says so)."""
+    path = Path(folder) / DB
+    try:
+        tables, _ = _contents(path)
+        kept = 0
+        if "trials" in tables:
+            import sqlite3
+
+            con = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True)
+            try:
+                kept = con.execute("SELECT COUNT(*) FROM trials WHERE state IN ('COMPLETE', 'FAIL')").fetchone()[0]
+            finally:
+                con.close()
+    except Exception:  # noqa: BLE001 - unreadable: nothing in it to keep
+        kept = 0
+    if kept:
+        return WriteError(f"{exc}; the {kept} trial(s) finished are kept in it (--resume continues)")
+    for suffix in ("", "-wal", "-shm", "-journal"):
+        with contextlib.suppress(OSError):
+            os.unlink(f"{path}{suffix}")
+    return exc
 
 
 def _wait_for_orphans(folder: Path, log: Callable[[str], None]) -> None:
@@ -344,7 +352,7 @@ def _wait_for_orphans(folder: Path, log: Callable[[str], None]) -> None:
     end = time.time() + ORPHAN_WAIT_S
     told = False
     while True:
-        with _flock(folder / WORKERS_LOCK, blocking=False) as free:
+        with flock(folder / WORKERS_LOCK, blocking=False) as free:
             if free:
                 return
         if time.time() > end:
@@ -412,34 +420,44 @@ def run(problem: Problem, folder: Path, total: int, *, workers: int = 1, seed: i
     log = log or (lambda msg: None)
     folder = Path(folder)
     t0 = time.perf_counter()
-    with _flock(folder / RUN_LOCK, blocking=False) as mine:
-        if not mine:
-            raise InputError(f"--out: another optimize run is using {folder}; wait for it or choose another --out")
-        _wait_for_orphans(folder, log)
-        study, before, requeued = open_study(problem, folder, resume, log)
-        stats = RunStats(requested=total, resumed=before, requeued=requeued, workers=workers)
-        if resume and before:
-            log(f"resuming: {before} of {total} trials already done"
-                + (f", {requeued} interrupted trial(s) queued again" if requeued else ""))
-        if seed is not None:
-            seed = seed + len(study.get_trials(deepcopy=False))
-        deadline = time.time() + timeout if timeout is not None else None
-        done = [before]
+    created = not (folder / DB).exists()
+    with one_run(folder / RUN_LOCK, "optimize"):
+        try:
+            with _db_errors(folder):
+                return _run(problem, folder, total, workers, seed, timeout, resume, progress, log, start_method, t0)
+        except WriteError as exc:
+            if not created:
+                raise
+            raise _drop_new_study(folder, exc) from None
 
-        def tick():
-            done[0] += 1
-            if progress is not None:
-                progress(min(done[0], total), total)
 
+def _run(problem, folder, total, workers, seed, timeout, resume, progress, log, start_method, t0) -> RunStats:
+    """:func:`run` under the run's lock."""
+    _wait_for_orphans(folder, log)
+    study, before, requeued = open_study(problem, folder, resume, log)
+    stats = RunStats(requested=total, resumed=before, requeued=requeued, workers=workers)
+    if resume and before:
+        log(f"resuming: {before} of {total} trials already done"
+            + (f", {requeued} interrupted trial(s) queued again" if requeued else ""))
+    if seed is not None:
+        seed = seed + len(study.get_trials(deepcopy=False))
+    deadline = time.time() + timeout if timeout is not None else None
+    done = [before]
+
+    def tick():
+        done[0] += 1
         if progress is not None:
-            progress(min(before, total), total)
-        if workers == 1:
-            stats.evaluated = work(problem, folder, total, seed, deadline, on_trial=tick, store=study._storage)
-        else:
-            stats.evaluated = _run_pool(problem, folder, total, workers, seed, deadline, study, progress,
-                                        start_method)
-        stats.elapsed_s = time.perf_counter() - t0
-        stats.stopped_by_timeout = len(finished(study)) < total
+            progress(min(done[0], total), total)
+
+    if progress is not None:
+        progress(min(before, total), total)
+    if workers == 1:
+        stats.evaluated = work(problem, folder, total, seed, deadline, on_trial=tick, store=study._storage)
+    else:
+        stats.evaluated = _run_pool(problem, folder, total, workers, seed, deadline, study, progress,
+                                    start_method)
+    stats.elapsed_s = time.perf_counter() - t0
+    stats.stopped_by_timeout = len(finished(study)) < total
     return stats
 
 
@@ -447,10 +465,10 @@ def _run_pool(problem, folder, total, workers, seed, deadline, study, progress, 
     """This process as worker 0 (set up already: it starts evaluating at once) and ``workers - 1``
     worker processes, each running :func:`work` on the shared study; progress by counting its trials."""
     import multiprocessing as mp
-    from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
+    from concurrent.futures import FIRST_EXCEPTION, wait
 
     before = set(mp.active_children())
-    ex = ProcessPoolExecutor(max_workers=workers - 1, mp_context=mp.get_context(start_method))
+    ex = pool(workers - 1, start_method)  # workers a Ctrl-C does not catch half-started
     interrupted = interrupted_count(study)
 
     def tick():
@@ -475,8 +493,8 @@ def _run_pool(problem, folder, total, workers, seed, deadline, study, progress, 
         return here + sum(f.result() for f in futures)
     except BaseException:
         children = [p for p in mp.active_children() if p not in before]
+        ex.shutdown(wait=False, cancel_futures=True)  # first: a worker done with its trial then ends
         _stop(children)
-        ex.shutdown(wait=False, cancel_futures=True)
         raise
 
 
