@@ -184,7 +184,7 @@ def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, o
     R = kin.rotation_matrix(*full[3:])
     Rb = np.ascontiguousarray(design.attachments @ R.T)
     A = np.ascontiguousarray(design.outlets)
-    W, cw = np.empty((n, m)), np.empty((m, KS.NCW))
+    W, cw = np.full((n, m), np.nan), np.empty((m, KS.NCW))  # cw: every column _span reads is written there
     L = np.empty(m)
     nan = np.full(m, np.nan)
     if not KS._span(full[0], full[1], full[2], Rb, A, arr.up, cw, L):
