@@ -204,3 +204,18 @@ def test_random_singular_poses_are_nan_not_garbage():
             for v in (res.cable_state.outlet_tensions, res.cable_state.unstretched_lengths, res.cable_state.sag):
                 assert np.all(np.isnan(v))
             assert np.all(np.isfinite(res.lengths)) and res.lengths[i] < 1e-9
+
+
+def test_a_taut_rope_solution_is_found():
+    """tests/test_sagging.py's 10 m robot with 5 kg/m cables and a 1 kg effector, at (5, 6): once
+    reported 'no-catenary' (the straight start asks a cable for less than its least tension), it is
+    held by the two cables pulled taut, about 1,885 N (Irvine's equations by scipy agree)."""
+    from .test_sagging import nocat_data
+
+    design = spec.from_dict(nocat_data())
+    refs = [s for s in square_solutions(design, [5.0, 6.0], scales=(1, 2, 5, 10, 20, 40, 80)) if s[3]]
+    assert len(refs) == 1
+    res = evaluate_pose(design, [5.0, 6.0])
+    assert res.cable_state.status == "ok" and res.feasible
+    np.testing.assert_allclose(res.tensions, refs[0][0], rtol=1e-8)
+    np.testing.assert_allclose(res.cable_state.outlet_tensions, refs[0][1], rtol=1e-8)

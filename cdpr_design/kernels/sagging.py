@@ -315,9 +315,13 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     status, bounded, it = _iterate(tq, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi, inf_hi,
                                    scr, work, maxit)
     if status != SAG_OK:
-        status, bounded, it2 = _continued(tq, t0, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi,
-                                          inf_hi, scr, work, maxit)
+        # the straight start can be too far (a light effector on heavy cables): follow the
+        # solution from weightless cables; if that fails too, the pose keeps its first status
+        st2, b2, it2 = _continued(tq, t0, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi,
+                                  inf_hi, scr, work, maxit)
         it += it2
+        if st2 == SAG_OK:
+            status, bounded = st2, b2
     if status != SAG_OK:
         W[:, :] = math.nan  # the shapes are not known
         return status, False, math.nan, it
@@ -507,8 +511,8 @@ def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi
     (m,) is too far from the solution for the fixed point (a light effector on heavy
     cables: at the straight tensions the cables' end forces point below the horizontal and
     no tensions balance the load, yet a solution exists at higher tensions).  A step that
-    fails is halved, down to :data:`MIN_WEIGHT_STEP`; then the pose keeps the status of
-    its last failure.  Returns :func:`_iterate`'s (status, code, iterations), ``t``
+    fails is halved, down to :data:`MIN_WEIGHT_STEP`; then it returns the status of its
+    last failure.  Returns :func:`_iterate`'s (status, code, iterations), ``t``
     (m,) holding the tensions on SAG_OK; ``t0`` and ``work[3]`` are overwritten.
     """
     m = t.shape[0]
