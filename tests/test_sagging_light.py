@@ -219,3 +219,24 @@ def test_a_taut_rope_solution_is_found():
     assert res.cable_state.status == "ok" and res.feasible
     np.testing.assert_allclose(res.tensions, refs[0][0], rtol=1e-8)
     np.testing.assert_allclose(res.cable_state.outlet_tensions, refs[0][1], rtol=1e-8)
+
+
+@pytest.mark.parametrize("position", [[-6.5, -1.0, 3.75], [-0.75, 4.5, 3.5], [6.75, 0.75, 3.75]])
+def test_cogiro_poses_the_straight_start_missed(position):
+    """CoGiRo with sagging cables: poses the fixed point did not converge to from the straight
+    start, solved by the continuation in the weight: balanced, and the minimum-norm distribution
+    for their own shapes (tests/test_sagging.check_kkt: free cables' tensions in the row space of
+    W, multipliers of the right sign at the bounds)."""
+    from cdpr_design.model.spec import with_cable_model
+
+    from .helpers import DESIGNS as D
+    from .test_sagging import check_kkt, end_forces
+
+    design = with_cable_model(spec.load(D / "cogiro.yaml"), "sagging")
+    pose = position + [0.0, 0.0, 0.0]
+    res = evaluate_pose(design, pose)
+    assert res.cable_state.status == "ok" and res.feasible
+    P, H, VB = end_forces(design, pose, res)
+    F = H[:, None] * P["u"] + VB[:, None] * P["up"]
+    np.testing.assert_allclose(columns(P, F).sum(axis=1), P["wreq"], atol=1e-9 * res.tensions.max())
+    check_kkt(design, pose, res)

@@ -90,6 +90,13 @@ CHILD = textwrap.dedent(r'''
     sweep("ipanema3", spec.load(D + "ipanema3.yaml"), step=1.0, interference=True)
     sweep("cogiro", spec.load(D + "cogiro.yaml"), step=4.0)
     sweep("crane4", spec.load(D + "crane4.yaml"), step=1.0)
+    # five and six cables in the plane (m - n = 3, 4: the Goldfarb-Idnani QP), with a wrench box
+    import numpy as np_
+    from tests.helpers import random_planar_data
+    for m in (5, 6):
+        data = random_planar_data(np_.random.default_rng(m), m, "2T")
+        data["workspace"]["external_wrench"] = {"lower": [-1.0, -1.0], "upper": [1.0, 1.0]}
+        sweep(f"planar{m}", spec.from_dict(data), kind="wrench-feasible")
     # poses on an outlet (zero-length cables) and ordinary ones
     s40 = spec.load(D + "sagging40.yaml")
     for model in ("ideal", "elastic", "sagging"):
