@@ -240,3 +240,16 @@ def test_cogiro_poses_the_straight_start_missed(position):
     F = H[:, None] * P["u"] + VB[:, None] * P["up"]
     np.testing.assert_allclose(columns(P, F).sum(axis=1), P["wreq"], atol=1e-9 * res.tensions.max())
     check_kkt(design, pose, res)
+
+
+@pytest.mark.parametrize("objective", ["min-max", "min-sum"])
+def test_other_objectives_hold_a_light_effector(objective):
+    """The other objectives' fixed point started from the straight cables too: it printed
+    'feasible' with no tensions and the structure matrix of shapes it never converged to.
+    With two cables every objective has the min-norm tensions."""
+    design = spec.from_dict(sagging40(1.0, tension=[0.0, 400.0]))
+    ref = evaluate_pose(design, [20.0, 10.0])
+    res = evaluate_pose(design, [20.0, 10.0], objective=objective)
+    assert res.cable_state.status == "ok" and res.feasible
+    np.testing.assert_allclose(res.tensions, ref.tensions, rtol=1e-9)
+    np.testing.assert_allclose(res.W, ref.W, rtol=1e-9, atol=1e-12)
