@@ -311,3 +311,35 @@ def test_trajectory_duty_cycle_uses_the_winch_side_tension(planar2):
     np.testing.assert_array_equal(cyc.tension, samples.cables.outlet_tensions)
     ok = np.isfinite(samples.tensions)
     assert ok.any() and np.all(cyc.tension[ok] > samples.tensions[ok])
+
+
+@pytest.mark.parametrize("source", ["sagging40", "planar2-3"])
+def test_sagging_wrench_closure_is_the_chords(tmp_path, source):
+    """Issue 37: a sagging wrench-closure workspace ended in a traceback (its chunks lacked the
+    cable_status column the table declared).  Closure ignores the tensions, which grow without
+    bound: every catenary straightens onto its chord, so the rows are the ideal cables' (the
+    chords'), the sagging columns are empty and every cable_status is 0."""
+    if source == "sagging40":
+        raw = spec.read_yaml(DESIGNS / "sagging40.yaml")
+        step = "2"
+    else:  # a third cable below: closure is possible in the plane
+        raw = planar2_raw()
+        raw["cables"].append({"name": "c3", "outlet": [0.75, 0.0], "attachment": [0.0, -0.06]})
+        raw.pop("plc")
+        raw["cable"]["model"] = "sagging"
+        step = "0.1"
+    outs = {}
+    for model in ("sagging", "ideal"):
+        path = write_spec(tmp_path, raw, f"{model}.yaml")
+        res = invoke("workspace", path, "--kind", "wrench-closure", "--cable-model", model, "--step", step,
+                     "--out", tmp_path / model, "--json")
+        assert res.exit_code == 0 and "Traceback" not in res.output, res.output
+        outs[model] = read_csv(tmp_path / model / "workspace.csv")
+    (hs, rs), (hi, ri) = outs["sagging"], outs["ideal"]
+    assert hs[-1] == "cable_status"
+    common = [c for c in hs if c in hi]  # the ideal under-constrained design adds its hanging tilt
+    assert common == hs[:len(common)] and len(common) == 4 + 2 * len(raw["cables"])
+    assert [r[:len(common)] for r in rs] == [[r[hi.index(c)] for c in common] for r in ri]
+    assert all(r[-1] == "0" and all(v == "" for v in r[len(common):-1]) for r in rs)
+    if source != "sagging40":
+        assert any(r[2] == "1" for r in ri)

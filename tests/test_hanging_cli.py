@@ -389,3 +389,45 @@ def test_free_needs_ideal_cables(tmp_path):
     assert res.exit_code == 2 and "--cable-model" in res.output
     res = invoke("workspace", PLANAR2, "--step", "0.1", "--out", tmp_path / "e", "--cable-model", "elastic")
     assert res.exit_code == 0 and "tilt" not in read_csv(tmp_path / "e" / "workspace.csv")[0]
+
+
+# ---------------------------------------------------------------------------
+# issue 40, finding 5: an infeasible hanging pose's margin, and the tilt limit's tolerance
+# ---------------------------------------------------------------------------
+
+def test_a_pose_rejected_for_its_tilt_does_not_pass_the_margin_check(tmp_path):
+    """With max_tilt 2 deg most of crane4's task box hangs too tilted: the task_box check fails,
+    and min_margin must fail too (it passed with the margin of the rejected poses, 258.5 N)."""
+    raw = spec.read_yaml(CRANE4)
+    raw["requirements"].update(max_tilt=2.0, min_margin=1.0)
+    path = write_spec(tmp_path, raw)
+    res = invoke("check", path, "--json")
+    assert res.exit_code == 1, res.output
+    flat = json.dumps(json.loads(res.stdout))
+    assert '"check_task_box": false' in flat and '"check_min_margin": false' in flat, flat
+    # every infeasible row's margin is negative or empty; feasible rows keep theirs
+    res = invoke("workspace", path, "--step", "0.5", "--out", tmp_path / "o", "--json")
+    assert res.exit_code == 0, res.output
+    header, rows = read_csv(tmp_path / "o" / "workspace.csv")
+    col = {h: i for i, h in enumerate(header)}
+    infeasible = [r for r in rows if r[col["feasible"]] == "0"]
+    assert infeasible and all(r[col["margin"]] == "" or float(r[col["margin"]]) < 0 for r in infeasible)
+    assert all(r[col["margin"]] != "" for r in rows if r[col["feasible"]] == "1")
+
+
+def test_max_tilt_zero_accepts_a_level_pose(tmp_path):
+    """A pose that hangs level has a computed tilt of about 1e-15 deg: --max-tilt 0 accepts it
+    (tolerance 1e-9 rad), and rejects one tilted by more."""
+    res = invoke("workspace", CRANE4, "--max-tilt", "0", "--step", "0.5", "--out", tmp_path / "o", "--json")
+    assert res.exit_code == 0, res.output
+    header, rows = read_csv(tmp_path / "o" / "workspace.csv")
+    col = {h: i for i, h in enumerate(header)}
+    level = [r for r in rows if r[col["x"]] == "2.5" and r[col["y"]] == "2"]
+    assert level and all(abs(float(r[col["tilt"]])) < 1e-12 and r[col["feasible"]] == "1" for r in level)
+    assert json.loads(res.stdout)["feasible"] == len(level)
+    raw = spec.read_yaml(CRANE4)
+    raw["requirements"]["max_tilt"] = 0.0
+    path = write_spec(tmp_path, raw)
+    level, tilted = (json.loads(invoke("pose", path, "--at", at, "--json").stdout) for at in ("2.5,2,2", "2.6,2,2"))
+    assert level["feasible"] is True and level["tilt"] < 1e-12
+    assert tilted["feasible"] is False and tilted["margin"] is None and "max_tilt" in tilted["reason"]

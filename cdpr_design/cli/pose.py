@@ -146,7 +146,8 @@ def fk(
             return
         out_console.print(summary_table(
             f"{design.name} — forward kinematics ({data['method']})",
-            [(c, float(v)) for c, v in zip(design.motion.coords, data["pose"])] + [("residual [m]", data["residual"])]
+            [(c, float(v)) for c, v in zip(design.motion.coords, data["pose"])]
+            + ([("tilt [deg]", data["tilt"])] if "tilt" in data else []) + [("residual [m]", data["residual"])]
             + [(f"tension {c} [N]", v) for c, v in data.get("tensions", {}).items()]
             + [("within tension bounds", "yes" if data["within_bounds"] else "no")]))
         return

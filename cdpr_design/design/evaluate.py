@@ -14,7 +14,8 @@ Checks (``check_<name>``: True pass, False fail, None not asked for):
 - ``min_margin``: the least capacity margin over the task box (over the
   feasible workspace when there is no task box) is at least
   ``requirements.min_margin``; an infeasible task pose has a negative margin
-  and a rank-deficient one fails;
+  or none (rank deficient, or a hanging effector rejected for its tilt or its
+  hanging tensions), and one without fails;
 - ``min_fraction``: the feasible fraction of the workspace grid is at least
   ``requirements.min_fraction``;
 - ``motors``: every axis's motor covers peak torque, RMS torque and speed with
@@ -79,7 +80,8 @@ def task_sweep(design: Design, step: float | None = None, progress=None, engine:
     """Sweep the task box: (result, least margin over every task pose).
 
     The least margin counts infeasible poses (negative margins) and is -inf
-    when a task pose has a rank-deficient structure matrix.
+    when a task pose has no margin (a rank-deficient structure matrix, or a
+    hanging effector rejected for its tilt or tensions: NaN).
     """
     g = task_grid(design, step)
     if g is None:

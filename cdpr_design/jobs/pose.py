@@ -47,10 +47,13 @@ def cable_fk_data(design, unstretched, guess=None) -> dict:
 
     res = forward(design, unstretched, guess)
     names = design.cable_names
+    free = {} if res.tilt is None else {"orientation": res.orientation, "tilt": res.tilt,
+                                        "effector_orientation": design.effector.orientation}
     return {"pose": [float(v) for v in res.pose], "residual": res.length_residual, "method": res.method,
             "cable_model": cable_model_name(design), "force_residual": res.force_residual,
             "tensions": {c: float(v) for c, v in zip(names, res.tensions)},
             "outlet_tensions": {c: float(v) for c, v in zip(names, res.outlet_tensions)},
             "slack": res.slack,
             "within_bounds": bool(np.all((res.tensions >= design.tension_min - 1e-9)
-                                         & (np.maximum(res.tensions, res.outlet_tensions) <= design.tension_max + 1e-9)))}
+                                         & (np.maximum(res.tensions, res.outlet_tensions) <= design.tension_max + 1e-9)))
+            } | free

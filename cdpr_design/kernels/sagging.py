@@ -66,6 +66,8 @@ SAG_SINGULAR = 4
 #: outlet: it exerts no force and its length is undetermined.  A heavy cable is
 #: never slack: it holds at least its least tension (:func:`least_tension`).
 SLACK = 1e-9
+#: The smallest step of the weight fraction in :func:`_continued`.
+MIN_WEIGHT_STEP = 1.0 / 256.0
 #: Equilibrium tolerance of the fixed point: |W t - w| <= SAG_TOL (1 + |w| + max t) [N].
 SAG_TOL = 1e-13
 
@@ -301,13 +303,27 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
         L0[i] = math.nan
         sag[i] = math.nan
     if not _span(px, py, pz, Rb, A, up, cw, lengths):
+        W[:, :] = math.nan  # no direction to pull in, and no shapes
         return SAG_SINGULAR, False, math.nan, 0
     _straight_columns(Rb, A, px, py, pz, rows, W)
     if _distribute(W, wreq[0], tmin, tmax, inf_hi, tq, scr) == 0:
+        W[:, :] = math.nan
         return SAG_NO_TENSIONS, False, math.nan, 0
+    t0 = work[2]
+    for i in range(m):
+        t0[i] = tq[i]
     status, bounded, it = _iterate(tq, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi, inf_hi,
                                    scr, work, maxit)
     if status != SAG_OK:
+        # the straight start can be too far (a light effector on heavy cables): follow the
+        # solution from weightless cables; if that fails too, the pose keeps its first status
+        st2, b2, it2 = _continued(tq, t0, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi,
+                                  inf_hi, scr, work, maxit)
+        it += it2
+        if st2 == SAG_OK:
+            status, bounded = st2, b2
+    if status != SAG_OK:
+        W[:, :] = math.nan  # the shapes are not known
         return status, False, math.nan, it
     for i in range(m):
         lo[i] = cw[i, _LO]
@@ -485,6 +501,54 @@ def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr,
             return SAG_NOT_CONVERGED, 0, it
         g = _gap(t, q)
     return SAG_NOT_CONVERGED, 0, maxit
+
+
+@njit
+def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit):
+    """:func:`_iterate` followed from straight cables to heavy ones: the cables' weight per
+    length is ``s w`` with s raised from 0 to 1, each step started from the tensions and
+    shapes of the last converged s.  The fallback when the straight-cable start ``t0`` [N]
+    (m,) is too far from the solution for the fixed point (a light effector on heavy
+    cables: at the straight tensions the cables' end forces point below the horizontal and
+    no tensions balance the load, yet a solution exists at higher tensions).  A step that
+    fails is halved, down to :data:`MIN_WEIGHT_STEP`; then it returns the status of its
+    last failure.  Returns :func:`_iterate`'s (status, code, iterations), ``t``
+    (m,) holding the tensions on SAG_OK; ``t0`` and ``work[3]`` are overwritten.
+    """
+    m = t.shape[0]
+    ws = work[3]
+    s = 0.0
+    ds = 0.25
+    total = 0
+    last = SAG_NOT_CONVERGED
+    for i in range(m):
+        cw[i, _TH] = math.nan
+        cw[i, _L0] = math.nan
+    while s < 1.0:
+        s1 = min(1.0, s + ds)
+        for i in range(m):
+            ws[i] = w[i] if s1 == 1.0 else s1 * w[i]
+            t[i] = t0[i]
+            # the least tension and the secant start belong to the last weight
+            cw[i, _TM] = math.nan
+            cw[i, _TAU] = math.nan
+            cw[i, _TP] = math.nan
+        status, code, it = _iterate(t, Rb, up, ws, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi,
+                                    scr, work, maxit)
+        total += it
+        if status == SAG_OK:
+            if s1 == 1.0:
+                return SAG_OK, code, total
+            s = s1
+            for i in range(m):
+                t0[i] = t[i]
+            ds = min(2.0 * ds, 1.0 - s)
+        else:
+            last = status
+            ds *= 0.5
+            if ds < MIN_WEIGHT_STEP:
+                return last, 0, total
+    return last, 0, total
 
 
 @njit

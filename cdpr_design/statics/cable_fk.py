@@ -31,7 +31,9 @@ FORCE_TOL = 1e-9
 @dataclass
 class CableFK:
     """Pose (motion coords), tensions at the effector and at the outlet [N] (0 when slack),
-    ``slack`` cable names, and the residuals: closure [m] and equilibrium [N]."""
+    ``slack`` cable names, and the residuals: closure [m] and equilibrium [N].  For an
+    effector that hangs freely, ``orientation`` (phi [rad] planar, [rx, ry, rz] [rad]
+    spatial) and ``tilt`` [deg] of the orientation it comes to rest in (else None)."""
 
     pose: np.ndarray
     tensions: np.ndarray
@@ -40,11 +42,39 @@ class CableFK:
     length_residual: float
     force_residual: float
     method: str = "levenberg-marquardt (catenary closure + equilibrium)"
+    orientation: object = None
+    tilt: float | None = None
 
 
-def _cable_frames(design: Design, pose, up):
-    """Per cable: X, Z [m], horizontal unit vector (m, 3) and R b (m, 3) at a pose."""
-    full = design.full_pose(pose)
+@dataclass(frozen=True)
+class _Unknowns:
+    """Where the unknown pose coordinates go in the full pose [x, y, z, rx, ry, rz] and the
+    wrench rows balanced: the motion's, or every position and orientation coordinate of the
+    plane or space for an effector that hangs freely (its orientation is not commanded)."""
+
+    index: tuple
+    rows: tuple
+    free: bool
+
+    def full(self, design: Design, x) -> np.ndarray:
+        if not self.free:
+            return design.full_pose(x)
+        out = np.zeros(6)
+        out[list(self.index)] = x
+        return out
+
+
+def _unknowns(design: Design) -> _Unknowns:
+    from cdpr_design.statics.hanging import hangs_freely
+
+    if hangs_freely(design):
+        idx = (0, 1, 5) if design.motion.planar else tuple(range(6))
+        return _Unknowns(idx, idx, True)
+    return _Unknowns(tuple(design.motion.pose_index), tuple(design.motion.wrench_rows), False)
+
+
+def _cable_frames(design: Design, full, up):
+    """Per cable: X, Z [m], horizontal unit vector (m, 3) and R b (m, 3) at a full pose."""
     Rb = design.attachments @ kin.rotation_matrix(*full[3:]).T
     lvec = design.outlets - full[:3] - Rb
     Z = lvec @ up
@@ -55,40 +85,74 @@ def _cable_frames(design: Design, pose, up):
     return X, Z, uh, Rb
 
 
-def _residual(x, design: Design, L0, arr, taut, wscale):
+def _gravity(design: Design, full) -> np.ndarray:
+    """The full wrench [N, N m] of gravity about the platform origin at a full pose."""
+    f = design.effector.mass * np.asarray(design.gravity, float)
+    c = kin.rotation_matrix(*full[3:]) @ np.asarray(design.effector.center_of_mass, float)
+    return np.concatenate([f, np.cross(c, f)])
+
+
+def _residual(x, design: Design, L0, arr, taut, wscale, unk: _Unknowns):
     from cdpr_design.kernels.catenary import catenary_ends
 
-    n = design.n
-    pose = x[:n]
+    n = len(unk.index)
+    full = unk.full(design, x[:n])
     idx = np.flatnonzero(taut)
     H, VB = x[n:n + idx.size], x[n + idx.size:]
-    X, Z, uh, Rb = _cable_frames(design, pose, arr.up)
-    rows = list(design.motion.wrench_rows)
+    X, Z, uh, Rb = _cable_frames(design, full, arr.up)
     res = []
-    wrench = kin.gravity_wrench(design, pose).astype(float)
+    wrench = _gravity(design, full)
     for k, i in enumerate(idx):
         xc, zc = catenary_ends(abs(H[k]), VB[k], L0[i], arr.w[i], arr.EA[i])
         res += [(xc - X[i]) / max(L0[i], 1e-3), (zc - Z[i]) / max(L0[i], 1e-3)]
         F = abs(H[k]) * uh[i] + VB[k] * arr.up
-        wrench += np.concatenate([F, np.cross(Rb[i], F)])[rows]
-    return np.concatenate([np.asarray(res), wrench / wscale])
+        wrench += np.concatenate([F, np.cross(Rb[i], F)])
+    return np.concatenate([np.asarray(res), wrench[list(unk.rows)] / wscale])
 
 
-def _start(design: Design, L0, guess):
-    """The straight-cable pose of the lengths and its minimum-norm tensions (or a positive guess)."""
+def _start(design: Design, L0, guess, unk: _Unknowns):
+    """A start: the unknown pose coordinates, tensions [N] (m,) and the cables the start leaves
+    slack.  For an effector that hangs freely, where it rests on ideal cables of the lengths
+    L0 (:func:`cdpr_design.statics.hanging.equilibrium`), when they reach; else the
+    straight-cable pose of the lengths and its minimum-norm tensions (or a positive guess)."""
     from cdpr_design.statics.tension import min_norm_above
 
+    if unk.free:
+        from cdpr_design.statics import hanging as H
+
+        try:
+            options = {"nominal": kin.pose_rotation(design, guess)} if guess is not None else {}
+            e = H.equilibrium(design, L0, **options)
+        except InputError:
+            e = None
+        if e is not None:
+            ori = np.atleast_1d(np.asarray(e.orientation, float))
+            slack = np.zeros(design.m, bool)
+            slack[list(e.slack)] = True
+            return np.concatenate([e.position, ori]), np.maximum(e.tensions, 1e-3), slack
     fk = kin.forward_kinematics(design, L0, guess=guess)
     W = kin.structure_matrix(design, fk.pose)
     t = min_norm_above(W, -kin.gravity_wrench(design, fk.pose), np.zeros(design.m))
     if t is None:
         t = np.full(design.m, design.effector.mass * np.linalg.norm(design.gravity) / max(design.m, 1))
-    return fk.pose, np.maximum(t, 1e-3)
+    x = np.asarray(fk.pose, float)
+    if unk.free:  # the position, at the nominal orientation
+        full = design.full_pose(fk.pose)
+        x = full[list(unk.index)]
+    return x, np.maximum(t, 1e-3), np.zeros(design.m, bool)
+
+
+#: A slack cable's chord may exceed its unstretched length by this much (relative) [-].
+SLACK_TOL = 1e-12
 
 
 def forward(design: Design, unstretched, guess=None) -> CableFK:
     """The pose [m, rad] of a design with elastic or sagging cables of unstretched lengths ``unstretched`` [m].
 
+    The effector's force and moment balance (every row of its motion; an effector that
+    hangs freely, ``effector.orientation: free``, also finds its orientation from the
+    moment balance).  A weightless cable whose chord is shorter than its length is slack
+    (no force); no cable is ever reported slack while its chord is longer than its length.
     Raises :class:`InputError` naming ``--lengths`` when no equilibrium is found
     (the residuals say how far the best attempt was).
     """
@@ -104,33 +168,66 @@ def forward(design: Design, unstretched, guess=None) -> CableFK:
     if L0.size != design.m or not np.all(np.isfinite(L0)) or np.any(L0 <= 0):
         raise InputError(f"--lengths: expected {design.m} positive unstretched lengths [m], got {list(L0)}")
     arr = cable_arrays(design)
-    p0, t0 = _start(design, L0, guess)
-    X, Z, uh, _ = _cable_frames(design, p0, arr.up)
+    unk = _unknowns(design)
+    n = len(unk.index)
+    p0, t0, slack0 = _start(design, L0, guess, unk)
+    X, Z, _, _ = _cable_frames(design, unk.full(design, p0), arr.up)
     chord = np.hypot(X, Z)
     ch = np.where(chord > 0, X / np.maximum(chord, 1e-300), 0.0)
     H0, V0 = t0 * ch, t0 * np.where(chord > 0, Z / np.maximum(chord, 1e-300), 1.0)
-    taut = np.ones(design.m, dtype=bool)
+    # cables the start leaves slack begin outside the equations if they can be slack (weightless)
+    taut = ~(slack0 & (arr.w == 0))
     wscale = 1.0 + design.effector.mass * float(np.linalg.norm(design.gravity))
-    for _ in range(design.m + 1):
+    tried = set()
+    for _ in range(2 * design.m + 2):
+        tried.add(taut.tobytes())
         x0 = np.concatenate([p0, H0[taut], V0[taut]])
-        sol = least_squares(_residual, x0, args=(design, L0, arr, taut, wscale), method="lm",
+        sol = least_squares(_residual, x0, args=(design, L0, arr, taut, wscale, unk), method="lm",
                             xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200 * (x0.size + 1))
-        n, k = design.n, int(taut.sum())
+        k = int(taut.sum())
         p0 = sol.x[:n]
         H0[taut], V0[taut] = np.abs(sol.x[n:n + k]), sol.x[n + k:]
-        X, Z, _, _ = _cable_frames(design, p0, arr.up)
-        slack_now = taut & (arr.w == 0) & (np.hypot(X, Z) <= L0)
-        if not slack_now.any():
+        X, Z, _, _ = _cable_frames(design, unk.full(design, p0), arr.up)
+        chord = np.hypot(X, Z)
+        # a slack cable longer than its chord: it is stretched, so it pulls
+        stretched = ~taut & (chord > L0 * (1.0 + SLACK_TOL))
+        if _converged(sol.fun, L0, taut, wscale) and not stretched.any():
             break
-        taut &= ~slack_now
-    return _result(design, sol.fun, p0, H0[taut], V0[taut], L0, arr, taut, wscale)
+        nxt = taut | stretched
+        if not stretched.any():  # not converged: leave out the weightless cables shorter than their chords
+            nxt = taut & ~((arr.w == 0) & (chord < L0))
+        if nxt.tobytes() in tried:
+            break
+        H0[nxt & ~taut] = 1e-3 * X[nxt & ~taut] / np.maximum(chord[nxt & ~taut], 1e-300)
+        V0[nxt & ~taut] = 1e-3 * Z[nxt & ~taut] / np.maximum(chord[nxt & ~taut], 1e-300)
+        taut = nxt
+    return _result(design, sol.fun, p0, H0[taut], V0[taut], L0, arr, taut, wscale, unk)
 
 
-def _result(design: Design, fun, pose, H, VB, L0, arr, taut, wscale) -> CableFK:
+def _residuals(fun, L0, taut, wscale) -> tuple:
+    """(closure [m], equilibrium [N]) residuals of a solve."""
     idx = np.flatnonzero(taut)
     nres = 2 * idx.size
     length_res = float(np.max(np.abs(fun[:nres]) * np.maximum(L0[idx].repeat(2), 1e-3))) if nres else 0.0
     force_res = float(np.max(np.abs(fun[nres:])) * wscale) if fun.size > nres else 0.0
+    return length_res, force_res
+
+
+def _converged(fun, L0, taut, wscale) -> bool:
+    length_res, force_res = _residuals(fun, L0, taut, wscale)
+    return length_res <= LENGTH_TOL and force_res <= FORCE_TOL * wscale
+
+
+def _result(design: Design, fun, x, H, VB, L0, arr, taut, wscale, unk: _Unknowns) -> CableFK:
+    from cdpr_design.statics.hanging_results import orientation_of, tilt_of
+
+    idx = np.flatnonzero(taut)
+    length_res, force_res = _residuals(fun, L0, taut, wscale)
+    full = unk.full(design, x)
+    X, Z, _, _ = _cable_frames(design, full, arr.up)
+    over = ~taut & (np.hypot(X, Z) > L0 * (1.0 + SLACK_TOL))
+    if over.any():  # never a pose where a cable with no force spans more than its length
+        length_res = max(length_res, float(np.max(np.hypot(X, Z)[over] - L0[over])))
     if not (length_res <= LENGTH_TOL and force_res <= FORCE_TOL * wscale):
         raise InputError(f"--lengths: no equilibrium with these unstretched lengths (best attempt: closure "
                          f"residual {length_res:.3g} m, force residual {force_res:.3g} N)")
@@ -139,4 +236,9 @@ def _result(design: Design, fun, pose, H, VB, L0, arr, taut, wscale) -> CableFK:
     t_eff[idx] = np.hypot(H, VB)
     t_out[idx] = np.hypot(H, VB + arr.w[idx] * L0[idx])
     names = [design.cable_names[i] for i in np.flatnonzero(~taut)]
-    return CableFK(np.asarray(pose, float), t_eff, t_out, names, length_res, force_res)
+    if not unk.free:
+        return CableFK(np.asarray(x, float), t_eff, t_out, names, length_res, force_res)
+    R = kin.rotation_matrix(*full[3:])
+    pose = full[list(design.motion.pose_index)]
+    return CableFK(pose, t_eff, t_out, names, length_res, force_res,
+                   orientation=orientation_of(R, design.motion.planar), tilt=tilt_of(R, arr.up))

@@ -168,12 +168,17 @@ def sagging_structures(design: Design, positions3: np.ndarray, orientation) -> t
     return feas.astype(bool), W, t, ta
 
 
-def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, objective: str, weights):
+def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, objective: str, weights,
+                          start: np.ndarray | None = None):
     """Tensions [N] of another objective (min-max, min-sum, weighted) with sagging cables.
 
     The same fixed point as the kernel's, with the objective's distribution
     (:func:`cdpr_design.statics.tension.tensions_for_objective`) in place of
-    the minimum-norm one.  Returns (tensions or None, W, CableState).
+    the minimum-norm one, started from the shapes of the effector-end tensions
+    ``start`` (m,) [N] (the converged minimum-norm ones: the straight tensions can
+    be too far, see :func:`cdpr_design.kernels.sagging._continued`), else from the
+    straight cables.  Returns (tensions or None, W, CableState); W is NaN unless
+    the tensions converged.
     """
     from cdpr_design.kernels import sagging as KS
     from cdpr_design.statics import kinematics as kin
@@ -184,20 +189,25 @@ def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, o
     R = kin.rotation_matrix(*full[3:])
     Rb = np.ascontiguousarray(design.attachments @ R.T)
     A = np.ascontiguousarray(design.outlets)
-    W, cw = np.empty((n, m)), np.empty((m, KS.NCW))
+    W, cw = np.full((n, m), np.nan), np.empty((m, KS.NCW))  # cw: every column _span reads is written there
     L = np.empty(m)
     nan = np.full(m, np.nan)
     if not KS._span(full[0], full[1], full[2], Rb, A, arr.up, cw, L):
         return None, W, CableState(nan, nan.copy(), nan.copy(), "singular")
-    KS._straight_columns(Rb, A, full[0], full[1], full[2], design.rows, W)
     lo, hi = design.tension_min, design.tension_max
+    if start is not None and KS.shapes_for(np.array(start, float), Rb, arr.up, arr.w, arr.EA, lo, hi,
+                                           design.rows, cw, W, 60):
+        lo, hi = cw[:, KS._LO].copy(), cw[:, KS._HI].copy()
+    else:
+        KS._straight_columns(Rb, A, full[0], full[1], full[2], design.rows, W)
     t = tensions_for_objective(W.copy(), wreq0, lo, hi, objective, weights)
+    unknown = np.full((n, m), np.nan)
     for _ in range(MAX_ITERATIONS):
         if t is None:
-            return None, W, CableState(nan, nan.copy(), nan.copy(), "no-tensions")
+            return None, unknown, CableState(nan, nan.copy(), nan.copy(), "no-tensions")
         if not KS.shapes_for(t, Rb, arr.up, arr.w, arr.EA, design.tension_min, design.tension_max,
                              design.rows, cw, W, 60):
-            return None, W, CableState(nan, nan.copy(), nan.copy(), "no-catenary")
+            return None, unknown, CableState(nan, nan.copy(), nan.copy(), "no-catenary")
         lo, hi = cw[:, KS._LO].copy(), cw[:, KS._HI].copy()
         t2 = tensions_for_objective(W.copy(), wreq0, lo, hi, objective, weights)
         if t2 is not None and np.max(np.abs(t2 - t)) <= 1e-9 * max(1.0, np.max(np.abs(t))):
@@ -205,7 +215,7 @@ def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, o
                             for i in range(m)])
             return t, W, CableState(cw[:, KS._TA].copy(), cw[:, KS._L0].copy(), sag)
         t = t2
-    return None, W, CableState(nan, nan.copy(), nan.copy(), "not-converged")
+    return None, unknown, CableState(nan, nan.copy(), nan.copy(), "not-converged")
 
 
 @dataclass

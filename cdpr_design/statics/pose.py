@@ -173,7 +173,7 @@ def _sagging_pose(design: Design, pose, full, kind: str, wreq, objective: str, w
     feasible, margin, t, L, W, state = cables.sagging_pose(design, full, wreq, combinations(design.m, design.n),
                                                            KINDS[kind])
     if (objective != "min-norm" or weights is not None) and feasible:
-        t2, W, state = cables.sagging_for_objective(design, full, wreq[0], objective, weights)
+        t2, W, state = cables.sagging_for_objective(design, full, wreq[0], objective, weights, start=t)
         t = np.full(design.m, np.nan) if t2 is None else t2
     return PoseResult(np.asarray(pose, float), L, t, bool(feasible), float(margin), W, wreq[0],
                       collisions(design, pose), tuple(design.cable_names), "sagging", state)

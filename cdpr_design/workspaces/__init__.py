@@ -20,7 +20,7 @@ from cdpr_design.statics import cables as cable_models
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.pose import KINDS, check_kind
 from cdpr_design.workspaces import hanging
-from cdpr_design.workspaces.cables import ElasticColumns, cable_summary, sweep_sagging
+from cdpr_design.workspaces.cables import ChordColumns, ElasticColumns, cable_summary, sweep_sagging
 from cdpr_design.workspaces.engine import ENGINES, check_engine, load_kernels, resolve
 from cdpr_design.workspaces.engine import sweep as straight_sweep
 from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, chunk_extra,
@@ -125,8 +125,8 @@ def _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interfere
     if model == "sagging" and kind != "wrench-closure":
         return sweep_sagging(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
                              chunk=chunk, keep_maps=keep_maps)
-    if model != "ideal":
-        on_chunk = ElasticColumns(design, on_chunk)
+    if model != "ideal":  # sagging here: wrench closure, from the chords
+        on_chunk = (ChordColumns if model == "sagging" else ElasticColumns)(design, on_chunk)
     if interference or kin.has_pulleys(design):
         from cdpr_design.workspaces.hardware import run_hardware  # numba kernels, loaded on first use
 
@@ -136,7 +136,7 @@ def _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interfere
         res = straight_sweep(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
                              chunk=chunk, keep_maps=keep_maps, engine=engine)
     if model != "ideal":
-        res.extra.update(cable_summary(design, None, res.max_tension))
+        res.extra.update(cable_summary(design, None, res.max_tension if model == "elastic" else None))
     return res
 
 

@@ -56,6 +56,22 @@ class ElasticColumns:
             self.on_chunk(ch)
 
 
+class ChordColumns:
+    """Wraps ``on_chunk`` of a straight-cable ``wrench-closure`` sweep of sagging cables: closure
+    ignores the tensions (as they grow without bound every catenary straightens onto its chord),
+    so the rows are the chords' and the cables have no shapes: the sagging columns are empty and
+    ``cable_status`` is 0 (nothing was solved that could fail)."""
+
+    def __init__(self, design: Design, on_chunk: Callable[[Chunk], None] | None):
+        self.design, self.on_chunk = design, on_chunk
+
+    def __call__(self, ch: Chunk) -> None:
+        empty = np.full(ch.tensions.shape, np.nan)
+        ch.extra.update(_extra(self.design, empty, empty, empty, np.zeros(len(empty), dtype=np.int8)))
+        if self.on_chunk is not None:
+            self.on_chunk(ch)
+
+
 def cable_summary(design: Design, status_counts: np.ndarray | None, outlet_peak: np.ndarray | None) -> dict:
     """The keys a non-ideal cable model adds to the workspace summary."""
     out: dict = {"cable_model": cables.design_model(design)}

@@ -30,6 +30,7 @@ grid is never held in memory.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -290,8 +291,21 @@ def free_rows(design: Design, P, hanger: "_Hanger", limit: float | None) -> Free
         # the margin's verdict where the motion's rows have one, with the hanging tensions' tolerance: a
         # cable that hangs slack in theory (tension 0 at its bound 0) is not decided by rounding
         within &= (marg >= -tol) | ~np.isfinite(marg)
-        upright = within if limit is None else within & (extra["tilt"] <= limit)
+        upright = within if limit is None else within & within_tilt(extra["tilt"], limit)
+        # an infeasible pose's margin says so: its own negative verdict, else empty (it is rejected
+        # for its tilt or its hanging tensions, which the capacity margin does not measure)
+        marg = np.where(upright | (marg < 0), marg, np.nan)
     return FreeRows(h, extra, upright.astype(np.uint8), marg, np.where(upright[:, None], t, np.nan), L, within)
+
+
+#: Tolerance [deg] of the tilt limit: a pose tilted by at most ``max_tilt + TILT_TOL_DEG`` is
+#: within it (1e-9 rad: a level effector's computed tilt is round-off, about 1e-15 deg).
+TILT_TOL_DEG = math.degrees(1e-9)
+
+
+def within_tilt(tilt, limit: float):
+    """Whether tilts [deg] are within the limit [deg] (:data:`TILT_TOL_DEG`); NaN is not."""
+    return np.asarray(tilt) <= limit + TILT_TOL_DEG
 
 
 def _free_sweep(design, g, ori, hanger, limit, stats, tilt_maps, on_chunk, progress, chunk, keep_maps):
