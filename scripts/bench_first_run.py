@@ -52,8 +52,9 @@ process from an empty cache (``workspaces.warm_up`` or the first ``workspaces.ru
 
 - the grid sweep's block in Python (``kernels.sweep._GridBlock``) instead of a compiled block
   around the compiled loop, which compiled the whole loop into its own module a second time:
-  32.9 -> 30.1 (the two side by side, load 17) and 24.6 -> 21.5 (one after the other, with the
-  next change); warm 2.99 -> 2.92 us a pose; in the whole command above, within the noise.  Kept.
+  32.38 and 32.41 -> 28.96 and 28.83 (-11 %; two pairs, the four processes side by side), 32.9
+  -> 30.1 in another pair; warm 2.99 -> 2.92 us a pose (one thread, best of 7); in the whole
+  command above, one run each at different loads, within the noise.  Kept.
 - ``hsm_two`` / ``hsm_one`` with one body and the closure flag read at run time instead of two
   inlined copies with the flag a constant: 34.2 -> 24.6, the largest gain found, but IPAnema 3's
   ``max_margin`` changed in its last bit (1654.7038865822271 -> 1654.703886582227, the CSV
