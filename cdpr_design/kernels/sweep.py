@@ -53,9 +53,10 @@ class _GridBlock:
     """Rows k0..k1-1 of :func:`sweep_grid`: the block's buffers, then ``loop`` over its poses.
 
     Python, not compiled: a compiled function carries the machine code of everything it
-    calls, optimised and emitted again with it, so a compiled block around the loop doubled
-    the loop's compile (IPAnema 3: 2-3 CPU-s of a cold start); from Python, the buffers and the
-    call cost tens of microseconds a block."""
+    calls, optimised and emitted again with it, so a compiled block around the loop compiled
+    the loop a second time (IPAnema 3's kernels from an empty cache: 32.4 -> 28.9 CPU-s,
+    ``scripts/bench_first_run.py``); from Python, the buffers and the call cost tens of
+    microseconds a block."""
 
     def __init__(self, loop):
         self.loop = loop
