@@ -33,7 +33,7 @@ print(repr(t.tolist()), sum(K.eval_square.stats.cache_hits.values()))
 
 
 def test_kernels_are_stamped_with_the_package_digest():
-    for fn in (K.eval_square, K.eval_general, K.sweep_grid.__globals__["grid_block"](2), K.min_norm_tensions):
+    for fn in (K.eval_square, K.eval_general, K.sweep_grid.__globals__["grid_block"](2).loop, K.min_norm_tensions):
         locator = fn._cache._impl._locator
         assert isinstance(locator, _jit._PackageStamp), type(locator)
         assert locator.get_source_stamp() == ("cdpr-design kernels", _jit.source_digest())

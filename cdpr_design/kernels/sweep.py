@@ -29,16 +29,16 @@ def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, 
 
 
 def grid_block(r: int):
-    """The kernel computing rows k0..k1-1 of :func:`sweep_grid` for m - n = ``r``.
+    """The block function computing rows k0..k1-1 of :func:`sweep_grid` for m - n = ``r``.
 
-    One per redundancy of 0, 1 and 2, each with ``r`` a constant in
+    One loop per redundancy of 0, 1 and 2, each with ``r`` a constant in
     :func:`_grid_loop` and so compiled with only its own margin and QP method
     (:func:`~cdpr_design.kernels.pose.eval_general`); any other ``r`` takes the
     general one.  Chosen here, in Python, so that a design compiles only the
-    kernel it uses.  A pose of IPAnema 3 (r = 2) took 3.56 us on one core
+    loop it uses.  A pose of IPAnema 3 (r = 2) took 3.56 us on one core
     with one kernel for every r, 2.62 us with its own.
 
-    Each block function allocates the block's buffers
+    The block (:class:`_GridBlock`) allocates the block's buffers
     (:func:`~cdpr_design.kernels.pose.row_buffers`) and hands them to its loop
     over the poses, compiled without reference counting
     (:data:`~cdpr_design.kernels._jit.njit_noref`): every array a pose's code
@@ -46,15 +46,32 @@ def grid_block(r: int):
     atomic increment and decrement per pose.  IPAnema 3: 2.66 -> 1.21 us a pose
     on one core.
     """
-    return {0: _grid_rows_0, 1: _grid_rows_1, 2: _grid_rows_2}.get(r, _grid_rows_any)
+    return _GridBlock({0: _grid_loop_0, 1: _grid_loop_1, 2: _grid_loop_2}.get(r, _grid_loop_any))
 
 
-@njit
-def _grid_rows_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+class _GridBlock:
+    """Rows k0..k1-1 of :func:`sweep_grid`: the block's buffers, then ``loop`` over its poses.
+
+    Python, not compiled: a compiled function carries the machine code of everything it
+    calls, optimised and emitted again with it, so a compiled block around the loop compiled
+    the loop a second time (IPAnema 3's kernels from an empty cache: 32.4 -> 28.9 CPU-s,
+    ``scripts/bench_first_run.py``); from Python, the buffers and the call cost tens of
+    microseconds a block."""
+
+    def __init__(self, loop):
+        self.loop = loop
+
+    @property
+    def signatures(self) -> list:
+        """The loop's compiled signatures (:func:`~cdpr_design.kernels.parallel.run_blocks`
+        runs the first block of a loop not compiled yet on the calling thread)."""
+        return self.loop.signatures
+
+    def __call__(self, k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths):
-    W, t, L, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
-    _grid_loop_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                 feasible, margin, tensions, lengths, W, t, L, scr)
+        W, t, L, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+        self.loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+                  feasible, margin, tensions, lengths, W, t, L, scr)
 
 
 @njit_noref
@@ -64,14 +81,6 @@ def _grid_loop_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tma
                feasible, margin, tensions, lengths, W, t, L, scr, 2)
 
 
-@njit
-def _grid_rows_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                 feasible, margin, tensions, lengths):
-    W, t, L, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
-    _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                 feasible, margin, tensions, lengths, W, t, L, scr)
-
-
 @njit_noref
 def _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths, W, t, L, scr):
@@ -79,27 +88,11 @@ def _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tma
                feasible, margin, tensions, lengths, W, t, L, scr, 1)
 
 
-@njit
-def _grid_rows_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                 feasible, margin, tensions, lengths):
-    W, t, L, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
-    _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                 feasible, margin, tensions, lengths, W, t, L, scr)
-
-
 @njit_noref
 def _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                  feasible, margin, tensions, lengths, W, t, L, scr):
     _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
                feasible, margin, tensions, lengths, W, t, L, scr, 0)
-
-
-@njit
-def _grid_rows_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                   feasible, margin, tensions, lengths):
-    W, t, L, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
-    _grid_loop_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                   feasible, margin, tensions, lengths, W, t, L, scr)
 
 
 @njit_noref

@@ -1,0 +1,177 @@
+#!/usr/bin/env python3
+"""Benchmark: the first ``workspace`` run of every shipped design, cold and warm, against a baseline.
+
+For every design in ``designs/*.yaml``, ``python -m cdpr_design workspace DESIGN --json`` in a
+new process (:func:`bench_outputs.command`: wall time, and CPU time -- user + system -- of the
+command's process and the processes it waits for):
+
+1. cold: with ``NUMBA_CACHE_DIR`` a new, empty folder (every kernel the design uses compiled);
+2. warm: the same folder again (loaded from numba's cache), ``--repeat`` times, the median;
+3. the total compile: one new folder for all designs run one after the other, so that each
+   kernel is compiled once, by the first design that needs it; the total is the sum over the
+   designs of (that run's CPU - the design's warm CPU).
+
+``--root DIR`` runs the same for another checkout first (e.g. the previous version: ``git
+worktree add /tmp/base <commit>``), in the same run of this script, and prints the ratios
+baseline / this checkout; it also compares their outputs (``workspace.csv`` and
+``summary.json`` without its times): a change to how the kernels compile must not change
+a number.  CPU time is the figure to trust on a shared machine; the load average is printed
+before each checkout.
+
+    python3 scripts/bench_first_run.py [--root DIR] [--repeat 3] [--designs planar2,ipanema3] [--no-total]
+
+CPU is the command's process (the picture process, which it does not wait for, is not in it).
+
+Figures (the 2-core development machine shared with five other sessions: load average 7-17
+throughout, so the wall times are mostly waiting and the CPU times are inflated too).  Every
+shipped design, ea1dd26 alone (``--repeat 2``, load average 5-9 at the start)::
+
+    design       cold wall  cold CPU  warm wall  warm CPU
+    cogiro         114.3 s    30.8 s     7.49 s    1.32 s
+    crane4         173.8 s    59.3 s    18.12 s    7.57 s
+    ipanema1       126.7 s    30.5 s    11.70 s    1.87 s
+    ipanema2       115.7 s    26.9 s     9.28 s    1.06 s
+    ipanema3       158.6 s    31.7 s     7.28 s    1.23 s
+    planar2          9.1 s     1.0 s    10.29 s    0.91 s   (numpy engine: no kernel)
+    planar4        118.3 s    23.7 s     9.17 s    1.17 s
+    pointmass3      61.2 s    12.5 s    10.55 s    0.99 s
+    sagging40      378.2 s   108.2 s    28.51 s    8.42 s
+    cold compile of every kernel the designs use (one cache): 133.8 CPU-s
+
+Before (``--root`` at ea1dd26) and after (the grid sweep's Python block, below), one run
+(``--designs ipanema3,pointmass3,planar2 --repeat 2 --no-total``, load average 9.2 / 7.7)::
+
+    design       cold wall          cold CPU           warm wall         warm CPU          outputs
+    ipanema3     60.1 -> 47.5 s     28.0 -> 29.6 s     8.18 -> 3.93 s    1.27 -> 1.19 s    identical
+    pointmass3   29.9 -> 17.8 s     13.1 -> 11.0 s     3.99 -> 3.99 s    0.99 -> 1.06 s    identical
+    planar2       4.0 -> 4.4 s       1.0 -> 1.1 s      4.00 -> 4.22 s    1.02 -> 1.04 s    identical
+
+The targets of issue 36 (IPAnema 3's first run <= 10 s on two cores, every kernel's compile
+<= 30 s) are not met.  What was tried, each measured on IPAnema 3's kernels compiled in one
+process from an empty cache (``workspaces.warm_up`` or the first ``workspaces.run``, CPU-s):
+
+- the grid sweep's block in Python (``kernels.sweep._GridBlock``) instead of a compiled block
+  around the compiled loop, which compiled the whole loop into its own module a second time:
+  32.38 and 32.41 -> 28.96 and 28.83 (-11 %; two pairs, the four processes side by side), 32.9
+  -> 30.1 in another pair; warm 2.99 -> 2.92 us a pose (one thread, best of 7); in the whole
+  command above, one run each at different loads, within the noise.  Kept.
+- ``hsm_two`` / ``hsm_one`` with one body and the closure flag read at run time instead of two
+  inlined copies with the flag a constant: 34.2 -> 24.6, the largest gain found, but IPAnema 3's
+  ``max_margin`` changed in its last bit (1654.7038865822271 -> 1654.703886582227, the CSV
+  identical): a compile change must not change a number.  Dropped.
+- the two copies as functions specialised on the flag (numba specialises a literal argument)
+  instead of inlined: bit-identical, and 30.3 against 30.1: nothing.  Dropped.
+- one loop function for every m - n with ``numba.literally(r)`` instead of four wrappers: numba's
+  branch pruning does not reach into the inlined pose function, so every margin and QP method
+  was compiled: 48.  Dropped.
+- ``NUMBA_OPT`` 2 and 1 (LLVM's optimisation level, default 3): 20.8 and 19.7 against 21.5, warm
+  2.64 and 3.48 us a pose: LLVM is not where the time goes.  A profile of the compile puts it in
+  numba's own Python passes: type inference, lowering, and 15-18 % in copying the IR of the
+  ``inline="always"`` functions (numba deep-copies every block with the whole scope, per inlined
+  call and per level of nesting).  Dropped.
+- without ``cdpr_design.numba_startup`` (numba's own cache loading): IPAnema 3 warm, 5
+  interleaved pairs, CPU of all processes (``perf stat``), 2.37 (2.26-2.64) -> 3.02 (2.94-3.24)
+  CPU-s; this script's warm CPU of the command 1.14 -> 1.68 (IPAnema 3), 0.84 -> 1.38
+  (pointmass3), 0.90 -> 1.38 (IPAnema 2).  It matters to a user; it stays where it was.
+"""
+
+from __future__ import annotations
+
+import argparse
+import filecmp
+import json
+import os
+import statistics
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_outputs import ROOT, command  # noqa: E402  (the command in a new process, timed)
+
+
+def run(root: Path, design: str, out: Path, cache: Path) -> tuple[float, float]:
+    """(wall, CPU) [s] of ``workspace`` on ``root``'s ``designs/<design>.yaml`` with numba's cache in ``cache``."""
+    (wall, cpu), _ = command(root, root / "designs" / f"{design}.yaml", None, "csv", str(out), str(cache))
+    return wall, cpu
+
+
+def first_runs(root: Path, designs: list[str], tmp: Path, repeat: int, total: bool) -> dict:
+    """Per design: ``cold`` and ``warm`` (wall, CPU) [s], and ``out`` (the cold run's folder);
+    with ``total``, ``compile`` (CPU [s] of the design's kernels not compiled by an earlier design)."""
+    res = {}
+    for name in designs:
+        cache = Path(tempfile.mkdtemp(dir=tmp))
+        out = tmp / f"{name}.out"
+        cold = run(root, name, out, cache)
+        warm = [run(root, name, tmp / "warm.out", cache) for _ in range(repeat)]
+        res[name] = {"cold": cold, "out": out,
+                     "warm": (statistics.median(w for w, _ in warm), statistics.median(c for _, c in warm))}
+        print(f"  {name:12s} cold {cold[0]:6.1f} s wall {cold[1]:6.1f} CPU-s, warm {res[name]['warm'][0]:5.2f} s "
+              f"wall {res[name]['warm'][1]:5.2f} CPU-s", flush=True)
+    if total:
+        cache = Path(tempfile.mkdtemp(dir=tmp))
+        for name in designs:
+            res[name]["compile"] = max(0.0, run(root, name, tmp / "total.out", cache)[1] - res[name]["warm"][1])
+    return res
+
+
+def same_outputs(a: Path, b: Path) -> bool:
+    """``workspace.csv`` byte-identical and ``summary.json`` equal without its times (``timings``,
+    ``elapsed_s``)."""
+    def summary(folder):
+        s = json.loads((folder / "summary.json").read_text())
+        for key in ("timings", "elapsed_s"):
+            s.pop(key, None)
+        return s
+
+    return filecmp.cmp(a / "workspace.csv", b / "workspace.csv", shallow=False) and summary(a) == summary(b)
+
+
+def table(designs: list[str], before: dict | None, after: dict) -> None:
+    """The cold / warm table (and the total compile), with ratios before / after when there is a before."""
+    def cell(res, name, what, i):
+        return f"{res[name][what][i]:.2f}" if what == "warm" else f"{res[name][what][i]:.1f}"
+
+    cols = [("cold wall", "cold", 0), ("cold CPU", "cold", 1), ("warm wall", "warm", 0), ("warm CPU", "warm", 1)]
+    print(f"\n{'design':12s}" + "".join(f"{h:>24s}" for h, _, _ in cols) + ("   outputs" if before else ""))
+    for name in designs:
+        row = f"{name:12s}"
+        for _, what, i in cols:
+            text = cell(after, name, what, i)
+            if before:
+                text = f"{cell(before, name, what, i)} -> {text} ({before[name][what][i] / after[name][what][i]:.1f}x)"
+            row += f"{text:>24s}"
+        if before:
+            row += "   identical" if same_outputs(before[name]["out"], after[name]["out"]) else "   DIFFER"
+        print(row)
+    if "compile" in after[designs[0]]:
+        total = sum(after[n]["compile"] for n in designs)
+        text = f"{total:.1f} CPU-s"
+        if before:
+            was = sum(before[n]["compile"] for n in designs)
+            text = f"{was:.1f} -> {text} ({was / total:.1f}x)"
+        print(f"\ncold compile of every kernel the designs use (one cache, CPU - warm CPU): {text}")
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--root", help="baseline checkout, timed first (default: none)")
+    ap.add_argument("--designs", help="comma-separated design names (default: every designs/*.yaml)")
+    ap.add_argument("--repeat", type=int, default=3, help="warm runs per design (the median is shown)")
+    ap.add_argument("--no-total", dest="total", action="store_false", help="skip the total compile")
+    args = ap.parse_args(argv)
+    designs = args.designs.split(",") if args.designs else sorted(p.stem for p in (ROOT / "designs").glob("*.yaml"))
+    with tempfile.TemporaryDirectory() as tmp:
+        results = {}
+        for label, root in ([("before", Path(args.root).resolve())] if args.root else []) + [("after", ROOT)]:
+            print(f"{label}: {root}, load average {os.getloadavg()[0]:.2f}", flush=True)
+            folder = Path(tmp) / label
+            folder.mkdir()
+            results[label] = first_runs(root, designs, folder, args.repeat, args.total)
+        table(designs, results.get("before"), results["after"])
+
+
+if __name__ == "__main__":
+    main()
