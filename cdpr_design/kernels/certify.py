@@ -1,0 +1,393 @@
+"""Interval tests of a box of positions: every pose feasible (``inside``), none (``outside``), or
+neither proven (``undecided``).
+
+A box of platform positions X at one fixed orientation, with outlets A_i and
+rotated attachments R b_i each in a box of its own (geometric tolerances;
+points when there are none).  Everything that decides is computed with the
+outward-rounded interval operations of :mod:`cdpr_design.kernels.interval`;
+floating-point values at the box's centre only *choose* what to test (a
+facet normal, a basis of cables, the tensions of the other cables), and any
+choice gives a valid proof.
+
+Structure matrix over the box.  Column i is [u_i ; (R b_i) x u_i] with
+u_i = d_i / |d_i|, d_i = A_i - R b_i - p.  Each component of u_i is enclosed
+exactly for independent component intervals of d_i
+(:func:`~cdpr_design.kernels.interval.unit_component`: it is monotonic in
+that component and in the sum of the others' squares); the moment rows are
+the interval cross product.
+
+``outside``.  For any direction nu and any feasible wrench w = W t,
+t in [t_min, t_max]: |nu . (w - W t_mid)| <= sum_j |nu . w_j| rho_j with
+rho_j = max |t_j - t_mid,j| (the support function of the zonotope of
+available wrenches: hyperplane shifting, Gouttefarde, Daney & Merlet, IEEE
+T-RO 27(1) 2011; Bouchard, Gosselin & Moore 2010).  So if, for one required
+wrench vertex and one nu, the interval of
+
+    s(X) = sum_j rho_j |nu . w_j(X)| - |nu . (W(X) t_mid - w)|
+
+lies below 0 (below mu |nu| for a capacity margin mu), no pose of X is
+feasible.  nu is the unit normal of the facet most violated at the centre,
+fixed over the box (so it carries no dependency).
+
+``inside``.  Pick n cables B whose columns are best conditioned at the
+centre (largest |det|), and fix the others F at the tensions t_F of the
+centre's least-squares solution nearest t_mid, clipped to their bounds.  If,
+for every pose of X (and every geometry within tolerance, every wrench
+vertex), W_B t_B = w - W_F t_F + e (e in [-mu, mu]^n, which holds the ball of
+radius mu) has its solution in the bounds, every pose is feasible with those
+tensions and margin >= mu.  The solutions over the box are enclosed by the
+Krawczyk operator with a midpoint-inverse preconditioner Y (Krawczyk 1969;
+Neumaier, "Interval Methods for Systems of Equations", 1990, sec. 4.1): with
+C = I - Y [A] and z = Y([b] - [A] x~), ||C||_inf <= beta < 1 proves every
+A in [A] regular and puts every solution within
+r = ||z||_inf / (1 - beta) of x~, and x~ + z + C (X0 - x~) refines that box.
+For m = n this is the enclosure of t = W^-1 w of the square case.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cdpr_design.kernels._jit import njit, njit_noref
+from cdpr_design.kernels.geometry import structure_matrix
+from cdpr_design.kernels.hsm import facet_normal
+from cdpr_design.kernels.interval import iabs, iadd, imul, isqr, isqrt, isub, iscale, down, up, unit_component
+from cdpr_design.kernels.linalg import det_in_place, inverse_into
+
+#: box statuses (``cdpr_design.workspaces.certify`` names them)
+INSIDE = 1
+OUTSIDE = -1
+UNDECIDED = 0
+
+#: Krawczyk refinements after the first enclosure
+KRAWCZYK_STEPS = 2
+
+
+@njit_noref
+def interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh):
+    """Enclose the structure matrix over the position box [plo, phi] (3,) [m], outlets in
+    [Alo, Ahi] and rotated attachments in [Blo, Bhi] (m, 3) [m]: ``Wl``, ``Wh`` (n, m).
+
+    Returns True when every cable's length is proven positive over the box (else its
+    direction is undefined somewhere: the column is [-1, 1]-wide)."""
+    m = Alo.shape[0]
+    n = rows.shape[0]
+    ok = True
+    for i in range(m):
+        # d = A - Rb - p, one interval per component
+        d0l, d0h = isub(Alo[i, 0], Ahi[i, 0], Blo[i, 0], Bhi[i, 0])
+        d0l, d0h = isub(d0l, d0h, plo[0], phi[0])
+        d1l, d1h = isub(Alo[i, 1], Ahi[i, 1], Blo[i, 1], Bhi[i, 1])
+        d1l, d1h = isub(d1l, d1h, plo[1], phi[1])
+        d2l, d2h = isub(Alo[i, 2], Ahi[i, 2], Blo[i, 2], Bhi[i, 2])
+        d2l, d2h = isub(d2l, d2h, plo[2], phi[2])
+        s0l, s0h = isqr(d0l, d0h)
+        s1l, s1h = isqr(d1l, d1h)
+        s2l, s2h = isqr(d2l, d2h)
+        r0l, r0h = iadd(s1l, s1h, s2l, s2h)
+        r1l, r1h = iadd(s0l, s0h, s2l, s2h)
+        r2l, r2h = iadd(s0l, s0h, s1l, s1h)
+        ll, lh = iadd(r0l, r0h, s0l, s0h)
+        if not (ll > 0.0):
+            ok = False
+        uxl, uxh = unit_component(d0l, d0h, r0l, r0h)
+        uyl, uyh = unit_component(d1l, d1h, r1l, r1h)
+        uzl, uzh = unit_component(d2l, d2h, r2l, r2h)
+        bxl = Blo[i, 0]
+        bxh = Bhi[i, 0]
+        byl = Blo[i, 1]
+        byh = Bhi[i, 1]
+        bzl = Blo[i, 2]
+        bzh = Bhi[i, 2]
+        for k in range(n):
+            r = rows[k]
+            if r == 0:
+                lo, hi = uxl, uxh
+            elif r == 1:
+                lo, hi = uyl, uyh
+            elif r == 2:
+                lo, hi = uzl, uzh
+            elif r == 3:  # by uz - bz uy
+                al, ah = imul(byl, byh, uzl, uzh)
+                bl, bh = imul(bzl, bzh, uyl, uyh)
+                lo, hi = isub(al, ah, bl, bh)
+            elif r == 4:  # bz ux - bx uz
+                al, ah = imul(bzl, bzh, uxl, uxh)
+                bl, bh = imul(bxl, bxh, uzl, uzh)
+                lo, hi = isub(al, ah, bl, bh)
+            else:  # bx uy - by ux
+                al, ah = imul(bxl, bxh, uyl, uyh)
+                bl, bh = imul(byl, byh, uxl, uxh)
+                lo, hi = isub(al, ah, bl, bh)
+            Wl[k, i] = lo
+            Wh[k, i] = hi
+    return ok
+
+
+@njit_noref
+def half_ranges(tmin, tmax, tmid, rho):
+    """``tmid`` = the bounds' midpoints (floats) and ``rho`` >= max |t - tmid| over the bounds, rounded up."""
+    for j in range(tmin.shape[0]):
+        tmid[j] = 0.5 * (tmin[j] + tmax[j])
+        a = up(tmid[j] - tmin[j])
+        b = up(tmax[j] - tmid[j])
+        rho[j] = max(a, b)
+
+
+@njit_noref
+def support_gap(nu, Wl, Wh, tmid, rho, w):
+    """The interval of s = sum_j rho_j |nu . w_j| - |nu . (W t_mid - w)| over the interval
+    structure matrix [Wl, Wh] (n, m), for the float direction ``nu`` (n,) and wrench ``w`` (n,)."""
+    n, m = Wl.shape
+    sl = 0.0
+    sh = 0.0
+    cl = 0.0
+    ch = 0.0
+    for j in range(m):
+        ll = 0.0
+        lh = 0.0
+        for i in range(n):
+            pl, ph = iscale(nu[i], Wl[i, j], Wh[i, j])
+            ll, lh = iadd(ll, lh, pl, ph)
+        al, ah = iabs(ll, lh)
+        pl, ph = iscale(rho[j], al, ah)
+        sl, sh = iadd(sl, sh, pl, ph)
+        pl, ph = iscale(tmid[j], ll, lh)
+        cl, ch = iadd(cl, ch, pl, ph)
+    for i in range(n):
+        pl, ph = iscale(nu[i], w[i], w[i])
+        cl, ch = isub(cl, ch, pl, ph)
+    al, ah = iabs(cl, ch)
+    return isub(sl, sh, al, ah)
+
+
+@njit_noref
+def krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work):
+    """Enclose the solutions of A x = b for every A in [Al, Ah] (n, n) and b in [bl, bh] (n,)
+    into [Xl, Xh] (n,).  Returns False when regularity is not proven (then X is meaningless).
+
+    ``Am``, ``Y``, ``Cl``, ``Ch`` (n, n), ``xt``, ``zl``, ``zh`` (n,) and ``work`` (n, >= 2n)
+    are scratch."""
+    n = Al.shape[0]
+    for i in range(n):
+        for j in range(n):
+            Am[i, j] = 0.5 * (Al[i, j] + Ah[i, j])
+    if not inverse_into(Am, Y, work):
+        return False
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            s += Y[i, j] * 0.5 * (bl[j] + bh[j])
+        xt[i] = s
+    # z = Y (b - A xt)
+    for i in range(n):
+        zl[i] = 0.0
+        zh[i] = 0.0
+    for k in range(n):
+        rl, rh = bl[k], bh[k]
+        for j in range(n):
+            pl, ph = iscale(xt[j], Al[k, j], Ah[k, j])
+            rl, rh = isub(rl, rh, pl, ph)
+        for i in range(n):
+            pl, ph = iscale(Y[i, k], rl, rh)
+            zl[i], zh[i] = iadd(zl[i], zh[i], pl, ph)
+    # C = I - Y A and beta = ||C||_inf (rounded up)
+    beta = 0.0
+    for i in range(n):
+        row = 0.0
+        for j in range(n):
+            cl = 1.0 if i == j else 0.0
+            ch = cl
+            for k in range(n):
+                pl, ph = iscale(Y[i, k], Al[k, j], Ah[k, j])
+                cl, ch = isub(cl, ch, pl, ph)
+            Cl[i, j] = cl
+            Ch[i, j] = ch
+            row = up(row + max(-cl, ch))
+        beta = max(beta, row)
+    if not (beta < 1.0):
+        return False
+    delta = 0.0
+    for i in range(n):
+        delta = max(delta, max(-zl[i], zh[i]))
+    r = up(delta / down(1.0 - beta))
+    for i in range(n):
+        Xl[i] = down(xt[i] - r)
+        Xh[i] = up(xt[i] + r)
+    for _ in range(KRAWCZYK_STEPS):
+        for i in range(n):
+            kl, kh = iadd(xt[i], xt[i], zl[i], zh[i])
+            for j in range(n):
+                dl, dh = isub(Xl[j], Xh[j], xt[j], xt[j])
+                pl, ph = imul(Cl[i, j], Ch[i, j], dl, dh)
+                kl, kh = iadd(kl, kh, pl, ph)
+            work[i, 0] = max(kl, Xl[i])
+            work[i, 1] = min(kh, Xh[i])
+        for i in range(n):
+            Xl[i] = work[i, 0]
+            Xh[i] = work[i, 1]
+    return True
+
+
+@njit
+def best_basis(Wc, bases, work):
+    """The row of ``bases`` (C(m, n), n) whose columns of the float matrix ``Wc`` have the
+    largest |det| (-1 if all are singular)."""
+    n = Wc.shape[0]
+    best = 0.0
+    arg = -1
+    for c in range(bases.shape[0]):
+        for i in range(n):
+            for j in range(n):
+                work[i, j] = Wc[i, bases[c, j]]
+        d = abs(det_in_place(work, n))
+        if d > best:
+            best = d
+            arg = c
+    return arg
+
+
+@njit
+def centre_tensions(Wc, w, tmid, t, G, Gi, work):
+    """The tensions t (m,) [N] nearest ``tmid`` with Wc t = w (least squares: t = tmid + Wc^T
+    (Wc Wc^T)^-1 (w - Wc tmid)); False when Wc Wc^T is singular."""
+    n, m = Wc.shape
+    for i in range(n):
+        for k in range(n):
+            s = 0.0
+            for j in range(m):
+                s += Wc[i, j] * Wc[k, j]
+            G[i, k] = s
+    if not inverse_into(G, Gi, work):
+        return False
+    for j in range(m):
+        t[j] = tmid[j]
+    for i in range(n):
+        r = w[i]
+        for j in range(m):
+            r -= Wc[i, j] * tmid[j]
+        for k in range(n):
+            y = Gi[k, i] * r
+            for j in range(m):
+                t[j] += Wc[k, j] * y
+    return True
+
+
+@njit
+def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu, facets, bases):
+    """The status of one box of positions [plo, phi] (3,) [m] with centre ``pc``: INSIDE,
+    OUTSIDE or UNDECIDED (module docstring).  ``Ac``, ``Bc`` (m, 3): the nominal outlets and
+    rotated attachments; ``wv`` (nv, n): the required-wrench vertices; ``mu`` [N]: the capacity
+    margin asked (0 for feasibility); ``facets`` (C(m, n-1), n-1) and ``bases`` (C(m, n), n):
+    the cable subsets."""
+    m = Alo.shape[0]
+    n = rows.shape[0]
+    nv = wv.shape[0]
+    Wl = np.empty((n, m))
+    Wh = np.empty((n, m))
+    lengths_ok = interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh)
+    Wc = np.empty((n, m))
+    L = np.empty(m)
+    centre_ok = structure_matrix(pc[0], pc[1], pc[2], Bc, Ac, rows, Wc, L)
+    tmid = np.empty(m)
+    rho = np.empty(m)
+    half_ranges(tmin, tmax, tmid, rho)
+    if not centre_ok:
+        return UNDECIDED
+    # outside: the facet most violated at the centre, for each wrench vertex
+    nu = np.empty(n)
+    best_nu = np.empty(n)
+    for k in range(nv):
+        worst = np.inf
+        for c in range(facets.shape[0]):
+            if not facet_normal(Wc, facets[c], nu):
+                continue
+            half = 0.0
+            gap = 0.0
+            for j in range(m):
+                lj = 0.0
+                for i in range(n):
+                    lj += nu[i] * Wc[i, j]
+                half += abs(lj) * rho[j]
+                gap += lj * tmid[j]
+            for i in range(n):
+                gap -= nu[i] * wv[k, i]
+            s = half - abs(gap)
+            if s < worst:
+                worst = s
+                for i in range(n):
+                    best_nu[i] = nu[i]
+        if worst < mu:
+            sl, sh = support_gap(best_nu, Wl, Wh, tmid, rho, wv[k])
+            if mu == 0.0:
+                if sh < 0.0:
+                    return OUTSIDE
+            else:
+                ql, qh = iadd(0.0, 0.0, 0.0, 0.0)
+                for i in range(n):
+                    pl, ph = isqr(best_nu[i], best_nu[i])
+                    ql, qh = iadd(ql, qh, pl, ph)
+                nl, nh = isqrt(ql, qh)
+                ml, mh = iscale(mu, nl, nh)
+                if sh < ml:
+                    return OUTSIDE
+    if not lengths_ok:
+        return UNDECIDED
+    # inside: Krawczyk enclosure of the basis tensions, the other cables' tensions fixed
+    work = np.empty((max(n, 1), max(2 * n, 2)))
+    b = best_basis(Wc, bases, work)
+    if b < 0:
+        return UNDECIDED
+    inb = np.zeros(m, dtype=np.bool_)
+    for j in range(n):
+        inb[bases[b, j]] = True
+    Al = np.empty((n, n))
+    Ah = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            Al[i, j] = Wl[i, bases[b, j]]
+            Ah[i, j] = Wh[i, bases[b, j]]
+    t = np.empty(m)
+    G = np.empty((n, n))
+    Gi = np.empty((n, n))
+    bl = np.empty(n)
+    bh = np.empty(n)
+    Am = np.empty((n, n))
+    Y = np.empty((n, n))
+    xt = np.empty(n)
+    Cl = np.empty((n, n))
+    Ch = np.empty((n, n))
+    zl = np.empty(n)
+    zh = np.empty(n)
+    Xl = np.empty(n)
+    Xh = np.empty(n)
+    for k in range(nv):
+        if not centre_tensions(Wc, wv[k], tmid, t, G, Gi, work):
+            return UNDECIDED
+        for i in range(n):
+            bl[i], bh[i] = iadd(wv[k, i], wv[k, i], -mu, mu)
+        for j in range(m):
+            if inb[j]:
+                continue
+            tj = min(max(t[j], tmin[j]), tmax[j])
+            for i in range(n):
+                pl, ph = iscale(tj, Wl[i, j], Wh[i, j])
+                bl[i], bh[i] = isub(bl[i], bh[i], pl, ph)
+        if not krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work):
+            return UNDECIDED
+        for j in range(n):
+            c = bases[b, j]
+            if not (Xl[j] >= tmin[c] and Xh[j] <= tmax[c]):
+                return UNDECIDED
+    return INSIDE
+
+
+@njit
+def classify_block(k0, k1, lo, hi, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu, facets, bases, status):
+    """:func:`classify_box` for boxes k0 .. k1 of ``lo``, ``hi`` (K, 3) [m] into ``status`` (K,) int8."""
+    pc = np.empty(3)
+    for k in range(k0, k1):
+        for a in range(3):
+            pc[a] = 0.5 * (lo[k, a] + hi[k, a])
+        status[k] = classify_box(lo[k], hi[k], pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu,
+                                 facets, bases)
