@@ -27,11 +27,14 @@ wrench vertex and one nu, the interval of
 
 lies below 0 (below mu |nu| for a capacity margin mu), no pose of X is
 feasible.  nu is the unit normal of the facet most violated at the centre,
-fixed over the box (so it carries no dependency).
+fixed over the box (so it carries no dependency).  The centre decides which
+proof is tried: outside when it is infeasible, inside when it is feasible.
 
-``inside``.  Pick n cables B whose columns are best conditioned at the
-centre (largest |det|), and fix the others F at the tensions t_F of the
-centre's least-squares solution nearest t_mid, clipped to their bounds.  If,
+``inside``.  Find tensions t_c at the centre that balance it with room to
+spare (the ones nearest t_mid within the bounds shrunk by a fraction, by the
+exact minimum-norm QP, bisecting on the fraction), pick n cables B whose columns are best conditioned
+at the centre (largest |det| times their least slack in t_c), and fix the
+others F at t_c.  If,
 for every pose of X (and every geometry within tolerance, every wrench
 vertex), W_B t_B = w - W_F t_F + e (e in [-mu, mu]^n, which holds the ball of
 radius mu) has its solution in the bounds, every pose is feasible with those
@@ -52,7 +55,9 @@ from cdpr_design.kernels._jit import njit, njit_noref
 from cdpr_design.kernels.geometry import structure_matrix
 from cdpr_design.kernels.hsm import facet_normal
 from cdpr_design.kernels.interval import iabs, iadd, imul, isqr, isqrt, isub, iscale, down, up, unit_component
+from cdpr_design.kernels.hsm import make_scratch as make_qp_scratch
 from cdpr_design.kernels.linalg import det_in_place, inverse_into
+from cdpr_design.kernels.tension_qp import min_norm_tensions
 
 #: box statuses (``cdpr_design.workspaces.certify`` names them)
 INSIDE = 1
@@ -230,74 +235,90 @@ def krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work):
 
 
 @njit
-def best_basis(Wc, bases, work):
-    """The row of ``bases`` (C(m, n), n) whose columns of the float matrix ``Wc`` have the
-    largest |det| (-1 if all are singular)."""
+def best_basis(Wc, bases, slack, work):
+    """The row of ``bases`` (C(m, n), n) whose columns of the float matrix ``Wc`` score best:
+    |det| times the least relative slack ``slack`` (m,) of its cables (-1 if none scores)."""
     n = Wc.shape[0]
     best = 0.0
     arg = -1
     for c in range(bases.shape[0]):
+        low = np.inf
+        for j in range(n):
+            low = min(low, slack[bases[c, j]])
+        if not (low > 0.0):
+            continue
         for i in range(n):
             for j in range(n):
                 work[i, j] = Wc[i, bases[c, j]]
-        d = abs(det_in_place(work, n))
+        d = abs(det_in_place(work, n)) * low
         if d > best:
             best = d
             arg = c
     return arg
 
 
+#: bisection steps on the shrinkage of the bounds for the centre's tensions
+SHRINK_STEPS = 6
+
+
 @njit
-def centre_tensions(Wc, w, tmid, t, G, Gi, work):
-    """The tensions t (m,) [N] nearest ``tmid`` with Wc t = w (least squares: t = tmid + Wc^T
-    (Wc Wc^T)^-1 (w - Wc tmid)); False when Wc Wc^T is singular."""
+def shrunk_qp(Wc, rhs, tmin, tmax, tmid, f, lo, hi, s, scr):
+    """The tensions - tmid nearest 0 within the bounds shrunk by ``f`` (t_max - t_min) each side."""
+    for j in range(Wc.shape[1]):
+        g = f * (tmax[j] - tmin[j])
+        lo[j] = tmin[j] - tmid[j] + g
+        hi[j] = tmax[j] - tmid[j] - g
+    return min_norm_tensions(Wc, rhs, lo, hi, s, scr)
+
+
+@njit
+def centre_tensions(Wc, w, tmin, tmax, tmid, t, lo, hi, rhs, s, scr):
+    """Feasible tensions t (m,) [N] at the centre with room to spare: the ones nearest ``tmid``
+    within the bounds shrunk by nearly the largest fraction that admits any (a bisection of
+    :data:`SHRINK_STEPS` steps over the exact minimum-norm QP of
+    :mod:`cdpr_design.kernels.tension_qp`, in t - tmid): close to the tensions whose least
+    relative slack is largest.  False when even the full bounds admit none (the centre is
+    infeasible)."""
     n, m = Wc.shape
-    for i in range(n):
-        for k in range(n):
-            s = 0.0
-            for j in range(m):
-                s += Wc[i, j] * Wc[k, j]
-            G[i, k] = s
-    if not inverse_into(G, Gi, work):
-        return False
-    for j in range(m):
-        t[j] = tmid[j]
+    if m == n:  # square: the tensions are unique, t = Wc^-1 w (scr[1] is n x n, scr[0] n x 2n)
+        if not inverse_into(Wc, scr[1], scr[0]):
+            return False
+        ok = True
+        for j in range(m):
+            tj = 0.0
+            for i in range(n):
+                tj += scr[1][j, i] * w[i]
+            t[j] = tj
+            ok = ok and tmin[j] <= tj <= tmax[j]
+        return ok
     for i in range(n):
         r = w[i]
         for j in range(m):
             r -= Wc[i, j] * tmid[j]
-        for k in range(n):
-            y = Gi[k, i] * r
+        rhs[i] = r
+    if not shrunk_qp(Wc, rhs, tmin, tmax, tmid, 0.0, lo, hi, s, scr):
+        return False
+    for j in range(m):
+        t[j] = tmid[j] + s[j]
+    a = 0.0
+    b = 0.5
+    for _ in range(SHRINK_STEPS):
+        f = 0.5 * (a + b)
+        if shrunk_qp(Wc, rhs, tmin, tmax, tmid, f, lo, hi, s, scr):
+            a = f
             for j in range(m):
-                t[j] += Wc[k, j] * y
+                t[j] = tmid[j] + s[j]
+        else:
+            b = f
     return True
 
 
 @njit
-def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu, facets, bases):
-    """The status of one box of positions [plo, phi] (3,) [m] with centre ``pc``: INSIDE,
-    OUTSIDE or UNDECIDED (module docstring).  ``Ac``, ``Bc`` (m, 3): the nominal outlets and
-    rotated attachments; ``wv`` (nv, n): the required-wrench vertices; ``mu`` [N]: the capacity
-    margin asked (0 for feasibility); ``facets`` (C(m, n-1), n-1) and ``bases`` (C(m, n), n):
-    the cable subsets."""
-    m = Alo.shape[0]
-    n = rows.shape[0]
-    nv = wv.shape[0]
-    Wl = np.empty((n, m))
-    Wh = np.empty((n, m))
-    lengths_ok = interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh)
-    Wc = np.empty((n, m))
-    L = np.empty(m)
-    centre_ok = structure_matrix(pc[0], pc[1], pc[2], Bc, Ac, rows, Wc, L)
-    tmid = np.empty(m)
-    rho = np.empty(m)
-    half_ranges(tmin, tmax, tmid, rho)
-    if not centre_ok:
-        return UNDECIDED
-    # outside: the facet most violated at the centre, for each wrench vertex
-    nu = np.empty(n)
-    best_nu = np.empty(n)
-    for k in range(nv):
+def outside_test(Wc, Wl, Wh, wv, tmid, rho, mu, facets, nu, best_nu):
+    """Whether the box is proven outside: for some wrench vertex, the facet most violated at
+    the centre has its support gap below ``mu`` |nu| over the whole box."""
+    n, m = Wc.shape
+    for k in range(wv.shape[0]):
         worst = np.inf
         for c in range(facets.shape[0]):
             if not facet_normal(Wc, facets[c], nu):
@@ -317,57 +338,80 @@ def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax,
                 worst = s
                 for i in range(n):
                     best_nu[i] = nu[i]
-        if worst < mu:
-            sl, sh = support_gap(best_nu, Wl, Wh, tmid, rho, wv[k])
-            if mu == 0.0:
-                if sh < 0.0:
-                    return OUTSIDE
-            else:
-                ql, qh = iadd(0.0, 0.0, 0.0, 0.0)
-                for i in range(n):
-                    pl, ph = isqr(best_nu[i], best_nu[i])
-                    ql, qh = iadd(ql, qh, pl, ph)
-                nl, nh = isqrt(ql, qh)
-                ml, mh = iscale(mu, nl, nh)
-                if sh < ml:
-                    return OUTSIDE
-    if not lengths_ok:
+        if not (worst < mu):
+            continue
+        sl, sh = support_gap(best_nu, Wl, Wh, tmid, rho, wv[k])
+        ql, qh = 0.0, 0.0
+        for i in range(n):
+            pl, ph = isqr(best_nu[i], best_nu[i])
+            ql, qh = iadd(ql, qh, pl, ph)
+        nl, nh = isqrt(ql, qh)
+        ml, mh = iscale(mu, nl, nh)
+        if sh < ml:
+            return True
+    return False
+
+
+@njit
+def make_scratch(n, m):
+    """The work arrays of :func:`classify_box` (one set per block of boxes)."""
+    return (np.empty((n, m)), np.empty((n, m)), np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m),
+            np.empty(n), np.empty(n), np.empty((n, max(2 * n, 2))), np.empty(m), np.empty(m), np.empty(m),
+            np.empty(m), np.empty(n), np.empty(m), np.empty((n, n)), np.empty((n, n)), np.empty(n),
+            np.empty(n), np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)), np.empty((n, n)),
+            np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(m),
+            make_qp_scratch(n, m, 1))
+
+
+@njit
+def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu, facets, bases, scr):
+    """The status of one box of positions [plo, phi] (3,) [m] with centre ``pc``: INSIDE,
+    OUTSIDE or UNDECIDED (module docstring).  ``Ac``, ``Bc`` (m, 3): the nominal outlets and
+    rotated attachments; ``wv`` (nv, n): the required-wrench vertices; ``mu`` [N]: the capacity
+    margin asked (0 for feasibility); ``facets`` (C(m, n-1), n-1) and ``bases`` (C(m, n), n):
+    the cable subsets; ``scr`` from :func:`make_scratch`."""
+    m = Alo.shape[0]
+    n = rows.shape[0]
+    (Wl, Wh, Wc, L, tmid, rho, nu, best_nu, work, t, lo, hi, s, rhs, slack, Al, Ah, bl, bh, Am, Y, xt,
+     Cl, Ch, zl, zh, Xl, Xh, _, tclip, qp) = scr
+    lengths_ok = interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh)
+    if not structure_matrix(pc[0], pc[1], pc[2], Bc, Ac, rows, Wc, L):
+        return UNDECIDED
+    half_ranges(tmin, tmax, tmid, rho)
+    # the centre decides which proof to try: inside if it is feasible (with the margin asked)
+    basis = -1
+    for k in range(wv.shape[0]):
+        for i in range(n):
+            bl[i] = wv[k, i]
+        if not centre_tensions(Wc, bl, tmin, tmax, tmid, t, lo, hi, rhs, s, qp):
+            if outside_test(Wc, Wl, Wh, wv, tmid, rho, mu, facets, nu, best_nu):
+                return OUTSIDE
+            return UNDECIDED
+        if k == 0:
+            for j in range(m):
+                slack[j] = min(t[j] - tmin[j], tmax[j] - t[j]) / max(tmax[j] - tmin[j], 1e-300)
+            basis = best_basis(Wc, bases, slack, work)
+    if mu > 0.0 and outside_test(Wc, Wl, Wh, wv, tmid, rho, mu, facets, nu, best_nu):
+        return OUTSIDE
+    if not lengths_ok or basis < 0:
         return UNDECIDED
     # inside: Krawczyk enclosure of the basis tensions, the other cables' tensions fixed
-    work = np.empty((max(n, 1), max(2 * n, 2)))
-    b = best_basis(Wc, bases, work)
-    if b < 0:
-        return UNDECIDED
-    inb = np.zeros(m, dtype=np.bool_)
-    for j in range(n):
-        inb[bases[b, j]] = True
-    Al = np.empty((n, n))
-    Ah = np.empty((n, n))
     for i in range(n):
         for j in range(n):
-            Al[i, j] = Wl[i, bases[b, j]]
-            Ah[i, j] = Wh[i, bases[b, j]]
-    t = np.empty(m)
-    G = np.empty((n, n))
-    Gi = np.empty((n, n))
-    bl = np.empty(n)
-    bh = np.empty(n)
-    Am = np.empty((n, n))
-    Y = np.empty((n, n))
-    xt = np.empty(n)
-    Cl = np.empty((n, n))
-    Ch = np.empty((n, n))
-    zl = np.empty(n)
-    zh = np.empty(n)
-    Xl = np.empty(n)
-    Xh = np.empty(n)
-    for k in range(nv):
-        if not centre_tensions(Wc, wv[k], tmid, t, G, Gi, work):
+            Al[i, j] = Wl[i, bases[basis, j]]
+            Ah[i, j] = Wh[i, bases[basis, j]]
+    for k in range(wv.shape[0]):
+        for i in range(n):
+            bl[i] = wv[k, i]
+        if not centre_tensions(Wc, bl, tmin, tmax, tmid, t, lo, hi, rhs, s, qp):
             return UNDECIDED
         for i in range(n):
             bl[i], bh[i] = iadd(wv[k, i], wv[k, i], -mu, mu)
         for j in range(m):
-            if inb[j]:
+            inb = False
+            for q in range(n):
+                inb = inb or bases[basis, q] == j
+            if inb:
                 continue
             tj = min(max(t[j], tmin[j]), tmax[j])
             for i in range(n):
@@ -376,7 +420,7 @@ def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax,
         if not krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work):
             return UNDECIDED
         for j in range(n):
-            c = bases[b, j]
+            c = bases[basis, j]
             if not (Xl[j] >= tmin[c] and Xh[j] <= tmax[c]):
                 return UNDECIDED
     return INSIDE
@@ -386,8 +430,9 @@ def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax,
 def classify_block(k0, k1, lo, hi, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu, facets, bases, status):
     """:func:`classify_box` for boxes k0 .. k1 of ``lo``, ``hi`` (K, 3) [m] into ``status`` (K,) int8."""
     pc = np.empty(3)
+    scr = make_scratch(rows.shape[0], Alo.shape[0])
     for k in range(k0, k1):
         for a in range(3):
             pc[a] = 0.5 * (lo[k, a] + hi[k, a])
         status[k] = classify_box(lo[k], hi[k], pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu,
-                                 facets, bases)
+                                 facets, bases, scr)

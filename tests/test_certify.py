@@ -1,0 +1,172 @@
+"""Certified workspaces (workspaces/certify.py): an exact closed-form region, and random robots
+checked by an independent LP at random points of the proven boxes."""
+
+from __future__ import annotations
+
+import itertools
+import zlib
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.optimize import linprog
+
+from cdpr_design.errors import InputError
+from cdpr_design.model import spec
+from cdpr_design.workspaces.certify import certify
+
+G = 9.81
+
+
+def two_outlet_point_mass(D=2.0, H=1.5, mass=1.0, tmax=30.0, step=0.05):
+    return spec.from_dict({
+        "name": "pm2", "motion": "2T", "gravity": [0.0, -G],
+        "frame": {"lower": [0.0, 0.0], "upper": [D, H]},
+        "effector": {"mass": mass, "size": [0.01, 0.01]}, "tension": [0.0, tmax],
+        "cables": [{"name": "c1", "outlet": [0.0, H], "attachment": [0.0, 0.0]},
+                   {"name": "c2", "outlet": [D, H], "attachment": [0.0, 0.0]}],
+        "workspace": {"grid": {"lower": [0.0, 0.0], "upper": [D, H], "step": step}}})
+
+
+def exact_area(D=2.0, H=1.5, mass=1.0, tmax=30.0) -> float:
+    """The area of {y <= H - h_min(x)} in [0, D] x [0, H] (docs/algorithms.md): the cables'
+    common horizontal tension component is h = m g x (D - x) / (D (H - y)), so t_1 = h L_1 / x,
+    t_2 = h L_2 / (D - x), and t_i <= t_max holds for H - y >= h_min(x) =
+    m g x (D - x) / sqrt((t_max D)^2 - (m g max(x, D - x))^2)."""
+    w = mass * G
+
+    def h_min(x):
+        return w * x * (D - x) / np.sqrt((tmax * D) ** 2 - (w * max(x, D - x)) ** 2)
+
+    val, err = quad(lambda x: max(0.0, H - h_min(x)), 0.0, D, points=[D / 2], epsabs=1e-13, limit=200)
+    assert err < 1e-10
+    return val
+
+
+def test_closed_form_region_lies_between_inner_and_outer_and_the_boundary_shrinks():
+    d = two_outlet_point_mass()
+    exact = exact_area()
+    assert 1.0 < exact < 3.0
+    boundaries = []
+    for res in (0.04, 0.02, 0.01, 0.005, 0.0025):
+        s = certify(d, resolution=res).summary()
+        assert s["inner_measure"] <= exact <= s["outer_measure"], (res, s)
+        assert s["outer_measure"] == pytest.approx(s["inner_measure"] + s["boundary_measure"])
+        boundaries.append(s["boundary_measure"])
+    assert all(b2 < 0.7 * b1 for b1, b2 in zip(boundaries, boundaries[1:])), boundaries
+    assert boundaries[-1] < 0.005 * exact
+
+
+def test_boxes_tile_the_box_exactly():
+    r = certify(two_outlet_point_mass(), resolution=0.02)
+    total = float(np.prod(r.upper - r.lower, axis=1).sum())
+    assert total == pytest.approx(2.0 * 1.5, rel=1e-12)
+    assert np.all(r.lower >= [0, 0]) and np.all(r.upper <= [2.0, 1.5])
+    assert np.all(np.max(r.upper - r.lower, axis=1)[r.status == 0] <= 0.02)
+
+
+# --- random robots against an independent LP ----------------------------------------------------
+
+def random_robot(rng, motion, m, external=False):
+    d = 2 if motion in ("2T", "1R2T") else 3
+    outlets = rng.uniform(-2, 2, (m, d))
+    outlets[:, d - 1] = rng.uniform(0.3, 2.0, m)  # mostly above: gravity pulls down the last axis
+    attach = rng.uniform(-0.15, 0.15, (m, d)) if motion in ("1R2T", "3R3T") else np.zeros((m, d))
+    cables = [{"name": f"c{i}", "outlet": outlets[i].tolist(), "attachment": attach[i].tolist()}
+              for i in range(m)]
+    n = {"2T": 2, "1R2T": 3, "3T": 3, "3R3T": 6}[motion]
+    ws = {"grid": {"lower": [-1.0] * (d - 1) + [-0.6], "upper": [1.0] * (d - 1) + [1.4], "step": 0.1}}
+    if external:
+        ws["external_wrench"] = {"lower": [-2.0] + [0.0] * (n - 1), "upper": [2.0] + [1.0] + [0.0] * (n - 2)}
+    return spec.from_dict({
+        "name": "r", "motion": motion, "frame": {"lower": [-2.0] * d, "upper": [2.0] * d},
+        "effector": {"mass": float(rng.uniform(0.5, 3.0)), "size": [0.2] * d,
+                     "center_of_mass": (rng.uniform(-0.03, 0.03, d) if n > d else np.zeros(d)).tolist()},
+        "tension": [float(rng.choice([0.0, 1.0])), float(rng.uniform(40, 120))], "cables": cables,
+        "workspace": ws})
+
+
+def lp_feasible(design, position, wrenches) -> bool:
+    """W t = w for every w, t in the bounds (scipy HiGHS), W built here from the spec's points."""
+    d = design.motion.dim
+    p = np.zeros(3)
+    p[:d] = position
+    A, B = design.outlets, design.attachments  # orientation zero: R = I
+    cols = []
+    for a, b in zip(A, B):
+        v = a - p - b
+        u = v / np.linalg.norm(v)
+        cols.append(np.concatenate([u, np.cross(b, u)])[list(design.motion.wrench_rows)])
+    W = np.array(cols).T
+    for w in wrenches:
+        r = linprog(np.zeros(design.m), A_eq=W, b_eq=w,
+                    bounds=list(zip(design.tension_min, design.tension_max)), method="highs",
+                    options={"primal_feasibility_tolerance": 1e-9})
+        assert r.status in (0, 2), r.message
+        if r.status != 0:
+            return False
+    return True
+
+
+def required_wrenches(design, kind):
+    rows = list(design.motion.wrench_rows)
+    f = design.effector.mass * np.asarray(design.gravity)
+    c = np.asarray(design.effector.center_of_mass)
+    g = np.concatenate([f, np.cross(c, f)])[rows]
+    out = [-g]
+    box = design.workspace.external_wrench
+    if kind == "wrench-feasible" and box is not None:
+        out = [-(g + np.asarray(v)) for v in itertools.product(*zip(box.lower, box.upper))]
+    return out
+
+
+CASES = ([("2T", m, "static") for m in range(2, 9)] + [("3T", m, "static") for m in range(3, 9)]
+         + [("1R2T", 4, "static"), ("1R2T", 5, "static"), ("3R3T", 7, "static"), ("3R3T", 8, "static"),
+            ("2T", 3, "wrench-feasible"), ("3T", 4, "wrench-feasible")])
+
+
+@pytest.mark.parametrize("motion,m,kind", CASES)
+def test_random_robots_never_contradict_an_lp(motion, m, kind):
+    rng = np.random.default_rng(zlib.crc32(f"{motion} {m} {kind}".encode()))
+    seen = {1: 0, -1: 0}
+    for _ in range(4):
+        d = random_robot(rng, motion, m, external=kind == "wrench-feasible")
+        res = 0.05 if d.motion.planar else 0.1
+        r = certify(d, kind=kind, resolution=res, max_boxes=20_000)
+        wrenches = required_wrenches(d, kind)
+        for code, expect in ((1, True), (-1, False)):
+            idx = np.flatnonzero(r.status == code)
+            for k in rng.choice(idx, min(idx.size, 60), replace=False) if idx.size else []:
+                for _ in range(2):
+                    x = rng.uniform(r.lower[k], r.upper[k])
+                    assert lp_feasible(d, x, wrenches) == expect, (code, x, r.lower[k], r.upper[k])
+                    seen[code] += 1
+    assert seen[-1] > 0  # every case proves some boxes outside ...
+    if motion in ("2T", "3T") or m > d.n:
+        assert seen[1] > 0  # ... and some inside (a random 3R3T with 6 + 1 cables may hold nowhere)
+
+
+def test_min_margin_is_proven_against_the_pose_margin():
+    import cdpr_design as cd
+
+    rng = np.random.default_rng(11)
+    d = random_robot(rng, "2T", 4)
+    mu = 3.0
+    r = certify(d, resolution=0.05, min_margin=mu)
+    plain = certify(d, resolution=0.05)
+    assert 0 < r.measure(1) < plain.measure(1)
+    for code in (1, -1):
+        for k in np.flatnonzero(r.status == code)[:80]:
+            x = rng.uniform(r.lower[k], r.upper[k])
+            margin = cd.pose(d, x).margin
+            assert (margin >= mu) if code == 1 else not (margin >= mu), (code, x, margin)
+
+
+def test_unsupported_models_are_refused_with_the_reason():
+    d = two_outlet_point_mass()
+    with pytest.raises(InputError, match="sagging"):
+        certify(spec.with_cable_model(d, "sagging"))
+    with pytest.raises(InputError, match="--kind"):
+        certify(d, kind="wrench-closure")
+    with pytest.raises(InputError, match="--resolution"):
+        certify(d, resolution=0.0)
