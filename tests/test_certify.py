@@ -163,10 +163,57 @@ def test_min_margin_is_proven_against_the_pose_margin():
 
 
 def test_unsupported_models_are_refused_with_the_reason():
+    import cdpr_design as cd
+
     d = two_outlet_point_mass()
     with pytest.raises(InputError, match="sagging"):
-        certify(spec.with_cable_model(d, "sagging"))
+        certify(cd.load("designs/sagging40.yaml"))
     with pytest.raises(InputError, match="--kind"):
         certify(d, kind="wrench-closure")
     with pytest.raises(InputError, match="--resolution"):
         certify(d, resolution=0.0)
+
+
+# --- the command ----------------------------------------------------------------------------------
+
+def _cli(*args, cwd=None):
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, PYTHONPATH=str(root), CDPR_DESIGN_PICTURE_WORKER="0")
+    return subprocess.run([sys.executable, "-m", "cdpr_design", *args], capture_output=True, text=True,
+                          cwd=cwd or root, env=env, timeout=600)
+
+
+def test_command_writes_boxes_picture_and_summary(tmp_path):
+    import json
+
+    import pyarrow.parquet as pq
+
+    r = _cli("certify", "designs/planar2.yaml", "--resolution", "0.01", "--out", str(tmp_path), "--json",
+             "--format", "parquet")
+    assert r.returncode == 0, r.stderr
+    s = json.loads(r.stdout)
+    assert s == json.loads((tmp_path / "summary.json").read_text())
+    assert s["outer_measure"] == pytest.approx(s["inner_measure"] + s["boundary_measure"])
+    assert s["unit"] == "m^2" and set(s["counts"]) == {"inside", "outside", "boundary"}
+    t = pq.read_table(tmp_path / "boxes.parquet")
+    assert t.column_names == ["lower_x", "upper_x", "lower_y", "upper_y", "status"]
+    assert t.num_rows == sum(s["counts"].values())
+    assert (tmp_path / "certify.png").stat().st_size > 10_000
+    import cdpr_design as cd
+
+    api = cd.certify(cd.load("designs/planar2.yaml"), resolution=0.01).summary()
+    assert api["inner_measure"] == s["inner_measure"] and api["counts"] == s["counts"]
+
+
+def test_command_refuses_unsupported_models_with_exit_2(tmp_path):
+    r = _cli("certify", "designs/sagging40.yaml", "--out", str(tmp_path))
+    assert r.returncode == 2 and "sagging" in r.stderr and "Traceback" not in r.stderr
+    r = _cli("certify", "designs/crane4.yaml", "--out", str(tmp_path))
+    assert r.returncode == 2 and "free" in r.stderr
+    r = _cli("certify", "designs/planar2.yaml", "--resolution", "-1", "--out", str(tmp_path))
+    assert r.returncode == 2 and "--resolution" in r.stderr

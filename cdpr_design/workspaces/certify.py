@@ -204,7 +204,7 @@ def check_box(box, dim: int, name: str = "box") -> tuple:
 
 
 def certify(design: Design, kind: str = "static", resolution: float | None = None, box=None,
-            min_margin: float | None = None, max_boxes: int = MAX_BOXES, time_limit: float | None = None,
+            min_margin: float | None = None, max_boxes: int | None = MAX_BOXES, time_limit: float | None = None,
             tolerance_outlets=None, tolerance_attachments=None,
             progress: Callable[[int, int], None] | None = None) -> CertifyResult:
     """Pave ``box`` (lower, upper) [m] (default the workspace grid's box) into proven
@@ -228,8 +228,11 @@ def certify(design: Design, kind: str = "static", resolution: float | None = Non
     mu = 0.0 if min_margin is None else float(min_margin)
     if not (math.isfinite(mu) and mu >= 0):
         raise InputError(f"--min-margin: expected a non-negative number of newtons, got {min_margin}")
+    max_boxes = MAX_BOXES if max_boxes is None else max_boxes
     if max_boxes < 1:
         raise InputError(f"--max-boxes: expected a positive count, got {max_boxes}")
+    if time_limit is not None and not (math.isfinite(time_limit) and time_limit > 0):
+        raise InputError(f"--time-limit: expected a positive number of seconds, got {time_limit}")
     classify = Classifier(design, kind, mu, tolerance_outlets, tolerance_attachments)
     t0 = time.perf_counter()
     lower, upper, status, classified, truncated = pave(classify, np.array([lo0]), np.array([hi0]), res,
@@ -295,3 +298,10 @@ def bisect(lower: np.ndarray, upper: np.ndarray, axis: np.ndarray):
     hi[2 * rows, axis] = mid
     lo[2 * rows + 1, axis] = mid
     return lo, hi
+
+
+def warm_up(design: Design, kind: str = "static") -> None:
+    """Classify one box: numba loads the kernels from its on-disk cache (or compiles them on a
+    machine's first run), so a caller can time that apart from the paving."""
+    lo, hi = default_box(design)
+    Classifier(design, kind)(np.array([lo]), np.array([lo]))
