@@ -217,3 +217,52 @@ def test_command_refuses_unsupported_models_with_exit_2(tmp_path):
     assert r.returncode == 2 and "free" in r.stderr
     r = _cli("certify", "designs/planar2.yaml", "--resolution", "-1", "--out", str(tmp_path))
     assert r.returncode == 2 and "--resolution" in r.stderr
+
+
+def test_check_certifies_the_task_box_and_names_what_it_could_not_prove(tmp_path):
+    import json
+
+    import yaml
+
+    raw = yaml.safe_load(open("designs/planar2.yaml"))
+    raw["requirements"] = {"task_box": {"lower": [0.45, 0.6], "upper": [1.05, 1.1]}, "certified": True}
+    good = tmp_path / "good.yaml"
+    good.write_text(yaml.safe_dump(raw))
+    r = _cli("check", str(good), "--json")  # (planar2's motors fail their torque check: exit 1 either way)
+    row = [c for c in json.loads(r.stdout)["checks"] if c["requirement"] == "certified"][0]
+    assert row["passed"]
+    raw.pop("winch")
+    raw.pop("cable")
+    good.write_text(yaml.safe_dump(raw))
+    r = _cli("check", str(good))
+    assert r.returncode == 0, r.stdout + r.stderr
+    raw["requirements"] = {"task_box": {"lower": [0.45, 0.6], "upper": [1.05, 1.4]}}  # above the 20 N limit
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(raw))
+    assert "certified" not in _cli("check", str(bad)).stdout  # without --certify nothing is proven
+    r = _cli("check", str(bad), "--certify")
+    assert r.returncode == 1
+    assert "could not prove the box" in r.stderr and "infeasible" in r.stderr
+    r = _cli("check", str(bad), "--certify", "--json")
+    row = [c for c in json.loads(r.stdout)["checks"] if c["requirement"] == "certified"][0]
+    assert not row["passed"] and row["unproven_box"]["status"] == "outside"
+    assert row["witness"]["feasible"] is False and row["unproven_box"]["lower"][1] > 1.2
+
+
+def test_tolerances_shrink_the_inner_measure_and_hold_for_every_geometry_within_them():
+    rng = np.random.default_rng(5)
+    d = random_robot(rng, "2T", 4)
+    inner = [certify(d, resolution=0.05, tolerance_outlets=tol, tolerance_attachments=tol).measure(1)
+             for tol in (0.0, 0.01, 0.03, 0.06)]
+    assert all(b < a for a, b in zip(inner, inner[1:])) and inner[-1] > 0, inner
+    tol = 0.03
+    r = certify(d, resolution=0.05, tolerance_outlets=tol, tolerance_attachments=tol)
+    idx = np.flatnonzero(r.status == 1)
+    for k in rng.choice(idx, 150, replace=False):
+        raw = {**d.raw, "cables": [dict(c) for c in d.raw["cables"]]}
+        for c in raw["cables"]:  # a geometry within the tolerance (in the plane)
+            c["outlet"] = (np.asarray(c["outlet"]) + rng.uniform(-tol, tol, 2)).tolist()
+            c["attachment"] = (np.asarray(c["attachment"]) + rng.uniform(-tol, tol, 2)).tolist()
+        built = spec.from_dict(raw)
+        x = rng.uniform(r.lower[k], r.upper[k])
+        assert lp_feasible(built, x, required_wrenches(built, "static")), (x, raw["cables"])

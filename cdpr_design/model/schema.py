@@ -145,6 +145,8 @@ class RequirementsSpec(StrictModel):
         None, description="Factor on required motor torque and speed when sizing")
     max_tilt: Annotated[FiniteFloat, Field(ge=0, le=180)] | None = Field(
         None, description="Largest tilt [deg] an under-constrained effector may hang with at a feasible pose")
+    certified: bool | None = Field(
+        None, description="check proves every pose of the task box feasible by interval analysis")
 
 
 class TrajectorySpec(StrictModel):
