@@ -54,7 +54,7 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_noref
 from cdpr_design.kernels.geometry import structure_matrix
 from cdpr_design.kernels.hsm import facet_normal
-from cdpr_design.kernels.interval import iabs, iadd, imul, isqr, isqrt, isub, iscale, down, up, unit_component
+from cdpr_design.kernels.interval import down, iabs, iadd, idiv, imul, iscale, isqr, isqrt, isub, unit_component, up
 from cdpr_design.kernels.hsm import make_scratch as make_qp_scratch
 from cdpr_design.kernels.linalg import det_in_place, inverse_into
 from cdpr_design.kernels.tension_qp import min_norm_tensions
@@ -69,16 +69,15 @@ KRAWCZYK_STEPS = 2
 
 
 @njit_noref
-def interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh):
-    """Enclose the structure matrix over the position box [plo, phi] (3,) [m], outlets in
-    [Alo, Ahi] and rotated attachments in [Blo, Bhi] (m, 3) [m]: ``Wl``, ``Wh`` (n, m).
+def interval_units(plo, phi, Alo, Ahi, Blo, Bhi, U, L):
+    """Enclose the cables' unit vectors u_i over the position box [plo, phi] (3,) [m], outlets
+    in [Alo, Ahi] and rotated attachments in [Blo, Bhi] (m, 3) [m]: ``U`` (m, 3, 2) (lower,
+    upper) and the lengths ``L`` (m, 2) [m].
 
     Returns True when every cable's length is proven positive over the box (else its
-    direction is undefined somewhere: the column is [-1, 1]-wide)."""
-    m = Alo.shape[0]
-    n = rows.shape[0]
+    direction is undefined somewhere: its components are [-1, 1])."""
     ok = True
-    for i in range(m):
+    for i in range(Alo.shape[0]):
         # d = A - Rb - p, one interval per component
         d0l, d0h = isub(Alo[i, 0], Ahi[i, 0], Blo[i, 0], Bhi[i, 0])
         d0l, d0h = isub(d0l, d0h, plo[0], phi[0])
@@ -95,38 +94,68 @@ def interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh):
         ll, lh = iadd(r0l, r0h, s0l, s0h)
         if not (ll > 0.0):
             ok = False
-        uxl, uxh = unit_component(d0l, d0h, r0l, r0h)
-        uyl, uyh = unit_component(d1l, d1h, r1l, r1h)
-        uzl, uzh = unit_component(d2l, d2h, r2l, r2h)
-        bxl = Blo[i, 0]
-        bxh = Bhi[i, 0]
-        byl = Blo[i, 1]
-        byh = Bhi[i, 1]
-        bzl = Blo[i, 2]
-        bzh = Bhi[i, 2]
-        for k in range(n):
-            r = rows[k]
-            if r == 0:
-                lo, hi = uxl, uxh
-            elif r == 1:
-                lo, hi = uyl, uyh
-            elif r == 2:
-                lo, hi = uzl, uzh
-            elif r == 3:  # by uz - bz uy
-                al, ah = imul(byl, byh, uzl, uzh)
-                bl, bh = imul(bzl, bzh, uyl, uyh)
-                lo, hi = isub(al, ah, bl, bh)
-            elif r == 4:  # bz ux - bx uz
-                al, ah = imul(bzl, bzh, uxl, uxh)
-                bl, bh = imul(bxl, bxh, uzl, uzh)
-                lo, hi = isub(al, ah, bl, bh)
-            else:  # bx uy - by ux
-                al, ah = imul(bxl, bxh, uyl, uyh)
-                bl, bh = imul(byl, byh, uxl, uxh)
-                lo, hi = isub(al, ah, bl, bh)
-            Wl[k, i] = lo
-            Wh[k, i] = hi
+        L[i, 0], L[i, 1] = isqrt(ll, lh)
+        U[i, 0, 0], U[i, 0, 1] = unit_component(d0l, d0h, r0l, r0h)
+        U[i, 1, 0], U[i, 1, 1] = unit_component(d1l, d1h, r1l, r1h)
+        U[i, 2, 0], U[i, 2, 1] = unit_component(d2l, d2h, r2l, r2h)
     return ok
+
+
+@njit_noref
+def column_rows(V, i, Blo, Bhi, rows, Wl, Wh):
+    """Column i of [Wl, Wh] (n, m): [v ; (R b_i) x v] restricted to ``rows``, for the interval
+    3-vector ``V`` (3, 2) and cable i's rotated attachment box (the structure matrix's column
+    for v = u_i, its derivative along a position axis for v = du_i/dp)."""
+    bxl = Blo[i, 0]
+    bxh = Bhi[i, 0]
+    byl = Blo[i, 1]
+    byh = Bhi[i, 1]
+    bzl = Blo[i, 2]
+    bzh = Bhi[i, 2]
+    for k in range(rows.shape[0]):
+        r = rows[k]
+        if r < 3:
+            lo, hi = V[r, 0], V[r, 1]
+        elif r == 3:  # by vz - bz vy
+            al, ah = imul(byl, byh, V[2, 0], V[2, 1])
+            bl, bh = imul(bzl, bzh, V[1, 0], V[1, 1])
+            lo, hi = isub(al, ah, bl, bh)
+        elif r == 4:  # bz vx - bx vz
+            al, ah = imul(bzl, bzh, V[0, 0], V[0, 1])
+            bl, bh = imul(bxl, bxh, V[2, 0], V[2, 1])
+            lo, hi = isub(al, ah, bl, bh)
+        else:  # bx vy - by vx
+            al, ah = imul(bxl, bxh, V[1, 0], V[1, 1])
+            bl, bh = imul(byl, byh, V[0, 0], V[0, 1])
+            lo, hi = isub(al, ah, bl, bh)
+        Wl[k, i] = lo
+        Wh[k, i] = hi
+
+
+@njit_noref
+def interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh, U, L):
+    """Enclose the structure matrix over the box (:func:`interval_units`): ``Wl``, ``Wh``
+    (n, m); ``U``, ``L`` receive the unit vectors and lengths.  Returns :func:`interval_units`'s flag."""
+    ok = interval_units(plo, phi, Alo, Ahi, Blo, Bhi, U, L)
+    for i in range(Alo.shape[0]):
+        column_rows(U[i], i, Blo, Bhi, rows, Wl, Wh)
+    return ok
+
+
+@njit_noref
+def structure_derivative(axis, U, L, Blo, Bhi, rows, Dl, Dh, V):
+    """Enclose dW/dp_axis over the box into [Dl, Dh] (n, m): du_i/dp_k = -(e_k - u_i u_ik) / L_i
+    (u_i = (A_i - R b_i - p) / L_i), through :func:`column_rows`; ``V`` (3, 2) is scratch."""
+    for i in range(U.shape[0]):
+        for c in range(3):
+            if c == axis:
+                pl, ph = isqr(U[i, c, 0], U[i, c, 1])
+                pl, ph = isub(1.0, 1.0, pl, ph)
+            else:
+                pl, ph = imul(U[i, c, 0], U[i, c, 1], U[i, axis, 0], U[i, axis, 1])
+                pl, ph = -ph, -pl
+            V[c, 0], V[c, 1] = idiv(-ph, -pl, L[i, 0], L[i, 1])
+        column_rows(V, i, Blo, Bhi, rows, Dl, Dh)
 
 
 @njit_noref
@@ -354,13 +383,98 @@ def outside_test(Wc, Wl, Wh, wv, tmid, rho, mu, facets, nu, best_nu):
 
 @njit
 def make_scratch(n, m):
-    """The work arrays of :func:`classify_box` (one set per block of boxes)."""
-    return (np.empty((n, m)), np.empty((n, m)), np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m),
-            np.empty(n), np.empty(n), np.empty((n, max(2 * n, 2))), np.empty(m), np.empty(m), np.empty(m),
-            np.empty(m), np.empty(n), np.empty(m), np.empty((n, n)), np.empty((n, n)), np.empty(n),
-            np.empty(n), np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)), np.empty((n, n)),
-            np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(m),
-            make_qp_scratch(n, m, 1))
+    """The work arrays of :func:`classify_box` (one set per block of boxes): a tuple of the
+    centre's floats, one of the box's enclosures and one of the Krawczyk steps."""
+    centre = (np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(n), np.empty(m),
+              np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(m), make_qp_scratch(n, m, 1))
+    box = (np.empty((n, m)), np.empty((n, m)), np.empty((m, 3, 2)), np.empty((m, 2)), np.empty((n, m)),
+           np.empty((n, m)), np.empty((m, 3, 2)), np.empty((m, 2)), np.empty((n, m)), np.empty((n, m)),
+           np.empty((3, 2)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty(n),
+           np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+           np.empty(n), np.empty(n))
+    kr = (np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)), np.empty((n, n)), np.empty(n),
+          np.empty(n), np.empty((n, max(2 * n, 2))))
+    return centre, box, kr
+
+
+@njit
+def basis_enclosure(Wl, Wh, bases, basis, t, tmin, tmax, w, mu, Al, Ah, bl, bh, kr, Xl, Xh):
+    """Enclose into [Xl, Xh] (n,) the tensions of the basis cables ``bases[basis]`` that balance
+    every wrench of w + [-mu, mu]^n (n,) for every structure matrix in [Wl, Wh] (n, m), the other
+    cables held at ``t`` clipped to their bounds.  ``Al``, ``Ah`` receive the basis columns;
+    ``kr``: the Krawczyk scratch.  False when regularity is not proven."""
+    n, m = Wl.shape
+    for i in range(n):
+        for j in range(n):
+            Al[i, j] = Wl[i, bases[basis, j]]
+            Ah[i, j] = Wh[i, bases[basis, j]]
+        bl[i], bh[i] = iadd(w[i], w[i], -mu, mu)
+    for j in range(m):
+        if in_basis(bases, basis, j) >= 0:
+            continue
+        tj = min(max(t[j], tmin[j]), tmax[j])
+        for i in range(n):
+            pl, ph = iscale(tj, Wl[i, j], Wh[i, j])
+            bl[i], bh[i] = isub(bl[i], bh[i], pl, ph)
+    Am, Y, xt, Cl, Ch, zl, zh, work = kr
+    return krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work)
+
+
+@njit_noref
+def in_basis(bases, basis, j):
+    """The slot of cable j in ``bases[basis]`` (-1 if it is not there)."""
+    for q in range(bases.shape[1]):
+        if bases[basis, q] == j:
+            return q
+    return -1
+
+
+@njit
+def within(bases, basis, Xl, Xh, tmin, tmax):
+    """Whether the enclosure [Xl, Xh] of the basis tensions lies within their bounds."""
+    for q in range(bases.shape[1]):
+        c = bases[basis, q]
+        if not (Xl[q] >= tmin[c] and Xh[q] <= tmax[c]):
+            return False
+    return True
+
+
+@njit
+def mean_value(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases, basis, t, tmin, tmax, w, mu, box, kr):
+    """Refine the first-order enclosure of the basis tensions (``box`` [15], [16]) by the centred
+    (mean-value) form t_B(X) in t_B(c) + sum_k dt_B/dp_k (X) (X_k - c_k), with
+    dt_B/dp_k = -W_B^-1 sum_j (dW_j/dp_k) t_j enclosed by Krawczyk over the box; the result
+    is intersected into ``box`` [15], [16].  False when a step is not proven."""
+    (Wl, Wh, U, L, Wcl, Wch, Uc, Lc, Dl, Dh, V, Al, Ah, Acl, Ach, bl, bh, Xl, Xh, Tl, Th, gl, gh, yl, yh) = box
+    n = rows.shape[0]
+    interval_structure(pc, pc, Alo, Ahi, Blo, Bhi, rows, Wcl, Wch, Uc, Lc)
+    if not basis_enclosure(Wcl, Wch, bases, basis, t, tmin, tmax, w, mu, Acl, Ach, bl, bh, kr, Tl, Th):
+        return False
+    Am, Y, xt, Cl, Ch, zl, zh, work = kr
+    for axis in range(3):
+        if not (phi[axis] > plo[axis]):
+            continue
+        structure_derivative(axis, U, L, Blo, Bhi, rows, Dl, Dh, V)
+        for i in range(n):
+            gl[i] = 0.0
+            gh[i] = 0.0
+            for j in range(Wl.shape[1]):
+                q = in_basis(bases, basis, j)
+                if q >= 0:
+                    pl, ph = imul(Dl[i, j], Dh[i, j], Xl[q], Xh[q])
+                else:
+                    pl, ph = iscale(min(max(t[j], tmin[j]), tmax[j]), Dl[i, j], Dh[i, j])
+                gl[i], gh[i] = iadd(gl[i], gh[i], pl, ph)
+        if not krawczyk(Al, Ah, gl, gh, Am, Y, xt, Cl, Ch, zl, zh, yl, yh, work):
+            return False
+        dl, dh = isub(plo[axis], phi[axis], pc[axis], pc[axis])
+        for q in range(n):
+            pl, ph = imul(-yh[q], -yl[q], dl, dh)
+            Tl[q], Th[q] = iadd(Tl[q], Th[q], pl, ph)
+    for q in range(n):
+        Xl[q] = max(Xl[q], Tl[q])
+        Xh[q] = min(Xh[q], Th[q])
+    return True
 
 
 @njit
@@ -372,18 +486,18 @@ def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax,
     the cable subsets; ``scr`` from :func:`make_scratch`."""
     m = Alo.shape[0]
     n = rows.shape[0]
-    (Wl, Wh, Wc, L, tmid, rho, nu, best_nu, work, t, lo, hi, s, rhs, slack, Al, Ah, bl, bh, Am, Y, xt,
-     Cl, Ch, zl, zh, Xl, Xh, _, tclip, qp) = scr
-    lengths_ok = interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh)
+    centre, box, kr = scr
+    (Wc, L, tmid, rho, nu, best_nu, t, lo, hi, s, rhs, slack, qp) = centre
+    (Wl, Wh, U, Lx, Wcl, Wch, Uc, Lc, Dl, Dh, V, Al, Ah, Acl, Ach, bl, bh, Xl, Xh, Tl, Th, gl, gh, yl, yh) = box
+    work = kr[7]
+    lengths_ok = interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh, U, Lx)
     if not structure_matrix(pc[0], pc[1], pc[2], Bc, Ac, rows, Wc, L):
         return UNDECIDED
     half_ranges(tmin, tmax, tmid, rho)
     # the centre decides which proof to try: inside if it is feasible (with the margin asked)
     basis = -1
     for k in range(wv.shape[0]):
-        for i in range(n):
-            bl[i] = wv[k, i]
-        if not centre_tensions(Wc, bl, tmin, tmax, tmid, t, lo, hi, rhs, s, qp):
+        if not centre_tensions(Wc, wv[k], tmin, tmax, tmid, t, lo, hi, rhs, s, qp):
             if outside_test(Wc, Wl, Wh, wv, tmid, rho, mu, facets, nu, best_nu):
                 return OUTSIDE
             return UNDECIDED
@@ -395,34 +509,18 @@ def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax,
         return OUTSIDE
     if not lengths_ok or basis < 0:
         return UNDECIDED
-    # inside: Krawczyk enclosure of the basis tensions, the other cables' tensions fixed
-    for i in range(n):
-        for j in range(n):
-            Al[i, j] = Wl[i, bases[basis, j]]
-            Ah[i, j] = Wh[i, bases[basis, j]]
+    # inside: enclose the basis tensions over the box, the other cables' tensions fixed
     for k in range(wv.shape[0]):
-        for i in range(n):
-            bl[i] = wv[k, i]
-        if not centre_tensions(Wc, bl, tmin, tmax, tmid, t, lo, hi, rhs, s, qp):
+        if not centre_tensions(Wc, wv[k], tmin, tmax, tmid, t, lo, hi, rhs, s, qp):
             return UNDECIDED
-        for i in range(n):
-            bl[i], bh[i] = iadd(wv[k, i], wv[k, i], -mu, mu)
-        for j in range(m):
-            inb = False
-            for q in range(n):
-                inb = inb or bases[basis, q] == j
-            if inb:
-                continue
-            tj = min(max(t[j], tmin[j]), tmax[j])
-            for i in range(n):
-                pl, ph = iscale(tj, Wl[i, j], Wh[i, j])
-                bl[i], bh[i] = isub(bl[i], bh[i], pl, ph)
-        if not krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work):
+        if not basis_enclosure(Wl, Wh, bases, basis, t, tmin, tmax, wv[k], mu, Al, Ah, bl, bh, kr, Xl, Xh):
             return UNDECIDED
-        for j in range(n):
-            c = bases[basis, j]
-            if not (Xl[j] >= tmin[c] and Xh[j] <= tmax[c]):
-                return UNDECIDED
+        if within(bases, basis, Xl, Xh, tmin, tmax):
+            continue
+        if not mean_value(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases, basis, t, tmin, tmax, wv[k], mu, box, kr):
+            return UNDECIDED
+        if not within(bases, basis, Xl, Xh, tmin, tmax):
+            return UNDECIDED
     return INSIDE
 
 
