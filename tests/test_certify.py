@@ -72,10 +72,16 @@ def random_robot(rng, motion, m, external=False):
     outlets = rng.uniform(-2, 2, (m, d))
     outlets[:, d - 1] = rng.uniform(0.3, 2.0, m)  # mostly above: gravity pulls down the last axis
     attach = rng.uniform(-0.15, 0.15, (m, d)) if motion in ("1R2T", "3R3T") else np.zeros((m, d))
+    if motion == "3R3T":  # random ones hold almost nowhere: a perturbed IPAnema-like layout instead
+        corners = np.array(list(itertools.product((-1, 1), (-1, 1), (-1, 1))), float)[rng.permutation(8)[:m]]
+        outlets = corners * [2.0, 2.0, 1.0] + [0, 0, 1.0] + rng.normal(0, 0.2, (m, 3))
+        attach = corners[:, [1, 0, 2]] * 0.15 + rng.normal(0, 0.03, (m, 3))
     cables = [{"name": f"c{i}", "outlet": outlets[i].tolist(), "attachment": attach[i].tolist()}
               for i in range(m)]
     n = {"2T": 2, "1R2T": 3, "3T": 3, "3R3T": 6}[motion]
     ws = {"grid": {"lower": [-1.0] * (d - 1) + [-0.6], "upper": [1.0] * (d - 1) + [1.4], "step": 0.1}}
+    if motion == "3R3T":
+        ws = {"grid": {"lower": [-0.6, -0.6, 0.2], "upper": [0.6, 0.6, 1.4], "step": 0.1}}
     if external:
         ws["external_wrench"] = {"lower": [-2.0] + [0.0] * (n - 1), "upper": [2.0] + [1.0] + [0.0] * (n - 2)}
     return spec.from_dict({
@@ -266,3 +272,19 @@ def test_tolerances_shrink_the_inner_measure_and_hold_for_every_geometry_within_
         built = spec.from_dict(raw)
         x = rng.uniform(r.lower[k], r.upper[k])
         assert lp_feasible(built, x, required_wrenches(built, "static")), (x, raw["cables"])
+
+
+def test_spec_tolerance_is_taken_and_checked(tmp_path):
+    from cdpr_design.errors import SpecError
+
+    rng = np.random.default_rng(5)
+    d = random_robot(rng, "2T", 4)
+    api = certify(d, resolution=0.05, tolerance_outlets=0.01, tolerance_attachments=[0.0, 0.01, 0.0, 0.01])
+    tol = spec.from_dict({**d.raw, "tolerance": {"outlets": 0.01, "attachments": [0.0, 0.01, 0.0, 0.01]}})
+    s = certify(tol, resolution=0.05).summary()
+    assert s["inner_measure"] == api.summary()["inner_measure"] < certify(d, resolution=0.05).measure(1)
+    assert s["tolerance"] == {"outlets": 0.01, "attachments": [0.0, 0.01, 0.0, 0.01]}
+    with pytest.raises(SpecError, match="tolerance.outlets"):
+        spec.from_dict({**d.raw, "tolerance": {"outlets": [0.01, 0.02]}})
+    with pytest.raises(SpecError, match="tolerance"):
+        spec.from_dict({**d.raw, "tolerance": -0.01})

@@ -343,10 +343,12 @@ def centre_tensions(Wc, w, tmin, tmax, tmid, t, lo, hi, rhs, s, scr):
 
 
 @njit
-def outside_test(Wc, Wl, Wh, wv, tmid, rho, mu, facets, nu, best_nu):
+def outside_test(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, Wc, wv, tmid, rho, mu, facets, nu, best_nu, box):
     """Whether the box is proven outside: for some wrench vertex, the facet most violated at
-    the centre has its support gap below ``mu`` |nu| over the whole box."""
+    the centre has its support gap below ``mu`` |nu| over the whole box (natural interval
+    extension, then the centred form of :func:`centred_gap`)."""
     n, m = Wc.shape
+    Wl, Wh = box[0], box[1]
     for k in range(wv.shape[0]):
         worst = np.inf
         for c in range(facets.shape[0]):
@@ -369,16 +371,91 @@ def outside_test(Wc, Wl, Wh, wv, tmid, rho, mu, facets, nu, best_nu):
                     best_nu[i] = nu[i]
         if not (worst < mu):
             continue
-        sl, sh = support_gap(best_nu, Wl, Wh, tmid, rho, wv[k])
         ql, qh = 0.0, 0.0
         for i in range(n):
             pl, ph = isqr(best_nu[i], best_nu[i])
             ql, qh = iadd(ql, qh, pl, ph)
         nl, nh = isqrt(ql, qh)
         ml, mh = iscale(mu, nl, nh)
+        sl, sh = support_gap(best_nu, Wl, Wh, tmid, rho, wv[k])
+        if sh < ml:
+            return True
+        sh = centred_gap(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, best_nu, tmid, rho, wv[k], box)
         if sh < ml:
             return True
     return False
+
+
+@njit
+def centred_gap(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, nu, tmid, rho, w, box):
+    """An upper bound over the box of the support gap s (:func:`support_gap`) by centred forms.
+
+    Where the sign sigma_j of l_j = nu . w_j is proven constant over the box (natural
+    extension), and the sign sigma_g of the gap g = nu . (W t_mid - w) is, the part
+    F = sum_j rho_j sigma_j l_j - sigma_g g of s is smooth and lies in
+    F(c) + sum_k dF/dp_k (X) (X_k - c_k), dF/dp_k = sum_j (rho_j sigma_j - sigma_g t_mid,j)
+    nu . dw_j/dp_k; each l_j of unknown sign (the facet's own cables, 0 at the centre) adds
+    rho_j max |l_j(c) + sum_k nu . dw_j/dp_k (X) (X_k - c_k)|.  ``inf`` when the gap's sign is
+    not proven."""
+    (Wl, Wh, U, L, Wcl, Wch, Uc, Lc, Dl, Dh, V, Al, Ah, Acl, Ach, bl, bh, Xl, Xh, Tl, Th, gl, gh, yl, yh) = box
+    n, m = Wl.shape
+    sig = np.empty(m)
+    El = np.empty(m)
+    Eh = np.empty(m)
+    cl, ch = 0.0, 0.0
+    for j in range(m):
+        ll, lh = 0.0, 0.0
+        for i in range(n):
+            pl, ph = iscale(nu[i], Wl[i, j], Wh[i, j])
+            ll, lh = iadd(ll, lh, pl, ph)
+        sig[j] = 1.0 if ll > 0.0 else (-1.0 if lh < 0.0 else 0.0)
+        pl, ph = iscale(tmid[j], ll, lh)
+        cl, ch = iadd(cl, ch, pl, ph)
+    for i in range(n):
+        pl, ph = iscale(nu[i], w[i], w[i])
+        cl, ch = isub(cl, ch, pl, ph)
+    if cl > 0.0:
+        sg = 1.0
+    elif ch < 0.0:
+        sg = -1.0
+    else:
+        return np.inf
+    # F(c) and the l_j(c), from the structure matrix enclosed at the centre point
+    interval_structure(pc, pc, Alo, Ahi, Blo, Bhi, rows, Wcl, Wch, Uc, Lc)
+    fl, fh = iscale(sg, 0.0, 0.0)
+    for i in range(n):
+        pl, ph = iscale(sg * nu[i], w[i], w[i])
+        fl, fh = iadd(fl, fh, pl, ph)
+    for j in range(m):
+        ll, lh = 0.0, 0.0
+        for i in range(n):
+            pl, ph = iscale(nu[i], Wcl[i, j], Wch[i, j])
+            ll, lh = iadd(ll, lh, pl, ph)
+        El[j], Eh[j] = ll, lh
+        kl, kh = isub(rho[j] * sig[j], rho[j] * sig[j], sg * tmid[j], sg * tmid[j])
+        pl, ph = imul(kl, kh, ll, lh)
+        fl, fh = iadd(fl, fh, pl, ph)
+    for axis in range(3):
+        if not (phi[axis] > plo[axis]):
+            continue
+        structure_derivative(axis, U, L, Blo, Bhi, rows, Dl, Dh, V)
+        xl, xh = isub(plo[axis], phi[axis], pc[axis], pc[axis])
+        for j in range(m):
+            dl, dh = 0.0, 0.0
+            for i in range(n):
+                pl, ph = iscale(nu[i], Dl[i, j], Dh[i, j])
+                dl, dh = iadd(dl, dh, pl, ph)
+            dl, dh = imul(dl, dh, xl, xh)
+            kl, kh = isub(rho[j] * sig[j], rho[j] * sig[j], sg * tmid[j], sg * tmid[j])
+            pl, ph = imul(kl, kh, dl, dh)
+            fl, fh = iadd(fl, fh, pl, ph)
+            if sig[j] == 0.0:
+                El[j], Eh[j] = iadd(El[j], Eh[j], dl, dh)
+    for j in range(m):
+        if sig[j] == 0.0:
+            pl, ph = iscale(rho[j], 0.0, max(-El[j], Eh[j]))
+            fl, fh = iadd(fl, fh, pl, ph)
+    return fh
 
 
 @njit
@@ -498,14 +575,14 @@ def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax,
     basis = -1
     for k in range(wv.shape[0]):
         if not centre_tensions(Wc, wv[k], tmin, tmax, tmid, t, lo, hi, rhs, s, qp):
-            if outside_test(Wc, Wl, Wh, wv, tmid, rho, mu, facets, nu, best_nu):
+            if outside_test(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, Wc, wv, tmid, rho, mu, facets, nu, best_nu, box):
                 return OUTSIDE
             return UNDECIDED
         if k == 0:
             for j in range(m):
                 slack[j] = min(t[j] - tmin[j], tmax[j] - t[j]) / max(tmax[j] - tmin[j], 1e-300)
             basis = best_basis(Wc, bases, slack, work)
-    if mu > 0.0 and outside_test(Wc, Wl, Wh, wv, tmid, rho, mu, facets, nu, best_nu):
+    if mu > 0.0 and outside_test(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, Wc, wv, tmid, rho, mu, facets, nu, best_nu, box):
         return OUTSIDE
     if not lengths_ok or basis < 0:
         return UNDECIDED

@@ -178,6 +178,13 @@ class PlcSpec(StrictModel):
     fault: str | None = None
 
 
+class ToleranceSpec(StrictModel):
+    outlets: NonNegFloat | list[NonNegFloat] | None = Field(
+        None, description="Half-width [m] of the box each outlet may lie in (one value, or one per cable)")
+    attachments: NonNegFloat | list[NonNegFloat] | None = Field(
+        None, description="Half-width [m] of the box each attachment may lie in (one value, or one per cable)")
+
+
 class DesignSpec(StrictModel):
     """A cable-driven parallel robot design (cdpr-design spec format)."""
 
@@ -196,6 +203,9 @@ class DesignSpec(StrictModel):
     plc: PlcSpec | None = None
     requirements: RequirementsSpec | None = None
     sweep: dict[str, Any] | None = Field(None, description="Parameter sweep: vary: {dotted.key: values}")
+    tolerance: NonNegFloat | ToleranceSpec | None = Field(
+        None, description="Geometric tolerance [m] of every outlet and attachment (certify proves its boxes "
+                          "for every geometry within it)")
 
 
 # ----------------------------------------------------------------------------

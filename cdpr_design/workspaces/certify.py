@@ -126,6 +126,17 @@ class CertifyResult:
         return cols
 
 
+def spec_tolerances(design: Design) -> tuple:
+    """(outlets, attachments) [m] of the spec's ``tolerance:`` (a number for every point, or
+    ``outlets`` / ``attachments`` each a number or one per cable); None where not given."""
+    tol = (design.raw or {}).get("tolerance")
+    if tol is None:
+        return None, None
+    if isinstance(tol, (int, float)):
+        return float(tol), float(tol)
+    return tol.get("outlets"), tol.get("attachments")
+
+
 def geometry_boxes(design: Design, tolerance_outlets=None, tolerance_attachments=None):
     """(Alo, Ahi, Blo, Bhi, A, Rb): the outlets and rotated attachments (m, 3) [m] as boxes of
     half-width the tolerances (scalars or (m,) [m], default 0) at the fixed orientation, and
@@ -215,11 +226,19 @@ def certify(design: Design, kind: str = "static", resolution: float | None = Non
     step).  ``min_margin`` [N]: prove a capacity margin of at least this much (inside) or
     less (outside) instead of feasibility.  ``max_boxes``, ``time_limit`` [s]: stop bisecting
     (the boxes left are ``boundary``; ``truncated`` says which).  ``tolerance_outlets``,
-    ``tolerance_attachments`` [m] (scalars or per cable): geometric tolerances; ``inside``
-    then holds for every geometry within them.  ``progress(classified, pending)`` after each
+    ``tolerance_attachments`` [m] (scalars or per cable): geometric tolerances (default the
+    spec's ``tolerance:``); ``inside`` then holds for every geometry within them.  ``progress(classified, pending)`` after each
     level of bisection.
     """
     check_certifiable(design, kind)
+    spec_outlets, spec_attachments = spec_tolerances(design)
+    tolerance_outlets = spec_outlets if tolerance_outlets is None else tolerance_outlets
+    tolerance_attachments = spec_attachments if tolerance_attachments is None else tolerance_attachments
+    for name, v in (("outlets", tolerance_outlets), ("attachments", tolerance_attachments)):
+        a = np.asarray(0.0 if v is None else v, float)
+        if a.ndim > 1 or (a.ndim == 1 and a.size != design.m) or not np.all(np.isfinite(a) & (a >= 0)):
+            raise InputError(f"tolerance.{name}: expected a non-negative number of metres or one per cable "
+                             f"({design.m})")
     dim = design.motion.dim
     lo0, hi0 = check_box(default_box(design) if box is None else box, dim)
     res = float(min(design.workspace.grid.step) if resolution is None else resolution)
