@@ -143,3 +143,45 @@ def test_krawczyk_encloses_every_solution_of_the_interval_system():
             for i in range(n):
                 assert _holds(Xl[i], Xh[i], x[i, 0])
     assert proven > 200
+
+
+def _arb_column(a, b, p, rows):
+    """[u ; b x u] restricted to ``rows`` in arb, u = (a - b - p)/|a - b - p|; and du/dp_k."""
+    d = [arb(float(a[i])) - arb(float(b[i])) - arb(float(p[i])) for i in range(3)]
+    L = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+    u = [x / L for x in d]
+    B = [arb(float(x)) for x in b]
+
+    def rows_of(v):
+        full = v + [B[1] * v[2] - B[2] * v[1], B[2] * v[0] - B[0] * v[2], B[0] * v[1] - B[1] * v[0]]
+        return [full[r] for r in rows]
+
+    derivs = [rows_of([-((1 if c == k else 0) - u[c] * u[k]) / L for c in range(3)]) for k in range(3)]
+    return rows_of(u), derivs
+
+
+def test_structure_matrix_and_its_derivative_enclose_every_point_of_the_box():
+    rng = np.random.default_rng(6)
+    rows = np.array([0, 1, 2, 3, 4, 5], dtype=np.int64)
+    for _ in range(60):
+        m = int(rng.integers(2, 9))
+        A = rng.uniform(-3, 3, (m, 3))
+        B = rng.uniform(-0.3, 0.3, (m, 3))
+        c = rng.uniform(-1, 1, 3)
+        w = np.abs(rng.normal(size=3)) * 10.0 ** rng.integers(-4, 0)
+        plo, phi = c - w, c + w
+        Wl, Wh = np.empty((6, m)), np.empty((6, m))
+        U, L = np.empty((m, 3, 2)), np.empty((m, 2))
+        ok = KC.interval_structure(plo, phi, A, A, B, B, rows, Wl, Wh, U, L)
+        D = [(np.empty((6, m)), np.empty((6, m))) for _ in range(3)]
+        for k in range(3):
+            KC.structure_derivative(k, U, L, B, B, rows, D[k][0], D[k][1], np.empty((3, 2)))
+        for _ in range(5):
+            p = rng.uniform(plo, phi)
+            for j in range(m):
+                col, derivs = _arb_column(A[j], B[j], p, rows)
+                for i in range(6):
+                    assert _holds(Wl[i, j], Wh[i, j], col[i])
+                    if ok:
+                        for k in range(3):
+                            assert _holds(D[k][0][i, j], D[k][1][i, j], derivs[k][i])
