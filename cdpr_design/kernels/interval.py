@@ -124,6 +124,18 @@ def idot(al, ah, bl, bh):
 
 
 @njit_noref
+def unit_at(x, r):
+    """x / sqrt(x^2 + r) for the floats x and r >= 0, as an interval ([-1, 1] when the
+    denominator may be 0)."""
+    sl, sh = isqr(x, x)
+    sl, sh = iadd(sl, sh, r, r)
+    dl, dh = isqrt(sl, sh)
+    if not (dl > 0.0):
+        return -1.0, 1.0
+    return idiv(x, x, dl, dh)
+
+
+@njit_noref
 def unit_component(xl, xh, rl, rh):
     """The range of x / sqrt(x^2 + r) for x in [xl, xh] and r in [rl, rh] (r >= 0): one component
     of a unit vector whose other squared components sum to r.
@@ -131,22 +143,8 @@ def unit_component(xl, xh, rl, rh):
     The function increases with x (its derivative r / (x^2 + r)^1.5 >= 0) and, for fixed x,
     decreases in r where x > 0 and increases where x < 0, so its extremes over the box are at
     (xl, rl if xl < 0 else rh) and (xh, rh if xh < 0 else rl), each evaluated with outward
-    rounding.  [-1, 1] when the vector may vanish (its direction is then undefined).
+    rounding (:func:`unit_at`), and clipped to [-1, 1].
     """
-    lo = -1.0
-    hi = 1.0
-    r = rl if xl < 0.0 else rh
-    sl, sh = isqr(xl, xl)
-    sl, sh = iadd(sl, sh, r, r)
-    dl, dh = isqrt(sl, sh)
-    if dl > 0.0:
-        ql, qh = idiv(xl, xl, dl, dh)
-        lo = max(lo, ql)
-    r = rh if xh < 0.0 else rl
-    sl, sh = isqr(xh, xh)
-    sl, sh = iadd(sl, sh, r, r)
-    dl, dh = isqrt(sl, sh)
-    if dl > 0.0:
-        ql, qh = idiv(xh, xh, dl, dh)
-        hi = min(hi, qh)
-    return lo, hi
+    lo = unit_at(xl, rl if xl < 0.0 else rh)[0]
+    hi = unit_at(xh, rh if xh < 0.0 else rl)[1]
+    return max(-1.0, lo), min(1.0, hi)
