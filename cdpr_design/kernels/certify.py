@@ -555,6 +555,30 @@ def mean_value(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases, basis, t, tmin, tm
 
 
 @njit
+def square_outside(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases, t, tmin, tmax, w, box, kr):
+    """Square case (m = n): whether the unique tensions t = W^-1 w, enclosed over the box by
+    Krawczyk (first order, then the centred form), have a component wholly outside its bounds
+    at every pose of the box (which also proves W regular there)."""
+    Wl, Wh, Al, Ah, bl, bh, Xl, Xh = box[0], box[1], box[11], box[12], box[15], box[16], box[17], box[18]
+    if not basis_enclosure(Wl, Wh, bases, 0, t, tmin, tmax, w, 0.0, Al, Ah, bl, bh, kr, Xl, Xh):
+        return False
+    if not beyond(bases, Xl, Xh, tmin, tmax):
+        mean_value(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases, 0, t, tmin, tmax, w, 0.0, box, kr)
+    return beyond(bases, Xl, Xh, tmin, tmax)
+
+
+@njit
+def beyond(bases, Xl, Xh, tmin, tmax):
+    """Whether some component of the enclosure [Xl, Xh] of the tensions of ``bases[0]`` lies
+    wholly below its lower bound or above its upper one."""
+    for q in range(bases.shape[1]):
+        c = bases[0, q]
+        if Xh[q] < tmin[c] or Xl[q] > tmax[c]:
+            return True
+    return False
+
+
+@njit
 def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu, facets, bases, scr):
     """The status of one box of positions [plo, phi] (3,) [m] with centre ``pc``: INSIDE,
     OUTSIDE or UNDECIDED (module docstring).  ``Ac``, ``Bc`` (m, 3): the nominal outlets and
@@ -575,6 +599,9 @@ def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax,
     basis = -1
     for k in range(wv.shape[0]):
         if not centre_tensions(Wc, wv[k], tmin, tmax, tmid, t, lo, hi, rhs, s, qp):
+            if mu == 0.0 and m == n and lengths_ok and square_outside(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases,
+                                                                      t, tmin, tmax, wv[k], box, kr):
+                return OUTSIDE
             if outside_test(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, Wc, wv, tmid, rho, mu, facets, nu, best_nu, box):
                 return OUTSIDE
             return UNDECIDED
