@@ -45,6 +45,8 @@ _LAZY = {
     "evaluate_pose": ("statics.pose", "evaluate_pose"),
     "WorkspaceResult": ("workspaces", "WorkspaceResult"),
     "evaluate_design": ("design.evaluate", "evaluate"),
+    "certify": ("workspaces.certify", "certify"),
+    "CertifyResult": ("workspaces.certify", "CertifyResult"),
 }
 
 __all__ = ["CdprError", "CheckFailed", "InputError", "SpecError", "__version__", *_LAZY]

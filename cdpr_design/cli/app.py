@@ -23,6 +23,7 @@ COMMANDS = {
     "workspace": "workspace", "pose": "pose", "fk": "pose", "schema": "pose",
     "size-motors": "sizing", "report": "sizing", "check": "sizing", "bridge": "bridge",
     "trajectory": "motion", "simulate": "motion", "compare": "motion", "sweep": "sweep", "optimize": "optimize",
+    "certify": "certify",
 }
 
 

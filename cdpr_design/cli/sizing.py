@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -130,6 +130,9 @@ def check(
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
     cable_model: CableModelOpt = None,
+    certify: Annotated[bool, typer.Option(
+        "--certify", help="Also prove the whole task box feasible by interval analysis (as "
+                          "requirements.certified: true).")] = False,
 ):
     """Test the spec's requirements: one line per requirement; exit 0 all pass, 1 otherwise."""
     from cdpr_design.cli import env
@@ -139,6 +142,14 @@ def check(
     e, checks = job.check(design, catalogue, trajectory, safety_factor, motor, step,
                           progress=bars(quiet or json_, min_total=500_000), engine=env.engine())
     passed = e.passed
+    if certify or design.requirements.certified:
+        from cdpr_design.jobs.certify import certify_task
+
+        row = certify_task(design)
+        checks.append(row)
+        passed = passed and row["passed"]
+        if not row["passed"] and not json_:
+            info(quiet, certify_failure(row))
     if json_:
         emit_json({"name": design.name, "passed": passed, "checks": checks, "figures": e.row})
     else:
@@ -149,6 +160,20 @@ def check(
     if not passed:
         failed = [c["requirement"] for c in checks if not c["passed"]]
         raise CheckFailed("" if json_ else f"{design.name}: {', '.join(failed)}")
+
+
+def certify_failure(row: dict) -> str:
+    """The message of a failed ``certified`` check: the box not proven and the witness pose."""
+    b = row["unproven_box"]
+    msg = (f"certified: could not prove the box [{', '.join(f'{v:.6g}' for v in b['lower'])}] .. "
+           f"[{', '.join(f'{v:.6g}' for v in b['upper'])}] ({b['status']})")
+    w = row.get("witness")
+    if w:
+        reason = "infeasible" if not w["feasible"] else f"margin {w['margin']:.4g} N"
+        msg += f"; at the pose ({', '.join(f'{v:.6g}' for v in w['pose'])}): {reason}"
+        if w["feasible"]:
+            msg += f", tensions [{', '.join(f'{t:.4g}' for t in w['tensions'])}] N"
+    return msg
 
 
 def register(app: typer.Typer) -> None:

@@ -35,7 +35,7 @@ _EXACT = {
 _PREFIX = sorted([
     ("tension_", "N"), ("outlet_tension_", "N"), ("peak_tension_", "N"), ("length_", "m"),
     ("unstretched_length_", "m"), ("sag_", "m"), ("cable_speed_", "m/s"), ("cable_accel_", "m/s^2"),
-    ("motor_angle_", "rad"), ("axis_", "m"), ("tilt", "rad"), ("range_", "rad"),
+    ("motor_angle_", "rad"), ("axis_", "m"), ("lower_", "m"), ("upper_", "m"), ("tilt", "rad"), ("range_", "rad"),
 ], key=lambda p: -len(p[0]))
 _COORD = {"x": "m", "y": "m", "z": "m", "phi": "rad", "rx": "rad", "ry": "rad", "rz": "rad"}
 

@@ -280,6 +280,8 @@ class Requirements:
     safety_factor: float = 1.0
     #: largest hanging tilt [deg] of an under-constrained effector at a feasible pose
     max_tilt: float | None = None
+    #: ``check`` proves the whole task box feasible (interval analysis, ``certify``)
+    certified: bool = False
 
 
 @dataclass(frozen=True)

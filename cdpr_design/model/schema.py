@@ -145,6 +145,8 @@ class RequirementsSpec(StrictModel):
         None, description="Factor on required motor torque and speed when sizing")
     max_tilt: Annotated[FiniteFloat, Field(ge=0, le=180)] | None = Field(
         None, description="Largest tilt [deg] an under-constrained effector may hang with at a feasible pose")
+    certified: bool | None = Field(
+        None, description="check proves every pose of the task box feasible by interval analysis")
 
 
 class TrajectorySpec(StrictModel):
@@ -176,6 +178,13 @@ class PlcSpec(StrictModel):
     fault: str | None = None
 
 
+class ToleranceSpec(StrictModel):
+    outlets: NonNegFloat | list[NonNegFloat] | None = Field(
+        None, description="Half-width [m] of the box each outlet may lie in (one value, or one per cable)")
+    attachments: NonNegFloat | list[NonNegFloat] | None = Field(
+        None, description="Half-width [m] of the box each attachment may lie in (one value, or one per cable)")
+
+
 class DesignSpec(StrictModel):
     """A cable-driven parallel robot design (cdpr-design spec format)."""
 
@@ -194,6 +203,9 @@ class DesignSpec(StrictModel):
     plc: PlcSpec | None = None
     requirements: RequirementsSpec | None = None
     sweep: dict[str, Any] | None = Field(None, description="Parameter sweep: vary: {dotted.key: values}")
+    tolerance: NonNegFloat | ToleranceSpec | None = Field(
+        None, description="Geometric tolerance [m] of every outlet and attachment (certify proves its boxes "
+                          "for every geometry within it)")
 
 
 # ----------------------------------------------------------------------------

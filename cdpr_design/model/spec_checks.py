@@ -49,6 +49,11 @@ def check_semantics(s: DesignSpec) -> Problems:
                 p.append((f"plc.{key}", f"expected {m} symbol names (one per cable), got {len(v)}"))
     if s.sweep is not None:
         _check_sweep(p, s.sweep)
+    if s.tolerance is not None and not isinstance(s.tolerance, (int, float)):
+        for key in ("outlets", "attachments"):
+            v = getattr(s.tolerance, key)
+            if isinstance(v, list) and len(v) != len(s.cables):
+                p.append((f"tolerance.{key}", f"expected one value or {len(s.cables)} (one per cable), got {len(v)}"))
     return p
 
 

@@ -1,0 +1,66 @@
+"""``certify``: the workspace paved with proven boxes (interval analysis)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Optional
+
+import typer
+
+from cdpr_design.cli.common import (CableModelOpt, Format, FormatOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt,
+                                    QuietOpt, SpecArg, bars, command, emit_json, load_design, out_console,
+                                    summary_table, timings_row)
+
+ResolutionOpt = Annotated[Optional[float], typer.Option(
+    "--resolution", help="Finest box edge [m]: undecided boxes are bisected down to it, then called boundary "
+                         "(default: the spec's grid step).")]
+
+
+@command
+def certify(
+    spec: SpecArg,
+    kind: KindOpt = Kind.static,
+    resolution: ResolutionOpt = None,
+    min_margin: Annotated[Optional[float], typer.Option(
+        "--min-margin", help="Prove a capacity margin of at least this many newtons (inside) instead of "
+                             "feasibility.")] = None,
+    max_boxes: Annotated[Optional[int], typer.Option(
+        "--max-boxes", help="Stop bisecting after this many boxes (the rest are boundary).")] = None,
+    time_limit: Annotated[Optional[float], typer.Option(
+        "--time-limit", help="Stop bisecting after this many seconds (the rest are boundary).")] = None,
+    out: OutOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    overwrite: OverwriteOpt = False,
+    cable_model: CableModelOpt = None,
+    format: FormatOpt = Format.csv,
+):
+    """Certified workspace by interval analysis: boxes.csv, certify.png, summary.json."""
+    from cdpr_design.cli import env
+    from cdpr_design.jobs import certify as job
+    from cdpr_design.plots import worker as _picture_worker
+
+    with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:
+        design = load_design(spec, cable_model)
+        result, out_dir = job.certify(design, out, overwrite, kind=kind.value, resolution=resolution,
+                                      min_margin=min_margin, max_boxes=max_boxes, time_limit=time_limit,
+                                      format=format.value, pictures=pictures, progress=bars(quiet or json_))
+    s = result.summary()
+    if json_:
+        emit_json(s)
+        return
+    c = s["counts"]
+    out_console.print(summary_table(
+        f"{design.name} — certified {s['kind']} workspace",
+        [("inner measure", f"{s['inner_measure']:.6g} {s['unit']}"),
+         ("outer measure", f"{s['outer_measure']:.6g} {s['unit']}"),
+         ("boundary measure", f"{s['boundary_measure']:.4g} {s['unit']} "
+                              f"({100 * s['boundary_measure'] / s['box_measure']:.3g} % of the box)"),
+         ("boxes", f"inside {c['inside']:,}, boundary {c['boundary']:,}, outside {c['outside']:,}"),
+         ("resolution [m]", s["resolution"])]
+        + ([("min margin [N]", s["min_margin"])] if s["min_margin"] else [])
+        + ([("stopped early", s["truncated"])] if s["truncated"] else [])
+        + [timings_row(s["timings"]), ("files", str(out_dir.path))]))
+
+
+def register(app: typer.Typer) -> None:
+    app.command()(certify)

@@ -1,0 +1,117 @@
+"""The ``certify`` job: pave the workspace with proven boxes, write ``boxes.csv`` (or
+``.parquet``), ``certify.png`` and ``summary.json``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from cdpr_design.io.files import OutputDir
+from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
+from cdpr_design.jobs.tables import Timings, table_metadata
+from cdpr_design.plots.certify import certify_figure
+from cdpr_design.plots.worker import PictureWorker
+
+#: the files the job writes besides its table
+FILES = ("certify.png", "summary.json")
+
+
+def certify(design, out: str | Path | None = None, overwrite: bool = False, **options):
+    """The ``certify`` command: :func:`run_certify` into the folder ``out`` (default
+    ``out/<design name>/``; ``overwrite``: replace foreign files).  Returns (result, folder)."""
+    out_dir = output_dir(design, out, overwrite)
+    return run_certify(design, out_dir, **options), out_dir
+
+
+def run_certify(design, out: OutputDir, kind: str = "static", resolution: float | None = None, box=None,
+                min_margin: float | None = None, max_boxes: int | None = None, time_limit: float | None = None,
+                format: str = "csv", pictures: PictureWorker | None = None, progress: Progress | None = None,
+                timings: Timings | None = None):
+    """Certify (:func:`cdpr_design.workspaces.certify.certify`, the options are its own), then
+    write the boxes, the picture and ``summary.json`` (with the ``timings``: ``load_s`` the
+    kernels' load or compile, ``sweep_s`` the branch-and-prune)."""
+    from cdpr_design.workspaces import certify as cert
+
+    timings = timings or Timings()
+    cert.check_certifiable(design, kind)
+    for name in FILES:
+        out.target(name)  # a foreign file of that name: refused before any work
+    limits = {} if max_boxes is None else {"max_boxes": max_boxes}
+    with timings.phase("load_s"), stage(progress, "loading the kernels (a first run compiles them)"):
+        cert.warm_up(design, kind)
+    with timings.phase("sweep_s"), stage(progress, f"certify {design.name}") as cb:
+        result = cert.certify(design, kind, resolution, box, min_margin, time_limit=time_limit,
+                              progress=None if cb is None else (lambda done, todo: cb(done, done + todo)),
+                              **limits)
+    pending = submit_pictures(out, [("certify.png", certify_figure, (result,))], pictures, timings)
+    cols = result.columns()
+    meta = table_metadata(design, "boxes", cols, kind=kind, resolution=result.resolution,
+                          orientation=[float(v) for v in design.default_orientation_full()])
+    with timings.phase("write_s"):
+        writer = out.table("boxes", format, metadata=meta, names=list(cols))
+        try:
+            writer.write(cols)
+            writer.close()
+        except BaseException:
+            writer.abort()
+            raise
+    pending.wait()
+    result.extra["timings"] = timings.as_dict()
+    out.write_json("summary.json", result.summary())
+    return result
+
+
+#: boxes of the task box's longest edge that ``check --certify`` bisects down to
+TASK_DIVISIONS = 256
+
+
+def certify_task(design, kind: str = "static", resolution: float | None = None, max_boxes: int | None = None) -> dict:
+    """The ``certified`` requirement of ``check``: prove every position of
+    ``requirements.task_box`` feasible at the fixed orientation (with ``requirements.min_margin``
+    when it is positive).  A row of the checks table (``requirement``, ``figure``, ``limit``,
+    ``passed``) plus, when it fails, ``unproven_box`` (the first box not proven inside:
+    ``lower``, ``upper`` [m] and ``status``) and ``witness`` (a pose of it found infeasible by
+    the pose evaluation, with its tensions [N] and margin [N], or None)."""
+    from cdpr_design.errors import InputError
+    from cdpr_design.workspaces import certify as cert
+
+    task = design.requirements.task_box
+    if task is None:
+        raise InputError("requirements.certified / --certify: the spec gives no requirements.task_box to certify")
+    lo, hi = (tuple(float(v) for v in c) for c in task)
+    res = resolution if resolution is not None else max(max(b - a for a, b in zip(lo, hi)) / TASK_DIVISIONS, 1e-6)
+    mu = design.requirements.min_margin
+    mu = mu if mu is not None and mu > 0 else None
+    r = cert.certify(design, kind, res, (lo, hi), mu, max_boxes=max_boxes)
+    counts = r.counts()
+    row = {"requirement": "certified", "figure": f"{100 * r.measure(1) / max(r.summary()['box_measure'], 1e-300):.4g} % "
+           f"proven ({counts['inside']} inside, {counts['boundary']} boundary, {counts['outside']} outside)",
+           "limit": "whole task box" + (f", margin >= {mu:g} N" if mu else ""), "passed": counts["inside"] == r.status.size}
+    if not row["passed"]:
+        order = np.argsort(r.status, kind="stable")  # outside (-1) first, then boundary
+        k = int(order[0])
+        row["unproven_box"] = {"lower": r.lower[k].tolist(), "upper": r.upper[k].tolist(),
+                               "status": cert.STATUS[int(r.status[k])]}
+        row["witness"] = witness(design, kind, r.lower[k], r.upper[k], mu or 0.0)
+    return row
+
+
+def witness(design, kind: str, lower, upper, min_margin: float = 0.0) -> dict | None:
+    """A pose of the box [lower, upper] [m] that fails (infeasible, or its margin below
+    ``min_margin`` [N]) by the pose evaluation: its centre or a corner; None if all pass."""
+    import itertools
+
+    from cdpr_design.statics.pose import evaluate_pose, pose_at
+
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    points = [0.5 * (lower + upper)] + [np.array(c) for c in itertools.product(*zip(lower, upper))]
+    ori = design.default_orientation_full()
+    for p in points:
+        pose = pose_at(design, np.pad(p, (0, 3 - p.size)), ori)
+        e = evaluate_pose(design, pose, kind)
+        if not e.feasible or not (e.margin >= min_margin):
+            return {"pose": [float(v) for v in pose], "feasible": bool(e.feasible),
+                    "margin": None if not np.isfinite(e.margin) else float(e.margin),
+                    "tensions": [None if not np.isfinite(t) else float(t) for t in e.tensions]}
+    return None

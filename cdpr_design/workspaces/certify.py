@@ -1,0 +1,326 @@
+"""Certified workspaces: branch-and-prune over a box of positions with interval tests.
+
+Every box is classified by the rigorous interval tests of
+:mod:`cdpr_design.kernels.certify`: ``inside`` (every position in it is
+feasible, proven), ``outside`` (none is, proven) or undecided; an undecided
+box is cut in two across its widest edge until that edge is at most
+``resolution``, and then reported as ``boundary`` (Jaulin, Kieffer, Didrit &
+Walter, "Applied Interval Analysis", Springer 2001, ch. 3; Gouttefarde, Daney
+& Merlet, IEEE T-RO 27(1) 2011 for cable robots).  The inner measure (the
+inside boxes) is a proven lower bound of the workspace's area or volume, the
+outer measure (inside + boundary) a proven upper bound.
+
+Positions are taken at the spec's fixed orientation for every motion type.
+What the tests cover is listed in :data:`UNSUPPORTED` (the one place that
+decides it for certification).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from cdpr_design.errors import InputError
+from cdpr_design.model.design import Design
+from cdpr_design.statics import cables as cable_models
+from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.hanging import hangs_freely
+from cdpr_design.statics.pose import combinations, wrench_vertices
+
+#: status codes of the kernels and their names in the outputs
+STATUS = {1: "inside", -1: "outside", 0: "boundary"}
+#: kinds of workspace certified
+KINDS = ("static", "wrench-feasible")
+#: Largest number of boxes classified by default (bounded memory: a box is 6 floats and a code).
+MAX_BOXES = 5_000_000
+
+#: What certification does not cover yet, and why: (test on a design, reason).  The single
+#: place that decides it for ``certify`` (and ``check --certify``); the sweeps decide their own
+#: combinations in :mod:`cdpr_design.statics.cables` and :mod:`cdpr_design.workspaces.hanging`.
+UNSUPPORTED = (
+    (lambda d: cable_models.design_model(d) == "sagging",
+     "cable model 'sagging': the interval tests assume straight cables (ideal or elastic); "
+     "use --cable-model ideal or elastic"),
+    (lambda d: kin.has_pulleys(d),
+     "swivel pulleys (cables[].pulley): the interval tests take point outlets"),
+    (lambda d: hangs_freely(d),
+     "effector.orientation: free: the hanging orientation changes with the position, and the "
+     "interval tests hold one fixed orientation"),
+)
+
+
+def check_certifiable(design: Design, kind: str = "static") -> None:
+    """Raise an :class:`InputError` with the reason when ``design`` or ``kind`` is not certified."""
+    if kind not in KINDS:
+        raise InputError(f"--kind: certify covers {', '.join(KINDS)}, got {kind!r}")
+    for test, reason in UNSUPPORTED:
+        if test(design):
+            raise InputError(f"certify: not supported for {design.name}: {reason}")
+
+
+@dataclass
+class CertifyResult:
+    """The paving of a box of positions.
+
+    ``lower``, ``upper`` (K, d) [m]: the boxes, over the motion's position axes
+    ``axes``; ``status`` (K,) int8 (:data:`STATUS`).  ``box`` is the box certified,
+    ``resolution`` [m] the finest edge; ``truncated`` names the limit that stopped the
+    bisection early (``max_boxes`` or ``time_limit``; the boxes left are then ``boundary``).
+    """
+
+    design: Design
+    kind: str
+    axes: tuple
+    box: tuple
+    resolution: float
+    min_margin: float
+    lower: np.ndarray
+    upper: np.ndarray
+    status: np.ndarray
+    classified: int
+    elapsed_s: float
+    truncated: str | None = None
+    tolerance: dict = field(default_factory=dict)
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def unit(self) -> str:
+        return "m^2" if len(self.axes) == 2 else "m^3"
+
+    def measure(self, status: int) -> float:
+        """The total area or volume [m^2 or m^3] of the boxes of one status code."""
+        sel = self.status == status
+        return float(np.prod(self.upper[sel] - self.lower[sel], axis=1).sum())
+
+    def counts(self) -> dict:
+        return {name: int(np.count_nonzero(self.status == code)) for code, name in STATUS.items()}
+
+    def summary(self) -> dict:
+        inner, boundary = self.measure(1), self.measure(0)
+        total = float(np.prod(np.asarray(self.box[1]) - np.asarray(self.box[0])))
+        out = {"design": self.design.name, "kind": self.kind, "axes": list(self.axes),
+               "box": {"lower": list(self.box[0]), "upper": list(self.box[1])},
+               "orientation": [float(v) for v in self.design.default_orientation_full()],
+               "resolution": self.resolution, "min_margin": self.min_margin,
+               "inner_measure": inner, "boundary_measure": boundary, "outer_measure": inner + boundary,
+               "box_measure": total, "unit": self.unit, "counts": self.counts(),
+               "boxes_classified": self.classified, "truncated": self.truncated,
+               "elapsed_s": round(self.elapsed_s, 4)}
+        if self.tolerance:
+            out["tolerance"] = self.tolerance
+        out.update(self.extra)
+        return out
+
+    def columns(self) -> dict:
+        """``boxes.csv``: ``lower_<axis>``, ``upper_<axis>`` [m] per axis, then ``status``."""
+        cols = {}
+        for j, a in enumerate(self.axes):
+            cols[f"lower_{a}"] = self.lower[:, j]
+            cols[f"upper_{a}"] = self.upper[:, j]
+        cols["status"] = np.array([STATUS[int(s)] for s in self.status], dtype=object)
+        return cols
+
+
+def spec_tolerances(design: Design) -> tuple:
+    """(outlets, attachments) [m] of the spec's ``tolerance:`` (a number for every point, or
+    ``outlets`` / ``attachments`` each a number or one per cable); None where not given."""
+    tol = (design.raw or {}).get("tolerance")
+    if tol is None:
+        return None, None
+    if isinstance(tol, (int, float)):
+        return float(tol), float(tol)
+    return tol.get("outlets"), tol.get("attachments")
+
+
+def geometry_boxes(design: Design, tolerance_outlets=None, tolerance_attachments=None):
+    """(Alo, Ahi, Blo, Bhi, A, Rb): the outlets and rotated attachments (m, 3) [m] as boxes of
+    half-width the tolerances (scalars or (m,) [m], default 0) at the fixed orientation, and
+    their nominal values.  Planar designs keep z = 0 (tolerances act in the plane)."""
+    m, dim = design.m, design.motion.dim
+    R = kin.rotation_matrix(*design.default_orientation_full())
+    A = np.ascontiguousarray(design.outlets)
+    Rb = np.ascontiguousarray(design.attachments @ R.T)
+    ta = np.broadcast_to(np.asarray(0.0 if tolerance_outlets is None else tolerance_outlets, float), (m,))
+    tb = np.broadcast_to(np.asarray(0.0 if tolerance_attachments is None else tolerance_attachments, float), (m,))
+    mask = np.zeros(3)
+    mask[:dim] = 1.0
+    ra = ta[:, None] * mask  # outlet box half-widths
+    # R (b + e), |e_k| <= tb: half-width sum_k |R_ik| tb (rounded up), about R b
+    rb = np.nextafter((np.abs(R) @ (np.ones(3) * mask))[None, :] * tb[:, None], np.inf) * mask
+    if design.motion.planar:
+        rb[:, 2] = 0.0
+    Alo = np.where(ra > 0, np.nextafter(A - ra, -np.inf), A)
+    Ahi = np.where(ra > 0, np.nextafter(A + ra, np.inf), A)
+    Blo = np.where(rb > 0, np.nextafter(Rb - rb, -np.inf), Rb)
+    Bhi = np.where(rb > 0, np.nextafter(Rb + rb, np.inf), Rb)
+    return (np.ascontiguousarray(Alo), np.ascontiguousarray(Ahi), np.ascontiguousarray(Blo),
+            np.ascontiguousarray(Bhi), A, Rb)
+
+
+class Classifier:
+    """The interval test of boxes of positions for one design, kind, margin and tolerance."""
+
+    def __init__(self, design: Design, kind: str = "static", min_margin: float = 0.0,
+                 tolerance_outlets=None, tolerance_attachments=None):
+        from cdpr_design.kernels import certify as KC  # numba, on first use
+
+        self.K = KC
+        self.design = design
+        self.dim = design.motion.dim
+        self.geometry = geometry_boxes(design, tolerance_outlets, tolerance_attachments)
+        wv = wrench_vertices(design, kind, design.default_orientation_full())
+        self.wv = np.ascontiguousarray(wv if kind == "wrench-feasible" else wv[:1])
+        self.rows = design.rows
+        self.tmin, self.tmax = design.tension_min, design.tension_max
+        self.mu = float(min_margin)
+        self.facets = combinations(design.m, design.n)
+        self.bases = np.array(list(itertools.combinations(range(design.m), design.n)),
+                              dtype=np.int64).reshape(-1, design.n)
+
+    def __call__(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """Status codes (K,) int8 of the boxes ``lower``, ``upper`` (K, d) [m]."""
+        from cdpr_design.kernels.parallel import run_blocks
+
+        k = lower.shape[0]
+        lo = np.zeros((k, 3))
+        hi = np.zeros((k, 3))
+        lo[:, :self.dim] = lower
+        hi[:, :self.dim] = upper
+        status = np.zeros(k, dtype=np.int8)
+        Alo, Ahi, Blo, Bhi, A, Rb = self.geometry
+        run_blocks(self.K.classify_block, k, lo, hi, Alo, Ahi, Blo, Bhi, A, Rb, self.rows, self.wv,
+                   self.tmin, self.tmax, self.mu, self.facets, self.bases, status, grain=64)
+        return status
+
+
+def default_box(design: Design) -> tuple:
+    """The workspace grid's box (lower, upper) [m]: what ``certify`` paves by default."""
+    g = design.workspace.grid
+    return tuple(float(v) for v in g.lower), tuple(float(v) for v in g.upper)
+
+
+def check_box(box, dim: int, name: str = "box") -> tuple:
+    """A box (lower, upper) of ``dim`` finite coordinates each with lower <= upper (InputError naming ``name``)."""
+    lo, hi = (np.asarray(v, float).reshape(-1) for v in box)
+    if lo.size != dim or hi.size != dim or not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+        raise InputError(f"{name}: expected {dim} finite lower and upper coordinates")
+    if np.any(hi < lo):
+        raise InputError(f"{name}: every upper coordinate must be >= its lower one")
+    return tuple(map(float, lo)), tuple(map(float, hi))
+
+
+def certify(design: Design, kind: str = "static", resolution: float | None = None, box=None,
+            min_margin: float | None = None, max_boxes: int | None = MAX_BOXES, time_limit: float | None = None,
+            tolerance_outlets=None, tolerance_attachments=None,
+            progress: Callable[[int, int], None] | None = None) -> CertifyResult:
+    """Pave ``box`` (lower, upper) [m] (default the workspace grid's box) into proven
+    ``inside``, proven ``outside`` and ``boundary`` boxes at the spec's fixed orientation.
+
+    ``kind``: ``static`` (gravity) or ``wrench-feasible`` (gravity plus every vertex of
+    ``workspace.external_wrench``).  ``resolution`` [m]: the finest box edge (default the grid
+    step).  ``min_margin`` [N]: prove a capacity margin of at least this much (inside) or
+    less (outside) instead of feasibility.  ``max_boxes``, ``time_limit`` [s]: stop bisecting
+    (the boxes left are ``boundary``; ``truncated`` says which).  ``tolerance_outlets``,
+    ``tolerance_attachments`` [m] (scalars or per cable): geometric tolerances (default the
+    spec's ``tolerance:``); ``inside`` then holds for every geometry within them.  ``progress(classified, pending)`` after each
+    level of bisection.
+    """
+    check_certifiable(design, kind)
+    spec_outlets, spec_attachments = spec_tolerances(design)
+    tolerance_outlets = spec_outlets if tolerance_outlets is None else tolerance_outlets
+    tolerance_attachments = spec_attachments if tolerance_attachments is None else tolerance_attachments
+    for name, v in (("outlets", tolerance_outlets), ("attachments", tolerance_attachments)):
+        a = np.asarray(0.0 if v is None else v, float)
+        if a.ndim > 1 or (a.ndim == 1 and a.size != design.m) or not np.all(np.isfinite(a) & (a >= 0)):
+            raise InputError(f"tolerance.{name}: expected a non-negative number of metres or one per cable "
+                             f"({design.m})")
+    dim = design.motion.dim
+    lo0, hi0 = check_box(default_box(design) if box is None else box, dim)
+    res = float(min(design.workspace.grid.step) if resolution is None else resolution)
+    if not (math.isfinite(res) and res > 0):
+        raise InputError(f"--resolution: expected a positive number of metres, got {resolution}")
+    mu = 0.0 if min_margin is None else float(min_margin)
+    if not (math.isfinite(mu) and mu >= 0):
+        raise InputError(f"--min-margin: expected a non-negative number of newtons, got {min_margin}")
+    max_boxes = MAX_BOXES if max_boxes is None else max_boxes
+    if max_boxes < 1:
+        raise InputError(f"--max-boxes: expected a positive count, got {max_boxes}")
+    if time_limit is not None and not (math.isfinite(time_limit) and time_limit > 0):
+        raise InputError(f"--time-limit: expected a positive number of seconds, got {time_limit}")
+    classify = Classifier(design, kind, mu, tolerance_outlets, tolerance_attachments)
+    t0 = time.perf_counter()
+    lower, upper, status, classified, truncated = pave(classify, np.array([lo0]), np.array([hi0]), res,
+                                                      max_boxes, time_limit, progress)
+    tol = {k: v for k, v in (("outlets", tolerance_outlets), ("attachments", tolerance_attachments))
+           if v is not None and np.any(np.asarray(v) > 0)}
+    return CertifyResult(design, kind, design.motion.position_coords, (lo0, hi0), res, mu, lower, upper, status,
+                         classified, time.perf_counter() - t0, truncated,
+                         {k: np.asarray(v, float).tolist() for k, v in tol.items()})
+
+
+def pave(classify: Callable, lower: np.ndarray, upper: np.ndarray, resolution: float, max_boxes: int = MAX_BOXES,
+         time_limit: float | None = None, progress: Callable[[int, int], None] | None = None):
+    """Branch and prune from the boxes ``lower``, ``upper`` (K, d) [m], level by level.
+
+    ``classify(lower, upper)`` gives status codes; undecided boxes wider than ``resolution``
+    are cut in two at the middle of their widest edge (the first such axis on ties), the
+    others become ``boundary`` (0).  Returns (lower, upper, status, classified, truncated):
+    the decided boxes in a fixed order (level by level, each level in its boxes' order), so the
+    result does not depend on how the classifier splits its work.
+    """
+    t0 = time.perf_counter()
+    out_lo, out_hi, out_st = [], [], []
+    classified = 0
+    truncated = None
+    while lower.shape[0]:
+        if classified + lower.shape[0] > max_boxes:
+            truncated = "max_boxes"
+        elif time_limit is not None and time.perf_counter() - t0 > time_limit:
+            truncated = "time_limit"
+        if truncated:
+            out_lo.append(lower)
+            out_hi.append(upper)
+            out_st.append(np.zeros(lower.shape[0], np.int8))
+            break
+        st = classify(lower, upper)
+        classified += lower.shape[0]
+        width = upper - lower
+        axis = np.argmax(width, axis=1)
+        widest = width[np.arange(width.shape[0]), axis]
+        final = (st != 0) | (widest <= resolution)
+        out_lo.append(lower[final])
+        out_hi.append(upper[final])
+        out_st.append(st[final])
+        split = ~final
+        lower, upper = bisect(lower[split], upper[split], axis[split])
+        if progress is not None:
+            progress(classified, lower.shape[0])
+    d = lower.shape[1]
+    return (np.concatenate(out_lo) if out_lo else np.empty((0, d)),
+            np.concatenate(out_hi) if out_hi else np.empty((0, d)),
+            np.concatenate(out_st) if out_st else np.empty(0, np.int8), classified, truncated)
+
+
+def bisect(lower: np.ndarray, upper: np.ndarray, axis: np.ndarray):
+    """Each box (K, d) cut in two across ``axis`` (K,) at its middle: (2K, d) lower and upper,
+    the two halves of a box next to each other (their union is the box exactly)."""
+    k = lower.shape[0]
+    rows = np.arange(k)
+    mid = 0.5 * (lower[rows, axis] + upper[rows, axis])
+    lo = np.repeat(lower, 2, axis=0)
+    hi = np.repeat(upper, 2, axis=0)
+    hi[2 * rows, axis] = mid
+    lo[2 * rows + 1, axis] = mid
+    return lo, hi
+
+
+def warm_up(design: Design, kind: str = "static") -> None:
+    """Classify one box: numba loads the kernels from its on-disk cache (or compiles them on a
+    machine's first run), so a caller can time that apart from the paving."""
+    lo, hi = default_box(design)
+    Classifier(design, kind)(np.array([lo]), np.array([lo]))

@@ -1,0 +1,187 @@
+"""The outward-rounded interval kernels (kernels/interval.py, kernels/certify.py's Krawczyk step)
+against python-flint's arb balls: the ball of the exact result always lies inside the interval."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+flint = pytest.importorskip("flint")
+
+from cdpr_design.kernels import certify as KC  # noqa: E402
+from cdpr_design.kernels import interval as I  # noqa: E402
+
+arb = flint.arb
+N = 3000
+
+
+@pytest.fixture(autouse=True)
+def _precision():
+    old = flint.ctx.prec
+    flint.ctx.prec = 300  # sums and products of doubles come out exact (balls of radius 0)
+    yield
+    flint.ctx.prec = old
+
+
+def _floats(rng, k, positive=False):
+    """Random doubles over many magnitudes, with exact ties, zeros and near-ulp neighbours."""
+    x = rng.uniform(1, 2, k) * 2.0 ** rng.integers(-40, 40, k)
+    if not positive:
+        x *= rng.choice([-1.0, 1.0], k)
+    x[rng.random(k) < 0.03] = 0.0
+    near = rng.random(k) < 0.1
+    x[near] = np.nextafter(1.0, 2.0) * rng.choice([1.0, 3.0, 0.1], near.sum())
+    return x
+
+
+def _intervals(rng, k, positive=False):
+    a = _floats(rng, k, positive)
+    b = np.where(rng.random(k) < 0.3, a, _floats(rng, k, positive))  # a third are points
+    return np.minimum(a, b), np.maximum(a, b)
+
+
+def _holds(lo, hi, exact) -> bool:
+    """Every point of the arb ball ``exact`` lies in [lo, hi]."""
+    return bool(arb(lo) <= exact) and bool(exact <= arb(hi))
+
+
+@pytest.mark.parametrize("op", ["add", "sub", "mul", "div"])
+def test_binary_operations_enclose_the_exact_range(op):
+    rng = np.random.default_rng(hash(op) % 2**32)
+    al, ah = _intervals(rng, N)
+    bl, bh = _intervals(rng, N)
+    f = {"add": I.iadd, "sub": I.isub, "mul": I.imul, "div": I.idiv}[op]
+    exact = {"add": lambda a, b: a + b, "sub": lambda a, b: a - b, "mul": lambda a, b: a * b,
+             "div": lambda a, b: a / b}[op]
+    tight = 0
+    for k in range(N):
+        lo, hi = f(al[k], ah[k], bl[k], bh[k])
+        if op == "div" and bl[k] <= 0.0 <= bh[k]:
+            assert (lo, hi) == (-math.inf, math.inf)
+            continue
+        for a in (al[k], ah[k]):
+            for b in (bl[k], bh[k]):
+                assert _holds(lo, hi, exact(arb(a), arb(b))), (op, al[k], ah[k], bl[k], bh[k], lo, hi)
+        if al[k] == ah[k] and bl[k] == bh[k]:  # points in: a few ulps wide, not anything that holds
+            tight += 1
+            assert hi - lo <= 4 * np.spacing(max(abs(lo), abs(hi))) + 1e-300
+    assert tight > N // 20
+
+
+def test_square_sqrt_abs_enclose_the_exact_range():
+    rng = np.random.default_rng(1)
+    al, ah = _intervals(rng, N)
+    for k in range(N):
+        lo, hi = I.isqr(al[k], ah[k])
+        a, b = arb(al[k]), arb(ah[k])
+        assert _holds(lo, hi, a * a) and _holds(lo, hi, b * b)
+        if al[k] <= 0 <= ah[k]:
+            assert lo == 0.0
+        lo, hi = I.iabs(al[k], ah[k])
+        assert _holds(lo, hi, abs(a)) and _holds(lo, hi, abs(b))
+    pl, ph = _intervals(rng, N, positive=True)
+    for k in range(N):
+        lo, hi = I.isqrt(pl[k], ph[k])
+        assert _holds(lo, hi, arb(pl[k]).sqrt()) and _holds(lo, hi, arb(ph[k]).sqrt())
+
+
+def test_dot_encloses_every_product_sum():
+    rng = np.random.default_rng(2)
+    for _ in range(300):
+        n = int(rng.integers(1, 9))
+        al, ah = _intervals(rng, n)
+        bl, bh = _intervals(rng, n)
+        lo, hi = I.idot(al, ah, bl, bh)
+        for _ in range(4):  # random corners: the exact range is reached at corners
+            a = np.where(rng.random(n) < 0.5, al, ah)
+            b = np.where(rng.random(n) < 0.5, bl, bh)
+            s = sum((arb(x) * arb(y) for x, y in zip(a, b)), arb(0))
+            assert _holds(lo, hi, s)
+
+
+def test_unit_component_encloses_the_unit_vector_over_the_box():
+    rng = np.random.default_rng(3)
+    for _ in range(2000):
+        c = rng.normal(size=3) * 10.0 ** rng.integers(-3, 2)
+        w = np.abs(rng.normal(size=3)) * 10.0 ** rng.integers(-4, 0)
+        lo3, hi3 = c - w, c + w
+        sq = [I.isqr(lo3[i], hi3[i]) for i in range(3)]
+        rl, rh = I.iadd(sq[1][0], sq[1][1], sq[2][0], sq[2][1])
+        lo, hi = I.unit_component(lo3[0], hi3[0], rl, rh)
+        assert -1.0 <= lo <= hi <= 1.0
+        for _ in range(6):
+            p = [arb(v) for v in rng.uniform(lo3, hi3)]
+            corner = [arb(v) for v in np.where(rng.random(3) < 0.5, lo3, hi3)]
+            for q in (p, corner):
+                norm = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt()
+                assert _holds(lo, hi, q[0] / norm)
+
+
+def test_krawczyk_encloses_every_solution_of_the_interval_system():
+    rng = np.random.default_rng(4)
+    proven = 0
+    for _ in range(300):
+        n = int(rng.integers(2, 7))
+        A = rng.normal(size=(n, n)) + 3 * np.eye(n)
+        b = rng.normal(size=n)
+        ra = np.abs(rng.normal(size=(n, n))) * 10.0 ** rng.integers(-8, -1)
+        rb = np.abs(rng.normal(size=n)) * 10.0 ** rng.integers(-8, -1)
+        Al, Ah, bl, bh = A - ra, A + ra, b - rb, b + rb
+        Xl, Xh = np.empty(n), np.empty(n)
+        scratch = [np.empty((n, n)) for _ in range(4)] + [np.empty(n) for _ in range(3)]
+        ok = KC.krawczyk(Al, Ah, bl, bh, scratch[0], scratch[1], scratch[4], scratch[2], scratch[3],
+                         scratch[5], scratch[6], Xl, Xh, np.empty((n, 2 * n)))
+        if not ok:
+            continue
+        proven += 1
+        for _ in range(5):
+            M = rng.uniform(Al, Ah)
+            v = rng.uniform(bl, bh)
+            x = flint.arb_mat(M.tolist()).solve(flint.arb_mat([[float(t)] for t in v]))
+            for i in range(n):
+                assert _holds(Xl[i], Xh[i], x[i, 0])
+    assert proven > 200
+
+
+def _arb_column(a, b, p, rows):
+    """[u ; b x u] restricted to ``rows`` in arb, u = (a - b - p)/|a - b - p|; and du/dp_k."""
+    d = [arb(float(a[i])) - arb(float(b[i])) - arb(float(p[i])) for i in range(3)]
+    L = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+    u = [x / L for x in d]
+    B = [arb(float(x)) for x in b]
+
+    def rows_of(v):
+        full = v + [B[1] * v[2] - B[2] * v[1], B[2] * v[0] - B[0] * v[2], B[0] * v[1] - B[1] * v[0]]
+        return [full[r] for r in rows]
+
+    derivs = [rows_of([-((1 if c == k else 0) - u[c] * u[k]) / L for c in range(3)]) for k in range(3)]
+    return rows_of(u), derivs
+
+
+def test_structure_matrix_and_its_derivative_enclose_every_point_of_the_box():
+    rng = np.random.default_rng(6)
+    rows = np.array([0, 1, 2, 3, 4, 5], dtype=np.int64)
+    for _ in range(60):
+        m = int(rng.integers(2, 9))
+        A = rng.uniform(-3, 3, (m, 3))
+        B = rng.uniform(-0.3, 0.3, (m, 3))
+        c = rng.uniform(-1, 1, 3)
+        w = np.abs(rng.normal(size=3)) * 10.0 ** rng.integers(-4, 0)
+        plo, phi = c - w, c + w
+        Wl, Wh = np.empty((6, m)), np.empty((6, m))
+        U, L = np.empty((m, 3, 2)), np.empty((m, 2))
+        ok = KC.interval_structure(plo, phi, A, A, B, B, rows, Wl, Wh, U, L)
+        D = [(np.empty((6, m)), np.empty((6, m))) for _ in range(3)]
+        for k in range(3):
+            KC.structure_derivative(k, U, L, B, B, rows, D[k][0], D[k][1], np.empty((3, 2)))
+        for _ in range(5):
+            p = rng.uniform(plo, phi)
+            for j in range(m):
+                col, derivs = _arb_column(A[j], B[j], p, rows)
+                for i in range(6):
+                    assert _holds(Wl[i, j], Wh[i, j], col[i])
+                    if ok:
+                        for k in range(3):
+                            assert _holds(D[k][0][i, j], D[k][1][i, j], derivs[k][i])
