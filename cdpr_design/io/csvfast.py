@@ -27,7 +27,6 @@ from typing import Sequence
 import numba as nb
 import numpy as np
 
-from cdpr_design import numba_startup
 from cdpr_design.io.csvtext import (_DIGITS, _FLOAT_RANGE, _INT_LIMIT, _P10, _SUFFIX, _TIE, _TZ5, BLOCK,
                                     _python_cell)
 
@@ -45,7 +44,6 @@ _INLINE = dict(_JIT, inline="always")
 #: otherwise count every table array handed to the inlined helpers, cell by cell (as the
 #: kernels' loops, :data:`cdpr_design.kernels._jit.NOREF`).
 _NOREF = dict(_JIT, _nrt=False)
-numba_startup.install_lazy_loading()  # the cached row loop loads without numba's compiler set-up
 
 
 @nb.njit(**_INLINE)

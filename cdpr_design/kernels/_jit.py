@@ -1,4 +1,4 @@
-"""The jit options of every kernel, set once, where numba caches them, and its start-up.
+"""The jit options of every kernel, set once, and where numba caches them.
 
 ``cache=True`` so users pay the compile time once per machine (numba's on-disk
 cache), ``nogil`` so sweeps run their blocks of poses on threads
@@ -18,11 +18,6 @@ numba offers no public hook for this; :func:`_register_locators` puts
 subclasses of its cache locators first in its list (the classes and the list
 have the same roles in numba 0.59 to 0.68; ``tests/test_jit_cache.py`` fails if
 that stops working).
-
-Start-up.  Importing this module installs the package's numba start-up
-shortcuts (:func:`cdpr_design.numba_startup.install_lazy_loading`): cached
-kernels load without numba's compiler set-up, and a compile does without
-importing ``scipy.linalg``.
 """
 
 from __future__ import annotations
@@ -32,8 +27,6 @@ import hashlib
 import os
 
 import numba as nb
-
-from cdpr_design import numba_startup
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -77,7 +70,6 @@ def _register_locators() -> None:
 
 
 _register_locators()
-numba_startup.install_lazy_loading()
 
 
 JIT = dict(cache=True, nogil=True, error_model="numpy")

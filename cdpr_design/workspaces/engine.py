@@ -34,8 +34,7 @@ ENGINES = ("auto", "numba", "numpy")
 #: 0.45-0.5 s of numba start-up (``load_s``), which puts the crossover at 45,000-90,000 poses;
 #: the commands measured it there, loosely (the machine's speed drifted between runs): numpy
 #: 0.25 s faster at 63,001 poses, numba 0.3-0.5 s faster at 74,529 and 0.6-0.8 s at 90,601.
-#: (130,000 when numba's start-up took 1 s, before :mod:`cdpr_design.numba_startup`.)  Batch
-#: sweeps decide apart (``batch.sweep.KERNELS_FROM_POSES``).
+#: Batch sweeps decide apart (``batch.sweep.KERNELS_FROM_POSES``).
 NUMPY_MAX_POSES = 70_000
 
 
