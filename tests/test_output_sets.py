@@ -370,3 +370,27 @@ def test_a_damaged_study_is_refused_and_nothing_is_created_beside_it(tmp_path):
     assert "left as it is" in one_error_line(r.output)
     assert snapshot(out) == before  # was: optimize.db-shm and optimize.db-wal beside it
     assert sorted(os.listdir(out)) == [MANIFEST, "optimize.db"]
+
+
+def test_a_certify_whose_summary_cannot_be_put_in_place_leaves_the_old_paving(tmp_path, monkeypatch):
+    """certify's boxes, picture and summary go in together: a refused rename of summary.json puts
+    the new boxes.csv back out (the folder keeps the earlier paving whole)."""
+    out = tmp_path / "o"
+    r = invoke("certify", PLANAR2, "--resolution", "0.1", "--out", out, "--quiet")
+    assert r.exit_code == 0, r.output
+    before = snapshot(out)
+    real = os.replace
+
+    def replace(src, dst, **kw):
+        if Path(dst).name == "summary.json" and Path(src).name.endswith(".tmp") and "_old" not in Path(src).name:
+            raise PermissionError(1, "Operation not permitted", str(dst))
+        return real(src, dst, **kw)
+
+    monkeypatch.setattr(os, "replace", replace)
+    r = invoke("certify", PLANAR2, "--resolution", "0.02", "--out", out, "--quiet")
+    monkeypatch.setattr(os, "replace", real)
+    assert r.exit_code == 2, r.output
+    assert "summary.json" in one_error_line(r.output)
+    assert snapshot(out) == before and leftovers(out) == []
+    boxes = (out / "boxes.csv").read_text().count("\n") - 1
+    assert sum(json.loads((out / "summary.json").read_text())["counts"].values()) == boxes

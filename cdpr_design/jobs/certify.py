@@ -19,9 +19,13 @@ FILES = ("certify.png", "summary.json")
 
 def certify(design, out: str | Path | None = None, overwrite: bool = False, **options):
     """The ``certify`` command: :func:`run_certify` into the folder ``out`` (default
-    ``out/<design name>/``; ``overwrite``: replace foreign files).  Returns (result, folder)."""
+    ``out/<design name>/``; ``overwrite``: replace foreign files).  Returns (result, folder).
+    The files are put in place together when all are written
+    (:class:`~cdpr_design.io.files.OutputDir`): a failure leaves the folder's earlier files whole."""
     out_dir = output_dir(design, out, overwrite)
-    return run_certify(design, out_dir, **options), out_dir
+    with out_dir:
+        result = run_certify(design, out_dir, **options)
+    return result, out_dir
 
 
 def run_certify(design, out: OutputDir, kind: str = "static", resolution: float | None = None, box=None,
