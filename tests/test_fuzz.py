@@ -148,12 +148,14 @@ def test_random_valid_specs_load(data):
     assert d.m == len(data["cables"]) and d.name == data["name"]
 
 
+@pytest.mark.slow
 @fuzz(1000)
 @given(mutated_spec_data())
 def test_mutated_specs_load_or_are_refused(work, data):
     load_both(work, "spec", data)
 
 
+@pytest.mark.slow
 @fuzz(400)
 @given(st.data())
 def test_mutated_yaml_text_loads_or_is_refused(work, data):
@@ -258,6 +260,7 @@ def test_schema_is_strict_json():
 steps = option_floats(0.05, 1.0)
 
 
+@pytest.mark.slow
 @fuzz(8)
 @given(spec_data(), steps, st.sampled_from(["static", "wrench-feasible", "wrench-closure", "nope"]))
 def test_workspace_job(work, data, step, kind):
@@ -469,6 +472,7 @@ def test_random_feature_specs_load(data):
     check_cable_models(spec.from_dict(data))
 
 
+@pytest.mark.slow
 @fuzz(400)
 @given(mutated_feature_data())
 def test_mutated_feature_keys_load_or_are_refused(work, data):
@@ -521,6 +525,7 @@ def test_pose_with_cable_models_and_free_orientation(data, where, kind):
             assert np.all(t >= design.tension_min - 1e-6) and np.all(t <= design.tension_max + 1e-6), t
 
 
+@pytest.mark.slow
 @fuzz(12)  # an elastic fk with no equilibrium takes 10-20 s to give up: more examples in the long run
 @given(feature_spec_data(), st.lists(st.floats(0.2, 0.8), min_size=3, max_size=3),
        st.one_of(st.none(), st.lists(st.one_of(st.floats(0, 10), st.sampled_from([0.0, 1e-9, 1e-6, 1e4, 0.5])),

@@ -180,6 +180,7 @@ def _fake_problem(planar2, directions):
     return opt.make_problem(planar2, ["effector.mass=0.5:2"], maxi, mini, None, batch.Options())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("directions", [(True, False), (True, True), (False, False, True)])
 def test_pareto_and_knee_against_brute_force(planar2, directions):
     rng = np.random.default_rng(len(directions) * 7 + sum(directions))
@@ -264,6 +265,7 @@ def test_the_picture_shows_convergence_or_the_front_and_importances(planar2):
 GRID = 41  # 0.025 m steps over the same box as the search
 
 
+@pytest.mark.slow
 def test_best_is_within_one_percent_of_the_exhaustive_grid(tmp_path, light_spec):
     """Two outlet x coordinates of planar2, task minimum margin: the exhaustive 41 x 41 grid against
     150 trials of the search; the best design, re-evaluated by ``report``, is within 1 %."""
@@ -370,6 +372,7 @@ def test_parquet_tables_are_the_csv_ones_and_the_summary_has_timings(tmp_path, l
     assert b["trial"].dtype == np.int64
 
 
+@pytest.mark.slow
 def test_two_workers_end_with_exactly_the_trials_asked(tmp_path, light_spec):
     """This process (worker 0) and a spawned worker share the study: exactly N trials, each once."""
     out = tmp_path / "opt"

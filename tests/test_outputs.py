@@ -173,6 +173,7 @@ def test_the_references_hold_negative_zeros_and_scientific_cells():
     assert any('"' in t for t in texts)  # a quoted cell (sweep's duty_cycle text)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(p.stem for p in DESIGNS.glob("*.yaml")))
 def test_workspace_table_of_every_design_matches_the_reference(name):
     """In-process: the writer's CSV of each shipped design's workspace equals the cell-by-cell text."""
@@ -293,6 +294,7 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - base)
 """
 
 
+@pytest.mark.slow
 def test_memory_stays_bounded_streaming_10_million_rows(tmp_path):
     """10,000,000 rows of 10 columns (800 MB as float64) stream in chunks: the peak grows by < 200 MB."""
     out = subprocess.run([sys.executable, "-c", _RSS, "parquet", "10000000", str(tmp_path / "big.parquet")],

@@ -58,6 +58,7 @@ def test_worker_runs_at_its_parents_cpu_priority(result):
         assert os.getpriority(os.PRIO_PROCESS, worker.proc.pid) == mine
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["planar2", "orientations", "hanging"])
 def test_the_worker_warms_up_with_what_a_request_needs_and_without_numba(case, result):
     """After the warm-up, a workspace request (plain, of an orientation sweep, of a hanging

@@ -99,6 +99,7 @@ def _rows_close(a, b, rtol):
 # ----------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(st.integers(0, 2 ** 31 - 1))
 def test_cable_paths_equal_outlet_geometry_and_exit_point(seed):
@@ -124,6 +125,7 @@ def test_cable_paths_equal_outlet_geometry_and_exit_point(seed):
                 assert beta == pytest.approx(g.wrap[j], abs=1e-12)
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(st.integers(0, 2 ** 31 - 1), st.sampled_from([0.0, 0.02, 0.3]))
 def test_length_hessian_matches_finite_differences(seed, radius):
@@ -229,6 +231,7 @@ def test_sizing_radius_to_zero_is_point_outlet_spatial(catalogue):
     _rows_close(r0, r1, 1e-6)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("make,radius", [(planar2, 0.05), (planar4, 0.08), (ipanema3, 0.1)])
 def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
     """Static tensions of the sizing envelope (A = V = 0) = statics.pose.evaluate_pose at every pose,

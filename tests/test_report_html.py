@@ -125,6 +125,7 @@ def test_report_command_writes_the_page_with_sizing_and_checks(tmp_path):
     assert json.loads((tmp_path / "report.json").read_text())["timings"]["total_s"] > 0
 
 
+@pytest.mark.slow
 def test_report_renders_in_a_real_browser_offline(tmp_path):
     """Where playwright and a browser are installed (not in CI): the page draws its figures with
     every network request refused and no script error."""
@@ -238,6 +239,7 @@ def _assert_outer_labels(ax, maps):
     assert low.get_xlim() == ax.get_xlim() and left.get_ylim() == ax.get_ylim()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design,step,orient", [("planar2", 0.02, None), ("ipanema3", 0.6, None),
                                                 ("planar4", 0.1, "range"), ("crane4", 0.25, None)])
 def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
@@ -284,6 +286,7 @@ def _assert_inside(fig) -> None:
     assert room >= 0.02, (box.bounds, width, height)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design,step", [("sagging40", 4.0), ("cogiro", 3.0)])
 def test_the_cable_model_picture_lies_inside_its_figure(design, step):
     """Planar (a single panel) and spatial (z-slice panels, :func:`~cdpr_design.plots._frame.fit_width`)."""
@@ -300,6 +303,7 @@ def test_the_cable_model_picture_lies_inside_its_figure(design, step):
     pyplot().close(fig)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", ["cogiro", "crane4"])
 def test_a_spatial_grid_of_one_z_level_keeps_its_titles_inside(design):
     """One z-slice makes a one-panel figure narrower than its title: the figure widens to the
