@@ -365,6 +365,7 @@ def _wait_running(proc, out: Path, timeout=60.0):
     raise AssertionError("bridge did not start")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("how", ["stop_server", "freeze"])
 def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_data, design, how):
     lay = PlcLayout.from_design(design)
@@ -395,6 +396,7 @@ def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_da
     assert json.loads((out / "bridge.json").read_text())["stopped"] == "plc_lost"
 
 
+@pytest.mark.slow
 def test_reconnect_retries_then_gives_up(tmp_path, loop_data, design):
     """--reconnect: the lost PLC is retried with back-off, then the run ends (exit 3)."""
     lay = PlcLayout.from_design(design)
@@ -416,6 +418,7 @@ def test_reconnect_retries_then_gives_up(tmp_path, loop_data, design):
     assert "0.1 s" in stderr and "0.2 s" in stderr  # back-off doubles
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=lambda s: s.name)
 def test_ctrl_c_stops_cleanly_with_the_log_intact(tmp_path, loop_data, sig):
     """Ctrl-C, and SIGTERM / SIGHUP the same way: exit 130, the summary printed, bridge.csv whole."""

@@ -304,6 +304,7 @@ def test_check_job(data, step, safety, motor):
         strict_json({"checks": res.checks, "figures": res.evaluation.row})
 
 
+@pytest.mark.slow
 @fuzz(4)
 @given(spec_data(), steps, motors)
 def test_report_job(work, data, step, motor):
@@ -339,6 +340,7 @@ def test_sweep_job(work, data, vary, rank_by):
         strict_json(res.summary)
 
 
+@pytest.mark.slow
 @fuzz(6)
 @given(spec_data(), option_floats(1e-3, 0.05), st.sampled_from(["sq", "pl", "nope"]))
 def test_trajectory_job(work, data, cycle_time, name):
@@ -557,6 +559,7 @@ formats = st.sampled_from(["csv", "csv", "parquet", "xls"])
 tilts = st.one_of(st.none(), st.floats(0, 180), st.sampled_from([-1.0, 180.5, 500.0, math.nan, math.inf, 1e308]))
 
 
+@pytest.mark.slow
 @fuzz(10)
 @given(feature_spec_data(), steps, st.sampled_from(["static", "static", "wrench-feasible", "nope"]), formats,
        st.booleans(), tilts)
@@ -590,6 +593,7 @@ opt_requires = st.one_of(st.sampled_from(["task_min_margin>=1", "fraction<=2", "
                          st.text(max_size=10))
 
 
+@pytest.mark.slow
 @fuzz(12)
 @given(spec_data(), st.tuples(st.sampled_from([["effector.mass=0.5:2"], ["tension.1=100:300"], []]),
                               st.lists(opt_vary, max_size=1)).map(lambda t: t[0] + t[1]),

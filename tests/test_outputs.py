@@ -68,6 +68,7 @@ def random_columns(rng, n: int) -> list[np.ndarray]:
     return cols
 
 
+@pytest.mark.slow
 def test_csv_cells_match_the_reference_on_random_numbers():
     rng = np.random.default_rng(18)
     cols = random_columns(rng, 20_000)
@@ -356,6 +357,7 @@ def test_a_dangling_symbolic_link_where_an_output_goes_is_a_foreign_file(tmp_pat
 EXTRA_PICTURE = {"crane4": "tilt_map.png", "planar2": "tilt_map.png", "sagging40": "cable_models.png"}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(p.stem for p in DESIGNS.glob("*.yaml")))
 def test_every_file_a_workspace_run_writes_is_known_before_the_sweep(tmp_path, name):
     """The names checked for foreign files up front are exactly the files the run writes."""

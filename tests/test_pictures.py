@@ -128,6 +128,7 @@ def test_prestart_take_discard(monkeypatch):
     assert pw._prestarted is None and proc.poll() is not None
 
 
+@pytest.mark.slow
 def test_command_output_identical_with_and_without_worker(tmp_path):
     """The real console entry: files byte-identical whether the worker drew or not."""
     outs = {}
@@ -151,6 +152,7 @@ def test_worker_refuses_foreign_file_before_drawing(tmp_path, result):
     assert (tmp_path / "tension_map.png").read_text() == "mine"
 
 
+@pytest.mark.slow
 @HOW
 def test_hung_worker_is_given_up(result, fork):
     """A child that does not answer in time is killed and the pictures are drawn here."""

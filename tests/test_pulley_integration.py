@@ -173,6 +173,7 @@ def test_trajectory_radius_to_zero_is_point_outlet(make, name):
     np.testing.assert_array_equal(s1.feasible, s0.feasible)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("make,radius,name", [(planar2, 0.05, "square_fast"), (planar4, 0.08, "tilt"),
                                               (planar4, 0.08, "ring"), (ipanema3, 0.1, "swing")])
 def test_trajectory_speeds_are_derivatives_of_pulley_lengths(make, radius, name):
@@ -261,6 +262,7 @@ def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
     assert np.nanmax(np.abs(e0["static"][feas] - ref[feas])) > 1e-4
 
 
+@pytest.mark.slow
 def test_sizing_cable_acceleration_bound_with_pulleys():
     """accel = A + V^2 max(1/l_f, |kappa_t|) bounds |L''| = |v^T H v - u . a| over |v| <= V, |a| <= A,
     and is attained (v along H's top eigenvector, a along -/+u)."""
@@ -290,6 +292,7 @@ def test_sizing_cable_acceleration_bound_with_pulleys():
 # ----------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_simulation_uses_pulley_lengths():
     """The MuJoCo model's cable lengths are arc + free segment (tendon from the tangent point)."""
     d = planar4(0.08)
@@ -322,6 +325,7 @@ def _orient_design(**wsx):
     return planar4_orient("p4c", **wsx)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["total", "range"])
 def test_orientation_summary_has_collision_counts(mode):
     """collision_free / feasible_statics / collisions_by_kind equal counts from the per-orientation

@@ -174,6 +174,7 @@ def _same_table(csv_path, pq_path):
     return a, b
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design,extra", [("planar2", ["--step", "0.05"]),
                                           ("ipanema3", ["--step", "0.8", "--collisions"]),
                                           ("planar4", ["--step", "0.2", "--orientations", "range"])])
@@ -198,6 +199,7 @@ def test_workspace_parquet_round_trip(tmp_path, design, extra):
     assert meta["units"]["length_c1"] == "m" and meta["units"]["x"] == "m"
 
 
+@pytest.mark.slow
 def test_sizing_trajectory_and_sweep_parquet(tmp_path):
     runs = {"motor_sizing": ["size-motors", PLANAR2, "--step", "0.05"],
             "trajectory": ["trajectory", PLANAR2, "square_fast", "--cycle-time", "0.02"],

@@ -47,6 +47,7 @@ def temps(folder: Path) -> list[Path]:
 BIG = ["workspace", PLANAR2, "--step", "0.001", "--quiet"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], ids=lambda s: s.name)
 def test_a_signal_during_workspace_exits_130_and_removes_its_temporary_files(tmp_path, sig):
     out = tmp_path / "out"
@@ -59,6 +60,7 @@ def test_a_signal_during_workspace_exits_130_and_removes_its_temporary_files(tmp
     assert temps(out) == [] and not (out / "workspace.csv").exists()
 
 
+@pytest.mark.slow
 def test_a_run_in_the_same_out_removes_what_a_killed_run_left(tmp_path):
     out = tmp_path / "out"
     proc = start(*BIG, "--out", out)

@@ -122,6 +122,7 @@ def test_cli_bad_keys_exit_2(tmp_path):
     assert not (tmp_path / "o" / "sweep.csv").exists()
 
 
+@pytest.mark.slow
 def test_spec_sweep_section(tmp_path, planar2_data):
     data = dict(planar2_data)
     data["sweep"] = {"vary": {"effector.mass": [0.5, 1.5], "tension.1": "15:25:2"},
@@ -155,6 +156,7 @@ def test_spec_sweep_section(tmp_path, planar2_data):
 # ----------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_rows_equal_individual_report_runs(tmp_path, planar2):
     """sweep.csv rows equal design_report.csv of ``report`` on each variant's own spec file."""
     out = tmp_path / "sweep"
