@@ -55,9 +55,10 @@ def design(loop_data):
     return spec.from_dict(loop_data)
 
 
-def _spec_for(tmp_path, loop_data, address: str) -> Path:
-    """The spec of ``loop_data`` with its ``plc.host`` at ``address`` (``host:port``)."""
-    return write_spec(tmp_path, dict(loop_data, plc=dict(loop_data["plc"], host=address)))
+def _spec_for(tmp_path, loop_data, address: str, net_id: str = TEST_PLC_NET_ID) -> Path:
+    """The spec of ``loop_data`` with its ``plc.host`` at ``address`` (``host:port``), ``plc.ams_net_id``
+    ``net_id``."""
+    return write_spec(tmp_path, dict(loop_data, plc=dict(loop_data["plc"], host=address, ams_net_id=net_id)))
 
 
 def _read_csv(path: Path):
@@ -245,7 +246,7 @@ def test_setpoints_from_the_test_plc_move_the_effector(design):
     samples = trajectory.sample(design, "probe")
     lay = PlcLayout.from_design(design)
     with TestPlc(lay, samples.time, samples.lengths) as plc:
-        tr = AdsTransport(lay, TEST_PLC_NET_ID, 851, plc.address, timeout=0.1,
+        tr = AdsTransport(lay, plc.net_id, 851, plc.address, timeout=0.1,
                           local_net_id=TEST_LOCAL_NET_ID)
         tr.connect()
         sp0 = tr.read_setpoints()
@@ -302,7 +303,7 @@ def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, c
     else:
         kw, name = {"retype": {"MAIN.nSimHeartbeat": ("LREAL", ADST_REAL64, 1)}}, "MAIN.nSimHeartbeat"
     with TestPlc(lay, **kw) as plc:
-        p = _spec_for(tmp_path, loop_data, plc.address)
+        p = _spec_for(tmp_path, loop_data, plc.address, plc.net_id)
         r = invoke("bridge", p, "--duration", "0.5", "--local-net-id", TEST_LOCAL_NET_ID, "--out", tmp_path / "o")
     assert r.exit_code == 2, r.output
     assert name in r.output
@@ -371,7 +372,7 @@ def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_da
     lay = PlcLayout.from_design(design)
     samples = trajectory.sample(design, "square_slow")
     with TestPlc(lay, samples.time, samples.lengths) as plc:
-        p = _spec_for(tmp_path, loop_data, plc.address)
+        p = _spec_for(tmp_path, loop_data, plc.address, plc.net_id)
         proc, out = _start_bridge(tmp_path, p, "--duration", "60", "--timeout", "0.05",
                                   "--local-net-id", TEST_LOCAL_NET_ID)
         try:
@@ -402,7 +403,7 @@ def test_reconnect_retries_then_gives_up(tmp_path, loop_data, design):
     lay = PlcLayout.from_design(design)
     samples = trajectory.sample(design, "probe")
     with TestPlc(lay, samples.time, samples.lengths) as plc:
-        p = _spec_for(tmp_path, loop_data, plc.address)
+        p = _spec_for(tmp_path, loop_data, plc.address, plc.net_id)
         proc, out = _start_bridge(tmp_path, p, "--duration", "60", "--reconnect", "2",
                                   "--local-net-id", TEST_LOCAL_NET_ID)
         try:

@@ -217,7 +217,7 @@ def _session(design, layout, samples, plc_lengths, test_plc, where, dt, timeout,
     try:
         if test_plc is not None:
             plc = TestPlc(layout, samples.time, plc_lengths, task_cycle=max(samples.cycle_time, 1e-3)).start()
-            where = where._replace(host=plc.address)
+            where = where._replace(host=plc.address, net_id=plc.net_id)
             log(f"test PLC on {plc.address} playing {test_plc!r} ({samples.duration:.3g} s)")
         transport = AdsTransport(layout, where.net_id, where.port, where.host, timeout=timeout,
                                  local_net_id=where.local_net_id)

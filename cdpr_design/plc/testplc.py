@@ -198,7 +198,8 @@ class TestPlc:
     free port (read :attr:`port` or :attr:`address` once started), so any
     number of test PLCs run side by side on a machine. A client reaches it at
     :attr:`address`, ``"127.0.0.1:<port>"``, the ``host[:port]`` form AdsLib
-    accepts (its default port is the ADS router port 48898).
+    accepts (its default port is the ADS router port 48898), and by its own AMS
+    net id :attr:`net_id`, ``127.0.0.1.<port / 256>.<port % 256>``.
 
     Parameters
     ----------
@@ -275,6 +276,9 @@ class TestPlc:
             self.stop()
             raise PlcLinkError(f"the test PLC did not start: {msg[1]}")
         self.port = int(msg[1])
+        # one AMS net id per test PLC: AdsLib keeps one route per net id in a process, so a route
+        # left to an earlier test PLC's port can never be taken for this one's
+        self.net_id = f"127.0.0.1.{self.port >> 8}.{self.port & 0xFF}"
         return self
 
     @property
