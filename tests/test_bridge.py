@@ -1,14 +1,16 @@
 """The PLC gateway (bridge) against pyads' ADS test server on 127.0.0.1.
 
-The test PLC binds the fixed ADS port 48898 of the loopback address, so the
-tests that start one are marked ``serial`` (run them without parallelism).
-Each bridged run lasts a few seconds.
+Each test PLC listens on a free port of the loopback address that the system
+chooses (``TestPlc.address``; the spec's ``plc.host`` names it as
+``127.0.0.1:<port>``), so these tests run in parallel with anything, whatever
+the number of workers. Each bridged run lasts a few seconds.
 """
 
 from __future__ import annotations
 
 import json
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -51,6 +53,12 @@ def loop_data(planar2_data) -> dict:
 @pytest.fixture
 def design(loop_data):
     return spec.from_dict(loop_data)
+
+
+def _spec_for(tmp_path, loop_data, address: str, net_id: str = TEST_PLC_NET_ID) -> Path:
+    """The spec of ``loop_data`` with its ``plc.host`` at ``address`` (``host:port``), ``plc.ams_net_id``
+    ``net_id``."""
+    return write_spec(tmp_path, dict(loop_data, plc=dict(loop_data["plc"], host=address, ams_net_id=net_id)))
 
 
 def _read_csv(path: Path):
@@ -229,18 +237,16 @@ def test_delay_trace_sees_the_hold_of_the_written_values():
 
 
 # ----------------------------------------------------------------------------
-# Against the test PLC (serial: fixed port 48898 on 127.0.0.1)
+# Against the test PLC (each on its own port of 127.0.0.1)
 # ----------------------------------------------------------------------------
 
 
-@pytest.mark.serial
-@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 def test_setpoints_from_the_test_plc_move_the_effector(design):
     """The loop closes: PLC set-points -> simulated robot -> PLC actuals, heartbeat, pose."""
     samples = trajectory.sample(design, "probe")
     lay = PlcLayout.from_design(design)
     with TestPlc(lay, samples.time, samples.lengths) as plc:
-        tr = AdsTransport(lay, TEST_PLC_NET_ID, 851, LOOPBACK, timeout=0.1,
+        tr = AdsTransport(lay, plc.net_id, 851, plc.address, timeout=0.1,
                           local_net_id=TEST_LOCAL_NET_ID)
         tr.connect()
         sp0 = tr.read_setpoints()
@@ -289,8 +295,6 @@ def test_setpoints_from_the_test_plc_move_the_effector(design):
         assert gw[k] is not None and -0.003 < v - gw[k] < 0.01 + 0.003, (d, gw)
 
 
-@pytest.mark.serial
-@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 @pytest.mark.parametrize("case", ["missing", "mistyped"])
 def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, case):
     lay = PlcLayout.from_design(design)
@@ -298,8 +302,8 @@ def test_bad_symbol_is_refused_at_start_naming_it(tmp_path, loop_data, design, c
         kw, name = {"omit": ["MAIN.fSimT2"]}, "MAIN.fSimT2"
     else:
         kw, name = {"retype": {"MAIN.nSimHeartbeat": ("LREAL", ADST_REAL64, 1)}}, "MAIN.nSimHeartbeat"
-    p = write_spec(tmp_path, loop_data)
-    with TestPlc(lay, **kw):
+    with TestPlc(lay, **kw) as plc:
+        p = _spec_for(tmp_path, loop_data, plc.address, plc.net_id)
         r = invoke("bridge", p, "--duration", "0.5", "--local-net-id", TEST_LOCAL_NET_ID, "--out", tmp_path / "o")
     assert r.exit_code == 2, r.output
     assert name in r.output
@@ -328,13 +332,13 @@ def test_a_bad_net_id_is_refused_before_any_work(tmp_path, loop_data, net_id):
     assert not (tmp_path / "o").exists()
 
 
-@pytest.mark.serial
-@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 def test_no_plc_at_all_is_a_clean_error(tmp_path, loop_data):
-    p = write_spec(tmp_path, loop_data)
-    t = time.monotonic()
-    r = invoke("bridge", p, "--duration", "0.5", "--timeout", "0.05", "--local-net-id", TEST_LOCAL_NET_ID,
-               "--out", tmp_path / "o")
+    with socket.socket() as taken:  # a port of our own that nothing listens on: the connection is refused
+        taken.bind((LOOPBACK, 0))
+        p = _spec_for(tmp_path, loop_data, f"{LOOPBACK}:{taken.getsockname()[1]}")
+        t = time.monotonic()
+        r = invoke("bridge", p, "--duration", "0.5", "--timeout", "0.05", "--local-net-id", TEST_LOCAL_NET_ID,
+                   "--out", tmp_path / "o")
     assert r.exit_code == 3, r.output
     assert "Traceback" not in r.output
     assert time.monotonic() - t < 10
@@ -362,14 +366,13 @@ def _wait_running(proc, out: Path, timeout=60.0):
     raise AssertionError("bridge did not start")
 
 
-@pytest.mark.serial
-@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
+@pytest.mark.slow
 @pytest.mark.parametrize("how", ["stop_server", "freeze"])
 def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_data, design, how):
     lay = PlcLayout.from_design(design)
     samples = trajectory.sample(design, "square_slow")
-    p = write_spec(tmp_path, loop_data)
     with TestPlc(lay, samples.time, samples.lengths) as plc:
+        p = _spec_for(tmp_path, loop_data, plc.address, plc.net_id)
         proc, out = _start_bridge(tmp_path, p, "--duration", "60", "--timeout", "0.05",
                                   "--local-net-id", TEST_LOCAL_NET_ID)
         try:
@@ -394,14 +397,13 @@ def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_da
     assert json.loads((out / "bridge.json").read_text())["stopped"] == "plc_lost"
 
 
-@pytest.mark.serial
-@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
+@pytest.mark.slow
 def test_reconnect_retries_then_gives_up(tmp_path, loop_data, design):
     """--reconnect: the lost PLC is retried with back-off, then the run ends (exit 3)."""
     lay = PlcLayout.from_design(design)
     samples = trajectory.sample(design, "probe")
-    p = write_spec(tmp_path, loop_data)
     with TestPlc(lay, samples.time, samples.lengths) as plc:
+        p = _spec_for(tmp_path, loop_data, plc.address, plc.net_id)
         proc, out = _start_bridge(tmp_path, p, "--duration", "60", "--reconnect", "2",
                                   "--local-net-id", TEST_LOCAL_NET_ID)
         try:
@@ -417,8 +419,7 @@ def test_reconnect_retries_then_gives_up(tmp_path, loop_data, design):
     assert "0.1 s" in stderr and "0.2 s" in stderr  # back-off doubles
 
 
-@pytest.mark.serial
-@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP], ids=lambda s: s.name)
 def test_ctrl_c_stops_cleanly_with_the_log_intact(tmp_path, loop_data, sig):
     """Ctrl-C, and SIGTERM / SIGHUP the same way: exit 130, the summary printed, bridge.csv whole."""
@@ -444,8 +445,6 @@ def test_ctrl_c_stops_cleanly_with_the_log_intact(tmp_path, loop_data, sig):
     assert not list(out.glob(".bridge.csv.*"))  # no temporary file left behind
 
 
-@pytest.mark.serial
-@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 def test_test_plc_run_writes_compare_ready_log(tmp_path, loop_data):
     """--test-plc: bridge.csv has the simulation.csv columns; compare reads it."""
     p = write_spec(tmp_path, loop_data)
@@ -467,8 +466,6 @@ def test_test_plc_run_writes_compare_ready_log(tmp_path, loop_data):
     assert json.loads((out / "bridge.json").read_text())["timings"] == t
 
 
-@pytest.mark.serial
-@pytest.mark.xdist_group("serial")  # one xdist worker runs them one after another
 def test_test_plc_plays_the_unstretched_lengths_of_elastic_cables(tmp_path, loop_data):
     """With elastic cables the test PLC commands what `simulate` commands: the unstretched lengths,
     which the simulated winches pay out (the chords would let the effector sink by the stretch)."""

@@ -76,6 +76,7 @@ def test_with_cable_model_keeps_the_override_in_raw(planar2):
     assert with_cable_model(planar2, None) is planar2
 
 
+@pytest.mark.slow
 def test_sagging_refuses_pulleys_and_interference(tmp_path, planar2_data):
     planar2_data["cable"]["model"] = "sagging"
     planar2_data["cables"][0]["pulley"] = {"radius": 0.02, "axis": [0.0, 1.0, 0.0]}
@@ -93,6 +94,7 @@ def test_sagging_refuses_pulleys_and_interference(tmp_path, planar2_data):
     assert invoke("fk", spec_path, "--lengths", "1.0,1.0", "--cable-model", "ideal").exit_code == 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["total", "range"])
 def test_orientation_workspaces_take_elastic_cables_and_refuse_sagging(tmp_path, mode):
     cogiro = DESIGNS / "cogiro.yaml"
@@ -157,6 +159,7 @@ def test_sagging_pose_json_keys_and_physics():
         assert d["tensions"][c] > ideal["tensions"][c]  # sag: the end forces turn down, more tension
 
 
+@pytest.mark.slow
 def test_other_objectives_with_sagging_cables(planar2):
     d = with_cable_model(planar2, "sagging")
     mn = evaluate_pose(d, [0.3, 0.9])
@@ -172,6 +175,7 @@ def test_other_objectives_with_sagging_cables(planar2):
 # ----------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_ideal_workspace_columns_unchanged(tmp_path):
     r = invoke("workspace", PLANAR2, "--out", tmp_path, "-q")
     assert r.exit_code == 0
@@ -183,6 +187,7 @@ def test_ideal_workspace_columns_unchanged(tmp_path):
     assert not (tmp_path / "cable_models.png").exists()
 
 
+@pytest.mark.slow
 def test_elastic_workspace_columns(tmp_path):
     r = invoke("workspace", PLANAR2, "--cable-model", "elastic", "--out", tmp_path, "-q", "--step", "0.05")
     assert r.exit_code == 0, r.output
@@ -196,6 +201,7 @@ def test_elastic_workspace_columns(tmp_path):
     assert np.all(np.isnan(a[~feas, 10]))
 
 
+@pytest.mark.slow
 def test_sagging_workspace_files_and_summary(tmp_path):
     r = invoke("workspace", SAG40, "--out", tmp_path, "--json", "--step", "0.5")
     assert r.exit_code == 0, r.output
@@ -283,6 +289,7 @@ def test_fk_elastic_slack_cable(planar2):
     assert abs(fk.tensions[0] - 9.81) < 1e-9
 
 
+@pytest.mark.slow
 def test_sweep_varies_the_cable_model(tmp_path):
     r = invoke("sweep", PLANAR2, "--vary", "cable.model=ideal,sagging", "--out", tmp_path, "-q", "--json",
                "--workers", "1")

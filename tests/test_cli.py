@@ -212,6 +212,7 @@ def test_blas_threads_settled_unless_the_user_chose(monkeypatch):
         assert ast.literal_eval(out.stdout.strip().splitlines()[-1]) == [expected]
 
 
+@pytest.mark.slow
 def test_a_command_printing_only_json_never_imports_rich(tmp_path):
     """rich draws what a person reads (tables, messages, progress bars): with ``--json`` nothing
     is drawn and rich is not imported (40 ms of a command's start-up); without it, the table."""

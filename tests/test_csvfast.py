@@ -30,6 +30,7 @@ def check(cols, **kw):
     assert text == numpy_rows(cols)
 
 
+@pytest.mark.slow
 def test_random_numbers_of_every_kind_match_the_reference():
     check(random_columns(np.random.default_rng(18), N))
 
@@ -41,6 +42,7 @@ def test_each_kind_of_cell_in_a_column_of_its_own():
         check([col, np.arange(col.size)])
 
 
+@pytest.mark.slow
 def test_every_magnitude_of_the_double_range():
     """|v| from the subnormals (5e-324) to 1.8e308, both signs, uniform in the exponent: every %g
     switch, every suffix, the ranges handed to Python (below 1e-34, from 1e53)."""
@@ -108,6 +110,7 @@ def test_empty_and_one_cell():
 finite = st.floats(allow_nan=True, allow_infinity=True, allow_subnormal=True)
 
 
+@pytest.mark.slow
 @settings(max_examples=300 if JIT else 60, deadline=None)
 @given(st.lists(st.tuples(finite, finite, st.integers(-(2 ** 63), 2 ** 63 - 1), st.booleans()),
                 min_size=1, max_size=40))

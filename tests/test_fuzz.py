@@ -148,12 +148,14 @@ def test_random_valid_specs_load(data):
     assert d.m == len(data["cables"]) and d.name == data["name"]
 
 
+@pytest.mark.slow
 @fuzz(1000)
 @given(mutated_spec_data())
 def test_mutated_specs_load_or_are_refused(work, data):
     load_both(work, "spec", data)
 
 
+@pytest.mark.slow
 @fuzz(400)
 @given(st.data())
 def test_mutated_yaml_text_loads_or_is_refused(work, data):
@@ -258,6 +260,7 @@ def test_schema_is_strict_json():
 steps = option_floats(0.05, 1.0)
 
 
+@pytest.mark.slow
 @fuzz(8)
 @given(spec_data(), steps, st.sampled_from(["static", "wrench-feasible", "wrench-closure", "nope"]))
 def test_workspace_job(work, data, step, kind):
@@ -301,6 +304,7 @@ def test_check_job(data, step, safety, motor):
         strict_json({"checks": res.checks, "figures": res.evaluation.row})
 
 
+@pytest.mark.slow
 @fuzz(4)
 @given(spec_data(), steps, motors)
 def test_report_job(work, data, step, motor):
@@ -336,6 +340,7 @@ def test_sweep_job(work, data, vary, rank_by):
         strict_json(res.summary)
 
 
+@pytest.mark.slow
 @fuzz(6)
 @given(spec_data(), option_floats(1e-3, 0.05), st.sampled_from(["sq", "pl", "nope"]))
 def test_trajectory_job(work, data, cycle_time, name):
@@ -469,6 +474,7 @@ def test_random_feature_specs_load(data):
     check_cable_models(spec.from_dict(data))
 
 
+@pytest.mark.slow
 @fuzz(400)
 @given(mutated_feature_data())
 def test_mutated_feature_keys_load_or_are_refused(work, data):
@@ -521,6 +527,7 @@ def test_pose_with_cable_models_and_free_orientation(data, where, kind):
             assert np.all(t >= design.tension_min - 1e-6) and np.all(t <= design.tension_max + 1e-6), t
 
 
+@pytest.mark.slow
 @fuzz(12)  # an elastic fk with no equilibrium takes 10-20 s to give up: more examples in the long run
 @given(feature_spec_data(), st.lists(st.floats(0.2, 0.8), min_size=3, max_size=3),
        st.one_of(st.none(), st.lists(st.one_of(st.floats(0, 10), st.sampled_from([0.0, 1e-9, 1e-6, 1e4, 0.5])),
@@ -552,6 +559,7 @@ formats = st.sampled_from(["csv", "csv", "parquet", "xls"])
 tilts = st.one_of(st.none(), st.floats(0, 180), st.sampled_from([-1.0, 180.5, 500.0, math.nan, math.inf, 1e308]))
 
 
+@pytest.mark.slow
 @fuzz(10)
 @given(feature_spec_data(), steps, st.sampled_from(["static", "static", "wrench-feasible", "nope"]), formats,
        st.booleans(), tilts)
@@ -585,6 +593,7 @@ opt_requires = st.one_of(st.sampled_from(["task_min_margin>=1", "fraction<=2", "
                          st.text(max_size=10))
 
 
+@pytest.mark.slow
 @fuzz(12)
 @given(spec_data(), st.tuples(st.sampled_from([["effector.mass=0.5:2"], ["tension.1=100:300"], []]),
                               st.lists(opt_vary, max_size=1)).map(lambda t: t[0] + t[1]),

@@ -124,6 +124,7 @@ def ref_tilt(A, B, c, mass, p, n=4000):
     return best, out
 
 
+@pytest.mark.slow
 def test_kernel_against_instantaneous_centre_reference():
     """Batched kernel = slow reference on random designs and positions (ambiguous
     poses - near-zero tension, near-neutral stability, ties - are skipped and counted)."""
@@ -303,6 +304,7 @@ def random_lengths(rng, A, B, c, W, Hh, slack_bias=0.3):
     return rho
 
 
+@pytest.mark.slow
 @NO_KERNELS
 def test_fk_planar2_against_curve_scan():
     """Random designs and lengths: the global minimum and every stable equilibrium of the
@@ -400,6 +402,7 @@ def check_equilibrium(A, B, c, mass, g, rho, e, planar):
     assert e.stable or abs(e.hessian_min) <= 1e-8 * scale  # stable, or neutral (a zero mode)
 
 
+@pytest.mark.slow
 @NO_KERNELS
 @pytest.mark.parametrize("planar,m,trials", [(True, 1, 3), (True, 2, 4), (True, 3, 4), (True, 4, 3),
                                              (False, 2, 2), (False, 3, 3), (False, 4, 2)])
@@ -443,6 +446,7 @@ def test_fk_against_multistart_slsqp(planar, m, trials):
 # point mass: the convex problem
 # ---------------------------------------------------------------------------
 
+@pytest.mark.slow
 @NO_KERNELS
 def test_point_mass_against_cvxpy():
     cp = pytest.importorskip("cvxpy")
@@ -540,6 +544,7 @@ def planar2_level_scan(cy, margin=0.12, step=0.02):
     return worst, where, err
 
 
+@pytest.mark.slow
 @NO_KERNELS
 @pytest.mark.parametrize("cy,tilt,pos_err", [(0.0, 33.4, 0.043), (0.03, 45.3, 0.057)])
 def test_planar2_level_lengths_tilt(cy, tilt, pos_err):
@@ -629,6 +634,7 @@ def wrench_closure(d, pose):
     return res.status == 0
 
 
+@pytest.mark.slow
 @NO_KERNELS
 @pytest.mark.parametrize("name,poses", [
     ("planar4.yaml", [[1.0, 0.75, 0.0], [1.3, 1.0, -0.2], [0.8, 0.6, 0.05]]),

@@ -159,6 +159,7 @@ def crane():
     return d, H.design_arrays(d)
 
 
+@pytest.mark.slow
 @NO_KERNELS
 @pytest.mark.parametrize("case", ["three", "crane"])
 def test_spatial_hanging_against_scipy(case):
@@ -203,6 +204,7 @@ def ref_least_tilt():
     return module.least_tilt_reference
 
 
+@pytest.mark.slow
 @NO_KERNELS
 def test_four_cables_hang_in_their_least_tilted_pulling_orientation():
     """crane4 at random positions: no balanced orientation with every tension >= 0 that is
@@ -237,6 +239,7 @@ def no_less_tilted_stable(A, B, c, mass, P, got, rng) -> int:
     return same
 
 
+@pytest.mark.slow
 @NO_KERNELS
 def test_five_cables_hang_in_their_least_tilted_pulling_orientation():
     """tests/data/crane5.yaml (crane4 with a fifth cable from the middle of its front top
@@ -263,6 +266,7 @@ def test_five_cables_hang_in_their_least_tilted_pulling_orientation():
     assert same >= 8, same
 
 
+@pytest.mark.slow
 @NO_KERNELS
 def test_crane4s_orientation_does_not_depend_on_its_mass():
     """Balance is linear in the weight, so any mass hangs in the same orientation with
@@ -362,6 +366,7 @@ def ref_held(A, B, c, mass, g, rho, d, rng, starts=12):
     return best
 
 
+@pytest.mark.slow
 @NO_KERNELS
 def test_held_fk_against_slsqp_and_the_closed_form():
     """planar-two-cable designs with the orientation held: the lowest point of the two discs
@@ -478,6 +483,7 @@ def _reduced_hessian_min_fd(geo, p, R, t, taut, dofs, h=1e-4):
     return float(np.linalg.eigvalsh(N.T @ Hd @ N)[0])
 
 
+@pytest.mark.slow
 @NO_KERNELS
 def test_batched_reduced_hessian_against_finite_differences():
     """Geometry.reduced_hessian_min_many (one batch of random robots' configurations, any taut

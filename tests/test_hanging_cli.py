@@ -75,6 +75,7 @@ def test_fixed_workspace_rows_are_the_plain_engines(planar2):
     np.testing.assert_allclose(tilt, np.where(status == 0, np.degrees(np.abs(phi)), np.nan), atol=1e-12)
 
 
+@pytest.mark.slow
 def test_an_underconstrained_design_without_a_hanging_solve_is_still_classified(tmp_path):
     """cli.md: an under-constrained design's summary has effector_orientation and
     underconstrained, also where there is no hanging solve (sagging cables, a weightless
@@ -127,6 +128,7 @@ def test_fixed_pose_and_fk_unchanged(planar2):
         assert f["orientation"] == 0.0 and f["slack"] == [] and f["model"] == "held"
 
 
+@pytest.mark.slow
 def test_fixed_fk_with_pulleys_is_the_kinematic_solve(tmp_path):
     data = planar2_raw()
     for c, ax in zip(data["cables"], ([0.0, 1.0, 0.0], [0.0, 1.0, 0.0])):
@@ -181,6 +183,7 @@ def free_rows(tmp_path_factory):
     return path, tmp / "o", json.loads(res.stdout), header, rows
 
 
+@pytest.mark.slow
 def test_free_workspace_rows_are_pose_at_each_position(free_rows):
     path, out, summary, header, rows = free_rows
     assert header == ["x", "y", "feasible", "margin", "tension_c1", "tension_c2", "length_c1", "length_c2",
@@ -229,6 +232,7 @@ def test_free_feasibility_is_the_hanging_statics(free_rows):
     assert summary["feasible"] == int(feasible.sum()) and summary["hangs"] == int(ok.sum())
 
 
+@pytest.mark.slow
 def test_max_tilt_makes_larger_tilts_infeasible(free_rows, tmp_path):
     path, out, summary, header, rows = free_rows
     res = invoke("workspace", path, "--step", "0.05", "--out", tmp_path / "m", "--json", "--max-tilt", "15")
@@ -269,6 +273,7 @@ def test_tilt_limit_needs_a_free_design(tmp_path):
     assert res.exit_code == 2 and "requirements.max_tilt" in res.output
 
 
+@pytest.mark.slow
 def test_crane_workspace(tmp_path):
     """crane4 (spatial, free, max_tilt 10): orientation per axis, feasibility at the hanging pose."""
     res = invoke("workspace", CRANE4, "--step", "0.5", "--out", tmp_path, "--json")
@@ -379,6 +384,7 @@ def test_pose_table_shows_the_tensions_an_infeasible_load_hangs_with():
     assert "and tensions" not in feasible  # the table has them
 
 
+@pytest.mark.slow
 def test_free_needs_ideal_cables(tmp_path):
     """The hanging solvers model rigid weightless cables: a free design with another cable model is
     refused; under fixed the other models' outputs come without the tilt."""

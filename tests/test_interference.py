@@ -39,6 +39,7 @@ def seg_dist_slow(p0, p1, q0, q1):
     return np.sqrt(max(best, 0.0))
 
 
+@pytest.mark.slow
 def test_segment_distance_kernel_against_optimiser():
     rng = np.random.default_rng(1)
     for k in range(150):
@@ -180,6 +181,7 @@ def slow_check(d, pose):
     return pairs
 
 
+@pytest.mark.slow
 def test_random_robots_against_slow_reference():
     rng = np.random.default_rng(4)
     checked = hits = 0
@@ -362,6 +364,7 @@ def test_plane_offsets_change_the_interference_only():
     assert np.any(a[4] == 0)  # collision-free positions exist now
 
 
+@pytest.mark.slow
 def test_random_planar_robots_with_plane_offsets_against_the_slow_distance():
     """Random planar robots whose cables lie in random planes: the kernel's and the pose check's
     cable-cable verdicts against the slow segment distance of the 3-D segments."""

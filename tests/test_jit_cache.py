@@ -60,6 +60,7 @@ def _probe(root: Path) -> tuple[list[float], int]:
     return eval(values), int(hits)
 
 
+@pytest.mark.slow
 def test_an_edit_to_a_called_module_recompiles_its_callers(tmp_path):
     """The kernel in pose.py is recompiled after an edit to hsm.py alone, not loaded stale."""
     shutil.copytree(PACKAGE, tmp_path / "cdpr_design", ignore=shutil.ignore_patterns("__pycache__"))

@@ -268,6 +268,7 @@ def test_rank_deficient_poses_are_infeasible(motion):
         assert not f and np.isnan(mg) and np.all(np.isnan(t))
 
 
+@pytest.mark.slow
 def test_min_norm_kernel_detects_infeasibility_and_is_exact():
     """min_norm_tensions alone: infeasible <=> linprog infeasible; optimum = cvxpy's."""
     rng = np.random.default_rng(11)
@@ -309,6 +310,7 @@ def small_redundancy_problem(rng, trial: int, r: int):
     return n, m, W, tmin, tmax
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("r", [1, 2])
 def test_small_redundancy_closed_forms_match_enumeration(r):
     """hsm_one / hsm_two (m - n = 1, 2, behind hsm_factored) against the general enumeration
@@ -341,6 +343,7 @@ def test_small_redundancy_closed_forms_match_enumeration(r):
     assert counts["cases"] > 400 and 0 < counts["closure"] < counts["cases"] and counts["degenerate"] > 150, counts
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("r", [1, 2])
 def test_small_redundancy_tensions_match_the_active_set_method(r):
     """project_one / project_two (m - n = 1, 2, behind project_null) against the general dual
@@ -384,6 +387,7 @@ def test_small_redundancy_tensions_match_the_active_set_method(r):
     assert counts["active"] > 300 and counts["degenerate"] > 1000, counts
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("motion,extra", CASES, ids=[f"{mo}-m=n+{k}" for mo, k in CASES])
 def test_grid_kernel_of_each_redundancy_equals_the_pose_kernel(motion, extra):
     """The grid sweep runs one kernel per m - n (0, 1, 2, any other: ``sweep.grid_block``), each

@@ -28,6 +28,7 @@ def test_symmetric_point_mass_closed_form(half_span, depth, mass):
     assert r.feasible
 
 
+@pytest.mark.slow
 def test_algorithms_reference_point():
     """algorithms.md: outlets (0,2),(3,2), point (1,1), m g = 9.81 N, t in [1, 40]:
     t = (9.2489567, 7.3119423) N, capacity margin 5.9880342 N."""

@@ -124,6 +124,7 @@ def test_sag_dominated_setpoint_error_has_the_catenarys_size():
     np.testing.assert_allclose(c.setpoint_error[j], s.lengths[j] - c.unstretched[j], rtol=0, atol=0)
 
 
+@pytest.mark.slow
 def test_a_sample_without_a_solution_is_flagged_never_a_number(tmp_path):
     """The path leaves the robot's reach (the effector above the outlets' line): those samples have
     no sagging statics.  They carry a status, empty cells and feasible 0; trajectory.json counts
@@ -173,6 +174,7 @@ def trajectory_header(model=None) -> list:
     return head + (["cable_status"] if model == "sagging" else [])
 
 
+@pytest.mark.slow
 def test_cli_columns_and_keys(tmp_path):
     """Ideal: the historical header and keys; elastic: the same columns first, then the cable model's
     (sagging: tests/test_motion_cables.py::test_a_sample_without_a_solution_is_flagged_never_a_number)."""
@@ -225,6 +227,7 @@ def _sim_at_rest(d, pose, segments):
     return sim.reset(pose, setpoints=L0, settle=6.0)
 
 
+@pytest.mark.slow
 def test_massive_cables_at_rest_agree_with_the_static_catenary():
     """Sagging cables as 1-D flexes (mu = 0.5 kg/m, EA = 1e5 N, 10 m span, 5 kg effector, sag
     0.13-0.44 m).  Commanded the static solution's unstretched lengths, the simulated robot comes to

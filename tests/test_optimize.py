@@ -180,6 +180,7 @@ def _fake_problem(planar2, directions):
     return opt.make_problem(planar2, ["effector.mass=0.5:2"], maxi, mini, None, batch.Options())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("directions", [(True, False), (True, True), (False, False, True)])
 def test_pareto_and_knee_against_brute_force(planar2, directions):
     rng = np.random.default_rng(len(directions) * 7 + sum(directions))
@@ -264,6 +265,7 @@ def test_the_picture_shows_convergence_or_the_front_and_importances(planar2):
 GRID = 41  # 0.025 m steps over the same box as the search
 
 
+@pytest.mark.slow
 def test_best_is_within_one_percent_of_the_exhaustive_grid(tmp_path, light_spec):
     """Two outlet x coordinates of planar2, task minimum margin: the exhaustive 41 x 41 grid against
     150 trials of the search; the best design, re-evaluated by ``report``, is within 1 %."""
@@ -294,6 +296,7 @@ def test_best_is_within_one_percent_of_the_exhaustive_grid(tmp_path, light_spec)
     assert csv_dicts(out / "optimize.csv")[s["best"]["trial"]]["state"] == "complete"
 
 
+@pytest.mark.slow
 def test_two_objectives_pareto_csv_is_the_front(tmp_path, light_spec):
     out = tmp_path / "opt"
     r = invoke("optimize", light_spec, *OUTLETS, "--maximize", "task_min_margin", "--minimize", "peak_tension",
@@ -339,6 +342,7 @@ def test_one_worker_with_a_seed_is_repeatable(tmp_path, light_spec):
     assert header[-1] == "seconds" and tables[0] == tables[1]
 
 
+@pytest.mark.slow
 def test_parquet_tables_are_the_csv_ones_and_the_summary_has_timings(tmp_path, light_spec):
     from cdpr_design.io.columns import read_table, table_metadata
 
@@ -370,6 +374,7 @@ def test_parquet_tables_are_the_csv_ones_and_the_summary_has_timings(tmp_path, l
     assert b["trial"].dtype == np.int64
 
 
+@pytest.mark.slow
 def test_two_workers_end_with_exactly_the_trials_asked(tmp_path, light_spec):
     """This process (worker 0) and a spawned worker share the study: exactly N trials, each once."""
     out = tmp_path / "opt"
@@ -385,6 +390,7 @@ def test_two_workers_end_with_exactly_the_trials_asked(tmp_path, light_spec):
     assert 0 in workers and workers <= {0, 1}
 
 
+@pytest.mark.slow
 def test_invalid_variants_in_a_range_are_failed_trials(tmp_path, light_spec):
     """tension.1 below tension.0 (0 N) breaks the spec: a failed trial with the spec's reason."""
     out = tmp_path / "opt"
@@ -516,6 +522,7 @@ def test_a_task_figure_needs_a_task_box(tmp_path):
     assert r.exit_code == 2 and "requirements.task_box" in r.output
 
 
+@pytest.mark.slow
 def test_an_existing_study_needs_resume_and_the_same_search(tmp_path, light_spec):
     out = tmp_path / "opt"
     base = ["optimize", light_spec, *OUTLETS, "--maximize", "task_min_margin", "--out", out, "--no-picture"]
@@ -625,6 +632,7 @@ def _check_resumed(out, before, light_spec):
     return s, interrupted
 
 
+@pytest.mark.slow
 def test_a_trial_left_running_is_evaluated_again_on_resume(tmp_path, light_spec):
     """What SIGKILL leaves (a RUNNING trial with its parameters) and SIGINT leaves (a failed trial
     marked interrupted): both queued again once, neither counted, the total exact."""
@@ -650,6 +658,7 @@ def test_a_trial_left_running_is_evaluated_again_on_resume(tmp_path, light_spec)
     assert (stats.requeued, stats.evaluated) == (0, 0)
 
 
+@pytest.mark.slow
 def test_sigint_then_resume(tmp_path, light_spec):
     out, code, err = _start_and_kill(tmp_path, light_spec, signal.SIGINT, group=True, workers=2)
     assert code == 130, err
@@ -659,6 +668,7 @@ def test_sigint_then_resume(tmp_path, light_spec):
     _check_resumed(out, before, light_spec)
 
 
+@pytest.mark.slow
 def test_sigkill_then_resume(tmp_path, light_spec):
     out, code, _ = _start_and_kill(tmp_path, light_spec, signal.SIGKILL, group=True, workers=1)
     assert code == -signal.SIGKILL
@@ -684,6 +694,7 @@ def _workers_gone(out, within_s: float = 60.0) -> bool:
     return False
 
 
+@pytest.mark.slow
 def test_sigkill_of_the_run_alone_leaves_workers_that_end(tmp_path, light_spec):
     """The run's process killed alone: its worker process finishes its trial (told normally) and ends;
     the trial the run's process was evaluating (it is worker 0) is left running, and evaluated again on

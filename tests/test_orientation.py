@@ -42,6 +42,7 @@ def _collect(fn, *a, **kw):
     return res, cat
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("make, oset, kind", [
     (planar4, {"lower": [-0.2], "upper": [0.3], "count": 4}, "static"),
     (ipanema3, {"lower": [-0.1, 0, -0.17], "upper": [0.1, 0, 0.17], "count": [2, 1, 3]}, "wrench-closure"),
@@ -117,6 +118,7 @@ def brute_range(d, pose_pos, scale, levels, count, interference):
     return best
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("interference", [False, True])
 def test_orientation_range_against_brute_force_planar(interference):
     d = planar4(orientation_range={"max": 0.5, "levels": 5, "count": 3})
@@ -134,6 +136,7 @@ def test_orientation_range_against_brute_force_planar(interference):
     assert res.summary()["orientation_mode"] == "range"
 
 
+@pytest.mark.slow
 def test_orientation_range_against_brute_force_spatial():
     d = ipanema3(orientation_range={"max": [0.2, 0.0, 0.4], "levels": 4, "count": 2})
     res, out = _collect(ws.run_orientations, d, "range")

@@ -68,6 +68,7 @@ def random_columns(rng, n: int) -> list[np.ndarray]:
     return cols
 
 
+@pytest.mark.slow
 def test_csv_cells_match_the_reference_on_random_numbers():
     rng = np.random.default_rng(18)
     cols = random_columns(rng, 20_000)
@@ -173,6 +174,7 @@ def test_the_references_hold_negative_zeros_and_scientific_cells():
     assert any('"' in t for t in texts)  # a quoted cell (sweep's duty_cycle text)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(p.stem for p in DESIGNS.glob("*.yaml")))
 def test_workspace_table_of_every_design_matches_the_reference(name):
     """In-process: the writer's CSV of each shipped design's workspace equals the cell-by-cell text."""
@@ -293,6 +295,7 @@ print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - base)
 """
 
 
+@pytest.mark.slow
 def test_memory_stays_bounded_streaming_10_million_rows(tmp_path):
     """10,000,000 rows of 10 columns (800 MB as float64) stream in chunks: the peak grows by < 200 MB."""
     out = subprocess.run([sys.executable, "-c", _RSS, "parquet", "10000000", str(tmp_path / "big.parquet")],
@@ -354,6 +357,7 @@ def test_a_dangling_symbolic_link_where_an_output_goes_is_a_foreign_file(tmp_pat
 EXTRA_PICTURE = {"crane4": "tilt_map.png", "planar2": "tilt_map.png", "sagging40": "cable_models.png"}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(p.stem for p in DESIGNS.glob("*.yaml")))
 def test_every_file_a_workspace_run_writes_is_known_before_the_sweep(tmp_path, name):
     """The names checked for foreign files up front are exactly the files the run writes."""

@@ -34,6 +34,7 @@ def test_blocks_cover_the_rows_once_in_order(count, grain, nthreads):
         assert all(k1 - k0 >= min(grain, count // len(parts)) for k0, k1 in parts[:-1])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path, step", [("designs/ipanema3.yaml", 0.25), (PLANAR2, 0.01),
                                         ("designs/crane4.yaml", 0.25)])
 def test_results_do_not_depend_on_the_thread_count(path, step):

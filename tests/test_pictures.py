@@ -58,6 +58,7 @@ def test_worker_runs_at_its_parents_cpu_priority(result):
         assert os.getpriority(os.PRIO_PROCESS, worker.proc.pid) == mine
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", ["planar2", "orientations", "hanging"])
 def test_the_worker_warms_up_with_what_a_request_needs_and_without_numba(case, result):
     """After the warm-up, a workspace request (plain, of an orientation sweep, of a hanging
@@ -127,6 +128,7 @@ def test_prestart_take_discard(monkeypatch):
     assert pw._prestarted is None and proc.poll() is not None
 
 
+@pytest.mark.slow
 def test_command_output_identical_with_and_without_worker(tmp_path):
     """The real console entry: files byte-identical whether the worker drew or not."""
     outs = {}
@@ -150,6 +152,7 @@ def test_worker_refuses_foreign_file_before_drawing(tmp_path, result):
     assert (tmp_path / "tension_map.png").read_text() == "mine"
 
 
+@pytest.mark.slow
 @HOW
 def test_hung_worker_is_given_up(result, fork):
     """A child that does not answer in time is killed and the pictures are drawn here."""

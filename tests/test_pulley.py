@@ -88,6 +88,7 @@ def random_case(rng):
             return a, k, r, B
 
 
+@pytest.mark.slow
 def test_ik_matches_shortest_wrapping_path_on_random_pulleys():
     rng = np.random.default_rng(7)
     for _ in range(80):

@@ -99,6 +99,7 @@ def _rows_close(a, b, rtol):
 # ----------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(st.integers(0, 2 ** 31 - 1))
 def test_cable_paths_equal_outlet_geometry_and_exit_point(seed):
@@ -124,6 +125,7 @@ def test_cable_paths_equal_outlet_geometry_and_exit_point(seed):
                 assert beta == pytest.approx(g.wrap[j], abs=1e-12)
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(st.integers(0, 2 ** 31 - 1), st.sampled_from([0.0, 0.02, 0.3]))
 def test_length_hessian_matches_finite_differences(seed, radius):
@@ -171,6 +173,7 @@ def test_trajectory_radius_to_zero_is_point_outlet(make, name):
     np.testing.assert_array_equal(s1.feasible, s0.feasible)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("make,radius,name", [(planar2, 0.05, "square_fast"), (planar4, 0.08, "tilt"),
                                               (planar4, 0.08, "ring"), (ipanema3, 0.1, "swing")])
 def test_trajectory_speeds_are_derivatives_of_pulley_lengths(make, radius, name):
@@ -229,6 +232,7 @@ def test_sizing_radius_to_zero_is_point_outlet_spatial(catalogue):
     _rows_close(r0, r1, 1e-6)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("make,radius", [(planar2, 0.05), (planar4, 0.08), (ipanema3, 0.1)])
 def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
     """Static tensions of the sizing envelope (A = V = 0) = statics.pose.evaluate_pose at every pose,
@@ -258,6 +262,7 @@ def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
     assert np.nanmax(np.abs(e0["static"][feas] - ref[feas])) > 1e-4
 
 
+@pytest.mark.slow
 def test_sizing_cable_acceleration_bound_with_pulleys():
     """accel = A + V^2 max(1/l_f, |kappa_t|) bounds |L''| = |v^T H v - u . a| over |v| <= V, |a| <= A,
     and is attained (v along H's top eigenvector, a along -/+u)."""
@@ -287,6 +292,7 @@ def test_sizing_cable_acceleration_bound_with_pulleys():
 # ----------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_simulation_uses_pulley_lengths():
     """The MuJoCo model's cable lengths are arc + free segment (tendon from the tangent point)."""
     d = planar4(0.08)
@@ -319,6 +325,7 @@ def _orient_design(**wsx):
     return planar4_orient("p4c", **wsx)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mode", ["total", "range"])
 def test_orientation_summary_has_collision_counts(mode):
     """collision_free / feasible_statics / collisions_by_kind equal counts from the per-orientation

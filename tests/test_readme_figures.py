@@ -10,6 +10,8 @@ import re
 import subprocess
 import sys
 
+import pytest
+
 from .helpers import ROOT
 
 
@@ -30,6 +32,7 @@ def _numbers(text: str) -> list[str]:
     return re.findall(r"-?\d+\.\d+", text)
 
 
+@pytest.mark.slow
 def test_readme_simulation_tables_are_the_scripts():
     readme, out = _readme_section(), _script_output()
     rows = [line for line in readme.splitlines() if re.match(r"\| (100 |1000 |)\| \d", line)]

@@ -125,6 +125,7 @@ def test_report_command_writes_the_page_with_sizing_and_checks(tmp_path):
     assert json.loads((tmp_path / "report.json").read_text())["timings"]["total_s"] > 0
 
 
+@pytest.mark.slow
 def test_report_renders_in_a_real_browser_offline(tmp_path):
     """Where playwright and a browser are installed (not in CI): the page draws its figures with
     every network request refused and no script error."""
@@ -173,6 +174,7 @@ def _same_table(csv_path, pq_path):
     return a, b
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design,extra", [("planar2", ["--step", "0.05"]),
                                           ("ipanema3", ["--step", "0.8", "--collisions"]),
                                           ("planar4", ["--step", "0.2", "--orientations", "range"])])
@@ -197,6 +199,7 @@ def test_workspace_parquet_round_trip(tmp_path, design, extra):
     assert meta["units"]["length_c1"] == "m" and meta["units"]["x"] == "m"
 
 
+@pytest.mark.slow
 def test_sizing_trajectory_and_sweep_parquet(tmp_path):
     runs = {"motor_sizing": ["size-motors", PLANAR2, "--step", "0.05"],
             "trajectory": ["trajectory", PLANAR2, "square_fast", "--cycle-time", "0.02"],
@@ -238,6 +241,7 @@ def _assert_outer_labels(ax, maps):
     assert low.get_xlim() == ax.get_xlim() and left.get_ylim() == ax.get_ylim()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design,step,orient", [("planar2", 0.02, None), ("ipanema3", 0.6, None),
                                                 ("planar4", 0.1, "range"), ("crane4", 0.25, None)])
 def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
@@ -284,6 +288,7 @@ def _assert_inside(fig) -> None:
     assert room >= 0.02, (box.bounds, width, height)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design,step", [("sagging40", 4.0), ("cogiro", 3.0)])
 def test_the_cable_model_picture_lies_inside_its_figure(design, step):
     """Planar (a single panel) and spatial (z-slice panels, :func:`~cdpr_design.plots._frame.fit_width`)."""
@@ -300,6 +305,7 @@ def test_the_cable_model_picture_lies_inside_its_figure(design, step):
     pyplot().close(fig)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("design", ["cogiro", "crane4"])
 def test_a_spatial_grid_of_one_z_level_keeps_its_titles_inside(design):
     """One z-slice makes a one-panel figure narrower than its title: the figure widens to the

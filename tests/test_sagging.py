@@ -347,6 +347,7 @@ def check_kkt(design, pose, res) -> np.ndarray:
     return least
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family,seed", [("2T", 1), ("1R2T", 2), ("3T", 3), ("3R3T", 4)])
 def test_sagging_statics_matches_the_reference(family, seed):
     """Each random robot twice: with bounds that no cable reaches, and with bounds around its
@@ -379,6 +380,7 @@ def test_sagging_statics_matches_the_reference(family, seed):
     assert max(sags) > 0.02, sags
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family,seed", [("2T", 11), ("1R2T", 12), ("3T", 13), ("3R3T", 14)])
 def test_sagging_solutions_balance_and_close(family, seed):
     """Every feasible pose, bounds active or not: the reported shapes close on the outlets
@@ -447,6 +449,7 @@ def test_weightless_cables_are_the_elastic_ones(family, seed):
         np.testing.assert_allclose(elastic.cable_state.unstretched_lengths, ideal.lengths / (1 + ideal.tensions / EA))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("family,seed", LIMIT_CASES)
 def test_sagging_tensions_converge_linearly_to_the_ideal_ones(family, seed):
     """|t(w) - t_ideal| shrinks in proportion to w: over w / 10^k (k = 0..4) the error falls
@@ -486,6 +489,7 @@ def planar10(tension_max: float = 5000.0, model: str = "sagging"):
 REGION = [(x, y) for x in np.arange(3.0, 7.01, 0.5) for y in np.arange(3.0, 9.01, 0.5)]
 
 
+@pytest.mark.slow
 def test_planar10_reproduces_the_issue_figures():
     """The issue's measurements: the winch sees up to ~5 % more than the effector end and
     ~4 % more than the ideal model; commanded lengths off by millimetres.  The geometry is not

@@ -47,6 +47,7 @@ def temps(folder: Path) -> list[Path]:
 BIG = ["workspace", PLANAR2, "--step", "0.001", "--quiet"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGHUP, signal.SIGINT], ids=lambda s: s.name)
 def test_a_signal_during_workspace_exits_130_and_removes_its_temporary_files(tmp_path, sig):
     out = tmp_path / "out"
@@ -59,6 +60,7 @@ def test_a_signal_during_workspace_exits_130_and_removes_its_temporary_files(tmp
     assert temps(out) == [] and not (out / "workspace.csv").exists()
 
 
+@pytest.mark.slow
 def test_a_run_in_the_same_out_removes_what_a_killed_run_left(tmp_path):
     out = tmp_path / "out"
     proc = start(*BIG, "--out", out)
@@ -113,6 +115,7 @@ def test_hidden_files_of_the_user_with_a_number_in_the_name_are_kept(tmp_path):
     assert [p.read_text() for p in mine] == ["precious"] * 3
 
 
+@pytest.mark.slow
 def test_sigterm_during_a_sweep_keeps_the_journal_and_resume_is_identical(tmp_path):
     # 48 variants of about 50 ms each (numpy engine, 0.005 m): the signal, sent once the first variant is in
     # the journal, lands seconds before the end. (With 6 variants of 6 ms the whole sweep could finish between
@@ -160,6 +163,7 @@ def _trial_states(db: Path) -> list[str]:
         return []
 
 
+@pytest.mark.slow
 def test_sigterm_during_optimize_exits_130_and_the_study_resumes(tmp_path):
     """SIGTERM behaves like Ctrl-C for optimize: exit 130, no table written, no trial left RUNNING,
     and --resume completes the study."""

@@ -103,6 +103,7 @@ def _truncate(s, k):
     return replace(s, **{f: getattr(s, f)[:k] for f in fields})
 
 
+@pytest.mark.slow
 def test_square_fast_tracking_and_delay(planar2):
     """The paper's square at 1 m/s: tracking below 1.5 mm RMS with the trapezoidal profile and
     feed-forward; with a 130 ms transport delay the measured axis delay is 130 ms."""

@@ -111,6 +111,7 @@ def _brute_peak(design, pose, A, ndirs=720):
     return best
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(6))
 def test_square_closed_form_matches_brute_force(seed):
     """t0 + A ||row_i(W^-1 M)|| is the max over |a| <= A (dense sampling from below)."""
@@ -133,6 +134,7 @@ def test_square_closed_form_matches_brute_force(seed):
     np.testing.assert_allclose(brute, e["peak"][0], rtol=1e-4)  # 1 - cos(pi / 720) < 1e-5
 
 
+@pytest.mark.slow
 def test_redundant_envelope_against_cvxpy():
     """m > n: the per-vertex minimum-norm tensions equal a cvxpy QP's."""
     import cvxpy as cp

@@ -88,6 +88,7 @@ def _wrenches(d, pose, rng, count):
     return np.array(rows)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(12))
 def test_kernel_equals_bvls_on_random_planar_robots(seed):
     rng = np.random.default_rng(1000 + seed)
@@ -104,6 +105,7 @@ def test_kernel_equals_bvls_on_random_planar_robots(seed):
     assert solved > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["planar4", "ipanema1", "ipanema2", "ipanema3", "cogiro"])
 def test_kernel_equals_bvls_on_shipped_designs(name):
     d = spec.load(DESIGNS / f"{name}.yaml")

@@ -122,6 +122,7 @@ def test_cli_bad_keys_exit_2(tmp_path):
     assert not (tmp_path / "o" / "sweep.csv").exists()
 
 
+@pytest.mark.slow
 def test_spec_sweep_section(tmp_path, planar2_data):
     data = dict(planar2_data)
     data["sweep"] = {"vary": {"effector.mass": [0.5, 1.5], "tension.1": "15:25:2"},
@@ -155,6 +156,7 @@ def test_spec_sweep_section(tmp_path, planar2_data):
 # ----------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_rows_equal_individual_report_runs(tmp_path, planar2):
     """sweep.csv rows equal design_report.csv of ``report`` on each variant's own spec file."""
     out = tmp_path / "sweep"
@@ -213,6 +215,7 @@ def serial_records(small_plan):
     return _records(small_plan, sw.Options(step=0.05), workers=1)
 
 
+@pytest.mark.slow
 def test_process_pool_equals_serial(small_plan, serial_records):
     """Spawned workers after this process ran numba's parallel kernels: same rows (fork would not be safe)."""
     seen = []
@@ -223,6 +226,7 @@ def test_process_pool_equals_serial(small_plan, serial_records):
     assert all(not r["error"] for r in serial_records)
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_equals_process_pool(small_plan, serial_records):
     pytest.importorskip("distributed")
     stats = sw.run(small_plan, sw.Options(step=0.05), workers=2, scheduler="local",
@@ -237,6 +241,7 @@ def test_dask_bad_address_is_bad_input(small_plan):
         sw.run(small_plan, sw.Options(step=0.05), scheduler="tcp://127.0.0.1:1", connect_timeout=1.0)
 
 
+@pytest.mark.slow
 def test_forked_workers_after_the_kernels_ran_here(small_plan, serial_records):
     """The kernels' threads (kernels/parallel.py) do not follow a fork: workers forked after a
     parallel sweep in this process evaluate like spawned ones (with numba's OpenMP layer they were
@@ -260,6 +265,7 @@ RESUME_VARY = ["--vary", "effector.mass=0.5:2:6", "--vary", "tension.1=15:30:8"]
 N_RESUME = 48
 
 
+@pytest.mark.slow
 def test_resume_after_kill_gives_the_identical_csv(tmp_path):
     full = tmp_path / "full"
     r = invoke("sweep", PLANAR2, *RESUME_VARY, "--workers", "1", "--out", full, "--quiet", "--no-picture")
@@ -307,6 +313,7 @@ def test_resume_after_kill_gives_the_identical_csv(tmp_path):
     assert r.exit_code == 2 and "another sweep" in r.output
 
 
+@pytest.mark.slow
 def test_resume_with_a_pool_in_another_order(tmp_path, small_plan, serial_records):
     """Journal rows arrive in completion order; the final table is sorted and identical."""
     from cdpr_design.io.files import OutputDir
@@ -471,6 +478,7 @@ def _worker_settings():
             dask.config.get("distributed.admin.tick.interval"))
 
 
+@pytest.mark.slow
 def test_local_cluster_workers_keep_glibc_malloc_defaults():
     """dask's nannies would set MALLOC_TRIM_THRESHOLD_ (fresh mmaps for every array above 128 kB,
     1.6-2x slower variants); the sweep's LocalCluster leaves it unset and restores this
@@ -491,6 +499,7 @@ def test_local_cluster_workers_keep_glibc_malloc_defaults():
     assert settings == (None, "1", False, "1s")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scheduler", [None, "local"])
 def test_workers_exit_after_the_sweep(small_plan, serial_records, scheduler):
     """run() returns once every row is in; the workers exit in the background and

@@ -54,6 +54,7 @@ def _random_W(rng, n, m):
     return W / np.linalg.norm(W, axis=0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(40))
 def test_objectives_against_linprog_and_cvxpy(seed):
     """min-norm (kernel, weighted too) vs cvxpy; min-max and min-sum vs scipy linprog."""

@@ -298,6 +298,7 @@ def redundant_4_cable():
     })
 
 
+@pytest.mark.slow
 def test_redundant_robot_min_norm_tensions_against_cvxpy():
     """m > n: the trajectory's tensions are the bounded minimum 2-norm ones (W t = w_req with
     inertia), checked against cvxpy pose by pose."""

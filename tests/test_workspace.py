@@ -71,6 +71,7 @@ def assert_same(ref, got, design):
     np.testing.assert_allclose(marg[fin], marg_r[fin], rtol=1e-9, atol=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("engine", ["numba", "numpy"])
 @pytest.mark.parametrize("seed", range(40))
 def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
@@ -100,6 +101,7 @@ def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
     assert_same((f2, m2, T2, L2), got, design)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("engine", ["numba", "numpy"])
 def test_planar2_wrench_feasible_matches_numpy(engine):
     data = planar2_raw()
@@ -248,6 +250,7 @@ def test_engine_choice(monkeypatch):
         ws.run(ipanema, step=0.5, engine="numpy")
 
 
+@pytest.mark.slow
 def test_engine_variable_is_read_by_the_command_line(tmp_path, monkeypatch):
     """Only the command line reads CDPR_DESIGN_ENGINE: it forces the engine, and a bad value
     is exit 2 naming the variable."""
@@ -276,6 +279,7 @@ def test_kernel_codes_match():
     assert eng._RANK_TOL == K.RANK_TOL
 
 
+@pytest.mark.slow
 def test_small_planar2_sweep_does_not_load_numba():
     """The paper's robot on its default grid is swept without numba's start-up (~1 s)."""
     import subprocess
@@ -293,6 +297,7 @@ def test_small_planar2_sweep_does_not_load_numba():
     assert int(feasible) == ws.run(spec.load(PLANAR2), engine="numba").feasible
 
 
+@pytest.mark.slow
 def test_kernels_package_alone_is_not_the_kernels_loaded():
     """``cdpr_design.kernels`` is lazy and imported without numba (batch and optimize import its
     ``parallel``): ``auto`` still takes numpy for small planar2 grids there, and ``load_kernels``
@@ -359,6 +364,7 @@ def test_warm_up_runs_the_sweeps_first_pose_with_the_whole_grids_engine(monkeypa
     assert seen[-1] == (1, tuple(small.lower), "auto")
 
 
+@pytest.mark.slow
 def test_workspace_reports_numba_start_up_apart(tmp_path):
     """The workspace summary's timings carry load_s (numba's start-up) besides the four phases."""
     r = invoke("workspace", PLANAR2, "--out", tmp_path / "a", "--json", "--quiet")

@@ -63,8 +63,8 @@ def _check_net_ids(design, local_net_id: str | None) -> None:
 
 
 def _endpoint(design, test_plc: str | None, local_net_id: str | None) -> _Endpoint:
-    """Where the PLC is: the built-in test PLC on the loopback, else the spec's plc section
-    (the net ids checked first)."""
+    """Where the PLC is: the built-in test PLC on the loopback (its port is known once it has
+    started: see :func:`_session`), else the spec's plc section (the net ids checked first)."""
     from cdpr_design.plc.testplc import LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID
 
     _check_net_ids(design, local_net_id)
@@ -155,7 +155,6 @@ def bridge(design, test_plc: str | None = None, duration: float | None = None, c
     each ADS request; ``reconnect``: attempts when the PLC stops answering.
     ``log`` receives progress messages, ``status`` the link's (lost, reconnecting).
     """
-    from cdpr_design.plc.ads import AdsTransport
     from cdpr_design.plc.symbols import PlcLayout
 
     if design.plc is None:
@@ -176,10 +175,8 @@ def bridge(design, test_plc: str | None = None, duration: float | None = None, c
     out_dir.target("bridge.json")
     log = log or (lambda msg: None)
     with _stop_on_signal() as stop:
-        transport = AdsTransport(layout, where.net_id, where.port, where.host, timeout=tmo,
-                                 local_net_id=where.local_net_id)
         t0 = time.perf_counter()
-        res, rows, plc_log = _session(design, transport, layout, samples, plc_lengths, test_plc, where, dt,
+        res, rows, plc_log = _session(design, layout, samples, plc_lengths, test_plc, where, dt, tmo,
                                       duration, reconnect, out_dir, stop, log, status or (lambda msg: None),
                                       timings)
         timings.sweep_s = time.perf_counter() - t0 - timings.write_s  # the loop, without its log's writing
@@ -202,23 +199,28 @@ def _test_plc_setpoints(samples, name: str):
         raise InputError(f"--test-plc {name}: {exc}") from None
 
 
-def _session(design, transport, layout, samples, plc_lengths, test_plc, where, dt, duration, reconnect,
+def _session(design, layout, samples, plc_lengths, test_plc, where, dt, timeout, duration, reconnect,
              out_dir, stop, log, status, timings):
-    """Test PLC (if any, playing ``plc_lengths`` at the sample times), connection, the loop;
+    """Test PLC (if any, playing ``plc_lengths`` at the sample times, on a port the system
+    chooses), connection (ADS requests time out after ``timeout`` [s]), the loop;
     (result, row maker, test PLC log or None).
 
     Whatever happens, the link is closed, the test PLC stopped and the rows
     logged so far kept in bridge.csv (every row is whole).
     """
     from cdpr_design.plc import bridge as br
+    from cdpr_design.plc.ads import AdsTransport
     from cdpr_design.plc.rows import RowMaker, csv_header
-    from cdpr_design.plc.testplc import LOOPBACK, TestPlc
+    from cdpr_design.plc.testplc import TestPlc
 
-    plc = log_file = res = rows = plc_log = None
+    plc = transport = log_file = res = rows = plc_log = None
     try:
         if test_plc is not None:
-            log(f"test PLC on {LOOPBACK} playing {test_plc!r} ({samples.duration:.3g} s)")
             plc = TestPlc(layout, samples.time, plc_lengths, task_cycle=max(samples.cycle_time, 1e-3)).start()
+            where = where._replace(host=plc.address, net_id=plc.net_id)
+            log(f"test PLC on {plc.address} playing {test_plc!r} ({samples.duration:.3g} s)")
+        transport = AdsTransport(layout, where.net_id, where.port, where.host, timeout=timeout,
+                                 local_net_id=where.local_net_id)
         _connect(transport, reconnect, stop, log)
         sim = br.make_simulator(design, dt, transport.read_setpoints())
         rows = RowMaker(design)
@@ -234,7 +236,8 @@ def _session(design, transport, layout, samples, plc_lengths, test_plc, where, d
         if res is None:
             raise
     finally:
-        transport.close()
+        if transport is not None:
+            transport.close()
         if log_file is not None:
             log_file.commit()  # every row is whole: what was logged is kept, also on failure
         if plc is not None:

@@ -133,7 +133,9 @@ BOUNDS: dict[str, tuple[float, float, str]] = {
 # ----------------------------------------------------------------------------
 
 
-_Parser = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml when built in: the same events, faster
+#: The parsers :func:`check_yaml` walks with, in turn: libyaml when PyYAML has it built in (the
+#: same events, faster), then PyYAML's pure-Python parser, which sets no limits.
+_PARSERS = tuple(dict.fromkeys((getattr(yaml, "CSafeLoader", yaml.SafeLoader), yaml.SafeLoader)))
 
 
 def check_yaml(text: str) -> str | None:
@@ -144,35 +146,48 @@ def check_yaml(text: str) -> str | None:
     as the whole node it repeats, within :data:`MAX_YAML_NODES`; an alias of a
     node still open (a self-containing document) is refused.  Syntax errors
     are left to the loader that follows (None).
+
+    A parser that refuses the text is followed by the next of :data:`_PARSERS`:
+    libyaml may refuse a document by limits of its own before it yields the
+    events that break ours (newer releases stop at 1,000 levels while scanning
+    ahead, before the first event of ``[[[[...``), and the user is then told
+    this module's limit, the same on every PyYAML, not the library's words.
     """
+    for parser in _PARSERS:
+        try:
+            return _shape_problem(yaml.parse(text, Loader=parser))
+        except yaml.YAMLError:
+            continue
+    return None  # not YAML at all: the loader that follows says what is wrong
+
+
+def _shape_problem(events) -> str | None:
+    """The first limit a YAML event stream breaks (see :func:`check_yaml`), or None."""
     sizes: dict[str, int] = {}  # anchor -> expanded node count
     stack: list[tuple] = []  # open collections: (anchor, nodes counted before it)
     nodes = 0  # expanded nodes so far
-    try:
-        for ev in yaml.parse(text, Loader=_Parser):
-            if isinstance(ev, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
-                if len(stack) >= MAX_YAML_DEPTH:
-                    return f"the YAML nests deeper than {MAX_YAML_DEPTH} levels (line {_line(ev)})"
-                stack.append((ev.anchor, nodes))
-                nodes += 1
-            elif isinstance(ev, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
-                anchor, before = stack.pop()
-                if anchor is not None:
-                    sizes[anchor] = nodes - before
-            elif isinstance(ev, yaml.ScalarEvent):
-                nodes += 1
-                if ev.anchor is not None:
-                    sizes[ev.anchor] = 1
-            elif isinstance(ev, yaml.AliasEvent):
-                if ev.anchor in sizes:
-                    nodes += sizes[ev.anchor]
-                elif any(a == ev.anchor for a, _ in stack):
-                    return f"the alias *{ev.anchor} repeats a node that contains it (line {_line(ev)})"
-            if nodes > MAX_YAML_NODES:
-                return (f"the YAML document expands to more than {MAX_YAML_NODES:,} nodes "
-                        f"(aliases counted in full; line {_line(ev)})")
-    except yaml.YAMLError:
-        return None  # the loader that follows says what is wrong
+    for ev in events:
+        if isinstance(ev, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
+            if len(stack) >= MAX_YAML_DEPTH:
+                return f"the YAML nests deeper than {MAX_YAML_DEPTH} levels (line {_line(ev)})"
+            stack.append((ev.anchor, nodes))
+            nodes += 1
+        elif isinstance(ev, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
+            anchor, before = stack.pop()
+            if anchor is not None:
+                sizes[anchor] = nodes - before
+        elif isinstance(ev, yaml.ScalarEvent):
+            nodes += 1
+            if ev.anchor is not None:
+                sizes[ev.anchor] = 1
+        elif isinstance(ev, yaml.AliasEvent):
+            if ev.anchor in sizes:
+                nodes += sizes[ev.anchor]
+            elif any(a == ev.anchor for a, _ in stack):
+                return f"the alias *{ev.anchor} repeats a node that contains it (line {_line(ev)})"
+        if nodes > MAX_YAML_NODES:
+            return (f"the YAML document expands to more than {MAX_YAML_NODES:,} nodes "
+                    f"(aliases counted in full; line {_line(ev)})")
     return None
 
 

@@ -158,11 +158,12 @@ def _test_plc_main(pipe, symbols, initial, setpoint_names, actual_names, times, 
         pipe.send(("error", f"cannot bind {ip}:{port}: {err}"))
         return
     server.request_history = deque(maxlen=16)  # bounded memory on long runs
+    bound = server.server.getsockname()[1]  # the port the system chose when asked for 0
     server.start()
     task = _PlcTask(variables, symbols, setpoint_names, actual_names, times, lengths, task_cycle)
     thread = threading.Thread(target=task.run, daemon=True)
     thread.start()
-    pipe.send(("ready", None))
+    pipe.send(("ready", bound))
     try:
         _serve(pipe, handler, server, variables, task)
     except (EOFError, OSError):
@@ -193,8 +194,12 @@ class TestPlc:
     ``(tau, set-points..., actuals...)`` each period, as TwinCAT's scope
     does in the paper.
 
-    It binds the fixed ADS port 48898 of 127.0.0.1 (AdsLib always connects to
-    that port), so only one test PLC runs at a time on a machine.
+    It listens on 127.0.0.1 at ``port``; the default 0 lets the system choose a
+    free port (read :attr:`port` or :attr:`address` once started), so any
+    number of test PLCs run side by side on a machine. A client reaches it at
+    :attr:`address`, ``"127.0.0.1:<port>"``, the ``host[:port]`` form AdsLib
+    accepts (its default port is the ADS router port 48898), and by its own AMS
+    net id :attr:`net_id`, ``127.0.0.1.<port / 256>.<port % 256>``.
 
     Parameters
     ----------
@@ -208,13 +213,15 @@ class TestPlc:
         Symbol names *not* to declare (tests of the symbol check).
     retype : dict
         Symbol name -> (plc_type, ads_type, count) declared instead (tests).
+    port : int
+        TCP port to listen on; 0 (the default): a free one the system chooses.
     """
 
     __test__ = False  # not a pytest class
 
     def __init__(self, layout: PlcLayout, times=(), lengths=(), *, task_cycle: float = 0.001,
                  initial_setpoints=None, omit: Sequence[str] = (), retype: dict | None = None,
-                 ip: str = LOOPBACK, port: int = 48898):
+                 ip: str = LOOPBACK, port: int = 0):
         if ip != LOOPBACK:
             raise ValueError("the test PLC binds the loopback address only")
         self.layout = layout
@@ -268,7 +275,16 @@ class TestPlc:
         if msg[0] != "ready":
             self.stop()
             raise PlcLinkError(f"the test PLC did not start: {msg[1]}")
+        self.port = int(msg[1])
+        # one AMS net id per test PLC: AdsLib keeps one route per net id in a process, so a route
+        # left to an earlier test PLC's port can never be taken for this one's
+        self.net_id = f"127.0.0.1.{self.port >> 8}.{self.port & 0xFF}"
         return self
+
+    @property
+    def address(self) -> str:
+        """Where a client reaches the started test PLC: ``"127.0.0.1:<port>"`` (AdsLib's ``host:port``)."""
+        return f"{self.ip}:{self.port}"
 
     def _recv(self, timeout: float):
         if self._pipe is None or not self._pipe.poll(timeout):

@@ -165,6 +165,11 @@ class PictureWorker:
 
     def __init__(self, enabled: bool = True, force: bool = False, fork: bool | None = None):
         self.proc = None
+        # the child's pipes are used by one thread at a time: the request in flight (its writer
+        # and reader threads) until it has ended, then whoever takes `proc` under this lock to
+        # close them (see close)
+        self._lock = threading.Lock()
+        self._inflight: threading.Thread | None = None  # the thread of a submitted request
         if not enabled or (not force and "matplotlib.pyplot" in sys.modules):
             return
         try:
@@ -189,16 +194,16 @@ class PictureWorker:
 
     def _render_remote(self, jobs):
         """The child's PNGs of ``jobs`` (with dpi), or None when it cannot draw them."""
-        if self.proc is None:
+        proc = self.proc
+        if proc is None:
             return None
         # the request is written by a thread (it may exceed the pipe's buffer) while this
         # one waits for the answer; a child that hangs is given up on after `timeout`
         sent: list[BaseException] = []
-        writer = threading.Thread(target=_send, args=(self.proc.stdin, jobs, sent), daemon=True)
+        writer = threading.Thread(target=_send, args=(proc.stdin, jobs, sent), daemon=True)
         writer.start()
         try:
-            answer = (read_message(self.proc.stdout) if _readable(self.proc.stdout, self.timeout)
-                      else None)
+            answer = read_message(proc.stdout) if _readable(proc.stdout, self.timeout) else None
         except (OSError, ValueError, EOFError, pickle.PickleError, AttributeError, TypeError):
             answer = None
         if sent:  # the request could not be sent (pickling it failed, or the child died)
@@ -206,20 +211,31 @@ class PictureWorker:
         if answer is not None and answer[0] == "ok":
             writer.join()
             return answer[1]
-        self.close(kill=True)  # also ends a writer blocked on the pipe
+        # give up on the child: stop it (a writer blocked on the full pipe then fails), wait for
+        # the writer, and only then close the pipes (see close)
+        _stop(proc)
         writer.join()
+        self.close()
         return None
 
     def close(self, kill: bool = False) -> None:
-        """Let the child go: it ends at end of input.  ``kill``: stop it now (it may be busy)."""
-        proc, self.proc = self.proc, None
+        """Let the child go: it ends at end of input.  ``kill``: stop it now (it may be busy).
+
+        The pipes are closed once a submitted request's thread has ended (at once when the child
+        is killed): a buffered stream closed by one thread while another writes to or reads from
+        it can fail in that other thread with a ValueError, as CPython's ``flush()`` checks for
+        *closed* before it takes the stream's lock and then writes from the buffer ``close()``
+        freed ("PyMemoryView_FromBuffer(): info->buf must not be NULL")."""
+        with self._lock:
+            proc, self.proc = self.proc, None
         if proc is None:
             return
         _alive.discard(proc)
-        if kill and proc.poll() is None:
-            # first, so that a thread blocked writing to it fails and lets go of the pipe
-            proc.kill()
-            proc.wait()
+        if kill:
+            _stop(proc)
+        inflight = self._inflight
+        if inflight is not None and inflight is not threading.current_thread():
+            inflight.join()
         for stream in (proc.stdin, proc.stdout):
             try:
                 stream.close()
@@ -235,6 +251,13 @@ class PictureWorker:
         # after an error the child may still be importing: stop it rather than wait
         self.close(kill=exc_type is not None)
         return False
+
+
+def _stop(proc) -> None:
+    """Kill the child ``proc`` if it still runs, and wait for it to end."""
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait()
 
 
 def _new_child() -> subprocess.Popen:
@@ -344,7 +367,7 @@ class Pending:
         self._thread = None
         if worker.proc is not None:
             # a thread of this process waits for the child's answer; it only moves bytes
-            self._thread = threading.Thread(target=self._wait, args=(worker,), daemon=True)
+            self._thread = worker._inflight = threading.Thread(target=self._wait, args=(worker,), daemon=True)
             self._thread.start()
 
     def _wait(self, worker: PictureWorker) -> None:

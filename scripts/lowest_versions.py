@@ -1,0 +1,131 @@
+"""The test suite against the lowest versions pyproject.toml allows.
+
+Every direct dependency (``[project] dependencies`` and the ``test`` extra) is
+pinned to its declared lower bound (``name>=X`` becomes ``name==X`` in a pip
+constraints file); everything they pull in comes at its newest allowed
+version, as ``uv``'s ``--resolution lowest-direct`` would have it.  The
+project is installed with those constraints into a new virtual environment in
+a temporary folder (nothing of this machine's site-packages is seen), and
+pytest runs there on the given selection, by default the fast tier
+(``-m "not slow"``).  Numba compiles into a cache folder of that environment,
+so the kernels cached for the usual environment are left alone.
+
+Usage::
+
+    python3 scripts/lowest_versions.py                 # the fast tier
+    python3 scripts/lowest_versions.py -- tests/test_spec.py -n 0 -q
+    python3 scripts/lowest_versions.py --keep --venv /tmp/lowest   # keep (and reuse) the environment
+    python3 scripts/lowest_versions.py --print         # only print the constraints
+
+Exit status: pytest's (0: passed), or 1 when the environment could not be made
+(pip's output is in ``<venv>/install.log``, kept with ``--keep``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: what the fast tier runs by default (pyproject's addopts add ``-n auto``)
+DEFAULT_SELECTION = ["-m", "not slow", "-q", "-p", "no:cacheprovider"]
+
+_REQ = re.compile(r"^\s*([A-Za-z0-9][A-Za-z0-9._-]*)\s*(\[[^\]]*\])?\s*(.*?)\s*(;.*)?$")
+
+
+def requirements(pyproject: Path = ROOT / "pyproject.toml", extras=("test",)) -> list[str]:
+    """The direct requirements: the project's dependencies and those of ``extras``."""
+    project = tomllib.loads(pyproject.read_text())["project"]
+    reqs = list(project.get("dependencies", []))
+    for extra in extras:
+        reqs += project.get("optional-dependencies", {}).get(extra, [])
+    return reqs
+
+
+def lower_bounds(reqs: list[str]) -> dict[str, str]:
+    """name -> the version of its ``>=`` bound, for each requirement (extras dropped: a constraint
+    names the distribution only).  A requirement with no lower bound is an error: say it."""
+    out = {}
+    for req in reqs:
+        m = _REQ.match(req)
+        if m is None:
+            raise ValueError(f"cannot read the requirement {req!r}")
+        name, spec = m.group(1), m.group(3)
+        lows = [s.strip()[2:].strip() for s in spec.split(",") if s.strip().startswith(">=")]
+        if not lows:
+            raise ValueError(f"{req!r} declares no lower bound (name>=version)")
+        out[name] = lows[0]
+    return out
+
+
+def constraints_text(bounds: dict[str, str]) -> str:
+    return "".join(f"{name}=={version}\n" for name, version in bounds.items())
+
+
+def run(cmd, **kw) -> int:
+    print("+", " ".join(map(str, cmd)), flush=True)
+    return subprocess.run(list(map(str, cmd)), **kw).returncode
+
+
+def make_venv(venv: Path, python: str, text: str) -> bool:
+    """A new environment at ``venv`` with the project installed (editable, with the test extra) under
+    the constraints ``text`` (kept as ``venv/lowest-constraints.txt``); False when pip failed (its
+    output in ``venv/install.log``)."""
+    if run([python, "-m", "venv", venv]) != 0:
+        return False
+    constraints = venv / "lowest-constraints.txt"
+    constraints.write_text(text)
+    py = venv / "bin" / "python"
+    log = venv / "install.log"
+    with open(log, "w") as fh:
+        ok = run([py, "-m", "pip", "install", "--upgrade", "pip"], stdout=fh, stderr=subprocess.STDOUT) == 0
+        # a constraints file given here replaces any the machine's pip configuration names
+        ok = ok and run([py, "-m", "pip", "install", "--constraint", constraints, "-e", f"{ROOT}[test]"],
+                        stdout=fh, stderr=subprocess.STDOUT) == 0
+    if not ok:
+        print(log.read_text()[-4000:], file=sys.stderr)
+        print(f"pip failed: {log}", file=sys.stderr)
+    return ok
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--python", default=sys.executable, help="the Python to make the environment with "
+                    "(default: the one running this script)")
+    ap.add_argument("--venv", type=Path, help="where to make the environment (default: a new temporary folder)")
+    ap.add_argument("--keep", action="store_true", help="keep the environment; an existing --venv is reused")
+    ap.add_argument("--print", action="store_true", help="print the constraints and stop")
+    ap.add_argument("pytest_args", nargs="*", help="after --: pytest's arguments (default: the fast tier, "
+                    f"{' '.join(DEFAULT_SELECTION)})")
+    args = ap.parse_args(argv)
+
+    text = constraints_text(lower_bounds(requirements()))
+    if args.print:
+        print(text, end="")
+        return 0
+    venv = args.venv or Path(tempfile.mkdtemp(prefix="cdpr-lowest-")) / "venv"
+    try:
+        print(f"lower bounds:\n{text}", flush=True)
+        if not (args.keep and (venv / "bin" / "python").exists()) and not make_venv(venv, args.python, text):
+            return 1
+        py = venv / "bin" / "python"
+        freeze = subprocess.run([py, "-m", "pip", "freeze", "--exclude-editable"], capture_output=True, text=True)
+        print(f"installed ({venv}):\n{freeze.stdout}", flush=True)
+        env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
+        env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+        env.setdefault("NUMBA_CACHE_DIR", str(venv / "numba-cache"))  # not the usual environment's cache
+        return run([py, "-m", "pytest", *(args.pytest_args or DEFAULT_SELECTION)], cwd=ROOT, env=env)
+    finally:
+        if not args.keep:
+            shutil.rmtree(venv if args.venv else venv.parent, ignore_errors=True)
+
+if __name__ == "__main__":
+    sys.exit(main())
