@@ -436,7 +436,8 @@ def test_committed_ci_baseline_matches(tmp_path):
     """The regression sweep of .ci/run passes against the committed baseline."""
     ci = ROOT / ".ci" / "run"
     if ci.exists():
-        assert CI_SWEEP in ci.read_text(), ".ci/run must run the same regression sweep as this test"
+        script = " ".join(ci.read_text().replace("\\\n", " ").split())  # continuation lines joined
+        assert CI_SWEEP in script, ".ci/run must run the same regression sweep as this test"
     header, rows = read_csv(ROOT / "tests" / "data" / "planar2_sweep_baseline.csv")
     assert len(rows) == 12 and all(r[header.index("error")] == "" for r in rows)
     assert 0 < sum(r[header.index("checks_passed")] == "1" for r in rows) < 12
