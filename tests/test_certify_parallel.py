@@ -123,3 +123,40 @@ def test_resume_refuses_another_pavings_journal(tmp_path):
     journal.write_text("\n".join(lines) + "\n")
     r = _cli("certify", PLANAR2, "--resolution", "0.02", "--out", str(tmp_path), "--resume")
     assert r.returncode == 2 and "line 3 is damaged" in r.stderr and "Traceback" not in r.stderr
+
+
+@pytest.mark.slow
+def test_interrupted_run_on_workers_resumes_to_the_straight_run(tmp_path):
+    """Ctrl-C (SIGINT to the process group, workers included) once the first level is journalled:
+    exit 130, the journal kept and no boxes written; --resume then gives the straight run's files."""
+    import signal
+    import time
+
+    straight, part = tmp_path / "straight", tmp_path / "part"
+    args = ("certify", PLANAR2, "--resolution", "0.001", "--quiet")
+    r = _cli(*args, "--out", str(straight))
+    assert r.returncode == 0, r.stderr
+    env = dict(os.environ, PYTHONPATH=str(ROOT), CDPR_DESIGN_PICTURE_WORKER="0")
+    proc = subprocess.Popen([sys.executable, "-m", "cdpr_design", *args, "--workers", "2", "--out", str(part)],
+                            cwd=ROOT, env=env, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    journal = part / "certify.journal.jsonl"
+    try:
+        deadline = time.monotonic() + 300
+        while not (journal.exists() and len(journal.read_text().splitlines()) >= 2):
+            assert proc.poll() is None, "the run finished before the first level was journalled"
+            assert time.monotonic() < deadline
+            time.sleep(0.005)
+        assert proc.poll() is None, "the run finished before it could be interrupted"
+        os.killpg(proc.pid, signal.SIGINT)
+        _, err = proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+    assert proc.returncode == 130 and "interrupted" in err and "Traceback" not in err, err
+    assert not (part / "boxes.csv").exists()
+    levels = len(journal.read_text().splitlines()) - 1
+    r = _cli(*args, "--out", str(part), "--resume")
+    assert r.returncode == 0, r.stderr
+    assert (straight / "boxes.csv").read_bytes() == (part / "boxes.csv").read_bytes()
+    assert _summary(straight) == _summary(part)
+    assert levels >= 1
