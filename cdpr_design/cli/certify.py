@@ -7,8 +7,8 @@ from typing import Annotated, Optional
 import typer
 
 from cdpr_design.cli.common import (CableModelOpt, Format, FormatOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt,
-                                    QuietOpt, SpecArg, bars, command, emit_json, info, load_design, out_console,
-                                    summary_table, timings_row)
+                                    QuietOpt, SchedulerOpt, SpecArg, bars, command, emit_json, info, load_design,
+                                    out_console, summary_table, timings_row)
 
 ResolutionOpt = Annotated[Optional[float], typer.Option(
     "--resolution", help="Finest box edge [m]: undecided boxes are bisected down to it, then called boundary "
@@ -31,10 +31,7 @@ def certify(
         "--workers", help="Worker processes classifying each level's boxes (default: this process, its kernels "
                           "on every core; with --scheduler local: one per core). The boxes are the same.",
         min=1, max=1024)] = None,
-    scheduler: Annotated[Optional[str], typer.Option(
-        "--scheduler", metavar="ADDRESS",
-        help="Classify on the Dask scheduler at ADDRESS (tcp://host:8786); 'local' starts a LocalCluster "
-             "of --workers processes on this machine.")] = None,
+    scheduler: SchedulerOpt = None,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue an interrupted (or --max-boxes / --time-limit stopped) paving from the "
                          "journal in --out.")] = False,

@@ -77,6 +77,22 @@ class SweepJournal:
                 records.append((k + 1, obj))
         return meta, records
 
+    def resumed(self, meta: dict, resume: bool, log, what: str) -> list[tuple[int, dict]] | None:
+        """The journal's (line, record) pairs to resume from (None: not ``resume``, or no journal), after
+        checking its first line has ``meta``'s fingerprint (another run's journal: an
+        :class:`InputError`, ``what`` naming what it records, e.g. "sweep (other spec, keys,
+        values or options)"); ``log`` says when there is no journal to resume."""
+        if not resume:
+            return None
+        old_meta, numbered = self.read_numbered()
+        if old_meta is None:
+            log(f"--resume: no journal in {self.out.path}; starting the {self.COMMAND}")
+            return None
+        if old_meta.get("fingerprint") != meta["fingerprint"]:
+            raise InputError(f"--resume: the journal in {self.out.path} is from another {what}; "
+                             "run without --resume to start over")
+        return numbered
+
     def start(self, meta: dict, records: Sequence[dict] = ()) -> None:
         """Write the journal afresh (meta and the records kept), then keep it open for appending."""
         self.out.target(self.name)

@@ -123,15 +123,9 @@ def kept_levels(journal: CertifyJournal, meta: dict, resume: bool, log: Callable
     """The journal's levels to replay (``resume``), after checking it is this paving's and whole:
     levels 0, 1, ... in order, each with its count of codes -1, 0 or 1 (a damaged line is refused,
     exit 2, naming it)."""
-    if not resume:
+    numbered = journal.resumed(meta, resume, log, "paving (other spec or options)")
+    if numbered is None:
         return []
-    old_meta, numbered = journal.read_numbered()
-    if old_meta is None:
-        log(f"--resume: no journal in {journal.out.path}; starting the paving")
-        return []
-    if old_meta.get("fingerprint") != meta["fingerprint"]:
-        raise InputError(f"--resume: the journal in {journal.out.path} is from another paving (other spec or "
-                         "options); run without --resume to start over")
     kept = []
     for line, rec in numbered:
         try:

@@ -126,15 +126,9 @@ def _check_records(journal: SweepJournal, numbered: list[tuple[int, dict]], plan
 def _kept_records(journal: SweepJournal, meta: dict, plan, resume: bool, log: Callable[[str], None]) -> list[dict]:
     """The journal's finished variants to keep (``resume``), after checking it is this sweep's
     and no record is damaged."""
-    if not resume:
+    numbered = journal.resumed(meta, resume, log, "sweep (other spec, keys, values or options)")
+    if numbered is None:
         return []
-    old_meta, numbered = journal.read_numbered()
-    if old_meta is None:
-        log(f"--resume: no journal in {journal.out.path}; starting the sweep")
-        return []
-    if old_meta.get("fingerprint") != meta["fingerprint"]:
-        raise InputError(f"--resume: the journal in {journal.out.path} is from another sweep (other spec, "
-                         "keys, values or options); run without --resume to start over")
     _check_records(journal, numbered, plan)
     kept = [rec for _, rec in numbered]
     log(f"resuming: {len(kept)} of {len(plan)} variants already done")
