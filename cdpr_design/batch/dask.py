@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
 import threading
 
-from cdpr_design.batch.local import Job, RunStats, chunk_size, chunks, closing, evaluate_chunk, guided_chunks, \
-    prepare_process
+from cdpr_design.batch.local import Job, RunStats, chunk_size, chunks, closing, guided_chunks
 from cdpr_design.batch.variants import short
 from cdpr_design.errors import InputError, quote
 
@@ -100,20 +100,36 @@ def start_local_cluster(LocalCluster, workers: int):
                     os.environ[k] = v
 
 
-#: set in a Dask worker process once it has been prepared for variants
-_DASK_READY: dict = {}
+#: the kinds of job (their classes) a Dask worker process has been set up for
+_DASK_READY: set = set()
 
 
-def _dask_chunk(job: Job, items):
-    """A chunk of variants in a Dask worker (prepared once per worker process)."""
-    if not _DASK_READY:
-        prepare_process(job)
-        _DASK_READY["ok"] = True
-    return evaluate_chunk(job, items)
+def _dask_chunk(job, items):
+    """A chunk run in a Dask worker by ``job.run_chunk``; the worker process is set up once per
+    kind of job (``job.prepared()``: the kernels loaded, one kernel thread)."""
+    if type(job) not in _DASK_READY:
+        job.prepared()
+        _DASK_READY.add(type(job))
+    return job.run_chunk(items)
 
 
 def run_dask(job: Job, todo, scheduler: str, w: int, chunk: int | None, emit, stats: RunStats,
               connect_timeout: float = 10.0) -> None:
+    with dask_session(job, scheduler, w, connect_timeout) as (nthreads, run_parts):
+        size = chunk or chunk_size(len(todo), nthreads, minimum=10)
+        stats.backend = "dask LocalCluster" if scheduler == "local" else f"dask {scheduler}"
+        stats.workers, stats.chunk = nthreads, size
+        if todo:
+            run_parts(chunks(todo, size) if chunk else guided_chunks(todo, size, nthreads, minimum=10), emit)
+
+
+@contextlib.contextmanager
+def dask_session(job, scheduler: str, w: int, connect_timeout: float = 10.0):
+    """Dask for the block: a LocalCluster of ``w`` workers (``scheduler == "local"``) or the
+    scheduler at that address.  Yields (worker threads, ``run_parts(parts, emit)``): every part
+    run by ``job.run_chunk`` on a worker (set up once with ``job.prepared()``), ``emit`` of its
+    result here as each completes.  An exception in the block cancels the tasks and closes the
+    client and the cluster; otherwise the cluster closes in the background (``wait_closed``)."""
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError as exc:  # pragma: no cover - a dependency
@@ -132,24 +148,24 @@ def run_dask(job: Job, todo, scheduler: str, w: int, chunk: int | None, emit, st
         if cluster is not None:
             cluster.close()
         raise
-    try:
-        nthreads = sum(client.nthreads().values()) or w
-        size = chunk or chunk_size(len(todo), nthreads, minimum=10)
-        stats.backend = "dask LocalCluster" if cluster is not None else f"dask {scheduler}"
-        stats.workers, stats.chunk = nthreads, size
-        if todo:
+    job_f = []
+
+    def run_parts(parts, emit) -> None:
+        if not job_f:
             # a small job (the usual: a few kB) travels with each task, which spares
             # a broadcast round trip before the first task; a big one is sent once
             small = len(pickle.dumps(job, protocol=pickle.HIGHEST_PROTOCOL)) < INLINE_JOB_BYTES
-            job_f = job if small else client.scatter(job, broadcast=True)
-            parts = chunks(todo, size) if chunk else guided_chunks(todo, size, nthreads, minimum=10)
-            futures = [client.submit(_dask_chunk, job_f, part, pure=False) for part in parts]
-            try:
-                for fut in as_completed(futures):
-                    emit(fut.result())
-            except BaseException:
-                client.cancel(futures)
-                raise
+            job_f.append(job if small else client.scatter(job, broadcast=True))
+        futures = [client.submit(_dask_chunk, job_f[0], part, pure=False) for part in parts]
+        try:
+            for fut in as_completed(futures):
+                emit(fut.result())
+        except BaseException:
+            client.cancel(futures)
+            raise
+
+    try:
+        yield sum(client.nthreads().values()) or w, run_parts
     except BaseException:
         client.close()
         if cluster is not None:

@@ -28,6 +28,7 @@ so that scheduling overhead stays small.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import itertools
 import math
@@ -76,6 +77,20 @@ class Job:
     #: holds more poses than the numpy closed form is worth (workspace.ENGINES)
     kernels: bool = False
 
+    def prepared(self) -> "Job":
+        """Set up a worker process for this job (once, in the worker); the job it then runs
+        (with the shipped catalogue loaded there when none was given)."""
+        prepare_process(self)
+        if self.options.catalogue is None:
+            from cdpr_design.model import spec
+
+            return Job(self.plan, with_catalogue(self.options, spec.load_catalogue()), self.kernels)
+        return self
+
+    def run_chunk(self, items: Sequence[tuple[int, tuple]]) -> list[dict]:
+        """The rows of a chunk of (index, values) variants."""
+        return evaluate_chunk(self, items)
+
 
 def record(index: int, values: Sequence, figures: dict | None = None, error: str = "") -> dict:
     """A sweep row as plain data (one journal line)."""
@@ -109,7 +124,9 @@ def evaluate_chunk(job: Job, items: Sequence[tuple[int, tuple]]) -> list[dict]:
     return [evaluate_variant(job, i, v) for i, v in items]
 
 
-_WORKER_JOB: Job | None = None
+#: the job of this pool worker (any object with ``prepared()`` and ``run_chunk(items)``: a
+#: sweep's :class:`Job`, a certification's ``batch.certify.CertifyJob``)
+_WORKER_JOB = None
 
 
 def prepare_process(job: Job) -> None:
@@ -127,18 +144,13 @@ def prepare_worker(kernels: bool) -> None:
     parallel.set_threads(1)
 
 
-def _init_worker(job: Job) -> None:
+def _init_worker(job) -> None:
     global _WORKER_JOB
-    _WORKER_JOB = job
-    prepare_process(job)
-    if job.options.catalogue is None:
-        from cdpr_design.model import spec
-
-        _WORKER_JOB = Job(job.plan, with_catalogue(job.options, spec.load_catalogue()), job.kernels)
+    _WORKER_JOB = job.prepared()
 
 
 def _pool_chunk(items):
-    return evaluate_chunk(_WORKER_JOB, items)
+    return _WORKER_JOB.run_chunk(items)
 
 
 def with_catalogue(opt: Options, cat) -> Options:
@@ -201,18 +213,28 @@ def run_serial(job: Job, todo, emit) -> None:
 
 def run_pool(job: Job, todo, w: int, chunk: int | None, emit, stats: RunStats, start_method: str) -> None:
     """Evaluate ``todo`` in a process pool of ``w`` workers started with ``start_method``."""
-    import multiprocessing as mp
-
-    from cdpr_design.batch.processes import pool
-
     w = min(w, len(todo))
     size = chunk or chunk_size(len(todo), w)
     stats.backend, stats.workers, stats.chunk = f"processes ({start_method})", w, size
     parts = chunks(todo, size) if chunk else guided_chunks(todo, size, w, minimum=2)
+    with pool_session(job, w, start_method) as run_parts:
+        run_parts(parts, emit)
+
+
+@contextlib.contextmanager
+def pool_session(job, w: int, start_method: str = "spawn"):
+    """A process pool of ``w`` workers, each set up once with ``job.prepared()``, kept for the
+    block; yields ``run_parts(parts, emit)``: every part run by ``job.run_chunk`` in a worker,
+    ``emit`` of its result in this process as each completes.  An exception (Ctrl-C) in the
+    block ends the workers at once; otherwise they exit in the background (:func:`wait_closed`)."""
+    import multiprocessing as mp
+
+    from cdpr_design.batch.processes import pool
+
     before = set(mp.active_children())
     ex = pool(w, start_method, _init_worker, (job,))  # workers a Ctrl-C does not catch half-started
     try:
-        _submit_bounded(ex, parts, 4 * w, emit)
+        yield lambda parts, emit: _submit_bounded(ex, parts, 4 * w, emit)
     except BaseException:
         ex.shutdown(wait=False, cancel_futures=True)
         _terminate([p for p in mp.active_children() if p not in before])

@@ -7,8 +7,8 @@ from typing import Annotated, Optional
 import typer
 
 from cdpr_design.cli.common import (CableModelOpt, Format, FormatOpt, JsonOpt, Kind, KindOpt, OutOpt, OverwriteOpt,
-                                    QuietOpt, SpecArg, bars, command, emit_json, load_design, out_console,
-                                    summary_table, timings_row)
+                                    QuietOpt, SchedulerOpt, SpecArg, bars, command, emit_json, info, load_design,
+                                    out_console, summary_table, timings_row)
 
 ResolutionOpt = Annotated[Optional[float], typer.Option(
     "--resolution", help="Finest box edge [m]: undecided boxes are bisected down to it, then called boundary "
@@ -27,6 +27,14 @@ def certify(
         "--max-boxes", help="Stop bisecting after this many boxes (the rest are boundary).")] = None,
     time_limit: Annotated[Optional[float], typer.Option(
         "--time-limit", help="Stop bisecting after this many seconds (the rest are boundary).")] = None,
+    workers: Annotated[Optional[int], typer.Option(
+        "--workers", help="Worker processes classifying each level's boxes (default: this process, its kernels "
+                          "on every core; with --scheduler local: one per core). The boxes are the same.",
+        min=1, max=1024)] = None,
+    scheduler: SchedulerOpt = None,
+    resume: Annotated[bool, typer.Option(
+        "--resume", help="Continue an interrupted (or --max-boxes / --time-limit stopped) paving from the "
+                         "journal in --out.")] = False,
     out: OutOpt = None,
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
@@ -43,7 +51,9 @@ def certify(
         design = load_design(spec, cable_model)
         result, out_dir = job.certify(design, out, overwrite, kind=kind.value, resolution=resolution,
                                       min_margin=min_margin, max_boxes=max_boxes, time_limit=time_limit,
-                                      format=format.value, pictures=pictures, progress=bars(quiet or json_))
+                                      format=format.value, pictures=pictures, progress=bars(quiet or json_),
+                                      workers=workers, scheduler=scheduler, resume=resume,
+                                      log=lambda msg: info(quiet or json_, msg))
     s = result.summary()
     if json_:
         emit_json(s)

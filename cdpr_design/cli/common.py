@@ -71,6 +71,10 @@ def table(title: str, **options) -> Table:
 
 SpecArg = Annotated[Path, typer.Argument(help="Design spec (YAML).", show_default=False)]
 OutOpt = Annotated[Optional[Path], typer.Option("--out", help="Output folder (default out/<design name>/).")]
+SchedulerOpt = Annotated[Optional[str], typer.Option(
+    "--scheduler", metavar="ADDRESS",
+    help="Run on the Dask scheduler at ADDRESS (tcp://host:8786); 'local' starts a LocalCluster "
+         "of --workers processes on this machine.")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout and nothing else there.")]
 QuietOpt = Annotated[bool, typer.Option("--quiet", "-q", help="No progress bars or messages on stderr.")]
 OverwriteOpt = Annotated[bool, typer.Option(

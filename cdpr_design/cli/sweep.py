@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Annotated, Optional
 import typer
 
 from cdpr_design.cli.common import (CatalogueOpt, Format, FormatOpt, JsonOpt, MotorOpt, OutOpt, OverwriteOpt,
-                                    QuietOpt, SafetyOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command,
+                                    QuietOpt, SafetyOpt, SchedulerOpt, SpecArg, StepOpt, TrajectoryOpt, bars, command,
                                     emit_json, fmt, info, load_design, out_console, summary_table, table,
                                     timings_row)
 from cdpr_design.batch.variants import HARD_MAX_VARIANTS, MAX_VARIANTS
@@ -75,10 +75,7 @@ def sweep(
     workers: Annotated[Optional[int], typer.Option(
         "--workers", help="Worker processes (default sweep.workers, else one per core; 1: in this process).",
         min=1, max=1024)] = None,
-    scheduler: Annotated[Optional[str], typer.Option(
-        "--scheduler", metavar="ADDRESS",
-        help="Run on the Dask scheduler at ADDRESS (tcp://host:8786); 'local' starts a LocalCluster "
-             "of --workers processes on this machine.")] = None,
+    scheduler: SchedulerOpt = None,
     resume: Annotated[bool, typer.Option(
         "--resume", help="Continue an interrupted sweep from the journal in --out.")] = False,
     rank_by: Annotated[Optional[str], typer.Option(

@@ -29,6 +29,10 @@ class SweepJournal:
 
     NAME = "sweep.journal.jsonl"
     LOCK = ".sweep.lock"
+    #: the command that writes it (its line 1's ``journal`` is ``cdpr-design <COMMAND>``)
+    COMMAND = "sweep"
+    #: the key every record line has
+    RECORD = "variant"
 
     def __init__(self, out: OutputDir, name: str | None = None):
         self.out = out
@@ -38,8 +42,8 @@ class SweepJournal:
         self._lock = contextlib.ExitStack()
 
     def check_free(self) -> None:
-        """Refuse at once (exit 2 naming it) when another sweep is writing this folder's journal."""
-        check_free(self.out.path / self.LOCK, "sweep")
+        """Refuse at once (exit 2 naming it) when another run is writing this folder's journal."""
+        check_free(self.out.path / self.LOCK, self.COMMAND)
 
     def read(self) -> tuple[dict | None, list[dict]]:
         """(meta, records) of the journal on disk; (None, []) when there is none."""
@@ -66,18 +70,34 @@ class SweepJournal:
                     break
                 raise InputError(f"--resume: {self.path} line {k + 1} is not a journal line") from None
             if meta is None:
-                if not isinstance(obj, dict) or obj.get("journal") != "cdpr-design sweep":
-                    raise InputError(f"--resume: {self.path} is not a sweep journal")
+                if not isinstance(obj, dict) or obj.get("journal") != f"cdpr-design {self.COMMAND}":
+                    raise InputError(f"--resume: {self.path} is not a {self.COMMAND} journal")
                 meta = obj
-            elif isinstance(obj, dict) and "variant" in obj:
+            elif isinstance(obj, dict) and self.RECORD in obj:
                 records.append((k + 1, obj))
         return meta, records
+
+    def resumed(self, meta: dict, resume: bool, log, what: str) -> list[tuple[int, dict]] | None:
+        """The journal's (line, record) pairs to resume from (None: not ``resume``, or no journal), after
+        checking its first line has ``meta``'s fingerprint (another run's journal: an
+        :class:`InputError`, ``what`` naming what it records, e.g. "sweep (other spec, keys,
+        values or options)"); ``log`` says when there is no journal to resume."""
+        if not resume:
+            return None
+        old_meta, numbered = self.read_numbered()
+        if old_meta is None:
+            log(f"--resume: no journal in {self.out.path}; starting the {self.COMMAND}")
+            return None
+        if old_meta.get("fingerprint") != meta["fingerprint"]:
+            raise InputError(f"--resume: the journal in {self.out.path} is from another {what}; "
+                             "run without --resume to start over")
+        return numbered
 
     def start(self, meta: dict, records: Sequence[dict] = ()) -> None:
         """Write the journal afresh (meta and the records kept), then keep it open for appending."""
         self.out.target(self.name)
         self.out.ensure()
-        self._lock.enter_context(one_run(self.out.path / self.LOCK, "sweep"))
+        self._lock.enter_context(one_run(self.out.path / self.LOCK, self.COMMAND))
         body = json.dumps(meta, sort_keys=True) + "\n" + "".join(
             json.dumps(r) + "\n" for r in records)
         write_text_atomic(self.path, body)
@@ -111,3 +131,34 @@ class SweepJournal:
             except OSError:
                 pass
         self._lock.close()
+
+
+class CertifyJournal(SweepJournal):
+    """The journal of ``certify`` (``certify.journal.jsonl``): line 1 names the paving
+    (``fingerprint``), every further line one level of the branch-and-prune classified
+    (``{"level": k, "boxes": n, "status": ...}``), appended as it finishes; a resumed run
+    replays those levels instead of classifying them again."""
+
+    NAME = "certify.journal.jsonl"
+    LOCK = ".certify.lock"
+    COMMAND = "certify"
+    RECORD = "level"
+
+
+class LazyJournal:
+    """The journal written afresh (its meta and the records kept) only at the first finished
+    record, or when the run ends: a run refused while its backend starts (an unreachable
+    ``--scheduler``) leaves the folder, and a journal already in it, as they were."""
+
+    def __init__(self, journal: "SweepJournal", meta: dict, kept: list[dict]):
+        self.journal, self.meta, self.kept = journal, meta, kept
+        self.started = False
+
+    def start(self) -> None:
+        if not self.started:
+            self.journal.start(self.meta, self.kept)
+            self.started = True
+
+    def append(self, rec: dict) -> None:
+        self.start()
+        self.journal.append(rec)

@@ -3,11 +3,17 @@
 
 from __future__ import annotations
 
+import base64
+import hashlib
+import json
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
+from cdpr_design.errors import InputError
 from cdpr_design.io.files import OutputDir
+from cdpr_design.io.journal import CertifyJournal, LazyJournal
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
 from cdpr_design.jobs.tables import Timings, table_metadata
 from cdpr_design.plots.certify import certify_figure
@@ -31,23 +37,47 @@ def certify(design, out: str | Path | None = None, overwrite: bool = False, **op
 def run_certify(design, out: OutputDir, kind: str = "static", resolution: float | None = None, box=None,
                 min_margin: float | None = None, max_boxes: int | None = None, time_limit: float | None = None,
                 format: str = "csv", pictures: PictureWorker | None = None, progress: Progress | None = None,
-                timings: Timings | None = None):
+                timings: Timings | None = None, workers: int | None = None, scheduler: str | None = None,
+                resume: bool = False, log: Callable[[str], None] | None = None):
     """Certify (:func:`cdpr_design.workspaces.certify.certify`, the options are its own), then
     write the boxes, the picture and ``summary.json`` (with the ``timings``: ``load_s`` the
-    kernels' load or compile, ``sweep_s`` the branch-and-prune)."""
+    kernels' load or compile, ``sweep_s`` the branch-and-prune).
+
+    ``workers`` processes (None or 1: in this process, the kernels on every core) or the Dask
+    ``scheduler`` (``"local"``: a LocalCluster of ``workers`` processes, None: one per core; or an
+    address) classify each level's boxes (:mod:`cdpr_design.batch.certify`):
+    the boxes are the same whatever they are.  Every level classified is journalled in
+    ``certify.journal.jsonl``; ``resume`` replays the journal's levels of the same paving
+    (an interrupted or ``max_boxes``-stopped run) and classifies only the rest."""
+    from cdpr_design import batch
+    from cdpr_design.batch import certify as parallel_certify
     from cdpr_design.workspaces import certify as cert
 
     timings = timings or Timings()
     cert.check_certifiable(design, kind)
-    for name in FILES:
+    if scheduler:
+        batch.check_scheduler(scheduler)
+    classifier = parallel_certify.classifier(1 if workers is None and not scheduler else workers, scheduler)
+    for name in FILES + (CertifyJournal.NAME,):
         out.target(name)  # a foreign file of that name: refused before any work
+    journal = CertifyJournal(out)
+    journal.check_free()  # another certify writing this folder: refused before any work
+    meta = {"journal": "cdpr-design certify", "name": design.name,
+            "fingerprint": fingerprint(design, kind, resolution, box, min_margin)}
+    kept = kept_levels(journal, meta, resume, log or (lambda msg: None))
+    lazy = LazyJournal(journal, meta, kept)
     limits = {} if max_boxes is None else {"max_boxes": max_boxes}
     with timings.phase("load_s"), stage(progress, "loading the kernels (a first run compiles them)"):
         cert.warm_up(design, kind)
-    with timings.phase("sweep_s"), stage(progress, f"certify {design.name}") as cb:
-        result = cert.certify(design, kind, resolution, box, min_margin, time_limit=time_limit,
-                              progress=None if cb is None else (lambda done, todo: cb(done, done + todo)),
-                              **limits)
+    try:
+        with timings.phase("sweep_s"), stage(progress, f"certify {design.name}") as cb:
+            result = cert.certify(design, kind, resolution, box, min_margin, time_limit=time_limit,
+                                  progress=None if cb is None else (lambda done, todo: cb(done, done + todo)),
+                                  classifier=classifier, replay=[decode(r) for r in kept],
+                                  on_level=lambda k, st: lazy.append(level_record(k, st)), **limits)
+        lazy.start()
+    finally:
+        journal.close()
     pending = submit_pictures(out, [("certify.png", certify_figure, (result,))], pictures, timings)
     cols = result.columns()
     meta = table_metadata(design, "boxes", cols, kind=kind, resolution=result.resolution,
@@ -64,6 +94,51 @@ def run_certify(design, out: OutputDir, kind: str = "static", resolution: float 
     result.extra["timings"] = timings.as_dict()
     out.write_json("summary.json", result.summary())
     return result
+
+
+def fingerprint(design, kind: str, resolution, box, min_margin) -> str:
+    """A hash of everything that decides the boxes (the spec, its cable model, the options; not
+    the limits, which only stop a paving earlier): a journal is resumed only by its own paving."""
+    from cdpr_design import __version__
+    from cdpr_design.statics import cables
+
+    blob = json.dumps({"spec": design.raw, "cable_model": cables.design_model(design), "kind": kind,
+                       "resolution": resolution, "box": box, "min_margin": min_margin, "version": __version__},
+                      sort_keys=True, default=repr)
+    return hashlib.sha256(blob.encode()).hexdigest()[:20]
+
+
+def level_record(level: int, status: np.ndarray) -> dict:
+    """A journal line: one level's status codes (int8, base64 of their bytes)."""
+    st = np.ascontiguousarray(status, np.int8)
+    return {"level": int(level), "boxes": int(st.size), "status": base64.b64encode(st.tobytes()).decode("ascii")}
+
+
+def decode(rec: dict) -> np.ndarray:
+    """The status codes of a journal line (:func:`level_record`)."""
+    return np.frombuffer(base64.b64decode(rec["status"]), np.int8)
+
+
+def kept_levels(journal: CertifyJournal, meta: dict, resume: bool, log: Callable[[str], None]) -> list[dict]:
+    """The journal's levels to replay (``resume``), after checking it is this paving's and whole:
+    levels 0, 1, ... in order, each with its count of codes -1, 0 or 1 (a damaged line is refused,
+    exit 2, naming it)."""
+    numbered = journal.resumed(meta, resume, log, "paving (other spec or options)")
+    if numbered is None:
+        return []
+    kept = []
+    for line, rec in numbered:
+        try:
+            st = decode(rec)
+            ok = rec["level"] == len(kept) and rec["boxes"] == st.size and np.all(np.abs(st) <= 1)
+        except (KeyError, TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise InputError(f"--resume: {journal.path} line {line} is damaged; delete it and the lines after it "
+                             "(those levels are classified again) or run without --resume to start over")
+        kept.append(rec)
+    log(f"resuming: {len(kept)} level(s) of boxes already classified")
+    return kept
 
 
 #: boxes of the task box's longest edge that ``check --certify`` bisects down to

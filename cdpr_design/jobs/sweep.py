@@ -9,7 +9,7 @@ from typing import Callable, NamedTuple, Sequence
 from cdpr_design.errors import InputError, quote
 from cdpr_design.io.columns import file_name
 from cdpr_design.io.files import OutputDir
-from cdpr_design.io.journal import SweepJournal
+from cdpr_design.io.journal import LazyJournal, SweepJournal
 from cdpr_design.io.tables import read_csv_table, text_rows
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
 from cdpr_design.jobs.tables import Timings, write_rows
@@ -123,37 +123,12 @@ def _check_records(journal: SweepJournal, numbered: list[tuple[int, dict]], plan
                              "(the variant is evaluated again) or run without --resume to start over")
 
 
-class _LazyJournal:
-    """The journal written afresh (its meta and the records kept) only at the first finished
-    variant, or when the run ends: a run refused while its backend starts (an unreachable
-    ``--scheduler``) leaves the folder, and a journal already in it, as they were."""
-
-    def __init__(self, journal: SweepJournal, meta: dict, kept: list[dict]):
-        self.journal, self.meta, self.kept = journal, meta, kept
-        self.started = False
-
-    def start(self) -> None:
-        if not self.started:
-            self.journal.start(self.meta, self.kept)
-            self.started = True
-
-    def append(self, rec: dict) -> None:
-        self.start()
-        self.journal.append(rec)
-
-
 def _kept_records(journal: SweepJournal, meta: dict, plan, resume: bool, log: Callable[[str], None]) -> list[dict]:
     """The journal's finished variants to keep (``resume``), after checking it is this sweep's
     and no record is damaged."""
-    if not resume:
+    numbered = journal.resumed(meta, resume, log, "sweep (other spec, keys, values or options)")
+    if numbered is None:
         return []
-    old_meta, numbered = journal.read_numbered()
-    if old_meta is None:
-        log(f"--resume: no journal in {journal.out.path}; starting the sweep")
-        return []
-    if old_meta.get("fingerprint") != meta["fingerprint"]:
-        raise InputError(f"--resume: the journal in {journal.out.path} is from another sweep (other spec, "
-                         "keys, values or options); run without --resume to start over")
     _check_records(journal, numbered, plan)
     kept = [rec for _, rec in numbered]
     log(f"resuming: {len(kept)} of {len(plan)} variants already done")
@@ -169,7 +144,7 @@ def _run_journalled(design, plan, options, out_dir, workers, scheduler, resume, 
     meta = {"journal": "cdpr-design sweep", "version": sw.JOURNAL_VERSION, "name": design.name,
             "keys": plan.keys, "variants": len(plan), "fingerprint": plan.fingerprint(options)}
     kept = _kept_records(journal, meta, plan, resume, log)
-    lazy = _LazyJournal(journal, meta, kept)
+    lazy = LazyJournal(journal, meta, kept)
     done = {r["variant"] for r in kept}
     try:
         with stage(progress, f"sweep {design.name}") as cb:

@@ -17,11 +17,12 @@ decides it for certification).
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Callable, ContextManager, Sequence
 
 import numpy as np
 
@@ -217,7 +218,10 @@ def check_box(box, dim: int, name: str = "box") -> tuple:
 def certify(design: Design, kind: str = "static", resolution: float | None = None, box=None,
             min_margin: float | None = None, max_boxes: int | None = MAX_BOXES, time_limit: float | None = None,
             tolerance_outlets=None, tolerance_attachments=None,
-            progress: Callable[[int, int], None] | None = None) -> CertifyResult:
+            progress: Callable[[int, int], None] | None = None,
+            classifier: Callable[..., ContextManager[Callable]] | None = None,
+            replay: Sequence[np.ndarray] = (), on_level: Callable[[int, np.ndarray], None] | None = None
+            ) -> CertifyResult:
     """Pave ``box`` (lower, upper) [m] (default the workspace grid's box) into proven
     ``inside``, proven ``outside`` and ``boundary`` boxes at the spec's fixed orientation.
 
@@ -229,6 +233,12 @@ def certify(design: Design, kind: str = "static", resolution: float | None = Non
     ``tolerance_attachments`` [m] (scalars or per cable): geometric tolerances (default the
     spec's ``tolerance:``); ``inside`` then holds for every geometry within them.  ``progress(classified, pending)`` after each
     level of bisection.
+
+    ``classifier(design, kind, min_margin, tolerance_outlets, tolerance_attachments)``: a context
+    manager giving the box test used for the paving (default a :class:`Classifier` in this
+    process; ``cdpr_design.batch.certify`` gives one spreading each level over worker processes
+    or Dask).  ``replay``, ``on_level``: see :func:`pave` (a resumed run's journal).  The boxes do
+    not depend on either.
     """
     check_certifiable(design, kind)
     spec_outlets, spec_attachments = spec_tolerances(design)
@@ -252,10 +262,11 @@ def certify(design: Design, kind: str = "static", resolution: float | None = Non
         raise InputError(f"--max-boxes: expected a positive count, got {max_boxes}")
     if time_limit is not None and not (math.isfinite(time_limit) and time_limit > 0):
         raise InputError(f"--time-limit: expected a positive number of seconds, got {time_limit}")
-    classify = Classifier(design, kind, mu, tolerance_outlets, tolerance_attachments)
+    make = classifier or (lambda *args: contextlib.nullcontext(Classifier(*args)))
     t0 = time.perf_counter()
-    lower, upper, status, classified, truncated = pave(classify, np.array([lo0]), np.array([hi0]), res,
-                                                      max_boxes, time_limit, progress)
+    with make(design, kind, mu, tolerance_outlets, tolerance_attachments) as classify:
+        lower, upper, status, classified, truncated = pave(classify, np.array([lo0]), np.array([hi0]), res,
+                                                          max_boxes, time_limit, progress, replay, on_level)
     tol = {k: v for k, v in (("outlets", tolerance_outlets), ("attachments", tolerance_attachments))
            if v is not None and np.any(np.asarray(v) > 0)}
     return CertifyResult(design, kind, design.motion.position_coords, (lo0, hi0), res, mu, lower, upper, status,
@@ -264,8 +275,13 @@ def certify(design: Design, kind: str = "static", resolution: float | None = Non
 
 
 def pave(classify: Callable, lower: np.ndarray, upper: np.ndarray, resolution: float, max_boxes: int = MAX_BOXES,
-         time_limit: float | None = None, progress: Callable[[int, int], None] | None = None):
+         time_limit: float | None = None, progress: Callable[[int, int], None] | None = None,
+         replay: Sequence[np.ndarray] = (), on_level: Callable[[int, np.ndarray], None] | None = None):
     """Branch and prune from the boxes ``lower``, ``upper`` (K, d) [m], level by level.
+
+    ``replay``: the status codes of the first levels, classified by an earlier run of the same
+    paving (its journal): used instead of classifying those levels again.  ``on_level(level,
+    status)`` after each level classified here (not replayed).
 
     ``classify(lower, upper)`` gives status codes; undecided boxes wider than ``resolution``
     are cut in two at the middle of their widest edge (the first such axis on ties), the
@@ -277,6 +293,8 @@ def pave(classify: Callable, lower: np.ndarray, upper: np.ndarray, resolution: f
     out_lo, out_hi, out_st = [], [], []
     classified = 0
     truncated = None
+    levels = iter(replay)
+    level = 0
     while lower.shape[0]:
         if classified + lower.shape[0] > max_boxes:
             truncated = "max_boxes"
@@ -287,7 +305,15 @@ def pave(classify: Callable, lower: np.ndarray, upper: np.ndarray, resolution: f
             out_hi.append(upper)
             out_st.append(np.zeros(lower.shape[0], np.int8))
             break
-        st = classify(lower, upper)
+        st = next(levels, None)
+        if st is None:
+            st = classify(lower, upper)
+            if on_level is not None:
+                on_level(level, st)
+        elif st.shape != (lower.shape[0],):
+            raise InputError(f"--resume: the journal's level {level} holds {st.size} boxes, the paving "
+                             f"{lower.shape[0]} there: it is from another paving; run without --resume")
+        level += 1
         classified += lower.shape[0]
         width = upper - lower
         axis = np.argmax(width, axis=1)
