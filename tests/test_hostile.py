@@ -437,8 +437,9 @@ def test_every_command_takes_json_and_quiet():
     from cdpr_design.cli.app import app
 
     names = [c.name or c.callback.__name__.replace("_", "-") for c in app.registered_commands]
-    assert sorted(names) == sorted(["workspace", "pose", "fk", "schema", "size-motors", "report", "check", "certify", "sweep",
-                                    "compare", "trajectory", "simulate", "bridge", "optimize"]), names
+    assert sorted(names) == sorted(["workspace", "pose", "fk", "schema", "size-motors", "report", "check",
+                                    "certify", "sweep", "compare", "trajectory", "simulate", "bridge",
+                                    "optimize"]), names
     for name in names:
         res = invoke(name, "--help")
         assert res.exit_code == 0 and "--json" in res.output and "--quiet" in res.output, name
