@@ -182,7 +182,8 @@ def forward(design: Design, unstretched, guess=None) -> CableFK:
     for _ in range(2 * design.m + 2):
         tried.add(taut.tobytes())
         x0 = np.concatenate([p0, H0[taut], V0[taut]])
-        sol = least_squares(_residual, x0, args=(design, L0, arr, taut, wscale, unk), method="lm",
+        sol = least_squares(_residual, x0, jac=kin.forward_difference_jacobian(_residual),
+                            args=(design, L0, arr, taut, wscale, unk), method="lm",
                             xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200 * (x0.size + 1))
         k = int(taut.sum())
         p0 = sol.x[:n]

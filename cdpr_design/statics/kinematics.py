@@ -286,6 +286,24 @@ def planar2_closed_form(design: Design, lengths) -> np.ndarray | None:
     return p
 
 
+def forward_difference_jacobian(fun):
+    """The Jacobian ``jac(x, *args)`` of ``fun(x, *args)`` by forward differences, with the step
+    sqrt(eps) max(1, |x_j|) [units of x_j] (scipy's own '2-point' step), for scipy's ``least_squares``.
+
+    Given explicitly so that every scipy version solves alike: without it, ``method="lm"`` of
+    scipy 1.11 lets MINPACK's lmdif difference with the step sqrt(eps) |x_j|, which for a
+    coordinate iterating towards 0 (a rotation at the nominal orientation) is swamped by rounding:
+    the Jacobian's column is noise and the solve stalls far above its tolerance.
+    """
+    from scipy.optimize import approx_fprime
+
+    def jac(x, *args):
+        step = np.sqrt(np.finfo(float).eps) * np.maximum(1.0, np.abs(x))
+        return np.atleast_2d(approx_fprime(np.asarray(x, float), fun, step, *args))
+
+    return jac
+
+
 def forward_kinematics(design: Design, lengths, guess=None, tol: float = 1e-12) -> FKResult:
     """The pose for given cable lengths.
 
@@ -322,7 +340,8 @@ def forward_kinematics(design: Design, lengths, guess=None, tol: float = 1e-12) 
     def fun(x):
         return inverse_kinematics(design, x) - lengths
 
-    sol = least_squares(fun, guess, method="lm" if design.m >= len(guess) else "trf",
+    sol = least_squares(fun, guess, jac=forward_difference_jacobian(fun),
+                        method="lm" if design.m >= len(guess) else "trf",
                         xtol=tol, ftol=tol, gtol=tol, max_nfev=2000)
     res = float(np.linalg.norm(fun(sol.x)))
     return FKResult(sol.x, res, "levenberg-marquardt" if design.m >= len(guess) else "trust-region")
