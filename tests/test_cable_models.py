@@ -17,6 +17,7 @@ from cdpr_design.model import spec
 from cdpr_design.model.spec import with_cable_model
 from cdpr_design.statics import cables
 from cdpr_design.statics.pose import evaluate_pose
+from cdpr_design.statics.robot import cable_model
 
 from .helpers import DESIGNS, PLANAR2, invoke, planar2_raw, read_csv, write_spec
 
@@ -30,12 +31,12 @@ SAG40 = DESIGNS / "sagging40.yaml"
 
 def test_default_model_is_ideal_and_spec_keys_resolve(planar2_data):
     d = spec.from_dict(planar2_data)
-    assert cables.design_model(d) == "ideal"
+    assert cable_model(d) == "ideal"
     planar2_data["cable"]["model"] = "elastic"
     planar2_data["cables"][1]["model"] = "sagging"
     d = spec.from_dict(planar2_data)
     assert [c.props.model for c in d.cables] == ["elastic", "sagging"]
-    assert cables.design_model(d) == "sagging"  # the heaviest
+    assert cable_model(d) == "sagging"  # the heaviest
 
 
 @pytest.mark.parametrize("model, drop, key", [
@@ -72,7 +73,7 @@ def test_cable_model_option_errors(tmp_path):
 def test_with_cable_model_keeps_the_override_in_raw(planar2):
     d = with_cable_model(planar2, "sagging")
     assert d.raw["cable"]["model"] == "sagging"
-    assert cables.design_model(spec.from_dict(d.raw)) == "sagging"
+    assert cable_model(spec.from_dict(d.raw)) == "sagging"
     assert with_cable_model(planar2, None) is planar2
 
 

@@ -488,21 +488,17 @@ def test_mutated_feature_keys_load_or_are_refused(work, data):
 def pose_entry(design, at: str, kind: str) -> dict:
     """What ``pose --at`` computes (cli/pose.py's branches, through the library)."""
     from cdpr_design.cli.common import parse_numbers, parse_pose
-    from cdpr_design.errors import InputError
     from cdpr_design.jobs import hanging as hjob
     from cdpr_design.jobs import pose as job
-    from cdpr_design.statics import hanging as H
-    from cdpr_design.statics.kinematics import has_pulleys
     from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design.statics.robot import Analysis, resolve
 
-    ideal = job.cable_model_name(design) == "ideal"
-    if H.hangs_freely(design):
-        if not ideal:
-            raise InputError("--cable-model: free hangs on ideal cables")
-        return hjob.free_pose_data(design, parse_numbers(at, "--at", design.motion.dim), kind)
+    robot = resolve(design, Analysis(command="pose", kind=kind))
+    if robot.orientation == "hanging":
+        return hjob.free_pose_data(robot, parse_numbers(at, "--at", design.motion.dim))
     p = parse_pose(design, at)
     data = job.pose_data(design, evaluate_pose(design, p, kind, "min-norm"))
-    if ideal and H.underconstrained(design) and not has_pulleys(design):
+    if robot.underconstrained and robot.cables == "ideal" and robot.outlets == "points":
         data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     return data
 

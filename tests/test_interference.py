@@ -321,7 +321,9 @@ def _kernel_pairs(d, pose):
 
     P = np.zeros((1, 3))
     P[0, :2] = pose
-    *_, mask = Evaluator(d, "static", True)(P, [0.0, 0.0, 0.0])
+    from cdpr_design.statics.robot import Analysis, resolve
+
+    *_, mask = Evaluator(resolve(d, Analysis(collisions=True)))(P, [0.0, 0.0, 0.0])
     return bool(mask[0] & K.HIT_CABLE_CABLE)
 
 
@@ -355,8 +357,10 @@ def test_plane_offsets_change_the_interference_only():
     from cdpr_design.workspaces.grid import positions3
 
     P = positions3(g, 0, g.size)
-    a = Evaluator(with_offsets, "static", True)(P, [0.0, 0.0, 0.0])
-    b = Evaluator(flat, "static", True)(P, [0.0, 0.0, 0.0])
+    from cdpr_design.statics.robot import Analysis, resolve
+
+    a = Evaluator(resolve(with_offsets, Analysis(collisions=True)))(P, [0.0, 0.0, 0.0])
+    b = Evaluator(resolve(flat, Analysis(collisions=True)))(P, [0.0, 0.0, 0.0])
     for x, y in zip(a[:4], b[:4]):
         np.testing.assert_array_equal(x, y)
     assert not np.any(a[4] & K.HIT_CABLE_CABLE)

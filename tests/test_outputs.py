@@ -132,7 +132,7 @@ def no_pictures(monkeypatch):
     """The tables only: the commands' pictures are not drawn (they have their own tests)."""
     from cdpr_design.jobs import motion, workspace
 
-    monkeypatch.setattr(workspace, "workspace_pictures", lambda result: [])
+    monkeypatch.setattr(workspace, "workspace_pictures", lambda result, names=None: [])
     monkeypatch.setattr(motion, "submit_pictures", lambda *a, **k: _NoPictures())
 
 
@@ -361,15 +361,18 @@ EXTRA_PICTURE = {"crane4": "tilt_map.png", "planar2": "tilt_map.png", "sagging40
 @pytest.mark.parametrize("name", sorted(p.stem for p in DESIGNS.glob("*.yaml")))
 def test_every_file_a_workspace_run_writes_is_known_before_the_sweep(tmp_path, name):
     """The names checked for foreign files up front are exactly the files the run writes."""
+    from cdpr_design import workspaces as ws
     from cdpr_design.jobs.workspace import output_names
     from cdpr_design.model.spec import load
 
     design = load(DESIGNS / f"{name}.yaml")
+    grid = ws.make_grid(design, 0.5)
+    plan = ws.plan(ws.robot_for(design, grid), grid)
     r = invoke("workspace", DESIGNS / f"{name}.yaml", "--step", "0.5", "--out", tmp_path, "--quiet")
     assert r.exit_code == 0, r.output
     written = sorted(p.name for p in tmp_path.iterdir())
     # besides them: the record of what cdpr-design wrote, and the folder's lock file (issue 40)
-    assert written == sorted(output_names(design) + ["workspace.csv", ".cdpr-design-outputs",
+    assert written == sorted(output_names(plan) + ["workspace.csv", ".cdpr-design-outputs",
                                                      ".cdpr-design.lock"]), written
     assert (EXTRA_PICTURE.get(name) in written) if name in EXTRA_PICTURE else \
         not {"tilt_map.png", "cable_models.png"} & set(written)

@@ -40,9 +40,10 @@ def test_blocks_cover_the_rows_once_in_order(count, grain, nthreads):
 def test_results_do_not_depend_on_the_thread_count(path, step):
     d = spec.load(path)
     if "crane4" in str(path):  # its hanging search runs on the kernels' threads, in blocks
-        from cdpr_design.workspaces.hanging import _Hanger
+        from cdpr_design.workspaces.hanging import Hanger
 
-        assert _Hanger(d, d.default_orientation_full(), "numba", 10_000).threaded
+        robot = ws.robot_for(d, ws.make_grid(d, step), engine="numba")
+        assert Hanger(robot, d.default_orientation_full()).threaded
     rows = []
     for n in (1, 2, 3, 8):
         got = []

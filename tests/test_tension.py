@@ -14,6 +14,8 @@ import cdpr_design as cd
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import tension as T
 
+from .reference_pose import analyse_pose
+
 from .helpers import DESIGNS, invoke
 
 IPANEMA1 = cd.load(DESIGNS / "ipanema1.yaml")
@@ -37,14 +39,14 @@ def test_algorithms_md_planar_point_mass():
         "effector": {"mass": 1.0, "size": [0, 0]}, "tension": [1, 40],
         "cables": [{"name": "a", "outlet": [0, 2], "attachment": [0, 0]},
                    {"name": "b", "outlet": [3, 2], "attachment": [0, 0]}]})
-    r = T.analyse_pose(d, [1, 1])
+    r = analyse_pose(d, [1, 1])
     assert r.feasible
     assert np.allclose(r.tensions, [9.2489567, 7.3119423], atol=1e-7)
     assert r.margin == pytest.approx(5.9880342, abs=1e-7)
 
 
 def test_zero_length_cable_is_flagged():
-    r = T.analyse_pose(PLANAR4, [-0.1, 0.05, 0.0])  # attachment of c1 on its outlet
+    r = analyse_pose(PLANAR4, [-0.1, 0.05, 0.0])  # attachment of c1 on its outlet
     assert r.lengths[0] == pytest.approx(0.0, abs=1e-12)
     assert not r.feasible and np.isnan(r.margin) and np.all(np.isnan(r.tensions))
 
@@ -97,27 +99,27 @@ def test_infeasible_objectives_give_none():
 
 def test_analyse_pose_objectives_and_weights():
     pose = [0.5, 0.3, 1.0, 0.0, 0.0, 0.0]
-    r = T.analyse_pose(IPANEMA1, pose)
+    r = analyse_pose(IPANEMA1, pose)
     assert r.feasible and r.closure and r.rank_ok
     assert np.allclose(r.W @ r.tensions, r.wrenches[0], atol=1e-8)
     for obj in ("min-max", "min-sum"):
-        ro = T.analyse_pose(IPANEMA1, pose, objective=obj)
+        ro = analyse_pose(IPANEMA1, pose, objective=obj)
         assert ro.feasible and ro.margin == r.margin
         assert np.allclose(ro.W @ ro.tensions, ro.wrenches[0], atol=1e-5)
-    rmax = T.analyse_pose(IPANEMA1, pose, objective="min-max")
+    rmax = analyse_pose(IPANEMA1, pose, objective="min-max")
     assert rmax.tensions.max() <= r.tensions.max() + 1e-6
-    rsum = T.analyse_pose(IPANEMA1, pose, objective="min-sum")
+    rsum = analyse_pose(IPANEMA1, pose, objective="min-sum")
     assert rsum.tensions.sum() <= r.tensions.sum() + 1e-6
     with pytest.raises(ValueError, match="weights"):
-        T.analyse_pose(IPANEMA1, pose, weights=[1, 2])
+        analyse_pose(IPANEMA1, pose, weights=[1, 2])
     with pytest.raises(ValueError, match="objective"):
-        T.analyse_pose(IPANEMA1, pose, objective="min-foo")
+        analyse_pose(IPANEMA1, pose, objective="min-foo")
 
 
 def test_wrench_feasible_kind_uses_every_vertex():
     pose = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
-    rs = T.analyse_pose(IPANEMA1, pose, kind="static")
-    rw = T.analyse_pose(IPANEMA1, pose, kind="wrench-feasible")
+    rs = analyse_pose(IPANEMA1, pose, kind="static")
+    rw = analyse_pose(IPANEMA1, pose, kind="wrench-feasible")
     assert rw.wrenches.shape == (1 + 2 ** 6, 6)
     assert rw.margin <= rs.margin
     assert rw.margin == pytest.approx(T.capacity_margin(rw.W, rw.wrenches, IPANEMA1.tension_min,
@@ -162,11 +164,11 @@ def _moved(design, shift, angle):
        sx=st.floats(-5, 5), sy=st.floats(-5, 5), sz=st.floats(-5, 5),
        ang=st.floats(-np.pi, np.pi))
 def test_spatial_invariance(x, y, z, sx, sy, sz, ang):
-    base = T.analyse_pose(IPANEMA1, [x, y, z, 0, 0, 0], kind="wrench-closure")
+    base = analyse_pose(IPANEMA1, [x, y, z, 0, 0, 0], kind="wrench-closure")
     moved, R2 = _moved(IPANEMA1, [sx, sy, sz], ang)
     p = np.r_[R2 @ [x, y], z] + [sx, sy, sz]
     # the platform frame turned with the robot: same attachments in the frame
-    r = T.analyse_pose(moved, list(p) + [0, 0, 0], kind="wrench-closure")
+    r = analyse_pose(moved, list(p) + [0, 0, 0], kind="wrench-closure")
     assert r.feasible == base.feasible
     assert r.closure == base.closure
     assert r.margin == pytest.approx(base.margin, rel=1e-9, abs=1e-9)
@@ -179,10 +181,10 @@ def test_spatial_invariance(x, y, z, sx, sy, sz, ang):
 @given(x=st.floats(0.3, 1.7), y=st.floats(0.3, 1.2), phi=st.floats(-0.3, 0.3),
        sx=st.floats(-5, 5), sy=st.floats(-5, 5), ang=st.floats(-np.pi, np.pi))
 def test_planar_invariance(x, y, phi, sx, sy, ang):
-    base = T.analyse_pose(PLANAR4, [x, y, phi])
+    base = analyse_pose(PLANAR4, [x, y, phi])
     moved, R2 = _moved(PLANAR4, [sx, sy], ang)
     p = R2 @ [x, y] + [sx, sy]
-    r = T.analyse_pose(moved, [p[0], p[1], phi])
+    r = analyse_pose(moved, [p[0], p[1], phi])
     assert r.feasible == base.feasible
     assert r.margin == pytest.approx(base.margin, rel=1e-9, abs=1e-9)
     if base.feasible:

@@ -234,18 +234,23 @@ def test_numpy_engine_degenerate_poses():
     np.testing.assert_allclose(a["tensions"], b["tensions"], rtol=1e-13, equal_nan=True)
 
 
-def test_engine_choice(monkeypatch):
+def test_engine_choice():
+    """The resolved robot's engine: numpy asked for, or ``auto`` on a closed-form grid of at most
+    NUMPY_MAX_POSES poses; the kernels otherwise; an unknown engine or numpy where the closed form
+    does not apply is refused with the reason."""
+    from cdpr_design.statics.robot import NUMPY_MAX_POSES, Analysis, resolve
+
     design = spec.load(PLANAR2)
-    assert eng.use_numpy("numpy", True, 10)
-    assert not eng.use_numpy("numba", True, 10)
-    # auto: numpy only while the kernels are not loaded, and only for grids numba would not repay
-    monkeypatch.delitem(__import__("sys").modules, eng.LOADED, raising=False)
-    assert eng.use_numpy("auto", True, eng.NUMPY_MAX_POSES)
-    assert not eng.use_numpy("auto", True, eng.NUMPY_MAX_POSES + 1)
-    assert not eng.use_numpy("auto", False, 10)
+    assert resolve(design, Analysis(engine="numpy", poses=10 ** 9)).engine == "numpy"
+    assert resolve(design, Analysis(engine="numba", poses=10)).engine == "numba"
+    assert resolve(design, Analysis(poses=NUMPY_MAX_POSES)).engine == "numpy"
+    assert resolve(design, Analysis(poses=NUMPY_MAX_POSES + 1)).engine == "numba"
+    assert resolve(design, Analysis(poses=10, kind="wrench-closure")).engine == "numba"
+    assert resolve(design, Analysis(poses=10, collisions=True)).engine == "numba"
     with pytest.raises(InputError, match="engine: expected one of auto, numba, numpy"):
         ws.run(design, engine="fortran")
     ipanema = spec.load(PLANAR2.parent / "ipanema3.yaml")
+    assert resolve(ipanema, Analysis(poses=10)).engine == "numba"
     with pytest.raises(InputError, match="engine=numpy: the numpy engine covers two cables"):
         ws.run(ipanema, step=0.5, engine="numpy")
 
@@ -254,18 +259,19 @@ def test_engine_choice(monkeypatch):
 def test_engine_variable_is_read_by_the_command_line(tmp_path, monkeypatch):
     """Only the command line reads CDPR_DESIGN_ENGINE: it forces the engine, and a bad value
     is exit 2 naming the variable."""
-    calls = []
-    real = eng.sweep
+    engines = []
+    real = ws.robot_for
 
     def spy(*args, **kwargs):
-        calls.append(kwargs["engine"])
-        return real(*args, **kwargs)
+        robot = real(*args, **kwargs)
+        engines.append(robot.engine)
+        return robot
 
-    monkeypatch.setattr(ws, "straight_sweep", spy)
+    monkeypatch.setattr(ws, "robot_for", spy)
     monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")
     r = invoke("workspace", PLANAR2, "--out", tmp_path / "a", "--json", "--quiet")
     assert r.exit_code == 0, r.output
-    assert calls == ["numba", "numba"]  # the one-pose warm-up (numba's start-up timed apart), then the sweep
+    assert engines == ["numba"]
     monkeypatch.setenv("CDPR_DESIGN_ENGINE", "fortran")
     r = invoke("workspace", PLANAR2, "--out", tmp_path / "b", "--json", "--quiet")
     assert r.exit_code == 2
@@ -274,7 +280,9 @@ def test_engine_variable_is_read_by_the_command_line(tmp_path, monkeypatch):
 
 def test_kernel_codes_match():
     """workspace keeps copies of kernel constants so that it need not import numba."""
-    assert sp.KINDS == {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
+    from cdpr_design.statics.robot import KINDS
+
+    assert KINDS == {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
                         "wrench-closure": K.KIND_WRENCH_CLOSURE}
     assert eng._RANK_TOL == K.RANK_TOL
 
@@ -300,17 +308,18 @@ def test_small_planar2_sweep_does_not_load_numba():
 @pytest.mark.slow
 def test_kernels_package_alone_is_not_the_kernels_loaded():
     """``cdpr_design.kernels`` is lazy and imported without numba (batch and optimize import its
-    ``parallel``): ``auto`` still takes numpy for small planar2 grids there, and ``load_kernels``
+    ``parallel``): a small planar2 grid still resolves to numpy there, and ``load_kernels``
     (what a worker of a big sweep does first) does load numba."""
     import subprocess
     import sys
 
     code = ("import sys; import cdpr_design.batch.local, cdpr_design.optimize.study; "
-            "from cdpr_design.workspaces import engine as eng; a = eng.use_numpy('auto', True, 100); "
-            "b = 'numba' in sys.modules; eng.load_kernels(); "
-            "print(a, b, 'numba' in sys.modules, eng.use_numpy('auto', True, 100))")
+            "from cdpr_design.model import spec; from cdpr_design.statics.robot import Analysis, resolve; "
+            "from cdpr_design.workspaces import engine as eng; "
+            f"a = resolve(spec.load({str(PLANAR2)!r}), Analysis(poses=100)).engine; "
+            "b = 'numba' in sys.modules; eng.load_kernels(); print(a, b, 'numba' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.split() == ["True", "False", "True", "False"]
+    assert out.stdout.split() == ["numpy", "False", "True"]
 
 
 @pytest.mark.parametrize("count", [0, 1, 63, 64, 65, 1000, 4099])
@@ -332,43 +341,15 @@ def test_chunk_stats_matches_numpy(count):
     np.testing.assert_array_equal(tp_k, tp_n)
 
 
-def test_engine_resolved_for_the_whole_grid():
-    """``auto`` becomes numba for grids over NUMPY_MAX_POSES (so that a one-pose warm-up loads
-    the kernels the whole sweep runs); explicit engines and small grids are left as they are."""
-    assert eng.resolve("auto", eng.NUMPY_MAX_POSES + 1) == "numba"
-    assert eng.resolve("auto", eng.NUMPY_MAX_POSES) == "auto"
-    assert eng.resolve("numpy", 10 ** 9) == "numpy"
-    assert eng.resolve("numba", 1) == "numba"
-    with pytest.raises(InputError, match="engine: expected one of"):
-        eng.resolve("fortran", 1)
-
-
-def test_warm_up_runs_the_sweeps_first_pose_with_the_whole_grids_engine(monkeypatch):
-    """warm_up sweeps the grid's first pose alone with the engine chosen for the whole grid,
-    and returns that engine."""
+def test_warm_up_runs_the_sweeps_first_pose_with_the_whole_grids_robot(monkeypatch):
+    """The warm-up sweeps the plan's first pose alone with the robot resolved for the whole grid
+    (its engine chosen for the whole grid's size)."""
     design = spec.load(PLANAR2)
-    seen = []
-    real = eng.sweep
-
-    def spy(design, kind, g, ori, **kwargs):
-        seen.append((g.size, tuple(g.lower), kwargs["engine"]))
-        return real(design, kind, g, ori, **kwargs)
-
-    monkeypatch.setattr(ws, "straight_sweep", spy)
     big = ws.make_grid(design, 0.004)
-    assert big.size > eng.NUMPY_MAX_POSES
-    assert ws.warm_up(design, "static", big) == "numba"
-    assert seen == [(1, tuple(big.lower), "numba")]
+    p = ws.plan(ws.robot_for(design, big), big)
+    assert p.robot.engine == "numba"
+    one = p.on(ws.grid.first_pose(big))
+    assert one.robot is p.robot and one.grid.size == 1 and tuple(one.grid.lower) == tuple(big.lower)
+    assert one.columns == p.columns and one.pictures == p.pictures
     small = ws.make_grid(design)
-    assert ws.warm_up(design, "static", small) == "auto"
-    assert seen[-1] == (1, tuple(small.lower), "auto")
-
-
-@pytest.mark.slow
-def test_workspace_reports_numba_start_up_apart(tmp_path):
-    """The workspace summary's timings carry load_s (numba's start-up) besides the four phases."""
-    r = invoke("workspace", PLANAR2, "--out", tmp_path / "a", "--json", "--quiet")
-    assert r.exit_code == 0, r.output
-    t = json.loads(r.output)["timings"]
-    assert list(t) == ["load_s", "sweep_s", "write_s", "pictures_s", "total_s"]
-    assert all(v >= 0 for v in t.values()) and t["total_s"] >= t["load_s"] + t["sweep_s"]
+    assert ws.plan(ws.robot_for(design, small), small).robot.engine == "numpy"

@@ -73,8 +73,8 @@ class Job:
 
     plan: Plan
     options: Options
-    #: load the numba kernels in each worker before the first variant: the sweep
-    #: holds more poses than the numpy closed form is worth (workspace.ENGINES)
+    #: load the numba kernels in each worker before the first variant: the sweep holds more
+    #: poses than the numpy closed form is worth; its variants then run them (:meth:`engine`)
     kernels: bool = False
 
     def prepared(self) -> "Job":
@@ -90,6 +90,11 @@ class Job:
     def run_chunk(self, items: Sequence[tuple[int, tuple]]) -> list[dict]:
         """The rows of a chunk of (index, values) variants."""
         return evaluate_chunk(self, items)
+
+    def engine(self) -> str:
+        """The engine of every variant's sweeps: the kernels where the worker loads them first
+        (``kernels``) and the options leave the choice to ``auto``, else the options' engine."""
+        return "numba" if self.kernels and self.options.engine == "auto" else self.options.engine
 
 
 def record(index: int, values: Sequence, figures: dict | None = None, error: str = "") -> dict:
@@ -112,7 +117,7 @@ def evaluate_variant(job: Job, index: int, values: Sequence) -> dict:
 
             samples = tr.sample(design, opt.trajectory)
         row = ev.evaluate(design, step=opt.step, catalogue=opt.catalogue, samples=samples,
-                          safety_factor=opt.safety_factor, motor=opt.motor, engine=opt.engine,
+                          safety_factor=opt.safety_factor, motor=opt.motor, engine=job.engine(),
                           figures=opt.figures)
     except Exception as exc:  # noqa: BLE001 - a failing variant is a row, the sweep goes on
         msg = " ".join(str(exc).split())

@@ -102,7 +102,7 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
 #: poses each, 2 processes, the whole ``sweep`` command, two runs an engine): numpy faster by
 #: 0.1-0.9 s from 4 to 20 variants (91,000-456,000 poses, 0.2 s at 10), even at 40 (912,000:
 #: 3.3-3.6 s either way), numba faster at 80 (1.8 M poses: 3.3 s against 3.4-4.0 s).  Not
-#: ``engine.NUMPY_MAX_POSES`` (one ``workspace`` command, kernels on two threads).
+#: ``statics.robot.NUMPY_MAX_POSES`` (one ``workspace`` command, kernels on two threads).
 KERNELS_FROM_POSES = 500_000
 
 

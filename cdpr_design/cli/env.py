@@ -45,7 +45,7 @@ def picture_worker_enabled(environ=os.environ) -> bool:
 def engine(environ=os.environ) -> str:
     """The workspace engine ``CDPR_DESIGN_ENGINE`` asks for (default ``auto``); a bad value is an
     :class:`InputError` naming the variable."""
-    from cdpr_design.workspaces.engine import ENGINES
+    from cdpr_design.statics.robot import ENGINES
 
     value = environ.get("CDPR_DESIGN_ENGINE", "").strip().lower() or "auto"
     if value not in ENGINES:

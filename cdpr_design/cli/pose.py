@@ -53,28 +53,22 @@ def pose(
     """One pose: cable lengths, tensions, feasibility, margin, structure matrix (and the hanging tilt)."""
     from cdpr_design.jobs import hanging as hjob
     from cdpr_design.jobs import pose as job
-    from cdpr_design.statics import hanging as H
-    from cdpr_design.statics.kinematics import has_pulleys
     from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design.statics.robot import Analysis, resolve
 
     design = load_design(spec, cable_model)
-    ideal = job.cable_model_name(design) == "ideal"
-    if H.hangs_freely(design):
-        if not ideal:
-            raise InputError("--cable-model: an effector with effector.orientation: free hangs on ideal cables "
-                             "(the hanging solver models rigid, weightless cables)")
+    robot = resolve(design, Analysis(command="pose", kind=kind.value, objective=objective.value,
+                                     weights=weights is not None))
+    if robot.orientation == "hanging":
         coords = design.motion.position_coords
         position = parse_numbers(at, "--at", len(coords), f"numbers ({','.join(coords)}): effector.orientation "
                                  "is free, so the position alone is commanded and the orientation hangs")
-        if objective != Objective.min_norm or weights is not None:
-            raise InputError(f"{'--weights' if weights is not None else '--objective'}: a hanging effector's "
-                             "tensions are unique (they balance its weight, force and moment)")
-        data = hjob.free_pose_data(design, position, kind.value)
+        data = hjob.free_pose_data(robot, position)
     else:
         p = parse_pose(design, at)
         c = parse_weights(design, weights)
         data = job.pose_data(design, evaluate_pose(design, p, kind.value, objective.value, c))
-        if ideal and H.underconstrained(design) and not has_pulleys(design):
+        if robot.underconstrained and robot.cables == "ideal" and robot.outlets == "points":
             data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     data["objective"] = objective.value
     if json_:
@@ -134,7 +128,10 @@ def fk(
     from cdpr_design.jobs import hanging as hjob
     from cdpr_design.jobs import pose as job
 
+    from cdpr_design.statics.robot import Analysis, resolve
+
     design = load_design(spec, cable_model)
+    resolve(design, Analysis(command="fk"))  # refused combinations: exit 2 with the reason
     L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)", limit=LENGTH)
     if any(v < 0 for v in L):
         raise InputError("--lengths: cable lengths must be non-negative")

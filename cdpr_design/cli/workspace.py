@@ -10,7 +10,6 @@ import typer
 from cdpr_design.cli.common import (CableModelOpt, ForceOpt, Format, FormatOpt, JsonOpt, Kind, KindOpt, OutOpt,
                                     OverwriteOpt, QuietOpt, SpecArg, StepOpt, bars, command, emit_json, load_design,
                                     out_console, summary_table, timings_row)
-from cdpr_design.errors import InputError
 
 
 class Orientations(str, Enum):
@@ -55,7 +54,7 @@ def workspace(
             design, out, overwrite, kind=kind.value, step=step, force=force, collisions=collisions,
             orientations=orientations.value if orientations is not None else None, pictures=pictures,
             engine=env.engine(), progress=bars(quiet or json_, min_total=500_000), format=format.value,
-            html=html, max_tilt=_max_tilt(design, max_tilt))
+            html=html, max_tilt=max_tilt)
     s = result.summary()
     if json_:
         emit_json(s)
@@ -79,20 +78,6 @@ def workspace(
         + ([("cable status", ", ".join(f"{k} {v:,}" for k, v in s["cable_status"].items() if v))]
            if "cable_status" in s else [])
         + [("files", str(out_dir.path))]))
-
-
-def _max_tilt(design, value: float | None) -> float | None:
-    """``--max-tilt``: an angle in [0, 180] degrees, for a design whose effector hangs freely."""
-    if value is None:
-        return None
-    from cdpr_design.statics.hanging import hangs_freely
-
-    if not (0.0 <= value <= 180.0):
-        raise InputError(f"--max-tilt: expected an angle in [0, 180] degrees, got {value:g}")
-    if not hangs_freely(design):
-        raise InputError("--max-tilt: a tilt limit applies to an under-constrained design with "
-                         "effector.orientation: free (this one's orientation is commanded or held)")
-    return value
 
 
 def register(app: typer.Typer) -> None:

@@ -45,6 +45,7 @@ import numpy as np
 
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics import cables as cable_models
+from cdpr_design.statics.robot import cable_model, has_pulleys
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate_structure
 from cdpr_design import workspaces as workspace
@@ -117,14 +118,14 @@ def task_grid(design: Design, step: float | None = None) -> Grid | None:
 def _structure_many(design: Design, positions: np.ndarray, Rb: np.ndarray, curvature: bool = False):
     """Structure matrices (k, n, m) and lengths (k, m) at positions (k, 3), fixed orientation.
 
-    With swivel pulleys (:func:`cdpr_design.statics.kinematics.has_pulleys`) the
+    With swivel pulleys (:func:`cdpr_design.statics.robot.has_pulleys`) the
     lengths are arc + free segment and u_i the free segment's unit vector
     from the tangent point (:mod:`cdpr_design.statics.pulley`).  With ``curvature``
     a third array (k, m) [1/m] bounds the length's second derivative,
     |v^T H_i v| <= kappa_i |v|^2: 1 / L_i for a point outlet,
     max(1 / l_f, |kappa_t|) with a pulley (:meth:`CablePaths.max_curvature`).
     """
-    if kin.has_pulleys(design):
+    if has_pulleys(design):
         from cdpr_design.statics import pulley as pl
 
         paths = pl.design_cable_paths(design, positions[:, None, :] + Rb[None, :, :])
@@ -214,7 +215,7 @@ def envelope_chunk(design: Design, positions: np.ndarray, orientation, A: float,
     Rb = design.attachments @ R.T
     W, L, kappa = _structure_many(design, pos3, Rb, curvature=True)
     sag_ok, offset = None, 0.0
-    if cable_models.design_model(design) == "sagging":
+    if cable_model(design) == "sagging":
         sag_ok, Ws, t_eff, t_out = cable_models.sagging_structures(design, pos3, orientation)
         W[sag_ok] = Ws[sag_ok]
         offset = np.where(sag_ok[:, None], np.nan_to_num(t_out - t_eff), 0.0)

@@ -100,9 +100,9 @@ def fingerprint(design, kind: str, resolution, box, min_margin) -> str:
     """A hash of everything that decides the boxes (the spec, its cable model, the options; not
     the limits, which only stop a paving earlier): a journal is resumed only by its own paving."""
     from cdpr_design import __version__
-    from cdpr_design.statics import cables
+    from cdpr_design.statics.robot import cable_model
 
-    blob = json.dumps({"spec": design.raw, "cable_model": cables.design_model(design), "kind": kind,
+    blob = json.dumps({"spec": design.raw, "cable_model": cable_model(design), "kind": kind,
                        "resolution": resolution, "box": box, "min_margin": min_margin, "version": __version__},
                       sort_keys=True, default=repr)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]

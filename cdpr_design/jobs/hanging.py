@@ -56,9 +56,10 @@ def fk_data(design, lengths, guess=None) -> dict:
     from cdpr_design.statics import hanging as H
     from cdpr_design.statics import kinematics as kin
     from cdpr_design.statics.reach import require_reached
+    from cdpr_design.statics.robot import has_pulleys
 
     rho = np.asarray(lengths, float)
-    if kin.has_pulleys(design):
+    if has_pulleys(design):
         res = kin.forward_kinematics(design, rho, guess=guess)
         require_reached(res.residual, rho)  # lengths no pose has: exit 2 with the residual, never a pose
         return {"pose": [float(v) for v in res.pose], "residual": float(res.residual),
@@ -104,16 +105,14 @@ def hanging_fields(design, position) -> dict:
         "stable": bool(at.stable), "within_limits": at.within_limits}}
 
 
-def free_pose_data(design, position, kind: str = "static") -> dict:
-    """The ``pose --json`` object of a ``free`` under-constrained design at ``position`` [m]:
-    the hanging orientation and the statics there (the workspace's rows; cli.md keys)."""
+def free_pose_data(robot, position) -> dict:
+    """The ``pose --json`` object of a hanging robot (``effector.orientation: free``) at
+    ``position`` [m]: the hanging orientation and the statics there (the workspace's rows; cli.md keys)."""
     from cdpr_design.statics.hanging_at import REASONS, OK
     from cdpr_design.workspaces.hanging import free_pose
 
-    if kind != "static":
-        raise InputError(f"--kind {kind}: an under-constrained design with effector.orientation: free hangs "
-                         "under gravity alone (static only)")
-    r = free_pose(design, position)
+    design = robot.design
+    r = free_pose(robot, position)
     h = r.hanging
     ok = h.status[0] == OK
     reason = REASONS[h.status[0]]

@@ -35,10 +35,10 @@ def cable_model_data(design, result) -> dict:
 
 
 def cable_model_name(design) -> str:
-    """The design's cable model (:func:`cdpr_design.statics.cables.design_model`)."""
-    from cdpr_design.statics.cables import design_model
+    """The design's cable model (:func:`cdpr_design.statics.robot.cable_model`)."""
+    from cdpr_design.statics.robot import cable_model
 
-    return design_model(design)
+    return cable_model(design)
 
 
 def cable_fk_data(design, unstretched, guess=None) -> dict:

@@ -20,8 +20,7 @@ from cdpr_design.plots.worker import PictureWorker
 def workspace_columns(design, chunk) -> dict:
     """The ``workspace.csv`` columns of one :class:`~cdpr_design.workspaces.grid.Chunk`, in order:
     the contract's (pose coordinates, ``feasible`` as bool, ``margin``, tensions, lengths), then
-    whatever extra columns the chunk carries (:func:`~cdpr_design.workspaces.grid.chunk_extra`;
-    0/1 flags held as uint8 become bool)."""
+    the extra columns the sweep plan declared (0/1 flags held as uint8 become bool)."""
     from cdpr_design import workspaces as ws
 
     names = ws.column_names(design)
@@ -29,7 +28,7 @@ def workspace_columns(design, chunk) -> dict:
     arrays = ([chunk.poses[:, j] for j in range(k)] + [chunk.feasible.astype(bool), chunk.margin]
               + [chunk.tensions[:, i] for i in range(m)] + [chunk.lengths[:, i] for i in range(m)])
     cols = dict(zip(names, arrays))
-    for name, v in ws.chunk_extra(chunk).items():
+    for name, v in chunk.extra.items():
         v = np.asarray(v)
         cols[name] = v.astype(bool) if v.dtype == np.uint8 else v
     return cols
@@ -86,18 +85,16 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
 
     timings = timings if timings is not None else Timings()
     grid = ws.make_grid(design, step, force)
-    names = ws.column_names(design) + ws.extra_columns(design, collisions, orientations)
-    meta = table_metadata(design, "workspace", names, kind=kind, grid=grid_metadata(grid),
+    p = ws.plan(ws.robot_for(design, grid, kind, collisions, orientations, engine, max_tilt), grid)
+    meta = table_metadata(design, "workspace", p.columns, kind=kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])
-    files = output_names(design, orientations, html)
+    files = output_names(p, html)
     for name in files:
         out.target(name)  # a foreign file of that name: refused before any work
-    writer = out.table("workspace", format, metadata=meta, names=names, background=True)
+    writer = out.table("workspace", format, metadata=meta, names=p.columns, background=True)
     try:
-        result = _sweep(design, grid, kind, collisions, orientations, engine, progress, writer, timings, max_tilt)
-        pics = workspace_pictures(result) + ([("report.html", report_html, (result,))] if html else [])
-        if "cable_models.png" in files:
-            pics.append(cable_model_picture(result, engine, collisions))
+        result = _sweep(p, progress, writer, timings)
+        pics = workspace_pictures(result, p.pictures) + ([("report.html", report_html, (result,))] if html else [])
         pending = submit_pictures(out, pics, pictures, timings)
         writer.close()
     except BaseException:
@@ -107,22 +104,11 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
     return result, pending
 
 
-def output_names(design, orientations: str | None = None, html: bool = False) -> list[str]:
+def output_names(p, html: bool = False) -> list[str]:
     """Every file :func:`start_workspace` writes besides its table, known before the sweep: the
-    names :func:`workspace_pictures` and :func:`cable_model_picture` will draw, ``summary.json``
-    and, with ``html``, ``report.html``."""
-    from cdpr_design import workspaces as ws
-    from cdpr_design.statics import cables as cable_models
-
-    names = ["workspace.png", "tension_map.png", "summary.json"]
-    if orientations:
-        names.append("orientation_workspace.png")
-    else:
-        if ws.hanging.wanted(design):
-            names.append("tilt_map.png")
-        if cable_models.design_model(design) == "sagging":
-            names.append("cable_models.png")
-    return names + (["report.html"] if html else [])
+    pictures the sweep plan ``p`` declares, ``summary.json`` and, with ``html``, ``report.html``."""
+    pics = p.pictures
+    return pics[:2] + ["summary.json"] + pics[2:] + (["report.html"] if html else [])
 
 
 def finish_workspace(out: OutputDir, result, pending, timings: Timings) -> None:
@@ -136,11 +122,12 @@ def finish_workspace(out: OutputDir, result, pending, timings: Timings) -> None:
 LOAD_HINT = "a first run compiles them: up to a minute"
 
 
-def _sweep(design, grid, kind, collisions, orientations, engine, progress, writer, timings, max_tilt=None):
-    """The grid sweep, each chunk handed to ``writer`` (a background ColumnWriter)."""
+def _sweep(p, progress, writer, timings):
+    """The sweep plan ``p`` run, each chunk handed to ``writer`` (a background ColumnWriter)."""
     from cdpr_design import workspaces as ws
 
     waited = 0.0
+    design = p.robot.design
 
     def on_chunk(chunk):
         nonlocal waited
@@ -150,37 +137,40 @@ def _sweep(design, grid, kind, collisions, orientations, engine, progress, write
 
     # numba's start-up, apart from the sweep's time (a machine's first run compiles the kernels)
     with timings.phase("load_s"), stage(progress, f"loading the kernels ({LOAD_HINT})"):
-        engine = ws.warm_up(design, kind, grid, orientations, collisions, engine, max_tilt)
+        ws.warm_up(p)
     t0 = time.perf_counter()
     with stage(progress, f"workspace {design.name}") as cb:
-        if orientations:
-            result = ws.run_orientations(design, orientations, kind=kind, grid=grid, on_chunk=on_chunk,
-                                         progress=cb, force=True, interference=collisions, engine=engine)
-        else:
-            result = ws.run(design, kind=kind, grid=grid, on_chunk=on_chunk, progress=cb, force=True,
-                            interference=collisions, engine=engine, max_tilt=max_tilt)
+        result = p.run(on_chunk, cb)
     timings.sweep_s += time.perf_counter() - t0 - waited
     return result
 
 
-def workspace_pictures(result) -> list:
-    """The pictures of a workspace result: ``workspace.png``, ``tension_map.png``, for an
-    under-constrained design ``tilt_map.png`` and, for orientation sweeps, ``orientation_workspace.png``."""
-    pics = [("workspace.png", wsplots.workspace_figure, (result,)),
-            ("tension_map.png", wsplots.tension_figure, (result,))]
-    if getattr(result, "hanging", None) is not None:
-        pics.append(("tilt_map.png", tilt_figure, (result,)))
-    if result.orientation_maps is not None:
-        pics.append(("orientation_workspace.png", wsplots.orientation_figure, (result,)))
-    return pics
+#: The figure function of each picture a sweep plan may declare (``cable_models.png`` apart:
+#: it sweeps the grid again, :func:`cable_model_picture`).
+FIGURES = {"workspace.png": wsplots.workspace_figure, "tension_map.png": wsplots.tension_figure,
+           "tilt_map.png": tilt_figure, "orientation_workspace.png": wsplots.orientation_figure}
 
 
-def cable_model_picture(result, engine: str = "auto", collisions: bool = False) -> tuple:
+def workspace_pictures(result, names: list[str] | None = None) -> list:
+    """The pictures ``names`` (default: those ``result`` has the maps of) as (file, figure
+    function, arguments); ``cable_models.png`` sweeps the grid again with ideal cables."""
+    if names is None:
+        names = ["workspace.png", "tension_map.png"]
+        names += ["tilt_map.png"] if getattr(result, "hanging", None) is not None else []
+        names += ["orientation_workspace.png"] if result.orientation_maps is not None else []
+    return [cable_model_picture(result) if n == "cable_models.png" else (n, FIGURES[n], (result,))
+            for n in names]
+
+
+def cable_model_picture(result) -> tuple:
     """``cable_models.png`` of a sagging sweep: the same grid swept with ideal cables, compared
     with ``result`` (:func:`~cdpr_design.plots.workspace.cable_model_figure`)."""
     from cdpr_design import workspaces as ws
     from cdpr_design.model.spec import with_cable_model
 
+    robot = result.robot
+    collisions = bool(robot.analysis.collisions) if robot is not None else False
+    engine = robot.engine if robot is not None else "auto"
     # only the feasible cells are compared: no hanging tilt of a held under-constrained effector
     ideal = ws.run(with_cable_model(result.design, "ideal"), kind=result.kind, grid=result.grid,
                    orientation=result.orientation, force=True, interference=collisions, engine=engine,

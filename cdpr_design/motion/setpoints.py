@@ -26,6 +26,7 @@ import numpy as np
 
 from cdpr_design.model.design import Design
 from cdpr_design.statics import cables
+from cdpr_design.statics.robot import cable_arrays, cable_model
 
 
 @dataclass(frozen=True)
@@ -99,12 +100,12 @@ def cable_samples(design: Design, positions, Rb, wreq, lengths, tensions, feasib
     sagging cables replace them by the catenaries' effector-end tensions and
     the feasibility by the whole-cable bounds.  None for ideal designs.
     """
-    model = cables.design_model(design)
+    model = cable_model(design)
     if model == "ideal":
         return None, tensions, feasible
     if model == "elastic":
         t = np.where(tensions >= 0.0, tensions, np.nan)
-        L0 = cables.elastic_unstretched(lengths, t, cables.cable_arrays(design).EA)
+        L0 = cables.elastic_unstretched(lengths, t, cable_arrays(design).EA)
         sag = np.where(np.isfinite(t), 0.0, np.nan)
         return CableSamples(model, L0, lengths - L0, t, sag), tensions, feasible
     s = cables.sagging_samples(design, positions, Rb, wreq)

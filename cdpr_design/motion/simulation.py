@@ -79,6 +79,7 @@ from cdpr_design.motion.mjcf import Chains, build_xml, massive_cables
 from cdpr_design.statics import cables as cm
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
+from cdpr_design.statics.robot import Analysis, cable_arrays, cable_model, has_pulleys, resolve
 
 #: Segments of each massive cable (``cable_segments``): the chain's end forces
 #: differ from the catenary's by O((L/N)^2) (tests/test_simulation_cables.py).
@@ -189,7 +190,7 @@ class Simulator:
         if massive and not (int(cable_segments) == cable_segments and cable_segments >= 2):
             raise ValueError(f"cable_segments must be an integer >= 2, got {cable_segments}")
         if massive:
-            cm.check_supported(design, pulleys=pl.any_pulley(design))
+            resolve(design, Analysis(command="motion"))  # refused where the catenaries cannot start
         self.design = design
         self.timestep = float(timestep)
         self.servo_bandwidth = float(servo_bandwidth)
@@ -232,7 +233,7 @@ class Simulator:
         # swivel pulleys: tangent exit points (mocap sites) and wrapped arc lengths r beta
         self._arc = np.zeros(self.m)
         self._pulley = None
-        if pl.any_pulley(design):
+        if has_pulleys(design):
             A, axes, radii = pl.design_pulleys(design)
             idx = np.flatnonzero(radii > 0)
             names = [design.cables[i].name for i in idx]
@@ -333,7 +334,7 @@ class Simulator:
     def _hold_lengths(self, pose) -> np.ndarray:
         """Axis positions [m] holding a pose: chords, or the cable model's unstretched lengths."""
         L = kin.inverse_kinematics(self.design, pose)
-        if cm.is_ideal(self.design):
+        if cable_model(self.design) == "ideal":
             return L
         from cdpr_design.statics.pose import evaluate_pose
 
@@ -343,7 +344,7 @@ class Simulator:
     def _place_chains(self, lengths) -> None:
         """Massive cables on their catenaries for unstretched ``lengths`` (straight where none exists)."""
         ch = self._chains
-        arr = cm.cable_arrays(self.design)
+        arr = cable_arrays(self.design)
         pts = []
         for j, i in enumerate(ch.idx):
             A, B = self.data.site_xpos[self.model.site(f"outlet_{self.design.cables[i].name}").id], \

@@ -41,6 +41,7 @@ from cdpr_design.motion.profile import MAX_SAMPLES, too_many_samples
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
 from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate, directions
+from cdpr_design.statics.robot import has_pulleys
 
 DEFAULT_CYCLE_TIME = 1e-3
 """Default sample period [s]: one PLC cycle."""
@@ -429,7 +430,7 @@ def _cable_motion(design: Design, P, Rb, vB, aB):
     ``P`` (k, 6) poses, ``Rb`` (k, m, 3) rotated attachments, ``vB`` and
     ``aB`` (k, m, 3) the attachment points' velocities and accelerations.
     """
-    if pl.any_pulley(design):
+    if has_pulleys(design):
         # swivel pulleys: arc + free length, u along the free segment from the tangent point
         cp = pl.design_cable_paths(design, P[:, None, :3] + Rb)
         u = np.nan_to_num(cp.directions)

@@ -21,7 +21,7 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.cables import cable_arrays, design_model
+from cdpr_design.statics.robot import Analysis, cable_arrays, cable_model, resolve
 
 #: Largest accepted residuals: closure [m] and equilibrium [N] (relative to the load + 1 N).
 LENGTH_TOL = 1e-9
@@ -158,12 +158,10 @@ def forward(design: Design, unstretched, guess=None) -> CableFK:
     """
     from scipy.optimize import least_squares
 
-    model = design_model(design)
+    model = cable_model(design)
     if model == "ideal":
         raise InputError("cable model 'ideal': the forward kinematics of straight cables is kinematics.forward_kinematics")
-    if kin.has_pulleys(design):  # the cables below run from point outlets
-        raise InputError(f"cable model {model!r}: the forward kinematics of elastic and sagging cables takes point "
-                         "outlets, not swivel pulleys; use --cable-model ideal for this design")
+    resolve(design, Analysis(command="fk"))  # the cables below run from point outlets
     L0 = np.asarray(unstretched, float).reshape(-1)
     if L0.size != design.m or not np.all(np.isfinite(L0)) or np.any(L0 <= 0):
         raise InputError(f"--lengths: expected {design.m} positive unstretched lengths [m], got {list(L0)}")

@@ -13,10 +13,11 @@ line; docs/cable-models.md):
   tension than the effector, and the unstretched length is the catenary's
   (:mod:`cdpr_design.kernels.sagging`).
 
-A design's model (:func:`design_model`) is the heaviest of its cables'
-(``sagging`` if any cable sags).  Swivel pulleys, interference checks and
-orientation sweeps take straight cables: with ``sagging`` they are refused
-(:func:`check_supported`).
+A design's model is the heaviest of its cables' (``sagging`` if any cable
+sags: :func:`cdpr_design.statics.robot.cable_model`).  Swivel pulleys,
+interference checks and orientation sweeps take straight cables: with
+``sagging`` they are refused by the resolved robot's one table
+(:data:`cdpr_design.statics.robot.REFUSALS`).
 """
 
 from __future__ import annotations
@@ -25,74 +26,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
+from cdpr_design.statics.robot import Analysis, cable_arrays, resolve
 
-#: Cable models, lightest first.
-MODELS = ("ideal", "elastic", "sagging")
 #: Status names of a sagging pose, by the kernel's code (``cable_status`` column).
 STATUS = ("ok", "no-tensions", "no-catenary", "not-converged", "singular")
 #: Fixed-point iterations allowed per pose (it converges in 3-10 on the shipped designs).
 MAX_ITERATIONS = 60
-
-
-def design_model(design: Design) -> str:
-    """The design's cable model: the heaviest of its cables' models."""
-    return MODELS[max(MODELS.index(c.props.model) for c in design.cables)]
-
-
-def is_ideal(design: Design) -> bool:
-    """Whether every cable is ideal (every historical output, unchanged)."""
-    return design_model(design) == "ideal"
-
-
-@dataclass(frozen=True)
-class CableArrays:
-    """What the kernels need: ``w`` (m,) weight per length [N/m] (0 unless the
-    cable sags), ``EA`` (m,) [N] (inf for an ideal cable), ``up`` (3,) unit
-    vector against gravity."""
-
-    w: np.ndarray
-    EA: np.ndarray
-    up: np.ndarray
-
-
-def cable_arrays(design: Design) -> CableArrays:
-    """The :class:`CableArrays` of a design (gravity from ``design.gravity`` [m/s^2])."""
-    g = np.asarray(design.gravity, float)
-    gn = float(np.linalg.norm(g))
-    up = -g / gn if gn > 0 else np.array([0.0, 0.0, 1.0])
-    w = np.array([c.props.mass_per_length * gn if c.props.model == "sagging" else 0.0 for c in design.cables])
-    EA = np.array([np.inf if c.props.model == "ideal" else float(c.props.axial_stiffness)
-                   for c in design.cables])
-    return CableArrays(np.ascontiguousarray(w), np.ascontiguousarray(EA), np.ascontiguousarray(up))
-
-
-def check_supported(design: Design, *, pulleys: bool = False, interference: bool = False,
-                    orientations: bool = False) -> None:
-    """Refuse what the sagging model does not cover (InputError naming the cause)."""
-    if design_model(design) != "sagging":
-        return
-    what = [name for name, on in (("swivel pulleys", pulleys), ("interference checks", interference),
-                                  ("orientation workspaces", orientations)) if on]
-    if what:
-        raise InputError(f"cable model 'sagging': {', '.join(what)} assume straight cables; "
-                         "use --cable-model elastic or ideal for this analysis")
-
-
-def column_names(design: Design) -> list[str]:
-    """The per-pose table columns the design's cable model adds (none for ideal cables).
-
-    Per cable c: ``outlet_tension_<c>`` [N], ``unstretched_length_<c>`` [m],
-    ``sag_<c>`` [m]; sagging adds ``cable_status`` (index into :data:`STATUS`).
-    """
-    model = design_model(design)
-    if model == "ideal":
-        return []
-    names = design.cable_names
-    cols = ([f"outlet_tension_{c}" for c in names] + [f"unstretched_length_{c}" for c in names]
-            + [f"sag_{c}" for c in names])
-    return cols + (["cable_status"] if model == "sagging" else [])
 
 
 def elastic_unstretched(lengths: np.ndarray, tensions: np.ndarray, EA: np.ndarray) -> np.ndarray:
@@ -155,7 +95,7 @@ def sagging_structures(design: Design, positions3: np.ndarray, orientation) -> t
     from cdpr_design.statics import kinematics as kin
     from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices
 
-    check_supported(design, pulleys=kin.has_pulleys(design))  # the catenaries start at point outlets
+    resolve(design, Analysis(command="size-motors"))  # refused where the catenaries cannot start
     arr = cable_arrays(design)
     k, m, n = positions3.shape[0], design.m, design.n
     Rb = np.ascontiguousarray(design.attachments @ kin.rotation_matrix(*orientation).T)
@@ -249,10 +189,9 @@ def sagging_samples(design: Design, positions: np.ndarray, Rb: np.ndarray, wreq:
     whose shapes do not exist or do not converge has NaN and its status.
     """
     from cdpr_design.kernels.sag_path import sag_samples
-    from cdpr_design.statics import kinematics as kin
     from cdpr_design.statics.pose import combinations
 
-    check_supported(design, pulleys=kin.has_pulleys(design))
+    resolve(design, Analysis(command="motion"))  # refused where the catenaries cannot start
     arr = cable_arrays(design)
     P = np.ascontiguousarray(positions, dtype=float)
     k, m = P.shape[0], design.m

@@ -468,22 +468,11 @@ def held_rotation(design) -> np.ndarray | None:
     return None
 
 
-def point_outlets(design, what: str) -> None:
-    """Raise an :class:`InputError` for a design with swivel pulleys (the hanging solvers
-    model point outlets); ``what`` names the analysis."""
-    from cdpr_design.statics.kinematics import has_pulleys
-
-    if has_pulleys(design):
-        raise InputError(f"{what}: the geometrico-static solver models point outlets, and this design has "
-                         "swivel pulleys (cables[i].pulley)")
-
-
 def equilibrium(design, lengths, **options) -> HangingFK:
     """Where the design's effector rests for cable ``lengths`` [m] under its spec (the ``fk``
     command): :func:`fk_held_arrays` at :func:`held_rotation` when the spec holds the
     orientation, else :func:`fk_arrays` started about :func:`nominal_rotation`.  Errors name
     the cables; ``within_limits`` from the design's tension limits."""
-    point_outlets(design, "fk")
     A, B, c, mass, g, planar = design_arrays(design)
     held = held_rotation(design)
     names = design.cable_names

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from cdpr_design.model.design import Design
+from cdpr_design.statics.robot import has_pulleys
 
 
 def rotation_matrix(rx: float = 0.0, ry: float = 0.0, rz: float = 0.0) -> np.ndarray:
@@ -71,11 +72,6 @@ class CableGeometry:
     anchors: np.ndarray
     exits: np.ndarray | None = None
     wrap: np.ndarray | None = None
-
-
-def has_pulleys(design: Design) -> bool:
-    """True when any cable has a swivel pulley of positive radius."""
-    return any(c.pulley is not None and c.pulley.radius > 0 for c in design.cables)
 
 
 def outlet_points(design: Design, anchors: np.ndarray):

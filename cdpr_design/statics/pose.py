@@ -20,21 +20,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cdpr_design.errors import SpecError
 from cdpr_design.io.tables import Table
 from cdpr_design.model.design import Design
 from cdpr_design.statics import cables
 from cdpr_design.statics import kinematics as kin
-
-#: workspace kinds and their kernel codes (= ``kernels.KIND_*``; a test checks)
-KINDS = {"static": 0, "wrench-feasible": 1, "wrench-closure": 2}
-
-
-def check_kind(kind: str) -> None:
-    """Raise a :class:`SpecError` naming ``--kind`` unless ``kind`` is one of :data:`KINDS`."""
-    if kind not in KINDS:
-        raise SpecError([("--kind", f"expected one of {', '.join(KINDS)}, got {kind!r}")])
-
+from cdpr_design.statics.robot import KINDS, Analysis, check_kind, combinations, has_pulleys, resolve
 
 def pose_at(design: Design, position3, ori3) -> np.ndarray:
     """The motion's pose coordinates of a full position (3,) [m] and orientation (3,) [rad]."""
@@ -59,13 +49,6 @@ def wrench_vertices(design: Design, kind: str, orientation=None) -> np.ndarray:
         for v in itertools.product(*choices):
             rows.append(-(g + np.asarray(v)))
     return np.ascontiguousarray(np.array(rows, dtype=float))
-
-
-def combinations(m: int, n: int) -> np.ndarray:
-    """All subsets of n-1 of the m cables, as a (C(m, n-1), n-1) int64 array (hyperplane shifting)."""
-    k = max(n - 1, 0)
-    c = list(itertools.combinations(range(m), k))
-    return np.array(c, dtype=np.int64).reshape(len(c), k)
 
 
 @dataclass
@@ -111,7 +94,7 @@ def _structure(design: Design, full: np.ndarray, K):
     A = np.ascontiguousarray(design.outlets)
     W = np.empty((design.n, design.m))
     L = np.empty(design.m)
-    if kin.has_pulleys(design):
+    if has_pulleys(design):
         from cdpr_design.statics.interference import hardware_arrays
 
         hw = hardware_arrays(design)
@@ -146,8 +129,7 @@ def evaluate_pose(design: Design, pose, kind: str = "static", objective: str = "
 
     check_kind(kind)
     full = design.full_pose(pose)
-    model = cables.design_model(design)
-    cables.check_supported(design, pulleys=kin.has_pulleys(design))
+    model = resolve(design, Analysis(command="statics", kind=kind)).cables  # at the commanded pose
     wreq = wrench_vertices(design, kind, full[3:])
     if model == "sagging" and kind != "wrench-closure":
         return _sagging_pose(design, pose, full, kind, wreq, objective, weights)

@@ -135,11 +135,6 @@ def outlet_geometry(outlet, axis, radius: float, points) -> PulleyGeometry:
 # ----------------------------------------------------------------------------
 
 
-def any_pulley(design) -> bool:
-    """True when any cable has a swivel pulley of positive radius (as ``kinematics.has_pulleys``)."""
-    return any(c.pulley is not None and c.pulley.radius > 0 for c in design.cables)
-
-
 def design_pulleys(design):
     """(outlets (m, 3), axes (m, 3) unit, radii (m,)) of a design's cables.
 

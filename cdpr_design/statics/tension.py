@@ -22,15 +22,10 @@ ICRA 2014 (capacity margin); Goldfarb & Idnani, Math. Programming 27, 1983
 
 from __future__ import annotations
 
-import itertools
-from dataclasses import dataclass
-
 import numpy as np
 
 from cdpr_design import kernels as K
-from cdpr_design.statics import kinematics as kin
-from cdpr_design.model.design import Design
-from cdpr_design.statics.pose import KINDS, combinations
+from cdpr_design.statics.robot import KINDS, combinations
 
 OBJECTIVES = ("min-norm", "min-max", "min-sum")
 
@@ -267,105 +262,3 @@ def tensions_for_objective(W, w, tmin, tmax, objective: str = "min-norm", weight
     if objective == "min-norm":
         return min_norm(W, w, tmin, tmax, weights=weights)
     return solve_cvxpy(W, w, tmin, tmax, objective, weights, solver=solver)
-
-
-# ----------------------------------------------------------------------------
-# One pose of a design
-# ----------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class PoseAnalysis:
-    """Statics of one pose. Infeasible poses are flags and NaNs, not errors.
-
-    Attributes
-    ----------
-    pose : (ncoords,) array, the pose in the motion's coordinates.
-    kind, objective : str
-    feasible : bool
-        static / wrench-feasible: every required wrench is balanced within
-        the bounds (and tensions were found); wrench-closure: W positively spans R^n.
-    margin : float
-        Capacity margin [N] over the required wrenches (NaN if rank W < n).
-    tensions : (m,) array
-        Tensions [N] at the nominal wrench for the objective; NaN where none.
-    W : (n, m) structure matrix.
-    wrenches : (nv, n) required wrenches; row 0 the nominal one (gravity only).
-    lengths : (m,) cable lengths [m].
-    rank_ok : bool
-        rank W = n and no cable has zero length.
-    closure : bool
-        W positively spans R^n (whatever ``kind``).
-    """
-
-    pose: np.ndarray
-    kind: str
-    objective: str
-    feasible: bool
-    margin: float
-    tensions: np.ndarray
-    W: np.ndarray
-    wrenches: np.ndarray
-    lengths: np.ndarray
-    rank_ok: bool
-    closure: bool
-
-
-def required_wrenches(design: Design, pose, kind: str = "static") -> np.ndarray:
-    """Required-wrench vertices at a pose, (nv, n): row 0 = -gravity; for
-    ``wrench-feasible`` every vertex of ``workspace.external_wrench`` added."""
-    g = kin.gravity_wrench(design, pose)
-    rows = [-g]
-    box = design.workspace.external_wrench
-    if kind == "wrench-feasible" and box is not None:
-        lo, hi = np.asarray(box.lower, float), np.asarray(box.upper, float)
-        choices = [(lo[i],) if lo[i] == hi[i] else (lo[i], hi[i]) for i in range(lo.size)]
-        for v in itertools.product(*choices):
-            rows.append(-(g + np.asarray(v)))
-    return np.ascontiguousarray(np.array(rows, dtype=float))
-
-
-def analyse_pose(design: Design, pose, kind: str = "static", objective: str = "min-norm",
-                 weights=None, solver: str | None = None) -> PoseAnalysis:
-    """Feasibility, capacity margin and tension distribution at one pose.
-
-    Parameters
-    ----------
-    design : Design
-    pose : sequence of float, the motion's pose coordinates.
-    kind : 'static' | 'wrench-feasible' | 'wrench-closure'
-    objective : 'min-norm' | 'min-max' | 'min-sum'
-        Tension objective at the nominal wrench: 2-norm (exact kernel, also
-        weighted), infinity-norm or 1-norm (cvxpy).
-    weights : (m,) positive, optional; per-cable weights of the objective.
-    """
-    if kind not in KINDS:
-        raise ValueError(f"kind: expected one of {', '.join(KINDS)}, got {kind!r}")
-    if objective not in OBJECTIVES:
-        raise ValueError(f"objective: expected one of {', '.join(OBJECTIVES)}, got {objective!r}")
-    m = design.m
-    c = _check_weights(weights, m)
-    pose = np.asarray(pose, dtype=float).reshape(-1)
-    geo = kin.cable_geometry(design, pose)
-    W = np.ascontiguousarray(kin.structure_matrix(design, pose))
-    wreq = required_wrenches(design, pose, kind)
-    tmin, tmax = design.tension_min, design.tension_max
-    zero_len = bool(np.any(geo.lengths <= 1e-12))
-    nan = np.full(m, np.nan)
-    if zero_len:
-        return PoseAnalysis(pose, kind, objective, False, float("nan"), nan, W, wreq,
-                            geo.lengths, False, False)
-    feasible, margin, t = evaluate(W, wreq, tmin, tmax, kind)
-    rank_ok = bool(np.isfinite(margin))
-    closure = wrench_closure(W) if rank_ok else False
-    has_t = bool(np.all(np.isfinite(t)))
-    if has_t and (objective != "min-norm" or c is not None):
-        if objective == "min-norm":
-            t2 = min_norm(W, wreq[0], tmin, tmax, weights=c)
-        else:
-            t2 = solve_cvxpy(W, wreq[0], tmin, tmax, objective, c, solver=solver)
-        t = nan if t2 is None else t2
-        if t2 is None and kind != "wrench-closure":
-            feasible = False
-    return PoseAnalysis(pose, kind, objective, bool(feasible), float(margin), t, W, wreq,
-                        geo.lengths, rank_ok, closure)

@@ -1,44 +1,44 @@
-"""Workspaces: sweeps of a design over a grid of poses, in bounded memory.
+"""Workspaces: sweeps of a resolved robot over a grid of poses, in bounded memory.
 
-:func:`run` sweeps the design's grid at one fixed orientation: straight
-cables from point outlets go to :mod:`~cdpr_design.workspaces.engine` (numpy
-closed form or numba kernels), swivel pulleys and interference checks to
-:mod:`~cdpr_design.workspaces.hardware`.  :func:`run_orientations` sweeps
-orientation sets (:mod:`~cdpr_design.workspaces.orientation`).  Both return
-a :class:`~cdpr_design.workspaces.grid.WorkspaceResult` and hand every chunk
-of rows to ``on_chunk``.
+A command resolves its design once (:func:`cdpr_design.statics.robot.resolve`), makes the
+sweep plan (:func:`~cdpr_design.workspaces.plan.plan`: the base evaluator and the wrappers
+the robot's strategies call for, with the table columns and pictures they declare) and runs
+it (:meth:`~cdpr_design.workspaces.plan.Plan.run`).  :func:`run` and :func:`run_orientations`
+do the three for a design, as a script calls them; both return a
+:class:`~cdpr_design.workspaces.grid.WorkspaceResult` and hand every chunk of rows to
+``on_chunk``.
 """
 
 from __future__ import annotations
 
 from typing import Callable
 
-import numpy as np
-
 from cdpr_design.model.design import Design, Grid
-from cdpr_design.statics import cables as cable_models
-from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.pose import KINDS, check_kind
-from cdpr_design.workspaces import hanging
-from cdpr_design.workspaces.cables import ChordColumns, ElasticColumns, cable_summary, sweep_sagging
-from cdpr_design.workspaces.engine import ENGINES, check_engine, load_kernels, resolve
-from cdpr_design.workspaces.engine import sweep as straight_sweep
-from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, chunk_extra,
-                                         column_names, extra_columns, first_pose, make_grid,
-                                         representative_pose)
+from cdpr_design.statics.robot import ENGINES, KINDS, Analysis, Robot, resolve
+from cdpr_design.workspaces.engine import load_kernels
+from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, column_names,
+                                         first_pose, make_grid, representative_pose)
+from cdpr_design.workspaces.plan import Plan, plan
 
-__all__ = ["CHUNK", "ENGINES", "KINDS", "MAX_POSES", "Chunk", "WorkspaceResult", "chunk_extra", "column_names", "extra_columns",
-           "load_kernels", "make_grid", "representative_pose", "run", "run_orientations", "warm_up"]
+__all__ = ["CHUNK", "ENGINES", "KINDS", "MAX_POSES", "Chunk", "Plan", "WorkspaceResult", "column_names",
+           "load_kernels", "make_grid", "plan", "representative_pose", "robot_for", "run", "run_orientations",
+           "warm_up"]
 
 
-def _setup(design: Design, kind: str, step, grid: Grid | None, orientation, force: bool):
-    """The grid (size checked) and full orientation (3,) [rad] of a sweep."""
-    check_kind(kind)
-    g = grid if grid is not None else make_grid(design, step, force)
-    if grid is not None:
-        check_grid_size(g, force)
-    ori = design.default_orientation_full() if orientation is None else np.asarray(orientation, float)
-    return g, ori
+def robot_for(design: Design, grid: Grid, kind: str = "static", interference: bool = False,
+              orientations: str | None = None, engine: str = "auto", max_tilt: float | None = None) -> Robot:
+    """The robot of a workspace sweep of ``design`` over ``grid`` (refused combinations raise an
+    :class:`~cdpr_design.errors.InputError` with the reason; see :func:`~cdpr_design.statics.robot.resolve`)."""
+    return resolve(design, Analysis(command="workspace", kind=kind, collisions=interference,
+                                    orientations=orientations, max_tilt=max_tilt, engine=engine, poses=grid.size))
+
+
+def _grid(design: Design, step, grid: Grid | None, force: bool) -> Grid:
+    """The grid of a sweep (size checked): ``grid``, else the design's with ``step`` [m]."""
+    if grid is None:
+        return make_grid(design, step, force)
+    check_grid_size(grid, force)
+    return grid
 
 
 def run(design: Design, kind: str = "static", step: float | None = None, grid: Grid | None = None,
@@ -89,55 +89,13 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         use just feasibility, margins and tensions pass False).  A ``free``
         design's hanging orientation is always found: its statics depend on it.
 
-    Under-constrained designs with ideal cables (:mod:`~cdpr_design.workspaces.hanging`)
-    add the tilt their effector hangs with; with ``effector.orientation: free`` their
-    feasibility is judged at that hanging orientation.
-
-    The design's cable model (:mod:`cdpr_design.statics.cables`) picks the
-    engine: ideal and elastic cables take the straight-cable sweeps (elastic
-    adds the unstretched lengths to each chunk), sagging cables the catenary
-    sweep of :mod:`~cdpr_design.workspaces.cables`.
-
-    Swivel pulleys (``cables[i].pulley``) are honoured whenever present; a
-    design without pulleys and without ``interference`` takes the point-outlet
-    engines.
+    What is computed (cable model, outlets, how the orientation is decided, engine) is the
+    resolved robot's (:func:`~cdpr_design.statics.robot.resolve`); the sweep is its
+    :func:`~cdpr_design.workspaces.plan.plan`.
     """
-    check_engine(engine)
-    g, ori = _setup(design, kind, step, grid, orientation, force)
-    if hanging.wanted(design, tilt):  # under-constrained: the tilt it hangs with (`free`: its statics there)
-        return hanging.sweep(design, kind, g, ori, lambda oc: _fixed(design, kind, g, ori, oc, progress, chunk,
-                                                                     keep_maps, interference, engine),
-                             on_chunk=on_chunk, progress=progress, chunk=chunk, keep_maps=keep_maps,
-                             interference=interference, engine=engine, max_tilt=max_tilt)
-    if max_tilt is not None:
-        hanging.tilt_limit(design, max_tilt)  # refused: the design does not hang
-    result = _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interference, engine)
-    if tilt:  # an under-constrained design without a hanging solve is still classified
-        result.extra.update(hanging.classification(design))
-    return result
-
-
-def _fixed(design, kind, g, ori, on_chunk, progress, chunk, keep_maps, interference, engine):
-    """The sweep at the fixed orientation ``ori`` (3,) [rad], by cable model: pulley- and
-    interference-aware, straight, or sagging."""
-    model = cable_models.design_model(design)
-    cable_models.check_supported(design, pulleys=kin.has_pulleys(design), interference=interference)
-    if model == "sagging" and kind != "wrench-closure":
-        return sweep_sagging(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
-                             chunk=chunk, keep_maps=keep_maps)
-    if model != "ideal":  # sagging here: wrench closure, from the chords
-        on_chunk = (ChordColumns if model == "sagging" else ElasticColumns)(design, on_chunk)
-    if interference or kin.has_pulleys(design):
-        from cdpr_design.workspaces.hardware import run_hardware  # numba kernels, loaded on first use
-
-        res = run_hardware(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
-                           chunk=chunk, keep_maps=keep_maps, interference=interference)
-    else:
-        res = straight_sweep(design, kind, g, ori, on_chunk=on_chunk, progress=progress,
-                             chunk=chunk, keep_maps=keep_maps, engine=engine)
-    if model != "ideal":
-        res.extra.update(cable_summary(design, None, res.max_tension if model == "elastic" else None))
-    return res
+    g = _grid(design, step, grid, force)
+    robot = robot_for(design, g, kind, interference, None, engine, max_tilt)
+    return plan(robot, g, orientation, tilt=tilt).run(on_chunk, progress, chunk, keep_maps)
 
 
 def run_orientations(design: Design, mode: str = "total", kind: str = "static", step: float | None = None,
@@ -151,42 +109,17 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     ``orientation`` is the nominal orientation (3,) [rad] (default
     ``workspace.orientation``); ``orientations`` the set (q, 3) [rad] of the
     ``total`` mode (default ``workspace.orientation_set``).  The other
-    parameters are those of :func:`run`; ``engine`` is checked but every
-    orientation sweep runs the kernels (pulley- and interference-aware).
-    See :func:`cdpr_design.workspaces.orientation.sweep_orientations`.
+    parameters are those of :func:`run`; every orientation sweep runs the
+    kernels (pulley- and interference-aware).  See
+    :class:`cdpr_design.workspaces.orientation.OrientationSweep`.
     """
-    check_engine(engine)
-    hanging.refuse_commanded_orientations(design)
-    cable_models.check_supported(design, pulleys=kin.has_pulleys(design), interference=interference,
-                                 orientations=True)
-    g, nominal = _setup(design, kind, step, grid, orientation, force)
-    from cdpr_design.workspaces.orientation import sweep_orientations  # numba kernels, loaded on first use
-
-    res = sweep_orientations(design, mode, kind, g, nominal, orientations=orientations,
-                             on_chunk=on_chunk, progress=progress, chunk=chunk,
-                             keep_maps=keep_maps, interference=interference)
-    if cable_models.design_model(design) != "ideal":  # elastic: straight, so the same statics
-        res.extra.update(cable_summary(design, None, res.max_tension))
-    return res
+    g = _grid(design, step, grid, force)
+    robot = robot_for(design, g, kind, interference, mode, engine)
+    return plan(robot, g, orientation, orientations=orientations).run(on_chunk, progress, chunk, keep_maps)
 
 
-def warm_up(design: Design, kind: str = "static", grid: Grid | None = None, orientations: str | None = None,
-            interference: bool = False, engine: str = "auto", max_tilt: float | None = None) -> str:
-    """Sweep ``grid``'s first pose alone, as :func:`run` (or, with ``orientations``,
-    :func:`run_orientations`) would sweep the whole grid: every numba kernel the whole sweep
-    will run is loaded from numba's on-disk cache, or compiled on a machine's first run.
-
-    Lets a caller time numba's start-up apart from the sweep.  Returns the engine to sweep
-    ``grid`` with (:func:`~cdpr_design.workspaces.engine.resolve`: the choice of ``auto``
-    made for the whole grid, not for one pose).  The other parameters are those of :func:`run`.
-    """
-    g = grid if grid is not None else make_grid(design)
-    engine = resolve(engine, g.size)
-    one = first_pose(g)
-    if orientations:
-        run_orientations(design, orientations, kind=kind, grid=one, keep_maps=False,
-                         interference=interference, engine=engine)
-    else:
-        run(design, kind=kind, grid=one, keep_maps=False, interference=interference, engine=engine,
-            max_tilt=max_tilt)
-    return engine
+def warm_up(p: Plan) -> None:
+    """Sweep the plan's first pose alone, with the same robot: every numba kernel the whole
+    sweep will run is loaded from numba's on-disk cache, or compiled on a machine's first run.
+    Lets a caller time numba's start-up apart from the sweep."""
+    p.on(first_pose(p.grid)).run(keep_maps=False)

@@ -1,11 +1,11 @@
 """Workspace sweeps with elastic and sagging cables (:mod:`cdpr_design.statics.cables`).
 
 - ``elastic``: the straight-cable sweep's rows, with the unstretched lengths
-  L / (1 + T/EA) added to each chunk (:func:`elastic_chunks`).
+  L / (1 + T/EA) added to each chunk (the wrapper :class:`ElasticColumns`).
 - ``sagging``: every pose solved with elastic catenaries by the batched
   kernel :func:`cdpr_design.kernels.sagging.sweep_grid_sagging`
-  (:func:`sweep_sagging`); each chunk carries the outlet tensions, unstretched
-  lengths, sag and a ``cable_status`` per pose.
+  (the base evaluator :class:`SaggingSweep`); each chunk carries the outlet
+  tensions, unstretched lengths, sag and a ``cable_status`` per pose.
 
 Extra ``workspace.csv`` columns, per cable c: ``outlet_tension_<c>`` [N],
 ``unstretched_length_<c>`` [m], ``sag_<c>`` [m]; sagging sweeps add
@@ -15,126 +15,142 @@ Extra ``workspace.csv`` columns, per cable c: ``outlet_tension_<c>`` [N],
 
 from __future__ import annotations
 
-import time
-from typing import Callable
-
 import numpy as np
 
-from cdpr_design.model.design import Design, Grid
+from cdpr_design.model.design import Grid
 from cdpr_design.statics import cables
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.pose import KINDS, combinations, pose_at, wrench_vertices
-from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, WorkspaceResult, grid3, grid_positions
+from cdpr_design.statics.pose import wrench_vertices
+from cdpr_design.statics.robot import Robot
+from cdpr_design.workspaces.grid import Rows, grid3
+from cdpr_design.workspaces.parts import Base, Wrapper
 
 
-def _extra(design: Design, outlet, L0, sag, status=None) -> dict:
+def _extra(robot: Robot, outlet, L0, sag, status=None) -> dict:
     out = {}
-    for i, c in enumerate(design.cable_names):
+    names = robot.design.cable_names
+    for i, c in enumerate(names):
         out[f"outlet_tension_{c}"] = outlet[:, i]
-    for i, c in enumerate(design.cable_names):
+    for i, c in enumerate(names):
         out[f"unstretched_length_{c}"] = L0[:, i]
-    for i, c in enumerate(design.cable_names):
+    for i, c in enumerate(names):
         out[f"sag_{c}"] = sag[:, i]
     if status is not None:
         out["cable_status"] = status
     return out
 
 
-class ElasticColumns:
-    """Wraps ``on_chunk`` of a straight-cable sweep: adds the elastic columns (outlet
-    tension = tension, no sag, unstretched length L / (1 + T/EA))."""
+class CableSummary(Wrapper):
+    """The summary keys of a non-ideal cable model over straight cables: ``cable_model`` and
+    ``max_outlet_tension_per_cable`` (the outlet tension is the effector's); no columns (an
+    orientation workspace's rows stand for a set of orientations, not one pose whose cables a
+    winch pays out)."""
 
-    def __init__(self, design: Design, on_chunk: Callable[[Chunk], None] | None):
-        self.design, self.on_chunk = design, on_chunk
-        self.EA = cables.cable_arrays(design).EA
+    def __init__(self, robot: Robot):
+        self.robot = robot
 
-    def __call__(self, ch: Chunk) -> None:
-        t = ch.tensions
+    def add(self, r: Rows, start: int, P: np.ndarray) -> None:
+        pass
+
+    def summary(self, maps) -> dict:
+        peak = maps.tpeak.copy()
+        peak[~np.isfinite(peak)] = np.nan
+        return cable_summary(self.robot, None, peak)
+
+
+class ElasticColumns(CableSummary):
+    """Elastic cables over straight-cable rows: the columns outlet tension = tension, no sag,
+    unstretched length L / (1 + T/EA)."""
+
+    def __init__(self, robot: Robot):
+        super().__init__(robot)
+        self.columns = tuple(cable_columns(robot))
+
+    def add(self, r: Rows, start: int, P: np.ndarray) -> None:
+        t = r.tensions
         sag = np.where(np.isfinite(t), 0.0, np.nan)
-        ch.extra.update(_extra(self.design, t, cables.elastic_unstretched(ch.lengths, t, self.EA), sag))
-        if self.on_chunk is not None:
-            self.on_chunk(ch)
+        r.extra.update(_extra(self.robot, t, cables.elastic_unstretched(r.lengths, t, self.robot.cable.EA), sag))
 
 
-class ChordColumns:
-    """Wraps ``on_chunk`` of a straight-cable ``wrench-closure`` sweep of sagging cables: closure
-    ignores the tensions (as they grow without bound every catenary straightens onto its chord),
-    so the rows are the chords' and the cables have no shapes: the sagging columns are empty and
-    ``cable_status`` is 0 (nothing was solved that could fail)."""
+class ChordColumns(Wrapper):
+    """Sagging cables under ``wrench-closure``: closure ignores the tensions (as they grow without
+    bound every catenary straightens onto its chord), so the rows are the chords' and the cables
+    have no shapes: the sagging columns are empty and ``cable_status`` is 0 (nothing was solved
+    that could fail).  Draws ``cable_models.png``."""
 
-    def __init__(self, design: Design, on_chunk: Callable[[Chunk], None] | None):
-        self.design, self.on_chunk = design, on_chunk
+    pictures = ("cable_models.png",)
 
-    def __call__(self, ch: Chunk) -> None:
-        empty = np.full(ch.tensions.shape, np.nan)
-        ch.extra.update(_extra(self.design, empty, empty, empty, np.zeros(len(empty), dtype=np.int8)))
-        if self.on_chunk is not None:
-            self.on_chunk(ch)
+    def __init__(self, robot: Robot):
+        self.robot = robot
+        self.columns = tuple(cable_columns(robot))
+
+    def add(self, r: Rows, start: int, P: np.ndarray) -> None:
+        empty = np.full(r.tensions.shape, np.nan)
+        r.extra.update(_extra(self.robot, empty, empty, empty, np.zeros(len(empty), dtype=np.int8)))
+
+    def summary(self, maps) -> dict:
+        return cable_summary(self.robot, None, None)
 
 
-def cable_summary(design: Design, status_counts: np.ndarray | None, outlet_peak: np.ndarray | None) -> dict:
+def cable_columns(robot: Robot) -> list[str]:
+    """The table columns a non-ideal cable model adds, per cable c: ``outlet_tension_<c>`` [N],
+    ``unstretched_length_<c>`` [m], ``sag_<c>`` [m]; sagging cables add ``cable_status``
+    (an index into :data:`cdpr_design.statics.cables.STATUS`)."""
+    if robot.cables == "ideal":
+        return []
+    names = robot.design.cable_names
+    cols = ([f"outlet_tension_{c}" for c in names] + [f"unstretched_length_{c}" for c in names]
+            + [f"sag_{c}" for c in names])
+    return cols + (["cable_status"] if robot.cables == "sagging" else [])
+
+
+def cable_summary(robot: Robot, status_counts: np.ndarray | None, outlet_peak: np.ndarray | None) -> dict:
     """The keys a non-ideal cable model adds to the workspace summary."""
-    out: dict = {"cable_model": cables.design_model(design)}
+    out: dict = {"cable_model": robot.cables}
     if status_counts is not None:
         out["cable_status"] = {name: int(n) for name, n in zip(cables.STATUS, status_counts)}
     if outlet_peak is not None:
         out["max_outlet_tension_per_cable"] = {
-            c: (float(v) if np.isfinite(v) else None) for c, v in zip(design.cable_names, outlet_peak)}
+            c: (float(v) if np.isfinite(v) else None) for c, v in zip(robot.design.cable_names, outlet_peak)}
     return out
 
 
-def sweep_sagging(design: Design, kind: str, g: Grid, ori: np.ndarray, *,
-                  on_chunk: Callable[[Chunk], None] | None = None,
-                  progress: Callable[[int, int], None] | None = None,
-                  chunk: int = CHUNK, keep_maps: bool = True) -> WorkspaceResult:
-    """Sweep grid ``g`` at orientation ``ori`` (3,) [rad] with sagging cables from point outlets.
+class SaggingSweep(Base):
+    """The base evaluator of sagging cables from point outlets at one orientation ``ori`` (3,)
+    [rad] (not wrench closure, which takes the chords): every pose solved with elastic
+    catenaries by :func:`cdpr_design.kernels.sagging.sweep_grid_sagging`.  Rows are independent
+    of the chunking: every pose starts from its own straight solution.  Summary keys:
+    ``cable_model``, ``cable_status`` (poses per status), ``max_outlet_tension_per_cable``."""
 
-    The caller (:func:`cdpr_design.workspaces.run`) has checked ``kind`` (not
-    wrench closure, which takes the chords) and the grid's size.  Rows are
-    independent of the chunking: every pose starts from its own straight
-    solution.
-    """
-    from cdpr_design.kernels import chunk_stats
-    from cdpr_design.kernels.sagging import sweep_grid_sagging
+    pictures = ("cable_models.png",)
 
-    t0 = time.perf_counter()
-    arr = cables.cable_arrays(design)
-    R = kin.rotation_matrix(*ori)
-    Rb = np.ascontiguousarray(design.attachments @ R.T)
-    A = np.ascontiguousarray(design.outlets)
-    wreq = wrench_vertices(design, kind, ori)
-    combos = combinations(design.m, design.n)
-    lower, step, shape = grid3(g)
-    total, m = g.size, design.m
-    ori_coords = pose_at(design, np.zeros(3), ori)[design.motion.dim:]
-    maps = Maps(g, m, keep_maps)
-    chunk = max(1, min(chunk, total))
-    feas, marg = np.empty(chunk, dtype=np.uint8), np.empty(chunk)
-    ten, lens, outlet, L0, sag = (np.empty((chunk, m)) for _ in range(5))
-    status = np.empty(chunk, dtype=np.int8)
-    counts = np.zeros(len(cables.STATUS), dtype=np.int64)
-    opeak = np.full(m, -np.inf)
-    done = 0
-    while done < total:
-        cnt = min(chunk, total - done)
-        sweep_grid_sagging(done, cnt, lower, step, shape, Rb, A, design.rows, arr.up, arr.w, arr.EA, wreq,
-                           design.tension_min, design.tension_max, combos, KINDS[kind], cables.MAX_ITERATIONS,
-                           feas, marg, ten, lens, outlet, L0, sag, status)
-        stats = chunk_stats(feas, marg, ten, cnt, maps.tpeak)
-        maps.add(done, stats, feas[:cnt], marg[:cnt], ten[:cnt])
-        counts += np.bincount(status[:cnt], minlength=len(cables.STATUS))
-        f = feas[:cnt].astype(bool)
+    def __init__(self, robot: Robot, ori: np.ndarray, g: Grid):
+        from cdpr_design.kernels.sagging import sweep_grid_sagging
+
+        self.robot, self.kind, self.kernel = robot, robot.kind, sweep_grid_sagging
+        self.columns = tuple(cable_columns(robot))
+        self.Rb = np.ascontiguousarray(robot.attachments @ kin.rotation_matrix(*ori).T)
+        self.wreq = wrench_vertices(robot.design, robot.kind, ori)
+        self.lower, self.step, self.shape = grid3(g)
+        self.counts = np.zeros(len(cables.STATUS), dtype=np.int64)
+        self.opeak = np.full(robot.m, -np.inf)
+
+    def rows(self, start: int, P: np.ndarray) -> Rows:
+        r, cnt, m = self.robot, P.shape[0], self.robot.m
+        feas, marg = np.empty(cnt, dtype=np.uint8), np.empty(cnt)
+        ten, lens, outlet, L0, sag = (np.empty((cnt, m)) for _ in range(5))
+        status = np.empty(cnt, dtype=np.int8)
+        c = r.cable
+        self.kernel(start, cnt, self.lower, self.step, self.shape, self.Rb, r.outlet_points, r.rows, c.up, c.w, c.EA,
+                    self.wreq, r.tension_min, r.tension_max, r.combos, r.kcode, cables.MAX_ITERATIONS,
+                    feas, marg, ten, lens, outlet, L0, sag, status)
+        self.counts += np.bincount(status, minlength=len(cables.STATUS))
+        f = feas.astype(bool)
         if f.any():
-            np.fmax(opeak, outlet[:cnt][f].max(axis=0), out=opeak)
-        if on_chunk is not None:
-            poses = np.empty((cnt, len(design.motion.coords)))
-            poses[:, : design.motion.dim] = grid_positions(g, done, cnt)
-            poses[:, design.motion.dim:] = ori_coords
-            on_chunk(Chunk(done, poses, feas[:cnt].copy(), marg[:cnt].copy(), ten[:cnt].copy(),
-                           lens[:cnt].copy(), extra=_extra(design, outlet[:cnt].copy(), L0[:cnt].copy(),
-                                                           sag[:cnt].copy(), status[:cnt].copy())))
-        done += cnt
-        if progress is not None:
-            progress(done, total)
-    opeak[~np.isfinite(opeak)] = np.nan
-    return maps.result(design, kind, ori, t0, extra=cable_summary(design, counts, opeak))
+            np.fmax(self.opeak, outlet[f].max(axis=0), out=self.opeak)
+        return Rows(feas, marg, ten, lens, _extra(r, outlet, L0, sag, status))
+
+    def summary(self, maps) -> dict:
+        opeak = self.opeak.copy()
+        opeak[~np.isfinite(opeak)] = np.nan
+        return cable_summary(self.robot, self.counts, opeak)

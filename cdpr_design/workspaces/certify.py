@@ -11,8 +11,9 @@ inside boxes) is a proven lower bound of the workspace's area or volume, the
 outer measure (inside + boundary) a proven upper bound.
 
 Positions are taken at the spec's fixed orientation for every motion type.
-What the tests cover is listed in :data:`UNSUPPORTED` (the one place that
-decides it for certification).
+What the tests do not cover (sagging cables, swivel pulleys, a hanging
+effector) is refused by the resolved robot's table
+(:data:`cdpr_design.statics.robot.REFUSALS`).
 """
 
 from __future__ import annotations
@@ -28,10 +29,9 @@ import numpy as np
 
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
-from cdpr_design.statics import cables as cable_models
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.hanging import hangs_freely
 from cdpr_design.statics.pose import combinations, wrench_vertices
+from cdpr_design.statics.robot import Analysis, resolve
 
 #: status codes of the kernels and their names in the outputs
 STATUS = {1: "inside", -1: "outside", 0: "boundary"}
@@ -40,28 +40,11 @@ KINDS = ("static", "wrench-feasible")
 #: Largest number of boxes classified by default (bounded memory: a box is 6 floats and a code).
 MAX_BOXES = 5_000_000
 
-#: What certification does not cover yet, and why: (test on a design, reason).  The single
-#: place that decides it for ``certify`` (and ``check --certify``); the sweeps decide their own
-#: combinations in :mod:`cdpr_design.statics.cables` and :mod:`cdpr_design.workspaces.hanging`.
-UNSUPPORTED = (
-    (lambda d: cable_models.design_model(d) == "sagging",
-     "cable model 'sagging': the interval tests assume straight cables (ideal or elastic); "
-     "use --cable-model ideal or elastic"),
-    (lambda d: kin.has_pulleys(d),
-     "swivel pulleys (cables[].pulley): the interval tests take point outlets"),
-    (lambda d: hangs_freely(d),
-     "effector.orientation: free: the hanging orientation changes with the position, and the "
-     "interval tests hold one fixed orientation"),
-)
-
-
 def check_certifiable(design: Design, kind: str = "static") -> None:
     """Raise an :class:`InputError` with the reason when ``design`` or ``kind`` is not certified."""
     if kind not in KINDS:
         raise InputError(f"--kind: certify covers {', '.join(KINDS)}, got {kind!r}")
-    for test, reason in UNSUPPORTED:
-        if test(design):
-            raise InputError(f"certify: not supported for {design.name}: {reason}")
+    resolve(design, Analysis(command="certify", kind=kind))  # the refusals' one table
 
 
 @dataclass

@@ -7,40 +7,27 @@ Two engines compute the same rows:
   over each chunk with the same formulas in the same order (bit-identical
   results, tested).
 
-``auto`` takes numpy for closed-form grids up to :data:`NUMPY_MAX_POSES` poses
-while the kernels are not loaded in this process: numba's start-up (its
-import and the cached kernels' load, 0.3-0.5 s) would cost more than the sweep itself.
+The robot's ``engine`` (:func:`cdpr_design.statics.robot.resolve`) says which:
+``auto`` takes numpy for closed-form grids up to
+:data:`~cdpr_design.statics.robot.NUMPY_MAX_POSES` poses while the kernels are
+not loaded in the process: numba's start-up (its import and the cached
+kernels' load, 0.3-0.5 s) would cost more than the sweep itself.
 """
 
 from __future__ import annotations
 
-import sys
-import time
-from typing import Callable
-
 import numpy as np
 
-from cdpr_design.errors import InputError
-from cdpr_design.model.design import Design, Grid
+from cdpr_design.model.design import Grid
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.pose import KINDS, combinations, pose_at, wrench_vertices
-from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, WorkspaceResult, grid3, grid_positions
+from cdpr_design.statics.pose import wrench_vertices
+from cdpr_design.statics.robot import Robot
+from cdpr_design.workspaces.grid import Rows, grid3, grid_positions
+from cdpr_design.workspaces.parts import Base
 
-#: Engines (see the module docstring).
-ENGINES = ("auto", "numba", "numpy")
-#: Largest closed-form grid ``auto`` gives to numpy while the kernels are not loaded.  Measured
-#: on planar2 (with its hanging tilt), warm, the whole ``workspace`` command in a new process,
-#: two runs an engine and size: numpy 13-18 us a pose, numba 5-7 us a pose on two threads plus
-#: 0.45-0.5 s of numba start-up (``load_s``), which puts the crossover at 45,000-90,000 poses;
-#: the commands measured it there, loosely (the machine's speed drifted between runs): numpy
-#: 0.25 s faster at 63,001 poses, numba 0.3-0.5 s faster at 74,529 and 0.6-0.8 s at 90,601.
-#: Batch sweeps decide apart (``batch.sweep.KERNELS_FROM_POSES``).
-NUMPY_MAX_POSES = 70_000
-
-
-#: The kernel module whose presence means "the kernels are loaded in this process": the package
+#: The kernel module whose import loads the sweep kernels (numba): the package
 #: :mod:`cdpr_design.kernels` itself is lazy (``kernels.parallel`` is imported without numba by
-#: the batch and optimize layers), so its presence in ``sys.modules`` says nothing.
+#: the batch and optimize layers).
 LOADED = "cdpr_design.kernels.sweep"
 
 
@@ -56,114 +43,47 @@ def kernels():
 
 
 def load_kernels() -> None:
-    """Load the numba kernels now: for a process that will sweep many grids (a sweep
-    worker), where numba's start-up is repaid and ``auto`` should then choose them."""
+    """Load the numba kernels now: for a process that will sweep many grids (a sweep worker),
+    where numba's start-up is repaid (it then resolves its robots with ``kernels_loaded``)."""
     kernels()
 
 
-def check_engine(engine: str) -> None:
-    """Raise an :class:`InputError` naming ``engine`` unless it is one of :data:`ENGINES`."""
-    if engine not in ENGINES:
-        raise InputError(f"engine: expected one of {', '.join(ENGINES)}, got {engine!r}")
+class StraightSweep(Base):
+    """The base evaluator of straight cables from point outlets at one orientation ``ori`` (3,)
+    [rad]: the robot's engine, numpy (closed form) or the kernels; the arrays built once."""
 
-
-def resolve(engine: str, poses: int) -> str:
-    """The engine to run a sweep of ``poses`` poses with: ``auto`` becomes ``numba`` where
-    :func:`use_numpy` would not take numpy at any design (grids over :data:`NUMPY_MAX_POSES`),
-    so that a one-pose run with the result loads the same kernels as the whole sweep."""
-    check_engine(engine)
-    return "numba" if engine == "auto" and poses > NUMPY_MAX_POSES else engine
-
-
-def use_numpy(engine: str, planar2: bool, poses: int) -> bool:
-    """Whether a point-outlet sweep of ``poses`` poses takes the numpy closed form.
-
-    ``planar2``: the design has two cables and two wrench rows and the kind is
-    not wrench closure (the closed form's case).
-    """
-    check_engine(engine)
-    if engine == "numpy":
-        if not planar2:
-            raise InputError("engine=numpy: the numpy engine covers two cables with two wrench rows "
-                             "(static or wrench-feasible); use auto or numba for this design")
-        return True
-    if engine == "numba":
-        return False
-    return planar2 and poses <= NUMPY_MAX_POSES and LOADED not in sys.modules
-
-
-class _Sweep:
-    """The arrays a straight-cable sweep hands to its engine, built once per sweep."""
-
-    def __init__(self, design: Design, kind: str, g: Grid, ori: np.ndarray, engine: str):
+    def __init__(self, robot: Robot, ori: np.ndarray, g: Grid):
+        design = robot.design
         R = kin.rotation_matrix(*ori)
-        self.Rb = np.ascontiguousarray(design.attachments @ R.T)
-        self.A = np.ascontiguousarray(design.outlets)
-        self.rows = design.rows
-        self.tmin, self.tmax = design.tension_min, design.tension_max
-        self.wreq = wrench_vertices(design, kind, ori)
-        self.combos = combinations(design.m, design.n)
-        self.kcode = KINDS[kind]
+        self.robot, self.kind, self.g = robot, robot.kind, g
+        self.Rb = np.ascontiguousarray(robot.attachments @ R.T)
+        self.wreq = wrench_vertices(design, robot.kind, ori)
+        self.numpy = robot.engine == "numpy"
         # the paper's case (two cables, two wrench rows) has a closed form
-        self.planar2 = design.m == 2 and design.n == 2 and kind != "wrench-closure"
-        self.numpy = use_numpy(engine, self.planar2, g.size)
+        self.planar2 = robot.m == 2 and robot.n == 2 and robot.kind != "wrench-closure"
         self.K = None if self.numpy else kernels()
-        self.wreq_used = self.wreq if kind == "wrench-feasible" else self.wreq[:1].copy()
-        self.g = g
+        self.wreq_used = self.wreq if robot.kind == "wrench-feasible" else self.wreq[:1].copy()
         self.lower, self.step, self.shape = grid3(g)
 
-    def chunk(self, start: int, cnt: int, feas, marg, ten, lens, tpeak):
-        """Fill the buffers' first ``cnt`` rows for grid rows start .. start+cnt; return the stats."""
+    def rows(self, start: int, P: np.ndarray) -> Rows:
+        r, cnt, m = self.robot, P.shape[0], self.robot.m
+        feas, marg = np.empty(cnt, dtype=np.uint8), np.empty(cnt)
+        ten, lens = np.empty((cnt, m)), np.empty((cnt, m))
         if self.numpy:
-            _planar2_numpy(self.g, start, cnt, self.Rb, self.A, self.wreq_used, self.tmin, self.tmax,
-                           feas, marg, ten, lens)
-            return _chunk_stats_numpy(feas, marg, ten, cnt, tpeak)
-        K = self.K
-        if self.planar2:
-            K.sweep_grid_planar2(start, cnt, self.lower, self.step, self.shape, self.Rb, self.A,
-                                 self.wreq_used, self.tmin, self.tmax, feas, marg, ten, lens)
+            _planar2_numpy(self.g, start, cnt, self.Rb, r.outlet_points, self.wreq_used, r.tension_min,
+                           r.tension_max, feas, marg, ten, lens)
+        elif self.planar2:
+            self.K.sweep_grid_planar2(start, cnt, self.lower, self.step, self.shape, self.Rb, r.outlet_points,
+                                      self.wreq_used, r.tension_min, r.tension_max, feas, marg, ten, lens)
         else:
-            K.sweep_grid(start, cnt, self.lower, self.step, self.shape, self.Rb, self.A, self.rows,
-                         self.wreq, self.tmin, self.tmax, self.combos, self.kcode, feas, marg, ten, lens)
-        return K.chunk_stats(feas, marg, ten, cnt, tpeak)
+            self.K.sweep_grid(start, cnt, self.lower, self.step, self.shape, self.Rb, r.outlet_points, r.rows,
+                              self.wreq, r.tension_min, r.tension_max, r.combos, r.kcode, feas, marg, ten, lens)
+        return Rows(feas, marg, ten, lens)
 
-
-def sweep(design: Design, kind: str, g: Grid, ori: np.ndarray, *,
-          on_chunk: Callable[[Chunk], None] | None = None,
-          progress: Callable[[int, int], None] | None = None,
-          chunk: int = CHUNK, keep_maps: bool = True, engine: str = "auto") -> WorkspaceResult:
-    """Sweep grid ``g`` at orientation ``ori`` (3,) [rad] with straight cables from point outlets.
-
-    The caller (:func:`cdpr_design.workspaces.run`) has checked ``kind`` and
-    the grid's size.  ``on_chunk`` receives each :class:`Chunk` in grid
-    order; ``progress(done, total)`` is called after each chunk.
-    """
-    t0 = time.perf_counter()
-    sw = _Sweep(design, kind, g, ori, engine)
-    total, m = g.size, design.m
-    ncoords = len(design.motion.coords)
-    ori_coords = pose_at(design, np.zeros(3), ori)[design.motion.dim:]
-    maps = Maps(g, m, keep_maps)
-    chunk = max(1, min(chunk, total))
-    feas_b = np.empty(chunk, dtype=np.uint8)
-    marg_b = np.empty(chunk)
-    ten_b = np.empty((chunk, m))
-    len_b = np.empty((chunk, m))
-    done = 0
-    while done < total:
-        cnt = min(chunk, total - done)
-        stats = sw.chunk(done, cnt, feas_b, marg_b, ten_b, len_b, maps.tpeak)
-        maps.add(done, stats, feas_b[:cnt], marg_b[:cnt], ten_b[:cnt])
-        if on_chunk is not None:
-            poses = np.empty((cnt, ncoords))
-            poses[:, : design.motion.dim] = grid_positions(g, done, cnt)
-            poses[:, design.motion.dim:] = ori_coords
-            on_chunk(Chunk(done, poses, feas_b[:cnt].copy(), marg_b[:cnt].copy(),
-                           ten_b[:cnt].copy(), len_b[:cnt].copy()))
-        done += cnt
-        if progress is not None:
-            progress(done, total)
-    return maps.result(design, kind, ori, t0)
+    def stats(self, rows: Rows, tpeak: np.ndarray) -> tuple:
+        if self.numpy:  # numba's start-up is what the numpy engine saves
+            return _chunk_stats_numpy(rows.feasible, rows.margin, rows.tensions, rows.feasible.shape[0], tpeak)
+        return self.K.chunk_stats(rows.feasible, rows.margin, rows.tensions, rows.feasible.shape[0], tpeak)
 
 
 def _planar2_numpy(g: Grid, start, count, Rb, A, wreq, tmin, tmax, feasible, margin, tensions, lengths):

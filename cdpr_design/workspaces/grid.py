@@ -18,7 +18,6 @@ import numpy as np
 
 from cdpr_design.errors import SpecError
 from cdpr_design.model.design import Design, Grid
-from cdpr_design.statics import cables
 from cdpr_design.statics.pose import pose_at
 
 #: Largest grid swept without ``force=True`` (poses): about 10 s of the numba kernels on one core.
@@ -36,7 +35,9 @@ class Chunk:
     """One chunk of a sweep: rows ``start .. start + len`` of the grid (C order x, y, z).
 
     ``poses`` are in the motion's coordinates (orientation columns hold the
-    sweep's fixed orientation).
+    sweep's fixed orientation, or the hanging one).  ``extra`` holds the
+    columns after the contract's, in the order the sweep plan declares them
+    (:attr:`cdpr_design.workspaces.plan.Plan.extra_columns`).
     """
 
     start: int
@@ -45,10 +46,30 @@ class Chunk:
     margin: np.ndarray
     tensions: np.ndarray
     lengths: np.ndarray
-    #: uint8 (count,), 1 where no interference (only when the sweep checks it)
-    collision_free: np.ndarray | None = None
-    #: further CSV columns after the contract's (name -> (count,) array)
+    #: further table columns after the contract's (name -> (count,) array)
     extra: dict = field(default_factory=dict)
+
+    @property
+    def collision_free(self) -> np.ndarray | None:
+        """uint8 (count,), 1 where no interference (only when the sweep checks it)."""
+        return self.extra.get("collision_free")
+
+
+@dataclass
+class Rows:
+    """What a sweep's base evaluator computes for a chunk of positions, before the wrappers
+    add their columns: ``feasible`` uint8 (k,), ``margin`` (k,) [N], ``tensions`` (k, m) [N],
+    ``lengths`` (k, m) [m] (None where the rows are not written), ``extra`` the declared
+    columns (name -> (k,)), ``maps`` the declared maps' values (name -> (k,)), ``poses`` the
+    motion's pose coordinates where they are not the grid's at the sweep's orientation."""
+
+    feasible: np.ndarray
+    margin: np.ndarray
+    tensions: np.ndarray
+    lengths: np.ndarray | None
+    extra: dict = field(default_factory=dict)
+    maps: dict = field(default_factory=dict)
+    poses: np.ndarray | None = None
 
 
 @dataclass
@@ -93,6 +114,8 @@ class WorkspaceResult:
     orientation_maps: object = None
     #: under-constrained designs only: the hanging tilt map (a workspaces.hanging.HangingMaps)
     hanging: object = None
+    #: the resolved robot the sweep ran (:class:`cdpr_design.statics.robot.Robot`)
+    robot: object = None
 
     @property
     def fraction(self) -> float:
@@ -327,34 +350,6 @@ def column_names(design: Design) -> list[str]:
     names = design.cable_names
     return (list(design.motion.coords) + ["feasible", "margin"]
             + [f"tension_{c}" for c in names] + [f"length_{c}" for c in names])
-
-
-def extra_columns(design: Design, interference: bool, mode: str | None) -> list[str]:
-    """Names of the extra ``workspace.csv`` columns, in the order :func:`chunk_extra` gives them.
-
-    An orientation workspace (``mode``) has no cable-model columns: its rows stand for a set of
-    orientations (the largest tension over it), not for one pose whose cables a winch pays out."""
-    from cdpr_design.workspaces import hanging
-
-    cols = ["collision_free"] if interference else []
-    cols += cables.column_names(design) if mode is None else []
-    if mode == "total":
-        cols.append("orientations_feasible")
-    elif mode == "range":
-        cols += [f"range_{c}" for c in design.motion.rotation_coords]
-    elif hanging.applies(design):  # under-constrained: the tilt it hangs with
-        cols += hanging.columns(design)
-    return cols
-
-
-def chunk_extra(chunk) -> dict:
-    """The extra columns of a :class:`Chunk` (name -> array)."""
-    out = {}
-    cf = getattr(chunk, "collision_free", None)
-    if cf is not None:
-        out["collision_free"] = cf
-    out.update(getattr(chunk, "extra", None) or {})
-    return out
 
 
 def representative_pose(result: WorkspaceResult) -> np.ndarray | None:

@@ -3,14 +3,15 @@
 An under-constrained design (:func:`cdpr_design.statics.hanging.underconstrained`)
 cannot hold its effector's orientation; at each grid position the effector
 turns until the cables balance its weight, force and moment
-(:func:`cdpr_design.statics.hanging_at.hang`).  :func:`sweep` is what
-:func:`cdpr_design.workspaces.run` does for such a design:
+(:func:`cdpr_design.statics.hanging_at.hang`).  The resolved robot's
+``orientation`` says which part of a sweep plan (:mod:`cdpr_design.workspaces.plan`)
+takes it:
 
-- ``effector.orientation: fixed`` (the default, the spec's model of an
-  effector held at the commanded orientation): the usual sweep, untouched,
-  with the hanging tilt added beside it, so that the held model's
-  feasibility is never read without the tilt the real body would take;
-- ``free``: feasibility judged at the hanging orientation - the effector
+- ``held`` (``effector.orientation: fixed``, the spec's model of an effector
+  held at the commanded orientation): the wrapper :class:`HeldTilt` adds the
+  hanging tilt beside the usual rows, so that the held model's feasibility is
+  never read without the tilt the real body would take;
+- ``hanging`` (``free``; the base evaluator :class:`FreeSweep`): feasibility judged at the hanging orientation - the effector
   hangs there stably with every cable pulling, its tensions are within their
   bounds (and the capacity margin below is >= 0 where the motion's rows
   define one), and its tilt is at most ``max_tilt`` (``--max-tilt``, default
@@ -31,21 +32,18 @@ grid is never held in memory.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
-from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
 from cdpr_design.statics import hanging as H
 from cdpr_design.statics import hanging_at as ha
 from cdpr_design.statics import hanging_core as hc
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.cables import is_ideal
-from cdpr_design.statics.pose import combinations
-from cdpr_design.workspaces.engine import use_numpy
-from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, chunk_poses, positions3
+from cdpr_design.statics.robot import Robot, combinations
+from cdpr_design.workspaces.grid import Rows, chunk_poses
+from cdpr_design.workspaces.parts import Base, Wrapper
 
 
 @dataclass
@@ -59,48 +57,6 @@ class HangingMaps:
     tilt_limit: float | None = None
 
 
-def wanted(design: Design, tilt: bool = True) -> bool:
-    """Whether a sweep of ``design`` goes through :func:`sweep`: it :func:`applies`, and either its
-    effector hangs freely (its feasibility is judged at the hanging orientation) or ``tilt``
-    asks for the tilt a held effector would hang with (only a figure: sweeps that use just
-    feasibility, margins and tensions leave it out)."""
-    return applies(design) and (tilt or H.hangs_freely(design))
-
-
-def applies(design: Design) -> bool:
-    """Whether a sweep of ``design`` goes through :func:`sweep`: under-constrained, with a weight
-    (a weightless ``fixed`` effector hangs in no particular orientation: no tilt), point outlets and
-    ideal cables (the hanging solvers model neither swivel pulleys nor elastic or sagging cables;
-    ``free`` with either, or without a weight, is refused)."""
-    if not H.underconstrained(design):
-        return False
-    if not H.has_weight(design.effector.mass, design.gravity):
-        if H.hangs_freely(design):
-            H.check_weight(design.effector.mass, design.gravity)  # the spec checks refuse it at load
-        return False
-    if kin.has_pulleys(design) or not is_ideal(design):
-        if H.hangs_freely(design):
-            hanging_model(design)
-        return False
-    return True
-
-
-def hanging_model(design: Design) -> None:
-    """Refuse what the hanging solvers do not model: swivel pulleys, elastic or sagging cables."""
-    H.point_outlets(design, "effector.orientation: free")
-    if not is_ideal(design):
-        raise InputError("cable model: an effector with effector.orientation: free hangs on ideal cables "
-                         "(the hanging solver models rigid, weightless cables); use --cable-model ideal")
-
-
-def refuse_commanded_orientations(design: Design) -> None:
-    """Orientation workspaces sweep commanded orientations: refused when the effector hangs freely."""
-    if H.hangs_freely(design):
-        raise InputError("--orientations: an under-constrained design with effector.orientation: free does "
-                         "not command its orientation (it hangs); use effector.orientation: fixed to sweep "
-                         "commanded orientations")
-
-
 def columns(design: Design) -> list[str]:
     """The extra ``workspace.csv`` columns of an under-constrained design: ``tilt`` [deg] and
     the hanging orientation per rotation axis [rad] (``orientation_phi``, or ``orientation_rx``,
@@ -109,40 +65,29 @@ def columns(design: Design) -> list[str]:
     return ["tilt"] + [f"orientation_{a}" for a in axes]
 
 
-def classification(design: Design) -> dict:
+def classification(robot: Robot) -> dict:
     """The summary keys of an under-constrained design's sweep, ``effector_orientation`` and
     ``underconstrained`` (cli.md), whether or not it hangs (a weightless effector, swivel
     pulleys and elastic or sagging cables have no hanging solve); none for other designs."""
-    if not H.underconstrained(design):
+    if not robot.underconstrained:
         return {}
-    return {"effector_orientation": design.effector.orientation, "underconstrained": True}
+    return {"effector_orientation": robot.design.effector.orientation, "underconstrained": True}
 
 
-def tilt_limit(design: Design, max_tilt: float | None) -> float | None:
-    """The tilt limit [deg] of a sweep: ``max_tilt``, else ``requirements.max_tilt`` (free designs)."""
-    if max_tilt is not None:
-        if not H.hangs_freely(design):
-            raise InputError("max_tilt: a tilt limit applies to an under-constrained design with "
-                             "effector.orientation: free (a fixed effector is held at its commanded orientation)")
-        if not (0.0 <= max_tilt <= 180.0):
-            raise InputError(f"max_tilt: expected an angle in [0, 180] degrees, got {max_tilt}")
-        return float(max_tilt)
-    return design.requirements.max_tilt if H.hangs_freely(design) else None
+class Hanger:
+    """The hanging orientation of ``robot``'s effector at a chunk's positions, about ``ori`` (3,) [rad]."""
 
-
-class _Hanger:
-    """The hanging orientation at a chunk's positions, for one design."""
-
-    def __init__(self, design: Design, ori, engine: str, poses: int):
+    def __init__(self, robot: Robot, ori):
+        design = robot.design
         A, B, c, mass, g, planar = H.design_arrays(design)
         self.geo = hc.Geometry(A, B, c, mass, g)
         self.planar = planar
         self.design = design
         self.nominal = kin.rotation_matrix(*ori)
-        # the planar two-cable kernel where numba is (or will be) loaded: numba asked for, a
-        # free design (its statics run the kernels), or a sweep the engines give to numba
+        # the planar two-cable kernel where the robot's sweep runs the kernels (a hanging
+        # effector's statics always do)
         two = planar and design.m == 2 and not hc.is_point_mass(B)
-        numba = engine == "numba" or (engine == "auto" and (H.hangs_freely(design) or not use_numpy(engine, True, poses)))
+        numba = robot.engine == "numba"
         self.engine = "numba" if two and numba else "numpy"
         # the numpy search on the kernels' threads where the sweep runs the kernels anyway (their
         # thread setting and pool are then there); the planar two-cable kernel runs on them itself
@@ -205,49 +150,54 @@ class _Stats:
         if f.any():
             self.max_feasible = max(self.max_feasible, float(tilt[f].max()))
 
-    def summary(self, design, limit) -> dict:
+    def summary(self, robot: Robot, limit) -> dict:
         num = lambda x: float(x) if np.isfinite(x) else None  # noqa: E731
-        out = {**classification(design),
+        out = {**classification(robot),
                "hangs": self.hangs, "max_tilt": num(self.max_feasible), "max_tilt_hanging": num(self.max_hanging)}
-        if design.effector.orientation == "free":
+        if robot.orientation == "hanging":
             out.update(tilt_limit=limit, tilt_limited=self.limited if limit is not None else None)
         return out
 
 
-def sweep(design: Design, kind: str, g, ori, fixed_sweep, *, on_chunk=None, progress=None,
-          chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False, engine: str = "auto",
-          max_tilt: float | None = None):
-    """Sweep grid ``g`` of an under-constrained design (see the module doc).
+class Classification(Wrapper):
+    """The summary keys ``effector_orientation`` and ``underconstrained`` of an under-constrained
+    design whose tilt is not solved (:func:`classification`); nothing for other designs."""
 
-    ``fixed_sweep(on_chunk)`` runs the design's usual sweep (the caller's, at
-    orientation ``ori`` (3,) [rad]); the other parameters are those of
-    :func:`cdpr_design.workspaces.run`.  ``max_tilt`` [deg] applies to ``free``
-    designs only.
-    """
-    limit = tilt_limit(design, max_tilt)
-    hanger = _Hanger(design, ori, engine, g.size)
-    tilt_maps = Maps(g, 0, keep_maps, extra_maps=("tilt",))
-    stats = _Stats()
-    if H.hangs_freely(design):
-        if kind != "static" or interference:
-            what = "--collisions" if interference else f"--kind {kind}"
-            raise InputError(f"{what}: an under-constrained design with effector.orientation: free is swept "
-                             "statically only (it hangs under gravity; interference at the hanging pose is "
-                             "not modelled)")
-        result = _free_sweep(design, g, ori, hanger, limit, stats, tilt_maps, on_chunk, progress, chunk, keep_maps)
-    else:
-        def add_tilt(c):
-            h, extra = hanger(positions3(g, c.start, len(c.feasible)))
-            c.extra.update(extra)
-            stats.add(extra["tilt"], c.feasible)
-            tilt_maps.add(c.start, (0, np.inf, -np.inf), c.feasible, c.margin, c.tensions[:, :0], extra)
-            if on_chunk is not None:
-                on_chunk(c)
+    def __init__(self, robot: Robot):
+        self.robot = robot
 
-        result = fixed_sweep(add_tilt)
-    result.extra.update(stats.summary(design, limit))
-    result.hanging = HangingMaps(tilt_maps.xmaps["tilt"], design.effector.orientation, limit)
-    return result
+    def add(self, r: Rows, start: int, P: np.ndarray) -> None:
+        pass
+
+    def summary(self, maps) -> dict:
+        return classification(self.robot)
+
+
+class HeldTilt(Wrapper):
+    """The tilt a *held* under-constrained effector (``effector.orientation: fixed``) would hang
+    with, beside the commanded orientation's rows: columns :func:`columns`, the ``tilt`` map
+    (``tilt_map.png``) and the summary keys of :class:`_Stats`."""
+
+    maps = ("tilt",)
+    pictures = ("tilt_map.png",)
+
+    def __init__(self, robot: Robot, ori):
+        self.robot = robot
+        self.hanger = Hanger(robot, ori)
+        self.columns = tuple(columns(robot.design))
+        self.tally = _Stats()
+
+    def add(self, r: Rows, start: int, P: np.ndarray) -> None:
+        _, extra = self.hanger(P)
+        r.extra.update(extra)
+        r.maps["tilt"] = extra["tilt"]
+        self.tally.add(extra["tilt"], r.feasible)
+
+    def summary(self, maps) -> dict:
+        return self.tally.summary(self.robot, None)
+
+    def finish(self, result, maps) -> None:
+        result.hanging = HangingMaps(maps.xmaps["tilt"], self.robot.design.effector.orientation, None)
 
 
 @dataclass
@@ -269,7 +219,7 @@ class FreeRows:
     within: np.ndarray
 
 
-def free_rows(design: Design, P, hanger: "_Hanger", limit: float | None) -> FreeRows:
+def free_rows(design: Design, P, hanger: Hanger, limit: float | None) -> FreeRows:
     """Hanging orientation, then feasibility, margin, tensions and lengths there, at positions
     ``P`` (k, 3) [m] (see the module doc; the workspace's rows and ``pose --at``'s)."""
     from cdpr_design.kernels import hanging as K  # numba, on first use
@@ -308,42 +258,42 @@ def within_tilt(tilt, limit: float):
     return np.asarray(tilt) <= limit + TILT_TOL_DEG
 
 
-def _free_sweep(design, g, ori, hanger, limit, stats, tilt_maps, on_chunk, progress, chunk, keep_maps):
-    """The grid at the hanging orientations, chunk by chunk (see the module doc)."""
-    from cdpr_design.workspaces.hardware import chunk_stats
+class FreeSweep(Base):
+    """The base evaluator of a hanging effector (``effector.orientation: free``): the grid at the
+    hanging orientations (see the module doc), the tilt limit ``robot.tilt_limit``."""
 
-    t0 = time.perf_counter()
-    total = g.size
-    maps = Maps(g, design.m, keep_maps)
-    chunk = max(1, min(chunk, total))
-    done = 0
-    while done < total:
-        cnt = min(chunk, total - done)
-        P = positions3(g, done, cnt)
-        r = free_rows(design, P, hanger, limit)
-        stats.limited += int(np.count_nonzero(r.within & (r.feasible == 0)))
-        stats.add(r.extra["tilt"], r.feasible)
-        maps.add(done, chunk_stats(r.feasible, r.margin, r.tensions, maps.tpeak), r.feasible, r.margin, r.tensions)
-        tilt_maps.add(done, (0, np.inf, -np.inf), r.feasible, r.margin, r.tensions[:, :0], {"tilt": r.extra["tilt"]})
-        if on_chunk is not None:
-            poses = chunk_poses(design, P, ori)
-            if design.motion.rotational:  # the orientation columns hold the hanging orientation
-                poses[:, design.motion.dim:] = r.hanging.orientation.reshape(cnt, -1)
-            on_chunk(Chunk(done, poses, r.feasible, r.margin, r.tensions, r.lengths, extra=r.extra))
-        done += cnt
-        if progress is not None:
-            progress(done, total)
-    return maps.result(design, "static", ori, t0)
+    maps = ("tilt",)
+    pictures = ("tilt_map.png",)
+
+    def __init__(self, robot: Robot, ori, g):
+        self.robot, self.ori, self.kind = robot, ori, "static"
+        self.hanger = Hanger(robot, ori)
+        self.columns = tuple(columns(robot.design))
+        self.tally = _Stats()
+
+    def rows(self, start: int, P: np.ndarray) -> Rows:
+        design, cnt = self.robot.design, P.shape[0]
+        r = free_rows(design, P, self.hanger, self.robot.tilt_limit)
+        self.tally.limited += int(np.count_nonzero(r.within & (r.feasible == 0)))
+        self.tally.add(r.extra["tilt"], r.feasible)
+        poses = chunk_poses(design, P, self.ori)
+        if design.motion.rotational:  # the orientation columns hold the hanging orientation
+            poses[:, design.motion.dim:] = r.hanging.orientation.reshape(cnt, -1)
+        return Rows(r.feasible, r.margin, r.tensions, r.lengths, r.extra, {"tilt": r.extra["tilt"]}, poses)
+
+    def summary(self, maps) -> dict:
+        return self.tally.summary(self.robot, self.robot.tilt_limit)
+
+    def finish(self, result, maps) -> None:
+        result.hanging = HangingMaps(maps.xmaps["tilt"], self.robot.design.effector.orientation,
+                                     self.robot.tilt_limit)
 
 
-def free_pose(design: Design, position, max_tilt: float | None = None) -> FreeRows:
-    """:func:`free_rows` at one position [m] of a ``free`` under-constrained design, about
-    ``workspace.orientation``, with the sweep's tilt limit (``max_tilt``, else the requirement)."""
-    if not H.hangs_freely(design):
-        raise InputError("free_pose: the design's orientation is commanded (not free and under-constrained)")
-    hanging_model(design)
+def free_pose(robot: Robot, position) -> FreeRows:
+    """:func:`free_rows` at one position [m] of a hanging robot (``effector.orientation: free``),
+    about ``workspace.orientation``, with the robot's tilt limit."""
+    design = robot.design
     P = np.zeros((1, 3))
     pos = np.asarray(position, float).ravel()
     P[0, : pos.size] = pos
-    hanger = _Hanger(design, design.default_orientation_full(), "numpy", 1)
-    return free_rows(design, P, hanger, tilt_limit(design, max_tilt))
+    return free_rows(design, P, Hanger(robot, design.default_orientation_full()), robot.tilt_limit)

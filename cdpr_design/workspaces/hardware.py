@@ -1,9 +1,9 @@
 """Workspace sweeps with real hardware geometry: swivel pulleys and interference.
 
-:func:`run_hardware` is what :func:`cdpr_design.workspaces.run` does when a
-design has swivel pulleys or interference is checked: the same chunked grid
-sweep, through :func:`cdpr_design.kernels.sweep_points` (pulley-aware
-structure matrix, interference mask per pose).  :class:`Evaluator` evaluates
+:class:`HardwareSweep` is the sweep plan's base evaluator when a design has
+swivel pulleys or interference is checked, through
+:func:`cdpr_design.kernels.sweep_points` (pulley-aware structure matrix,
+interference mask per pose).  :class:`Evaluator` evaluates
 explicit positions at one orientation; the orientation workspaces
 (:mod:`cdpr_design.workspaces.orientation`) call it once per orientation.
 
@@ -12,33 +12,32 @@ Results are data: chunks go to ``on_chunk``, nothing touches files.
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 
-from cdpr_design import kernels as K
-from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.interference import HIT_NAMES, hardware_arrays, in_cable_planes
-from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices
-from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, chunk_poses, positions3
+from cdpr_design.statics.pose import wrench_vertices
+from cdpr_design.statics.robot import Robot
+from cdpr_design.workspaces.grid import Rows
+from cdpr_design.workspaces.parts import Base
 
 
 class Evaluator:
-    """Evaluates explicit positions at one orientation (pulleys and interference included)."""
+    """Evaluates explicit positions of ``robot`` at one orientation (pulleys and, with the
+    analysis's ``collisions``, interference included)."""
 
-    def __init__(self, design: Design, kind: str, interference: bool):
-        self.design = design
-        self.kind = kind
-        self.kcode = KINDS[kind]
-        self.interference = bool(interference)
+    def __init__(self, robot: Robot):
+        design = self.design = robot.design
+        self.kind = robot.kind
+        self.kcode = robot.kcode
+        self.interference = bool(robot.analysis.collisions)
         self.hw = hardware_arrays(design)
-        self.A = np.ascontiguousarray(design.outlets)
-        self.Bp = np.ascontiguousarray(design.attachments)
-        self.Bp_planes = np.ascontiguousarray(in_cable_planes(design.attachments, self.hw.zoff))  # interference
-        self.rows = design.rows
-        self.tmin, self.tmax = design.tension_min, design.tension_max
-        self.combos = combinations(design.m, design.n)
+        self.A = robot.outlet_points
+        self.Bp = robot.attachments
+        self.Bp_planes = np.ascontiguousarray(in_cable_planes(robot.attachments, self.hw.zoff))  # interference
+        self.rows = robot.rows
+        self.tmin, self.tmax = robot.tension_min, robot.tension_max
+        self.combos = robot.combos
         self._wreq = {}
 
     def wrench(self, ori) -> np.ndarray:
@@ -62,6 +61,8 @@ class Evaluator:
         ten = np.empty((k, m))
         L = np.empty((k, m))
         mask = np.empty(k, dtype=np.uint8)
+        from cdpr_design import kernels as K  # numba, on first use
+
         hw = self.hw
         K.sweep_points(np.ascontiguousarray(P, dtype=float), Rb, R, self.A, hw.axes, hw.eref,
                        hw.radii, self.rows, self.wrench(ori), self.tmin, self.tmax, self.combos,
@@ -71,6 +72,8 @@ class Evaluator:
 
 def chunk_stats(feas, marg, ten, tpeak):
     """(feasible count, min margin [N], max margin [N]) of a chunk; raises ``tpeak`` [N] in place."""
+    from cdpr_design import kernels as K
+
     return K.chunk_stats(np.ascontiguousarray(feas), np.ascontiguousarray(marg),
                          np.ascontiguousarray(ten), feas.shape[0], tpeak)
 
@@ -80,44 +83,40 @@ def kind_counts(mask: np.ndarray, counts: dict) -> None:
         counts[name] += int(np.count_nonzero(mask & bit))
 
 
-def run_hardware(design: Design, kind: str, g, ori, *, on_chunk=None, progress=None,
-                 chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False):
-    """Sweep grid ``g`` at orientation ``ori`` (3,) [rad] with pulleys and interference.
+class HardwareSweep(Base):
+    """The base evaluator with swivel pulleys and (the analysis's ``collisions``) interference, at
+    one orientation ``ori`` (3,) [rad], through :func:`cdpr_design.kernels.sweep_points`.
 
-    With ``interference`` the ``feasible`` flag is statics-feasible and
-    collision free; tensions are blanked (NaN) where a pose collides; the
-    margin stays the capacity margin.  Summary extras: ``interference``,
-    ``collision_free`` (collision-free poses), ``feasible_statics`` (feasible
-    before the interference checks), ``collisions_by_kind`` (poses hit by
-    each kind of interference), ``pulleys``.
+    With interference the ``feasible`` flag is statics-feasible and collision free; tensions
+    are blanked (NaN) where a pose collides; the margin stays the capacity margin; column
+    ``collision_free``.  Summary keys: ``pulleys``, ``interference`` and, with interference,
+    ``collision_free`` (collision-free poses), ``feasible_statics`` (feasible before the
+    interference checks), ``collisions_by_kind`` (poses hit by each kind of interference).
     """
-    t0 = time.perf_counter()
-    ev = Evaluator(design, kind, interference)
-    total = g.size
-    chunk = max(1, min(chunk, total))
-    maps = Maps(g, design.m, keep_maps)
-    n_free = n_stat = 0
-    counts = {name: 0 for name in HIT_NAMES.values()}
-    done = 0
-    while done < total:
-        cnt = min(chunk, total - done)
-        P = positions3(g, done, cnt)
-        feas, marg, ten, L, mask = ev(P, ori)
-        cfree = None
-        if interference:
-            n_stat += int(np.count_nonzero(feas))
+
+    def __init__(self, robot: Robot, ori: np.ndarray):
+        self.robot, self.kind, self.ori = robot, robot.kind, ori
+        self.ev = Evaluator(robot)
+        self.interference = robot.analysis.collisions
+        self.columns = ("collision_free",) if self.interference else ()
+        self.n_free = self.n_stat = 0
+        self.counts = {name: 0 for name in HIT_NAMES.values()}
+
+    def rows(self, start: int, P: np.ndarray) -> Rows:
+        feas, marg, ten, L, mask = self.ev(P, self.ori)
+        extra = {}
+        if self.interference:
+            self.n_stat += int(np.count_nonzero(feas))
             cfree = (mask == 0).astype(np.uint8)
-            n_free += int(np.count_nonzero(cfree))
-            kind_counts(mask, counts)
+            self.n_free += int(np.count_nonzero(cfree))
+            kind_counts(mask, self.counts)
             feas &= cfree
             ten[cfree == 0] = np.nan
-        maps.add(done, chunk_stats(feas, marg, ten, maps.tpeak), feas, marg, ten)
-        if on_chunk is not None:
-            on_chunk(Chunk(done, chunk_poses(design, P, ori), feas, marg, ten, L, collision_free=cfree))
-        done += cnt
-        if progress is not None:
-            progress(done, total)
-    extra = {"pulleys": bool(kin.has_pulleys(design)), "interference": bool(interference)}
-    if interference:
-        extra.update(collision_free=n_free, feasible_statics=n_stat, collisions_by_kind=counts)
-    return maps.result(design, kind, ori, t0, extra)
+            extra["collision_free"] = cfree
+        return Rows(feas, marg, ten, L, extra)
+
+    def summary(self, maps) -> dict:
+        extra = {"pulleys": self.robot.outlets == "pulleys", "interference": bool(self.interference)}
+        if self.interference:
+            extra.update(collision_free=self.n_free, feasible_statics=self.n_stat, collisions_by_kind=self.counts)
+        return extra

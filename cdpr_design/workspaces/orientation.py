@@ -15,17 +15,17 @@ from __future__ import annotations
 
 import itertools
 import math
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from cdpr_design.errors import SpecError
 from cdpr_design.model.design import Design
-from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.interference import HIT_NAMES
-from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, chunk_poses, positions3
-from cdpr_design.workspaces.hardware import Evaluator, chunk_stats, kind_counts
+from cdpr_design.statics.robot import Robot
+from cdpr_design.workspaces.grid import Rows
+from cdpr_design.workspaces.hardware import Evaluator, kind_counts
+from cdpr_design.workspaces.parts import Base
 
 #: Default total-orientation set: nominal +- 10 deg about the last rotation coordinate, 5 samples.
 DEFAULT_SET_HALF = math.radians(10.0)
@@ -139,24 +139,14 @@ def range_levels(design: Design, max_=None, levels=None, count=None):
     return scale, levels, count, sets
 
 
-def sweep_orientations(design: Design, mode: str, kind: str, g, nominal, *, orientations=None,
-                       on_chunk=None, progress=None, chunk: int = CHUNK, keep_maps: bool = True,
-                       interference: bool = False):
-    """Total orientation workspace (``mode='total'``) or orientation range per position (``'range'``).
+class OrientationSweep(Base):
+    """The base evaluator of the orientation workspaces (the analysis's ``orientations``:
+    ``total`` or ``range``) about the nominal orientation ``nominal`` (3,) [rad].
 
-    Parameters
-    ----------
-    mode : {'total', 'range'}
-    orientations : (q, 3) array, optional
-        ``total``: the orientation set (rx, ry, rz) [rad]; default
-        :func:`orientation_set`.
-    nominal : (3,) nominal orientation [rad]:
-        the orientation of the reported poses, lengths and (``range``) the
-        centre of the range boxes.
-    interference : bool
-        Intersect every orientation's feasibility with its interference check.
+    ``orientations`` (q, 3) [rad]: the ``total`` mode's set (default :func:`orientation_set`);
+    every orientation is evaluated with pulleys and (the analysis's ``collisions``) interference.
 
-    CSV chunks (``on_chunk``): the contract columns at the nominal pose, with
+    Table rows (the contract columns at the nominal pose):
 
     - ``total``: ``feasible`` = feasible for every orientation of the set,
       ``margin`` = least capacity margin over the set, ``tension_<c>`` =
@@ -174,48 +164,49 @@ def sweep_orientations(design: Design, mode: str, kind: str, g, nominal, *, orie
       ``collision_free``, ``feasible_statics`` and ``collisions_by_kind``
       count the nominal orientation's poses.
 
-    Returns a :class:`~cdpr_design.workspaces.grid.WorkspaceResult` whose maps are
-    those of the swept workspace, with ``orientation_maps`` (an
-    :class:`OrientationMaps`) set and summary extras ``orientation_mode``,
-    ``orientation_count`` and (range) ``mean_range``, ``range_levels``.
+    The result gets ``orientation_maps`` (an :class:`OrientationMaps`) and summary extras
+    ``orientation_mode``, ``orientation_count`` and (range) ``mean_range``, ``range_levels``.
+    (Orientation workspaces: Pott 2018, ch. 6; Gouttefarde, Merlet & Daney, ICRA 2007.)
     """
 
-    if mode not in ("total", "range"):
-        raise SpecError([("--orientations", f"expected total or range, got {mode!r}")])
-    t0 = time.perf_counter()
-    ev = Evaluator(design, kind, interference)
-    rot_names = design.motion.rotation_coords
-    if mode == "total":
-        oset = orientation_set(design) if orientations is None else np.atleast_2d(np.asarray(orientations, float))
-        level_sets, scale = None, np.zeros(len(rot_names))
-    else:
-        scale, _, _, level_sets = range_levels(design)
-        oset = level_sets[-1]
-    tally = _Tally(interference)
-    total = g.size
-    chunk = max(1, min(chunk, total))
-    maps = Maps(g, design.m, keep_maps, extra_maps=("value",))
-    done = 0
-    while done < total:
-        cnt = min(chunk, total - done)
-        P = positions3(g, done, cnt)
-        if mode == "total":
-            rows = _total_rows(ev, P, nominal, oset, tally, lengths=on_chunk is not None)
+    maps = ("value",)
+    pictures = ("orientation_workspace.png",)
+
+    def __init__(self, robot: Robot, nominal: np.ndarray, orientations=None):
+        design = self.design = robot.design
+        self.robot, self.kind, self.nominal = robot, robot.kind, nominal
+        self.mode = robot.analysis.orientations
+        self.interference = robot.analysis.collisions
+        self.ev = Evaluator(robot)
+        self.rot_names = design.motion.rotation_coords
+        if self.mode == "total":
+            self.oset = orientation_set(design) if orientations is None else np.atleast_2d(
+                np.asarray(orientations, float))
+            self.level_sets, self.scale = None, np.zeros(len(self.rot_names))
         else:
-            rows = _range_rows(ev, P, nominal, level_sets, scale, rot_names, tally)
-        feas, marg, ten, L, cfree, value, extra_cols = rows
-        maps.add(done, chunk_stats(feas, marg, ten, maps.tpeak), feas, marg, ten,
-                 {"value": np.asarray(value, float)})
-        if on_chunk is not None:
-            on_chunk(Chunk(done, chunk_poses(design, P, nominal), feas, marg, ten, L,
-                           collision_free=cfree, extra=extra_cols))
-        done += cnt
-        if progress is not None:
-            progress(done, total)
-    extra = _summary_extra(design, mode, oset, level_sets, scale, tally, interference)
-    res = maps.result(design, kind, nominal, t0, extra)
-    res.orientation_maps = OrientationMaps(mode, maps.xmaps["value"], oset, scale)
-    return res
+            self.scale, _, _, self.level_sets = range_levels(design)
+            self.oset = self.level_sets[-1]
+        self.tally = _Tally(self.interference)
+        cols = ["collision_free"] if self.interference else []
+        cols += ["orientations_feasible"] if self.mode == "total" else [f"range_{c}" for c in self.rot_names]
+        self.columns = tuple(cols)
+
+    def rows(self, start: int, P: np.ndarray) -> Rows:
+        if self.mode == "total":
+            r = _total_rows(self.ev, P, self.nominal, self.oset, self.tally)
+        else:
+            r = _range_rows(self.ev, P, self.nominal, self.level_sets, self.scale, self.rot_names, self.tally)
+        feas, marg, ten, L, cfree, value, extra = r
+        if cfree is not None:
+            extra = {"collision_free": cfree, **extra}
+        return Rows(feas, marg, ten, L, extra, {"value": np.asarray(value, float)})
+
+    def summary(self, maps) -> dict:
+        return _summary_extra(self.design, self.mode, self.oset, self.level_sets, self.scale, self.tally,
+                              self.interference, self.robot.outlets == "pulleys")
+
+    def finish(self, result, maps) -> None:
+        result.orientation_maps = OrientationMaps(self.mode, maps.xmaps["value"], self.oset, self.scale)
 
 
 @dataclass
@@ -231,10 +222,10 @@ class _Tally:
     by_kind: dict = field(default_factory=lambda: {name: 0 for name in HIT_NAMES.values()})
 
 
-def _total_rows(ev: Evaluator, P, nominal, oset, tally: _Tally, lengths: bool):
+def _total_rows(ev: Evaluator, P, nominal, oset, tally: _Tally):
     """One chunk of the total orientation workspace: feasible at every orientation of ``oset``."""
     cnt, m = P.shape[0], ev.design.m
-    L = ev(P, nominal)[3] if lengths else None
+    L = ev(P, nominal)[3]
     allok = np.ones(cnt, dtype=bool)
     nok = np.zeros(cnt, dtype=np.int64)
     cfree_all = np.ones(cnt, dtype=bool)
@@ -303,11 +294,11 @@ def _range_rows(ev: Evaluator, P, nominal, level_sets, scale, rot_names, tally: 
     return feas, marg, ten, L, cfree, best, extra_cols
 
 
-def _summary_extra(design, mode, oset, level_sets, scale, tally: _Tally, interference: bool) -> dict:
+def _summary_extra(design, mode, oset, level_sets, scale, tally: _Tally, interference: bool, pulleys: bool) -> dict:
     """The summary extras of an orientation sweep (``orientation_mode``, counts, set or range)."""
     rot_names = design.motion.rotation_coords
     extra = {"orientation_mode": mode, "orientation_count": int(len(oset)),
-             "orientations_evaluated": int(tally.evaluated), "pulleys": bool(kin.has_pulleys(design)),
+             "orientations_evaluated": int(tally.evaluated), "pulleys": pulleys,
              "interference": bool(interference)}
     if interference:
         # total: over the whole set (collision free / statics feasible at every

@@ -16,7 +16,7 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.io.tables import Table
 from cdpr_design.model.design import Design
-from cdpr_design.workspaces.grid import Chunk, WorkspaceResult, chunk_extra, column_names, make_grid
+from cdpr_design.workspaces.grid import Chunk, WorkspaceResult, column_names, make_grid
 
 #: Default largest grid :func:`collect` keeps in memory (poses).
 MAX_COLLECT = 5_000_000
@@ -94,7 +94,7 @@ def collect(design: Design, kind: str = "static", *, step: float | None = None, 
         res = ws.run_orientations(design, mode, kind, grid=g, on_chunk=chunks.append, **options)
     else:
         res = ws.run(design, kind, grid=g, on_chunk=chunks.append, **options)
-    extra_names = list(chunk_extra(chunks[0])) if chunks else []
+    extra_names = list(chunks[0].extra) if chunks else []
     return WorkspaceTable(
         design=design,
         poses=np.concatenate([c.poses for c in chunks]),
@@ -103,5 +103,5 @@ def collect(design: Design, kind: str = "static", *, step: float | None = None, 
         tensions=np.concatenate([c.tensions for c in chunks]),
         lengths=np.concatenate([c.lengths for c in chunks]),
         result=res,
-        extra={k: np.concatenate([chunk_extra(c)[k] for c in chunks]) for k in extra_names},
+        extra={k: np.concatenate([c.extra[k] for c in chunks]) for k in extra_names},
     )

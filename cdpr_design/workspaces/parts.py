@@ -1,0 +1,52 @@
+"""The parts a sweep plan is made of (:mod:`cdpr_design.workspaces.plan`): base evaluators,
+which compute the rows of a chunk of grid positions, and wrappers, which add columns to them.
+Each declares what it adds to the table, the maps, the pictures and the summary."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cdpr_design.workspaces.grid import Maps, Rows, WorkspaceResult
+
+
+class Part:
+    """A part of a sweep plan: what it adds to the table, the maps, the pictures and the summary.
+
+    ``columns`` extra table columns (in order), ``maps`` extra maps kept beside the
+    feasibility map (name -> float32 map), ``pictures`` the picture files it draws.
+    """
+
+    columns: tuple[str, ...] = ()
+    maps: tuple[str, ...] = ()
+    pictures: tuple[str, ...] = ()
+
+    def summary(self, maps: Maps) -> dict:
+        """The summary keys this part adds, after the sweep (``maps``: its streaming figures)."""
+        return {}
+
+    def finish(self, result: WorkspaceResult, maps: Maps) -> None:
+        """Attach what this part keeps for the pictures to ``result``."""
+
+
+class Base(Part):
+    """A base evaluator: the rows of chunks of grid positions; ``kind`` the result's kind."""
+
+    kind: str = "static"
+
+    def rows(self, start: int, P: np.ndarray) -> Rows:
+        """The rows of grid positions ``start .. start + len(P)`` at ``P`` (k, 3) [m]."""
+        raise NotImplementedError
+
+    def stats(self, r: Rows, tpeak: np.ndarray) -> tuple:
+        """(feasible count, least margin [N], largest margin [N]) of ``r``; raises ``tpeak`` [N]."""
+        from cdpr_design import kernels as K
+
+        return K.chunk_stats(np.ascontiguousarray(r.feasible), np.ascontiguousarray(r.margin),
+                             np.ascontiguousarray(r.tensions), r.feasible.shape[0], tpeak)
+
+
+class Wrapper(Part):
+    """A wrapper: adds its declared columns (and maps) to a base evaluator's rows."""
+
+    def add(self, r: Rows, start: int, P: np.ndarray) -> None:
+        raise NotImplementedError

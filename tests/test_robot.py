@@ -1,0 +1,130 @@
+"""The resolved robot (statics/robot.py): its strategies, and the one table of refusals.
+
+Every row of REFUSALS is reached here through ``resolve`` with a design and an analysis that
+trigger it and no earlier row, and the message is the row's (the option named first).  The
+commands' exit status and wording for these combinations are checked by the combination matrix
+(tests/test_combinations.py) and the commands' own tests."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from cdpr_design.errors import InputError, SpecError
+from cdpr_design.model import spec
+from cdpr_design.model.design import Pulley
+from cdpr_design.statics import robot as R
+from cdpr_design.statics.robot import Analysis, resolve
+
+from .helpers import DESIGNS, PLANAR2
+
+
+def _with(d, *, model=None, pulleys=False, orientation=None, mass=None):
+    if model is not None:
+        d = spec.with_cable_model(d, model)
+    if pulleys:
+        d = d.replace(cables=tuple(dataclasses.replace(c, pulley=Pulley(0.05)) for c in d.cables))
+    if orientation is not None or mass is not None:
+        eff = d.effector
+        eff = dataclasses.replace(eff, orientation=orientation or eff.orientation,
+                                  mass=eff.mass if mass is None else mass)
+        d = d.replace(effector=eff)
+    return d
+
+
+@pytest.fixture(scope="module")
+def planar2():
+    return spec.load(PLANAR2)
+
+
+@pytest.fixture(scope="module")
+def ipanema3():
+    return spec.load(DESIGNS / "ipanema3.yaml")
+
+
+@pytest.fixture(scope="module")
+def cogiro():
+    return spec.load(DESIGNS / "cogiro.yaml")
+
+
+def test_strategies_of_the_shipped_designs(planar2, ipanema3):
+    """planar2 is under-constrained and held (its tilt reported beside), ideal, from points;
+    IPAnema 3 fully constrained; the arrays are the design's, built once."""
+    r = resolve(planar2)
+    assert (r.cables, r.outlets, r.orientation, r.underconstrained) == ("ideal", "points", "held", True)
+    assert r.engine == "numpy" and r.tilt_limit is None
+    np.testing.assert_array_equal(r.outlet_points, planar2.outlets)
+    np.testing.assert_array_equal(r.tension_max, planar2.tension_max)
+    assert r.combos.shape == (2, 1)
+    r = resolve(ipanema3)
+    assert (r.cables, r.outlets, r.orientation, r.underconstrained) == ("ideal", "points", "commanded", False)
+    assert r.engine == "numba"
+    assert resolve(_with(planar2, orientation="free"), max_tilt=10.0).tilt_limit == 10.0
+    assert resolve(_with(planar2, orientation="free")).orientation == "hanging"
+    # a held effector needs a weight, ideal cables and point outlets to hang: else commanded
+    assert resolve(_with(planar2, mass=0.0)).orientation == "commanded"
+    assert resolve(_with(planar2, model="elastic")).orientation == "commanded"
+    assert resolve(_with(planar2, pulleys=True)).outlets == "pulleys"
+
+
+def _cases(planar2, ipanema3, cogiro):
+    """(row's option and reason start, design, analysis) for every row of the table."""
+    free = _with(planar2, orientation="free")
+    return [
+        ("engine: expected one of", planar2, Analysis(engine="fortran")),
+        ("--orientations: expected total or range", ipanema3, Analysis(orientations="half")),
+        ("--cable-model: cable model 'sagging' assumes point outlets", _with(planar2, model="sagging", pulleys=True),
+         Analysis()),
+        ("--collisions: cable model 'sagging'", _with(planar2, model="sagging"), Analysis(collisions=True)),
+        ("--orientations: cable model 'sagging'", _with(cogiro, model="sagging"), Analysis(orientations="total")),
+        ("effector.orientation: free: the hanging solver models point outlets", _with(free, pulleys=True), Analysis()),
+        ("--cable-model: an effector with effector.orientation: free", _with(free, model="elastic"), Analysis()),
+        ("--orientations: an under-constrained design with effector.orientation: free", free,
+         Analysis(orientations="total")),
+        ("--orientations: this motion has a fixed orientation", planar2, Analysis(orientations="range")),
+        ("--kind wrench-feasible: an under-constrained design", free, Analysis(kind="wrench-feasible")),
+        ("--collisions: an under-constrained design", free, Analysis(collisions=True)),
+        ("--max-tilt: a tilt limit applies", planar2, Analysis(max_tilt=5.0)),
+        ("--max-tilt: expected an angle", free, Analysis(max_tilt=200.0)),
+        ("--weights: a hanging effector's tensions are unique", free, Analysis(command="pose", weights=True)),
+        ("--objective: a hanging effector's tensions are unique", free, Analysis(command="pose", objective="min-max")),
+        ("fk: the forward kinematics of elastic and sagging cables takes point outlets",
+         _with(cogiro, model="elastic", pulleys=True), Analysis(command="fk")),
+        ("engine=numpy: the numpy engine covers two cables", ipanema3, Analysis(engine="numpy")),
+        ("certify: cable model 'sagging'", _with(cogiro, model="sagging"), Analysis(command="certify")),
+        ("certify: swivel pulleys", _with(ipanema3, pulleys=True), Analysis(command="certify")),
+        ("certify: effector.orientation: free", free, Analysis(command="certify")),
+    ]
+
+
+def test_every_row_of_the_table_is_reached_with_its_reason(planar2, ipanema3, cogiro):
+    cases = _cases(planar2, ipanema3, cogiro)
+    assert len(cases) == len(R.REFUSALS)  # a new row needs its case here
+    reached = set()
+    for start, design, analysis in cases:
+        with pytest.raises(InputError) as err:
+            resolve(design, analysis)
+        msg = str(err.value)
+        assert msg.startswith(start), (start, msg)
+        row = R.refusal(R.facts(design), analysis)
+        assert row is not None and msg == row.message(analysis)
+        reached.add(id(row))
+    assert len(reached) == len(R.REFUSALS)  # each case reaches its own row
+
+
+def test_an_unknown_kind_names_the_option(planar2):
+    with pytest.raises(SpecError, match="--kind"):
+        resolve(planar2, Analysis(kind="dynamic"))
+
+
+def test_what_the_table_allows_resolves(planar2, cogiro):
+    """Combinations the table does not refuse resolve (the matrix test computes them)."""
+    for model in R.CABLE_MODELS:
+        for kind in R.KINDS:
+            resolve(_with(cogiro, model=model), Analysis(kind=kind))
+            resolve(_with(planar2, model=model), Analysis(kind=kind))
+    resolve(_with(cogiro, model="elastic"), Analysis(orientations="total", collisions=True))
+    resolve(_with(planar2, orientation="free"), Analysis(command="fk"))
+    resolve(_with(planar2, orientation="free", model="sagging"), Analysis(command="fk"))
