@@ -21,8 +21,8 @@ For IPAnema 3 on a fine grid and for planar2, all in one run on this machine:
    imports matplotlib);
 4. the CSV writer alone on the IPAnema 3 rows: the previous one (printf per
    row, as ``io.tables.format_block`` was) against both paths of
-   :func:`cdpr_design.io.csvtext.csv_rows`, the vectorised numpy one and the
-   compiled one of :mod:`cdpr_design.io.csvfast` (warm, and its first call in the
+   the vectorised numpy formatter (:func:`cdpr_design.io.csvtext.numpy_rows`) and the
+   compiled one (:func:`cdpr_design.io.csvfast.numba_rows`) (warm, and its first call in the
    process with numba's cache warm).
 
 Ratios are LP time for the grid / measured time, in wall-clock time and in CPU

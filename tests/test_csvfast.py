@@ -5,15 +5,13 @@ small arrays: the kernel is then plain Python)."""
 
 from __future__ import annotations
 
-import sys
-
 import numba
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cdpr_design.io import csvfast, csvtext
+from cdpr_design.io.columns import ColumnWriter
 from cdpr_design.io.csvfast import numba_rows
 from cdpr_design.io.csvtext import numpy_rows
 
@@ -119,38 +117,20 @@ def test_hypothesis_rows(rows):
     check([a, b, i.astype(np.int64), t.astype(bool)])
 
 
-def test_the_kernel_formats_ordinary_numbers_itself():
-    """Python gets only the rare cells (near ties; |v| outside 1e-34..1e53): the compiled path is taken."""
-    rng = np.random.default_rng(7)
-    n = N
-    x = (rng.normal(size=n) * 10.0 ** rng.uniform(-30, 50, n)).reshape(n, 1)
-    out = np.empty(csvfast.CELL_MAX * n, dtype=np.uint8)
-    slow = np.empty((n, 2), dtype=np.int64)
-
-    def left(v, is_int):
-        return csvfast.format_rows(v, v.view(np.int64), np.array([is_int], np.uint8), out, slow, *csvfast._TABLES,
-                                   *csvtext._FLOAT_RANGE, 1e10, csvtext._TIE)[1]
-
-    assert left(x, 0) < max(10, n // 5000)  # ~ 2e-5 of the cells fall within 1e-5 of a tie
-    ints = rng.integers(-(10 ** 9), 10 ** 9, n).astype(np.float64).reshape(n, 1)
-    assert left(ints, 1) == 0
-    assert left(np.full((n, 1), 1e60), 0) == n  # beyond the exact range: every cell to Python
-
-
-def test_csv_rows_uses_the_kernel_only_where_numba_is_imported_and_compiles(monkeypatch):
-    """Where numba is imported with its JIT on, csv_rows takes the compiled path; elsewhere
-    (numba not imported, or NUMBA_DISABLE_JIT: the kernel would run interpreted, ~50x slower
-    than numpy) the numpy one."""
-    import numba
-
-    calls = []
-    monkeypatch.setattr(csvfast, "numba_rows", lambda a: calls.append("numba") or numba_rows(a))
-    monkeypatch.setattr(csvtext, "numpy_rows", lambda a: calls.append("numpy") or numpy_rows(a))
-    cols = [np.array([1.5, -0.0]), np.array([3, 4])]
-    monkeypatch.setattr(numba.config, "DISABLE_JIT", False)
-    assert csvtext.csv_rows(cols) == b"1.5,3\n0,4\n"
-    monkeypatch.setattr(numba.config, "DISABLE_JIT", True)
-    assert csvtext.csv_rows(cols) == b"1.5,3\n0,4\n"
-    monkeypatch.delitem(sys.modules, "numba")
-    assert csvtext.csv_rows(cols) == b"1.5,3\n0,4\n"
-    assert calls == ["numba", "numpy", "numpy"]
+@pytest.mark.parametrize("fmt_", ["csv", "parquet"])
+def test_the_writer_gives_the_same_file_compiled_or_not(tmp_path, fmt_):
+    """ColumnWriter's ``compiled`` changes the speed, never the file: compiled, vectorised and
+    the default (whichever is already loaded) write the same bytes, chunk after chunk."""
+    rng = np.random.default_rng(9)
+    chunks = [random_columns(rng, 300) for _ in range(3)]
+    files = {}
+    for compiled in (True, False, None):
+        path = tmp_path / f"{compiled}.{fmt_}"
+        with ColumnWriter(path, fmt_, compiled=compiled) as w:
+            for cols in chunks:
+                w.write({f"c{j}": c for j, c in enumerate(cols)})
+        files[compiled] = path.read_bytes()
+    assert files[True] == files[False] == files[None]
+    if fmt_ == "csv":
+        body = files[True].split(b"\n", 1)[1]
+        assert body.decode() == "".join(reference_text(cols) for cols in chunks)

@@ -228,13 +228,13 @@ def test_the_picture_shows_convergence_or_the_front_and_importances(planar2):
     in colour, dominated complete trials grey, infeasible ones apart; importances only when given."""
     from matplotlib.colors import to_rgb
 
-    from cdpr_design.jobs.optimize import _picture_data
+    from cdpr_design.jobs.optimize import picture_data
     from cdpr_design.plots.optimize import optimize_figure
 
     pb = _fake_problem(planar2, (True,))
     rows = [opt.Trial(0, "failed", {}, None), opt.Trial(1, "complete", {}, [2.0]), opt.Trial(2, "infeasible", {},
             [9.0]), opt.Trial(3, "complete", {}, [1.0]), opt.Trial(4, "complete", {}, [4.0])]
-    fig = optimize_figure(_picture_data(planar2, pb, rows, opt.best(pb, rows), [], {}))
+    fig = optimize_figure(picture_data(planar2, pb, rows, opt.best(pb, rows), [], {}))
     assert len(fig.axes) == 1  # no importances: no second panel
     lines = _drawn(fig.axes[0])
     assert lines["best so far"][:2] == ([1, 2, 3, 4], [2.0, 2.0, 2.0, 4.0])
@@ -247,7 +247,7 @@ def test_the_picture_shows_convergence_or_the_front_and_importances(planar2):
             opt.Trial(4, "failed", {}, None), opt.Trial(5, "complete", {}, [0.5, 1.5])]
     front = opt.pareto(pb, rows)
     imp = {"task_min_margin": {"effector.mass": 1.0}, "peak_motor_torque": {"effector.mass": 1.0}}
-    fig = optimize_figure(_picture_data(planar2, pb, rows, opt.best(pb, rows), front, imp))
+    fig = optimize_figure(picture_data(planar2, pb, rows, opt.best(pb, rows), front, imp))
     assert len(fig.axes) == 2 and fig.axes[1].get_title() == "which keys matter"
     lines = _drawn(fig.axes[0])
     assert sorted(zip(*lines["Pareto front"][:2])) == [(1.0, 1.0), (2.0, 2.0)]

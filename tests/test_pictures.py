@@ -6,6 +6,7 @@ import os
 import pickle
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -107,7 +108,14 @@ def test_disabled_by_environment(monkeypatch):
     assert pw.PictureWorker(enabled=env.picture_worker_enabled()).proc is None
 
 
+def _children() -> set[int]:
+    """The process ids of this process's children (Linux's /proc)."""
+    return {int(pid) for f in Path("/proc/self/task").glob("*/children") for pid in f.read_text().split()}
+
+
 def test_prestart_take_discard(monkeypatch):
+    """A picture command's worker is started before the command line is read (prestart), handed
+    over once (take), and stopped -- its process gone -- when no command takes it (discard)."""
     assert pw.wanted(["workspace", "designs/planar2.yaml"])
     assert pw.wanted(["report", "x.yaml", "--json"])
     assert not pw.wanted(["workspace", "x.yaml", "--help"])
@@ -115,17 +123,20 @@ def test_prestart_take_discard(monkeypatch):
     assert not pw.wanted([])
     monkeypatch.delitem(sys.modules, "matplotlib.pyplot", raising=False)
     monkeypatch.delenv("CDPR_DESIGN_PICTURE_WORKER", raising=False)
+    before = _children()
     pw.prestart()
-    started = pw._prestarted
-    assert started is not None and started.proc is not None
+    started = pw.take()
+    assert started.proc is not None and started.proc.poll() is None  # the prestarted child, running
+    assert pw.take(enabled=False) is not started  # handed over once: the next take makes a new one
     proc = started.proc
-    assert pw.take() is started and pw._prestarted is None
     started.close(kill=True)
     assert proc.poll() is not None
+    linux = Path("/proc/self/task").is_dir()
     pw.prestart()
-    proc = pw._prestarted.proc
+    assert not linux or _children() - before  # a child is running
     pw.discard()
-    assert pw._prestarted is None and proc.poll() is not None
+    assert pw.take(enabled=False).proc is None  # nothing prestarted is left to take
+    assert not linux or not _children() - before  # and its process is gone
 
 
 @pytest.mark.slow
@@ -207,26 +218,31 @@ def test_a_forked_child_let_go_of_is_reaped():
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="it forks for real once the conditions hold")
-def test_a_copy_is_made_only_where_it_is_safe(monkeypatch):
-    """No fork with another thread running, with numba loaded, beside another live child, or
-    off Linux; the worker then starts a new interpreter (``fork=None``, the default)."""
-    import threading
-
-    monkeypatch.delitem(sys.modules, "numba", raising=False)
-    monkeypatch.setattr(threading, "active_count", lambda: 1)
-    monkeypatch.setattr(sys, "platform", "linux")
-    assert pw.can_fork()
-    with pw.PictureWorker(force=True) as first:
-        assert isinstance(first.proc, pw.ForkedChild)
-        assert not pw.can_fork()  # its request pipe would stay open in a second copy
-        with pw.PictureWorker(force=True) as second:
-            assert isinstance(second.proc, subprocess.Popen)
-    assert pw.can_fork()
-    monkeypatch.setattr(threading, "active_count", lambda: 2)
-    assert not pw.can_fork()
-    monkeypatch.setattr(threading, "active_count", lambda: 1)
-    monkeypatch.setitem(sys.modules, "numba", object())
-    assert not pw.can_fork()
-    monkeypatch.delitem(sys.modules, "numba")
-    monkeypatch.setattr(sys, "platform", "darwin")
-    assert not pw.can_fork()
+def test_a_copy_is_made_only_where_it_is_safe():
+    """No fork with another thread running, with numba loaded, or beside another live child; the
+    worker then starts a new interpreter (``fork=None``, the default).  In a fresh process, where
+    each condition is made for real (a thread started, numba imported), nothing patched."""
+    code = """if True:
+        import subprocess, threading
+        from cdpr_design.plots import worker as pw
+        out = [pw.can_fork()]
+        with pw.PictureWorker(force=True) as first:
+            out += [isinstance(first.proc, pw.ForkedChild), pw.can_fork()]
+            with pw.PictureWorker(force=True) as second:  # the first's request pipe: no second copy
+                out.append(isinstance(second.proc, subprocess.Popen))
+        out.append(pw.can_fork())
+        stop = threading.Event()
+        t = threading.Thread(target=stop.wait)
+        t.start()
+        out.append(pw.can_fork())
+        stop.set()
+        t.join()
+        out.append(pw.can_fork())
+        import numba
+        out.append(pw.can_fork())
+        print(out)
+    """
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=300,
+                       env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert r.stdout.split("\n")[-2] == str([True, True, False, True, True, False, True, False])

@@ -249,7 +249,7 @@ def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
     from cdpr_design import workspaces as ws
     from cdpr_design.model import spec
     from cdpr_design.plots import workspace as wsplots
-    from cdpr_design.plots._style import pyplot
+    import matplotlib.pyplot as plt
     from cdpr_design.plots.hanging import tilt_figure
 
     d = spec.load(DESIGNS / f"{design}.yaml")
@@ -273,7 +273,7 @@ def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
         filled = sum(y1 - y0 for y0, y1 in rows)
         assert filled > 0.6, (fig.get_suptitle(), filled)
         _assert_inside(fig)
-        pyplot().close(fig)
+        plt.close(fig)
 
 
 def _assert_inside(fig) -> None:
@@ -295,14 +295,14 @@ def test_the_cable_model_picture_lies_inside_its_figure(design, step):
     from cdpr_design import workspaces as ws
     from cdpr_design.jobs.workspace import cable_model_picture
     from cdpr_design.model import spec
-    from cdpr_design.plots._style import pyplot
+    import matplotlib.pyplot as plt
 
     r = ws.run(spec.with_cable_model(spec.load(DESIGNS / f"{design}.yaml"), "sagging"), step=step)
     name, builder, args = cable_model_picture(r)
     fig = builder(*args)
     fig.canvas.draw()
     _assert_inside(fig)
-    pyplot().close(fig)
+    plt.close(fig)
 
 
 @pytest.mark.slow
@@ -314,7 +314,7 @@ def test_a_spatial_grid_of_one_z_level_keeps_its_titles_inside(design):
     from cdpr_design.jobs.workspace import cable_model_picture
     from cdpr_design.model import spec
     from cdpr_design.plots import workspace as wsplots
-    from cdpr_design.plots._style import pyplot
+    import matplotlib.pyplot as plt
     from cdpr_design.plots.hanging import tilt_figure
     from cdpr_design.model.design import Grid
 
@@ -334,7 +334,7 @@ def test_a_spatial_grid_of_one_z_level_keeps_its_titles_inside(design):
         fig.canvas.draw()
         _assert_inside(fig)
         assert fig.get_suptitle()
-        pyplot().close(fig)
+        plt.close(fig)
 
 
 def test_fit_width_measures_what_reaches_furthest():
@@ -345,7 +345,7 @@ def test_fit_width_measures_what_reaches_furthest():
     from cdpr_design import workspaces as ws
     from cdpr_design.model import spec
     from cdpr_design.plots import workspace as wsplots
-    from cdpr_design.plots._style import pyplot
+    import matplotlib.pyplot as plt
 
     r = ws.run(spec.load(DESIGNS / "ipanema3.yaml"), step=0.5)
     for fig in (wsplots.tension_figure(r), wsplots.workspace_figure(r)):
@@ -359,7 +359,7 @@ def test_fit_width_measures_what_reaches_furthest():
         whole = cax.get_tightbbox(renderer).x1
         assert whole == pytest.approx(max(cax.yaxis.get_tightbbox(renderer).x1,
                                           cax.get_window_extent(renderer).x1), abs=1e-9)
-        pyplot().close(fig)
+        plt.close(fig)
 
 
 def test_a_colour_bar_with_long_tick_labels_widens_its_figure():
@@ -367,7 +367,7 @@ def test_a_colour_bar_with_long_tick_labels_widens_its_figure():
     from cdpr_design import workspaces as ws
     from cdpr_design.model import spec
     from cdpr_design.plots import workspace as wsplots
-    from cdpr_design.plots._style import pyplot
+    import matplotlib.pyplot as plt
 
     r = ws.run(spec.load(DESIGNS / "planar2.yaml"), step=0.05)
     fig = wsplots.tension_figure(r)
@@ -382,8 +382,8 @@ def test_a_colour_bar_with_long_tick_labels_widens_its_figure():
     assert big.get_figwidth() > width + 0.2
     # the panels keep their size in inches
     assert [ax.get_position().width * big.get_figwidth() for ax in big.axes[:-1]] == pytest.approx(panels)
-    pyplot().close(fig)
-    pyplot().close(big)
+    plt.close(fig)
+    plt.close(big)
 
 
 def test_submitted_pictures_are_drawn_while_the_caller_works():

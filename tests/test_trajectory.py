@@ -323,16 +323,19 @@ def test_redundant_robot_min_norm_tensions_against_cvxpy():
         np.testing.assert_allclose(w, w_req, atol=1e-8)
 
 
-def test_summary_tension_extremes_skip_nan_samples_without_a_warning():
-    """A cable whose every sample is infeasible (NaN tension) has no extreme (None), and the
-    summary says so without numpy's all-NaN RuntimeWarning (which np.nanmax gave)."""
+def test_summary_tension_extremes_skip_nan_samples_without_a_warning(planar2):
+    """A cable whose every sample is infeasible (NaN tension) has no extreme (None) in the
+    trajectory's summary, and the summary says so without numpy's all-NaN RuntimeWarning (which
+    np.nanmax gave); the other cable's extremes skip its NaN samples."""
+    import dataclasses
     import warnings
 
-    from cdpr_design.motion.trajectory import _column_extreme
-
-    T = np.array([[1.0, np.nan], [3.0, np.nan], [np.nan, np.nan]])
+    s = tr.sample(planar2, "square_slow")
+    T = np.full_like(s.tensions, np.nan)
+    T[:3, 0] = [1.0, 3.0, np.nan]
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert _column_extreme(T, ["a", "b"], np.max) == {"a": 3.0, "b": None}
-        assert _column_extreme(T, ["a", "b"], np.min) == {"a": 1.0, "b": None}
-        assert _column_extreme(np.empty((0, 2)), ["a", "b"], np.max) == {"a": None, "b": None}
+        summary = dataclasses.replace(s, tensions=T).summary()
+        a, b = s.cable_names
+        assert summary["max_tension"] == {a: 3.0, b: None}
+        assert summary["min_tension"] == {a: 1.0, b: None}

@@ -279,30 +279,46 @@ def test_engine_variable_is_read_by_the_command_line(tmp_path, monkeypatch):
 
 
 def test_kernel_codes_match():
-    """workspace keeps copies of kernel constants so that it need not import numba."""
+    """workspace keeps copies of kernel constants so that it need not import numba (the numpy
+    engine's rank tolerance is held to the kernels' by the sweeps agreeing at degenerate poses,
+    test_numpy_engine_degenerate_poses)."""
     from cdpr_design.statics.robot import KINDS
 
     assert KINDS == {"static": K.KIND_STATIC, "wrench-feasible": K.KIND_WRENCH_FEASIBLE,
                         "wrench-closure": K.KIND_WRENCH_CLOSURE}
-    assert eng._RANK_TOL == K.RANK_TOL
+
+
+def _loaded(stderr: str) -> set[str]:
+    """The modules a process imported, from its ``-X importtime`` lines."""
+    return {line.rsplit("|", 1)[-1].strip() for line in stderr.splitlines() if line.startswith("import time:")}
 
 
 @pytest.mark.slow
-def test_small_planar2_sweep_does_not_load_numba():
-    """The paper's robot on its default grid is swept without numba's start-up (~1 s)."""
+def test_planar2_commands_run_without_numba(tmp_path):
+    """The paper's robot on its default grid -- ``workspace``, ``size-motors``, ``report`` -- runs
+    without numba's start-up (about 0.8 s of CPU): the user's process never imports numba; and the
+    numpy engine's workspace counts the same feasible poses as the kernels'."""
     import subprocess
     import sys
 
-    # the sweep, and the evaluation behind report / check / size-motors
-    code = ("import sys, importlib; from cdpr_design.model import spec; from cdpr_design import workspaces as ws; "
-            f"d = spec.load({str(PLANAR2)!r}); r = ws.run(d); "
-            "importlib.import_module('cdpr_design.design.evaluate').evaluate(d, catalogue=spec.load_catalogue()); "
-            "print(r.feasible, 'numba' in sys.modules, 'cdpr_design.kernels' in sys.modules)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
-                         env={**__import__("os").environ, "CDPR_DESIGN_ENGINE": ""})
-    feasible, numba_loaded, kernels_loaded = out.stdout.split()
-    assert (numba_loaded, kernels_loaded) == ("False", "False")
-    assert int(feasible) == ws.run(spec.load(PLANAR2), engine="numba").feasible
+    from .helpers import subprocess_env
+
+    env = subprocess_env(CDPR_DESIGN_ENGINE="")
+    found = {}
+    for cmd in ("workspace", "size-motors", "report"):
+        r = subprocess.run([sys.executable, "-X", "importtime", "-m", "cdpr_design", cmd, str(PLANAR2), "--json",
+                            "--quiet", "--out", str(tmp_path / cmd)], capture_output=True, text=True, env=env,
+                           timeout=600)
+        assert r.returncode == 0, r.stderr[-3000:]
+        loaded = _loaded(r.stderr)
+        assert "yaml" in loaded, cmd  # the lines were read (the spec's reader)
+        assert "numba" not in loaded, cmd
+        found[cmd] = json.loads(r.stdout)
+    r = subprocess.run([sys.executable, "-m", "cdpr_design", "workspace", str(PLANAR2), "--json", "--quiet",
+                        "--out", str(tmp_path / "numba")], capture_output=True, text=True, timeout=600,
+                       env=subprocess_env(CDPR_DESIGN_ENGINE="numba"))
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert json.loads(r.stdout)["feasible"] == found["workspace"]["feasible"] > 0
 
 
 @pytest.mark.slow

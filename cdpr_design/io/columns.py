@@ -10,9 +10,10 @@ Every table the tool writes (``workspace``, ``sweep``, motor sizing,
 CSV follows the command line's contract (docs/cli.md): one header row, ``\\n``
 line ends, numbers with 10 significant digits, integers and booleans as
 integers, NaN/None as empty cells (numeric columns are formatted by the
-vectorised or compiled :func:`~cdpr_design.io.csvtext.csv_rows`, other columns cell by
-cell with :func:`~cdpr_design.io.tables.fmt` and the ``csv`` module's
-quoting).  Parquet keeps the types -- booleans as ``bool``, integers as
+vectorised :func:`cdpr_design.io.csvtext.csv_rows` or, when the caller says so
+(``compiled``), by the compiled :func:`cdpr_design.io.csvfast.csv_rows` --
+the same bytes; other columns cell by cell with
+:func:`~cdpr_design.io.tables.fmt` and the ``csv`` module's quoting).  Parquet keeps the types -- booleans as ``bool``, integers as
 ``int64``, every other number as ``float64`` (NaN where CSV has an empty
 cell), text as strings -- writes each :meth:`ColumnWriter.write` as a row
 group (memory stays bounded whatever the table's length), and carries the
@@ -20,7 +21,7 @@ group (memory stays bounded whatever the table's length), and carries the
 version) and each column's unit (field metadata ``unit``).
 
 The file appears under its name only when :meth:`ColumnWriter.close` succeeds
-(:class:`~cdpr_design.io.files.AtomicFile`; in an output folder's ``with``
+(:class:`~cdpr_design.io.atomic.AtomicFile`; in an output folder's ``with``
 block, when the block ends); an exception inside the ``with`` block leaves
 nothing.  A write that fails (a full disk, a file-size limit) is a
 :class:`~cdpr_design.errors.WriteError` naming the file.
@@ -32,6 +33,7 @@ import csv
 import io
 import json
 import queue
+import sys
 import threading
 import time
 from pathlib import Path
@@ -40,8 +42,8 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from cdpr_design.errors import InputError, WriteError, quote
-from cdpr_design.io.csvtext import csv_rows
-from cdpr_design.io.files import AtomicFile
+from cdpr_design.io import csvtext
+from cdpr_design.io.atomic import AtomicFile
 from cdpr_design.io.tables import fmt, json_default
 
 #: Table formats: name -> file extension.
@@ -120,13 +122,20 @@ class ColumnWriter:
         pictures drawn by another process) overlaps the writing.  At most two
         chunks wait (memory stays bounded); an error in the thread is raised by
         the next :meth:`write` or by :meth:`close`.
+    compiled : format CSV numbers with the compiled formatter (:mod:`~cdpr_design.io.csvfast`,
+        numba) rather than the vectorised numpy one (:mod:`~cdpr_design.io.csvtext`): the
+        same bytes; worth it where numba is loaded anyway (a sweep on the kernels) or the
+        table is large (the figures are in :mod:`~cdpr_design.io.csvtext`).  ``None``: compiled
+        exactly when numba is already loaded in this process with its JIT on (what every
+        writer did before the choice was a parameter).
 
     ``busy_s`` is the time spent formatting and writing so far [s].
     """
 
     def __init__(self, path: str | Path, format: str = "csv", metadata: Mapping | None = None,
                  names: Sequence[str] | None = None, stage: Callable[[AtomicFile], None] | None = None,
-                 background: bool = False, before_open: Callable[[], object] | None = None):
+                 background: bool = False, before_open: Callable[[], object] | None = None,
+                 compiled: bool | None = None):
         check_format(format)
         self.path = Path(path)
         self.format = format
@@ -140,6 +149,7 @@ class ColumnWriter:
         self._parquet = None
         self._header_done = False
         self.busy_s = 0.0
+        self.compiled = numba_loaded() if compiled is None else compiled
         self._queue: queue.Queue | None = None
         self._thread: threading.Thread | None = None
         self._error: BaseException | None = None
@@ -224,7 +234,7 @@ class ColumnWriter:
         if not arrays or not len(arrays[0]):
             return
         if all(a.dtype.kind in "biuf" for a in arrays):
-            self._file.write(csv_rows(arrays))
+            self._file.write(_formatter(self.compiled).csv_rows(arrays))
             return
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
@@ -315,6 +325,20 @@ class ColumnWriter:
         else:
             self.abort()
         return False
+
+
+def numba_loaded() -> bool:
+    """numba is imported in this process with its JIT on: the compiled formatter costs no start-up."""
+    return "numba" in sys.modules and not sys.modules["numba"].config.DISABLE_JIT
+
+
+def _formatter(compiled: bool):
+    """The module whose ``csv_rows`` formats numeric CSV rows: csvfast (numba) or csvtext (numpy)."""
+    if compiled:
+        from cdpr_design.io import csvfast  # imports numba: only when asked
+
+        return csvfast
+    return csvtext
 
 
 def _parquet_writer(fh, schema):

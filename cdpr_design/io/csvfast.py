@@ -1,23 +1,23 @@
-"""CSV text of numeric columns, compiled: :func:`~cdpr_design.io.csvtext.csv_rows` in numba.
+"""CSV text of numeric columns, compiled: the cells :func:`~cdpr_design.io.tables.fmt` writes, in numba.
 
-:func:`numba_rows` gives the bytes of :func:`~cdpr_design.io.csvtext.numpy_rows`
+:func:`csv_rows` gives the bytes of :func:`cdpr_design.io.csvtext.csv_rows`
 (every cell as :func:`~cdpr_design.io.tables.fmt` writes it) by the same
 algorithm, one cell at a time in a compiled loop (``nogil``: a sweep's kernels
 run on while the background writer formats; ``cache=True``): the 10-digit
-mantissa ``m`` and exponent ``X`` from ``log10`` and at most two scalings by
-exact powers of ten, the digits from the five-digit table, the trailing zeros
-from its table, the ``e-XX`` suffixes from theirs -- the constants and tables
-of :mod:`~cdpr_design.io.csvtext`, handed to the kernel as arguments.  The
-kernel writes a block of rows into a preallocated byte buffer (at most
-:data:`CELL_MAX` bytes a cell) and lists the cells it cannot format with
-certainty (a scaled value within ``_TIE`` of a half, ``|v|`` outside
-``_FLOAT_RANGE``, integers of ten digits or more): Python formats those, as the
-numpy path does, and their text is spliced in where the kernel left room for
-nothing.
+mantissa ``m`` and exponent ``X`` from the binary exponent and at most two
+scalings by exact powers of ten, the digits from the five-digit table, the
+trailing zeros from its table, the ``e-XX`` suffixes from theirs -- the
+constants and tables of :mod:`~cdpr_design.io.csvcells`, handed to the kernel
+as arguments.  The kernel writes a block of rows into a preallocated byte
+buffer (at most :data:`CELL_MAX` bytes a cell) and lists the cells it cannot
+format with certainty (a scaled value within ``TIE`` of a half, ``|v|``
+outside ``FLOAT_RANGE``, integers of ten digits or more): Python formats
+those, as the numpy path does, and their text is spliced in where the kernel
+left room for nothing.
 
-Import this module only where numba is already imported
-(:func:`~cdpr_design.io.csvtext.csv_rows` checks ``"numba" in sys.modules``):
-importing numba costs about a second, more than a small table takes either way.
+Importing this module imports numba: a writer uses it only when the caller
+says numba is worth it (``ColumnWriter(..., compiled=True)``; see
+:mod:`~cdpr_design.io.csvtext` for the figures).
 """
 
 from __future__ import annotations
@@ -27,8 +27,9 @@ from typing import Sequence
 import numba as nb
 import numpy as np
 
-from cdpr_design.io.csvtext import (_DIGITS, _FLOAT_RANGE, _INT_LIMIT, _P10, _SUFFIX, _TIE, _TZ5, BLOCK,
-                                    _python_cell)
+from cdpr_design.io.csvcells import (BLOCK, DIGITS, FLOAT_RANGE, INT_LIMIT, P10, SUFFIX, TIE, TZ5,
+                                     numeric_columns)
+from cdpr_design.io.tables import fmt
 
 #: Bytes of the longest cell and its separator, ``-1.234567891e-308,``: also the most a cell writes.
 CELL_MAX = 18
@@ -36,7 +37,7 @@ _SUFFIX_X0 = 400  # _SUFFIX[X + 400] is the suffix of exponent X
 _TENS_X0 = -400  # tens[k + 400] ~ 10^k (inf above 10^308): the first guess of the exponent
 _TENS = np.array([float(f"1e{k}") for k in range(_TENS_X0, -_TENS_X0 + 1)])
 # the tables as int64 (every entry < 2^40): no unsigned arithmetic in the kernel
-_TABLES = (_P10, _TENS, _DIGITS.astype(np.int64), _TZ5, _SUFFIX.astype(np.int64))
+_TABLES = (P10, _TENS, DIGITS.astype(np.int64), TZ5, SUFFIX.astype(np.int64))
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 #: The cell helpers are inlined into the row loop (no call per cell).
 _INLINE = dict(_JIT, inline="always")
@@ -48,7 +49,7 @@ _NOREF = dict(_JIT, _nrt=False)
 
 @nb.njit(**_INLINE)
 def _scale(a, k, p10):
-    """a * 10^k [float64], |k| <= 44, with at most two roundings (as ``csvtext._scale``)."""
+    """a * 10^k [float64], |k| <= 44, with at most two roundings (as the numpy formatter's)."""
     k1 = min(max(k, -22), 22)
     out = a * p10[k1] if k1 >= 0 else a / p10[-k1]
     k2 = k - k1
@@ -61,7 +62,7 @@ def _scale(a, k, p10):
 
 @nb.njit(**_INLINE)
 def _round10(a, bits, p10, tens, tie):
-    """(m, X, ok) of one finite a > 0 as ``csvtext._round10``: a ~ m 10^(X - 9), m in [1e9, 1e10).
+    """(m, X, ok) of one finite a > 0 as the numpy formatter's: a ~ m 10^(X - 9), m in [1e9, 1e10).
 
     bits : the IEEE 754 bits of a (or of -a) as int64.  X starts from the binary exponent
     e2 (floor(e2 log10 2), X or X - 1), raised by one where a >= tens[X + 1 - _TENS_X0]
@@ -165,8 +166,14 @@ def format_rows(values, bits, is_int, out, slow, p10, tens, digits, tz5, suffix,
     return p, ns
 
 
+def csv_rows(columns: Sequence) -> bytes:
+    """CSV rows (``\\n`` ends, no header) of equal-length 1-D numeric columns (float, int, bool),
+    byte-identical to :func:`cdpr_design.io.csvtext.csv_rows`."""
+    return numba_rows(numeric_columns(columns)) if columns else b""
+
+
 def numba_rows(arrays: Sequence[np.ndarray], block: int = BLOCK) -> bytes:
-    """:func:`~cdpr_design.io.csvtext.csv_rows` of checked columns by :func:`format_rows`, block by block.
+    """:func:`csv_rows` of checked columns by :func:`format_rows`, block by block.
 
     The blocks' text goes into one buffer of ``CELL_MAX`` bytes a cell (its pages
     touched only as far as it is filled), joined once with the cells Python formats."""
@@ -186,11 +193,11 @@ def numba_rows(arrays: Sequence[np.ndarray], block: int = BLOCK) -> bytes:
         for j, c in enumerate(arrays):
             vals[:, j] = c[start:start + k]
         used, ns = format_rows(vals, vals.view(np.int64), is_int, out[end:], slow, *_TABLES,
-                               _FLOAT_RANGE[0], _FLOAT_RANGE[1], float(_INT_LIMIT), _TIE)
+                               FLOAT_RANGE[0], FLOAT_RANGE[1], float(INT_LIMIT), TIE)
         prev = end
         for idx, pos in slow[:ns].tolist():  # the cells left to Python, in order
             i, j = divmod(idx, ncol)
-            pieces += [view[prev:end + pos], _python_cell(arrays[j][start + i]).encode()]
+            pieces += [view[prev:end + pos], fmt(arrays[j][start + i]).encode()]
             prev = end + pos
         end += used
         pieces.append(view[prev:end])

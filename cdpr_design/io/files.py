@@ -1,7 +1,7 @@
 """Output folders and atomic files: a command's files are put in place together, or not at all.
 
 Every file is written under a temporary name in its destination folder
-(:class:`AtomicFile`), so a final name never holds a truncated file.  An
+(:class:`~cdpr_design.io.atomic.AtomicFile`), so a final name never holds a truncated file.  An
 output folder (:class:`OutputDir`) used as a context manager -- ``with out:``,
 what every command does around its writing -- keeps each finished file under
 its temporary name (*staged*) and puts them all in place when the block ends
@@ -47,13 +47,14 @@ from __future__ import annotations
 import json
 import logging
 import os
-import tempfile
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
 from cdpr_design.errors import InputError, WriteError
+from cdpr_design.io.atomic import AtomicFile, write_text_atomic
+from cdpr_design.io.columns import ColumnWriter, file_name
 from cdpr_design.io.locks import Busy, owned, signals_held
-from cdpr_design.io.preflight import check_folder, check_name, remove_stale, temp_prefix
+from cdpr_design.io.preflight import check_folder, check_name, remove_stale
 from cdpr_design.io.tables import json_text
 
 MANIFEST = ".cdpr-design-outputs"
@@ -241,24 +242,23 @@ class OutputDir:
         return self.write_columns(name, dict(zip(header, cols)), names=header)
 
     def write_columns(self, name: str, columns: dict, names: Sequence[str] | None = None,
-                      metadata: dict | None = None) -> Path:
+                      metadata: dict | None = None, compiled: bool | None = None) -> Path:
         """A table of named 1-D columns in one go, CSV or Parquet by the extension of ``name``
-        (:class:`~cdpr_design.io.columns.ColumnWriter`)."""
+        (:class:`~cdpr_design.io.columns.ColumnWriter`, ``compiled`` as there)."""
         stem, _, ext = name.rpartition(".")
-        with self.table(stem, ext, metadata=metadata, names=names if names is not None else list(columns)) as w:
+        with self.table(stem, ext, metadata=metadata, names=names if names is not None else list(columns),
+                        compiled=compiled) as w:
             if columns and len(next(iter(columns.values()))):
                 w.write(columns)
         return w.path
 
     def table(self, stem: str, format: str = "csv", metadata: dict | None = None,
-              names: Sequence[str] | None = None, background: bool = False):
+              names: Sequence[str] | None = None, background: bool = False, compiled: bool | None = None):
         """A :class:`~cdpr_design.io.columns.ColumnWriter` for ``stem.csv`` or ``stem.parquet``
-        (refused if a foreign file has that name; staged when closed)."""
-        from cdpr_design.io.columns import ColumnWriter, file_name
-
+        (refused if a foreign file has that name; staged when closed; ``compiled`` as there)."""
         name = file_name(stem, format)
         return ColumnWriter(self.target(name), format, metadata, names, stage=self._stager(name),
-                            background=background, before_open=self.ensure)
+                            background=background, before_open=self.ensure, compiled=compiled)
 
     def stream(self, name: str) -> "AtomicFile":
         """An :class:`AtomicFile` for writing ``name`` piece by piece (staged when committed)."""
@@ -301,122 +301,6 @@ class _FolderLock:
 
     def _waiting(self, holder: str | None) -> None:
         _log.warning(f"waiting for {holder or 'another process'} to finish writing {self.folder}")
-
-
-class AtomicFile:
-    """A file written under a temporary name and renamed into place on success.
-
-    Use as a context manager; on an exception (or :meth:`abort`) the
-    temporary file is removed and the final name is untouched.  ``stage``:
-    instead of renaming it, :meth:`commit` hands the finished temporary file
-    to ``stage`` (an :class:`OutputDir` puts it in place with its other files).
-    Every OSError is a :class:`~cdpr_design.errors.WriteError` naming the file.
-    """
-
-    def __init__(self, path: str | Path, binary: bool = False, on_commit: Callable[[], None] | None = None,
-                 stage: Callable[["AtomicFile"], None] | None = None):
-        self.path = Path(path)
-        self.on_commit = on_commit
-        self._stage = stage
-        # a marked name with the writer's pid: a later run removes what a killed one left (io.preflight)
-        try:
-            fd, tmp = tempfile.mkstemp(prefix=temp_prefix(self.path.name), suffix=".tmp", dir=self.path.parent)
-        except OSError as exc:
-            raise WriteError.of(self.path, exc) from None
-        self.tmp = Path(tmp)
-        self.fh = os.fdopen(fd, "wb" if binary else "w", **({} if binary else {"newline": "", "encoding": "utf-8"}))
-        self.closed = False  # the temporary file is closed (finished or dropped)
-        self.committed = False
-        self.placed = False  # renamed to its final name
-        try:
-            os.chmod(self.tmp, 0o666 & ~_umask())
-        except OSError as exc:
-            self.abort()
-            raise WriteError.of(self.path, exc) from None
-
-    def write(self, data):
-        try:
-            return self.fh.write(data)
-        except OSError as exc:
-            raise WriteError.of(self.path, exc) from None
-
-    def flush(self):
-        try:
-            self.fh.flush()
-        except OSError as exc:
-            raise WriteError.of(self.path, exc) from None
-
-    def finish(self) -> None:
-        """Flush, sync and close the temporary file: complete, not yet in place (once)."""
-        if self.closed:
-            return
-        try:
-            self.fh.flush()
-            os.fsync(self.fh.fileno())
-            self.fh.close()
-        except OSError as exc:
-            self.abort()
-            raise WriteError.of(self.path, exc) from None
-        self.closed = True
-
-    def commit(self) -> Path:
-        """Finish and rename into place, or hand to ``stage`` (once; later calls do nothing)."""
-        if self.committed:
-            return self.path
-        self.finish()
-        self.committed = True
-        if self._stage is not None:
-            self._stage(self)
-            return self.path
-        try:
-            os.replace(self.tmp, self.path)
-        except OSError as exc:
-            self.discard()
-            raise WriteError.of(self.path, exc, "replace") from None
-        self.placed = True
-        if self.on_commit:
-            self.on_commit()
-        return self.path
-
-    def abort(self) -> None:
-        """Drop the temporary file (the final name is untouched)."""
-        if not self.closed:
-            self.closed = True
-            try:
-                self.fh.close()
-            except OSError:  # its last buffer could not be written: the file is dropped anyway
-                pass
-        self.discard()
-
-    def discard(self) -> None:
-        """Remove the temporary file, unless it was put in place."""
-        if not self.placed:
-            try:
-                self.tmp.unlink(missing_ok=True)
-            except OSError:
-                pass
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, exc_type, exc, tb):
-        if exc_type is None:
-            self.commit()
-        else:
-            self.abort()
-        return False
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def write_text_atomic(path: str | Path, text: str) -> None:
-    """Write ``text`` to ``path`` through an :class:`AtomicFile`."""
-    with AtomicFile(path) as fh:
-        fh.write(text)
 
 
 # -- putting a set of files in place ---------------------------------------------

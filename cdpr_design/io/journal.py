@@ -8,7 +8,8 @@ import os
 from typing import Sequence
 
 from cdpr_design.errors import InputError, WriteError
-from cdpr_design.io.files import OutputDir, write_text_atomic
+from cdpr_design.io.atomic import write_text_atomic
+from cdpr_design.io.files import OutputDir
 from cdpr_design.io.locks import check_free, one_run
 
 

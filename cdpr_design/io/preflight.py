@@ -23,7 +23,7 @@ from cdpr_design.errors import InputError
 
 #: What only cdpr-design's temporary files carry in their names.
 TEMP_MARKER = "cdpr-design-tmp"
-#: ``.<name>.cdpr-design-tmp.<pid>.<random>.tmp``: the temporary files of :class:`cdpr_design.io.files.AtomicFile`.
+#: ``.<name>.cdpr-design-tmp.<pid>.<random>.tmp``: the temporary files of :class:`cdpr_design.io.atomic.AtomicFile`.
 _TEMP = re.compile(rf"^\..+\.{re.escape(TEMP_MARKER)}\.(\d+)\.[A-Za-z0-9_]+\.tmp$")
 
 

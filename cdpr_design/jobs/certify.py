@@ -83,7 +83,7 @@ def run_certify(design, out: OutputDir, kind: str = "static", resolution: float 
     meta = table_metadata(design, "boxes", cols, kind=kind, resolution=result.resolution,
                           orientation=[float(v) for v in design.default_orientation_full()])
     with timings.phase("write_s"):
-        writer = out.table("boxes", format, metadata=meta, names=list(cols))
+        writer = out.table("boxes", format, metadata=meta, names=list(cols), compiled=True)  # the kernels run
         try:
             writer.write(cols)
             writer.close()

@@ -63,7 +63,9 @@ def best_spec_text(design, problem, best) -> str:
     return "\n".join(head) + "\n" + yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=100)
 
 
-def _picture_data(design, problem, rows, best, front, importances) -> dict:
+def picture_data(design, problem, rows, best, front, importances) -> dict:
+    """What ``optimize.png`` shows (:func:`cdpr_design.plots.optimize.optimize_figure`'s input):
+    the trials, the best so far or the Pareto front, the importances."""
     from cdpr_design import optimize as opt
 
     return {"title": f"{design.name}: search of {', '.join(problem.space.keys)}",
@@ -92,7 +94,7 @@ def write_outputs(out: OutputDir, design, problem, rows, best, front, importance
                 paths.append(out.write_text("best.yaml", best_spec_text(design, problem, best)))
         if picture and rows:
             paths += save_pictures(out, [("optimize.png", optimize_plots.optimize_figure,
-                                          (_picture_data(design, problem, rows, best, front, importances),))],
+                                          (picture_data(design, problem, rows, best, front, importances),))],
                                    timings=timings)
     return paths
 

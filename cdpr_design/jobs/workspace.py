@@ -91,7 +91,8 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
     files = output_names(p, html)
     for name in files:
         out.target(name)  # a foreign file of that name: refused before any work
-    writer = out.table("workspace", format, metadata=meta, names=p.columns, background=True)
+    writer = out.table("workspace", format, metadata=meta, names=p.columns, background=True,
+                       compiled=p.robot.engine == "numba")  # the kernels loaded: their formatter costs no start-up
     try:
         result = _sweep(p, progress, writer, timings)
         pics = workspace_pictures(result, p.pictures) + ([("report.html", report_html, (result,))] if html else [])
