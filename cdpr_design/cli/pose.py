@@ -70,13 +70,18 @@ def pose(
             raise InputError(f"{'--weights' if weights is not None else '--objective'}: a hanging effector's "
                              "tensions are unique (they balance its weight, force and moment)")
         data = hjob.free_pose_data(design, position, kind.value)
+        stiffness = job.stiffness_data(design, reason="effector.orientation: free: the hanging effector's "
+                                                     "stiffness is not modelled")
     else:
         p = parse_pose(design, at)
         c = parse_weights(design, weights)
-        data = job.pose_data(design, evaluate_pose(design, p, kind.value, objective.value, c))
+        result = evaluate_pose(design, p, kind.value, objective.value, c)
+        data = job.pose_data(design, result)
+        stiffness = job.stiffness_data(design, p, result.tensions)
         if ideal and H.underconstrained(design) and not has_pulleys(design):
             data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     data["objective"] = objective.value
+    data.update(stiffness)
     if json_:
         emit_json(data)
         return
