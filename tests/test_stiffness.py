@@ -316,3 +316,23 @@ def test_mujoco_rings_at_the_lowest_frequency(name):
     eta = x @ (M @ s.modes[0])
     f_sim = peak_frequency(t, eta)
     assert f_sim == pytest.approx(f0, rel=1e-3), (f_sim, f0, s.frequencies)
+
+
+def test_least_eigenvalue_kernel_matches_numpy():
+    """The kernel's least eigenvalue of a symmetric n x n matrix (closed form to 2x2, Householder
+    and Newton beyond) against numpy on random matrices and on multiple and clustered spectra."""
+    from cdpr_design.kernels.stiffness import min_eig_sym
+
+    rng = np.random.default_rng(5)
+    d, e2 = np.empty(6), np.empty(6)
+    for n in range(1, 7):
+        spectra = [rng.normal(size=n) * 10 ** rng.uniform(-3, 6) for _ in range(300)]
+        spectra += [np.r_[[1.0] * min(n, 2), np.arange(n - min(n, 2)) + 2.0], np.full(n, 5.0),
+                    np.r_[1e-7, 1e-7 + 1e-12, np.linspace(3, 9, max(n - 2, 0))][:n]]
+        for lam in spectra:
+            Q = np.linalg.qr(rng.normal(size=(n, n)))[0]
+            a = Q @ np.diag(lam) @ Q.T
+            a = 0.5 * (a + a.T)
+            ref = np.linalg.eigvalsh(a)[0]
+            got = min_eig_sym(a.copy(), n, d, e2)
+            assert abs(got - ref) <= 1e-13 * np.max(np.abs(lam)), (n, lam, got, ref)

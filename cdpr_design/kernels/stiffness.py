@@ -19,8 +19,8 @@ and then
 - ``lowest_frequency`` [Hz]: sqrt(lambda_min(L^-1 K L^-T)) / (2 pi) for the mass matrix
   M = L L^T (``Linv`` = L^-1), NaN when lambda_min < 0 (an unstable equilibrium).
 
-The eigenvalues are those of cyclic Jacobi rotations on the small symmetric matrices (n <= 6), no
-allocation per pose.  A pose whose tensions are not all finite gives NaN.
+The least eigenvalues come from :func:`min_eig_sym` (closed form up to 2x2, Householder and
+bisection beyond), with no allocation per pose.  A pose whose tensions are not all finite gives NaN.
 """
 
 from __future__ import annotations
@@ -32,54 +32,85 @@ import numpy as np
 from cdpr_design.kernels._jit import njit_inline, njit_noref
 from cdpr_design.kernels.parallel import run_blocks
 
-#: Jacobi sweeps stop when the off-diagonal mass is below this fraction of the matrix's
-JACOBI_TOL = 1e-28
-JACOBI_SWEEPS = 30
+#: The least eigenvalue's Newton steps stop below this fraction of the matrix's Gershgorin norm
+EIG_TOL = 1e-15
+#: ... or after this many (a double root halves the distance per step: 1e-15 after 50)
+NEWTON_STEPS = 80
 
 
 @njit_inline
-def min_eig_sym(a, n):
-    """The least eigenvalue of the symmetric ``a[:n, :n]`` (destroyed: cyclic Jacobi rotations)."""
-    for _ in range(JACOBI_SWEEPS):
-        off = 0.0
-        tot = 0.0
-        for p in range(n):
-            tot += a[p, p] * a[p, p]
-            for q in range(p + 1, n):
-                off += a[p, q] * a[p, q]
-        if not off > JACOBI_TOL * (tot + off):
+def min_eig_sym(a, n, d, e2):
+    """The least eigenvalue of the symmetric ``a[:n, :n]`` (destroyed); ``d``, ``e2`` (>= n,) scratch.
+
+    n <= 2 in closed form; beyond, Householder reflections to a tridiagonal matrix T (diagonal ``d``,
+    squared off-diagonal ``e2``), then Newton's method on det(T - x I) (three-term recurrence) from
+    Gershgorin's lower bound, to a step of EIG_TOL times the matrix's Gershgorin norm.
+    """
+    if n == 1:
+        return a[0, 0]
+    if n == 2:
+        h = 0.5 * (a[0, 0] - a[1, 1])
+        return 0.5 * (a[0, 0] + a[1, 1]) - math.sqrt(h * h + a[0, 1] * a[0, 1])
+    for k in range(n - 2):
+        s = 0.0
+        for i in range(k + 1, n):
+            s += a[i, k] * a[i, k]
+        x0 = a[k + 1, k]
+        alpha = -math.sqrt(s) if x0 >= 0.0 else math.sqrt(s)
+        v0 = x0 - alpha  # v = x - alpha e_1, kept in a[k+1:, k]
+        beta = s - x0 * x0 + v0 * v0  # |v|^2
+        if beta > 0.0:
+            a[k + 1, k] = v0
+            vp = 0.0
+            for i in range(k + 1, n):  # p = 2 A22 v / |v|^2, in d
+                acc = 0.0
+                for j in range(k + 1, n):
+                    acc += a[i, j] * a[j, k]
+                acc *= 2.0 / beta
+                d[i] = acc
+                vp += a[i, k] * acc
+            c = vp / beta
+            for i in range(k + 1, n):  # q = p - (v.p / |v|^2) v
+                d[i] -= c * a[i, k]
+            for i in range(k + 1, n):  # A22 <- A22 - v q^T - q v^T
+                for j in range(k + 1, n):
+                    a[i, j] -= a[i, k] * d[j] + d[i] * a[j, k]
+        e2[k] = alpha * alpha
+    e2[n - 2] = a[n - 1, n - 2] * a[n - 1, n - 2]
+    for i in range(n):
+        d[i] = a[i, i]
+    # Newton on det(T - x I) from Gershgorin's lower bound: left of every root of a polynomial whose
+    # roots are all real, the steps increase x and never pass the least root (quadratic convergence
+    # at a simple root, halving the distance at a double one)
+    x = d[0]
+    scale = 0.0
+    for i in range(n):
+        r = 0.0
+        if i > 0:
+            r += math.sqrt(e2[i - 1])
+        if i < n - 1:
+            r += math.sqrt(e2[i])
+        x = min(x, d[i] - r)
+        scale = max(scale, abs(d[i]) + r)
+    for _ in range(NEWTON_STEPS):
+        p0, p1, q0, q1 = 1.0, d[0] - x, 0.0, -1.0
+        for i in range(1, n):
+            p2 = (d[i] - x) * p1 - e2[i - 1] * p0
+            q2 = -p1 + (d[i] - x) * q1 - e2[i - 1] * q0
+            p0, p1, q0, q1 = p1, p2, q1, q2
+        if p1 == 0.0 or q1 == 0.0:
             break
-        for p in range(n - 1):
-            for q in range(p + 1, n):
-                apq = a[p, q]
-                if apq == 0.0:
-                    continue
-                theta = (a[q, q] - a[p, p]) / (2.0 * apq)
-                t = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
-                if theta < 0.0:
-                    t = -t
-                c = 1.0 / math.sqrt(t * t + 1.0)
-                s = t * c
-                for r in range(n):
-                    arp = a[r, p]
-                    arq = a[r, q]
-                    a[r, p] = c * arp - s * arq
-                    a[r, q] = s * arp + c * arq
-                for r in range(n):
-                    apr = a[p, r]
-                    aqr = a[q, r]
-                    a[p, r] = c * apr - s * aqr
-                    a[q, r] = s * apr + c * aqr
-    lo = a[0, 0]
-    for p in range(1, n):
-        if a[p, p] < lo:
-            lo = a[p, p]
-    return lo
+        step = -p1 / q1
+        if not step > EIG_TOL * scale:
+            break
+        x += step
+    return x
 
 
 @njit_inline
-def full_stiffness(px, py, pz, Rb, A, t, EA, Kg, K):
-    """Write the 6x6 stiffness matrix K = -dw/dx (module notes) of one pose into ``K``.
+def full_stiffness(px, py, pz, Rb, A, t, EA, Kg, rot, K):
+    """Write the 6x6 stiffness matrix K = -dw/dx (module notes) of one pose into ``K`` (its
+    translational block K_pp alone unless ``rot``).
 
     Returns False when a cable has zero length or a tension that is not finite.
     """
@@ -104,10 +135,6 @@ def full_stiffness(px, py, pz, Rb, A, t, EA, Kg, K):
         # H = e u u^T + g I
         h00, h01, h02 = e * u0 * u0 + g, e * u0 * u1, e * u0 * u2
         h11, h12, h22 = e * u1 * u1 + g, e * u1 * u2, e * u2 * u2 + g
-        # C = H [r]x, [r]x = [[0, -rz, ry], [rz, 0, -rx], [-ry, rx, 0]]
-        c00, c01, c02 = h01 * rz - h02 * ry, -h00 * rz + h02 * rx, h00 * ry - h01 * rx
-        c10, c11, c12 = h11 * rz - h12 * ry, -h01 * rz + h12 * rx, h01 * ry - h11 * rx
-        c20, c21, c22 = h12 * rz - h22 * ry, -h02 * rz + h22 * rx, h02 * ry - h12 * rx
         K[0, 0] += h00
         K[0, 1] += h01
         K[0, 2] += h02
@@ -117,6 +144,12 @@ def full_stiffness(px, py, pz, Rb, A, t, EA, Kg, K):
         K[2, 0] += h02
         K[2, 1] += h12
         K[2, 2] += h22
+        if not rot:
+            continue
+        # C = H [r]x, [r]x = [[0, -rz, ry], [rz, 0, -rx], [-ry, rx, 0]]
+        c00, c01, c02 = h01 * rz - h02 * ry, -h00 * rz + h02 * rx, h00 * ry - h01 * rx
+        c10, c11, c12 = h11 * rz - h12 * ry, -h01 * rz + h12 * rx, h01 * ry - h11 * rx
+        c20, c21, c22 = h12 * rz - h22 * ry, -h02 * rz + h22 * rx, h02 * ry - h12 * rx
         # K_pt = -H [r]x ; K_tp = [r]x H = -(H [r]x)^T = K_pt^T
         K[0, 3] -= c00
         K[0, 4] -= c01
@@ -162,18 +195,20 @@ def full_stiffness(px, py, pz, Rb, A, t, EA, Kg, K):
 
 
 @njit_inline
-def pose_figures(K, sel, d, Linv, S, B):
+def pose_figures(K, sel, d, Linv, S, B, v1, v2):
     """(min_stiffness [N/m], lowest_frequency [Hz]) of the full 6x6 ``K`` restricted to ``sel`` (its
-    first ``d`` entries the translations, the rest rotations); ``S``, ``B`` (6, 6) scratch.
+    first ``d`` entries the translations, the rest rotations); ``S``, ``B`` (6, 6) and ``v1``,
+    ``v2`` (6,) scratch.
 
-    The matrix is symmetrised first.  The Schur complement solves K_tt X = K_tp by Gauss-Jordan
-    elimination with partial pivoting (NaN when K_tt is singular).
+    The matrix is symmetrised first.  The Schur complement eliminates the rotations by
+    Gauss-Jordan steps with partial pivoting (NaN when K_rr is singular).  Without rotations
+    M = m I: the lowest frequency is sqrt(min_stiffness / m) / (2 pi).
     """
     n = sel.shape[0]
     for r in range(n):
         for c in range(n):
             B[r, c] = 0.5 * (K[sel[r], sel[c]] + K[sel[c], sel[r]])
-    # S[:d, :d] = K_pp - K_pt K_tt^-1 K_tp, eliminating in the rows d..n-1 of B (B is overwritten)
+    # B[:d, :d] <- K_pp - K_pr K_rr^-1 K_rp: eliminate the columns d..n-1 with pivots in rows d..n-1
     for j in range(d, n):
         piv = j
         for r in range(j + 1, n):
@@ -195,37 +230,39 @@ def pose_figures(K, sel, d, Linv, S, B):
                 if f != 0.0:
                     for c in range(n):
                         B[r, c] -= f * B[j, c]
-    # rows 0..d-1, columns 0..d-1 of B now hold K_pp - K_pt K_tt^-1 K_tp
     for r in range(d):
         for c in range(r, d):
             v = 0.5 * (B[r, c] + B[c, r])
             S[r, c] = v
             S[c, r] = v
-    lo = min_eig_sym(S, d)
-    # lowest frequency: the least eigenvalue of Linv Ks Linv^T
-    for r in range(n):
-        for c in range(n):
-            acc = 0.0
-            for k in range(n):
-                acc += Linv[r, k] * 0.5 * (K[sel[k], sel[c]] + K[sel[c], sel[k]])
-            B[r, c] = acc
-    for r in range(n):
-        for c in range(r, n):
-            acc = 0.0
-            for k in range(n):
-                acc += B[r, k] * Linv[c, k]
-            S[r, c] = acc
-            S[c, r] = acc
-    w2 = min_eig_sym(S, n)
+    lo = min_eig_sym(S, d, v1, v2)
+    if n == d:
+        w2 = lo * Linv[0, 0] * Linv[0, 0]
+    else:
+        # the least eigenvalue of Linv Ks Linv^T
+        for r in range(n):
+            for c in range(n):
+                acc = 0.0
+                for k in range(n):
+                    acc += Linv[r, k] * 0.5 * (K[sel[k], sel[c]] + K[sel[c], sel[k]])
+                B[r, c] = acc
+        for r in range(n):
+            for c in range(r, n):
+                acc = 0.0
+                for k in range(n):
+                    acc += B[r, k] * Linv[c, k]
+                S[r, c] = acc
+                S[c, r] = acc
+        w2 = min_eig_sym(S, n, v1, v2)
     f = math.sqrt(w2) / (2.0 * math.pi) if w2 >= 0.0 else np.nan
     return lo, f
 
 
 @njit_noref
-def _stiffness_loop(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow, K, S, B):
+def _stiffness_loop(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow, K, S, B, v1, v2):
     for k in range(k0, k1):
-        if full_stiffness(P[k, 0], P[k, 1], P[k, 2], Rb, A, T[k], EA, Kg, K):
-            kmin[k], flow[k] = pose_figures(K, sel, d, Linv, S, B)
+        if full_stiffness(P[k, 0], P[k, 1], P[k, 2], Rb, A, T[k], EA, Kg, sel.shape[0] > d, K):
+            kmin[k], flow[k] = pose_figures(K, sel, d, Linv, S, B, v1, v2)
         else:
             kmin[k] = np.nan
             flow[k] = np.nan
@@ -234,7 +271,7 @@ def _stiffness_loop(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow, K, S,
 def _stiffness_block(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow):
     """Rows k0..k1-1 of :func:`stiffness_points`: the block's scratch, then the compiled loop."""
     _stiffness_loop(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow,
-                    np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)))
+                    np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)), np.empty(6), np.empty(6))
 
 
 def stiffness_points(P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow):
