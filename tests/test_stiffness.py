@@ -215,6 +215,19 @@ def test_pose_json_stiffness_keys(tmp_path):
     assert data["min_stiffness"] is None and "infeasible" in data["stiffness_reason"]
 
 
+def test_min_cable_frequency_gives_a_tension_floor(tmp_path):
+    """requirements.min_cable_frequency: 20 Hz on the closed form's 1 m cables of 0.01 kg/m asks
+    4 f^2 L^2 mu = 16 N of each (pose --json cable_frequency_tensions); out of range: exit 2."""
+    spec_ = dict(TWO_CABLES, requirements={"min_cable_frequency": 20.0})
+    data = json.loads(invoke("pose", str(write_spec(tmp_path, spec_)), "--at", "0,0", "--json").output)
+    assert data["cable_frequency_tensions"] == pytest.approx({"left": 16.0, "right": 16.0}, rel=1e-12)
+    assert "cable_frequency_tensions" not in json.loads(
+        invoke("pose", str(write_spec(tmp_path, TWO_CABLES, "plain.yaml")), "--at", "0,0", "--json").output)
+    bad = dict(TWO_CABLES, requirements={"min_cable_frequency": -1.0})
+    res = invoke("pose", str(write_spec(tmp_path, bad, "bad.yaml")), "--at", "0,0", "--json")
+    assert res.exit_code == 2 and "requirements.min_cable_frequency" in res.output
+
+
 def test_rotational_stiffness_includes_the_weight():
     """A pendulum: one cable to a body whose centre of mass hangs d below the attachment. Rotating
     it by dtheta about the attachment (= the reference point) the weight's moment gives back

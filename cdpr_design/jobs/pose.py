@@ -78,8 +78,11 @@ def stiffness_data(design, pose=None, tensions=None, reason: str | None = None) 
     def mat(a):
         return None if a is None else [[num(x) for x in row] for row in a]
 
-    return {"stiffness_matrix": mat(s.matrix), "translational_stiffness": mat(s.translational),
-            "min_stiffness": num(s.min_stiffness),
-            "natural_frequencies": None if s.frequencies is None else [num(v) for v in s.frequencies],
-            "mode_shapes": mat(s.modes), "cable_frequencies": {c: num(v) for c, v in zip(names, s.cable_frequencies)},
-            "stiffness_reason": s.reason}
+    out = {"stiffness_matrix": mat(s.matrix), "translational_stiffness": mat(s.translational),
+           "min_stiffness": num(s.min_stiffness),
+           "natural_frequencies": None if s.frequencies is None else [num(v) for v in s.frequencies],
+           "mode_shapes": mat(s.modes), "cable_frequencies": {c: num(v) for c, v in zip(names, s.cable_frequencies)},
+           "stiffness_reason": s.reason}
+    if s.frequency_floor is not None:
+        out["cable_frequency_tensions"] = {c: float(v) for c, v in zip(names, s.frequency_floor)}
+    return out

@@ -183,6 +183,17 @@ def min_string_tension(lengths, mass_per_length, frequency: float) -> np.ndarray
     return 4.0 * float(frequency) ** 2 * L * L * mu
 
 
+def frequency_tension_floor(design: Design, lengths) -> np.ndarray | None:
+    """The lower tension bound [N] that ``requirements.min_cable_frequency`` sets on each cable at
+    cable lengths ``lengths`` (..., m) [m] (:func:`min_string_tension`; 0 for a cable without a
+    mass per length), or None when the spec has no such requirement."""
+    f = design.requirements.min_cable_frequency
+    if f is None:
+        return None
+    mu = np.array([c.props.mass_per_length or 0.0 for c in design.cables])
+    return min_string_tension(lengths, mu, f)
+
+
 @dataclass(frozen=True)
 class PoseStiffness:
     """Stiffness and vibration at one pose (module notes); None/NaN fields with ``reason`` where undefined.
@@ -190,7 +201,7 @@ class PoseStiffness:
     ``matrix`` (n, n) K in the motion's coordinates; ``translational`` (d, d) its block -df/dp at
     fixed orientation [N/m]; ``min_stiffness`` [N/m]; ``frequencies`` (n,) [Hz] ascending;
     ``modes`` (n, n), mode j in row j; ``cable_frequencies`` (m,) each cable's first string
-    frequency [Hz] (NaN without a mass per length).
+    frequency [Hz] (NaN without a mass per length) over its free length (outlet to attachment).
     """
 
     matrix: np.ndarray | None
@@ -200,6 +211,8 @@ class PoseStiffness:
     modes: np.ndarray | None
     cable_frequencies: np.ndarray
     reason: str | None = None
+    #: the lower tension bound of ``requirements.min_cable_frequency`` (m,) [N] (:func:`frequency_tension_floor`)
+    frequency_floor: np.ndarray | None = None
 
 
 def pose_stiffness(design: Design, pose, tensions) -> PoseStiffness:
@@ -211,12 +224,14 @@ def pose_stiffness(design: Design, pose, tensions) -> PoseStiffness:
     g = kin.cable_geometry(design, pose)
     t = np.asarray(tensions, float)
     mu = np.array([c.props.mass_per_length or 0.0 for c in design.cables])
-    strings = string_frequencies(np.linalg.norm(g.vectors, axis=1), t, mu)
+    free = np.linalg.norm(g.vectors, axis=1)
+    strings = string_frequencies(free, t, mu)
+    floor = frequency_tension_floor(design, free)
     EA, reason = axial_stiffnesses(design)
     if reason is None and not np.all(np.isfinite(t)):
         reason = "no tensions hold the effector at this pose (infeasible)"
     if reason is not None:
-        return PoseStiffness(None, None, float("nan"), None, None, strings, reason)
+        return PoseStiffness(None, None, float("nan"), None, None, strings, reason, floor)
     R = kin.pose_rotation(design, pose)
     c = R @ np.asarray(design.effector.center_of_mass, float)
     weight = design.effector.mass * np.asarray(design.gravity, float)
@@ -227,10 +242,10 @@ def pose_stiffness(design: Design, pose, tensions) -> PoseStiffness:
     if vib is None:
         return PoseStiffness(K, K[:d, :d], kmin, None, None, strings,
                              "the effector's mass matrix is singular (no mass, or no inertia about a rotation "
-                             "the motion has): no natural frequencies")
+                             "the motion has): no natural frequencies", floor)
     f, V = vib
     note = None if np.all(np.isfinite(f)) else "unstable equilibrium: K has a negative eigenvalue (frequency null)"
-    return PoseStiffness(K, K[:d, :d], kmin, f, V, strings, note)
+    return PoseStiffness(K, K[:d, :d], kmin, f, V, strings, note, floor)
 
 
 # ----------------------------------------------------------------------------
