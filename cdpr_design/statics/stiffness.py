@@ -230,6 +230,8 @@ def pose_stiffness(design: Design, pose, tensions) -> PoseStiffness:
     EA, reason = axial_stiffnesses(design)
     if reason is None and not np.all(np.isfinite(t)):
         reason = "no tensions hold the effector at this pose (infeasible)"
+    if reason is None and not np.all(free > 1e-12):
+        reason = "a cable has zero length at this pose"
     if reason is not None:
         return PoseStiffness(None, None, float("nan"), None, None, strings, reason, floor)
     R = kin.pose_rotation(design, pose)
