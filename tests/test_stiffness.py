@@ -75,6 +75,7 @@ def fd_stiffness(design, full, L0, EA, h=1e-5):
     return J[sel]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("motion", MOTIONS)
 def test_stiffness_matrix_is_minus_wrench_derivative(motion):
     """200 random robots of each motion type, at random poses and random unstretched lengths
