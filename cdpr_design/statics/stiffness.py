@@ -247,6 +247,8 @@ def pose_stiffness(design: Design, pose, tensions) -> PoseStiffness:
                              "the motion has): no natural frequencies", floor)
     f, V = vib
     note = None if np.all(np.isfinite(f)) else "unstable equilibrium: K has a negative eigenvalue (frequency null)"
+    if not np.isfinite(kmin):
+        note = "the rotational block of K is singular: the cables do not hold the rotations (min_stiffness null)"
     return PoseStiffness(K, K[:d, :d], kmin, f, V, strings, note, floor)
 
 
