@@ -126,9 +126,12 @@ def test_orientation_workspaces_take_elastic_cables_and_refuse_sagging(tmp_path,
 def test_ideal_pose_json_is_unchanged():
     r = invoke("pose", PLANAR2, "--at", "0.3,0.9", "--json")
     data = json.loads(r.output)
-    # planar2 is under-constrained: the tilt its free body would hang with comes beside (issue 16)
+    # planar2 is under-constrained: the tilt its free body would hang with comes beside (issue 16);
+    # the stiffness keys (issue 39) come with every design, null with a reason where undefined
     assert set(data) == {"pose", "lengths", "tensions", "feasible", "margin", "structure_matrix",
-                         "collisions", "objective", "tilt", "hanging"}
+                         "collisions", "objective", "tilt", "hanging", "stiffness_matrix",
+                         "translational_stiffness", "min_stiffness", "natural_frequencies", "mode_shapes",
+                         "cable_frequencies", "stiffness_reason"}
 
 
 def test_elastic_pose_is_the_ideal_one_with_stretch(planar2):

@@ -205,7 +205,7 @@ number_text = st.one_of(st.floats(-3, 5).map(lambda v: f"{v:.4g}"), st.sampled_f
        st.sampled_from(["min-norm", "min-norm", "min-max", "min-sum"]))
 def test_pose(data, at, kind, objective):
     from cdpr_design.cli.common import parse_pose
-    from cdpr_design.jobs.pose import pose_data
+    from cdpr_design.jobs.pose import pose_data, stiffness_data
     from cdpr_design.statics.pose import evaluate_pose
 
     design = load_design(data)
@@ -215,7 +215,7 @@ def test_pose(data, at, kind, objective):
         return
     res, exc = outcome(evaluate_pose, design, pose, kind, objective)
     if res is not None:
-        out = pose_data(design, res)
+        out = pose_data(design, res) | stiffness_data(design, pose, res.tensions)
         strict_json(out)
         assert not res.feasible or np.all(np.isfinite(res.tensions))
 

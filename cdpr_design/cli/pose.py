@@ -64,13 +64,18 @@ def pose(
         position = parse_numbers(at, "--at", len(coords), f"numbers ({','.join(coords)}): effector.orientation "
                                  "is free, so the position alone is commanded and the orientation hangs")
         data = hjob.free_pose_data(robot, position)
+        stiffness = job.stiffness_data(design, reason="effector.orientation: free: the hanging effector's "
+                                                     "stiffness is not modelled")
     else:
         p = parse_pose(design, at)
         c = parse_weights(design, weights)
-        data = job.pose_data(design, evaluate_pose(design, p, kind.value, objective.value, c))
+        result = evaluate_pose(design, p, kind.value, objective.value, c)
+        data = job.pose_data(design, result)
+        stiffness = job.stiffness_data(design, p, result.tensions)
         if robot.underconstrained and robot.cables == "ideal" and robot.outlets == "points":
             data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     data["objective"] = objective.value
+    data.update(stiffness)
     if json_:
         emit_json(data)
         return

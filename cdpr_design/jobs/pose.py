@@ -57,3 +57,32 @@ def cable_fk_data(design, unstretched, guess=None) -> dict:
             "within_bounds": bool(np.all((res.tensions >= design.tension_min - 1e-9)
                                          & (np.maximum(res.tensions, res.outlet_tensions) <= design.tension_max + 1e-9)))
             } | free
+
+
+def stiffness_data(design, pose=None, tensions=None, reason: str | None = None) -> dict:
+    """The stiffness and vibration keys of ``pose --json`` (cli.md) at a pose held by ``tensions``
+    [N] (:func:`cdpr_design.statics.stiffness.pose_stiffness`); with ``pose`` None, every value
+    null and ``reason`` the stiffness_reason."""
+    from cdpr_design.statics.stiffness import pose_stiffness
+
+    names = design.cable_names
+    if pose is None:
+        return {"stiffness_matrix": None, "translational_stiffness": None, "min_stiffness": None,
+                "natural_frequencies": None, "mode_shapes": None, "cable_frequencies": dict.fromkeys(names),
+                "stiffness_reason": reason}
+    s = pose_stiffness(design, pose, tensions)
+
+    def num(v):
+        return float(v) if np.isfinite(v) else None
+
+    def mat(a):
+        return None if a is None else [[num(x) for x in row] for row in a]
+
+    out = {"stiffness_matrix": mat(s.matrix), "translational_stiffness": mat(s.translational),
+           "min_stiffness": num(s.min_stiffness),
+           "natural_frequencies": None if s.frequencies is None else [num(v) for v in s.frequencies],
+           "mode_shapes": mat(s.modes), "cable_frequencies": {c: num(v) for c, v in zip(names, s.cable_frequencies)},
+           "stiffness_reason": s.reason}
+    if s.frequency_floor is not None:
+        out["cable_frequency_tensions"] = {c: float(v) for c, v in zip(names, s.frequency_floor)}
+    return out

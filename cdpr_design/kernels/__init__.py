@@ -26,6 +26,7 @@ module             what
 ``cable_shape``    one heavy elastic cable at a given tension: its shape, its least tension
 ``sagging``        statics of a pose with sagging cables; the sagging grid sweep
 ``sag_path``       sagging statics along a sampled trajectory
+``stiffness``      the effector's least stiffness and lowest natural frequency at many poses
 =================  ==========================================================
 """
 
@@ -50,7 +51,7 @@ _EXPORTS = {
 }
 
 _SUBMODULES = {"cable_shape", "catenary", "codes", "geometry", "hanging", "hsm", "hsm_small", "interference", "linalg",
-               "parallel", "pose", "sag_path", "sagging", "sweep", "tension_qp"}
+               "parallel", "pose", "sag_path", "sagging", "stiffness", "sweep", "tension_qp"}
 
 __all__ = sorted(_EXPORTS)
 

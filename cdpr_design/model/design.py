@@ -282,6 +282,8 @@ class Requirements:
     max_tilt: float | None = None
     #: ``check`` proves the whole task box feasible (interval analysis, ``certify``)
     certified: bool = False
+    #: least first string frequency of every cable [Hz] (a lower tension bound 4 f^2 L^2 mu)
+    min_cable_frequency: float | None = None
 
 
 @dataclass(frozen=True)

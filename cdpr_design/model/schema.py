@@ -147,6 +147,9 @@ class RequirementsSpec(StrictModel):
         None, description="Largest tilt [deg] an under-constrained effector may hang with at a feasible pose")
     certified: bool | None = Field(
         None, description="check proves every pose of the task box feasible by interval analysis")
+    min_cable_frequency: PosFloat | None = Field(
+        None, description="Least first transverse (string) frequency of every cable [Hz]: a lower tension "
+                          "bound 4 f^2 L^2 mu per cable with a mass_per_length")
 
 
 class TrajectorySpec(StrictModel):

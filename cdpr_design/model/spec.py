@@ -335,7 +335,7 @@ def _requirements(s: DesignSpec) -> Requirements:
         max_speed=req.max_speed, max_acceleration=req.max_acceleration,
         min_margin=req.min_margin, min_fraction=req.min_fraction,
         safety_factor=req.safety_factor if req.safety_factor is not None else 1.0, max_tilt=req.max_tilt,
-        certified=bool(req.certified),
+        certified=bool(req.certified), min_cable_frequency=req.min_cable_frequency,
     )
 
 

@@ -1,0 +1,287 @@
+"""Stiffness and lowest natural frequency of the effector at many poses (straight elastic cables).
+
+The kernel twin of :mod:`cdpr_design.statics.stiffness` (which derives the matrix and
+documents the conventions; docs/algorithms.md, "Stiffness and vibration").  Per pose, with
+l_i = a_i - (p + R b_i), L_i = |l_i|, u_i = l_i / L_i, r_i = R b_i and the cable's axial
+stiffness k_i = EA_i / L0_i = (EA_i + t_i) / L_i (the elastic cable's unstretched length
+L0 = L / (1 + t / EA)):
+
+    H_i  = k_i u_i u_i^T + (t_i / L_i) (I - u_i u_i^T)
+    K_pp = sum H_i                      K_pt = -sum H_i [r_i]x
+    K_tp = sum [r_i]x H_i               K_tt = -sum ([r_i]x H_i [r_i]x + [t_i u_i]x [r_i]x) + Kg
+
+with Kg = -[m g]x [R c]x the weight's term (constant at a fixed orientation).  The matrix is
+restricted to the motion's coordinates ``sel``, symmetrised (it is symmetric at an equilibrium)
+and then
+
+- ``min_stiffness`` [N/m]: the least eigenvalue of the translational Schur complement
+  K_pp - K_pt K_tt^-1 K_tp (of K_pp itself when the motion has no rotation);
+- ``lowest_frequency`` [Hz]: sqrt(lambda_min(L^-1 K L^-T)) / (2 pi) for the mass matrix
+  M = L L^T (``Linv`` = L^-1), NaN when lambda_min < 0 (an unstable equilibrium).
+
+The least eigenvalues come from :func:`min_eig_sym` (closed form up to 2x2, Householder and
+bisection beyond), with no allocation per pose.  A pose whose tensions are not all finite gives NaN.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cdpr_design.kernels._jit import njit_inline, njit_noref
+from cdpr_design.kernels.parallel import run_blocks
+
+#: The least eigenvalue's Newton steps stop below this fraction of the matrix's Gershgorin norm
+EIG_TOL = 1e-15
+#: ... or after this many (a double root halves the distance per step: 1e-15 after 50)
+NEWTON_STEPS = 80
+
+
+@njit_inline
+def min_eig_sym(a, n, d, e2):
+    """The least eigenvalue of the symmetric ``a[:n, :n]`` (destroyed); ``d``, ``e2`` (>= n,) scratch.
+
+    n <= 2 in closed form; beyond, Householder reflections to a tridiagonal matrix T (diagonal ``d``,
+    squared off-diagonal ``e2``), then Newton's method on det(T - x I) (three-term recurrence) from
+    Gershgorin's lower bound, to a step of EIG_TOL times the matrix's Gershgorin norm.
+    """
+    if n == 1:
+        return a[0, 0]
+    if n == 2:
+        h = 0.5 * (a[0, 0] - a[1, 1])
+        return 0.5 * (a[0, 0] + a[1, 1]) - math.sqrt(h * h + a[0, 1] * a[0, 1])
+    for k in range(n - 2):
+        s = 0.0
+        for i in range(k + 1, n):
+            s += a[i, k] * a[i, k]
+        x0 = a[k + 1, k]
+        alpha = -math.sqrt(s) if x0 >= 0.0 else math.sqrt(s)
+        v0 = x0 - alpha  # v = x - alpha e_1, kept in a[k+1:, k]
+        beta = s - x0 * x0 + v0 * v0  # |v|^2
+        if beta > 0.0:
+            a[k + 1, k] = v0
+            vp = 0.0
+            for i in range(k + 1, n):  # p = 2 A22 v / |v|^2, in d
+                acc = 0.0
+                for j in range(k + 1, n):
+                    acc += a[i, j] * a[j, k]
+                acc *= 2.0 / beta
+                d[i] = acc
+                vp += a[i, k] * acc
+            c = vp / beta
+            for i in range(k + 1, n):  # q = p - (v.p / |v|^2) v
+                d[i] -= c * a[i, k]
+            for i in range(k + 1, n):  # A22 <- A22 - v q^T - q v^T
+                for j in range(k + 1, n):
+                    a[i, j] -= a[i, k] * d[j] + d[i] * a[j, k]
+        e2[k] = alpha * alpha
+    e2[n - 2] = a[n - 1, n - 2] * a[n - 1, n - 2]
+    for i in range(n):
+        d[i] = a[i, i]
+    # Newton on det(T - x I) from Gershgorin's lower bound: left of every root of a polynomial whose
+    # roots are all real, the steps increase x and never pass the least root (quadratic convergence
+    # at a simple root, halving the distance at a double one)
+    x = d[0]
+    scale = 0.0
+    for i in range(n):
+        r = 0.0
+        if i > 0:
+            r += math.sqrt(e2[i - 1])
+        if i < n - 1:
+            r += math.sqrt(e2[i])
+        x = min(x, d[i] - r)
+        scale = max(scale, abs(d[i]) + r)
+    for _ in range(NEWTON_STEPS):
+        p0, p1, q0, q1 = 1.0, d[0] - x, 0.0, -1.0
+        for i in range(1, n):
+            p2 = (d[i] - x) * p1 - e2[i - 1] * p0
+            q2 = -p1 + (d[i] - x) * q1 - e2[i - 1] * q0
+            p0, p1, q0, q1 = p1, p2, q1, q2
+        if p1 == 0.0 or q1 == 0.0:
+            break
+        step = -p1 / q1
+        if not step > EIG_TOL * scale:
+            break
+        x += step
+    return x
+
+
+@njit_inline
+def full_stiffness(px, py, pz, Rb, A, t, EA, Kg, rot, K):
+    """Write the 6x6 stiffness matrix K = -dw/dx (module notes) of one pose into ``K`` (its
+    translational block K_pp alone unless ``rot``).
+
+    Returns False when a cable has zero length or a tension that is not finite.
+    """
+    for r in range(6):
+        for c in range(6):
+            K[r, c] = 0.0
+    for r in range(3):
+        for c in range(3):
+            K[3 + r, 3 + c] = Kg[r, c]
+    for i in range(A.shape[0]):
+        ti = t[i]
+        if not math.isfinite(ti):
+            return False
+        rx, ry, rz = Rb[i, 0], Rb[i, 1], Rb[i, 2]
+        lx, ly, lz = A[i, 0] - px - rx, A[i, 1] - py - ry, A[i, 2] - pz - rz
+        L = math.sqrt(lx * lx + ly * ly + lz * lz)
+        if not L > 0.0:
+            return False
+        u0, u1, u2 = lx / L, ly / L, lz / L
+        g = ti / L
+        e = (EA[i] + ti) / L - g  # k_i - t_i / L_i
+        # H = e u u^T + g I
+        h00, h01, h02 = e * u0 * u0 + g, e * u0 * u1, e * u0 * u2
+        h11, h12, h22 = e * u1 * u1 + g, e * u1 * u2, e * u2 * u2 + g
+        K[0, 0] += h00
+        K[0, 1] += h01
+        K[0, 2] += h02
+        K[1, 0] += h01
+        K[1, 1] += h11
+        K[1, 2] += h12
+        K[2, 0] += h02
+        K[2, 1] += h12
+        K[2, 2] += h22
+        if not rot:
+            continue
+        # C = H [r]x, [r]x = [[0, -rz, ry], [rz, 0, -rx], [-ry, rx, 0]]
+        c00, c01, c02 = h01 * rz - h02 * ry, -h00 * rz + h02 * rx, h00 * ry - h01 * rx
+        c10, c11, c12 = h11 * rz - h12 * ry, -h01 * rz + h12 * rx, h01 * ry - h11 * rx
+        c20, c21, c22 = h12 * rz - h22 * ry, -h02 * rz + h22 * rx, h02 * ry - h12 * rx
+        # K_pt = -H [r]x ; K_tp = [r]x H = -(H [r]x)^T = K_pt^T
+        K[0, 3] -= c00
+        K[0, 4] -= c01
+        K[0, 5] -= c02
+        K[1, 3] -= c10
+        K[1, 4] -= c11
+        K[1, 5] -= c12
+        K[2, 3] -= c20
+        K[2, 4] -= c21
+        K[2, 5] -= c22
+        K[3, 0] -= c00
+        K[4, 0] -= c01
+        K[5, 0] -= c02
+        K[3, 1] -= c10
+        K[4, 1] -= c11
+        K[5, 1] -= c12
+        K[3, 2] -= c20
+        K[4, 2] -= c21
+        K[5, 2] -= c22
+        # -[r]x H [r]x = -[r]x C ; rows of [r]x: (0, -rz, ry), (rz, 0, -rx), (-ry, rx, 0)
+        K[3, 3] -= -rz * c10 + ry * c20
+        K[3, 4] -= -rz * c11 + ry * c21
+        K[3, 5] -= -rz * c12 + ry * c22
+        K[4, 3] -= rz * c00 - rx * c20
+        K[4, 4] -= rz * c01 - rx * c21
+        K[4, 5] -= rz * c02 - rx * c22
+        K[5, 3] -= -ry * c00 + rx * c10
+        K[5, 4] -= -ry * c01 + rx * c11
+        K[5, 5] -= -ry * c02 + rx * c12
+        # -[F]x [r]x = -(r F^T - (F . r) I), F = t u
+        f0, f1, f2 = ti * u0, ti * u1, ti * u2
+        fr = f0 * rx + f1 * ry + f2 * rz
+        K[3, 3] -= rx * f0 - fr
+        K[3, 4] -= rx * f1
+        K[3, 5] -= rx * f2
+        K[4, 3] -= ry * f0
+        K[4, 4] -= ry * f1 - fr
+        K[4, 5] -= ry * f2
+        K[5, 3] -= rz * f0
+        K[5, 4] -= rz * f1
+        K[5, 5] -= rz * f2 - fr
+    return True
+
+
+@njit_inline
+def pose_figures(K, sel, d, Linv, S, B, v1, v2):
+    """(min_stiffness [N/m], lowest_frequency [Hz]) of the full 6x6 ``K`` restricted to ``sel`` (its
+    first ``d`` entries the translations, the rest rotations); ``S``, ``B`` (6, 6) and ``v1``,
+    ``v2`` (6,) scratch.
+
+    The matrix is symmetrised first.  The Schur complement eliminates the rotations by
+    Gauss-Jordan steps with partial pivoting (NaN when K_rr is singular).  Without rotations
+    M = m I: the lowest frequency is sqrt(min_stiffness / m) / (2 pi).
+    """
+    n = sel.shape[0]
+    for r in range(n):
+        for c in range(n):
+            B[r, c] = 0.5 * (K[sel[r], sel[c]] + K[sel[c], sel[r]])
+    # B[:d, :d] <- K_pp - K_pr K_rr^-1 K_rp: eliminate the columns d..n-1 with pivots in rows d..n-1
+    for j in range(d, n):
+        piv = j
+        for r in range(j + 1, n):
+            if abs(B[r, j]) > abs(B[piv, j]):
+                piv = r
+        if not abs(B[piv, j]) > 0.0:
+            return np.nan, np.nan
+        if piv != j:
+            for c in range(n):
+                tmp = B[j, c]
+                B[j, c] = B[piv, c]
+                B[piv, c] = tmp
+        inv = 1.0 / B[j, j]
+        for c in range(n):
+            B[j, c] *= inv
+        for r in range(n):
+            if r != j:
+                f = B[r, j]
+                if f != 0.0:
+                    for c in range(n):
+                        B[r, c] -= f * B[j, c]
+    for r in range(d):
+        for c in range(r, d):
+            v = 0.5 * (B[r, c] + B[c, r])
+            S[r, c] = v
+            S[c, r] = v
+    lo = min_eig_sym(S, d, v1, v2)
+    if n == d:
+        w2 = lo * Linv[0, 0] * Linv[0, 0]
+    else:
+        # the least eigenvalue of Linv Ks Linv^T
+        for r in range(n):
+            for c in range(n):
+                acc = 0.0
+                for k in range(n):
+                    acc += Linv[r, k] * 0.5 * (K[sel[k], sel[c]] + K[sel[c], sel[k]])
+                B[r, c] = acc
+        for r in range(n):
+            for c in range(r, n):
+                acc = 0.0
+                for k in range(n):
+                    acc += B[r, k] * Linv[c, k]
+                S[r, c] = acc
+                S[c, r] = acc
+        w2 = min_eig_sym(S, n, v1, v2)
+    f = math.sqrt(w2) / (2.0 * math.pi) if w2 >= 0.0 else np.nan
+    return lo, f
+
+
+@njit_noref
+def _stiffness_loop(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow, K, S, B, v1, v2):
+    for k in range(k0, k1):
+        if full_stiffness(P[k, 0], P[k, 1], P[k, 2], Rb, A, T[k], EA, Kg, sel.shape[0] > d, K):
+            kmin[k], flow[k] = pose_figures(K, sel, d, Linv, S, B, v1, v2)
+        else:
+            kmin[k] = np.nan
+            flow[k] = np.nan
+
+
+def _stiffness_block(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow):
+    """Rows k0..k1-1 of :func:`stiffness_points`: the block's scratch, then the compiled loop."""
+    _stiffness_loop(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow,
+                    np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)), np.empty(6), np.empty(6))
+
+
+def stiffness_points(P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow):
+    """Least stiffness [N/m] and lowest natural frequency [Hz] at ``k`` poses (module notes).
+
+    Parameters: ``P`` (k, 3) positions [m]; ``Rb`` (m, 3) rotated attachments R b_i [m] (one
+    orientation for every pose); ``A`` (m, 3) outlets [m]; ``T`` (k, m) tensions [N]; ``EA`` (m,)
+    [N]; ``Kg`` (3, 3) the weight's rotational stiffness -[m g]x [R c]x [N m]; ``Linv`` (n, n)
+    the inverse of the mass matrix's Cholesky factor; ``sel`` (n,) int64 the motion's coordinates
+    in [x, y, z, rx, ry, rz], the first ``d`` of them translations.  Writes ``kmin`` and ``flow``
+    (k,).
+    """
+    run_blocks(_stiffness_block, P.shape[0], P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow)
