@@ -150,7 +150,8 @@ class OrientationSweep(Base):
 
     - ``total``: ``feasible`` = feasible for every orientation of the set,
       ``margin`` = least capacity margin over the set, ``tension_<c>`` =
-      largest tension over the set (empty unless feasible); extra column
+      largest tension over the set (empty unless feasible, and where one
+      orientation of the set has no tensions within the bounds: wrench closure); extra column
       ``orientations_feasible`` (count of feasible set orientations) and,
       with interference, ``collision_free`` (no interference at any of them).
       Summary extras with interference: ``collision_free`` (poses collision
@@ -246,7 +247,7 @@ def _total_rows(ev: Evaluator, P, nominal, oset, tally: _Tally):
         nok += ok
         allok &= ok
         marg = np.fmin(marg, mg)
-        ten = np.fmax(ten, t)
+        ten = np.maximum(ten, t)  # an orientation without tensions (wrench closure) leaves none to report
     marg[~np.isfinite(marg)] = np.nan
     ten[~allok] = np.nan
     cfree = None
