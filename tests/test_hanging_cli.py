@@ -185,7 +185,7 @@ def free_rows(tmp_path_factory):
 
 
 @pytest.mark.slow
-def test_free_workspace_rows_are_pose_at_each_position(free_rows):
+def test_free_workspace_rows_are_the_hanging_pose_at_each_position(free_rows):
     path, out, summary, header, rows = free_rows
     assert header == ["x", "y", "feasible", "margin", "tension_c1", "tension_c2", "length_c1", "length_c2",
                       "tilt", "orientation_phi"]
@@ -292,7 +292,7 @@ def test_crane_workspace(tmp_path):
     assert s["max_tilt_hanging"] > 30 and s["tilt_limited"] > 0
     d = spec.load(CRANE4)
     k = int(np.flatnonzero(feas)[0])
-    at = H.pose_at(d, a[k, :3], nominal=np.eye(3))
+    at = H.hanging_pose(d, a[k, :3], nominal=np.eye(3))
     np.testing.assert_allclose(at.orientation, a[k, -3:], atol=1e-9)
     np.testing.assert_allclose(at.tensions, a[k, 5:9], rtol=1e-9)
     assert (tmp_path / "tilt_map.png").is_file()
@@ -323,7 +323,7 @@ def test_fk_point_mass_with_a_pushing_cable():
 
 def test_fk_free_reports_orientation_and_equilibria(tmp_path):
     path = free_planar2(tmp_path)
-    at = H.pose_at(spec.load(path), [0.3, 0.5])
+    at = H.hanging_pose(spec.load(path), [0.3, 0.5])
     res = invoke("fk", path, "--lengths", csv_numbers(at.lengths), "--json")
     f = json.loads(res.stdout)
     assert f["orientation"] == pytest.approx(at.orientation, abs=1e-9) and f["tilt"] == pytest.approx(at.tilt_deg)
@@ -331,7 +331,7 @@ def test_fk_free_reports_orientation_and_equilibria(tmp_path):
     assert f["model"] == "rigid" and f["effector_orientation"] == "free"
     assert all(e["energy"] >= f["energy"] and e["stable"] for e in f["equilibria"])
     d = spec.load(CRANE4)
-    L = H.pose_at(d, [1.0, 1.0, 2.0]).lengths
+    L = H.hanging_pose(d, [1.0, 1.0, 2.0]).lengths
     f = json.loads(invoke("fk", CRANE4, "--lengths", csv_numbers(L), "--json").stdout)
     assert len(f["orientation"]) == 3 and len(f["slack"]) == 1 and f["tilt"] == pytest.approx(24.787, abs=1e-3)
 

@@ -220,7 +220,7 @@ def _converged(fun, L0, taut, wscale) -> bool:
 
 
 def _result(design: Design, fun, x, H, VB, L0, arr, taut, wscale, unk: _Unknowns) -> CableFK:
-    from cdpr_design.statics.hanging_results import orientation_of, tilt_of
+    from cdpr_design.statics.hanging.results import orientation_of, tilt_of
 
     idx = np.flatnonzero(taut)
     length_res, force_res = _residuals(fun, L0, taut, wscale)

@@ -3,8 +3,8 @@
 An under-constrained design (:func:`cdpr_design.statics.hanging.underconstrained`)
 cannot hold its effector's orientation; at each grid position the effector
 turns until the cables balance its weight, force and moment
-(:func:`cdpr_design.statics.hanging_at.hang`).  :func:`sweep` is what
-:func:`cdpr_design.workspaces.run` does for such a design:
+(:func:`cdpr_design.statics.hanging.at_positions.hanging_orientations`).
+:func:`sweep` is what :func:`cdpr_design.workspaces.run` does for such a design:
 
 - ``effector.orientation: fixed`` (the default, the spec's model of an
   effector held at the commanded orientation): the usual sweep, untouched,
@@ -39,8 +39,9 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
 from cdpr_design.statics import hanging as H
-from cdpr_design.statics import hanging_at as ha
-from cdpr_design.statics import hanging_core as hc
+from cdpr_design.statics.hanging.at_positions import hanging_orientations
+from cdpr_design.statics.hanging.geometry import Geometry
+from cdpr_design.statics.hanging.results import HangingOrientations
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.cables import is_ideal
 from cdpr_design.statics.pose import combinations
@@ -135,13 +136,13 @@ class _Hanger:
 
     def __init__(self, design: Design, ori, engine: str, poses: int):
         A, B, c, mass, g, planar = H.design_arrays(design)
-        self.geo = hc.Geometry(A, B, c, mass, g)
+        self.geo = Geometry(A, B, c, mass, g)
         self.planar = planar
         self.design = design
         self.nominal = kin.rotation_matrix(*ori)
         # the planar two-cable kernel where numba is (or will be) loaded: numba asked for, a
         # free design (its statics run the kernels), or a sweep the engines give to numba
-        two = planar and design.m == 2 and not hc.is_point_mass(B)
+        two = planar and design.m == 2 and not H.is_point_mass(B)
         numba = engine == "numba" or (engine == "auto" and (H.hangs_freely(design) or not use_numpy(engine, True, poses)))
         self.engine = "numba" if two and numba else "numpy"
         # the numpy search on the kernels' threads where the sweep runs the kernels anyway (their
@@ -152,7 +153,7 @@ class _Hanger:
         if self.threaded:
             h = _hang_in_blocks(self.geo, P3, self.planar, self.nominal)
         else:
-            h = ha.hang(self.geo, P3, self.planar, nominal=self.nominal, engine=self.engine)
+            h = hanging_orientations(self.geo, P3, self.planar, nominal=self.nominal, engine=self.engine)
         ori = h.orientation.reshape(len(P3), -1)
         extra = {"tilt": h.tilt_deg}
         for j, name in enumerate(columns(self.design)[1:]):
@@ -170,9 +171,9 @@ HANG_GRAIN = 256
 HANG_BLOCK = 4096
 
 
-def _hang_in_blocks(geo: hc.Geometry, P, planar: bool, nominal) -> ha.Hanging:
-    """:func:`~cdpr_design.statics.hanging_at.hang` (numpy) at positions ``P`` (k, 3) [m], in
-    blocks of rows on the kernels' threads (:func:`~cdpr_design.kernels.parallel.run_blocks`):
+def _hang_in_blocks(geo: Geometry, P, planar: bool, nominal) -> HangingOrientations:
+    """:func:`~cdpr_design.statics.hanging.at_positions.hanging_orientations` (numpy) at positions
+    ``P`` (k, 3) [m], in blocks of rows on the kernels' threads (:func:`~cdpr_design.kernels.parallel.run_blocks`):
     its stacked linear algebra and einsum release the GIL, so the blocks share the cores
     (crane4's 2,873 positions: 1.4 s -> 0.95 s on two).  Each position is solved on its own,
     so the answers do not depend on the blocks (tests/test_parallel.py)."""
@@ -180,14 +181,14 @@ def _hang_in_blocks(geo: hc.Geometry, P, planar: bool, nominal) -> ha.Hanging:
 
     k = len(P)
     if k == 0:
-        return ha.hang(geo, P, planar, nominal=nominal)
-    parts: dict[int, ha.Hanging] = {}
+        return hanging_orientations(geo, P, planar, nominal=nominal)
+    parts: dict[int, HangingOrientations] = {}
 
     def block(k0, k1):
-        parts[k0] = ha.hang(geo, P[k0:k1], planar, nominal=nominal)  # one key a block: no race
+        parts[k0] = hanging_orientations(geo, P[k0:k1], planar, nominal=nominal)  # one key a block: no race
 
     run_blocks(block, k, grain=max(HANG_GRAIN, min(-(-k // threads()), HANG_BLOCK)))
-    return ha.Hanging.joined([parts[k0] for k0 in sorted(parts)])
+    return HangingOrientations.joined([parts[k0] for k0 in sorted(parts)])
 
 
 class _Stats:
@@ -254,13 +255,13 @@ def sweep(design: Design, kind: str, g, ori, fixed_sweep, *, on_chunk=None, prog
 class FreeRows:
     """The statics of a ``free`` design at k positions, at its hanging orientations.
 
-    ``hanging`` the :class:`~cdpr_design.statics.hanging_at.Hanging`; ``extra`` the
+    ``hanging`` the :class:`~cdpr_design.statics.hanging.results.HangingOrientations`; ``extra`` the
     :func:`columns` (name -> (k,)); ``feasible`` uint8, ``margin`` [N], ``tensions``
     (k, m) [N] (NaN where infeasible), ``lengths`` (k, m) [m] (NaN where it cannot hang);
     ``within`` where it hangs within the tension bounds (before the tilt limit).
     """
 
-    hanging: ha.Hanging
+    hanging: HangingOrientations
     extra: dict
     feasible: np.ndarray
     margin: np.ndarray

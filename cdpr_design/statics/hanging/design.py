@@ -1,0 +1,155 @@
+"""The hanging effector of a design: its arrays, its classification and the design-level answers.
+
+What the other layers ask of a :class:`~cdpr_design.model.design.Design`
+whose effector may hang: whether its cables leave the orientation free
+(:func:`underconstrained`) and whether the spec lets it hang
+(:func:`hangs_freely`); where it rests for given cable lengths under its
+spec (:func:`equilibrium`, the ``fk`` command; :func:`fk` without the
+spec's orientation rules); the orientation it hangs in at a commanded
+position (:func:`hanging_pose`); and, for a planar body on two cables, that
+orientation over a grid with the numba kernel (:func:`tilt_map`).  Each
+reads the design's arrays (:func:`design_arrays`) and asks the solvers on
+plain arrays (:mod:`~cdpr_design.statics.hanging.forward`,
+:mod:`~cdpr_design.statics.hanging.at_positions`), adding whether the
+tensions are within the design's limits.
+
+Units: SI (m, kg, N, rad).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from cdpr_design.errors import InputError
+from cdpr_design.model.design import is_point_mass, is_underconstrained
+from cdpr_design.statics.hanging import geometry as hg
+from cdpr_design.statics.hanging.at_positions import hanging_pose_arrays
+from cdpr_design.statics.hanging.forward import fk_arrays, fk_held_arrays
+from cdpr_design.statics.hanging.results import HangingFK, HangingPose, TiltMap
+
+
+def tilt_map_arrays(A, B, c, mass, g, positions):
+    """:func:`hanging_pose` for a planar two-cable body at many positions (k, 2) [m], batched
+    with numba.  Returns (phi (k,) [rad], tensions (k, 2) [N], status (k,))."""
+    from cdpr_design.kernels import hanging as K
+
+    geo = hg.checked_geometry(A, B, c, mass, g, True)
+    if geo.m != 2 or is_point_mass(geo.B):
+        raise InputError("the batched tilt map is for a planar rigid body on two cables")
+    P = np.ascontiguousarray(np.asarray(positions, float)[:, :2])
+    phi, t, _, status, _ = K.hanging_tilt_batch(geo.A, geo.B, geo.c, geo.mass, geo.g, P)
+    return phi, t, status
+
+
+def design_arrays(design):
+    """(outlets, attachments, centre of mass, mass, gravity, planar) of a design [m, kg, m/s^2]."""
+    planar = design.motion.name in ("2T", "1R2T")
+    return (design.outlets, design.attachments, np.asarray(design.effector.center_of_mass, float),
+            float(design.effector.mass), np.asarray(design.gravity, float), planar)
+
+
+def _within(design, t) -> bool:
+    return bool(np.all(t >= design.tension_min - 1e-9) and np.all(t <= design.tension_max + 1e-9))
+
+
+def fk(design, lengths, **options) -> HangingFK:
+    """:func:`~cdpr_design.statics.hanging.forward.fk_arrays` for a design: where it hangs for
+    cable ``lengths`` [m], with ``within_limits`` set from the design's tension limits."""
+    A, B, c, mass, g, planar = design_arrays(design)
+    r = fk_arrays(A, B, c, mass, g, lengths, planar, **options)
+    return dataclasses.replace(r, within_limits=None if r.indeterminate else _within(design, r.tensions))
+
+
+def hanging_pose(design, position, **options) -> HangingPose:
+    """:func:`~cdpr_design.statics.hanging.at_positions.hanging_pose_arrays` for a design: the
+    orientation its effector hangs in at ``position`` [m], with ``within_limits`` set from the
+    design's tension limits."""
+    A, B, c, mass, g, planar = design_arrays(design)
+    r = hanging_pose_arrays(A, B, c, mass, g, position, planar, **options)
+    return dataclasses.replace(r, within_limits=_within(design, r.tensions) if r.feasible else None)
+
+
+def underconstrained(design) -> bool:
+    """Whether the design's cables leave its orientation free
+    (:func:`~cdpr_design.model.design.is_underconstrained`)."""
+    A, B, _, _, _, planar = design_arrays(design)
+    return is_underconstrained(A.shape[0], B, planar)
+
+
+def hangs_freely(design) -> bool:
+    """``effector.orientation: free`` on an under-constrained design: its orientation is not
+    commanded but follows from the cables and gravity (every analysis uses the hanging pose)."""
+    return design.effector.orientation == "free" and underconstrained(design)
+
+
+def nominal_rotation(design) -> np.ndarray:
+    """The rotation of ``workspace.orientation`` (identity for 2T and 3T)."""
+    from cdpr_design.statics.kinematics import rotation_matrix
+
+    return rotation_matrix(*design.default_orientation_full())
+
+
+def held_rotation(design) -> np.ndarray | None:
+    """The rotation the spec holds the effector at for the forward problem, or None when
+    the orientation is among its unknowns: ``effector.orientation: fixed`` on a translational
+    motion (2T, 3T) holds it at the identity, the spec's model; rotational motions (1R2T, 3R3T)
+    find it from the lengths, and ``free`` lets it hang."""
+    if design.effector.orientation == "fixed" and not design.motion.rotational:
+        return np.eye(3)
+    return None
+
+
+def point_outlets(design, what: str) -> None:
+    """Raise an :class:`InputError` for a design with swivel pulleys (the hanging solvers
+    model point outlets); ``what`` names the analysis."""
+    from cdpr_design.statics.kinematics import has_pulleys
+
+    if has_pulleys(design):
+        raise InputError(f"{what}: the geometrico-static solver models point outlets, and this design has "
+                         "swivel pulleys (cables[i].pulley)")
+
+
+def equilibrium(design, lengths, **options) -> HangingFK:
+    """Where the design's effector rests for cable ``lengths`` [m] under its spec (the ``fk``
+    command): :func:`~cdpr_design.statics.hanging.forward.fk_held_arrays` at :func:`held_rotation` when
+    the spec holds the orientation, else :func:`~cdpr_design.statics.hanging.forward.fk_arrays` started
+    about :func:`nominal_rotation`.  Errors name
+    the cables; ``within_limits`` from the design's tension limits."""
+    point_outlets(design, "fk")
+    A, B, c, mass, g, planar = design_arrays(design)
+    held = held_rotation(design)
+    names = design.cable_names
+    if held is not None:
+        r = fk_held_arrays(A, B, c, mass, g, lengths, planar, held, names=names)
+    else:
+        options.setdefault("nominal", nominal_rotation(design))
+        r = fk_arrays(A, B, c, mass, g, lengths, planar, names=names, **options)
+    return dataclasses.replace(r, within_limits=None if r.indeterminate else _within(design, r.tensions))
+
+
+def tilt_map(design, axes=None, *, step: float | None = None) -> TiltMap:
+    """The hanging orientation over a grid for a planar design on two cables.
+
+    ``axes`` (xs, ys) [m], default the design's frame sampled every ``step``
+    [m] (default 0.01 m; planar2: 151 x 151 positions).
+    """
+    from cdpr_design.kernels import hanging as K
+
+    A, B, c, mass, g, planar = design_arrays(design)
+    if not planar:
+        raise InputError("the tilt map is for planar designs")
+    if axes is None:
+        st = 0.01 if step is None else float(step)
+        lo, hi = design.frame_lower, design.frame_upper
+        axes = tuple(lo[k] + st * np.arange(int(np.floor((hi[k] - lo[k]) / st + 1e-9)) + 1) for k in range(2))
+    X, Y = np.meshgrid(axes[0], axes[1], indexing="ij")
+    phi, t, status = tilt_map_arrays(A, B, c, mass, g, np.column_stack([X.ravel(), Y.ravel()]))
+    shape = X.shape
+    t = t.reshape(shape + (2,))
+    with np.errstate(invalid="ignore"):
+        within = (status.reshape(shape) == K.TILT_OK) & np.all(
+            (t >= design.tension_min - 1e-9) & (t <= design.tension_max + 1e-9), axis=2)
+    return TiltMap(tuple(np.asarray(a) for a in axes), phi.reshape(shape), t, status.reshape(shape),
+                   K.TILT_REASONS, within)
