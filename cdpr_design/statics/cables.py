@@ -153,7 +153,7 @@ def sagging_structures(design: Design, positions3: np.ndarray, orientation) -> t
     """
     from cdpr_design.kernels import sagging as KS
     from cdpr_design.statics import kinematics as kin
-    from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices
+    from cdpr_design.statics.wrenches import KINDS, combinations, wrench_vertices
 
     check_supported(design, pulleys=kin.has_pulleys(design))  # the catenaries start at point outlets
     arr = cable_arrays(design)
@@ -250,7 +250,7 @@ def sagging_samples(design: Design, positions: np.ndarray, Rb: np.ndarray, wreq:
     """
     from cdpr_design.kernels.sag_path import sag_samples
     from cdpr_design.statics import kinematics as kin
-    from cdpr_design.statics.pose import combinations
+    from cdpr_design.statics.wrenches import combinations
 
     check_supported(design, pulleys=kin.has_pulleys(design))
     arr = cable_arrays(design)

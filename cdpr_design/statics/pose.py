@@ -5,67 +5,21 @@ a workspace sweep's required wrenches, the orientation workspaces) goes
 through this module, so a cable or effector model changes the answers here,
 once.
 
-Kinds of workspace (:data:`KINDS`):
-
-- ``static``: gravity only;
-- ``wrench-feasible``: gravity plus every vertex of ``workspace.external_wrench``;
-- ``wrench-closure``: tension bounds ignored; the cables positively span the
-  wrench space (rank n).
+Kinds of workspace and their required wrenches: :mod:`cdpr_design.statics.wrenches`.
 """
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from cdpr_design.errors import SpecError
 from cdpr_design.io.tables import Table
 from cdpr_design.model.design import Design
 from cdpr_design.statics import cables
 from cdpr_design.statics import kinematics as kin
-
-#: workspace kinds and their kernel codes (= ``kernels.KIND_*``; a test checks)
-KINDS = {"static": 0, "wrench-feasible": 1, "wrench-closure": 2}
-
-
-def check_kind(kind: str) -> None:
-    """Raise a :class:`SpecError` naming ``--kind`` unless ``kind`` is one of :data:`KINDS`."""
-    if kind not in KINDS:
-        raise SpecError([("--kind", f"expected one of {', '.join(KINDS)}, got {kind!r}")])
-
-
-def pose_at(design: Design, position3, ori3) -> np.ndarray:
-    """The motion's pose coordinates of a full position (3,) [m] and orientation (3,) [rad]."""
-    full = np.concatenate([np.asarray(position3, float), np.asarray(ori3, float)])
-    return full[list(design.motion.pose_index)]
-
-
-def wrench_vertices(design: Design, kind: str, orientation=None) -> np.ndarray:
-    """Required-wrench vertices (nv, n) [N, N m] at a fixed orientation (3,) [rad].
-
-    Row 0 is the nominal wrench -gravity (the one whose tensions are
-    reported).  For ``wrench-feasible`` every vertex of the external wrench
-    box is added to gravity (dimensions where lower = upper contribute one value).
-    """
-    ori = design.default_orientation_full() if orientation is None else np.asarray(orientation, float)
-    g = kin.gravity_wrench(design, pose_at(design, np.zeros(3), ori))
-    rows = [-g]
-    box = design.workspace.external_wrench
-    if kind == "wrench-feasible" and box is not None:
-        lo, hi = np.asarray(box.lower), np.asarray(box.upper)
-        choices = [(lo[i],) if lo[i] == hi[i] else (lo[i], hi[i]) for i in range(lo.size)]
-        for v in itertools.product(*choices):
-            rows.append(-(g + np.asarray(v)))
-    return np.ascontiguousarray(np.array(rows, dtype=float))
-
-
-def combinations(m: int, n: int) -> np.ndarray:
-    """All subsets of n-1 of the m cables, as a (C(m, n-1), n-1) int64 array (hyperplane shifting)."""
-    k = max(n - 1, 0)
-    c = list(itertools.combinations(range(m), k))
-    return np.array(c, dtype=np.int64).reshape(len(c), k)
+from cdpr_design.statics.kinematics import pose_at  # noqa: F401 - the pose-level API, as before
+from cdpr_design.statics.wrenches import KINDS, check_kind, combinations, wrench_vertices
 
 
 @dataclass

@@ -30,7 +30,7 @@ import numpy as np
 from cdpr_design import kernels as K
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.model.design import Design
-from cdpr_design.statics.pose import KINDS, combinations
+from cdpr_design.statics.wrenches import KINDS, combinations
 
 OBJECTIVES = ("min-norm", "min-max", "min-sum")
 
