@@ -31,6 +31,7 @@ from cdpr_design.statics import hanging as H
 from cdpr_design.statics import kinematics as kin
 from tests.conftest import DESIGNS
 from tests.helpers import NO_KERNELS
+from tests.reference.tilt_map import tilt_map
 
 G2 = np.array([0.0, -9.81, 0.0])
 G3 = np.array([0.0, 0.0, -9.81])
@@ -568,7 +569,7 @@ def planar2_maps():
     out = {}
     for cy in (0.0, 0.03):
         dd = d.replace(effector=d.effector.__class__(**{**vars(d.effector), "center_of_mass": (0.0, cy, 0.0)}))
-        out[cy] = (dd, H.tilt_map(dd))
+        out[cy] = (dd, tilt_map(dd))
     return out
 
 

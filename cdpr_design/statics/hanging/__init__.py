@@ -3,7 +3,8 @@
 A cable can pull but never push, and a cable of length rho_i only keeps its
 attachment within rho_i of its outlet; the effector rests where its potential
 energy is smallest among the configurations those lengths allow (Carricato &
-Merlet 2013; Abbasnejad & Carricato 2015).  A robot is *under-constrained*
+Merlet 2013; Abbasnejad & Carricato 2015: the references are in
+:mod:`~cdpr_design.statics.hanging.forward`).  A robot is *under-constrained*
 when its taut cables cannot fix every free degree of freedom: fewer than 3
 cables for a planar rigid body, fewer than 6 for a spatial one, fewer than its
 dimension for a point mass (an effector whose attachments coincide); then its
@@ -34,33 +35,24 @@ One module a concept (SI units throughout; ``tilt_deg`` in degrees):
   :func:`hanging_pose`, :func:`hangs_freely`, ...).
 
 The names below are what the other layers use.
-
-References
-----------
-M. Carricato, J.-P. Merlet, "Stability analysis of underconstrained
-cable-driven parallel robots", IEEE Transactions on Robotics 29(1),
-288-296, 2013.
-G. Abbasnejad, M. Carricato, "Direct geometrico-static problem of
-underconstrained cable-driven parallel robots with n cables", IEEE
-Transactions on Robotics 31(2), 468-478, 2015.
 """
 
 from cdpr_design.model.design import has_weight, is_point_mass, is_underconstrained
 from cdpr_design.statics.hanging.at_positions import hanging_pose_arrays
 from cdpr_design.statics.hanging.design import (
     design_arrays, equilibrium, fk, hanging_pose, hangs_freely, held_rotation, nominal_rotation, point_outlets,
-    tilt_map, tilt_map_arrays, underconstrained,
+    underconstrained,
 )
 from cdpr_design.statics.hanging.forward import fk_arrays, fk_held_arrays
 from cdpr_design.statics.hanging.geometry import check_weight
 from cdpr_design.statics.hanging.results import (
-    Equilibrium, HangingFK, HangingPose, NotUnderconstrained, TiltMap, UnreachableLengths, orientation_of, tilt_of,
+    Equilibrium, HangingFK, HangingPose, NotUnderconstrained, UnreachableLengths, orientation_of, tilt_of,
 )
 
 __all__ = [
-    "Equilibrium", "HangingFK", "HangingPose", "NotUnderconstrained", "TiltMap", "UnreachableLengths",
+    "Equilibrium", "HangingFK", "HangingPose", "NotUnderconstrained", "UnreachableLengths",
     "check_weight", "design_arrays", "equilibrium", "fk", "fk_arrays", "fk_held_arrays", "hanging_pose",
     "hanging_pose_arrays", "hangs_freely", "has_weight", "held_rotation", "is_point_mass", "is_underconstrained",
-    "nominal_rotation", "orientation_of", "point_outlets", "tilt_map", "tilt_map_arrays", "tilt_of",
+    "nominal_rotation", "orientation_of", "point_outlets", "tilt_of",
     "underconstrained",
 ]

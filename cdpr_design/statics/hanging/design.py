@@ -6,9 +6,7 @@ whose effector may hang: whether its cables leave the orientation free
 (:func:`hangs_freely`); where it rests for given cable lengths under its
 spec (:func:`equilibrium`, the ``fk`` command; :func:`fk` without the
 spec's orientation rules); the orientation it hangs in at a commanded
-position (:func:`hanging_pose`); and, for a planar body on two cables, that
-orientation over a grid with the numba kernel (:func:`tilt_map`).  Each
-reads the design's arrays (:func:`design_arrays`) and asks the solvers on
+position (:func:`hanging_pose`).  Each reads the design's arrays (:func:`design_arrays`) and asks the solvers on
 plain arrays (:mod:`~cdpr_design.statics.hanging.forward`,
 :mod:`~cdpr_design.statics.hanging.at_positions`), adding whether the
 tensions are within the design's limits.
@@ -23,24 +21,10 @@ import dataclasses
 import numpy as np
 
 from cdpr_design.errors import InputError
-from cdpr_design.model.design import is_point_mass, is_underconstrained
-from cdpr_design.statics.hanging import geometry as hg
+from cdpr_design.model.design import is_underconstrained
 from cdpr_design.statics.hanging.at_positions import hanging_pose_arrays
 from cdpr_design.statics.hanging.forward import fk_arrays, fk_held_arrays
-from cdpr_design.statics.hanging.results import HangingFK, HangingPose, TiltMap
-
-
-def tilt_map_arrays(A, B, c, mass, g, positions):
-    """:func:`hanging_pose` for a planar two-cable body at many positions (k, 2) [m], batched
-    with numba.  Returns (phi (k,) [rad], tensions (k, 2) [N], status (k,))."""
-    from cdpr_design.kernels import hanging as K
-
-    geo = hg.checked_geometry(A, B, c, mass, g, True)
-    if geo.m != 2 or is_point_mass(geo.B):
-        raise InputError("the batched tilt map is for a planar rigid body on two cables")
-    P = np.ascontiguousarray(np.asarray(positions, float)[:, :2])
-    phi, t, _, status, _ = K.hanging_tilt_batch(geo.A, geo.B, geo.c, geo.mass, geo.g, P)
-    return phi, t, status
+from cdpr_design.statics.hanging.results import HangingFK, HangingPose
 
 
 def design_arrays(design):
@@ -127,29 +111,3 @@ def equilibrium(design, lengths, **options) -> HangingFK:
         options.setdefault("nominal", nominal_rotation(design))
         r = fk_arrays(A, B, c, mass, g, lengths, planar, names=names, **options)
     return dataclasses.replace(r, within_limits=None if r.indeterminate else _within(design, r.tensions))
-
-
-def tilt_map(design, axes=None, *, step: float | None = None) -> TiltMap:
-    """The hanging orientation over a grid for a planar design on two cables.
-
-    ``axes`` (xs, ys) [m], default the design's frame sampled every ``step``
-    [m] (default 0.01 m; planar2: 151 x 151 positions).
-    """
-    from cdpr_design.kernels import hanging as K
-
-    A, B, c, mass, g, planar = design_arrays(design)
-    if not planar:
-        raise InputError("the tilt map is for planar designs")
-    if axes is None:
-        st = 0.01 if step is None else float(step)
-        lo, hi = design.frame_lower, design.frame_upper
-        axes = tuple(lo[k] + st * np.arange(int(np.floor((hi[k] - lo[k]) / st + 1e-9)) + 1) for k in range(2))
-    X, Y = np.meshgrid(axes[0], axes[1], indexing="ij")
-    phi, t, status = tilt_map_arrays(A, B, c, mass, g, np.column_stack([X.ravel(), Y.ravel()]))
-    shape = X.shape
-    t = t.reshape(shape + (2,))
-    with np.errstate(invalid="ignore"):
-        within = (status.reshape(shape) == K.TILT_OK) & np.all(
-            (t >= design.tension_min - 1e-9) & (t <= design.tension_max + 1e-9), axis=2)
-    return TiltMap(tuple(np.asarray(a) for a in axes), phi.reshape(shape), t, status.reshape(shape),
-                   K.TILT_REASONS, within)

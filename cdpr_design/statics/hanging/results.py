@@ -4,8 +4,7 @@
 given cable lengths), :class:`HangingPose` (its hanging orientation at a
 commanded position), :class:`HangingOrientations` (that orientation at many
 positions, with a status code per position: :data:`OK`, ... and
-:data:`REASONS`), :class:`TiltMap` (it over a planar grid), and the two
-errors.  Units: SI (m, N, J, rad); ``tilt_deg`` in degrees.
+:data:`REASONS`), and the two errors.  Units: SI (m, N, J, rad); ``tilt_deg`` in degrees.
 """
 
 from __future__ import annotations
@@ -257,29 +256,3 @@ def orientation_of(R, planar: bool):
 def tilt_of(R, up) -> float:
     """The angle [deg] between R up and up (up a unit vector): the tilt from level."""
     return float(hg.tilt_many(np.asarray(R, float), up))
-
-
-@dataclass(frozen=True)
-class TiltMap:
-    """Hanging orientation over a grid of positions (planar body on two cables).
-
-    ``axes`` the x and y samples [m]; ``phi`` [rad], ``tilt_deg`` [deg],
-    ``tensions`` [N] (..., 2) and ``status`` (``kernels.hanging.TILT_*``) on the
-    grid (shape (nx, ny)); ``reasons`` the text of each status code;
-    ``within_limits`` where the hanging tensions respect the design's limits.
-    """
-
-    axes: tuple
-    phi: np.ndarray
-    tensions: np.ndarray
-    status: np.ndarray
-    reasons: tuple
-    within_limits: np.ndarray | None = None
-
-    @property
-    def tilt_deg(self) -> np.ndarray:
-        return np.degrees(np.abs(self.phi))
-
-    @property
-    def feasible(self) -> np.ndarray:
-        return self.status == 0
