@@ -95,10 +95,6 @@ def euler_xyz(R) -> np.ndarray:
     return np.stack([rx, np.arcsin(s02), rz], axis=-1)
 
 
-def from_euler_xyz(rx: float, ry: float, rz: float) -> np.ndarray:
-    return rotvec([rx, 0, 0]) @ rotvec([0, ry, 0]) @ rotvec([0, 0, rz])
-
-
 def angle_from(R, R0) -> np.ndarray:
     """The angles [rad] of rotations R (..., 3, 3) from R0 (3, 3 or ..., 3, 3): 2 asin(|R -
     R0|_F / sqrt 8), accurate near R0 too (where acos of the trace loses half the digits)."""
@@ -335,14 +331,9 @@ class Geometry:
             u = l / L[..., None]
         return Rb, l, L, u
 
-    def lagrangian_hessian(self, p, R, t) -> np.ndarray:
-        """Hessian (6, 6) of U + sum t_i |l_i| in (dp, w) at a configuration (t [N])."""
-        return self.lagrangian_hessian_many(np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3)),
-                                            np.reshape(t, (1, self.m)))[0]
-
     def lagrangian_hessian_many(self, P, R, t, cables=None) -> np.ndarray:
-        """:meth:`lagrangian_hessian` at k configurations: P (k, 3) [m], R (k, 3, 3), t (k, m)
-        [N] -> (k, 6, 6).
+        """Hessians (k, 6, 6) of U + sum t_i |l_i| in (dp, w) at k configurations: P (k, 3) [m],
+        R (k, 3, 3), t (k, m) [N].
 
         With S_i = [R b_i]_x, P_i = (I - u_i u_i^T) / L_i and J_i = [-I, S_i] (the
         derivative of l_i), cable i adds t_i (J_i^T P_i J_i + [0, 0; 0, (u_i . R b_i) I -
