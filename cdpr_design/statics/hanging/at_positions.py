@@ -78,7 +78,7 @@ SPATIAL_STARTS = ((0.0, 0.0, 0.0), (0.7, 0.0, 0.0), (-0.7, 0.0, 0.0), (0.0, 0.7,
 def point_mass_many(geo: hg.Geometry, P, planar: bool, R):
     """A point mass at positions P (k, 3): tensions (k, m) [N] balancing its weight with the
     cables from the common attachment (least squares) and whether they do (k,)."""
-    W, wg, *_ = Balance(geo, planar).parts(np.asarray(P, float), np.broadcast_to(R, (len(P), 3, 3)))
+    W, wg, *_ = Balance(geo, planar).wrenches(np.asarray(P, float), np.broadcast_to(R, (len(P), 3, 3)))
     d = 2 if planar else 3
     Wf, f = W[:, :d], -wg[:, :d]
     t = solve_sym(Wf.transpose(0, 2, 1) @ Wf, np.einsum("ndm,nd->nm", Wf, f))

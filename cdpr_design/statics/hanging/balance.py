@@ -37,7 +37,7 @@ class Balance:
         sc = np.array([1.0, 1.0, 1.0, geo.size, geo.size, geo.size]) * geo.weight
         self.scale = sc[self.rows]
 
-    def parts(self, P, R):
+    def wrenches(self, P, R):
         """W (N, 6, m), gravity wrench (N, 6), Rb, L, u of the cables."""
         geo = self.geo
         Rb, _, L, u = geo.cables_many(P, R)
@@ -47,14 +47,14 @@ class Balance:
         return W, wg, Rb, L, u
 
     def residual(self, P, R, t):
-        W, wg, *_ = self.parts(P, R)
+        W, wg, *_ = self.wrenches(P, R)
         F = np.einsum("nrm,nm->nr", W, t) + wg
         return F[:, self.rows] / self.scale
 
     def jacobian(self, P, R, t, w):
         """d(scaled residual)/d(rotation coordinates, tensions / weight) (N, r, nr + m)."""
         geo = self.geo
-        W, _, Rb, L, u = self.parts(P, R)
+        W, _, Rb, L, u = self.wrenches(P, R)
         Jw = geo.balance_jacobian_many(P, R, t, (Rb, None, L, u))[:, :, 3:] @ hg.left_jacobian(w)
         J = np.concatenate([Jw[:, :, self.rot], W * geo.weight], axis=2)[:, self.rows]
         return J / self.scale[:, None]
@@ -102,7 +102,7 @@ def newton_many(geo: hg.Geometry, P, planar: bool, R0, starts, iterations: int =
     full = np.tile(np.asarray(starts, float), (k, 1))
     base = np.broadcast_to(np.asarray(R0, float), (k, S, 3, 3)).reshape(-1, 3, 3)
     R = hg.rotvec(full) @ base
-    W, wg, *_ = bal.parts(Pn, R)
+    W, wg, *_ = bal.wrenches(Pn, R)
     Wr = W[:, bal.rows] / bal.scale[:, None]
     t = -solve_sym(Wr.transpose(0, 2, 1) @ Wr, np.einsum("nrm,nr->nm", Wr, wg[:, bal.rows] / bal.scale))
     t = np.nan_to_num(t) * geo.weight
