@@ -38,7 +38,9 @@ class Balance:
         self.scale = sc[self.rows]
 
     def wrenches(self, P, R):
-        """W (N, 6, m), gravity wrench (N, 6), Rb, L, u of the cables."""
+        """At N configurations (P (N, 3) [m], R (N, 3, 3)): the cables' unit wrenches W (N, 6, m)
+        [1, m], the weight's wrench (N, 6) [N, N m], and the cables' R b (N, m, 3) [m], lengths
+        L (N, m) [m] and directions u (N, m, 3)."""
         geo = self.geo
         Rb, _, L, u = geo.cables_many(P, R)
         W = np.concatenate([u, _cross(Rb, u)], axis=2).transpose(0, 2, 1)
