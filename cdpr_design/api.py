@@ -100,12 +100,12 @@ def fk(design: Design, lengths, guess=None):
 
 def hanging_pose(design: Design, position):
     """The orientation an under-constrained design's effector hangs in at ``position`` [m]
-    (a :class:`~cdpr_design.statics.hanging.HangingAt`: ``feasible``, ``reason``,
+    (a :class:`~cdpr_design.statics.hanging.HangingPose`: ``feasible``, ``reason``,
     ``orientation`` [rad], ``tilt_deg``, ``tensions`` [N], ``lengths`` [m], ``stable``),
     searched about ``workspace.orientation``."""
     from cdpr_design.statics import hanging
 
-    return hanging.pose_at(design, position, nominal=hanging.nominal_rotation(design))
+    return hanging.hanging_pose(design, position, nominal=hanging.nominal_rotation(design))
 
 
 def size_motors(design: Design, catalogue=None, *, step: float | None = None, trajectory: str | None = None,

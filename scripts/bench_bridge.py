@@ -27,7 +27,7 @@ from pathlib import Path
 import yaml
 
 from cdpr_design.plc import bridge as br
-from cdpr_design.motion import simulation
+from cdpr_design.motion import run
 from cdpr_design.model import spec
 from cdpr_design.motion import trajectory
 from cdpr_design.plc.ads import AdsTransport
@@ -81,7 +81,7 @@ def main():
     seconds = args.seconds or samples.duration + 0.5
 
     t = time.perf_counter()
-    off = simulation.simulate(d, samples).summary()["delay"]
+    off = run.simulate(d, samples).summary()["delay"]
     print(f"offline simulation (no gateway) of square_fast: {time.perf_counter() - t:.2f} s wall")
     off_delay = {k: off.get(k) for k in ("length_c1", "length_c2")}
 

@@ -14,7 +14,7 @@ subsample in the same process, scaled per pose:
     the stable one closest to level wins - the kernel's rule.
 
 The same map is also timed through the library's two other paths: the numpy
-twin of the kernel (:func:`cdpr_design.statics.hanging_at.planar_two_cable`,
+twin of the kernel (:func:`cdpr_design.statics.hanging.planar2.planar_two_cable`,
 what a ``fixed`` design's workspace uses while numba is not loaded) and the
 whole ``free`` workspace sweep (:func:`cdpr_design.workspaces.run`: the
 hanging orientation, then feasibility, margin and tensions there, streamed
@@ -139,14 +139,14 @@ def main():
     import dataclasses
 
     from cdpr_design import workspaces as ws
-    from cdpr_design.statics import hanging_at as ha
-    from cdpr_design.statics import hanging_core as hc
+    from cdpr_design.statics.hanging.at_positions import hanging_orientations
+    from cdpr_design.statics.hanging.geometry import Geometry
 
-    geo = hc.Geometry(A, B, c, mass, g)
+    geo = Geometry(A, B, c, mass, g)
     t_numpy = math.inf
     for _ in range(args.repeat):
         t0 = time.perf_counter()
-        ha.hang(geo, P, True, engine="numpy")
+        hanging_orientations(geo, P, True, engine="numpy")
         t_numpy = min(t_numpy, time.perf_counter() - t0)
     free = d.replace(effector=dataclasses.replace(d.effector, orientation="free", center_of_mass=tuple(c)))
     t0 = time.perf_counter()

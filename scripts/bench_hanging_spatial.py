@@ -4,7 +4,7 @@
 crane4 (a 60 kg load on four cables, ``effector.orientation: free``) is
 found hanging from three of its cables or all four; at each position of its 0.25 m
 grid (2,873 positions) the library finds the least tilted stable orientation
-with every cable pulling (:func:`cdpr_design.statics.hanging_at.hang`: batched
+with every cable pulling (:func:`cdpr_design.statics.hanging.at_positions.hanging_orientations`: batched
 numpy Newton per set of taut cables, a march along the four-cable family, then the
 stability of the candidates).
 This times
@@ -52,8 +52,9 @@ from cdpr_design import workspaces as ws  # noqa: E402
 from cdpr_design.kernels import parallel  # noqa: E402
 from cdpr_design.model import spec  # noqa: E402
 from cdpr_design.statics import hanging as H  # noqa: E402
-from cdpr_design.statics import hanging_at as ha  # noqa: E402
-from cdpr_design.statics import hanging_core as hc  # noqa: E402
+from cdpr_design.statics.hanging.at_positions import hanging_orientations  # noqa: E402
+from cdpr_design.statics.hanging.geometry import Geometry  # noqa: E402
+from cdpr_design.statics.hanging.results import OK  # noqa: E402
 from cdpr_design.workspaces.grid import positions3  # noqa: E402
 
 DESIGN = os.path.join(os.path.dirname(__file__), "..", "designs", "crane4.yaml")
@@ -137,12 +138,12 @@ def main() -> None:
     g = ws.make_grid(d)
     P = positions3(g, 0, g.size)
     A, B, c, mass, grav, planar = H.design_arrays(d)
-    geo = hc.Geometry(A, B, c, mass, grav)
+    geo = Geometry(A, B, c, mass, grav)
     ws.run(d, grid=ws.first_pose(g))  # numba's kernels loaded, the numpy paths warm
 
     with parallel.threads_kept():
         parallel.set_threads(1)
-        t_hang, got = best_of(a.repeat, lambda: ha.hang(geo, P, False))
+        t_hang, got = best_of(a.repeat, lambda: hanging_orientations(geo, P, False))
         t_one, _ = best_of(a.repeat, lambda: ws.run(d, grid=g))
     t_all, _ = best_of(a.repeat, lambda: ws.run(d, grid=g))
     threads = parallel.threads()
@@ -158,8 +159,8 @@ def main() -> None:
     tilt = got.tilt_deg
     four = np.sum(got.tensions > 1e-9 * geo.weight, axis=1) == 4
     three = [(i, r) for i, r in zip(idx, ref) if not four[i]]
-    both = [(tilt[i], r) for i, r in three if r is not None and got.status[i] == ha.OK]
-    status_same = sum((r is not None) == (got.status[i] == ha.OK) for i, r in three)
+    both = [(tilt[i], r) for i, r in three if r is not None and got.status[i] == OK]
+    status_same = sum((r is not None) == (got.status[i] == OK) for i, r in three)
     print(f"crane4, {n:,} positions (0.25 m grid); best of {a.repeat}; scipy on {len(idx)} positions, "
           f"{a.starts} starts per set of three taut cables")
     print(f"  scipy per position                 {1e3 * per_scipy:9.2f} ms")

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from cdpr_design.model import spec
-from cdpr_design.motion import simulation, trajectory
+from cdpr_design.motion import run, trajectory
 from cdpr_design.statics import cables
 from cdpr_design.statics.pose import combinations
 
@@ -86,7 +86,7 @@ def main() -> None:
     for m, d in designs.items():
         samples = trajectory.sample(d, "square_fast", hold_end=0.5)
         t0, c0 = time.perf_counter(), time.process_time()
-        res = simulation.simulate(d, samples)
+        res = run.simulate(d, samples)
         t, c = time.perf_counter() - t0, time.process_time() - c0
         t_ideal = t_ideal or c
         sub = f", {res.settings['cable_segments']} segments per cable" if "cable_segments" in res.settings else ""

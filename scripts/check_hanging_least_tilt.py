@@ -7,7 +7,7 @@ of balanced orientations (the lengths can still choose among them); its
 members with every tension >= 0 end where one tension reaches zero, which is a
 three-cable answer.  On five cables the family has two parameters, and the
 edges of its pulling region are arcs of four-cable families.
-:func:`cdpr_design.statics.hanging_at.hang` reports the least tilted stable
+:func:`cdpr_design.statics.hanging.at_positions.hanging_orientations` reports the least tilted stable
 answer among the ones its search finds: Newton's method for every three taut
 cables and for all of them, then marches along the four-cable families from
 them (docs/hanging-pose.md).  This script measures, at random
@@ -46,8 +46,8 @@ from scipy.spatial.transform import Rotation
 
 from cdpr_design.model.spec import load
 from cdpr_design.statics import hanging as H
-from cdpr_design.statics import hanging_at as ha
-from cdpr_design.statics import hanging_core as hc
+from cdpr_design.statics.hanging.at_positions import hanging_orientations
+from cdpr_design.statics.hanging.geometry import Geometry
 
 
 def least_tilt_reference(A, B, c, mass, g, p, starts: int, rng) -> tuple[float, np.ndarray | None, np.ndarray]:
@@ -123,7 +123,7 @@ def main(argv=None) -> int:
     print(f"{design.name}: {args.n} positions (seed {args.seed}), reference {time.perf_counter() - t0:.0f} s; "
           f"the reference's least tilted answer has every cable pulling at {every}")
     for m in [mass] + ([args.mass] if args.mass is not None else []):
-        h = ha.hang(hc.Geometry(A, B, c, m, g), P, False)
+        h = hanging_orientations(Geometry(A, B, c, m, g), P, False)
         gap = h.tilt_deg - tilt_ref
         both = np.isfinite(gap)
         worse = both & (gap > args.tol)

@@ -35,7 +35,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from cdpr_design.motion import simulation
+from cdpr_design.motion.run import simulate
 from cdpr_design.model import spec
 from cdpr_design.motion import trajectory  # noqa: E402
 
@@ -53,7 +53,7 @@ PAPER_T2 = {
 def run(design, name: str, delay: float) -> dict:
     samples = trajectory.sample(design, name, hold_end=0.5 + delay)
     t0 = time.perf_counter()
-    res = simulation.simulate(design, samples, delay=delay)
+    res = simulate(design, samples, delay=delay)
     wall = time.perf_counter() - t0
     s = res.summary()
     s["wall_s"] = wall

@@ -512,9 +512,9 @@ def test_pose_with_cable_models_and_free_orientation(data, where, kind):
     assume(design is not None)
     g = design.workspace.grid
     pose = [lo + f * (hi - lo) for lo, hi, f in zip(g.lower, g.upper, where)]
-    from cdpr_design.statics import hanging as H
+    from cdpr_design.statics.robot import facts
 
-    if not H.hangs_freely(design):
+    if facts(design).orientation != "hanging":
         pose += list(design.workspace.orientation)
     res, exc = outcome(pose_entry, design, ",".join(f"{v:.6g}" for v in pose), kind)
     if res is not None:

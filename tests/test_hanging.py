@@ -27,10 +27,12 @@ from scipy.optimize import brentq, linprog, minimize, minimize_scalar
 
 from cdpr_design.kernels import hanging as K
 from cdpr_design.model import spec
+from cdpr_design.statics.robot import underconstrained
 from cdpr_design.statics import hanging as H
 from cdpr_design.statics import kinematics as kin
 from tests.conftest import DESIGNS
 from tests.helpers import NO_KERNELS
+from tests.reference.tilt_map import tilt_map
 
 G2 = np.array([0.0, -9.81, 0.0])
 G3 = np.array([0.0, 0.0, -9.81])
@@ -165,19 +167,19 @@ def test_kernel_status_reasons():
     assert st[1] != K.TILT_OK and st[2] == K.TILT_PUSHING  # above the outlets / beyond them
     for s in st:
         assert isinstance(K.TILT_REASONS[s], str)
-    res = [H.pose_at(d, p) for p in P]
+    res = [H.hanging_pose(d, p) for p in P]
     assert [r.feasible for r in res] == [s == K.TILT_OK for s in st]
     assert "pushing" in res[2].reason
 
 
-def test_statics_pose_at_matches_kernel():
+def test_hanging_pose_matches_kernel():
     rng = np.random.default_rng(5)
     for _ in range(4):
         A, B, c, mass, W, Hh = random_planar2(rng)
         P = np.column_stack([rng.uniform(0, W, 30), rng.uniform(0, Hh - 0.1, 30)])
         phi, t, _, st, _ = K.hanging_tilt_batch(A, B, c, mass, G2, P)
         for k in range(len(P)):
-            r = H.pose_at_arrays(A, B, c, mass, G2, P[k], True)
+            r = H.hanging_pose_arrays(A, B, c, mass, G2, P[k], True)
             assert r.feasible == (st[k] == K.TILT_OK)
             if r.feasible:
                 assert r.orientation == pytest.approx(phi[k], abs=1e-9)
@@ -568,7 +570,7 @@ def planar2_maps():
     out = {}
     for cy in (0.0, 0.03):
         dd = d.replace(effector=d.effector.__class__(**{**vars(d.effector), "center_of_mass": (0.0, cy, 0.0)}))
-        out[cy] = (dd, H.tilt_map(dd))
+        out[cy] = (dd, tilt_map(dd))
     return out
 
 
@@ -612,7 +614,7 @@ def test_planar2_tilt_figures(planar2_maps, cy, origin_max, box_max):
     # the worst pose is where the robot really rests for its lengths (global minimum)
     i, j = np.unravel_index(k, tm.phi.shape)
     p = np.array([tm.axes[0][i], tm.axes[1][j]])
-    at = H.pose_at(d, p)
+    at = H.hanging_pose(d, p)
     r = H.fk(d, at.lengths)
     np.testing.assert_allclose(r.position, p, atol=1e-9)
     assert r.orientation == pytest.approx(tm.phi[i, j], abs=1e-9)
@@ -625,7 +627,7 @@ def test_planar2_tilt_is_larger_with_com_closer_to_the_line(planar2_maps):
 
 
 # ---------------------------------------------------------------------------
-# fully constrained designs, unreachable lengths, pose_at
+# fully constrained designs, unreachable lengths, hanging_pose
 # ---------------------------------------------------------------------------
 
 def wrench_closure(d, pose):
@@ -642,7 +644,7 @@ def wrench_closure(d, pose):
 ])
 def test_fully_constrained_gives_the_ik_pose_back(name, poses):
     d = spec.load(DESIGNS / name)
-    assert not H.underconstrained(d)
+    assert not underconstrained(d)
     for pose in poses:
         assert wrench_closure(d, pose)
         r = H.fk(d, kin.inverse_kinematics(d, pose))
@@ -672,38 +674,38 @@ def test_unreachable_lengths_raise():
 
 
 @NO_KERNELS
-def test_pose_at():
+def test_hanging_pose():
     d = spec.load(DESIGNS / "planar2.yaml")
-    r = H.pose_at(d, [0.75, 0.8])
+    r = H.hanging_pose(d, [0.75, 0.8])
     assert r.feasible and abs(r.orientation) < 1e-12 and r.tilt_deg < 1e-12 and r.stable
-    r = H.pose_at(d, [0.3, 0.5])
+    r = H.hanging_pose(d, [0.3, 0.5])
     assert r.feasible and r.tilt_deg == pytest.approx(math.degrees(abs(r.orientation)))
     back = H.fk(d, r.lengths)  # the lengths it reports put it there
     np.testing.assert_allclose(back.pose, r.pose, atol=1e-9)
     np.testing.assert_allclose(r.pose[:2], [0.3, 0.5])
     assert r.within_limits  # planar2: 0 <= t <= 20 N
-    high = H.pose_at(d, [0.75, 1.4])
+    high = H.hanging_pose(d, [0.75, 1.4])
     assert high.feasible and high.tensions.max() > 20 and high.within_limits is False
     assert H.fk(d, high.lengths).within_limits is False
-    bad = H.pose_at(d, [3.0, 1.0])
+    bad = H.hanging_pose(d, [3.0, 1.0])
     assert not bad.feasible and "pushing" in bad.reason and math.isnan(bad.tilt_deg)
     with pytest.raises(H.NotUnderconstrained):
-        H.pose_at(spec.load(DESIGNS / "planar4.yaml"), [1.0, 0.75])
+        H.hanging_pose(spec.load(DESIGNS / "planar4.yaml"), [1.0, 0.75])
     # a spatial rigid body on three cables: the balanced orientation is where fk puts it
     ang = np.array([0.0, 2.1, 4.2])
     A = np.column_stack([2 * np.cos(ang), 2 * np.sin(ang), np.full(3, 3.0)])
     B = np.column_stack([0.2 * np.cos(ang + 0.3), 0.2 * np.sin(ang + 0.3), np.full(3, 0.05)])
     c = np.array([0.02, -0.01, -0.1])
     for p in ([0.2, -0.1, 1.0], [1.2, 0.3, 1.5]):
-        a = H.pose_at_arrays(A, B, c, 2.0, G3, p, False)
+        a = H.hanging_pose_arrays(A, B, c, 2.0, G3, p, False)
         assert a.feasible and a.stable
         f = H.fk_arrays(A, B, c, 2.0, G3, a.lengths, False)
         np.testing.assert_allclose(f.position, p, atol=1e-8)
         np.testing.assert_allclose(f.rotation, a.rotation, atol=1e-8)
     # a point mass on one cable hangs only straight below its outlet
-    pm = H.pose_at_arrays(A[:1], np.zeros((1, 3)), np.zeros(3), 1.0, G3, [0.5, 0.0, 1.0], False)
+    pm = H.hanging_pose_arrays(A[:1], np.zeros((1, 3)), np.zeros(3), 1.0, G3, [0.5, 0.0, 1.0], False)
     assert not pm.feasible
-    pm = H.pose_at_arrays(A[:1], np.zeros((1, 3)), np.zeros(3), 1.0, G3, [2.0, 0.0, 1.0], False)
+    pm = H.hanging_pose_arrays(A[:1], np.zeros((1, 3)), np.zeros(3), 1.0, G3, [2.0, 0.0, 1.0], False)
     assert pm.feasible and pm.tensions[0] == pytest.approx(9.81)
 
 
@@ -712,5 +714,5 @@ def test_results_convert_to_plain_data():
     r = H.fk(d, [0.9, 1.2]).to_dict()
     assert set(r) >= {"position", "orientation", "tilt_deg", "tensions", "slack", "stable", "equilibria"}
     assert isinstance(r["orientation"], float)
-    a = H.pose_at(d, [0.4, 0.4]).to_dict()
+    a = H.hanging_pose(d, [0.4, 0.4]).to_dict()
     assert a["feasible"] and isinstance(a["tilt_deg"], float)

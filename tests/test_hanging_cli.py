@@ -25,6 +25,7 @@ from cdpr_design.model import spec
 from cdpr_design.statics import hanging as H
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.pose import evaluate_pose
+from cdpr_design.statics.robot import resolve
 from cdpr_design.workspaces.engine import StraightSweep
 from cdpr_design.workspaces.plan import Plan
 
@@ -160,7 +161,7 @@ def test_fully_constrained_design_same_under_both(tmp_path):
             "workspace": {"grid": {"step": 0.1}}}
     fixed = spec.from_dict(base)
     free = spec.from_dict({**base, "effector": {**base["effector"], "orientation": "free"}})
-    assert not H.underconstrained(free) and not H.hangs_freely(free)
+    assert resolve(free).orientation == "commanded" and not resolve(free).underconstrained
     a, ca = collect_chunks(ws.run, fixed)
     b, cb = collect_chunks(ws.run, free)
     for name in ("poses", "feasible", "margin", "tensions", "lengths"):
@@ -192,7 +193,7 @@ def free_rows(tmp_path_factory):
 
 
 @pytest.mark.slow
-def test_free_workspace_rows_are_pose_at_each_position(free_rows):
+def test_free_workspace_rows_are_the_hanging_pose_at_each_position(free_rows):
     path, out, summary, header, rows = free_rows
     assert header == ["x", "y", "feasible", "margin", "tension_c1", "tension_c2", "length_c1", "length_c2",
                       "tilt", "orientation_phi"]
@@ -299,7 +300,7 @@ def test_crane_workspace(tmp_path):
     assert s["max_tilt_hanging"] > 30 and s["tilt_limited"] > 0
     d = spec.load(CRANE4)
     k = int(np.flatnonzero(feas)[0])
-    at = H.pose_at(d, a[k, :3], nominal=np.eye(3))
+    at = H.hanging_pose(d, a[k, :3], nominal=np.eye(3))
     np.testing.assert_allclose(at.orientation, a[k, -3:], atol=1e-9)
     np.testing.assert_allclose(at.tensions, a[k, 5:9], rtol=1e-9)
     assert (tmp_path / "tilt_map.png").is_file()
@@ -330,7 +331,7 @@ def test_fk_point_mass_with_a_pushing_cable():
 
 def test_fk_free_reports_orientation_and_equilibria(tmp_path):
     path = free_planar2(tmp_path)
-    at = H.pose_at(spec.load(path), [0.3, 0.5])
+    at = H.hanging_pose(spec.load(path), [0.3, 0.5])
     res = invoke("fk", path, "--lengths", csv_numbers(at.lengths), "--json")
     f = json.loads(res.stdout)
     assert f["orientation"] == pytest.approx(at.orientation, abs=1e-9) and f["tilt"] == pytest.approx(at.tilt_deg)
@@ -338,7 +339,7 @@ def test_fk_free_reports_orientation_and_equilibria(tmp_path):
     assert f["model"] == "rigid" and f["effector_orientation"] == "free"
     assert all(e["energy"] >= f["energy"] and e["stable"] for e in f["equilibria"])
     d = spec.load(CRANE4)
-    L = H.pose_at(d, [1.0, 1.0, 2.0]).lengths
+    L = H.hanging_pose(d, [1.0, 1.0, 2.0]).lengths
     f = json.loads(invoke("fk", CRANE4, "--lengths", csv_numbers(L), "--json").stdout)
     assert len(f["orientation"]) == 3 and len(f["slack"]) == 1 and f["tilt"] == pytest.approx(24.787, abs=1e-3)
 

@@ -74,7 +74,7 @@ def rotation3(at):
 ])
 def test_released_at_the_hanging_pose_it_stays(name, position):
     d = spec.load(DESIGNS / f"{name}.yaml")
-    at = H.pose_at(d, position, nominal=H.nominal_rotation(d))
+    at = H.hanging_pose(d, position, nominal=H.nominal_rotation(d))
     assert at.feasible and at.tilt_deg > 10  # a real tilt, not the level pose
     dev_p, dev_r = release(d, position, rotation3(at), at.lengths, at.tensions, 1.0)
     assert dev_p < 1e-6 and dev_r < 1e-6
@@ -86,7 +86,7 @@ def test_released_at_the_hanging_pose_it_stays(name, position):
 
 def test_stable_pose_comes_back_unstable_one_runs_away():
     d = spec.load(PLANAR2)
-    at = H.pose_at(d, [0.3, 0.5])
+    at = H.hanging_pose(d, [0.3, 0.5])
     _, dev_r = release(d, [0.3, 0.5], rotation3(at), at.lengths, at.tensions, 6.0, kick=0.01, damping=0.02)
     assert dev_r < 1e-4  # it swings back and settles on the pose (measured ~4e-6 rad)
     # the same lengths' unstable equilibrium (upside down, both cables pulling)

@@ -27,6 +27,7 @@ from hypothesis import strategies as st
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
 from cdpr_design.motion import simulation as sim
+from cdpr_design.motion.run import simulate
 from cdpr_design.design import envelope as ev
 from cdpr_design.design import sizing as sz
 from cdpr_design.model import spec
@@ -299,7 +300,7 @@ def test_simulation_uses_pulley_lengths():
     """The MuJoCo model's cable lengths are arc + free segment (tendon from the tangent point)."""
     d = planar4(0.08)
     s = tr.sample(d, "tilt")
-    res = sim.simulate(d, s)
+    res = simulate(d, s)
     # the lengths the model reports are the pulley-aware lengths at the simulated pose (where
     # it is nearly at rest: MuJoCo's tendon lengths are those of the step's start)
     rest = np.flatnonzero(np.linalg.norm(s.velocity, axis=1) < 1e-3)

@@ -8,6 +8,7 @@ import pytest
 
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.motion import simulation as S
+from cdpr_design.motion.run import simulate
 from cdpr_design.model import spec
 from cdpr_design.motion import trajectory as tr
 from cdpr_design.motion.compare import estimate_delay
@@ -89,7 +90,7 @@ def test_servo_without_feedforward_lags_by_one_over_bandwidth(planar2):
     s = tr.sample(planar2, "square_slow", hold_end=0.3)
     s = _truncate(s, 3000)
     for wc, delay in [(20.0, 0.0), (50.0, 0.05)]:
-        r = S.simulate(planar2, s, servo_bandwidth=wc, feedforward=False, delay=delay, settle=0.0)
+        r = simulate(planar2, s, servo_bandwidth=wc, feedforward=False, delay=delay, settle=0.0)
         for i in range(2):
             d = estimate_delay(s.cycle_time, s.lengths[:, i], r.axis[:, i])
             assert d == pytest.approx(1 / wc + delay, abs=2e-3)
@@ -108,7 +109,7 @@ def test_square_fast_tracking_and_delay(planar2):
     """The paper's square at 1 m/s: tracking below 1.5 mm RMS with the trapezoidal profile and
     feed-forward; with a 130 ms transport delay the measured axis delay is 130 ms."""
     s = tr.sample(planar2, "square_fast", hold_end=0.4)
-    r = S.simulate(planar2, s)
+    r = simulate(planar2, s)
     summ = r.summary()
     assert summ["rms_error"] < 1.5e-3
     assert min(summ["min_tension"].values()) >= 0.0
@@ -117,7 +118,7 @@ def test_square_fast_tracking_and_delay(planar2):
         assert row["error_pct"] < 0.5
     for c in ("length_c1", "length_c2"):
         assert abs(summ["delay"][c]) < 2e-3
-    rd = S.simulate(planar2, s, delay=0.13)
+    rd = simulate(planar2, s, delay=0.13)
     sd = rd.summary()
     for c in ("length_c1", "length_c2"):
         assert sd["delay"][c] == pytest.approx(0.13, abs=2e-3)

@@ -181,7 +181,8 @@ def witness(design, kind: str, lower, upper, min_margin: float = 0.0) -> dict | 
     ``min_margin`` [N]) by the pose evaluation: its centre or a corner; None if all pass."""
     import itertools
 
-    from cdpr_design.statics.pose import evaluate_pose, pose_at
+    from cdpr_design.statics.kinematics import pose_at
+    from cdpr_design.statics.pose import evaluate_pose
 
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     points = [0.5 * (lower + upper)] + [np.array(c) for c in itertools.product(*zip(lower, upper))]

@@ -92,13 +92,13 @@ def fk_data(design, lengths, guess=None) -> dict:
 
 def hanging_fields(design, position) -> dict:
     """``pose --json``'s ``tilt`` and ``hanging`` keys for a ``fixed`` under-constrained design:
-    the orientation the free body would hang in at ``position`` [m] (:func:`statics.hanging.pose_at`);
+    the orientation the free body would hang in at ``position`` [m] (:func:`statics.hanging.hanging_pose`);
     both null for a weightless effector, which hangs in no particular orientation."""
     from cdpr_design.statics import hanging as H
 
     if not H.has_weight(design.effector.mass, design.gravity):
         return {"tilt": None, "hanging": None}
-    at = H.pose_at(design, position, nominal=H.nominal_rotation(design))
+    at = H.hanging_pose(design, position, nominal=H.nominal_rotation(design))
     return {"tilt": _num(at.tilt_deg), "hanging": {
         "feasible": bool(at.feasible), "reason": at.reason, "orientation": _orientation(at.orientation),
         "tilt": _num(at.tilt_deg), "tensions": _by_cable(design, at.tensions), "lengths": _by_cable(design, at.lengths),
@@ -108,7 +108,7 @@ def hanging_fields(design, position) -> dict:
 def free_pose_data(robot, position) -> dict:
     """The ``pose --json`` object of a hanging robot (``effector.orientation: free``) at
     ``position`` [m]: the hanging orientation and the statics there (the workspace's rows; cli.md keys)."""
-    from cdpr_design.statics.hanging_at import REASONS, OK
+    from cdpr_design.statics.hanging.results import REASONS, OK
     from cdpr_design.workspaces.hanging import free_pose
 
     design = robot.design
@@ -123,7 +123,7 @@ def free_pose_data(robot, position) -> dict:
     ori = _orientation(h.orientation[0]) if ok else None
     W = None
     if ok:
-        from cdpr_design.statics.hanging_core import euler_xyz
+        from cdpr_design.statics.hanging.geometry import euler_xyz
         from cdpr_design.statics.pose import _structure
         from cdpr_design import kernels as K
 

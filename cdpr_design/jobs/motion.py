@@ -165,7 +165,7 @@ def _check_simulation(settings: dict, hold: float | None) -> None:
 
 
 class SimulationRun(NamedTuple):
-    result: object  # motion.simulation.SimulationResult
+    result: object  # motion.run.SimulationResult
     summary: dict
     samples: object
     out: OutputDir
@@ -183,6 +183,7 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
     ``cable_segments``: segments of each sagging cable (2 to 200).  With elastic or sagging cables a
     sample without set-points is an InputError."""
     from cdpr_design.motion import simulation as sim
+    from cdpr_design.motion.run import simulate
 
     timings = Timings()
     settings = {"delay": delay, "servo_bandwidth": servo_bandwidth, "cable_damping": cable_damping,
@@ -198,8 +199,8 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
         out_dir.target(f)  # a foreign file (or a folder) of that name: refused before the simulation
     with stage(progress, f"simulate {name}") as cb, timings.phase("sweep_s"):
         try:
-            result = sim.simulate(design, samples, feedforward=feedforward, compensate_stretch=compensate_stretch,
-                                  progress=cb, cable_segments=cable_segments, **settings)
+            result = simulate(design, samples, feedforward=feedforward, compensate_stretch=compensate_stretch,
+                              progress=cb, cable_segments=cable_segments, **settings)
         except sim.SimulationError as exc:
             raise InputError(f"--timestep / --servo-bandwidth / --cable-damping: {exc}") from None
         except ValueError as exc:  # samples without set-points (the cable model has no solution there)

@@ -567,7 +567,4 @@ class Simulator:
                         outlet)
 
 
-# A whole trajectory: :mod:`cdpr_design.motion.run` (imported here for the historical names)
-from cdpr_design.motion.run import SimulationResult, simulate  # noqa: E402
-
-__all__ = ["SimState", "SimulationError", "SimulationResult", "Simulator", "build_xml", "simulate"]
+__all__ = ["SimState", "SimulationError", "Simulator", "build_xml"]

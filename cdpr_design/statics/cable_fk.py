@@ -21,7 +21,7 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.robot import Analysis, cable_arrays, cable_model, resolve
+from cdpr_design.statics.robot import Analysis, Robot, resolve
 
 #: Largest accepted residuals: closure [m] and equilibrium [N] (relative to the load + 1 N).
 LENGTH_TOL = 1e-9
@@ -64,10 +64,11 @@ class _Unknowns:
         return out
 
 
-def _unknowns(design: Design) -> _Unknowns:
-    from cdpr_design.statics.hanging import hangs_freely
-
-    if hangs_freely(design):
+def _unknowns(robot: Robot) -> _Unknowns:
+    """The pose coordinates solved for and the wrench rows balanced: a hanging effector also
+    finds its orientation (every rotation), others the motion's coordinates."""
+    design = robot.design
+    if robot.orientation == "hanging":
         idx = (0, 1, 5) if design.motion.planar else tuple(range(6))
         return _Unknowns(idx, idx, True)
     return _Unknowns(tuple(design.motion.pose_index), tuple(design.motion.wrench_rows), False)
@@ -158,15 +159,14 @@ def forward(design: Design, unstretched, guess=None) -> CableFK:
     """
     from scipy.optimize import least_squares
 
-    model = cable_model(design)
-    if model == "ideal":
+    robot = resolve(design, Analysis(command="fk"))  # refused: the cables below run from point outlets
+    if robot.cables == "ideal":
         raise InputError("cable model 'ideal': the forward kinematics of straight cables is kinematics.forward_kinematics")
-    resolve(design, Analysis(command="fk"))  # the cables below run from point outlets
     L0 = np.asarray(unstretched, float).reshape(-1)
     if L0.size != design.m or not np.all(np.isfinite(L0)) or np.any(L0 <= 0):
         raise InputError(f"--lengths: expected {design.m} positive unstretched lengths [m], got {list(L0)}")
-    arr = cable_arrays(design)
-    unk = _unknowns(design)
+    arr = robot.cable
+    unk = _unknowns(robot)
     n = len(unk.index)
     p0, t0, slack0 = _start(design, L0, guess, unk)
     X, Z, _, _ = _cable_frames(design, unk.full(design, p0), arr.up)
@@ -218,7 +218,7 @@ def _converged(fun, L0, taut, wscale) -> bool:
 
 
 def _result(design: Design, fun, x, H, VB, L0, arr, taut, wscale, unk: _Unknowns) -> CableFK:
-    from cdpr_design.statics.hanging_results import orientation_of, tilt_of
+    from cdpr_design.statics.hanging.results import orientation_of, tilt_of
 
     idx = np.flatnonzero(taut)
     length_res, force_res = _residuals(fun, L0, taut, wscale)

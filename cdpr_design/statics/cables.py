@@ -93,7 +93,8 @@ def sagging_structures(design: Design, positions3: np.ndarray, orientation) -> t
     """
     from cdpr_design.kernels import sagging as KS
     from cdpr_design.statics import kinematics as kin
-    from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices
+    from cdpr_design.statics.robot import KINDS, combinations
+    from cdpr_design.statics.wrenches import wrench_vertices
 
     resolve(design, Analysis(command="size-motors"))  # refused where the catenaries cannot start
     arr = cable_arrays(design)
@@ -189,7 +190,7 @@ def sagging_samples(design: Design, positions: np.ndarray, Rb: np.ndarray, wreq:
     whose shapes do not exist or do not converge has NaN and its status.
     """
     from cdpr_design.kernels.sag_path import sag_samples
-    from cdpr_design.statics.pose import combinations
+    from cdpr_design.statics.robot import combinations
 
     resolve(design, Analysis(command="motion"))  # refused where the catenaries cannot start
     arr = cable_arrays(design)

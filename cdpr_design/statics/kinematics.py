@@ -38,6 +38,12 @@ def pose_rotation(design: Design, pose) -> np.ndarray:
     return rotation_matrix(*full[3:])
 
 
+def pose_at(design: Design, position3, ori3) -> np.ndarray:
+    """The motion's pose coordinates of a full position (3,) [m] and orientation (3,) [rad]."""
+    full = np.concatenate([np.asarray(position3, float), np.asarray(ori3, float)])
+    return full[list(design.motion.pose_index)]
+
+
 @dataclass(frozen=True)
 class CableGeometry:
     """Cable geometry at one pose (all frame coordinates).

@@ -5,17 +5,11 @@ a workspace sweep's required wrenches, the orientation workspaces) goes
 through this module, so a cable or effector model changes the answers here,
 once.
 
-Kinds of workspace (:data:`KINDS`):
-
-- ``static``: gravity only;
-- ``wrench-feasible``: gravity plus every vertex of ``workspace.external_wrench``;
-- ``wrench-closure``: tension bounds ignored; the cables positively span the
-  wrench space (rank n).
+Kinds of workspace and their required wrenches: :mod:`cdpr_design.statics.wrenches`.
 """
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -25,30 +19,7 @@ from cdpr_design.model.design import Design
 from cdpr_design.statics import cables
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.robot import KINDS, Analysis, check_kind, combinations, has_pulleys, resolve
-
-def pose_at(design: Design, position3, ori3) -> np.ndarray:
-    """The motion's pose coordinates of a full position (3,) [m] and orientation (3,) [rad]."""
-    full = np.concatenate([np.asarray(position3, float), np.asarray(ori3, float)])
-    return full[list(design.motion.pose_index)]
-
-
-def wrench_vertices(design: Design, kind: str, orientation=None) -> np.ndarray:
-    """Required-wrench vertices (nv, n) [N, N m] at a fixed orientation (3,) [rad].
-
-    Row 0 is the nominal wrench -gravity (the one whose tensions are
-    reported).  For ``wrench-feasible`` every vertex of the external wrench
-    box is added to gravity (dimensions where lower = upper contribute one value).
-    """
-    ori = design.default_orientation_full() if orientation is None else np.asarray(orientation, float)
-    g = kin.gravity_wrench(design, pose_at(design, np.zeros(3), ori))
-    rows = [-g]
-    box = design.workspace.external_wrench
-    if kind == "wrench-feasible" and box is not None:
-        lo, hi = np.asarray(box.lower), np.asarray(box.upper)
-        choices = [(lo[i],) if lo[i] == hi[i] else (lo[i], hi[i]) for i in range(lo.size)]
-        for v in itertools.product(*choices):
-            rows.append(-(g + np.asarray(v)))
-    return np.ascontiguousarray(np.array(rows, dtype=float))
+from cdpr_design.statics.wrenches import wrench_vertices
 
 
 @dataclass

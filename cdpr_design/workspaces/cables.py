@@ -20,7 +20,7 @@ import numpy as np
 from cdpr_design.model.design import Grid
 from cdpr_design.statics import cables
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.pose import wrench_vertices
+from cdpr_design.statics.wrenches import wrench_vertices
 from cdpr_design.statics.robot import Robot
 from cdpr_design.workspaces.grid import Rows, grid3
 from cdpr_design.workspaces.parts import Base, Wrapper

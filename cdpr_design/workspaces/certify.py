@@ -30,7 +30,8 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.pose import combinations, wrench_vertices
+from cdpr_design.statics.robot import combinations
+from cdpr_design.statics.wrenches import wrench_vertices
 from cdpr_design.statics.robot import Analysis, resolve
 
 #: status codes of the kernels and their names in the outputs

@@ -18,7 +18,7 @@ import numpy as np
 
 from cdpr_design.errors import SpecError
 from cdpr_design.model.design import Design, Grid
-from cdpr_design.statics.pose import pose_at
+from cdpr_design.statics.kinematics import pose_at
 
 #: Largest grid swept without ``force=True`` (poses): about 10 s of the numba kernels on one core.
 MAX_POSES = 20_000_000

@@ -1,9 +1,9 @@
 """Workspaces of under-constrained designs: the tilt the effector hangs with, and its statics there.
 
-An under-constrained design (:func:`cdpr_design.statics.hanging.underconstrained`)
+An under-constrained design (:func:`cdpr_design.statics.robot.underconstrained`)
 cannot hold its effector's orientation; at each grid position the effector
 turns until the cables balance its weight, force and moment
-(:func:`cdpr_design.statics.hanging_at.hang`).  The resolved robot's
+(:func:`cdpr_design.statics.hanging.at_positions.hanging_orientations`).  The resolved robot's
 ``orientation`` says which part of a sweep plan (:mod:`cdpr_design.workspaces.plan`)
 takes it:
 
@@ -38,8 +38,9 @@ import numpy as np
 
 from cdpr_design.model.design import Design
 from cdpr_design.statics import hanging as H
-from cdpr_design.statics import hanging_at as ha
-from cdpr_design.statics import hanging_core as hc
+from cdpr_design.statics.hanging.at_positions import hanging_orientations
+from cdpr_design.statics.hanging.geometry import Geometry
+from cdpr_design.statics.hanging.results import HangingOrientations
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.robot import Robot, combinations
 from cdpr_design.workspaces.grid import Rows, chunk_poses
@@ -80,13 +81,13 @@ class Hanger:
     def __init__(self, robot: Robot, ori):
         design = robot.design
         A, B, c, mass, g, planar = H.design_arrays(design)
-        self.geo = hc.Geometry(A, B, c, mass, g)
+        self.geo = Geometry(A, B, c, mass, g)
         self.planar = planar
         self.design = design
         self.nominal = kin.rotation_matrix(*ori)
         # the planar two-cable kernel where the robot's sweep runs the kernels (a hanging
         # effector's statics always do)
-        two = planar and design.m == 2 and not hc.is_point_mass(B)
+        two = planar and design.m == 2 and not H.is_point_mass(B)
         numba = robot.engine == "numba"
         self.engine = "numba" if two and numba else "numpy"
         # the numpy search on the kernels' threads where the sweep runs the kernels anyway (their
@@ -97,7 +98,7 @@ class Hanger:
         if self.threaded:
             h = _hang_in_blocks(self.geo, P3, self.planar, self.nominal)
         else:
-            h = ha.hang(self.geo, P3, self.planar, nominal=self.nominal, engine=self.engine)
+            h = hanging_orientations(self.geo, P3, self.planar, nominal=self.nominal, engine=self.engine)
         ori = h.orientation.reshape(len(P3), -1)
         extra = {"tilt": h.tilt_deg}
         for j, name in enumerate(columns(self.design)[1:]):
@@ -115,9 +116,9 @@ HANG_GRAIN = 256
 HANG_BLOCK = 4096
 
 
-def _hang_in_blocks(geo: hc.Geometry, P, planar: bool, nominal) -> ha.Hanging:
-    """:func:`~cdpr_design.statics.hanging_at.hang` (numpy) at positions ``P`` (k, 3) [m], in
-    blocks of rows on the kernels' threads (:func:`~cdpr_design.kernels.parallel.run_blocks`):
+def _hang_in_blocks(geo: Geometry, P, planar: bool, nominal) -> HangingOrientations:
+    """:func:`~cdpr_design.statics.hanging.at_positions.hanging_orientations` (numpy) at positions
+    ``P`` (k, 3) [m], in blocks of rows on the kernels' threads (:func:`~cdpr_design.kernels.parallel.run_blocks`):
     its stacked linear algebra and einsum release the GIL, so the blocks share the cores
     (crane4's 2,873 positions: 1.4 s -> 0.95 s on two).  Each position is solved on its own,
     so the answers do not depend on the blocks (tests/test_parallel.py)."""
@@ -125,14 +126,14 @@ def _hang_in_blocks(geo: hc.Geometry, P, planar: bool, nominal) -> ha.Hanging:
 
     k = len(P)
     if k == 0:
-        return ha.hang(geo, P, planar, nominal=nominal)
-    parts: dict[int, ha.Hanging] = {}
+        return hanging_orientations(geo, P, planar, nominal=nominal)
+    parts: dict[int, HangingOrientations] = {}
 
     def block(k0, k1):
-        parts[k0] = ha.hang(geo, P[k0:k1], planar, nominal=nominal)  # one key a block: no race
+        parts[k0] = hanging_orientations(geo, P[k0:k1], planar, nominal=nominal)  # one key a block: no race
 
     run_blocks(block, k, grain=max(HANG_GRAIN, min(-(-k // threads()), HANG_BLOCK)))
-    return ha.Hanging.joined([parts[k0] for k0 in sorted(parts)])
+    return HangingOrientations.joined([parts[k0] for k0 in sorted(parts)])
 
 
 class _Stats:
@@ -204,13 +205,13 @@ class HeldTilt(Wrapper):
 class FreeRows:
     """The statics of a ``free`` design at k positions, at its hanging orientations.
 
-    ``hanging`` the :class:`~cdpr_design.statics.hanging_at.Hanging`; ``extra`` the
+    ``hanging`` the :class:`~cdpr_design.statics.hanging.results.HangingOrientations`; ``extra`` the
     :func:`columns` (name -> (k,)); ``feasible`` uint8, ``margin`` [N], ``tensions``
     (k, m) [N] (NaN where infeasible), ``lengths`` (k, m) [m] (NaN where it cannot hang);
     ``within`` where it hangs within the tension bounds (before the tilt limit).
     """
 
-    hanging: ha.Hanging
+    hanging: HangingOrientations
     extra: dict
     feasible: np.ndarray
     margin: np.ndarray

@@ -16,7 +16,7 @@ import numpy as np
 
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.interference import HIT_NAMES, hardware_arrays, in_cable_planes
-from cdpr_design.statics.pose import wrench_vertices
+from cdpr_design.statics.wrenches import wrench_vertices
 from cdpr_design.statics.robot import Robot
 from cdpr_design.workspaces.grid import Rows
 from cdpr_design.workspaces.parts import Base

@@ -1,9 +1,10 @@
 """The results of the hanging-effector solvers (:mod:`cdpr_design.statics.hanging`).
 
 :class:`Equilibrium` and :class:`HangingFK` (where the effector rests for
-given cable lengths), :class:`HangingAt` (its hanging orientation at a
-commanded position), :class:`TiltMap` (that orientation over a planar grid),
-and the two errors.  Units: SI (m, N, J, rad); ``tilt_deg`` in degrees.
+given cable lengths), :class:`HangingPose` (its hanging orientation at a
+commanded position), :class:`HangingOrientations` (that orientation at many
+positions, with a status code per position: :data:`OK`, ... and
+:data:`REASONS`), and the two errors.  Units: SI (m, N, J, rad); ``tilt_deg`` in degrees.
 """
 
 from __future__ import annotations
@@ -14,7 +15,28 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cdpr_design.errors import InputError
-from cdpr_design.statics import hanging_core as hc
+from cdpr_design.statics.hanging import geometry as hg
+
+
+#: A stable equilibrium with every tension >= 0 was found.
+OK = 0
+#: Balanced orientations exist, but each needs a pushing (negative) cable.
+PUSHING = 1
+#: Balanced orientations with tensions >= 0 exist, but none is stable.
+UNSTABLE = 2
+#: No orientation balances the weight with the cables taut.
+NO_BALANCE = 3
+#: Degenerate input: a zero-length cable, or every orientation balances.
+DEGENERATE = 4
+
+#: Why a position has no hanging orientation, indexed by status code.
+REASONS = (
+    "ok",
+    "every balanced orientation needs a pushing cable",
+    "the balanced orientations with pulling cables are unstable",
+    "no orientation balances the weight with the cables taut",
+    "degenerate geometry (zero-length cable or indifferent balance)",
+)
 
 
 class UnreachableLengths(InputError):
@@ -110,11 +132,13 @@ class Equilibrium:
 
 @dataclass(frozen=True)
 class HangingFK(Equilibrium):
-    """:func:`fk`: the lowest-energy equilibrium, plus every other stable one found.
+    """:func:`~cdpr_design.statics.hanging.forward.fk_arrays`: the lowest-energy equilibrium,
+    plus every other stable one found.
 
     ``equilibria`` holds the other stable equilibria (each an
     :class:`Equilibrium` with its ``energy``), lowest energy first; ``model``
-    is ``point`` or ``rigid``; ``underconstrained`` as in the module doc.
+    is ``point``, ``held`` or ``rigid``; ``underconstrained`` whether the cables leave the
+    orientation free (:func:`~cdpr_design.model.design.is_underconstrained`).
     """
 
     equilibria: tuple = ()
@@ -129,8 +153,8 @@ class HangingFK(Equilibrium):
 
 
 @dataclass(frozen=True)
-class HangingAt:
-    """:func:`pose_at`: the hanging orientation at a commanded position.
+class HangingPose:
+    """:func:`~cdpr_design.statics.hanging.design.hanging_pose`: the hanging orientation at a commanded position.
 
     ``feasible`` False comes with ``reason``; then orientation fields are NaN.
     ``lengths`` [m] are the cable lengths that put the effector there;
@@ -177,41 +201,58 @@ class HangingAt:
                 "within_limits": self.within_limits}
 
 
+@dataclass
+class HangingOrientations:
+    """The hanging orientation at k positions.
+
+    ``rotation`` (k, 3, 3) and ``tensions`` (k, m) [N] are NaN where
+    ``status`` (k,) is not :data:`OK`; ``hessian_min`` (k,) the smallest
+    eigenvalue of the reduced Hessian there; ``up`` the frame's unit vertical
+    (-g/|g|).  ``alternatives`` (when asked for) holds, per position, the
+    other balanced orientations found with tensions >= 0, as (rotation,
+    tensions, stable) tuples.
+    """
+
+    rotation: np.ndarray
+    tensions: np.ndarray
+    status: np.ndarray
+    hessian_min: np.ndarray
+    planar: bool
+    up: np.ndarray
+    alternatives: list = field(default_factory=list)
+
+    @classmethod
+    def joined(cls, parts: list["HangingOrientations"]) -> "HangingOrientations":
+        """The answers of consecutive runs of positions (``parts`` in order) as one."""
+        first = parts[0]
+        return cls(*(np.concatenate([getattr(h, name) for h in parts])
+                     for name in ("rotation", "tensions", "status", "hessian_min")),
+                   first.planar, first.up, [a for h in parts for a in h.alternatives])
+
+    @property
+    def feasible(self) -> np.ndarray:
+        return self.status == OK
+
+    @property
+    def tilt_deg(self) -> np.ndarray:
+        """Angle [deg] between the platform's vertical R up and up; NaN where it cannot hang."""
+        return hg.tilt_many(self.rotation, self.up)
+
+    @property
+    def orientation(self) -> np.ndarray:
+        """phi (k,) [rad] about z (planar) or (k, 3) [rx, ry, rz] [rad], R = Rx Ry Rz (spatial)."""
+        if self.planar:
+            return np.arctan2(self.rotation[:, 1, 0], self.rotation[:, 0, 0])
+        return hg.euler_xyz(self.rotation)
+
+
 def orientation_of(R, planar: bool):
     """phi [rad] about z (planar) or [rx, ry, rz] [rad] with R = Rx Ry Rz (spatial)."""
     if planar:
         return float(math.atan2(R[1, 0], R[0, 0]))
-    return [float(a) for a in hc.euler_xyz(R)]
+    return [float(a) for a in hg.euler_xyz(R)]
 
 
 def tilt_of(R, up) -> float:
     """The angle [deg] between R up and up (up a unit vector): the tilt from level."""
-    from cdpr_design.statics.hanging_core import tilt_many
-
-    return float(tilt_many(np.asarray(R, float), up))
-
-
-@dataclass(frozen=True)
-class TiltMap:
-    """Hanging orientation over a grid of positions (planar body on two cables).
-
-    ``axes`` the x and y samples [m]; ``phi`` [rad], ``tilt_deg`` [deg],
-    ``tensions`` [N] (..., 2) and ``status`` (``kernels.hanging.TILT_*``) on the
-    grid (shape (nx, ny)); ``reasons`` the text of each status code;
-    ``within_limits`` where the hanging tensions respect the design's limits.
-    """
-
-    axes: tuple
-    phi: np.ndarray
-    tensions: np.ndarray
-    status: np.ndarray
-    reasons: tuple
-    within_limits: np.ndarray | None = None
-
-    @property
-    def tilt_deg(self) -> np.ndarray:
-        return np.degrees(np.abs(self.phi))
-
-    @property
-    def feasible(self) -> np.ndarray:
-        return self.status == 0
+    return float(hg.tilt_many(np.asarray(R, float), up))

@@ -1,10 +1,10 @@
-"""Geometry, statics and local solvers of a hanging effector (plain arrays).
+"""The geometry and statics of a hanging effector at one configuration (plain arrays).
 
 The building blocks of :mod:`cdpr_design.statics.hanging`: rotations, the
-exact lowest point of an intersection of balls, force and moment balance with
-its Jacobian, the reduced Hessian (stability), Newton refinement of an
-equilibrium with an active set of taut cables, and two scipy helpers (a
-feasibility phase and a local constrained minimisation) used as fall-backs.
+exact lowest point of an intersection of balls, the effector on its cables
+(:class:`Geometry`: cable vectors, force and moment balance with its
+Jacobian, the reduced Hessian that judges stability) and the checked
+construction of one from a caller's arrays (:func:`checked_geometry`).
 
 Conventions (docs/spec-format.md): outlets A (m, 3) [m], attachments B (m, 3)
 in platform coordinates [m], centre of mass c (3,) [m], mass [kg], gravity g
@@ -24,7 +24,8 @@ import math
 
 import numpy as np
 
-from cdpr_design.model.design import is_point_mass, is_underconstrained  # noqa: F401 - in the model: the spec checks use it
+from cdpr_design.errors import InputError
+from cdpr_design.model.design import has_weight
 
 DOFS_PLANAR = (0, 1, 5)
 DOFS_SPATIAL = (0, 1, 2, 3, 4, 5)
@@ -76,6 +77,14 @@ def rot_z(phi: float) -> np.ndarray:
     return np.array([[co, -si, 0.0], [si, co, 0.0], [0.0, 0.0, 1.0]])
 
 
+def rot_z_many(phi) -> np.ndarray:
+    """Rotations (k, 3, 3) about z by angles phi (k,) [rad]."""
+    co, si = np.cos(phi), np.sin(phi)
+    R = np.zeros(np.shape(phi) + (3, 3))
+    R[..., 0, 0], R[..., 0, 1], R[..., 1, 0], R[..., 1, 1], R[..., 2, 2] = co, -si, si, co, 1.0
+    return R
+
+
 def euler_xyz(R) -> np.ndarray:
     """(rx, ry, rz) [rad] with R = Rx(rx) Ry(ry) Rz(rz) (ry in [-pi/2, pi/2]); R (..., 3, 3) -> (..., 3)."""
     R = np.asarray(R, float)
@@ -84,10 +93,6 @@ def euler_xyz(R) -> np.ndarray:
     rx = np.where(lock, np.arctan2(R[..., 2, 1], R[..., 1, 1]), np.arctan2(-R[..., 1, 2], R[..., 2, 2]))
     rz = np.where(lock, 0.0, np.arctan2(-R[..., 0, 1], R[..., 0, 0]))
     return np.stack([rx, np.arcsin(s02), rz], axis=-1)
-
-
-def from_euler_xyz(rx: float, ry: float, rz: float) -> np.ndarray:
-    return rotvec([rx, 0, 0]) @ rotvec([0, ry, 0]) @ rotvec([0, 0, rz])
 
 
 def angle_from(R, R0) -> np.ndarray:
@@ -326,14 +331,9 @@ class Geometry:
             u = l / L[..., None]
         return Rb, l, L, u
 
-    def lagrangian_hessian(self, p, R, t) -> np.ndarray:
-        """Hessian (6, 6) of U + sum t_i |l_i| in (dp, w) at a configuration (t [N])."""
-        return self.lagrangian_hessian_many(np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3)),
-                                            np.reshape(t, (1, self.m)))[0]
-
     def lagrangian_hessian_many(self, P, R, t, cables=None) -> np.ndarray:
-        """:meth:`lagrangian_hessian` at k configurations: P (k, 3) [m], R (k, 3, 3), t (k, m)
-        [N] -> (k, 6, 6).
+        """Hessians (k, 6, 6) of U + sum t_i |l_i| in (dp, w) at k configurations: P (k, 3) [m],
+        R (k, 3, 3), t (k, m) [N].
 
         With S_i = [R b_i]_x, P_i = (I - u_i u_i^T) / L_i and J_i = [-I, S_i] (the
         derivative of l_i), cable i adds t_i (J_i^T P_i J_i + [0, 0; 0, (u_i . R b_i) I -
@@ -406,211 +406,50 @@ class Geometry:
         return out
 
 
+def point_mass_rotation(geo: Geometry, planar: bool, nominal=None) -> np.ndarray:
+    """The rotation that puts a point mass's centre of mass straight below its attachment
+    point (the smallest such rotation; ``nominal`` when they coincide)."""
+    down = geo.g / np.linalg.norm(geo.g)
+    arm = geo.c - geo.B[0]
+    if np.linalg.norm(arm) > 1e-12 * geo.size:
+        if planar:
+            return rot_z(math.atan2(down[1], down[0]) - math.atan2(arm[1], arm[0]))
+        return align(arm, down)
+    return np.eye(3) if nominal is None else np.asarray(nominal, float)
+
+
 # ----------------------------------------------------------------------------
-# local solvers
+# from a caller's arrays
 # ----------------------------------------------------------------------------
 
-def nonnegative_tensions(W, w):
-    """Tensions t >= 0 with W t = w: the least-squares min-norm solution when it is
-    non-negative, else scipy's NNLS.  Returns (t, residual 2-norm)."""
-    t, *_ = np.linalg.lstsq(W, w, rcond=None)
-    if np.all(t >= 0):
-        return t, float(np.linalg.norm(W @ t - w))
-    from scipy.optimize import nnls
-    t, r = nnls(W, w)
-    return t, float(r)
+def check_weight(mass: float, g) -> None:
+    """An :class:`InputError` naming ``effector.mass`` and ``gravity`` unless the effector has a weight:
+    an under-constrained effector hangs from its cables under it (mass [kg] > 0, |g| [m/s^2] > 0)."""
+    gn = float(np.linalg.norm(np.asarray(g, float)))
+    if not has_weight(mass, g):
+        raise InputError(f"effector.mass, gravity: an under-constrained effector hangs from its cables under its "
+                         f"weight, so it needs effector.mass > 0 and a non-zero gravity (got {mass:g} kg and "
+                         f"|gravity| = {gn:g} m/s^2)")
 
 
-def min_norm_nonnegative(W, w):
-    """The minimum 2-norm t >= 0 with W t = w (a small QP; SLSQP)."""
-    t0, r = nonnegative_tensions(W, w)
-    from scipy.optimize import minimize
-    sol = minimize(lambda t: 0.5 * t @ t, t0, jac=lambda t: t, method="SLSQP",
-                   bounds=[(0.0, None)] * W.shape[1],
-                   constraints=[{"type": "eq", "fun": lambda t: W @ t - w, "jac": lambda t: W}],
-                   options={"ftol": 1e-14, "maxiter": 200})
-    t = np.maximum(sol.x, 0.0)
-    return (t, float(np.linalg.norm(W @ t - w))) if sol.success else (t0, r)
+def checked_geometry(A, B, c, mass, g, planar: bool) -> Geometry:
+    """The :class:`Geometry` of a caller's arrays: ``A``, ``B`` (m, 2|3) [m] padded to 3-D, ``c``
+    [m] and ``g`` [m/s^2] likewise; an :class:`InputError` for mismatched shapes, a weightless
+    effector (:func:`check_weight`) or a ``planar`` design off the z = 0 plane."""
+    A = np.atleast_2d(np.asarray(A, float))
+    B = np.atleast_2d(np.asarray(B, float))
+    pad = lambda X: np.hstack([X, np.zeros((X.shape[0], 3 - X.shape[1]))]) if X.shape[1] < 3 else X
+    A, B = pad(A), pad(B)
+    c = np.concatenate([np.asarray(c, float).ravel(), np.zeros(3)])[:3]
+    g = np.concatenate([np.asarray(g, float).ravel(), np.zeros(3)])[:3]
+    if A.shape != B.shape or A.shape[0] < 1:
+        raise InputError(f"outlets {A.shape} and attachments {B.shape} must both be (m, 3)")
+    check_weight(mass, g)
+    if planar and (np.any(A[:, 2] != 0) or np.any(B[:, 2] != 0) or c[2] != 0 or g[2] != 0):
+        raise InputError("a planar design lives in the z = 0 plane")
+    return Geometry(A, B, c, mass, g)
 
 
-def newton(geo: Geometry, rho, p, R, t, S, dofs, tol_f, maxit=60):
-    """Newton's method on force + moment balance (``dofs`` rows) and the taut
-    cables' lengths |l_i| = rho_i (i in S), unknowns the configuration and t_S.
-
-    Steps solve the linearised system in the least-squares sense (a cable set
-    that over-determines the pose gives the minimum-norm tension update) and
-    are halved until the scaled residual decreases.  Returns (p, R, t,
-    balance residual [N, N m], length residual [m]).
-    """
-    dofs = list(dofs)
-    S = list(S)
-    t = np.array(t, float)
-    ls = geo.size
-
-    def res(p, R, t):
-        b = geo.balance(p, R, t)[dofs]
-        L = geo.cables(p, R)[2]
-        return b, L[S] - rho[S]
-
-    def merit(b, e):
-        sc = np.array([1.0 if k < 3 else ls for k in dofs])
-        return float(np.linalg.norm(b / sc) / geo.weight + np.linalg.norm(e) / ls)
-
-    b, e = res(p, R, t)
-    cur = merit(b, e)
-    for _ in range(maxit):
-        if np.max(np.abs(b), initial=0.0) <= tol_f and np.max(np.abs(e), initial=0.0) <= 1e-13 * (1 + rho.max()):
-            break
-        Jz, Jt, G = geo.jacobian(p, R, t, S)
-        J = np.block([[Jz[np.ix_(dofs, dofs)], Jt[dofs]], [G[:, dofs], np.zeros((len(S), len(S)))]])
-        F = np.concatenate([b, e])
-        step, *_ = np.linalg.lstsq(J, -F, rcond=None)
-        lam = 1.0
-        improved = False
-        for _ in range(16):
-            dz = np.zeros(6)
-            dz[dofs] = lam * step[: len(dofs)]
-            p2 = p + dz[:3]
-            R2 = rotvec(dz[3:]) @ R
-            t2 = t.copy()
-            t2[S] += lam * step[len(dofs):]
-            b2, e2 = res(p2, R2, t2)
-            new = merit(b2, e2)
-            if new < cur or (new <= cur * (1 + 1e-12) and lam == 1.0):
-                p, R, t, b, e, cur = p2, R2, t2, b2, e2, new
-                improved = True
-                break
-            lam *= 0.5
-        if not improved:
-            break
-    return p, R, t, float(np.max(np.abs(b), initial=0.0)), float(np.max(np.abs(e), initial=0.0))
-
-
-def refine(geo: Geometry, rho, p, R, dofs, tol_f, ltol, active_tol=1e-7):
-    """An equilibrium near (p, R): Newton's method with an active set of taut cables.
-
-    Starts with the cables whose length is within ``active_tol`` [m] of rho;
-    drops a cable whose tension turns negative, adds one that the pose
-    stretches beyond rho + ``ltol``, and repeats.  When more cables are taut
-    than the pose has degrees of freedom and they lock it, the tensions are
-    statically indeterminate: the minimum-norm non-negative ones are kept.
-    Returns (p, R, t, S, balance residual, indeterminate, length residual), or
-    None when Newton's method does not converge (the caller then minimises first).
-    """
-    dofs = list(dofs)
-    n = len(dofs)
-    L = geo.cables(p, R)[2]
-    S = sorted(int(i) for i in np.flatnonzero(L >= rho - active_tol))
-    ttol = 1e-9 * geo.weight
-    seen = set()
-    for _ in range(3 * geo.m + 3):
-        key = tuple(S)
-        if key in seen:
-            break
-        seen.add(key)
-        t = np.zeros(geo.m)
-        W, wg = geo.wrenches(p, R)
-        if S:
-            t[S], _ = nonnegative_tensions(W[np.ix_(dofs, S)], -wg[dofs])
-        p1, R1, t1, rb, rl = newton(geo, rho, p, R, t, S, dofs, tol_f)
-        indeterminate = False
-        if len(S) > n:
-            _, _, G = geo.jacobian(p1, R1, t1, S)
-            if np.linalg.matrix_rank(G[:, dofs], tol=1e-9) == n:
-                indeterminate = True
-                W, wg = geo.wrenches(p1, R1)
-                tS, _ = min_norm_nonnegative(W[np.ix_(dofs, S)], -wg[dofs])
-                t1 = np.zeros(geo.m)
-                t1[S] = tS
-                rb = float(np.max(np.abs(geo.balance(p1, R1, t1)[dofs])))
-        L1 = geo.cables(p1, R1)[2]
-        neg = [i for i in S if t1[i] < -ttol]
-        over = [i for i in range(geo.m) if i not in S and L1[i] > rho[i] + ltol]
-        if neg:
-            S.remove(min(neg, key=lambda i: t1[i]))
-            continue
-        if over:
-            S.append(max(over, key=lambda i: L1[i] - rho[i]))
-            S.sort()
-            p, R = p1, R1
-            continue
-        if rl > ltol or rb > 1e3 * tol_f:
-            return None  # Newton did not converge with this cable set (inconsistent lengths)
-        t1[t1 < 0] = 0.0
-        return p1, R1, t1, S, max(rb, 0.0), indeterminate, rl
-    return None
-
-
-def feasibility_phase(geo: Geometry, rho, p, R, dofs, tol):
-    """Least squares on the stretches max(0, |l_i| - rho_i) from (p, R) (scipy).
-
-    Returns a configuration with every |l_i| <= rho_i + tol, or None.
-    """
-    from scipy.optimize import least_squares
-
-    dofs = list(dofs)
-
-    def unpack(x):
-        z = np.zeros(6)
-        z[dofs] = x
-        return p + z[:3], rotvec(z[3:]) @ R
-
-    def fun(x):
-        q, Q = unpack(x)
-        return np.maximum(geo.cables(q, Q)[2] - rho, 0.0)
-
-    def jac(x):
-        z = np.zeros(6)
-        z[dofs] = x
-        q, Q = p + z[:3], rotvec(z[3:]) @ R
-        Rb, _, L, u = geo.cables(q, Q)
-        G = np.hstack([-u, -np.cross(Rb, u)])
-        G[:, 3:] = G[:, 3:] @ left_jacobian(z[3:])
-        G[L <= rho] = 0.0
-        return G[:, dofs]
-
-    sol = least_squares(fun, np.zeros(len(dofs)), jac=jac, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=500)
-    if np.max(sol.fun, initial=0.0) > tol:
-        return None
-    return unpack(sol.x)
-
-
-def local_minimum(geo: Geometry, rho, p, R, dofs):
-    """Minimise U subject to |l_i|^2 <= rho_i^2 from a feasible (p, R) (scipy SLSQP,
-    rotation as exp([w]) R with analytic gradients).  Returns (p, R)."""
-    from scipy.optimize import minimize
-
-    dofs = list(dofs)
-    scale_u = geo.weight * (1.0 + float(np.max(rho)))
-
-    def unpack(x):
-        z = np.zeros(6)
-        z[dofs] = x
-        return p + z[:3], rotvec(z[3:]) @ R, z[3:]
-
-    def f(x):
-        q, Q, _ = unpack(x)
-        return geo.energy(q, Q) / scale_u
-
-    def df(x):
-        _, Q, w = unpack(x)
-        fg = geo.mass * geo.g
-        grad = np.concatenate([-fg, left_jacobian(w).T @ -np.cross(Q @ geo.c, fg)])
-        return grad[dofs] / scale_u
-
-    def cons(x):
-        q, Q, _ = unpack(x)
-        L = geo.cables(q, Q)[2]
-        return (rho ** 2 - L ** 2) / np.maximum(rho, 1e-9) ** 2
-
-    def dcons(x):
-        q, Q, w = unpack(x)
-        Rb, l, _, _ = geo.cables(q, Q)
-        G = np.hstack([2.0 * l, 2.0 * np.cross(Rb, l) @ left_jacobian(w)])
-        return G[:, dofs] / np.maximum(rho, 1e-9)[:, None] ** 2
-
-    sol = minimize(f, np.zeros(len(dofs)), jac=df, method="SLSQP",
-                   constraints=[{"type": "ineq", "fun": cons, "jac": dcons}],
-                   options={"ftol": 1e-14, "maxiter": 300})
-    q, Q, _ = unpack(sol.x)
-    return q, Q
+def up_of(geo: Geometry) -> tuple:
+    """The frame's unit vertical -g/|g| as a tuple (the results' ``up``)."""
+    return tuple(float(v) for v in -geo.g / np.linalg.norm(geo.g))

@@ -8,7 +8,7 @@ balanced pulling point by predictor-corrector continuation to its least
 tilted pulling member and to where a cable goes slack; :func:`with_marches`
 adds what the marches find to a search's candidates.
 
-Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging_core`.
+Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging.geometry`.
 """
 
 from __future__ import annotations
@@ -18,9 +18,8 @@ import math
 
 import numpy as np
 
-from cdpr_design.statics import hanging_core as hc
-from cdpr_design.statics.hanging_core import tilt_rank
-from cdpr_design.statics.hanging_newton import Balance, newton_many, solve_sym, subset
+from cdpr_design.statics.hanging import geometry as hg
+from cdpr_design.statics.hanging.balance import Balance, newton_many, on_cables, solve_sym
 
 
 #: Arc-length step of the march along a four-cable family (rotation [rad] and tension / weight
@@ -60,7 +59,7 @@ def _correct(bal, P, R, t, tol, iterations: int = 4):
         Jt = np.nan_to_num(bal.jacobian(P[todo], R[todo], t[todo], w0[todo]))
         JT = Jt.transpose(0, 2, 1)
         dz = -np.einsum("ncr,nr->nc", JT, solve_sym(Jt @ JT, F[todo]))
-        R[todo] = hc.rotvec(dz[:, :3]) @ R[todo]
+        R[todo] = hg.rotvec(dz[:, :3]) @ R[todo]
         t[todo] += dz[:, 3:] * bal.geo.weight
         F[todo] = np.nan_to_num(bal.residual(P[todo], R[todo], t[todo]), nan=1e300)
         J[todo] = Jt
@@ -70,14 +69,14 @@ def _correct(bal, P, R, t, tol, iterations: int = 4):
 def _advance(bal, P, R, t, tau, h, tol):
     """The family point h [scaled arc length] along the tangent tau from (R, t), corrected
     (:func:`_correct`)."""
-    R1 = hc.rotvec(h[:, None] * tau[:, :3]) @ R
+    R1 = hg.rotvec(h[:, None] * tau[:, :3]) @ R
     return _correct(bal, P, R1, t + h[:, None] * tau[:, 3:] * bal.geo.weight, tol)
 
 
-def march_family(geo: hc.Geometry, P, R, t, direction, R0):
+def march_family(geo: hg.Geometry, P, R, t, direction, R0):
     """The least tilted member with every tension >= 0 of the one-parameter family of
     balanced orientations of a spatial body on four taut cables (ranked by
-    :func:`~cdpr_design.statics.hanging_core.tilt_rank`: of equally tilted members the
+    :func:`~cdpr_design.statics.hanging.geometry.tilt_rank`: of equally tilted members the
     nearest the nominal rotation R0 (3, 3)), along the family from balanced pulling points
     (R (N, 3, 3), t (N, 4) [N]) at positions P (N, 3) [m], in ``direction`` (N, 7)
     (rotation, tension / weight; only its sign along the tangent counts).
@@ -95,7 +94,7 @@ def march_family(geo: hc.Geometry, P, R, t, direction, R0):
     tol = 1e-10
     w0 = np.zeros((N, 3))
     tau = _null_vector(np.nan_to_num(bal.jacobian(P, R, t, w0)), direction)
-    f = tilt_rank(R, up, R0)
+    f = hg.tilt_rank(R, up, R0)
     best = [R.copy(), t.copy(), f.copy(), tau.copy()]
     # the bracket of the least tilted step: arc lengths and tilts of (previous, best, next)
     x = np.stack([np.full(N, -1.0), np.zeros(N), np.full(N, 1.0)], axis=1) * MARCH_STEP
@@ -111,7 +110,7 @@ def march_family(geo: hc.Geometry, P, R, t, direction, R0):
             break
         h = np.full(idx.size, MARCH_STEP)
         R1, t1, res, J1 = _advance(bal, P[idx], R[idx], t[idx], tau[idx], h, tol)
-        f1 = tilt_rank(R1, up, R0)
+        f1 = hg.tilt_rank(R1, up, R0)
         ok_t = np.all(t1 >= -1e-9 * geo.weight, axis=1)
         ok = (res <= tol) & ok_t
         f1 = np.where(ok, f1, np.inf)
@@ -145,7 +144,7 @@ def march_family(geo: hc.Geometry, P, R, t, direction, R0):
         xn = _parabola_vertex(x[todo], fx[todo])
         moved = np.abs(xn - x[todo, 1]) > 1e-7  # a smaller step moves the tilt by ~1e-14 rad
         Rn, tn, res, _ = _advance(bal, P[todo], best[0][todo], best[1][todo], best[3][todo], xn - xb[todo], tol)
-        fn = np.where((res <= tol) & np.all(tn >= -1e-9 * geo.weight, axis=1), tilt_rank(Rn, up, R0), np.inf)
+        fn = np.where((res <= tol) & np.all(tn >= -1e-9 * geo.weight, axis=1), hg.tilt_rank(Rn, up, R0), np.inf)
         x[todo], fx[todo] = _bracket(x[todo], fx[todo], xn, fn)
         better = fn < best[2][todo]
         g = todo[better]
@@ -169,7 +168,7 @@ def _slack_ends(geo, P, R, last, cable):
         if not rows.size:
             continue
         keep = [i for i in range(m) if i != j]
-        Rn, tn, okn = newton_many(subset(geo, keep), P[rows], False, R[rows][:, None], [(0.0, 0.0, 0.0)])
+        Rn, tn, okn = newton_many(on_cables(geo, keep), P[rows], False, R[rows][:, None], [(0.0, 0.0, 0.0)])
         Re[rows], oke[rows] = Rn[:, 0], okn[:, 0]
         te[rows[:, None], keep] = tn[:, 0]
     return Re, te, oke
@@ -303,7 +302,7 @@ def _walks(geo, P, Rs, ts, balanced, R0):
             Qs = list(Q)
             d = np.zeros((r.size, 7))
             d[np.arange(r.size), 3 + np.searchsorted(Qs, wa[r])] = 1.0
-            Rb, tb, ok = march_family(subset(geo, Q), P[wn[r]], wR[r], wt[r][:, Qs], d, R0)
+            Rb, tb, ok = march_family(on_cables(geo, Q), P[wn[r]], wR[r], wt[r][:, Qs], d, R0)
             tf = np.zeros(tb.shape[:2] + (m,))
             tf[:, :, Qs] = tb
             found.append((wn[r], Rb, tf, ok))

@@ -6,17 +6,17 @@ orientations, batched over the pairs (:func:`newton_many`): the unknowns are
 the rotation (R = exp([w]) R_0) and the tensions.  Where the unknowns
 outnumber the equations (a spatial body on four or more taut cables: a family
 of balanced orientations) each step is the minimum-norm step plus a pull along
-the family towards w = 0.  Used by :mod:`cdpr_design.statics.hanging_at` and
-:mod:`cdpr_design.statics.hanging_family`.
+the family towards w = 0.  Used by :mod:`cdpr_design.statics.hanging.at_positions`
+and :mod:`cdpr_design.statics.hanging.family`.
 
-Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging_core`.
+Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging.geometry`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from cdpr_design.statics import hanging_core as hc
+from cdpr_design.statics.hanging import geometry as hg
 
 
 def _cross(a, b):
@@ -30,15 +30,17 @@ class Balance:
     """Force and moment balance at many (position, rotation) pairs, scaled: forces by the
     weight, moments by the weight times the effector's length scale."""
 
-    def __init__(self, geo: hc.Geometry, planar: bool):
+    def __init__(self, geo: hg.Geometry, planar: bool):
         self.geo = geo
         self.rows = [0, 1, 5] if planar else list(range(6))
         self.rot = [2] if planar else [0, 1, 2]
         sc = np.array([1.0, 1.0, 1.0, geo.size, geo.size, geo.size]) * geo.weight
         self.scale = sc[self.rows]
 
-    def parts(self, P, R):
-        """W (N, 6, m), gravity wrench (N, 6), Rb, L, u of the cables."""
+    def wrenches(self, P, R):
+        """At N configurations (P (N, 3) [m], R (N, 3, 3)): the cables' unit wrenches W (N, 6, m)
+        [1, m], the weight's wrench (N, 6) [N, N m], and the cables' R b (N, m, 3) [m], lengths
+        L (N, m) [m] and directions u (N, m, 3)."""
         geo = self.geo
         Rb, _, L, u = geo.cables_many(P, R)
         W = np.concatenate([u, _cross(Rb, u)], axis=2).transpose(0, 2, 1)
@@ -47,15 +49,15 @@ class Balance:
         return W, wg, Rb, L, u
 
     def residual(self, P, R, t):
-        W, wg, *_ = self.parts(P, R)
+        W, wg, *_ = self.wrenches(P, R)
         F = np.einsum("nrm,nm->nr", W, t) + wg
         return F[:, self.rows] / self.scale
 
     def jacobian(self, P, R, t, w):
         """d(scaled residual)/d(rotation coordinates, tensions / weight) (N, r, nr + m)."""
         geo = self.geo
-        W, _, Rb, L, u = self.parts(P, R)
-        Jw = geo.balance_jacobian_many(P, R, t, (Rb, None, L, u))[:, :, 3:] @ hc.left_jacobian(w)
+        W, _, Rb, L, u = self.wrenches(P, R)
+        Jw = geo.balance_jacobian_many(P, R, t, (Rb, None, L, u))[:, :, 3:] @ hg.left_jacobian(w)
         J = np.concatenate([Jw[:, :, self.rot], W * geo.weight], axis=2)[:, self.rows]
         return J / self.scale[:, None]
 
@@ -85,7 +87,7 @@ def _step(J, F, w, nr):
     return dz - np.where(near, pull, 0.0)
 
 
-def newton_many(geo: hc.Geometry, P, planar: bool, R0, starts, iterations: int = 40):
+def newton_many(geo: hg.Geometry, P, planar: bool, R0, starts, iterations: int = 40):
     """Balanced orientations from each start: (R (k, S, 3, 3), t (k, S, m) [N], balanced (k, S)).
 
     ``P`` (k, 3) positions [m]; ``R0`` the nominal rotation (3, 3), or one per
@@ -101,8 +103,8 @@ def newton_many(geo: hc.Geometry, P, planar: bool, R0, starts, iterations: int =
     Pn = np.repeat(np.asarray(P, float), S, axis=0)
     full = np.tile(np.asarray(starts, float), (k, 1))
     base = np.broadcast_to(np.asarray(R0, float), (k, S, 3, 3)).reshape(-1, 3, 3)
-    R = hc.rotvec(full) @ base
-    W, wg, *_ = bal.parts(Pn, R)
+    R = hg.rotvec(full) @ base
+    W, wg, *_ = bal.wrenches(Pn, R)
     Wr = W[:, bal.rows] / bal.scale[:, None]
     t = -solve_sym(Wr.transpose(0, 2, 1) @ Wr, np.einsum("nrm,nr->nm", Wr, wg[:, bal.rows] / bal.scale))
     t = np.nan_to_num(t) * geo.weight
@@ -128,7 +130,7 @@ def newton_many(geo: hc.Geometry, P, planar: bool, R0, starts, iterations: int =
             w2 = wa[sub].copy()
             w2[:, bal.rot] += lam[sub, None] * dz[sub, :nr]
             t2 = ta[sub] + lam[sub, None] * dz[sub, nr:] * geo.weight
-            R2 = hc.rotvec(w2) @ base[idx[sub]]
+            R2 = hg.rotvec(w2) @ base[idx[sub]]
             F2 = np.nan_to_num(bal.residual(Pa[sub], R2, t2), nan=np.inf)
             ok = (np.abs(F2).max(axis=1) < merit[sub]) | near[sub]
             g = idx[sub[ok]]
@@ -143,6 +145,6 @@ def newton_many(geo: hc.Geometry, P, planar: bool, R0, starts, iterations: int =
     return R.reshape(k, S, 3, 3), t.reshape(k, S, geo.m), ok.reshape(k, S)
 
 
-def subset(geo, S) -> hc.Geometry:
-    """The effector on the cables S only."""
-    return hc.Geometry(geo.A[list(S)], geo.B[list(S)], geo.c, geo.mass, geo.g)
+def on_cables(geo: hg.Geometry, S) -> hg.Geometry:
+    """The effector on the cables S (indices) only."""
+    return hg.Geometry(geo.A[list(S)], geo.B[list(S)], geo.c, geo.mass, geo.g)

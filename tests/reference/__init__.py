@@ -1,0 +1,1 @@
+"""Reference computations the tests compare the product against (no product path uses them)."""
