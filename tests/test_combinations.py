@@ -28,7 +28,8 @@ pose is read back from the CSV (10 significant digits), so at a pose whose margi
 ``ATOL`` of 0 a different ``feasible`` is not counted.
 
 Counts of the matrix (computed, refused by reason, failed): ``python -m tests.test_combinations``
-from the repository root runs it outside pytest and prints the table.
+from the repository root runs it outside pytest and prints the table (``-h``: a subset, the
+outcomes kept in a JSON file, the table of several such files).
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ import io
 import json
 import math
 import sys
+import time
 import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -299,40 +301,63 @@ def test_agreement_check_sees_a_wrong_row(tmp_path):
 # ----------------------------------------------------------------------------
 
 
+def print_table(outcomes: list[dict]) -> None:
+    """The counts of the matrix: computed, refused by reason, failed with their errors."""
+    counts = collections.Counter(o["status"] for o in outcomes)
+    print(f"{len(outcomes)} combinations: " + ", ".join(f"{counts[s]} {s}" for s in ("computed", "refused", "failed")))
+    by_reason = collections.Counter(o["reason"] for o in outcomes if o["status"] == "refused")
+    print("\nrefused, by reason:")
+    for reason, c in by_reason.most_common():
+        print(f"  {c:4d}  {reason}")
+    failed = [o for o in outcomes if o["status"] == "failed"]
+    if failed:
+        print("\nfailed:")
+        for o in failed:
+            print(f"  {o['name']}: {o['reason']}")
+            for line in o["detail"][:4]:
+                print(f"      {line[:300]}")
+
+
 def main(argv: list[str]) -> int:
+    """``python -m tests.test_combinations [REGEX] [--json FILE]``: run the combinations whose name
+    matches (all by default), print each and the table of counts, and keep them in FILE;
+    ``--table FILE ...`` prints the table of earlier runs' FILEs together."""
+    import argparse
     import os
     import re
     import resource
     import tempfile
 
+    ap = argparse.ArgumentParser(prog="python -m tests.test_combinations")
+    ap.add_argument("pattern", nargs="?", help="regular expression on design-kind-model-mode-option")
+    ap.add_argument("--json", type=Path, help="write the outcomes to this file")
+    ap.add_argument("--table", type=Path, nargs="+", help="print the table of these outcome files")
+    a = ap.parse_args(argv)
+    if a.table:
+        outcomes = [o for f in a.table for o in json.loads(f.read_text())]
+        print_table(outcomes)
+        return 1 if any(o["status"] == "failed" for o in outcomes) else 0
     os.environ["CDPR_DESIGN_PICTURE_WORKER"] = "0"
-    pattern = re.compile(argv[0]) if argv else None
+    pattern = re.compile(a.pattern) if a.pattern else None
     outcomes = []
     with tempfile.TemporaryDirectory() as tmp:
         for n, (d, k, m, o, opt) in enumerate(COMBINATIONS):
             name = f"{d.stem}-{k}-{m}-{o}-{opt}"
             if pattern and not pattern.search(name):
                 continue
+            c0 = time.process_time()
             outcome = run_combination(Path(tmp) / str(n), d, k, m, o, opt)
-            outcomes.append(outcome)
-            print(f"{name:60s} {outcome.status:9s} {outcome.reason[:150]}", flush=True)
+            cpu = time.process_time() - c0
+            outcomes.append({"name": name, "status": outcome.status, "reason": outcome.reason,
+                             "detail": outcome.detail, "cpu_s": round(cpu, 2)})
+            print(f"{name:60s} {outcome.status:9s} {cpu:6.2f} s  {outcome.reason[:150]}", flush=True)
+            if a.json:
+                a.json.write_text(json.dumps(outcomes, indent=1))
     print()
-    counts = collections.Counter(o.status for o in outcomes)
-    print(f"{len(outcomes)} combinations: " + ", ".join(f"{counts[s]} {s}" for s in ("computed", "refused", "failed")))
-    by_reason = collections.Counter(o.reason for o in outcomes if o.status == "refused")
-    print("\nrefused, by reason:")
-    for reason, c in by_reason.most_common():
-        print(f"  {c:4d}  {reason}")
-    failed = [o for o in outcomes if o.status == "failed"]
-    if failed:
-        print("\nfailed:")
-        for o in failed:
-            print(f"  {'-'.join(o.key)}: {o.reason}")
-            for line in o.detail[:4]:
-                print(f"      {line[:300]}")
+    print_table(outcomes)
     ru = resource.getrusage(resource.RUSAGE_SELF)
     print(f"\nCPU: {ru.ru_utime + ru.ru_stime:.1f} s (this process)")
-    return 1 if failed else 0
+    return 1 if any(o["status"] == "failed" for o in outcomes) else 0
 
 
 if __name__ == "__main__":
