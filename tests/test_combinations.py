@@ -39,6 +39,7 @@ import csv
 import io
 import json
 import math
+import re
 import sys
 import time
 import traceback
@@ -132,10 +133,18 @@ def _traceback_lines(result) -> list[str]:
     return lines[:1] + lines[-1:] if len(lines) > 1 else lines
 
 
-def _classify(result) -> tuple[str, str, list]:
-    """(status, reason, detail) of a command's result: computed (exit 0), refused (exit 2 with one
-    line on stderr and no traceback) or failed (anything else)."""
+#: The spec loader's message for several problems (docs/spec-format.md): a first line, then one
+#: indented line per problem.
+_PROBLEMS = re.compile(r"^error: .*: \d+ problems$")
+
+
+def _classify(result, spec: Path | None = None) -> tuple[str, str, list]:
+    """(status, reason, detail) of a command's result: computed (exit 0), refused (exit 2, no
+    traceback, one line on stderr - or the spec loader's list of problems, one indented line each)
+    or failed (anything else). In the reason, the spec variant's path reads ``SPEC``."""
     err = (result.stderr or "").strip()
+    if spec is not None:
+        err = err.replace(str(spec), "SPEC")
     crashed = result.exception is not None and not isinstance(result.exception, SystemExit)
     if result.exit_code == 0 and not crashed:
         return "computed", "", []
@@ -143,6 +152,8 @@ def _classify(result) -> tuple[str, str, list]:
         lines = err.splitlines()
         if len(lines) == 1:
             return "refused", lines[0], []
+        if _PROBLEMS.match(lines[0]) and all(ln.startswith("  ") for ln in lines[1:]):
+            return "refused", " / ".join(ln.strip() for ln in lines), []
         return "failed", f"exit 2 with {len(lines)} lines on stderr", lines[:3]
     return "failed", f"exit {result.exit_code}" + (f": {type(result.exception).__name__}" if crashed else ""), \
         _traceback_lines(result)
@@ -178,7 +189,7 @@ def _samples(rows: list[dict]) -> list[int]:
 def _pose_json(spec: Path, at: list[float], kind: str, model: str) -> tuple[dict | None, str]:
     r = _invoke(["pose", spec, "--at", ",".join(repr(v) for v in at), "--kind", kind, "--cable-model", model,
                  "--json", "--quiet"])
-    status, reason, detail = _classify(r)
+    status, reason, detail = _classify(r, spec)
     if status != "computed":
         return None, f"pose --at {at}: {status}: {reason} {' | '.join(detail)}".strip()
     return json.loads(r.stdout), ""
@@ -243,7 +254,7 @@ def run_combination(folder: Path, design: Path, kind: str, model: str, mode: str
     out = folder / "out"
     args = ["workspace", spec, "--kind", kind, "--cable-model", model, "--step", repr(_step(raw)),
             "--out", out, "--json", "--quiet", *OPTIONS[option]]
-    status, reason, detail = _classify(_invoke(args))
+    status, reason, detail = _classify(_invoke(args), spec)
     if status != "computed":
         return Outcome(key, status, reason, detail)
     try:
@@ -324,17 +335,18 @@ def main(argv: list[str]) -> int:
     ``--table FILE ...`` prints the table of earlier runs' FILEs together."""
     import argparse
     import os
-    import re
     import resource
     import tempfile
 
     ap = argparse.ArgumentParser(prog="python -m tests.test_combinations")
     ap.add_argument("pattern", nargs="?", help="regular expression on design-kind-model-mode-option")
     ap.add_argument("--json", type=Path, help="write the outcomes to this file")
-    ap.add_argument("--table", type=Path, nargs="+", help="print the table of these outcome files")
+    ap.add_argument("--table", type=Path, nargs="+",
+                    help="print the table of these outcome files (a combination in several: the last)")
     a = ap.parse_args(argv)
     if a.table:
-        outcomes = [o for f in a.table for o in json.loads(f.read_text())]
+        by_name = {o["name"]: o for f in a.table for o in json.loads(f.read_text())}  # later files win
+        outcomes = list(by_name.values())
         print_table(outcomes)
         return 1 if any(o["status"] == "failed" for o in outcomes) else 0
     os.environ["CDPR_DESIGN_PICTURE_WORKER"] = "0"
