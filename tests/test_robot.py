@@ -92,6 +92,8 @@ def _cases(planar2, ipanema3, cogiro):
         ("--objective: a hanging effector's tensions are unique", free, Analysis(command="pose", objective="min-max")),
         ("fk: the forward kinematics of elastic and sagging cables takes point outlets",
          _with(cogiro, model="elastic", pulleys=True), Analysis(command="fk")),
+        ("--stiffness: ideal cables without cable.axial_stiffness", ipanema3, Analysis(stiffness=True)),
+        ("--stiffness: an orientation workspace's rows", cogiro, Analysis(stiffness=True, orientations="total")),
         ("engine=numpy: the numpy engine covers two cables", ipanema3, Analysis(engine="numpy")),
         ("certify: cable model 'sagging'", _with(cogiro, model="sagging"), Analysis(command="certify")),
         ("certify: swivel pulleys", _with(ipanema3, pulleys=True), Analysis(command="certify")),
@@ -109,7 +111,7 @@ def test_every_row_of_the_table_is_reached_with_its_reason(planar2, ipanema3, co
         msg = str(err.value)
         assert msg.startswith(start), (start, msg)
         row = R.refusal(R.facts(design), analysis)
-        assert row is not None and msg == row.message(analysis)
+        assert row is not None and msg == row.message(R.facts(design), analysis)
         reached.add(id(row))
     assert len(reached) == len(R.REFUSALS)  # each case reaches its own row
 

@@ -18,6 +18,7 @@ HIGHER_IS_BETTER = frozenset({
     "task_fraction", "task_min_margin", "torque_margin", "speed_margin",
     "implied_tension_max", "min_margin_figure", "checks_passed",
     "check_task_box", "check_min_margin", "check_min_fraction", "check_motors",
+    "task_min_stiffness", "task_lowest_frequency", "check_min_stiffness", "check_min_frequency",
 })
 
 
@@ -33,7 +34,7 @@ LOWER_IS_BETTER = frozenset({
 KNOWN_FIGURES = HIGHER_IS_BETTER | LOWER_IS_BETTER | frozenset({
     "name", "motion", "cables", "kind", "poses", "task_poses", "sizing_poses", "motor",
     "tension_max", "drum_radius", "gear_ratio", "safety_factor", "duty_cycle",
-    "req_min_margin", "req_min_fraction",
+    "req_min_margin", "req_min_fraction", "req_min_stiffness", "req_min_frequency",
 })
 
 
@@ -41,7 +42,7 @@ KNOWN_FIGURES = HIGHER_IS_BETTER | LOWER_IS_BETTER | frozenset({
 #: those with a direction; ``drum_radius`` and ``gear_ratio`` are text (``0.03;0.036``).
 NUMERIC_FIGURES = HIGHER_IS_BETTER | LOWER_IS_BETTER | frozenset({
     "cables", "poses", "task_poses", "sizing_poses", "tension_max", "safety_factor",
-    "req_min_margin", "req_min_fraction",
+    "req_min_margin", "req_min_fraction", "req_min_stiffness", "req_min_frequency",
 })
 
 

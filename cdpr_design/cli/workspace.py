@@ -38,6 +38,10 @@ def workspace(
         "--max-tilt", help="Largest tilt [deg] a feasible pose may hang with (under-constrained designs with "
                            "effector.orientation: free; default requirements.max_tilt).", min=0.0, max=180.0)] = None,
     cable_model: CableModelOpt = None,
+    stiffness: Annotated[bool, typer.Option(
+        "--stiffness", help="Also the least stiffness [N/m] and the lowest natural frequency [Hz] of every "
+                            "feasible pose (elastic cables, or ideal ones with axial_stiffness): columns "
+                            "min_stiffness and lowest_frequency, stiffness_map.png.")] = False,
     format: FormatOpt = Format.csv,
     html: Annotated[bool, typer.Option(
         "--html", help="Also write report.html: the interactive workspace, tension map and summary in one "
@@ -54,7 +58,7 @@ def workspace(
             design, out, overwrite, kind=kind.value, step=step, force=force, collisions=collisions,
             orientations=orientations.value if orientations is not None else None, pictures=pictures,
             engine=env.engine(), progress=bars(quiet or json_, min_total=500_000), format=format.value,
-            html=html, max_tilt=max_tilt)
+            html=html, max_tilt=max_tilt, stiffness=stiffness)
     s = result.summary()
     if json_:
         emit_json(s)
@@ -75,6 +79,8 @@ def workspace(
         + ([("hangs at", f"{s['hangs']:,} positions"), ("max tilt (feasible) [deg]", s["max_tilt"])]
            if "hangs" in s else [])
         + ([("cable model", s["cable_model"])] if "cable_model" in s else [])
+        + ([("least stiffness [N/m]", s["min_stiffness"]), ("lowest frequency [Hz]", s["lowest_frequency"])]
+           if "lowest_frequency" in s else [])
         + ([("cable status", ", ".join(f"{k} {v:,}" for k, v in s["cable_status"].items() if v))]
            if "cable_status" in s else [])
         + [("files", str(out_dir.path))]))

@@ -20,7 +20,12 @@ Checks (``check_<name>``: True pass, False fail, None not asked for):
   ``requirements.min_fraction``;
 - ``motors``: every axis's motor covers peak torque, RMS torque and speed with
   the safety factor.  Asked for when the spec names a motor or gives
-  ``max_speed`` / ``max_acceleration``.
+  ``max_speed`` / ``max_acceleration``;
+- ``min_stiffness``, ``min_frequency`` (only when the spec asks, or the figures
+  ``task_min_stiffness`` / ``task_lowest_frequency`` are wanted): the least
+  stiffness [N/m] and the lowest natural frequency [Hz] over the feasible poses
+  of the task box (:mod:`cdpr_design.workspaces.stiffness`) are at least
+  ``requirements.min_stiffness`` / ``requirements.min_frequency``.
 """
 
 from __future__ import annotations
@@ -39,6 +44,12 @@ from cdpr_design.model.catalogue import Catalogue
 from cdpr_design.model.design import Design
 
 CHECKS = ("task_box", "min_margin", "min_fraction", "motors")
+#: Checks whose columns a row has only when the spec asks for them (or their figures are wanted):
+#: (check, requirement, figure of the task box, summary key of the task sweep).
+STIFFNESS_CHECKS = (("min_stiffness", "min_stiffness", "task_min_stiffness", "min_stiffness"),
+                    ("min_frequency", "min_frequency", "task_lowest_frequency", "lowest_frequency"))
+#: The task box's stiffness figures (:data:`STIFFNESS_CHECKS`).
+STIFFNESS_FIGURES = frozenset(f for _, _, f, _ in STIFFNESS_CHECKS)
 
 #: Figures of the static workspace sweep (the whole workspace grid).
 WORKSPACE_FIGURES = frozenset({"kind", "poses", "feasible", "fraction", "measure", "min_margin", "max_margin",
@@ -76,8 +87,18 @@ def _task_kind(design: Design) -> str:
     return "wrench-feasible" if design.workspace.external_wrench is not None else "static"
 
 
-def task_sweep(design: Design, step: float | None = None, progress=None, engine: str = "auto"):
-    """Sweep the task box: (result, least margin over every task pose).
+def stiffness_asked(design: Design, figures: Iterable[str] | None = None) -> bool:
+    """Whether the task box's stiffness is asked for: ``requirements.min_stiffness`` or
+    ``min_frequency``, or one of :data:`STIFFNESS_FIGURES` among ``figures``."""
+    req = design.requirements
+    return (req.min_stiffness is not None or req.min_frequency is not None
+            or bool(set(figures or ()) & STIFFNESS_FIGURES))
+
+
+def task_sweep(design: Design, step: float | None = None, progress=None, engine: str = "auto",
+               stiffness: bool = False):
+    """Sweep the task box: (result, least margin over every task pose); ``stiffness`` adds the
+    least stiffness and the lowest natural frequency over its feasible poses to the result's summary.
 
     The least margin counts infeasible poses (negative margins) and is -inf
     when a task pose has no margin (a rank-deficient structure matrix, or a
@@ -96,7 +117,7 @@ def task_sweep(design: Design, step: float | None = None, progress=None, engine:
             least[0] = min(least[0], float(mg.min()))
 
     res = ws.run(design, kind=_task_kind(design), grid=g, on_chunk=on_chunk, progress=progress,
-                 keep_maps=False, engine=engine, tilt=False)
+                 keep_maps=False, engine=engine, tilt=False, stiffness=stiffness)
     return res, least[0]
 
 
@@ -161,13 +182,14 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catal
         # the figures and checks use no hanging tilt of a held effector (report passes its own sweep)
         wres = ws.run(design, "static", step=step, keep_maps=keep_maps, progress=progress, engine=engine,
                       tilt=False)
-    task, task_least = task_sweep(design, step, engine=engine)
+    stiffness = stiffness_asked(design, figures) and task_grid(design, step) is not None
+    task, task_least = task_sweep(design, step, engine=engine, stiffness=stiffness)
     sizing = sz.size_motors(design, catalogue, step=step, samples=samples, safety_factor=safety_factor,
                             motor=motor, engine=engine) if need_sizing else None
     row = _workspace_figures(design, wres, task, task_least)
     if sizing is not None:
         row.update(_sizing_figures(sizing))
-    row.update(_checks(design, wres, task, task_least, sizing, motor))
+    row.update(_checks(design, wres, task, task_least, sizing, motor, stiffness))
     # per-cable figures last (their number depends on the design)
     for a in sizing.axes if sizing is not None else ():
         row[f"peak_tension_{a.cable}"] = _f(a.peak_tension)
@@ -219,7 +241,8 @@ def _sizing_figures(sizing: sz.SizingResult) -> dict:
 
 
 def _checks(design: Design, wres: ws.WorkspaceResult | None, task: ws.WorkspaceResult | None,
-            task_least: float | None, sizing: sz.SizingResult | None, motor: str | None) -> dict:
+            task_least: float | None, sizing: sz.SizingResult | None, motor: str | None,
+            stiffness: bool = False) -> dict:
     """The requirement figures and limits, ``check_<name>`` (True, False, None) and ``checks_passed``.
 
     ``wres`` and ``sizing`` may be None only where :func:`parts_needed` says the checks do not need them."""
@@ -238,7 +261,13 @@ def _checks(design: Design, wres: ws.WorkspaceResult | None, task: ws.WorkspaceR
     checks["min_fraction"] = (wres.fraction >= req.min_fraction) if req.min_fraction is not None else None
     row["req_min_fraction"] = req.min_fraction
     checks["motors"] = sizing.ok if motors_asked(design, motor) else None
-    for name in CHECKS:
+    if stiffness:  # the task box's least stiffness and lowest frequency (STIFFNESS_CHECKS)
+        s = task.summary()
+        for name, req_name, figure, key in STIFFNESS_CHECKS:
+            value, limit = _f(s.get(key)), getattr(req, req_name)
+            row[figure], row[f"req_{req_name}"] = value, limit
+            checks[name] = None if limit is None else (value is not None and value >= limit)
+    for name in checks:
         row[f"check_{name}"] = None if checks[name] is None else bool(checks[name])
     row["checks_passed"] = all(v is not False for v in checks.values())
     return row
@@ -275,6 +304,11 @@ def check_table(row: dict) -> list[dict]:
     if row["check_min_fraction"] is not None:
         out.append({"requirement": "min_fraction", "figure": num(row["fraction"]),
                     "limit": f">= {row['req_min_fraction']:g}", "passed": row["check_min_fraction"]})
+    for name, req_name, figure, _ in STIFFNESS_CHECKS:
+        if row.get(f"check_{name}") is not None:
+            unit = " N/m" if name == "min_stiffness" else " Hz"
+            out.append({"requirement": name, "figure": num(row[figure], unit),
+                        "limit": f">= {row[f'req_{req_name}']:g}{unit}", "passed": row[f"check_{name}"]})
     if row["check_motors"] is not None:
         out.append({"requirement": "motors", "figure": f"{row['motor'] or 'none fits'}: torque margin "
                     f"{num(row['torque_margin'])}, speed margin {num(row['speed_margin'])}",

@@ -13,6 +13,7 @@ from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage, 
 from cdpr_design.jobs.tables import Timings, grid_metadata, table_metadata
 from cdpr_design.plots import workspace as wsplots
 from cdpr_design.plots.hanging import tilt_figure
+from cdpr_design.plots.stiffness import stiffness_figure
 from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
 
@@ -49,7 +50,7 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
                   collisions: bool = False, orientations: str | None = None,
                   pictures: PictureWorker | None = None, engine: str = "auto",
                   progress: Progress | None = None, format: str = "csv", html: bool = False,
-                  timings: Timings | None = None, max_tilt: float | None = None):
+                  timings: Timings | None = None, max_tilt: float | None = None, stiffness: bool = False):
     """Sweep, stream ``workspace.csv`` (``format='parquet'``: ``workspace.parquet``), write the
     pictures, ``summary.json`` and (``html``) ``report.html``; return the result.
 
@@ -65,10 +66,12 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
     ``max_tilt`` [deg]: the tilt limit of an under-constrained design with
     ``effector.orientation: free`` (its sweeps add ``tilt_map.png``).  With
     sagging cables the grid is swept again with ideal cables for ``cable_models.png``.
+    ``stiffness``: the columns ``min_stiffness`` [N/m] and ``lowest_frequency`` [Hz] and
+    ``stiffness_map.png`` (:mod:`cdpr_design.workspaces.stiffness`).
     """
     timings = timings or Timings()
     result, pending = start_workspace(design, out, kind, step, force, collisions, orientations, pictures, engine,
-                                      progress, format, html, timings, max_tilt)
+                                      progress, format, html, timings, max_tilt, stiffness)
     finish_workspace(out, result, pending, timings)
     return result
 
@@ -77,7 +80,7 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
                     collisions: bool = False, orientations: str | None = None,
                     pictures: PictureWorker | None = None, engine: str = "auto",
                     progress: Progress | None = None, format: str = "csv", html: bool = False,
-                    timings: Timings | None = None, max_tilt: float | None = None):
+                    timings: Timings | None = None, max_tilt: float | None = None, stiffness: bool = False):
     """:func:`run_workspace` up to the pictures: the table is written and the pictures are being
     drawn.  Returns (result, pending pictures); :func:`finish_workspace` waits for them, so a
     caller can do more work (``report``'s evaluation) while they are drawn."""
@@ -85,7 +88,7 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
 
     timings = timings if timings is not None else Timings()
     grid = ws.make_grid(design, step, force)
-    p = ws.plan(ws.robot_for(design, grid, kind, collisions, orientations, engine, max_tilt), grid)
+    p = ws.plan(ws.robot_for(design, grid, kind, collisions, orientations, engine, max_tilt, stiffness), grid)
     meta = table_metadata(design, "workspace", p.columns, kind=kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])
     files = output_names(p, html)
@@ -149,7 +152,8 @@ def _sweep(p, progress, writer, timings):
 #: The figure function of each picture a sweep plan may declare (``cable_models.png`` apart:
 #: it sweeps the grid again, :func:`cable_model_picture`).
 FIGURES = {"workspace.png": wsplots.workspace_figure, "tension_map.png": wsplots.tension_figure,
-           "tilt_map.png": tilt_figure, "orientation_workspace.png": wsplots.orientation_figure}
+           "tilt_map.png": tilt_figure, "orientation_workspace.png": wsplots.orientation_figure,
+           "stiffness_map.png": stiffness_figure}
 
 
 def workspace_pictures(result, names: list[str] | None = None) -> list:
@@ -159,6 +163,7 @@ def workspace_pictures(result, names: list[str] | None = None) -> list:
         names = ["workspace.png", "tension_map.png"]
         names += ["tilt_map.png"] if getattr(result, "hanging", None) is not None else []
         names += ["orientation_workspace.png"] if result.orientation_maps is not None else []
+        names += ["stiffness_map.png"] if result.stiffness is not None else []
     return [cable_model_picture(result) if n == "cable_models.png" else (n, FIGURES[n], (result,))
             for n in names]
 

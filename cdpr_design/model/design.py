@@ -284,6 +284,10 @@ class Requirements:
     certified: bool = False
     #: least first string frequency of every cable [Hz] (a lower tension bound 4 f^2 L^2 mu)
     min_cable_frequency: float | None = None
+    #: least stiffness [N/m] over the task box (``check``; :mod:`cdpr_design.workspaces.stiffness`)
+    min_stiffness: float | None = None
+    #: lowest natural frequency [Hz] allowed over the task box
+    min_frequency: float | None = None
 
 
 @dataclass(frozen=True)

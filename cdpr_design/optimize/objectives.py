@@ -31,7 +31,8 @@ from cdpr_design.errors import InputError, quote
 FIGURES = tuple(sorted(f for f in HIGHER_IS_BETTER | LOWER_IS_BETTER
                        if not f.startswith("check") and f != "checks_passed"))
 #: Figures that exist only when the spec has a ``requirements.task_box``.
-TASK_FIGURES = frozenset({"task_feasible", "task_fraction", "task_min_margin"})
+TASK_FIGURES = frozenset({"task_feasible", "task_fraction", "task_min_margin", "task_min_stiffness",
+                          "task_lowest_frequency"})
 #: The violation of a limit whose figure is undefined (a NaN cannot be handed to the sampler).
 UNDEFINED = 1e9
 
@@ -43,6 +44,8 @@ _UNDEFINED_WHY = {
     "max_margin": "no pose of the workspace is feasible",
     "max_tension": "no pose of the workspace is feasible",
     "speed_margin": "no axis turns (no max_speed)",
+    "task_min_stiffness": "no task pose is feasible, or the stiffness is not defined there",
+    "task_lowest_frequency": "no task pose is feasible, or its equilibrium is unstable",
 }
 
 
@@ -141,13 +144,16 @@ def spec_checks(design, motor: str | None = None) -> list[str]:
 
     req = design.requirements
     asked = {"task_box": req.task_box is not None, "min_margin": req.min_margin is not None,
-             "min_fraction": req.min_fraction is not None, "motors": motors_asked(design, motor)}
-    return [c for c in CHECKS if asked[c]]
+             "min_fraction": req.min_fraction is not None, "motors": motors_asked(design, motor),
+             "min_stiffness": req.min_stiffness is not None and req.task_box is not None,
+             "min_frequency": req.min_frequency is not None and req.task_box is not None}
+    return [c for c in CHECKS + ("min_stiffness", "min_frequency") if asked[c]]
 
 
 #: The figures behind each spec check (columns of optimize.csv).
 CHECK_FIGURES = {"task_box": ("task_feasible", "task_poses"), "min_margin": ("min_margin_figure",),
-                 "min_fraction": ("fraction",), "motors": ("torque_margin", "speed_margin")}
+                 "min_fraction": ("fraction",), "motors": ("torque_margin", "speed_margin"),
+                 "min_stiffness": ("task_min_stiffness",), "min_frequency": ("task_lowest_frequency",)}
 
 
 def check_violation(name: str, row: dict) -> tuple[float, str]:
@@ -161,6 +167,12 @@ def check_violation(name: str, row: dict) -> tuple[float, str]:
         f = number(row.get("min_margin_figure"))
         v = UNDEFINED if f is None else row["req_min_margin"] - f
         return v, f"min_margin ({'undefined' if f is None else f'{f:.4g} N'} < {row['req_min_margin']:g} N)"
+    if name in ("min_stiffness", "min_frequency"):
+        figure = "task_min_stiffness" if name == "min_stiffness" else "task_lowest_frequency"
+        f, limit = number(row.get(figure)), row[f"req_{name}"]
+        unit = "N/m" if name == "min_stiffness" else "Hz"
+        v = UNDEFINED if f is None else limit - f
+        return v, f"{name} ({'undefined' if f is None else f'{f:.4g} {unit}'} < {limit:g} {unit})"
     if name == "min_fraction":
         f = number(row.get("fraction"))
         v = UNDEFINED if f is None else row["req_min_fraction"] - f

@@ -63,7 +63,8 @@ class Analysis:
     interference checks; ``orientations`` ``total`` | ``range`` (orientation workspaces) or
     None; ``max_tilt`` [deg] a tilt limit asked on the command line; ``objective`` and
     ``weights`` the tension distribution of ``pose``; ``engine`` one of :data:`ENGINES`;
-    ``poses`` the size of the grid to sweep (the engine's choice).
+    ``poses`` the size of the grid to sweep (the engine's choice); ``stiffness`` the sweep adds
+    the least stiffness and the lowest natural frequency of every feasible pose.
     """
 
     command: str = "workspace"
@@ -75,6 +76,7 @@ class Analysis:
     weights: bool = False
     engine: str = "auto"
     poses: int = 1
+    stiffness: bool = False
 
 
 @dataclass(frozen=True)
@@ -90,6 +92,8 @@ class Facts:
     rotational: bool
     closed_form: bool
     motion: str
+    #: why the stiffness is not defined (None: it is; :func:`stiffness_reason`)
+    stiffness: str | None = None
 
 
 @dataclass(frozen=True)
@@ -102,9 +106,9 @@ class Refusal:
     reason: str
     applies: Callable[[Facts, Analysis], bool]
 
-    def message(self, analysis: Analysis) -> str:
-        """``option: reason``, the option formatted with the analysis (``{a.kind}``)."""
-        return f"{self.option.format(a=analysis)}: {self.reason}"
+    def message(self, facts: Facts, analysis: Analysis) -> str:
+        """``option: reason``, formatted with the facts and the analysis (``{a.kind}``, ``{f.stiffness}``)."""
+        return f"{self.option.format(a=analysis)}: {self.reason.format(f=facts)}"
 
 
 def check_kind(kind: str) -> None:
@@ -164,6 +168,12 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal("fk", "the forward kinematics of elastic and sagging cables takes point outlets, not swivel "
                   "pulleys; use --cable-model ideal for this design",
             lambda f, a: a.command == "fk" and f.cables != "ideal" and f.outlets == "pulleys"),
+    Refusal("--stiffness", "{f.stiffness}",
+            lambda f, a: a.stiffness and f.stiffness is not None),
+    Refusal("--stiffness", "an orientation workspace's rows stand for a set of orientations, not one pose "
+                           "the cables hold: the stiffness is reported at one orientation (leave out "
+                           "--orientations)",
+            lambda f, a: a.stiffness and a.orientations is not None),
     Refusal("engine=numpy", "the numpy engine covers two cables with two wrench rows (static or wrench-feasible) "
                             "from point outlets, at the workspace's orientation; use auto or numba for this design",
             lambda f, a: a.engine == "numpy" and not _numpy_covers(f, a)),
@@ -315,7 +325,25 @@ def facts(design: Design) -> Facts:
     else:
         orientation = "commanded"
     return Facts(cables, outlets, orientation, under, weight, design.motion.rotational,
-                 design.m == 2 and design.n == 2, design.motion.name)
+                 design.m == 2 and design.n == 2, design.motion.name,
+                 stiffness_reason(design, cables, outlets, orientation))
+
+
+def stiffness_reason(design: Design, cables: str, outlets: str, orientation: str) -> str | None:
+    """Why the stiffness of the design's effector on its cables is not defined, or None (it is:
+    straight cables from point outlets, each with an axial stiffness, the orientation commanded
+    or held; :mod:`cdpr_design.statics.stiffness`)."""
+    if cables == "sagging":
+        return "sagging cables: the elastic catenary's stiffness is not modelled (use --cable-model elastic)"
+    if outlets == "pulleys":
+        return "swivel pulleys: the stiffness of a cable over a pulley is not modelled"
+    if orientation == "hanging":
+        return "effector.orientation: free: the hanging effector's stiffness is not modelled"
+    missing = [c.name for c in design.cables if not c.props.axial_stiffness]
+    if missing:
+        return ("ideal cables without cable.axial_stiffness are inextensible, so the robot is rigid along "
+                f"them (infinite stiffness): give axial_stiffness for {', '.join(missing)}")
+    return None
 
 
 def resolve(design: Design, analysis: Analysis | None = None, **options) -> Robot:
@@ -334,7 +362,7 @@ def resolve(design: Design, analysis: Analysis | None = None, **options) -> Robo
     f = facts(design)
     r = refusal(f, a)
     if r is not None:
-        raise InputError(r.message(a))
+        raise InputError(r.message(f, a))
     return Robot(
         design=design, analysis=a, cables=f.cables, outlets=f.outlets, orientation=f.orientation,
         underconstrained=f.underconstrained, engine=_engine(f, a), tilt_limit=_tilt_limit(design, f, a),

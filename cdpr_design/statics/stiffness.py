@@ -48,7 +48,7 @@ import numpy as np
 
 from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.robot import cable_model, has_pulleys
+from cdpr_design.statics.robot import facts
 
 
 def skew(v) -> np.ndarray:
@@ -58,15 +58,11 @@ def skew(v) -> np.ndarray:
 
 
 def axial_stiffnesses(design: Design) -> tuple[np.ndarray | None, str | None]:
-    """(EA (m,) [N], None), or (None, the reason the stiffness is not defined for this design)."""
-    if cable_model(design) == "sagging":
-        return None, "sagging cables: the elastic catenary's stiffness is not modelled (use --cable-model elastic)"
-    if has_pulleys(design):
-        return None, "swivel pulleys: the stiffness of a cable over a pulley is not modelled"
-    missing = [c.name for c in design.cables if not c.props.axial_stiffness]
-    if missing:
-        return None, ("ideal cables without cable.axial_stiffness are inextensible, so the robot is rigid along "
-                      f"them (infinite stiffness): give axial_stiffness for {', '.join(missing)}")
+    """(EA (m,) [N], None), or (None, the reason the stiffness is not defined for this design:
+    :func:`cdpr_design.statics.robot.stiffness_reason`)."""
+    reason = facts(design).stiffness
+    if reason is not None:
+        return None, reason
     return np.array([float(c.props.axial_stiffness) for c in design.cables]), None
 
 

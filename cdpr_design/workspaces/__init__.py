@@ -26,11 +26,13 @@ __all__ = ["CHUNK", "ENGINES", "KINDS", "MAX_POSES", "Chunk", "Plan", "Workspace
 
 
 def robot_for(design: Design, grid: Grid, kind: str = "static", interference: bool = False,
-              orientations: str | None = None, engine: str = "auto", max_tilt: float | None = None) -> Robot:
+              orientations: str | None = None, engine: str = "auto", max_tilt: float | None = None,
+              stiffness: bool = False) -> Robot:
     """The robot of a workspace sweep of ``design`` over ``grid`` (refused combinations raise an
     :class:`~cdpr_design.errors.InputError` with the reason; see :func:`~cdpr_design.statics.robot.resolve`)."""
     return resolve(design, Analysis(command="workspace", kind=kind, collisions=interference,
-                                    orientations=orientations, max_tilt=max_tilt, engine=engine, poses=grid.size))
+                                    orientations=orientations, max_tilt=max_tilt, engine=engine, poses=grid.size,
+                                    stiffness=stiffness))
 
 
 def _grid(design: Design, step, grid: Grid | None, force: bool) -> Grid:
@@ -45,7 +47,8 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         orientation=None, on_chunk: Callable[[Chunk], None] | None = None,
         progress: Callable[[int, int], None] | None = None, force: bool = False,
         chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False,
-        engine: str = "auto", max_tilt: float | None = None, tilt: bool = True) -> WorkspaceResult:
+        engine: str = "auto", max_tilt: float | None = None, tilt: bool = True,
+        stiffness: bool = False) -> WorkspaceResult:
     """Sweep the workspace grid and return the summary and maps.
 
     Parameters
@@ -88,13 +91,16 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         with (a figure only, and the costliest part of such a sweep: callers that
         use just feasibility, margins and tensions pass False).  A ``free``
         design's hanging orientation is always found: its statics depend on it.
+    stiffness : bool
+        Also the least stiffness [N/m] and the lowest natural frequency [Hz] of every feasible
+        pose (:mod:`~cdpr_design.workspaces.stiffness`): columns, maps and summary keys.
 
     What is computed (cable model, outlets, how the orientation is decided, engine) is the
     resolved robot's (:func:`~cdpr_design.statics.robot.resolve`); the sweep is its
     :func:`~cdpr_design.workspaces.plan.plan`.
     """
     g = _grid(design, step, grid, force)
-    robot = robot_for(design, g, kind, interference, None, engine, max_tilt)
+    robot = robot_for(design, g, kind, interference, None, engine, max_tilt, stiffness)
     return plan(robot, g, orientation, tilt=tilt).run(on_chunk, progress, chunk, keep_maps)
 
 

@@ -116,6 +116,8 @@ class WorkspaceResult:
     hanging: object = None
     #: the resolved robot the sweep ran (:class:`cdpr_design.statics.robot.Robot`)
     robot: object = None
+    #: ``--stiffness`` only: the maps ``min_stiffness`` [N/m] and ``lowest_frequency`` [Hz]
+    stiffness: dict | None = None
 
     @property
     def fraction(self) -> float:

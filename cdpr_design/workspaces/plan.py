@@ -147,4 +147,8 @@ def plan(robot: Robot, grid: Grid, orientation=None, *, tilt: bool = True, orien
         wrappers.append(hanging.HeldTilt(robot, ori))
     elif tilt:
         wrappers.append(hanging.Classification(robot))
+    if a.stiffness:
+        from cdpr_design.workspaces.stiffness import StiffnessColumns  # the kernels, on first use
+
+        wrappers.append(StiffnessColumns(robot, ori))
     return Plan(robot, grid, ori, base, tuple(wrappers), tilt, orientations)

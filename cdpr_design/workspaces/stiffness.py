@@ -1,0 +1,56 @@
+"""The stiffness and the lowest natural frequency of every pose of a sweep (``workspace --stiffness``).
+
+:class:`StiffnessColumns` is a wrapper of the sweep plan (:mod:`cdpr_design.workspaces.plan`):
+at each pose the base evaluator found feasible, the effector held by the minimum-norm tensions
+on its elastic cables (:mod:`cdpr_design.statics.stiffness`, the kernel
+:mod:`cdpr_design.kernels.stiffness`) gives
+
+- ``min_stiffness`` [N/m]: the smallest stiffness against a force at the reference point, the
+  effector free to rotate;
+- ``lowest_frequency`` [Hz]: the lowest natural frequency of the effector on its cables (cable
+  mass neglected);
+
+both empty where the pose is infeasible (no tensions hold it) or the equilibrium is unstable.
+The map of ``min_stiffness`` is drawn as ``stiffness_map.png``; the summary adds the least of
+each over the feasible poses (``min_stiffness``, ``lowest_frequency``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cdpr_design.statics.robot import Robot
+from cdpr_design.statics.stiffness import sweep_arrays, sweep_figures
+from cdpr_design.workspaces.grid import Rows
+from cdpr_design.workspaces.parts import Wrapper
+
+
+class StiffnessColumns(Wrapper):
+    """The columns ``min_stiffness`` and ``lowest_frequency`` of a robot whose stiffness is defined
+    (the resolved robot refuses ``--stiffness`` otherwise), at the sweep's orientation ``ori`` (3,) [rad]."""
+
+    columns = ("min_stiffness", "lowest_frequency")
+    maps = ("min_stiffness", "lowest_frequency")
+    pictures = ("stiffness_map.png",)
+
+    def __init__(self, robot: Robot, ori):
+        self.arrays = sweep_arrays(robot.design, ori)
+        self.least = {"min_stiffness": math.inf, "lowest_frequency": math.inf}
+
+    def add(self, r: Rows, start: int, P: np.ndarray) -> None:
+        t = np.where(r.feasible.astype(bool)[:, None], r.tensions, np.nan)
+        kmin, flow = sweep_figures(self.arrays, P, t)
+        for name, v in (("min_stiffness", kmin), ("lowest_frequency", flow)):
+            r.extra[name] = v
+            r.maps[name] = v
+            fin = v[np.isfinite(v)]
+            if fin.size:
+                self.least[name] = min(self.least[name], float(fin.min()))
+
+    def summary(self, maps) -> dict:
+        return {k: (v if math.isfinite(v) else None) for k, v in self.least.items()}
+
+    def finish(self, result, maps) -> None:
+        result.stiffness = {name: maps.xmaps[name] for name in self.maps}
