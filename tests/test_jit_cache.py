@@ -148,9 +148,10 @@ eval_rotated(P, R, A, Bp, rows, np.tile(wreq, (64, 1, 1)), tmin, tmax, combinati
     "points": """
 import numpy as np
 from cdpr_design.model import spec
+from cdpr_design.statics.robot import Analysis, resolve
 from cdpr_design.workspaces.hardware import Evaluator
 d = spec.load("designs/planar4.yaml")
-Evaluator(d, "static", True)(np.zeros((16, 3)), [0.0, 0.0, 0.0])
+Evaluator(resolve(d, Analysis(collisions=True)))(np.zeros((16, 3)), [0.0, 0.0, 0.0])
 """,
     "catenary": """
 import numpy as np

@@ -69,7 +69,7 @@ def test_total_orientation_workspace_is_the_intersection(make, oset, kind, inter
         allok &= ok
         count += ok
         marg = np.fmin(marg, one["margin"])
-        tmax = np.fmax(tmax, one["tensions"])
+        tmax = np.maximum(tmax, one["tensions"])  # none at one orientation (wrench closure): none over the set
         if interference:
             cfree &= one["collision_free"].astype(bool)
     np.testing.assert_array_equal(tot["feasible"].astype(bool), allok)

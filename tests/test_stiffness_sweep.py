@@ -108,3 +108,20 @@ def test_both_figures_are_optimize_objectives():
     assert row["task_min_stiffness"] == task["min_stiffness"] > 0
     assert row["task_lowest_frequency"] == task["lowest_frequency"] > 0
     assert "task_min_stiffness" not in evaluate(design, figures={"fraction"})
+
+
+def test_the_readmes_planar2_figures(tmp_path):
+    """README 'Stiffness and vibration': planar2 at its spec's grid is softest at the bottom
+    corners, 3.2 kN/m and 9.0 Hz at (0.06, 0)."""
+    import re
+
+    from .helpers import ROOT
+
+    text = (ROOT / "README.md").read_text()
+    k, f, x, y = re.search(r"([\d.]+) kN/m and ([\d.]+) Hz\nat \(([\d.]+), ([\d.]+)\)", text).groups()
+    r = invoke("workspace", PLANAR2, "--stiffness", "--out", tmp_path, "--json", "--quiet")
+    s = json.loads(r.stdout)
+    assert round(s["min_stiffness"] / 1e3, 1) == float(k) and round(s["lowest_frequency"], 1) == float(f)
+    cols = columns(tmp_path / "workspace.csv")
+    i = int(np.nanargmin(cols["min_stiffness"]))
+    assert (cols["x"][i], cols["y"][i]) == pytest.approx((float(x), float(y)), abs=1e-9)
