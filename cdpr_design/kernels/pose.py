@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
+from cdpr_design.kernels._jit import jitable, njit, njit_inline, njit_noref
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
 from cdpr_design.kernels.tension_qp import goldfarb_idnani, null_space_setup, project_one, project_two
@@ -185,9 +185,9 @@ def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin,
         tensions[k, i] = t[i]
 
 
-@njit_inline
+@jitable
 def row_buffers(n, m, nv):
     """What :func:`eval_row` works in, for one block of poses: the structure matrix W (n, m),
     tensions t (m,) [N], lengths L (m,) [m] and the scratch (:func:`make_scratch`, ``nv``
-    required-wrench rows)."""
+    required-wrench rows).  A plain function from Python, as :func:`make_scratch`."""
     return np.empty((n, m)), np.empty(m), np.empty(m), make_scratch(n, m, nv)
