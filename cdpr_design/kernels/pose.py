@@ -7,7 +7,7 @@ import numpy as np
 from cdpr_design.kernels._jit import jitable, njit, njit_inline, njit_noref
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
-from cdpr_design.kernels.tension_qp import goldfarb_idnani, null_space_setup, project_one, project_two
+from cdpr_design.kernels.tension_qp import goldfarb_idnani, line_projection, null_space, plane_projection
 
 
 KIND_STATIC = 0
@@ -74,11 +74,12 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
                 acc += tab[s, m + i] * wreq[0, i]
             t_out[bcol[s]] = min(max(acc, tmin[bcol[s]]), tmax[bcol[s]])
     else:  # writes t_out, NaN where no tensions exist
-        null_space_setup(n, m, wreq[0], scr)
+        # (tension_qp's null_space_setup, project_two, project_one on the scratch's arrays)
+        null_space(n, m, wreq[0], scr[0], scr[8], scr[9], scr[25], scr[19], scr[20])
         if r == 2:
-            qp_ok = project_two(m, tmin, tmax, t_out, scr)
+            qp_ok = plane_projection(m, tmin, tmax, t_out, scr[8], scr[9], scr[30])
         elif r == 1:
-            qp_ok = project_one(m, tmin, tmax, t_out, scr)
+            qp_ok = line_projection(m, tmin, tmax, t_out, scr[8], scr[9])
         else:
             qp_ok = goldfarb_idnani(m, r, tmin, tmax, t_out, scr)
     if kind == KIND_WRENCH_CLOSURE:
