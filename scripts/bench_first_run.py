@@ -104,6 +104,20 @@ Both, ``--root`` at cfe429a, ``--repeat 1 --no-total``, load average 6.8 (before
     planar4      161.2 -> 113.2 s         24.5 -> 17.5 s       14.31 -> 11.39 s       1.53 -> 1.31 s  identical
     planar2        9.7 -> 5.9 s            0.9 -> 0.9 s         9.06 -> 5.45 s        0.91 -> 0.91 s  identical
 
+The same, another run (load average 8.5 before / 4.7 after; single warm runs, so their
+differences are noise)::
+
+    design       cold wall                cold CPU             warm wall              warm CPU      outputs
+    ipanema2      97.5 -> 46.8 s          31.5 -> 24.0 s        4.06 -> 3.08 s        1.18 -> 1.51 s  identical
+    cogiro        59.1 -> 25.4 s          31.9 -> 23.0 s        3.55 -> 3.41 s        1.62 -> 1.47 s  identical
+    ipanema1      32.4 -> 28.0 s          30.0 -> 25.3 s        2.99 -> 4.46 s        1.61 -> 2.39 s  identical
+    crane4        48.2 -> 53.0 s          45.8 -> 49.3 s        9.99 -> 8.99 s        6.60 -> 6.99 s  identical
+
+crane4 (its hanging sweep compiles ``row_buffers`` into its block either way) gains nothing.
+After both, IPAnema 3's kernels compile into 20 functions (28 before), ``hsm_two`` the largest
+(about 37 % of the compile by numba's events); still compiled twice: ``_setup`` (flag),
+``_inside`` (``k`` 0 and int64) and ``_half_plane`` (-1 and int64).
+
 The targets (IPAnema 3 <= 10 s, every kernel <= 30 s) are still not met.
 """
 
