@@ -112,6 +112,8 @@ differences are noise)::
     cogiro        59.1 -> 25.4 s          31.9 -> 23.0 s        3.55 -> 3.41 s        1.62 -> 1.47 s  identical
     ipanema1      32.4 -> 28.0 s          30.0 -> 25.3 s        2.99 -> 4.46 s        1.61 -> 2.39 s  identical
     crane4        48.2 -> 53.0 s          45.8 -> 49.3 s        9.99 -> 8.99 s        6.60 -> 6.99 s  identical
+    sagging40    110.6 -> 104.1 s        104.6 -> 97.4 s        9.24 -> 10.22 s       7.32 -> 8.61 s  identical
+                 (a third run, load average 2.0 before / 4.1 after)
 
 crane4 (its hanging sweep compiles ``row_buffers`` into its block either way) gains nothing.
 After both, IPAnema 3's kernels compile into 20 functions (28 before), ``hsm_two`` the largest
