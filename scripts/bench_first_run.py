@@ -73,6 +73,54 @@ process from an empty cache (``workspaces.warm_up`` or the first ``workspaces.ru
   interleaved pairs, CPU of all processes (``perf stat``), 2.37 (2.26-2.64) -> 3.02 (2.94-3.24)
   CPU-s; this script's warm CPU of the command 1.14 -> 1.68 (IPAnema 3), 0.84 -> 1.38
   (pointmass3), 0.90 -> 1.38 (IPAnema 2).  It matters to a user; it stays where it was.
+
+Later (numba 0.68.1): where a cold compile goes, from numba's compile events and cProfile on
+IPAnema 3's kernels: ``hsm_two`` about 30 % (two inlined copies of its body), ``_grid_loop_2``
+about 20 %, ``project_two`` with its callees 15 %, ``row_buffers`` and ``make_scratch`` (compiled
+alone because Python called them) 10 %.  Of the whole, numba's IR inlining (``inline="always"``)
+is 3.2 of 25.6 CPU-s, 2.0 of them ``hsm_two``'s two copies; LLVM's optimisation at ``NUMBA_OPT=0``
+saves 6-8 of about 28 (not an option: it is the kernels' speed).  A compiled function that takes
+the scratch tuple (31 arrays) costs 0.3-0.4 CPU-s more to compile than the same body on its two
+arrays (its arguments unpacked, and boxed again in its Python wrapper).  numba also compiles a
+function once per *constant* argument it sees, and, for a variable first set from a constant in a
+loop, once for the constant as well (``_finish`` with ``ok`` True and False, ``_inside`` with
+``k`` = 0 and int64, ``_half_plane`` with -1 and int64, ``hsm_small._setup`` with the closure flag
+True and False: ``kernel.signatures`` after a run).  Kept, each bit-identical (outputs compared
+below; ``tension_qp`` has no fastmath, so IEEE arithmetic fixes its results whatever the code's
+shape):
+
+- ``make_scratch`` and ``row_buffers`` plain Python functions that numba compiles into the
+  kernels calling them (``register_jitable``): the grid sweep's block and ``statics.tension``
+  allocate with numpy and compile nothing for it;
+- the eval's QP on the scratch's arrays (``null_space``, ``plane_projection``,
+  ``line_projection``; the scratch-tuple forms stay for their other callers), and ``_finish``
+  called once with a computed ``ok``.
+
+Both, ``--root`` at cfe429a, ``--repeat 1 --no-total``, load average 6.8 (before) / 9.7 (after)::
+
+    design       cold wall                cold CPU             warm wall              warm CPU      outputs
+    ipanema3     151.5 -> 155.0 s         31.5 -> 26.3 s       16.13 -> 10.85 s       1.86 -> 1.54 s  identical
+    pointmass3    89.2 -> 55.4 s          12.6 -> 9.3 s        17.09 -> 11.60 s       1.39 -> 1.22 s  identical
+    planar4      161.2 -> 113.2 s         24.5 -> 17.5 s       14.31 -> 11.39 s       1.53 -> 1.31 s  identical
+    planar2        9.7 -> 5.9 s            0.9 -> 0.9 s         9.06 -> 5.45 s        0.91 -> 0.91 s  identical
+
+The same, another run (load average 8.5 before / 4.7 after; single warm runs, so their
+differences are noise)::
+
+    design       cold wall                cold CPU             warm wall              warm CPU      outputs
+    ipanema2      97.5 -> 46.8 s          31.5 -> 24.0 s        4.06 -> 3.08 s        1.18 -> 1.51 s  identical
+    cogiro        59.1 -> 25.4 s          31.9 -> 23.0 s        3.55 -> 3.41 s        1.62 -> 1.47 s  identical
+    ipanema1      32.4 -> 28.0 s          30.0 -> 25.3 s        2.99 -> 4.46 s        1.61 -> 2.39 s  identical
+    crane4        48.2 -> 53.0 s          45.8 -> 49.3 s        9.99 -> 8.99 s        6.60 -> 6.99 s  identical
+    sagging40    110.6 -> 104.1 s        104.6 -> 97.4 s        9.24 -> 10.22 s       7.32 -> 8.61 s  identical
+                 (a third run, load average 2.0 before / 4.1 after)
+
+crane4 (its hanging sweep compiles ``row_buffers`` into its block either way) gains nothing.
+After both, IPAnema 3's kernels compile into 20 functions (28 before), ``hsm_two`` the largest
+(about 37 % of the compile by numba's events); still compiled twice: ``_setup`` (flag),
+``_inside`` (``k`` 0 and int64) and ``_half_plane`` (-1 and int64).
+
+The targets (IPAnema 3 <= 10 s, every kernel <= 30 s) are still not met.
 """
 
 from __future__ import annotations

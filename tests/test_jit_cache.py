@@ -206,10 +206,14 @@ def test_sweeps_free_every_array_they_allocate():
     r = subprocess.run([sys.executable, "-c", LEAK_PROBE], cwd=PACKAGE.parent, env=env, capture_output=True,
                        text=True)
     assert r.returncode == 0, r.stderr[-3000:]
-    for line in r.stdout.strip().splitlines():
+    lines = r.stdout.strip().splitlines()
+    for line in lines:
         name, poses, alloc, free, mi_alloc, mi_free = line.split()
         assert alloc == free and mi_alloc == mi_free, line
-        assert 0 < int(alloc) < int(poses), line  # per block, not per pose
+        assert int(alloc) < int(poses), line  # per block, not per pose
+    # the counts are numba's (the grid sweeps' buffers are numpy's: none there); the point and
+    # hanging sweeps allocate theirs in compiled blocks, so a count of 0 everywhere means no counting
+    assert any(int(line.split()[2]) > 0 for line in lines), lines
 
 
 ORDER_PROBE = """

@@ -27,6 +27,7 @@ import hashlib
 import os
 
 import numba as nb
+from numba.extending import register_jitable
 
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -99,3 +100,14 @@ njit_inline = nb.njit(fastmath=FAST, inline="always", **JIT)
 NOREF = dict(JIT, _nrt=False)
 njit_noref = nb.njit(**NOREF)
 njit_fast_noref = nb.njit(fastmath=FAST, **NOREF)
+
+
+def jitable(func):
+    """``func`` itself, a plain Python function, and compiled into the kernels that call it.
+
+    For the functions that only allocate a kernel's arrays (:func:`~cdpr_design.kernels.hsm.make_scratch`):
+    called from Python, numpy allocates them and nothing is compiled -- a compiled function
+    returning a tuple of 31 arrays took 1.5-3 CPU-s to compile on a machine's first run, more than
+    the allocation costs in a whole sweep (``numba.extending.register_jitable``).
+    """
+    return register_jitable(func)

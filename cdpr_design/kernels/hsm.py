@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_fast_noref, njit_inline, njit_noref
+from cdpr_design.kernels._jit import jitable, njit, njit_fast_noref, njit_inline, njit_noref
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
 from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, det_in_place, det_small, gram_of_inverse, inverse_into
 
@@ -194,12 +194,14 @@ def hsm_margin(W, wreq, tmin, tmax, combos):
     return True, margin
 
 
-@njit
+@jitable
 def make_scratch(n, m, nv):
     """Scratch arrays for :func:`eval_general` (allocate once per block of poses).
 
     A tuple so that every array keeps its contiguous type; ``nv`` is the
-    number of required-wrench rows.
+    number of required-wrench rows.  A plain function from Python (numpy allocates;
+    nothing is compiled), compiled into the kernels that call it
+    (:data:`~cdpr_design.kernels._jit.jitable`).
     """
     r = max(m - n, 1)
     return (np.empty((n, m + n)),       # 0 tab: [G W | G], G = W_B^-1

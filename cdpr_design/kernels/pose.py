@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
+from cdpr_design.kernels._jit import jitable, njit, njit_inline, njit_noref
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
-from cdpr_design.kernels.tension_qp import goldfarb_idnani, null_space_setup, project_one, project_two
+from cdpr_design.kernels.tension_qp import goldfarb_idnani, line_projection, null_space, plane_projection
 
 
 KIND_STATIC = 0
@@ -74,11 +74,12 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
                 acc += tab[s, m + i] * wreq[0, i]
             t_out[bcol[s]] = min(max(acc, tmin[bcol[s]]), tmax[bcol[s]])
     else:  # writes t_out, NaN where no tensions exist
-        null_space_setup(n, m, wreq[0], scr)
+        # (tension_qp's null_space_setup, project_two, project_one on the scratch's arrays)
+        null_space(n, m, wreq[0], scr[0], scr[8], scr[9], scr[25], scr[19], scr[20])
         if r == 2:
-            qp_ok = project_two(m, tmin, tmax, t_out, scr)
+            qp_ok = plane_projection(m, tmin, tmax, t_out, scr[8], scr[9], scr[30])
         elif r == 1:
-            qp_ok = project_one(m, tmin, tmax, t_out, scr)
+            qp_ok = line_projection(m, tmin, tmax, t_out, scr[8], scr[9])
         else:
             qp_ok = goldfarb_idnani(m, r, tmin, tmax, t_out, scr)
     if kind == KIND_WRENCH_CLOSURE:
@@ -185,9 +186,9 @@ def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin,
         tensions[k, i] = t[i]
 
 
-@njit_inline
+@jitable
 def row_buffers(n, m, nv):
     """What :func:`eval_row` works in, for one block of poses: the structure matrix W (n, m),
     tensions t (m,) [N], lengths L (m,) [m] and the scratch (:func:`make_scratch`, ``nv``
-    required-wrench rows)."""
+    required-wrench rows).  A plain function from Python, as :func:`make_scratch`."""
     return np.empty((n, m)), np.empty(m), np.empty(m), make_scratch(n, m, nv)

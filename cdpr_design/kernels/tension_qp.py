@@ -24,8 +24,14 @@ def null_space_setup(n, m, w, scr):
     solution t_b (t_B = G w, t_N = 0) projected off the null space is the
     minimum-norm solution t_p = t_b - N N^T t_b (``scr[9]``).
     """
-    tab, N, tp, tb = scr[0], scr[8], scr[9], scr[25]
-    nbc, bcol = scr[19], scr[20]
+    null_space(n, m, w, scr[0], scr[8], scr[9], scr[25], scr[19], scr[20])
+
+
+@njit_noref
+def null_space(n, m, w, tab, N, tp, tb, nbc, bcol):
+    """:func:`null_space_setup` on the scratch's arrays themselves (``tab`` scr[0], ``N`` scr[8],
+    ``tp`` scr[9], ``tb`` scr[25], ``nbc`` scr[19], ``bcol`` scr[20]): a compiled function that
+    takes the scratch tuple unpacks its 31 arrays, which cost 0.3-0.4 CPU-s of compile per function."""
     r = m - n
     for k in range(r):
         col = nbc[k]
@@ -90,9 +96,8 @@ def project_null(m, r, tmin, tmax, t, scr):
 
 
 @njit_noref
-def _finish(m, r, tmin, tmax, t, scr, z0, z1, ok):
+def _finish(m, r, tmin, tmax, t, N, tp, z0, z1, ok):
     """t = t_p + N z clipped into the bounds (``ok``), else NaN; returns ``ok``."""
-    N, tp = scr[8], scr[9]
     for j in range(m):
         if not ok:
             t[j] = np.nan
@@ -115,7 +120,13 @@ def project_one(m, tmin, tmax, t, scr):
     so z ends at the end of the feasible interval nearest 0.  Violations up to
     :func:`qp_tolerance` count as met, as in the general method.
     """
-    N, tp = scr[8], scr[9]
+    return line_projection(m, tmin, tmax, t, scr[8], scr[9])
+
+
+@njit_noref
+def line_projection(m, tmin, tmax, t, N, tp):
+    """:func:`project_one` on the scratch's null basis ``N`` (scr[8]) and ``tp`` (scr[9]) themselves
+    (see :func:`null_space`)."""
     tol = qp_tolerance(m, tmin, tmax)
     z = 0.0
     way = 0.0  # the direction z moves in: +1, -1 (0: not moved yet)
@@ -130,14 +141,16 @@ def project_one(m, tmin, tmax, t, scr):
             if v - tmax[j] > worst:
                 worst, p, up = v - tmax[j], j, False
         if p < 0:
-            return _finish(m, 1, tmin, tmax, t, scr, z, 0.0, True)
+            break
         a = N[p, 0]
         need = (1.0 if a > 0.0 else -1.0) * (1.0 if up else -1.0)
         if a == 0.0 or need * way < 0.0:
             break
         way = need
         z = ((tmin[p] if up else tmax[p]) - tp[p]) / a
-    return _finish(m, 1, tmin, tmax, t, scr, 0.0, 0.0, False)
+    # no bound violated (p < 0): t at z; else none exist.  One call, its ``ok`` not a constant:
+    # numba compiles a function once per constant argument it is called with
+    return _finish(m, 1, tmin, tmax, t, N, tp, z, 0.0, p < 0)
 
 
 @njit_noref
@@ -172,7 +185,13 @@ def project_two(m, tmin, tmax, t, scr):
     inside it, hence the answer.  No candidate inside the half-planes proves
     that no tensions exist.  Violations up to :func:`qp_tolerance` count as met.
     """
-    N, tp, H = scr[8], scr[9], scr[30]
+    return plane_projection(m, tmin, tmax, t, scr[8], scr[9], scr[30])
+
+
+@njit_noref
+def plane_projection(m, tmin, tmax, t, N, tp, H):
+    """:func:`project_two` on the scratch's ``N`` (scr[8]), ``tp`` (scr[9]) and half-planes ``H``
+    (scr[30]) themselves (see :func:`null_space`)."""
     tol = qp_tolerance(m, tmin, tmax)
     z0 = 0.0
     z1 = 0.0
@@ -191,7 +210,7 @@ def project_two(m, tmin, tmax, t, scr):
                 worst = v - tmax[j]
                 p = j + m
         if p < 0:
-            return _finish(m, 2, tmin, tmax, t, scr, z0, z1, True)
+            break
         k = 0
         for c in (act0, act1, p):
             if c >= 0:
@@ -226,7 +245,8 @@ def project_two(m, tmin, tmax, t, scr):
         if new0 < 0:  # the half-planes have no common point: neither has the polygon
             break
         z0, z1, act0, act1 = z0n, z1n, new0, new1
-    return _finish(m, 2, tmin, tmax, t, scr, 0.0, 0.0, False)
+    # no bound violated (p < 0): t at z; else none exist (as in :func:`line_projection`)
+    return _finish(m, 2, tmin, tmax, t, N, tp, z0, z1, p < 0)
 
 
 @njit_noref
