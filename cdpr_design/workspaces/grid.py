@@ -307,11 +307,14 @@ class Maps:
         if not self.keep:
             return
         cnt = feas.shape[0]
-        if not (self.stride > 1).any() and not self.xmaps:
+        if not (self.stride > 1).any():
             # full resolution: the chunk is a contiguous run of the flat grid
             self.fmap.reshape(-1)[start:start + cnt] = feas
             self.mmap.reshape(-1)[start:start + cnt] = marg
             self.tmaps.reshape(self.m, -1)[:, start:start + cnt] = ten.T
+            for name, v in (extra or {}).items():
+                if name in self.xmaps:
+                    self.xmaps[name].reshape(-1)[start:start + cnt] = v
             return
         msub, keep = self._cells(start, cnt)
         self.fmap[msub] = feas[keep]
