@@ -46,6 +46,8 @@ class CableSummary(Wrapper):
     orientation workspace's rows stand for a set of orientations, not one pose whose cables a
     winch pays out)."""
 
+    positions = False
+
     def __init__(self, robot: Robot):
         self.robot = robot
 
@@ -79,6 +81,7 @@ class ChordColumns(Wrapper):
     that could fail).  Draws ``cable_models.png``."""
 
     pictures = ("cable_models.png",)
+    positions = False
 
     def __init__(self, robot: Robot):
         self.robot = robot
@@ -123,6 +126,7 @@ class SaggingSweep(Base):
     ``cable_model``, ``cable_status`` (poses per status), ``max_outlet_tension_per_cable``."""
 
     pictures = ("cable_models.png",)
+    positions = False  # the kernel works from the grid's indices
 
     def __init__(self, robot: Robot, ori: np.ndarray, g: Grid):
         from cdpr_design.kernels.sagging import sweep_grid_sagging
@@ -135,8 +139,8 @@ class SaggingSweep(Base):
         self.counts = np.zeros(len(cables.STATUS), dtype=np.int64)
         self.opeak = np.full(robot.m, -np.inf)
 
-    def rows(self, start: int, P: np.ndarray) -> Rows:
-        r, cnt, m = self.robot, P.shape[0], self.robot.m
+    def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
+        r, cnt, m = self.robot, count, self.robot.m
         feas, marg = np.empty(cnt, dtype=np.uint8), np.empty(cnt)
         ten, lens, outlet, L0, sag = (np.empty((cnt, m)) for _ in range(5))
         status = np.empty(cnt, dtype=np.int8)

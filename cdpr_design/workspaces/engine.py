@@ -52,6 +52,8 @@ class StraightSweep(Base):
     """The base evaluator of straight cables from point outlets at one orientation ``ori`` (3,)
     [rad]: the robot's engine, numpy (closed form) or the kernels; the arrays built once."""
 
+    positions = False  # the engines work from the grid's indices
+
     def __init__(self, robot: Robot, ori: np.ndarray, g: Grid):
         design = robot.design
         R = kin.rotation_matrix(*ori)
@@ -65,8 +67,8 @@ class StraightSweep(Base):
         self.wreq_used = self.wreq if robot.kind == "wrench-feasible" else self.wreq[:1].copy()
         self.lower, self.step, self.shape = grid3(g)
 
-    def rows(self, start: int, P: np.ndarray) -> Rows:
-        r, cnt, m = self.robot, P.shape[0], self.robot.m
+    def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
+        r, cnt, m = self.robot, count, self.robot.m
         feas, marg = np.empty(cnt, dtype=np.uint8), np.empty(cnt)
         ten, lens = np.empty((cnt, m)), np.empty((cnt, m))
         if self.numpy:

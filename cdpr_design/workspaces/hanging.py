@@ -164,6 +164,8 @@ class Classification(Wrapper):
     """The summary keys ``effector_orientation`` and ``underconstrained`` of an under-constrained
     design whose tilt is not solved (:func:`classification`); nothing for other designs."""
 
+    positions = False
+
     def __init__(self, robot: Robot):
         self.robot = robot
 
@@ -272,7 +274,7 @@ class FreeSweep(Base):
         self.columns = tuple(columns(robot.design))
         self.tally = _Stats()
 
-    def rows(self, start: int, P: np.ndarray) -> Rows:
+    def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
         design, cnt = self.robot.design, P.shape[0]
         r = free_rows(design, P, self.hanger, self.robot.tilt_limit)
         self.tally.limited += int(np.count_nonzero(r.within & (r.feasible == 0)))

@@ -102,7 +102,7 @@ class HardwareSweep(Base):
         self.n_free = self.n_stat = 0
         self.counts = {name: 0 for name in HIT_NAMES.values()}
 
-    def rows(self, start: int, P: np.ndarray) -> Rows:
+    def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
         feas, marg, ten, L, mask = self.ev(P, self.ori)
         extra = {}
         if self.interference:

@@ -192,7 +192,7 @@ class OrientationSweep(Base):
         cols += ["orientations_feasible"] if self.mode == "total" else [f"range_{c}" for c in self.rot_names]
         self.columns = tuple(cols)
 
-    def rows(self, start: int, P: np.ndarray) -> Rows:
+    def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
         if self.mode == "total":
             r = _total_rows(self.ev, P, self.nominal, self.oset, self.tally)
         else:

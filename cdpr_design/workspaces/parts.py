@@ -19,6 +19,9 @@ class Part:
     columns: tuple[str, ...] = ()
     maps: tuple[str, ...] = ()
     pictures: tuple[str, ...] = ()
+    #: whether it reads the chunk's positions ``P`` (else it is handed None: the evaluators that
+    #: work from grid indices spare the sweep computing them)
+    positions: bool = True
 
     def summary(self, maps: Maps) -> dict:
         """The summary keys this part adds, after the sweep (``maps``: its streaming figures)."""
@@ -33,8 +36,9 @@ class Base(Part):
 
     kind: str = "static"
 
-    def rows(self, start: int, P: np.ndarray) -> Rows:
-        """The rows of grid positions ``start .. start + len(P)`` at ``P`` (k, 3) [m]."""
+    def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
+        """The rows of grid positions ``start .. start + count``, at ``P`` (count, 3) [m] (None
+        for a part that does not read them, :attr:`Part.positions`)."""
         raise NotImplementedError
 
     def stats(self, r: Rows, tpeak: np.ndarray) -> tuple:

@@ -83,13 +83,14 @@ class Plan:
         design = robot.design
         maps = Maps(g, design.m, keep_maps, extra_maps=tuple(n for p in self.parts for n in p.maps))
         names = self.extra_columns
+        wants_positions = on_chunk is not None or any(p.positions for p in self.parts)
         total = g.size
         chunk = max(1, min(chunk, total))
         done = 0
         while done < total:
             cnt = min(chunk, total - done)
-            P = positions3(g, done, cnt)
-            r = self.base.rows(done, P)
+            P = positions3(g, done, cnt) if wants_positions else None
+            r = self.base.rows(done, cnt, P)
             for w in self.wrappers:
                 w.add(r, done, P)
             maps.add(done, self.base.stats(r, maps.tpeak), r.feasible, r.margin, r.tensions, r.maps)
