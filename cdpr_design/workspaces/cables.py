@@ -48,12 +48,6 @@ class CableSummary(Wrapper):
 
     positions = False
 
-    def __init__(self, robot: Robot):
-        self.robot = robot
-
-    def add(self, r: Rows, start: int, P: np.ndarray) -> None:
-        pass
-
     def summary(self, maps) -> dict:
         peak = maps.tpeak.copy()
         peak[~np.isfinite(peak)] = np.nan
@@ -84,7 +78,7 @@ class ChordColumns(Wrapper):
     positions = False
 
     def __init__(self, robot: Robot):
-        self.robot = robot
+        super().__init__(robot)
         self.columns = tuple(cable_columns(robot))
 
     def add(self, r: Rows, start: int, P: np.ndarray) -> None:

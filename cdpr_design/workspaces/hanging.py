@@ -166,12 +166,6 @@ class Classification(Wrapper):
 
     positions = False
 
-    def __init__(self, robot: Robot):
-        self.robot = robot
-
-    def add(self, r: Rows, start: int, P: np.ndarray) -> None:
-        pass
-
     def summary(self, maps) -> dict:
         return classification(self.robot)
 
@@ -185,7 +179,7 @@ class HeldTilt(Wrapper):
     pictures = ("tilt_map.png",)
 
     def __init__(self, robot: Robot, ori):
-        self.robot = robot
+        super().__init__(robot)
         self.hanger = Hanger(robot, ori)
         self.columns = tuple(columns(robot.design))
         self.tally = _Stats()

@@ -50,7 +50,11 @@ class Base(Part):
 
 
 class Wrapper(Part):
-    """A wrapper: adds its declared columns (and maps) to a base evaluator's rows."""
+    """A wrapper of ``robot``'s sweep: adds its declared columns (and maps) to a base evaluator's
+    rows; one that only adds summary keys keeps the default :meth:`add`, which adds nothing."""
 
-    def add(self, r: Rows, start: int, P: np.ndarray) -> None:
-        raise NotImplementedError
+    def __init__(self, robot):
+        self.robot = robot
+
+    def add(self, r: Rows, start: int, P: np.ndarray | None) -> None:
+        """Fill this wrapper's columns and maps of the chunk ``r`` (grid rows from ``start``)."""
