@@ -167,3 +167,51 @@ def test_commands(tmp_path):
         assert r.exit_code == 2 and "requirements.min_cable_frequency" in r.output and "Traceback" not in r.output
     r = invoke("certify", spec_path, "--out", tmp_path / "c")
     assert r.exit_code == 2 and "requirements.min_cable_frequency" in r.output
+
+
+def _four_cables(f: float | None) -> dict:
+    """A point mass on four cables from the corners of a 2 m frame (2T, m = 4 > n = 2), cables of 50 g/m."""
+    return _with_frequency({
+        "name": "p4", "motion": "2T", "gravity": [0, -9.81], "frame": {"lower": [0, 0], "upper": [2, 2]},
+        "effector": {"mass": 2.0, "size": [0.1, 0.1]}, "tension": [1.0, 200.0],
+        "cable": {"diameter": 0.004, "mass_per_length": 0.05},
+        "cables": [{"name": n, "outlet": o, "attachment": [0, 0]} for n, o in
+                   (("a", [0, 2]), ("b", [2, 2]), ("c", [0, 0]), ("d", [2, 0]))]}, f)
+
+
+def _qp(W, w, lower, upper):
+    """The minimum 2-norm tensions within [lower, upper] by cvxpy (None: infeasible)."""
+    import cvxpy as cp
+
+    t = cp.Variable(W.shape[1])
+    prob = cp.Problem(cp.Minimize(cp.sum_squares(t)), [W @ t == w, t >= lower, t <= upper])
+    prob.solve()
+    return t.value if prob.status == "optimal" else None
+
+
+def test_trajectory_tensions_and_sizing_take_the_floor():
+    """Along a path (motion.trajectory.states) and in the sizing envelope (design.envelope), a
+    redundant robot's minimum-norm tensions are those of a cvxpy QP with max(t_min, 4 f^2 L^2 mu)
+    as lower bounds, and the floor raises them above the plain ones."""
+    from cdpr_design.design import envelope as ev
+    from cdpr_design.motion import trajectory as tr
+
+    plain, d = spec.from_dict(_four_cables(None)), spec.from_dict(_four_cables(8.0))  # 4 f^2 mu = 12.8 N/m^2
+    P = np.array([[0.5, 0.6], [1.0, 1.0], [1.4, 1.5], [0.3, 1.7]])
+    zero = np.zeros_like(P)
+    s, s0 = tr.states(d, P, zero, zero), tr.states(plain, P, zero, zero)
+    e = ev.envelope_chunk(d, P, np.zeros(3), 0.0, 0.0)
+    for k, p in enumerate(P):
+        W = kin.structure_matrix(d, p)
+        w = -kin.gravity_wrench(d, p)
+        lower = np.maximum(1.0, _floor(d, p))
+        ref = _qp(W, w, lower, 200.0)
+        assert ref is not None
+        np.testing.assert_allclose(s["tensions"][k], ref, rtol=1e-5, atol=1e-5)
+        np.testing.assert_allclose(e["static"][k], ref, rtol=1e-5, atol=1e-5)
+        assert s["feasible"][k] and np.all(s["tensions"][k] >= lower - TOL)
+    assert np.all(s["tensions"] >= s0["tensions"] - 1e-9) and np.any(s["tensions"] > s0["tensions"] + 1.0)
+    # a floor above the upper bound at the far corner: infeasible there, as in the workspace
+    far = spec.from_dict({**_four_cables(30.0), "tension": [1.0, 200.0]})  # 180 N/m^2: 200 N at 1.05 m
+    f = tr.states(far, P, zero, zero)["feasible"]
+    assert not f.all()
