@@ -215,3 +215,19 @@ def test_trajectory_tensions_and_sizing_take_the_floor():
     far = spec.from_dict({**_four_cables(30.0), "tension": [1.0, 200.0]})  # 180 N/m^2: 200 N at 1.05 m
     f = tr.states(far, P, zero, zero)["feasible"]
     assert not f.all()
+
+
+def test_the_readmes_planar2_figures(tmp_path):
+    """README 'Stiffness and vibration': planar2's feasible poses without the requirement, at 10 Hz
+    and at 20 Hz, as the README states them."""
+    import re
+
+    from .helpers import ROOT
+
+    text = (ROOT / "README.md").read_text()
+    m = re.search(r"(\d+) of its (\d+) poses are feasible without it,\n(\d+) at (\d+) Hz and (\d+) at (\d+) Hz", text)
+    plain, poses, n1, f1, n2, f2 = (int(v) for v in m.groups())
+    for f, want in ((None, plain), (f1, n1), (f2, n2)):
+        path = write_spec(tmp_path, _with_frequency(planar2_raw(), f), f"p{f}.yaml")
+        s = json.loads(invoke("workspace", path, "--out", tmp_path / f"o{f}", "--json", "--quiet").stdout)
+        assert (s["feasible"], s["poses"]) == (want, poses)
