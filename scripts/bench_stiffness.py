@@ -34,7 +34,7 @@ from cdpr_design.model import spec  # noqa: E402
 from cdpr_design.statics import kinematics as kin  # noqa: E402
 from cdpr_design.statics import stiffness as st  # noqa: E402
 from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices  # noqa: E402
-from cdpr_design.workspaces.grid import grid3, positions3  # noqa: E402
+from cdpr_design.workspaces.grid import grid3  # noqa: E402
 
 CHUNK = 65536
 
@@ -56,6 +56,7 @@ def run(design):
     combos = combinations(design.m, design.n)
     lower, step, shape = grid3(g)
     arrays = st.sweep_arrays(design, ori)
+    planar2 = design.m == 2 and design.n == 2  # the sweep's closed form for two cables (as workspaces.engine)
     t_sweep = t_stiff = 0.0
     feasible = 0
     for start in range(0, g.size, CHUNK):
@@ -65,15 +66,17 @@ def run(design):
         ten = np.empty((cnt, design.m))
         lens = np.empty((cnt, design.m))
         c0 = time.process_time()
-        K.sweep_grid(start, cnt, lower, step, shape, Rb, A, design.rows, wreq, design.tension_min,
-                     design.tension_max, combos, KINDS["static"], feas, marg, ten, lens)
+        if planar2:
+            K.sweep_grid_planar2(start, cnt, lower, step, shape, Rb, A, wreq[:1].copy(), design.tension_min,
+                                 design.tension_max, feas, marg, ten, lens)
+        else:
+            K.sweep_grid(start, cnt, lower, step, shape, Rb, A, design.rows, wreq, design.tension_min,
+                         design.tension_max, combos, KINDS["static"], feas, marg, ten, lens)
         c1 = time.process_time()
-        P = positions3(g, start, cnt)
+        kmin, flow = st.grid_figures(arrays, (lower, step, shape), start, ten, feas)
         c2 = time.process_time()
-        kmin, flow = st.sweep_figures(arrays, P, ten)
-        c3 = time.process_time()
         t_sweep += c1 - c0
-        t_stiff += c3 - c2
+        t_stiff += c2 - c1
         feasible += int(feas.sum())
     return t_sweep, t_stiff, g.size, feasible
 
