@@ -1,23 +1,46 @@
 """Benchmark: the stiffness kernel's cost relative to the sweep kernel on the same grid (issue 39, item 5).
 
-For each design, in this one process and on one thread: the grid sweep's kernel
-(``kernels.sweep_grid``: feasibility, capacity margin, minimum-norm tensions) over the design's
-workspace grid in chunks, then the stiffness kernel
-(:func:`cdpr_design.statics.stiffness.sweep_figures`: least stiffness and lowest natural
-frequency) on the same rows with the sweep's tensions.  CPU time (``time.process_time``), the
-best of ``--repeat`` interleaved rounds; the kernels are compiled (or loaded) before timing.
-Prints both per-pose costs and the ratio (sweep + stiffness) / sweep; the issue's target is
-<= 2.  Then the whole workspace sweep as a command runs it (``workspaces.run``: the sweep plan,
-its wrappers, the maps; no files), without and with ``stiffness=True``, CPU time on the
-kernels' threads (``--threads``), the best of ``--repeat`` interleaved rounds, and the ratio.
+For each design, in this one process and on one thread: the grid sweep's kernel as the
+workspace sweep calls it (``kernels.sweep_grid``, or ``kernels.sweep_grid_planar2``, the closed
+form of two cables and two wrench rows: feasibility, capacity margin, minimum-norm tensions)
+over the design's workspace grid in chunks, then the stiffness kernel
+(:func:`cdpr_design.statics.stiffness.grid_figures`: least stiffness and lowest natural
+frequency, counting the grid's indices) on the same rows with the sweep's tensions and
+feasibility.  CPU time (``time.process_time``), the best of ``--repeat`` interleaved rounds;
+the kernels are compiled (or loaded) before timing.  Prints both per-pose costs and the ratio
+(sweep + stiffness) / sweep.  Then what the issue's target (<= 2) is about, the whole
+workspace sweep as a command runs it (``workspaces.run``: the sweep plan, its wrappers, the
+maps; no files; a two-cable grid of at most 70,000 poses on the numpy engine), without and
+with ``stiffness=True``, CPU time on the kernels' threads (``--threads``), the best of
+``--repeat`` interleaved rounds, and the ratio.  The load average is printed before and after:
+the figures of a few milliseconds move with it.
 
     python scripts/bench_stiffness.py                 # cogiro, planar4, pointmass3, planar2, sagging40 (elastic)
     python scripts/bench_stiffness.py --repeat 5 cogiro
+
+Measured 2026-11-28 (AMD EPYC, 2 cores shared, load average 6-7; ``--repeat 40``, one run):
+
+    design       motion  m    poses  sweep us  stiff us  ratio | whole sweep without    with  ratio
+    cogiro       3R3T    8    39729     2.078     1.127   1.54 |             0.0856  0.1323   1.54
+    planar4      1R2T    4    30351     0.560     0.176   1.31 |             0.0173  0.0221   1.28
+    pointmass3   3T      3     4536     0.262     0.119   1.45 |             0.0019  0.0026   1.39
+    planar2      2T      2    22801     0.026     0.031   2.21 |             0.0031  0.0043   1.42
+    sagging40    2T      2    74681     0.025     0.042   2.67 |             0.0040  0.0081   2.02
+
+sagging40 (as elastic) sits at the target: its whole sweep without stiffness is 54 ns a pose
+(the two-cable closed form, 25 ns, and the elastic columns), and the stiffness kernel adds
+31-42 ns a pose: four square roots and nine divisions, which it keeps to give the numbers of
+the 6 x 6 path to the bit.  With the rounds in one fixed order (without, then with) the
+ratios read lower (sagging40 1.4-1.6): the run after another design's pays for the memory
+that design left.  Before the stiffness kernel counted the grid's indices (it read positions
+computed for it, ~5 ms per 75,000 poses, and tensions masked by np.where), sagging40's whole
+sweep cost 3.2-4.0 times one without.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -34,7 +57,7 @@ from cdpr_design.model import spec  # noqa: E402
 from cdpr_design.statics import kinematics as kin  # noqa: E402
 from cdpr_design.statics import stiffness as st  # noqa: E402
 from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices  # noqa: E402
-from cdpr_design.workspaces.grid import grid3, positions3  # noqa: E402
+from cdpr_design.workspaces.grid import grid3  # noqa: E402
 
 CHUNK = 65536
 
@@ -56,6 +79,7 @@ def run(design):
     combos = combinations(design.m, design.n)
     lower, step, shape = grid3(g)
     arrays = st.sweep_arrays(design, ori)
+    planar2 = design.m == 2 and design.n == 2  # the sweep's closed form for two cables (as workspaces.engine)
     t_sweep = t_stiff = 0.0
     feasible = 0
     for start in range(0, g.size, CHUNK):
@@ -65,15 +89,17 @@ def run(design):
         ten = np.empty((cnt, design.m))
         lens = np.empty((cnt, design.m))
         c0 = time.process_time()
-        K.sweep_grid(start, cnt, lower, step, shape, Rb, A, design.rows, wreq, design.tension_min,
-                     design.tension_max, design.string_floor, combos, KINDS["static"], feas, marg, ten, lens)
+        if planar2:
+            K.sweep_grid_planar2(start, cnt, lower, step, shape, Rb, A, wreq[:1].copy(), design.tension_min,
+                                 design.tension_max, design.string_floor, feas, marg, ten, lens)
+        else:
+            K.sweep_grid(start, cnt, lower, step, shape, Rb, A, design.rows, wreq, design.tension_min,
+                         design.tension_max, design.string_floor, combos, KINDS["static"], feas, marg, ten, lens)
         c1 = time.process_time()
-        P = positions3(g, start, cnt)
+        kmin, flow = st.grid_figures(arrays, (lower, step, shape), start, ten, feas)
         c2 = time.process_time()
-        kmin, flow = st.sweep_figures(arrays, P, ten)
-        c3 = time.process_time()
         t_sweep += c1 - c0
-        t_stiff += c3 - c2
+        t_stiff += c2 - c1
         feasible += int(feas.sum())
     return t_sweep, t_stiff, g.size, feasible
 
@@ -91,6 +117,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--threads", type=int, default=1, help="kernel threads of the whole-sweep rounds")
     args = ap.parse_args()
+    print("load average (1, 5, 15 min): %.1f %.1f %.1f" % os.getloadavg())
     parallel.set_threads(1)
     designs = {n: design_of(n) for n in args.designs}
     for d in designs.values():  # compile / load both kernels outside the timing
@@ -115,14 +142,17 @@ def main() -> None:
         ws.run(d, grid=ws.grid.first_pose(one), stiffness=True, tilt=False)
         ws.run(d, grid=ws.grid.first_pose(one), tilt=False)
     whole = {n: [np.inf, np.inf] for n in designs}
-    for _ in range(args.repeat):
+    for r in range(args.repeat):
         for n, d in designs.items():
-            whole[n][0] = min(whole[n][0], whole_sweep(d, False))
-            whole[n][1] = min(whole[n][1], whole_sweep(d, True))
+            # each order in every other round: the first run after another design's pays for
+            # the memory that design's arrays left (page faults), the second does not
+            for stiffness in ((False, True) if r % 2 == 0 else (True, False)):
+                whole[n][stiffness] = min(whole[n][stiffness], whole_sweep(d, stiffness))
     print(f"\nthe whole workspace sweep ({args.threads} thread(s)), CPU-s")
     print(f"{'design':12s} {'without':>9s} {'with':>9s} {'ratio':>6s}")
     for n, (a, b) in whole.items():
-        print(f"{n:12s} {a:9.3f} {b:9.3f} {b / a:6.2f}")
+        print(f"{n:12s} {a:9.4f} {b:9.4f} {b / a:6.2f}")
+    print("load average (1, 5, 15 min): %.1f %.1f %.1f" % os.getloadavg())
 
 
 if __name__ == "__main__":

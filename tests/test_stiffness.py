@@ -115,44 +115,86 @@ def test_stiffness_symmetric_at_equilibrium(motion):
         seen += 1
 
 
+def random_orientation(rng, design):
+    """The workspace orientation with the motion's rotations drawn in [-0.6, 0.6] rad."""
+    ori = design.default_orientation_full()
+    d = design.motion.dim
+    if design.motion.rotational:
+        ori[[i - 3 for i in design.motion.pose_index[d:]]] = rng.uniform(-0.6, 0.6, len(design.motion.rotation_coords))
+    return ori
+
+
+def assert_kernel_figures(design, ori, P, T, feasible, kmin, flow):
+    """The kernel's ``kmin``, ``flow`` at positions ``P`` (k, 3) held by ``T`` (k, m) against
+    numpy/scipy (Schur complement, generalised eigenproblem); NaN where ``feasible`` is 0 or a
+    tension is NaN.  Returns the number of poses compared."""
+    d = design.motion.dim
+    R = kin.rotation_matrix(*ori)
+    Rb = design.attachments @ R.T
+    EA = st.axial_stiffnesses(design)[0]
+    Mn = st.restrict(design, st.mass_matrix(design, R))
+    weight = design.effector.mass * np.asarray(design.gravity)
+    compared = 0
+    for k in range(P.shape[0]):
+        if not feasible[k] or not np.all(np.isfinite(T[k])):
+            assert np.isnan(kmin[k]) and np.isnan(flow[k])
+            continue
+        K = st.restrict(design, st.stiffness_matrix(design.outlets - P[k] - Rb, Rb, T[k], EA, weight,
+                                                    R @ np.asarray(design.effector.center_of_mass)))
+        ref_k = st.min_stiffness(K, d)
+        f = st.vibration(K, Mn)[0][0]
+        scale = np.max(np.abs(K))
+        assert abs(kmin[k] - ref_k) <= 1e-9 * scale, (kmin[k], ref_k)
+        if np.isnan(f):
+            assert np.isnan(flow[k])
+        else:
+            assert flow[k] == pytest.approx(f, rel=1e-8, abs=1e-9 * np.sqrt(scale / np.max(np.diag(Mn))))
+        compared += 1
+    return compared
+
+
 @pytest.mark.parametrize("motion", MOTIONS)
 def test_kernel_matches_numpy(motion):
-    """The sweep kernel's least stiffness and lowest frequency against numpy/scipy (Schur
-    complement, generalised eigenproblem) on 40 random robots x 20 positions each."""
+    """The sweep kernel's least stiffness and lowest frequency against numpy/scipy on 40 random
+    robots x 20 positions each."""
     rng = np.random.default_rng(30 + MOTIONS.index(motion))
+    compared = 0
+    for _ in range(40):
+        design = random_robot(rng, motion)
+        ori = random_orientation(rng, design)
+        P = np.zeros((20, 3))
+        P[:, :design.motion.dim] = rng.uniform(-0.5, 0.5, (20, design.motion.dim))
+        T = rng.uniform(0, 500, (20, design.m))
+        T[3] = np.nan  # an infeasible pose
+        kmin, flow = st.sweep_figures(st.sweep_arrays(design, ori), P, T)
+        compared += assert_kernel_figures(design, ori, P, T, np.ones(20), kmin, flow)
+    assert compared == 40 * 19
+
+
+@pytest.mark.parametrize("motion", MOTIONS)
+def test_grid_kernel_matches_numpy(motion):
+    """The kernel as the sweep calls it, counting a grid's indices from a row ``start`` and
+    skipping the poses the sweep flags infeasible, against numpy/scipy at the grid's positions
+    (C order over x, y, z) on 40 random robots and grids."""
+    rng = np.random.default_rng(50 + MOTIONS.index(motion))
     d = 2 if motion in ("2T", "1R2T") else 3
     compared = 0
     for _ in range(40):
         design = random_robot(rng, motion)
-        ori = design.default_orientation_full()
-        if design.motion.rotational:
-            ori[[i - 3 for i in design.motion.pose_index[d:]]] = rng.uniform(-0.6, 0.6, len(design.motion.rotation_coords))
-        arrays = st.sweep_arrays(design, ori)
-        P = np.zeros((20, 3))
-        P[:, :d] = rng.uniform(-0.5, 0.5, (20, d))
-        T = rng.uniform(0, 500, (20, design.m))
-        T[3] = np.nan  # an infeasible pose
-        kmin, flow = st.sweep_figures(arrays, P, T)
-        R = kin.rotation_matrix(*ori)
-        Mn = st.restrict(design, st.mass_matrix(design, R))
-        weight = design.effector.mass * np.asarray(design.gravity)
-        for k in range(20):
-            if k == 3:
-                assert np.isnan(kmin[k]) and np.isnan(flow[k])
-                continue
-            Rb = design.attachments @ R.T
-            K = st.restrict(design, st.stiffness_matrix(design.outlets - P[k] - Rb, Rb, T[k], arrays.EA, weight,
-                                                        R @ np.asarray(design.effector.center_of_mass)))
-            ref_k = st.min_stiffness(K, d)
-            f = st.vibration(K, Mn)[0][0]
-            scale = np.max(np.abs(K))
-            assert abs(kmin[k] - ref_k) <= 1e-9 * scale, (kmin[k], ref_k)
-            if np.isnan(f):
-                assert np.isnan(flow[k])
-            else:
-                assert flow[k] == pytest.approx(f, rel=1e-8, abs=1e-9 * np.sqrt(scale / np.max(np.diag(Mn))))
-            compared += 1
-    assert compared == 40 * 19
+        ori = random_orientation(rng, design)
+        lower, step, shape = np.zeros(3), np.ones(3), np.ones(3, dtype=np.int64)
+        lower[:d] = rng.uniform(-0.5, 0.0, d)
+        step[:d] = rng.uniform(0.02, 0.2, d)
+        shape[:d] = rng.integers(2, 6, d)
+        axes = [lower[i] + np.arange(shape[i]) * step[i] for i in range(3)]
+        grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        start = int(rng.integers(0, grid.shape[0] - 1))
+        P = grid[start:]
+        T = rng.uniform(0, 500, (P.shape[0], design.m))
+        feasible = (rng.random(P.shape[0]) < 0.8).astype(np.uint8)
+        kmin, flow = st.grid_figures(st.sweep_arrays(design, ori), (lower, step, shape), start, T, feasible)
+        compared += assert_kernel_figures(design, ori, P, T, feasible, kmin, flow)
+    assert compared > 40 * 3
 
 
 # ----------------------------------------------------------------------------

@@ -20,7 +20,10 @@ and then
   M = L L^T (``Linv`` = L^-1), NaN when lambda_min < 0 (an unstable equilibrium).
 
 The least eigenvalues come from :func:`min_eig_sym` (closed form up to 2x2, Householder and
-bisection beyond), with no allocation per pose.  A pose whose tensions are not all finite gives NaN.
+Newton's method beyond), with no allocation per pose; a 2T robot's 2x2 K_pp is summed in scalars
+(:func:`planar_figures`, the same numbers).  In a sweep the kernel counts the grid's indices as
+the sweep's kernels do (no positions) and skips the poses the sweep found infeasible.  A pose
+whose tensions are not all finite gives NaN.
 """
 
 from __future__ import annotations
@@ -30,12 +33,27 @@ import math
 import numpy as np
 
 from cdpr_design.kernels._jit import njit_inline, njit_noref
+from cdpr_design.kernels.geometry import grid_index, next_grid_index
 from cdpr_design.kernels.parallel import run_blocks
 
 #: The least eigenvalue's Newton steps stop below this fraction of the matrix's Gershgorin norm
 EIG_TOL = 1e-15
 #: ... or after this many (a double root halves the distance per step: 1e-15 after 50)
 NEWTON_STEPS = 80
+
+
+@njit_inline
+def min_eig_2(a00, a01, a11):
+    """The least eigenvalue of the symmetric [[a00, a01], [a01, a11]], in closed form."""
+    h = 0.5 * (a00 - a11)
+    return 0.5 * (a00 + a11) - math.sqrt(h * h + a01 * a01)
+
+
+@njit_inline
+def frequency(w2):
+    """The frequency [Hz] sqrt(w2) / (2 pi) of an eigenvalue ``w2`` = omega^2 [1/s^2]; NaN below 0
+    (an unstable mode)."""
+    return math.sqrt(w2) / (2.0 * math.pi) if w2 >= 0.0 else np.nan
 
 
 @njit_inline
@@ -49,8 +67,7 @@ def min_eig_sym(a, n, d, e2):
     if n == 1:
         return a[0, 0]
     if n == 2:
-        h = 0.5 * (a[0, 0] - a[1, 1])
-        return 0.5 * (a[0, 0] + a[1, 1]) - math.sqrt(h * h + a[0, 1] * a[0, 1])
+        return min_eig_2(a[0, 0], a[0, 1], a[1, 1])
     for k in range(n - 2):
         s = 0.0
         for i in range(k + 1, n):
@@ -254,34 +271,81 @@ def pose_figures(K, sel, d, Linv, S, B, v1, v2):
                 S[r, c] = acc
                 S[c, r] = acc
         w2 = min_eig_sym(S, n, v1, v2)
-    f = math.sqrt(w2) / (2.0 * math.pi) if w2 >= 0.0 else np.nan
-    return lo, f
+    return lo, frequency(w2)
+
+
+@njit_inline
+def planar_figures(px, py, pz, A, Rb, t, EA, Linv):
+    """(min_stiffness [N/m], lowest_frequency [Hz]) of a 2T robot at position (px, py, pz) [m]:
+    :func:`full_stiffness` then :func:`pose_figures` with ``sel`` = (0, 1), to the bit, with the
+    2 x 2 K_pp summed in scalars (pose_figures' symmetrisations 0.5 (x + x) of this symmetric
+    block give x back exactly, short of an overflow, and are left out).  (NaN, NaN) where
+    full_stiffness is False (a tension that is not finite, a cable of zero length).
+    """
+    k00 = k01 = k11 = 0.0
+    for i in range(A.shape[0]):
+        ti = t[i]
+        if not math.isfinite(ti):
+            return np.nan, np.nan
+        lx, ly, lz = A[i, 0] - px - Rb[i, 0], A[i, 1] - py - Rb[i, 1], A[i, 2] - pz - Rb[i, 2]
+        L = math.sqrt(lx * lx + ly * ly + lz * lz)
+        if not L > 0.0:
+            return np.nan, np.nan
+        u0, u1 = lx / L, ly / L
+        g = ti / L
+        e = (EA[i] + ti) / L - g
+        k00 += e * u0 * u0 + g
+        k01 += e * u0 * u1
+        k11 += e * u1 * u1 + g
+    lo = min_eig_2(k00, k01, k11)
+    return lo, frequency(lo * Linv[0, 0] * Linv[0, 0])
 
 
 @njit_noref
-def _stiffness_loop(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow, K, S, B, v1, v2):
+def _stiffness_loop(k0, k1, start, lower, step, shape, P, feasible, Rb, A, T, EA, Kg, Linv, sel, d,
+                    kmin, flow, K, S, B, v1, v2):
+    grid = P.shape[0] == 0
+    rot = sel.shape[0] > d
+    planar = d == 2 and not rot
+    ny = shape[1]
+    nz = shape[2]
+    ix, iy, iz = grid_index(start + k0, ny, nz)
     for k in range(k0, k1):
-        if full_stiffness(P[k, 0], P[k, 1], P[k, 2], Rb, A, T[k], EA, Kg, sel.shape[0] > d, K):
+        if grid:
+            px = lower[0] + ix * step[0]
+            py = lower[1] + iy * step[1]
+            pz = lower[2] + iz * step[2]
+            ix, iy, iz = next_grid_index(ix, iy, iz, ny, nz)
+        else:
+            px, py, pz = P[k, 0], P[k, 1], P[k, 2]
+        if feasible[k] == 0:
+            kmin[k] = np.nan
+            flow[k] = np.nan
+        elif planar:
+            kmin[k], flow[k] = planar_figures(px, py, pz, A, Rb, T[k], EA, Linv)
+        elif full_stiffness(px, py, pz, Rb, A, T[k], EA, Kg, rot, K):
             kmin[k], flow[k] = pose_figures(K, sel, d, Linv, S, B, v1, v2)
         else:
             kmin[k] = np.nan
             flow[k] = np.nan
 
 
-def _stiffness_block(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow):
-    """Rows k0..k1-1 of :func:`stiffness_points`: the block's scratch, then the compiled loop."""
-    _stiffness_loop(k0, k1, P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow,
-                    np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)), np.empty(6), np.empty(6))
+def _stiffness_block(k0, k1, *args):
+    """Rows k0..k1-1 of :func:`stiffness_rows`: the block's scratch, then the compiled loop."""
+    _stiffness_loop(k0, k1, *args, np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)), np.empty(6), np.empty(6))
 
 
-def stiffness_points(P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow):
+def stiffness_rows(start, lower, step, shape, P, feasible, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow):
     """Least stiffness [N/m] and lowest natural frequency [Hz] at ``k`` poses (module notes).
 
-    Parameters: ``P`` (k, 3) positions [m]; ``Rb`` (m, 3) rotated attachments R b_i [m] (one
-    orientation for every pose); ``A`` (m, 3) outlets [m]; ``T`` (k, m) tensions [N]; ``EA`` (m,)
-    [N]; ``Kg`` (3, 3) the weight's rotational stiffness -[m g]x [R c]x [N m]; ``Linv`` (n, n)
-    the inverse of the mass matrix's Cholesky factor; ``sel`` (n,) int64 the motion's coordinates
-    in [x, y, z, rx, ry, rz], the first ``d`` of them translations.  Writes ``kmin`` and ``flow``
-    (k,).
+    The poses: with ``P`` (0, 3), the grid poses ``start .. start + k - 1`` of the grid ``lower``,
+    ``step`` (3,) [m], ``shape`` (3,) int64 (C order over x, y, z, as the sweep kernels count
+    them); else ``P`` (k, 3) the positions [m].  ``feasible`` (k,) uint8: rows where it is 0 get
+    NaN.  ``Rb`` (m, 3) rotated attachments R b_i [m] (one orientation for every pose); ``A`` (m,
+    3) outlets [m]; ``T`` (k, m) tensions [N]; ``EA`` (m,) [N]; ``Kg`` (3, 3) the weight's
+    rotational stiffness -[m g]x [R c]x [N m]; ``Linv`` (n, n) the inverse of the mass matrix's
+    Cholesky factor; ``sel`` (n,) int64 the motion's coordinates in [x, y, z, rx, ry, rz], the
+    first ``d`` of them translations (0 .. d-1).  Writes ``kmin`` and ``flow`` (k,).
     """
-    run_blocks(_stiffness_block, P.shape[0], P, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow)
+    run_blocks(_stiffness_block, kmin.shape[0], start, lower, step, shape, P, feasible, Rb, A, T, EA, Kg, Linv,
+               sel, d, kmin, flow)

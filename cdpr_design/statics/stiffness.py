@@ -285,12 +285,26 @@ def sweep_arrays(design: Design, orientation=None) -> SweepStiffness | str:
 def sweep_figures(arrays: SweepStiffness, positions, tensions) -> tuple[np.ndarray, np.ndarray]:
     """(min_stiffness (k,) [N/m], lowest_frequency (k,) [Hz]) at ``positions`` (k, 3) [m] held by
     ``tensions`` (k, m) [N] (NaN rows give NaN), by the kernel :mod:`cdpr_design.kernels.stiffness`."""
-    from cdpr_design.kernels.stiffness import stiffness_points
-
     P = np.ascontiguousarray(positions, dtype=float)
+    return _figures(arrays, 0, np.zeros(3), np.ones(3), np.ones(3, dtype=np.int64), P, tensions,
+                    np.ones(P.shape[0], dtype=np.uint8))
+
+
+def grid_figures(arrays: SweepStiffness, grid3, start: int, tensions, feasible) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`sweep_figures` at the grid poses ``start .. start + k - 1`` of ``grid3`` = (lower (3,)
+    [m], step (3,) [m], shape (3,) int64) (:func:`cdpr_design.workspaces.grid.grid3`), without
+    their positions: the kernel counts the grid's indices as the sweep's kernels do.  ``feasible``
+    (k,) the sweep's flags: NaN where 0, as for rows of NaN ``tensions`` (k, m) [N]."""
+    lower, step, shape = grid3
+    return _figures(arrays, start, lower, step, shape, np.empty((0, 3)), tensions,
+                    np.ascontiguousarray(feasible, dtype=np.uint8))
+
+
+def _figures(a: SweepStiffness, start, lower, step, shape, P, tensions, feasible):
+    from cdpr_design.kernels.stiffness import stiffness_rows
+
     T = np.ascontiguousarray(tensions, dtype=float)
-    kmin = np.empty(P.shape[0])
-    flow = np.empty(P.shape[0])
-    a = arrays
-    stiffness_points(P, a.Rb, a.A, T, a.EA, a.Kg, a.Linv, a.sel, a.d, kmin, flow)
+    kmin = np.empty(T.shape[0])
+    flow = np.empty(T.shape[0])
+    stiffness_rows(start, lower, step, shape, P, feasible, a.Rb, a.A, T, a.EA, a.Kg, a.Linv, a.sel, a.d, kmin, flow)
     return kmin, flow

@@ -151,5 +151,5 @@ def plan(robot: Robot, grid: Grid, orientation=None, *, tilt: bool = True, orien
     if a.stiffness:
         from cdpr_design.workspaces.stiffness import StiffnessColumns  # the kernels, on first use
 
-        wrappers.append(StiffnessColumns(robot, ori))
+        wrappers.append(StiffnessColumns(robot, ori, grid))
     return Plan(robot, grid, ori, base, tuple(wrappers), tilt, orientations)

@@ -21,33 +21,34 @@ import math
 
 import numpy as np
 
+from cdpr_design.model.design import Grid
 from cdpr_design.statics.robot import Robot
-from cdpr_design.statics.stiffness import sweep_arrays, sweep_figures
-from cdpr_design.workspaces.grid import Rows
+from cdpr_design.statics.stiffness import grid_figures, sweep_arrays
+from cdpr_design.workspaces.grid import Rows, grid3
 from cdpr_design.workspaces.parts import Wrapper
 
 
 class StiffnessColumns(Wrapper):
     """The columns ``min_stiffness`` and ``lowest_frequency`` of a robot whose stiffness is defined
-    (the resolved robot refuses ``--stiffness`` otherwise), at the sweep's orientation ``ori`` (3,) [rad]."""
+    (the resolved robot refuses ``--stiffness`` otherwise), at the sweep's orientation ``ori`` (3,) [rad]
+    over the grid ``g`` (the kernel counts its indices: it reads no positions)."""
 
     columns = ("min_stiffness", "lowest_frequency")
     maps = ("min_stiffness", "lowest_frequency")
     pictures = ("stiffness_map.png",)
+    positions = False
 
-    def __init__(self, robot: Robot, ori):
+    def __init__(self, robot: Robot, ori, g: Grid):
         self.arrays = sweep_arrays(robot.design, ori)
+        self.grid3 = grid3(g)
         self.least = {"min_stiffness": math.inf, "lowest_frequency": math.inf}
 
     def add(self, r: Rows, start: int, P: np.ndarray) -> None:
-        t = np.where(r.feasible.astype(bool)[:, None], r.tensions, np.nan)
-        kmin, flow = sweep_figures(self.arrays, P, t)
+        kmin, flow = grid_figures(self.arrays, self.grid3, start, r.tensions, r.feasible)
         for name, v in (("min_stiffness", kmin), ("lowest_frequency", flow)):
             r.extra[name] = v
             r.maps[name] = v
-            fin = v[np.isfinite(v)]
-            if fin.size:
-                self.least[name] = min(self.least[name], float(fin.min()))
+            self.least[name] = min(self.least[name], float(np.min(v, where=np.isfinite(v), initial=math.inf)))
 
     def summary(self, maps) -> dict:
         return {k: (v if math.isfinite(v) else None) for k, v in self.least.items()}
