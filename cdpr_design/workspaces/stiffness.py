@@ -48,7 +48,7 @@ class StiffnessColumns(Wrapper):
         for name, v in (("min_stiffness", kmin), ("lowest_frequency", flow)):
             r.extra[name] = v
             r.maps[name] = v
-            self.least[name] = min(self.least[name], float(np.min(v, where=np.isfinite(v), initial=math.inf)))
+            self.least[name] = min(self.least[name], float(np.fmin.reduce(v, initial=math.inf)))  # NaN left out
 
     def summary(self, maps) -> dict:
         return {k: (v if math.isfinite(v) else None) for k, v in self.least.items()}
