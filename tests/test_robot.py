@@ -152,5 +152,6 @@ def test_robot_of_resolves_a_design_once_and_keeps_a_robot(planar2):
     r = R.robot_of(planar2, "motion")
     assert r.analysis.command == "motion" and r.design is planar2
     assert R.robot_of(r, "size-motors") is r
+    assert R.design_of(r) is planar2 and R.design_of(planar2) is planar2
     with pytest.raises(InputError, match="assumes point outlets"):
         R.robot_of(_with(planar2, model="sagging", pulleys=True), "size-motors")

@@ -37,7 +37,7 @@ from cdpr_design.errors import InputError, quote
 from cdpr_design.io.tables import Table, rows_to_columns
 from cdpr_design.model.catalogue import Catalogue, Motor
 from cdpr_design.model.design import Cable, Design
-from cdpr_design.statics.robot import Robot
+from cdpr_design.statics.robot import Robot, design_of
 
 
 @dataclass
@@ -191,11 +191,10 @@ def size_motors(design: Design | Robot, catalogue: Catalogue, *, step: float | N
         A motor named by the spec or ``motor`` is not in the catalogue, or the
         safety factor is below 1.
     """
-    robot, design = (design, design.design) if isinstance(design, Robot) else (None, design)
-    sf = check_options(design, catalogue, safety_factor, motor)  # the options first, then the robot
+    sf = check_options(design_of(design), catalogue, safety_factor, motor)  # the options first, then the robot
     # the robot resolved once for the sizing (task_envelope resolves a design)
-    env = envelope if envelope is not None else task_envelope(robot or design, step=step, progress=progress,
-                                                              engine=engine)
+    env = envelope if envelope is not None else task_envelope(design, step=step, progress=progress, engine=engine)
+    design = design_of(design)
     notes = []
     if samples is not None:
         cycle = trajectory_cycle(samples)

@@ -81,9 +81,9 @@ def sample_named(design, name: str, cycle_time: float | None = None, hold_end: f
     holding the last set-point ``hold_end`` [s]; bad names, cycles and files are :class:`InputError`.
     ``design``: a Design, or the :class:`~cdpr_design.statics.robot.Robot` the command resolved."""
     from cdpr_design.motion import trajectory as tr
-    from cdpr_design.statics.robot import Robot
+    from cdpr_design.statics.robot import design_of
 
-    robot, design = (design, design.design) if isinstance(design, Robot) else (None, design)
+    given, design = design, design_of(design)
 
     traj = require_trajectory(design, name, option)
     if cycle_time is not None and not (math.isfinite(cycle_time) and 1e-5 <= cycle_time <= 1.0):
@@ -95,7 +95,7 @@ def sample_named(design, name: str, cycle_time: float | None = None, hold_end: f
             p = Path(design.source).resolve().parent / p
         poses = read_poses(p, design, f"trajectories.{name}.file")
     try:
-        return tr.sample(robot or design, name, cycle_time, csv_poses=poses, hold_end=hold_end)
+        return tr.sample(given, name, cycle_time, csv_poses=poses, hold_end=hold_end)
     except (KeyError, ValueError) as exc:
         raise InputError(f"trajectories.{name}: {exc}") from None
 

@@ -79,7 +79,7 @@ from cdpr_design.motion.mjcf import Chains, build_xml, massive_cables
 from cdpr_design.statics import cables as cm
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
-from cdpr_design.statics.robot import Robot, robot_of
+from cdpr_design.statics.robot import Robot, design_of, robot_of
 
 #: Segments of each massive cable (``cable_segments``): the chain's end forces
 #: differ from the catenary's by O((L/N)^2) (tests/test_simulation_cables.py).
@@ -188,13 +188,12 @@ class Simulator:
             raise ValueError(f"delay must be >= 0, got {delay}")
         if not servo_bandwidth > 0:
             raise ValueError(f"servo_bandwidth must be > 0, got {servo_bandwidth}")
-        spec_design = design.design if isinstance(design, Robot) else design
-        massive = massive_cables(spec_design)
+        massive = massive_cables(design_of(design))
         if massive and not (int(cable_segments) == cable_segments and cable_segments >= 2):
             raise ValueError(f"cable_segments must be an integer >= 2, got {cable_segments}")
         #: the design resolved for ``motion`` (refused where the catenaries cannot start)
         self.robot = robot_of(design, "motion")
-        self.design = design = spec_design
+        self.design = design = self.robot.design
         self.timestep = float(timestep)
         self.servo_bandwidth = float(servo_bandwidth)
         self.delay = float(delay)

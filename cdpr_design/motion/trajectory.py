@@ -41,7 +41,7 @@ from cdpr_design.motion.profile import MAX_SAMPLES, too_many_samples
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
 from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate, directions
-from cdpr_design.statics.robot import Robot, robot_of
+from cdpr_design.statics.robot import Robot, design_of, robot_of
 
 DEFAULT_CYCLE_TIME = 1e-3
 """Default sample period [s]: one PLC cycle."""
@@ -353,7 +353,7 @@ def sample(design: Design | Robot, trajectory: str | Trajectory, cycle_time: flo
     ValueError
         A csv path without its poses, or bad poses.
     """
-    robot, design = (design, design.design) if isinstance(design, Robot) else (None, design)
+    given, design = design, design_of(design)
     traj = _lookup(design, trajectory)
     dt = float(cycle_time or traj.cycle_time or DEFAULT_CYCLE_TIME)
     if not dt > 0:
@@ -361,7 +361,7 @@ def sample(design: Design | Robot, trajectory: str | Trajectory, cycle_time: flo
     blocks = _path_blocks(design, traj, dt, csv_poses, hold_start, hold_end)
     pose, vel, acc, seg = blocks.stack()
     time = dt * np.arange(pose.shape[0])
-    robot = robot_of(robot or design, "motion")  # the path's errors first, then the robot's refusals
+    robot = robot_of(given, "motion")  # the path's errors first, then the robot's refusals
     st = states(robot, pose, vel, acc, time=time, external=external)
     cs, tensions, feasible = setpoints.cable_samples(robot, st["positions"], st["attachments"], st["wrench"],
                                                      st["lengths"], st["tensions"], st["feasible"])

@@ -289,6 +289,11 @@ def robot_of(design: Design | Robot, command: str) -> Robot:
     return design if isinstance(design, Robot) else resolve(design, Analysis(command=command))
 
 
+def design_of(design: Design | Robot) -> Design:
+    """The :class:`~cdpr_design.model.design.Design` of a design or of a robot (its spec as data)."""
+    return design.design if isinstance(design, Robot) else design
+
+
 def cable_model(design: Design) -> str:
     """The design's cable model: the heaviest of its cables' models (:data:`CABLE_MODELS`)."""
     return CABLE_MODELS[max(CABLE_MODELS.index(c.props.model) for c in design.cables)]
