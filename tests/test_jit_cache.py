@@ -23,6 +23,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "cdpr_design"
 # eval_square (pose.py) calls square_eval (hsm.py): print the tensions of one square pose
 PROBE = """
 import numpy as np
+from cdpr_design import kernels as K
 W = np.array([[1.0, 0.0], [0.0, 1.0]])
 t = np.empty(2)
 K.eval_square(W, np.array([[3.0, 4.0]]), np.zeros(2), np.full(2, 100.0), 0, t)
@@ -33,6 +34,7 @@ print(repr(t.tolist()), sum(K.eval_square.stats.cache_hits.values()))
 # chunk_stats (sweep.py) calls no other kernel: print its answer and whether it came from the cache
 PROBE_ALONE = """
 import numpy as np
+from cdpr_design import kernels as K
 got = K.chunk_stats(np.ones(2, np.uint8), np.array([1.0, 2.0]), np.ones((2, 1)), 2, np.zeros(1))
 print(repr(list(got)), sum(K.chunk_stats.stats.cache_hits.values()))
 """
@@ -122,6 +124,7 @@ def test_a_noref_loop_cannot_allocate():
 # there if it allocated.
 _ROBOT = """
 import numpy as np
+from cdpr_design import kernels as K
 from cdpr_design.statics.pose import combinations
 rng = np.random.default_rng(5)
 m = {m}
