@@ -66,7 +66,7 @@ def run(design):
         lens = np.empty((cnt, design.m))
         c0 = time.process_time()
         K.sweep_grid(start, cnt, lower, step, shape, Rb, A, design.rows, wreq, design.tension_min,
-                     design.tension_max, combos, KINDS["static"], feas, marg, ten, lens)
+                     design.tension_max, design.string_floor, combos, KINDS["static"], feas, marg, ten, lens)
         c1 = time.process_time()
         P = positions3(g, start, cnt)
         c2 = time.process_time()

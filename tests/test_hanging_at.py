@@ -437,7 +437,7 @@ def test_eval_rotated_equals_evaluate_pose(name):
     feas, marg, ten, L = np.empty(k, np.uint8), np.empty(k), np.empty((k, m)), np.empty((k, m))
     R[3] = np.nan  # a pose where the effector cannot hang
     K.eval_rotated(P, R, d.outlets, np.ascontiguousarray(d.attachments), d.rows, wreq, d.tension_min,
-                   d.tension_max, combinations(m, d.n), 0, feas, marg, ten, L)
+                   d.tension_max, d.string_floor, combinations(m, d.n), 0, feas, marg, ten, L)
     assert feas[3] == 0 and np.isnan(marg[3]) and np.all(np.isnan(L[3]))
     n_feasible = 0
     for i in set(range(k)) - {3}:

@@ -144,7 +144,7 @@ def grid_loop(m):
     tmin, tmax = np.zeros(m), np.full(m, 100.0)
     feas, marg, ten, L = np.empty(64, np.uint8), np.empty(64), np.empty((64, m)), np.empty((64, m))
     K.sweep_grid(0, 64, np.full(3, -0.5), np.full(3, 0.3), np.array([4, 4, 4]), Bp, A, rows, wreq, tmin, tmax,
-                 combinations(m, 3), KIND, feas, marg, ten, L)
+                 np.zeros(m), combinations(m, 3), KIND, feas, marg, ten, L)
 """
 NOREF_PROBES = {
     "grid loops": _ROBOT.format(m=3, n=3) + "KIND = K.KIND_WRENCH_FEASIBLE" + _GRID_LOOPS + """
@@ -153,13 +153,13 @@ for m in (3, 4, 5, 7):
 """,
     "planar2": _ROBOT.format(m=2, n=2) + """
 K.sweep_grid_planar2(0, 64, np.full(3, -0.5), np.full(3, 0.3), np.array([8, 8, 1]), Bp, A, wreq, tmin, tmax,
-                     feas, marg, ten, L)
+                     np.zeros(m), feas, marg, ten, L)
 K.chunk_stats(feas, marg, ten, 64, np.zeros(m))
 """,
     "rotated": _ROBOT.format(m=8, n=6) + """
 from cdpr_design.kernels.hanging import eval_rotated
 P = rng.uniform(-0.5, 0.5, (64, 3)); R = np.tile(np.eye(3), (64, 1, 1))
-eval_rotated(P, R, A, Bp, rows, np.tile(wreq, (64, 1, 1)), tmin, tmax, combinations(m, 6),
+eval_rotated(P, R, A, Bp, rows, np.tile(wreq, (64, 1, 1)), tmin, tmax, np.zeros(m), combinations(m, 6),
                K.KIND_STATIC, feas, marg, ten, L)
 """,
     "points": """

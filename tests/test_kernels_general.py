@@ -396,7 +396,12 @@ def test_grid_kernel_of_each_redundancy_equals_the_pose_kernel(motion, extra):
     kinds -- including poses on an outlet (zero-length cable): feasibility, lengths and where the
     NaNs are exactly, margins and tensions to the last bits (1e-12 relative: the methods' sums
     may be reassociated (``_jit.FAST``), and LLVM orders them in each compiled loop as it sees fit).
-    A kernel with the wrong methods for its r gives other numbers or none."""
+    A kernel with the wrong methods for its r gives other numbers or none.
+
+    Each kind runs twice: with the plain bounds, and with a lower bound that grows with the cable's
+    length (``requirements.min_cable_frequency``'s c_i L_i^2 on some cables, ``raise_floor``),
+    against the pose kernel given max(t_min, c L^2) computed here with numpy; the floor must
+    change some verdicts."""
     rng = np.random.default_rng(700 + 10 * extra + list(MOTIONS).index(motion))
     dim, _ = MOTIONS[motion]
     n = len(MOTIONS[motion][1])
@@ -414,26 +419,46 @@ def test_grid_kernel_of_each_redundancy_equals_the_pose_kernel(motion, extra):
     for kind in (K.KIND_STATIC, K.KIND_WRENCH_FEASIBLE, K.KIND_WRENCH_CLOSURE):
         # balanced by tensions inside the bounds at grid pose 3,2,(1): feasible there
         wreq = np.array([W0 @ rng.uniform(tmin + 1.0, tmax - 1.0) for _ in range(3)])
-        got = (np.empty(count, np.uint8), np.empty(count), np.empty((count, m)), np.empty((count, m)))
-        K.sweep_grid(0, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind, *got)
-        W = np.empty((n, m))
-        L = np.empty(m)
-        t = np.empty(m)
-        on_outlet = 0
-        for k, (ix, iy, iz) in enumerate(itertools.product(*map(range, shape))):
-            p = lower + step * np.array([ix, iy, iz])
-            ok = K.structure_matrix(p[0], p[1], p[2], Rb, A, rows, W, L)
-            if ok:
-                f, mg = K.eval_pose(W, wreq, tmin, tmax, combos, kind, t)
-            else:
-                on_outlet += 1
-                f, mg, t[:] = False, np.nan, np.nan
-            np.testing.assert_array_equal(got[3][k], L)
-            assert got[0][k] == f, (kind, k)
-            np.testing.assert_allclose(got[1][k], mg, rtol=1e-12, atol=1e-10)
-            np.testing.assert_allclose(got[2][k], t, rtol=1e-12, atol=1e-10)
-            assert np.array_equal(np.isnan(got[2][k]), np.isnan(t)) and np.isnan(got[1][k]) == np.isnan(mg)
-        assert on_outlet == 1
+        plain = _grid_equals_pose_kernel(kind, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax,
+                                         np.zeros(m), combos, dim)
+        # a floor c L^2 reaching the middle of the bounds at L = 1.5 m, on every other cable
+        floor = np.where(np.arange(m) % 2 == 0, 0.5 * (tmin + tmax) / 1.5**2, 0.0)
+        raised = _grid_equals_pose_kernel(kind, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax,
+                                          floor, combos, dim)
+        if kind != K.KIND_WRENCH_CLOSURE:  # closure ignores the bounds
+            assert not np.array_equal(plain, raised) and not np.any(raised & ~plain)
+        else:
+            np.testing.assert_array_equal(plain, raised)
+        got = plain
         if kind != K.KIND_WRENCH_CLOSURE:
-            assert got[0][3 * shape[1] * shape[2] + 2 * shape[2] + (1 if dim == 3 else 0)]
-            assert not got[0].all()
+            assert got[3 * shape[1] * shape[2] + 2 * shape[2] + (1 if dim == 3 else 0)]
+            assert not got.all()
+
+
+def _grid_equals_pose_kernel(kind, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, dim):
+    """Sweep the grid with ``sweep_grid`` and check every row against ``eval_pose`` with the pose's
+    lower bounds max(tmin, floor L^2) computed with numpy; returns the feasibility flags (bool)."""
+    from cdpr_design.statics.robot import tension_lower
+
+    n, m = rows.shape[0], A.shape[0]
+    got = (np.empty(count, np.uint8), np.empty(count), np.empty((count, m)), np.empty((count, m)))
+    K.sweep_grid(0, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind, *got)
+    W = np.empty((n, m))
+    L = np.empty(m)
+    t = np.empty(m)
+    on_outlet = 0
+    for k, (ix, iy, iz) in enumerate(itertools.product(*map(range, shape))):
+        p = lower + step * np.array([ix, iy, iz])
+        ok = K.structure_matrix(p[0], p[1], p[2], Rb, A, rows, W, L)
+        if ok:
+            f, mg = K.eval_pose(W, wreq, tension_lower(tmin, floor, L), tmax, combos, kind, t)
+        else:
+            on_outlet += 1
+            f, mg, t[:] = False, np.nan, np.nan
+        np.testing.assert_array_equal(got[3][k], L)
+        assert got[0][k] == f, (kind, k)
+        np.testing.assert_allclose(got[1][k], mg, rtol=1e-12, atol=1e-10)
+        np.testing.assert_allclose(got[2][k], t, rtol=1e-12, atol=1e-10)
+        assert np.array_equal(np.isnan(got[2][k]), np.isnan(t)) and np.isnan(got[1][k]) == np.isnan(mg)
+    assert on_outlet == 1
+    return got[0].astype(bool)

@@ -21,7 +21,9 @@ from cdpr_design.statics.robot import Analysis, resolve
 from .helpers import DESIGNS, PLANAR2
 
 
-def _with(d, *, model=None, pulleys=False, orientation=None, mass=None):
+def _with(d, *, model=None, pulleys=False, orientation=None, mass=None, cable_frequency=None):
+    if cable_frequency is not None:  # requirements.min_cable_frequency [Hz]
+        d = d.replace(requirements=dataclasses.replace(d.requirements, min_cable_frequency=cable_frequency))
     if model is not None:
         d = spec.with_cable_model(d, model)
     if pulleys:
@@ -95,6 +97,10 @@ def _cases(planar2, ipanema3, cogiro):
         ("--stiffness: ideal cables without cable.axial_stiffness", ipanema3, Analysis(stiffness=True)),
         ("--stiffness: an orientation workspace's rows", cogiro, Analysis(stiffness=True, orientations="total")),
         ("engine=numpy: the numpy engine covers two cables", ipanema3, Analysis(engine="numpy")),
+        ("requirements.min_cable_frequency: cable model 'sagging'",
+         _with(cogiro, model="sagging", cable_frequency=5.0), Analysis(command="pose")),
+        ("requirements.min_cable_frequency: certify: the interval tests hold constant tension bounds",
+         _with(cogiro, cable_frequency=5.0), Analysis(command="certify")),
         ("certify: cable model 'sagging'", _with(cogiro, model="sagging"), Analysis(command="certify")),
         ("certify: swivel pulleys", _with(ipanema3, pulleys=True), Analysis(command="certify")),
         ("certify: effector.orientation: free", free, Analysis(command="certify")),
@@ -130,6 +136,13 @@ def test_what_the_table_allows_resolves(planar2, cogiro):
     resolve(_with(cogiro, model="elastic"), Analysis(orientations="total", collisions=True))
     resolve(_with(planar2, orientation="free"), Analysis(command="fk"))
     resolve(_with(planar2, orientation="free", model="sagging"), Analysis(command="fk"))
+    # the cable-frequency floor: straight cables compute it, fk does not use tension bounds
+    r = resolve(_with(cogiro, cable_frequency=5.0), Analysis(kind="wrench-feasible", collisions=True))
+    np.testing.assert_allclose(r.tension_floor, 4 * 5.0**2 * 0.061)  # 4 f^2 mu [N/m^2]
+    resolve(_with(cogiro, model="sagging", cable_frequency=5.0), Analysis(command="fk"))
+    # without the requirement, or without a mass per length, no floor
+    assert not np.any(resolve(cogiro).tension_floor)
+    assert not np.any(resolve(_with(spec.load(DESIGNS / "planar4.yaml"), cable_frequency=5.0)).tension_floor)
 
 
 def test_commands_at_commanded_poses_take_a_free_effector_over_pulleys(planar2):

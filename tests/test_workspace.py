@@ -95,7 +95,8 @@ def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
     n = g.size
     f2, m2, T2, L2 = np.empty(n, np.uint8), np.empty(n), np.empty((n, 2)), np.empty((n, 2))
     K.sweep_grid(0, n, lower, step, shape, design.attachments.copy(), design.outlets, design.rows,
-                 wreq, design.tension_min, design.tension_max, sp.combinations(2, 2), K.KIND_STATIC,
+                 wreq, design.tension_min, design.tension_max, design.string_floor, sp.combinations(2, 2),
+                 K.KIND_STATIC,
                  f2, m2, T2, L2)
     assert_same((f2, m2, T2, L2), got, design)
 

@@ -45,7 +45,7 @@ import numpy as np
 
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics import cables as cable_models
-from cdpr_design.statics.robot import Robot, robot_of
+from cdpr_design.statics.robot import Robot, robot_of, tension_lower
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate_structure
 from cdpr_design import workspaces as workspace
@@ -115,13 +115,15 @@ def task_grid(design: Design, step: float | None = None) -> Grid | None:
     return Grid(tuple(float(x) for x in box[0]), tuple(float(x) for x in box[1]), tuple(st))
 
 
-def _structure_many(robot: Robot, positions: np.ndarray, Rb: np.ndarray, curvature: bool = False):
-    """Structure matrices (k, n, m) and lengths (k, m) at positions (k, 3), fixed orientation.
+def _structure_many(robot: Robot, positions: np.ndarray, Rb: np.ndarray):
+    """Structure matrices (k, n, m), lengths, free lengths (k, m) [m] and curvatures (k, m) [1/m]
+    at positions (k, 3), fixed orientation.
 
     With swivel pulleys (the robot's ``outlets``: ``pulleys``) the
     lengths are arc + free segment and u_i the free segment's unit vector
-    from the tangent point (:mod:`cdpr_design.statics.pulley`).  With ``curvature``
-    a third array (k, m) [1/m] bounds the length's second derivative,
+    from the tangent point (:mod:`cdpr_design.statics.pulley`), the free length from the
+    tangent point to the attachment (the total length for a point outlet).  The curvatures
+    bound the length's second derivative,
     |v^T H_i v| <= kappa_i |v|^2: 1 / L_i for a point outlet,
     max(1 / l_f, |kappa_t|) with a pulley (:meth:`CablePaths.max_curvature`).
     """
@@ -130,13 +132,13 @@ def _structure_many(robot: Robot, positions: np.ndarray, Rb: np.ndarray, curvatu
         from cdpr_design.statics import pulley as pl
 
         paths = pl.design_cable_paths(design, positions[:, None, :] + Rb[None, :, :])
-        L = paths.lengths
+        L, free = paths.lengths, paths.free_lengths
         u = paths.directions.copy()
         u[~(paths.free_lengths > MIN_CABLE_LENGTH)] = 0.0
         kappa = paths.max_curvature()
     else:
         vec = design.outlets[None, :, :] - positions[:, None, :] - Rb[None, :, :]
-        L = np.linalg.norm(vec, axis=2)
+        L = free = np.linalg.norm(vec, axis=2)
         with np.errstate(invalid="ignore", divide="ignore"):
             u = vec / L[:, :, None]
             kappa = 1.0 / L
@@ -144,9 +146,7 @@ def _structure_many(robot: Robot, positions: np.ndarray, Rb: np.ndarray, curvatu
     mom = np.cross(Rb[None, :, :], u)
     full = np.concatenate([u, mom], axis=2)  # (k, m, 6)
     W = np.transpose(full[:, :, list(design.motion.wrench_rows)], (0, 2, 1))
-    if curvature:
-        return np.ascontiguousarray(W), L, kappa
-    return np.ascontiguousarray(W), L
+    return np.ascontiguousarray(W), L, free, kappa
 
 
 def wrench_model(design: Design, orientation) -> tuple[np.ndarray, np.ndarray]:
@@ -219,7 +219,7 @@ def envelope_chunk(design: Design | Robot, positions: np.ndarray, orientation, A
     pos3[:, :d] = positions
     R = kin.rotation_matrix(*orientation)
     Rb = design.attachments @ R.T
-    W, L, kappa = _structure_many(robot, pos3, Rb, curvature=True)
+    W, L, free, kappa = _structure_many(robot, pos3, Rb)
     sag_ok, offset = None, 0.0
     if robot.cables == "sagging":
         sag_ok, Ws, t_eff, t_out = cable_models.sagging_structures(robot, pos3, orientation)
@@ -229,7 +229,7 @@ def envelope_chunk(design: Design | Robot, positions: np.ndarray, orientation, A
     if design.m == design.n:
         static, peak, low, ok = _square_chunk(W, w0, M, A)
     else:
-        static, peak, low, ok = _redundant_chunk(design, W, w0, M, A)
+        static, peak, low, ok = _redundant_chunk(design, W, w0, M, A, free)
     if sag_ok is not None:
         # the winch holds the outlet tension: the effector's plus the cable's share of its weight
         ok &= sag_ok
@@ -261,17 +261,20 @@ def _square_chunk(W, w0, M, A):
     return static, peak, low, ok
 
 
-def _redundant_chunk(design: Design, W, w0, M, A):
-    """m > n: minimum 2-norm tensions [N] at w0 and at the vertices of the acceleration polytope."""
+def _redundant_chunk(design: Design, W, w0, M, A, free):
+    """m > n: minimum 2-norm tensions [N] at w0 and at the vertices of the acceleration polytope,
+    each cable's lower bound raised at its free length ``free`` (k, m) [m] by
+    ``requirements.min_cable_frequency`` (:func:`~cdpr_design.statics.robot.tension_lower`)."""
     k, n, m = W.shape
     static, peak, low = (np.full((k, m), np.nan) for _ in range(3))
     ok = np.zeros(k, dtype=bool)
+    lower = np.broadcast_to(tension_lower(design.tension_min, design.string_floor, free), (k, m))
     dirs = acceleration_directions(design.motion.dim) * A
     wreq = np.vstack([w0[None, :], w0[None, :] + dirs @ M.T]) if A > 0 else w0[None, :]
     for j in range(k):
         if np.linalg.matrix_rank(W[j]) < n:
             continue
-        T = _min_norm_general(W[j], wreq, design.tension_min, design.tension_max)
+        T = _min_norm_general(W[j], wreq, lower[j], design.tension_max)
         if not np.all(np.isfinite(T[0])):
             continue
         ok[j] = True

@@ -157,13 +157,9 @@ FIGURES = {"workspace.png": wsplots.workspace_figure, "tension_map.png": wsplots
 
 
 def workspace_pictures(result, names: list[str] | None = None) -> list:
-    """The pictures ``names`` (default: those ``result`` has the maps of) as (file, figure
-    function, arguments); ``cable_models.png`` sweeps the grid again with ideal cables."""
-    if names is None:
-        names = ["workspace.png", "tension_map.png"]
-        names += ["tilt_map.png"] if getattr(result, "hanging", None) is not None else []
-        names += ["orientation_workspace.png"] if result.orientation_maps is not None else []
-        names += ["stiffness_map.png"] if result.stiffness is not None else []
+    """The pictures ``names`` (default: those the sweep's plan declared, ``result.pictures``) as
+    (file, figure function, arguments); ``cable_models.png`` sweeps the grid again with ideal cables."""
+    names = result.pictures if names is None else names
     return [cable_model_picture(result) if n == "cable_models.png" else (n, FIGURES[n], (result,))
             for n in names]
 

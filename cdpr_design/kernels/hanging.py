@@ -52,7 +52,7 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_noref
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.geometry import rotate_attachments, structure_matrix
-from cdpr_design.kernels.pose import eval_row, row_buffers
+from cdpr_design.kernels.pose import eval_row, raise_floor, row_buffers
 
 #: A stable equilibrium with both tensions >= 0 was found.
 TILT_OK = 0
@@ -320,7 +320,7 @@ def _tilt_block(k0, k1, A, B, c, mass, gx, gy, P, phi, t, h, status, nbal):
         nbal[i] = nb_
 
 
-def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths):
+def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions, lengths):
     """Feasibility, capacity margin and tensions at positions each with its own orientation.
 
     :func:`cdpr_design.kernels.sweep.sweep_grid` for explicit positions ``P``
@@ -328,24 +328,25 @@ def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, mar
     required wrenches ``wreq`` (k, nv, n) [N, N m] of each pose; ``B`` (m, 3)
     the attachments in platform coordinates.  A pose whose rotation is NaN
     (the effector cannot hang there) gets feasible 0 and NaN margin, tensions
-    and lengths.  Outputs as :func:`~cdpr_design.kernels.sweep.sweep_grid`.
+    and lengths.  Lower tension bounds and outputs as :func:`~cdpr_design.kernels.sweep.sweep_grid`.
     """
-    run_blocks(rotated_block, P.shape[0], P, R, A, B, rows, wreq, tmin, tmax, combos, kind,
+    run_blocks(rotated_block, P.shape[0], P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind,
                feasible, margin, tensions, lengths)
 
 
 @njit
-def rotated_block(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths):
+def rotated_block(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                  lengths):
     """Rows k0..k1-1 of :func:`eval_rotated`: the block's scratch, then :func:`_rotated_loop`."""
     m = A.shape[0]
-    W, t, L, scr = row_buffers(rows.shape[0], m, wreq.shape[1])
-    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths,
-                  W, t, L, np.empty((m, 3)), scr)
+    W, t, L, lo, scr = row_buffers(rows.shape[0], m, wreq.shape[1])
+    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                  lengths, W, t, L, lo, np.empty((m, 3)), scr)
 
 
 @njit_noref
-def _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feasible, margin, tensions, lengths,
-                  W, t, L, Rb, scr):
+def _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                  lengths, W, t, L, lo, Rb, scr):
     """The poses of :func:`rotated_block` with its scratch (no reference counting, see
     :func:`cdpr_design.kernels.sweep.grid_block`)."""
     n = rows.shape[0]
@@ -362,4 +363,5 @@ def _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, combos, kind, feas
         ok = structure_matrix(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
         for i in range(m):
             lengths[k, i] = L[i]
-        eval_row(k, ok, W, wreq[k], tmin, tmax, combos, kind, t, scr, feasible, margin, tensions, m - n)
+        eval_row(k, ok, W, wreq[k], raise_floor(tmin, floor, L, lo), tmax, combos, kind, t, scr, feasible, margin,
+                 tensions, m - n)

@@ -189,6 +189,18 @@ def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin,
 @jitable
 def row_buffers(n, m, nv):
     """What :func:`eval_row` works in, for one block of poses: the structure matrix W (n, m),
-    tensions t (m,) [N], lengths L (m,) [m] and the scratch (:func:`make_scratch`, ``nv``
-    required-wrench rows).  A plain function from Python, as :func:`make_scratch`."""
-    return np.empty((n, m)), np.empty(m), np.empty(m), make_scratch(n, m, nv)
+    tensions t (m,) [N], lengths L (m,) [m], the pose's lower tension bounds lo (m,) [N]
+    (:func:`raise_floor`) and the scratch (:func:`make_scratch`, ``nv`` required-wrench rows).
+    A plain function from Python, as :func:`make_scratch`."""
+    return np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m), make_scratch(n, m, nv)
+
+
+@njit_inline
+def raise_floor(tmin, floor, L, lo):
+    """The pose's lower tension bounds into ``lo`` (m,) [N]: max(``tmin``, ``floor`` L^2) for a cable
+    with ``floor`` > 0 [N/m^2] (``requirements.min_cable_frequency``, the robot's ``tension_floor``),
+    ``tmin`` otherwise; ``L`` (m,) [m] the cables' free lengths.  Returns ``lo``."""
+    for i in range(tmin.shape[0]):
+        c = floor[i]
+        lo[i] = max(tmin[i], c * L[i] * L[i]) if c > 0.0 else tmin[i]
+    return lo

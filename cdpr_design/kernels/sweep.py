@@ -10,14 +10,17 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
 from cdpr_design.kernels.linalg import RANK_TOL
 from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
-from cdpr_design.kernels.pose import eval_row, row_buffers
+from cdpr_design.kernels.pose import eval_row, raise_floor, row_buffers
 from cdpr_design.kernels.interference import interference_pose
 from cdpr_design.kernels.parallel import run_blocks
 
 
-def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos,
+def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos,
                kind, feasible, margin, tensions, lengths):
     """Evaluate ``count`` grid poses from flat index ``start`` (C order over x, y, z).
+
+    Cable i's lower tension bound at a pose is max(``tmin``[i], ``floor``[i] L_i^2) where
+    ``floor``[i] > 0 [N/m^2] (:func:`~cdpr_design.kernels.pose.raise_floor`; zeros: ``tmin``).
 
     Outputs are written to rows 0..count-1 of ``feasible`` (uint8), ``margin``,
     ``tensions`` (count, m) and ``lengths`` (count, m).  The orientation is
@@ -25,7 +28,7 @@ def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, 
     run on threads, each with its own scratch arrays, so no allocation happens per pose.
     """
     run_blocks(grid_block(A.shape[0] - rows.shape[0]), count, start, lower, step, shape, Rb, A, rows, wreq,
-               tmin, tmax, combos, kind, feasible, margin, tensions, lengths)
+               tmin, tmax, floor, combos, kind, feasible, margin, tensions, lengths)
 
 
 def grid_block(r: int):
@@ -67,44 +70,44 @@ class _GridBlock:
         runs the first block of a loop not compiled yet on the calling thread)."""
         return self.loop.signatures
 
-    def __call__(self, k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
+    def __call__(self, k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
                  feasible, margin, tensions, lengths):
-        W, t, L, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
-        self.loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                  feasible, margin, tensions, lengths, W, t, L, scr)
+        W, t, L, lo, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
+        self.loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
+                  feasible, margin, tensions, lengths, W, t, L, lo, scr)
 
 
 @njit_noref
-def _grid_loop_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                 feasible, margin, tensions, lengths, W, t, L, scr):
-    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-               feasible, margin, tensions, lengths, W, t, L, scr, 2)
+def _grid_loop_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
+                 feasible, margin, tensions, lengths, W, t, L, lo, scr):
+    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
+               feasible, margin, tensions, lengths, W, t, L, lo, scr, 2)
 
 
 @njit_noref
-def _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                 feasible, margin, tensions, lengths, W, t, L, scr):
-    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-               feasible, margin, tensions, lengths, W, t, L, scr, 1)
+def _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
+                 feasible, margin, tensions, lengths, W, t, L, lo, scr):
+    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
+               feasible, margin, tensions, lengths, W, t, L, lo, scr, 1)
 
 
 @njit_noref
-def _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                 feasible, margin, tensions, lengths, W, t, L, scr):
-    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-               feasible, margin, tensions, lengths, W, t, L, scr, 0)
+def _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
+                 feasible, margin, tensions, lengths, W, t, L, lo, scr):
+    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
+               feasible, margin, tensions, lengths, W, t, L, lo, scr, 0)
 
 
 @njit_noref
-def _grid_loop_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-                   feasible, margin, tensions, lengths, W, t, L, scr):
-    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos, kind,
-               feasible, margin, tensions, lengths, W, t, L, scr, A.shape[0] - rows.shape[0])
+def _grid_loop_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
+                   feasible, margin, tensions, lengths, W, t, L, lo, scr):
+    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
+               feasible, margin, tensions, lengths, W, t, L, lo, scr, A.shape[0] - rows.shape[0])
 
 
 @njit_inline
-def _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, combos,
-               kind, feasible, margin, tensions, lengths, W, t, L, scr, r):
+def _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos,
+               kind, feasible, margin, tensions, lengths, W, t, L, lo, scr, r):
     """Rows k0..k1-1 of :func:`sweep_grid` (grid poses start+k0 .. start+k1-1) with the block's
     buffers (:func:`~cdpr_design.kernels.pose.row_buffers`), for m - n = ``r``."""
     m = A.shape[0]
@@ -120,10 +123,11 @@ def _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax,
         ok = structure_matrix(px, py, pz, Rb, A, rows, W, L)
         for i in range(m):
             lengths[k, i] = L[i]
-        eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin, tensions, r)
+        eval_row(k, ok, W, wreq, raise_floor(tmin, floor, L, lo), tmax, combos, kind, t, scr, feasible, margin,
+                 tensions, r)
 
 
-def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax,
+def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax, floor,
                        feasible, margin, tensions, lengths):
     """:func:`sweep_grid` specialised to two cables and two wrench rows (2T, m = n = 2).
 
@@ -131,17 +135,19 @@ def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax
     u_i the unit cable vectors, det = u1x u2y - u2x u1y,
     t1 = (w_x u2y - w_y u2x) / det, t2 = (u1x w_y - u1y w_x) / det
     (algorithms.md; paper eq. 6-9), and the capacity margin is
-    min_i min(t_i - t_min,i, t_max,i - t_i) / ||row_i(W^-1)||.
+    min_i min(t_i - t_min,i, t_max,i - t_i) / ||row_i(W^-1)||, t_min,i raised to ``floor``[i] L_i^2
+    where ``floor``[i] > 0 (as :func:`~cdpr_design.kernels.pose.raise_floor`).
     Only the nominal wrench (row 0 of ``wreq``) is evaluated, plus the other
     rows for the margin when there are several (wrench-feasible sweeps).
     Same outputs as :func:`sweep_grid`.
     """
-    run_blocks(planar2_block, count, start, lower, step, shape, Rb, A, wreq, tmin, tmax,
+    run_blocks(planar2_block, count, start, lower, step, shape, Rb, A, wreq, tmin, tmax, floor,
                feasible, margin, tensions, lengths, grain=4096)
 
 
 @njit_noref
-def planar2_block(k0, k1, start, lower, step, shape, Rb, A, wreq, tmin, tmax, feasible, margin, tensions, lengths):
+def planar2_block(k0, k1, start, lower, step, shape, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensions,
+                  lengths):
     """Rows k0..k1-1 of :func:`sweep_grid_planar2`."""
     ny = shape[1]
     nz = shape[2]
@@ -154,8 +160,10 @@ def planar2_block(k0, k1, start, lower, step, shape, Rb, A, wreq, tmin, tmax, fe
     # which would otherwise force a reload per pose
     w0 = wreq[0, 0]
     w1 = wreq[0, 1]
-    tn0 = tmin[0]
-    tn1 = tmin[1]
+    tm0 = tmin[0]
+    tm1 = tmin[1]
+    c0 = floor[0]
+    c1 = floor[1]
     tx0 = tmax[0]
     tx1 = tmax[1]
     ix, iy, iz = grid_index(start + k0, ny, nz)
@@ -171,6 +179,8 @@ def planar2_block(k0, k1, start, lower, step, shape, Rb, A, wreq, tmin, tmax, fe
         L1 = math.sqrt(lx1 * lx1 + ly1 * ly1)
         lengths[k, 0] = L0
         lengths[k, 1] = L1
+        tn0 = max(tm0, c0 * L0 * L0) if c0 > 0.0 else tm0
+        tn1 = max(tm1, c1 * L1 * L1) if c1 > 0.0 else tm1
         u0x = u0y = u1x = u1y = det = 0.0  # a zero-length cable: no structure matrix
         if L0 > 1e-12 and L1 > 1e-12:
             u0x = lx0 / L0
@@ -230,7 +240,7 @@ def chunk_stats(feasible, margin, tensions, count, tpeak):
     return nf, lo + 0.0, hi + 0.0
 
 
-def sweep_points(P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
+def sweep_points(P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,
                  check, Bp, half, rho, flo, fhi, dim, tol, full, zoff,
                  feasible, margin, tensions, lengths, cmask):
     """Evaluate explicit positions ``P`` (count, 3) at one orientation, pulley- and interference-aware.
@@ -242,26 +252,26 @@ def sweep_points(P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind
     [m]: each cable's plane offset (planar designs; zeros otherwise) added to the z of its free
     segment's ends for the interference check only (``Bp`` given in those planes already).
     """
-    run_blocks(points_block, P.shape[0], P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
+    run_blocks(points_block, P.shape[0], P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,
                check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask)
 
 
 @njit
-def points_block(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
+def points_block(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,
                  check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask):
     """Rows k0..k1-1 of :func:`sweep_points`: the block's buffers, then :func:`_points_loop`."""
     m = A.shape[0]
-    W, t, L, scr = row_buffers(rows.shape[0], m, wreq.shape[0])
-    _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
+    W, t, L, lo, scr = row_buffers(rows.shape[0], m, wreq.shape[0])
+    _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,
                  check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask,
-                 W, t, L, scr, np.empty((m, 3)), np.empty((m, 3)), np.zeros((m + 2, m + 2), dtype=np.uint8),
+                 W, t, L, lo, scr, np.empty((m, 3)), np.empty((m, 3)), np.zeros((m + 2, m + 2), dtype=np.uint8),
                  np.empty(3), np.empty(3), np.empty(3))
 
 
 @njit_noref
-def _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, combos, kind,
+def _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,
                  check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask,
-                 W, t, L, scr, C, S0, hits, s0, s1, cp):
+                 W, t, L, lo, scr, C, S0, hits, s0, s1, cp):
     """The poses of :func:`points_block` with its buffers (no reference counting, see :func:`grid_block`)."""
     n = rows.shape[0]
     m = A.shape[0]
@@ -270,6 +280,10 @@ def _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, comb
         ok = structure_matrix_pulley(px, py, pz, Rb, A, K, Eref, rad, rows, W, L, C)
         for i in range(m):
             lengths[k, i] = L[i]
+            dx = px + Rb[i, 0] - C[i, 0]  # the free length (tangent point to attachment), for the floor
+            dy = py + Rb[i, 1] - C[i, 1]
+            dz = pz + Rb[i, 2] - C[i, 2]
+            lo[i] = math.sqrt(dx * dx + dy * dy + dz * dz)
         if check:
             for i in range(m):
                 S0[i, 0] = px + Rb[i, 0]
@@ -280,4 +294,5 @@ def _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, comb
                                          tol, full, hits, s0, s1, cp)
         else:
             cmask[k] = 0
-        eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin, tensions, m - n)
+        eval_row(k, ok, W, wreq, raise_floor(tmin, floor, lo, lo), tmax, combos, kind, t, scr, feasible, margin,
+                 tensions, m - n)

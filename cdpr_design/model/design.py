@@ -93,6 +93,15 @@ def default_gravity(dim: int) -> list[float]:
     return [0.0] * (dim - 1) + [-9.81]
 
 
+def min_string_tension(lengths, mass_per_length, frequency: float) -> np.ndarray:
+    """The least tension [N] that keeps a cable's first transverse (string) mode at or above
+    ``frequency`` [Hz]: T_min = 4 f^2 L^2 mu (``lengths`` L [m], ``mass_per_length`` mu [kg/m];
+    0 for a massless cable), from f_1 = sqrt(T / mu) / (2 L) (docs/algorithms.md, "The cables'
+    own vibration")."""
+    L, mu = np.asarray(lengths, float), np.asarray(mass_per_length, float)
+    return 4.0 * float(frequency) ** 2 * L * L * mu
+
+
 def has_weight(mass: float, g) -> bool:
     """Whether an effector of ``mass`` [kg] under gravity ``g`` [m/s^2] has a weight to hang under."""
     return bool(mass > 0 and np.linalg.norm(np.asarray(g, float)) > 0)
@@ -387,6 +396,15 @@ class Design:
     @property
     def tension_max(self) -> np.ndarray:
         return np.array([c.tension_max for c in self.cables], dtype=float)
+
+    @property
+    def string_floor(self) -> np.ndarray:
+        """(m,) [N/m^2]: the coefficient c_i of the lower tension bound c_i L_i^2 that
+        ``requirements.min_cable_frequency`` f sets on each cable of free length L_i
+        (:func:`min_string_tension` at L = 1 m); zeros without the requirement or a mass per length."""
+        f = self.requirements.min_cable_frequency
+        mu = np.array([c.props.mass_per_length or 0.0 for c in self.cables], dtype=float)
+        return min_string_tension(1.0, mu, 0.0 if f is None else f)
 
     @property
     def rows(self) -> np.ndarray:

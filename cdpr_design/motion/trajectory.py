@@ -41,7 +41,7 @@ from cdpr_design.motion.profile import MAX_SAMPLES, too_many_samples
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
 from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate, directions
-from cdpr_design.statics.robot import Robot, design_of, robot_of
+from cdpr_design.statics.robot import Robot, design_of, robot_of, tension_lower
 
 DEFAULT_CYCLE_TIME = 1e-3
 """Default sample period [s]: one PLC cycle."""
@@ -429,7 +429,8 @@ def _body_rotation(design: Design, P, V, Acc, time):
 
 
 def _cable_motion(robot: Robot, P, Rb, vB, aB):
-    """Lengths L [m], pulling directions u, dL/dt [m/s] and d2L/dt2 [m/s^2] of every cable.
+    """Lengths L [m], free lengths [m] (tangent point, or outlet, to attachment), pulling
+    directions u, dL/dt [m/s] and d2L/dt2 [m/s^2] of every cable.
 
     ``P`` (k, 6) poses, ``Rb`` (k, m, 3) rotated attachments, ``vB`` and
     ``aB`` (k, m, 3) the attachment points' velocities and accelerations.
@@ -442,14 +443,14 @@ def _cable_motion(robot: Robot, P, Rb, vB, aB):
         u[~(cp.free_lengths > MIN_CABLE_LENGTH)] = 0.0  # no direction: a degenerate sample
         Ld = -np.einsum("kmi,kmi->km", u, vB)
         Ldd = cp.second_derivative(vB) - np.einsum("kmi,kmi->km", u, aB)
-        return cp.lengths, u, Ld, Ldd
+        return cp.lengths, cp.free_lengths, u, Ld, Ldd
     vec = design.outlets[None, :, :] - P[:, None, :3] - Rb
     L = np.linalg.norm(vec, axis=2)
     u = directions(vec, L)  # zero for a cable of zero length: a degenerate sample
     Ld = -np.einsum("kmi,kmi->km", u, vB)
     with np.errstate(invalid="ignore", divide="ignore"):
         Ldd = (np.einsum("kmi,kmi->km", vB, vB) - Ld ** 2) / L - np.einsum("kmi,kmi->km", u, aB)
-    return L, u, Ld, Ldd
+    return L, L, u, Ld, Ldd
 
 
 def _structure(design: Design, u, Rb) -> np.ndarray:
@@ -482,30 +483,40 @@ def _load_wrenches(design: Design, R, Acc, w, al, external) -> np.ndarray:
     return wext
 
 
-def within_bounds(design: Design, tensions) -> np.ndarray:
+def within_bounds(design: Design, tensions, lower=None) -> np.ndarray:
     """Feasibility flags (k,): tensions (k, m) finite and within every cable's bounds
-    (to :data:`TENSION_TOL` [N])."""
-    tmin, tmax = design.tension_min, design.tension_max
+    (to :data:`TENSION_TOL` [N]); ``lower`` (k, m) [N] the samples' lower bounds (default
+    ``tension_min``; :func:`lower_bounds`)."""
+    tmin, tmax = design.tension_min if lower is None else lower, design.tension_max
     with np.errstate(invalid="ignore"):
         return np.all(np.isfinite(tensions), axis=1) & np.all(tensions >= tmin - TENSION_TOL, axis=1) \
             & np.all(tensions <= tmax + TENSION_TOL, axis=1)
 
 
-def solve_tensions(design: Design, W: np.ndarray, wreq: np.ndarray) -> np.ndarray:
+def lower_bounds(design: Design, free_lengths) -> np.ndarray:
+    """The samples' lower tension bounds (k, m) [N] at cable free lengths (k, m) [m]: ``tension_min``
+    raised by ``requirements.min_cable_frequency`` (:func:`~cdpr_design.statics.robot.tension_lower`)."""
+    return np.broadcast_to(tension_lower(design.tension_min, design.string_floor, free_lengths),
+                           np.shape(free_lengths))
+
+
+def solve_tensions(design: Design, W: np.ndarray, wreq: np.ndarray, lower=None) -> np.ndarray:
     """Cable tensions for many poses: W t = w_req, (k, n, m), (k, n) -> (k, m) [N].
 
     m = n: t = W^-1 w_req (the paper's eq. 6 solved directly; reported even
     outside the bounds), NaN where W is singular.  m > n: the minimum 2-norm
     tensions within the cable bounds, min 1/2 |t|^2 s.t. W t = w_req,
     t_min <= t <= t_max (:func:`cdpr_design.statics.tension.min_norm` pose by
-    pose), NaN where the bounds admit none.  m < n: the least-squares
+    pose), NaN where the bounds admit none; ``lower`` (k, m) [N] the samples' lower bounds
+    (default ``tension_min``; :func:`lower_bounds`).  m < n: the least-squares
     solution where it balances w_req exactly, else NaN.
     """
     k, n, m = W.shape
     if m == n:
         return _square_tensions(W, wreq)
     if m > n:
-        return _min_norm_tensions(W, wreq, design.tension_min, design.tension_max)
+        return _min_norm_tensions(W, wreq, np.broadcast_to(design.tension_min if lower is None else lower, (k, m)),
+                                  design.tension_max)
     t = np.full((k, m), np.nan)
     for i in range(k):
         sol, *_ = np.linalg.lstsq(W[i], wreq[i], rcond=None)
@@ -527,13 +538,14 @@ def _square_tensions(W: np.ndarray, wreq: np.ndarray) -> np.ndarray:
 
 
 def _min_norm_tensions(W: np.ndarray, wreq: np.ndarray, tmin, tmax) -> np.ndarray:
-    """Bounded minimum 2-norm tensions (k, m) [N] of redundant robots, NaN where none exist."""
+    """Bounded minimum 2-norm tensions (k, m) [N] of redundant robots, NaN where none exist;
+    ``tmin`` (k, m) [N] each pose's lower bounds."""
     from cdpr_design.statics import tension  # imported here: it loads the numba kernels
 
     k, n, m = W.shape
     t = np.full((k, m), np.nan)
     for i in range(k):
-        sol = tension.min_norm(W[i], wreq[i], tmin, tmax)
+        sol = tension.min_norm(W[i], wreq[i], np.ascontiguousarray(tmin[i]), tmax)
         if sol is not None:
             t[i] = sol
     return t
@@ -587,13 +599,14 @@ def states(design: Design | Robot, pose, velocity, acceleration, *, time=None, e
     Rb = np.einsum("kij,mj->kmi", R, design.attachments)  # (k, m, 3)
     vB = V[:, None, :3] + np.cross(w[:, None, :], Rb)
     aB = Acc[:, None, :3] + np.cross(al[:, None, :], Rb) + np.cross(w[:, None, :], np.cross(w[:, None, :], Rb))
-    L, u, Ld, Ldd = _cable_motion(robot, P, Rb, vB, aB)
+    L, free, u, Ld, Ldd = _cable_motion(robot, P, Rb, vB, aB)
     W = _structure(design, u, Rb)
     wreq = -_load_wrenches(design, R, Acc, w, al, external)
-    t = solve_tensions(design, W, wreq)
+    lower = lower_bounds(design, free)
+    t = solve_tensions(design, W, wreq, lower)
     t[degenerate(u)] = np.nan  # a cable of zero length: infeasible, as for `pose` (statics.degenerate)
     return {"lengths": L, "cable_speed": Ld, "cable_accel": Ldd, "tensions": t,
-            "feasible": within_bounds(design, t), "structure": W, "wrench": wreq, "positions": P[:, :3],
+            "feasible": within_bounds(design, t, lower), "structure": W, "wrench": wreq, "positions": P[:, :3],
             "attachments": Rb}
 
 
@@ -605,6 +618,6 @@ def pose_at(samples: Samples, time) -> np.ndarray:
 
 
 __all__ = [
-    "DEFAULT_CYCLE_TIME", "Samples", "Segment", "TENSION_TOL", "motor_angles", "pose_at", "sample",
+    "DEFAULT_CYCLE_TIME", "Samples", "Segment", "TENSION_TOL", "lower_bounds", "motor_angles", "pose_at", "sample",
     "solve_tensions", "states", "within_bounds",
 ]

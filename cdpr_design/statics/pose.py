@@ -18,7 +18,7 @@ from cdpr_design.io.tables import Table
 from cdpr_design.model.design import Design
 from cdpr_design.statics import cables
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.robot import KINDS, Analysis, check_kind, combinations, has_pulleys, resolve
+from cdpr_design.statics.robot import KINDS, Analysis, check_kind, combinations, has_pulleys, resolve, tension_lower
 from cdpr_design.statics.wrenches import wrench_vertices
 
 
@@ -59,7 +59,8 @@ class PoseResult(Table):
 
 
 def _structure(design: Design, full: np.ndarray, K):
-    """(ok, W (n, m), lengths (m,) [m]) at a full pose, pulleys honoured."""
+    """(ok, W (n, m), lengths (m,) [m], free lengths (m,) [m]) at a full pose, pulleys honoured (the
+    free length runs from the pulley's tangent point to the attachment)."""
     R = kin.rotation_matrix(*full[3:])
     Rb = np.ascontiguousarray(design.attachments @ R.T)
     A = np.ascontiguousarray(design.outlets)
@@ -69,11 +70,12 @@ def _structure(design: Design, full: np.ndarray, K):
         from cdpr_design.statics.interference import hardware_arrays
 
         hw = hardware_arrays(design)
+        C = np.empty((design.m, 3))
         ok = K.structure_matrix_pulley(full[0], full[1], full[2], Rb, A, hw.axes, hw.eref, hw.radii,
-                                       design.rows, W, L, np.empty((design.m, 3)))
-    else:
-        ok = K.structure_matrix(full[0], full[1], full[2], Rb, A, design.rows, W, L)
-    return ok, W, L
+                                       design.rows, W, L, C)
+        return ok, W, L, np.linalg.norm(full[:3] + Rb - C, axis=1)
+    ok = K.structure_matrix(full[0], full[1], full[2], Rb, A, design.rows, W, L)
+    return ok, W, L, L
 
 
 def evaluate_pose(design: Design, pose, kind: str = "static", objective: str = "min-norm",
@@ -104,15 +106,16 @@ def evaluate_pose(design: Design, pose, kind: str = "static", objective: str = "
     wreq = wrench_vertices(design, kind, full[3:])
     if model == "sagging" and kind != "wrench-closure":
         return _sagging_pose(design, pose, full, kind, wreq, objective, weights)
-    ok, W, L = _structure(design, full, K)
+    ok, W, L, free = _structure(design, full, K)
     t = np.full(design.m, np.nan)
+    tmin = tension_lower(design.tension_min, design.string_floor, free)  # the robot's floor, if any
     if ok:
-        feasible, margin = K.eval_pose(W, wreq, design.tension_min, design.tension_max,
+        feasible, margin = K.eval_pose(W, wreq, tmin, design.tension_max,
                                        combinations(design.m, design.n), KINDS[kind], t)
     else:
         feasible, margin = False, np.nan
     if (objective != "min-norm" or weights is not None) and np.all(np.isfinite(t)):
-        t2 = tensions_for_objective(W, wreq[0], design.tension_min, design.tension_max, objective, weights)
+        t2 = tensions_for_objective(W, wreq[0], tmin, design.tension_max, objective, weights)
         t = np.full(design.m, np.nan) if t2 is None else t2
     state = None if model == "ideal" else cables.straight_state(design, L, t)
     return PoseResult(np.asarray(pose, float), L, t, bool(feasible), float(margin), W, wreq[0],

@@ -98,6 +98,8 @@ class Facts:
     motion: str
     #: why the stiffness is not defined (None: it is; :func:`stiffness_reason`)
     stiffness: str | None = None
+    #: ``requirements.min_cable_frequency`` bounds a cable with a mass per length from below
+    string_floor: bool = False
 
 
 @dataclass(frozen=True)
@@ -181,6 +183,14 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal("engine=numpy", "the numpy engine covers two cables with two wrench rows (static or wrench-feasible) "
                             "from point outlets, at the workspace's orientation; use auto or numba for this design",
             lambda f, a: a.engine == "numpy" and not _numpy_covers(f, a)),
+    Refusal("requirements.min_cable_frequency", "cable model 'sagging': the lower tension bound 4 f^2 L^2 mu "
+                                                "is a taut straight cable's, and a sagging cable's own modes are "
+                                                "not modelled; use --cable-model elastic or ideal",
+            lambda f, a: f.string_floor and f.cables == "sagging" and a.command != "fk"),
+    Refusal("requirements.min_cable_frequency", "certify: the interval tests hold constant tension bounds, and "
+                                                "this bound grows with the cable's length (4 f^2 L^2 mu); leave "
+                                                "it out to certify the workspace of the other bounds",
+            lambda f, a: f.string_floor and a.command == "certify"),
     Refusal("certify", "cable model 'sagging': the interval tests assume straight cables (ideal or elastic); "
                        "use --cable-model ideal or elastic",
             lambda f, a: a.command == "certify" and f.cables == "sagging"),
@@ -226,7 +236,11 @@ class Robot:
     [m], ``tension_min`` and ``tension_max`` (m,) [N], ``rows`` (n,) int64 the balanced rows of
     the full wrench, ``combos`` the (C(m, n-1), n-1) cable subsets of hyperplane shifting,
     ``cable`` the :class:`CableArrays`, ``mass`` [kg], ``center_of_mass`` (3,) [m] in the
-    effector's frame, ``gravity`` (3,) [m/s^2].
+    effector's frame, ``gravity`` (3,) [m/s^2], ``tension_floor`` (m,) [N/m^2] the coefficients
+    c_i of the lower tension bound c_i L_i^2 at free length L_i [m] of
+    ``requirements.min_cable_frequency`` (zeros without it; :attr:`Design.string_floor
+    <cdpr_design.model.design.Design.string_floor>`): every evaluation bounds cable i from
+    below by max(tension_min_i, c_i L_i^2) (:func:`tension_lower`).
     """
 
     design: Design
@@ -247,6 +261,7 @@ class Robot:
     mass: float = 0.0
     center_of_mass: np.ndarray = field(default_factory=lambda: np.zeros(3), repr=False)
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3), repr=False)
+    tension_floor: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
 
     @property
     def m(self) -> int:
@@ -342,7 +357,7 @@ def facts(design: Design) -> Facts:
         orientation = "commanded"
     return Facts(cables, outlets, orientation, under, weight, design.motion.rotational,
                  design.m == 2 and design.n == 2, design.motion.name,
-                 stiffness_reason(design, cables, outlets, orientation))
+                 stiffness_reason(design, cables, outlets, orientation), bool(np.any(design.string_floor > 0)))
 
 
 def stiffness_reason(design: Design, cables: str, outlets: str, orientation: str) -> str | None:
@@ -385,7 +400,17 @@ def resolve(design: Design, analysis: Analysis | None = None, **options) -> Robo
         outlet_points=np.ascontiguousarray(design.outlets), attachments=np.ascontiguousarray(design.attachments),
         tension_min=design.tension_min, tension_max=design.tension_max, rows=design.rows,
         combos=combinations(design.m, design.n), cable=cable_arrays(design), mass=float(design.effector.mass),
-        center_of_mass=np.asarray(design.effector.center_of_mass, float), gravity=np.asarray(design.gravity, float))
+        center_of_mass=np.asarray(design.effector.center_of_mass, float), gravity=np.asarray(design.gravity, float),
+        tension_floor=np.ascontiguousarray(design.string_floor))
+
+
+def tension_lower(tension_min, tension_floor, free_lengths) -> np.ndarray:
+    """The lower tension bounds [N] at cable free lengths ``free_lengths`` (..., m) [m]:
+    max(``tension_min``, ``tension_floor`` L^2) (:class:`Robot`); ``tension_min`` itself where a
+    cable has no floor.  The kernels' per-pose bound is the same expression (``kernels.pose.raise_floor``)."""
+    L = np.asarray(free_lengths, float)
+    c = np.asarray(tension_floor, float)
+    return np.where(c > 0.0, np.maximum(tension_min, c * L * L), tension_min)
 
 
 def _engine(f: Facts, a: Analysis) -> str:

@@ -171,22 +171,14 @@ def string_frequencies(lengths, tensions, mass_per_length) -> np.ndarray:
     return np.where((mu > 0) & np.isfinite(T) & (T >= 0), f, np.nan)
 
 
-def min_string_tension(lengths, mass_per_length, frequency: float) -> np.ndarray:
-    """The least tension [N] that keeps each cable's first string mode at or above ``frequency`` [Hz]:
-    T_min = 4 f^2 L^2 mu (``lengths`` [m], ``mass_per_length`` [kg/m]); 0 for a massless cable."""
-    L, mu = np.asarray(lengths, float), np.asarray(mass_per_length, float)
-    return 4.0 * float(frequency) ** 2 * L * L * mu
-
-
 def frequency_tension_floor(design: Design, lengths) -> np.ndarray | None:
     """The lower tension bound [N] that ``requirements.min_cable_frequency`` sets on each cable at
-    cable lengths ``lengths`` (..., m) [m] (:func:`min_string_tension`; 0 for a cable without a
-    mass per length), or None when the spec has no such requirement."""
-    f = design.requirements.min_cable_frequency
-    if f is None:
+    free lengths ``lengths`` (..., m) [m] (:func:`~cdpr_design.model.design.min_string_tension`;
+    0 for a cable without a mass per length), or None when the spec has no such requirement."""
+    if design.requirements.min_cable_frequency is None:
         return None
-    mu = np.array([c.props.mass_per_length or 0.0 for c in design.cables])
-    return min_string_tension(lengths, mu, f)
+    L = np.asarray(lengths, float)
+    return design.string_floor * L * L
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ import numpy as np
 from cdpr_design.model.design import Grid
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.wrenches import wrench_vertices
-from cdpr_design.statics.robot import Robot
+from cdpr_design.statics.robot import Robot, tension_lower
 from cdpr_design.workspaces.grid import Rows, grid3, grid_positions
 from cdpr_design.workspaces.parts import Base
 
@@ -73,13 +73,15 @@ class StraightSweep(Base):
         ten, lens = np.empty((cnt, m)), np.empty((cnt, m))
         if self.numpy:
             _planar2_numpy(self.g, start, cnt, self.Rb, r.outlet_points, self.wreq_used, r.tension_min,
-                           r.tension_max, feas, marg, ten, lens)
+                           r.tension_max, r.tension_floor, feas, marg, ten, lens)
         elif self.planar2:
             self.K.sweep_grid_planar2(start, cnt, self.lower, self.step, self.shape, self.Rb, r.outlet_points,
-                                      self.wreq_used, r.tension_min, r.tension_max, feas, marg, ten, lens)
+                                      self.wreq_used, r.tension_min, r.tension_max, r.tension_floor, feas, marg,
+                                      ten, lens)
         else:
             self.K.sweep_grid(start, cnt, self.lower, self.step, self.shape, self.Rb, r.outlet_points, r.rows,
-                              self.wreq, r.tension_min, r.tension_max, r.combos, r.kcode, feas, marg, ten, lens)
+                              self.wreq, r.tension_min, r.tension_max, r.tension_floor, r.combos, r.kcode, feas,
+                              marg, ten, lens)
         return Rows(feas, marg, ten, lens)
 
     def stats(self, rows: Rows, tpeak: np.ndarray) -> tuple:
@@ -88,12 +90,13 @@ class StraightSweep(Base):
         return self.K.chunk_stats(rows.feasible, rows.margin, rows.tensions, rows.feasible.shape[0], tpeak)
 
 
-def _planar2_numpy(g: Grid, start, count, Rb, A, wreq, tmin, tmax, feasible, margin, tensions, lengths):
+def _planar2_numpy(g: Grid, start, count, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensions, lengths):
     """``kernels.sweep_grid_planar2`` vectorised with numpy: same formulas, same order.
 
     Two cables, two wrench rows: t = W^-1 w in closed form, the capacity margin
     min_i min(t_i - t_min,i, t_max,i - t_i) / ||row_i(W^-1)||, the other rows of
-    ``wreq`` (wrench-feasible) lowering the margin.  Fills rows 0 .. count of
+    ``wreq`` (wrench-feasible) lowering the margin; t_min,i raised to ``floor``[i] L_i^2 where
+    ``floor``[i] > 0 (:func:`~cdpr_design.statics.robot.tension_lower`).  Fills rows 0 .. count of
     the output buffers exactly as the kernel does.
     """
     pos = grid_positions(g, start, count)
@@ -106,6 +109,8 @@ def _planar2_numpy(g: Grid, start, count, Rb, A, wreq, tmin, tmax, feasible, mar
     L1 = np.sqrt(lx1 * lx1 + ly1 * ly1)
     lengths[:count, 0] = L0
     lengths[:count, 1] = L1
+    tn = tension_lower(tmin, floor, np.stack([L0, L1], axis=1))
+    tn0, tn1 = tn[:, 0], tn[:, 1]
     with np.errstate(divide="ignore", invalid="ignore"):
         u0x, u0y, u1x, u1y = lx0 / L0, ly0 / L0, lx1 / L1, ly1 / L1
         det = u0x * u1y - u1x * u0y
@@ -116,13 +121,13 @@ def _planar2_numpy(g: Grid, start, count, Rb, A, wreq, tmin, tmax, feasible, mar
         w0, w1 = wreq[0, 0], wreq[0, 1]
         t0 = i00 * w0 + i01 * w1
         t1 = i10 * w0 + i11 * w1
-        s = np.minimum(np.minimum(t0 - tmin[0], tmax[0] - t0) / r0, np.minimum(t1 - tmin[1], tmax[1] - t1) / r1)
+        s = np.minimum(np.minimum(t0 - tn0, tmax[0] - t0) / r0, np.minimum(t1 - tn1, tmax[1] - t1) / r1)
         inb = s >= 0.0
         for v in range(1, wreq.shape[0]):
             q0 = i00 * wreq[v, 0] + i01 * wreq[v, 1]
             q1 = i10 * wreq[v, 0] + i11 * wreq[v, 1]
-            s = np.minimum(s, np.minimum(np.minimum(q0 - tmin[0], tmax[0] - q0) / r0,
-                                         np.minimum(q1 - tmin[1], tmax[1] - q1) / r1))
+            s = np.minimum(s, np.minimum(np.minimum(q0 - tn0, tmax[0] - q0) / r0,
+                                         np.minimum(q1 - tn1, tmax[1] - q1) / r1))
     # a zero-length cable or parallel cables: rank deficient, no margin, infeasible
     bad = (L0 <= 1e-12) | (L1 <= 1e-12) | (np.abs(det) <= _RANK_TOL)
     s[bad] = np.nan

@@ -118,6 +118,8 @@ class WorkspaceResult:
     robot: object = None
     #: ``--stiffness`` only: the maps ``min_stiffness`` [N/m] and ``lowest_frequency`` [Hz]
     stiffness: dict | None = None
+    #: the picture files the sweep's plan declared (:attr:`~cdpr_design.workspaces.plan.Plan.pictures`)
+    pictures: list = field(default_factory=list)
 
     @property
     def fraction(self) -> float:

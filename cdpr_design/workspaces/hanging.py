@@ -42,7 +42,7 @@ from cdpr_design.statics.hanging.at_positions import hanging_orientations
 from cdpr_design.statics.hanging.geometry import Geometry
 from cdpr_design.statics.hanging.results import HangingOrientations
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.robot import Robot, combinations
+from cdpr_design.statics.robot import Robot, tension_lower
 from cdpr_design.workspaces.grid import Rows, chunk_poses
 from cdpr_design.workspaces.parts import Base, Wrapper
 
@@ -216,11 +216,13 @@ class FreeRows:
     within: np.ndarray
 
 
-def free_rows(design: Design, P, hanger: Hanger, limit: float | None) -> FreeRows:
+def free_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
     """Hanging orientation, then feasibility, margin, tensions and lengths there, at positions
-    ``P`` (k, 3) [m] (see the module doc; the workspace's rows and ``pose --at``'s)."""
+    ``P`` (k, 3) [m] (see the module doc; the workspace's rows and ``pose --at``'s), within the
+    robot's tension bounds (its per-pose floor included) and tilt limit."""
     from cdpr_design.kernels import hanging as K  # numba, on first use
 
+    design, limit = robot.design, robot.tilt_limit
     k, m = len(P), design.m
     h, extra = hanger(P)
     R = np.ascontiguousarray(h.rotation)
@@ -230,11 +232,12 @@ def free_rows(design: Design, P, hanger: Hanger, limit: float | None) -> FreeRow
     feas, marg = np.empty(k, np.uint8), np.empty(k)
     ten, L = np.empty((k, m)), np.empty((k, m))
     K.eval_rotated(np.ascontiguousarray(P, dtype=float), R, design.outlets,
-                   np.ascontiguousarray(design.attachments), design.rows, wreq, design.tension_min,
-                   design.tension_max, combinations(m, design.n), 0, feas, marg, ten, L)
+                   robot.attachments, robot.rows, wreq, robot.tension_min, robot.tension_max, robot.tension_floor,
+                   robot.combos, 0, feas, marg, ten, L)
     t, tol = h.tensions, 1e-9 * max(1.0, hanger.geo.weight)
     with np.errstate(invalid="ignore"):
-        within = h.feasible & np.all((t >= design.tension_min - tol) & (t <= design.tension_max + tol), axis=1)
+        lower = tension_lower(robot.tension_min, robot.tension_floor, L)
+        within = h.feasible & np.all((t >= lower - tol) & (t <= robot.tension_max + tol), axis=1)
         # the margin's verdict where the motion's rows have one, with the hanging tensions' tolerance: a
         # cable that hangs slack in theory (tension 0 at its bound 0) is not decided by rounding
         within &= (marg >= -tol) | ~np.isfinite(marg)
@@ -270,7 +273,7 @@ class FreeSweep(Base):
 
     def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
         design, cnt = self.robot.design, P.shape[0]
-        r = free_rows(design, P, self.hanger, self.robot.tilt_limit)
+        r = free_rows(self.robot, P, self.hanger)
         self.tally.limited += int(np.count_nonzero(r.within & (r.feasible == 0)))
         self.tally.add(r.extra["tilt"], r.feasible)
         poses = chunk_poses(design, P, self.ori)
@@ -293,4 +296,4 @@ def free_pose(robot: Robot, position) -> FreeRows:
     P = np.zeros((1, 3))
     pos = np.asarray(position, float).ravel()
     P[0, : pos.size] = pos
-    return free_rows(design, P, Hanger(robot, design.default_orientation_full()), robot.tilt_limit)
+    return free_rows(robot, P, Hanger(robot, design.default_orientation_full()))

@@ -36,7 +36,7 @@ class Evaluator:
         self.Bp = robot.attachments
         self.Bp_planes = np.ascontiguousarray(in_cable_planes(robot.attachments, self.hw.zoff))  # interference
         self.rows = robot.rows
-        self.tmin, self.tmax = robot.tension_min, robot.tension_max
+        self.tmin, self.tmax, self.floor = robot.tension_min, robot.tension_max, robot.tension_floor
         self.combos = robot.combos
         self._wreq = {}
 
@@ -65,7 +65,7 @@ class Evaluator:
 
         hw = self.hw
         K.sweep_points(np.ascontiguousarray(P, dtype=float), Rb, R, self.A, hw.axes, hw.eref,
-                       hw.radii, self.rows, self.wrench(ori), self.tmin, self.tmax, self.combos,
+                       hw.radii, self.rows, self.wrench(ori), self.tmin, self.tmax, self.floor, self.combos,
                        self.kcode, self.interference, self.Bp_planes, hw.half, hw.rho, hw.frame_lower,
                        hw.frame_upper, hw.dim, hw.tol, full, hw.zoff, feas, marg, ten, L, mask)
         return feas, marg, ten, L, mask

@@ -105,7 +105,7 @@ class Plan:
         for p in self.parts:
             extra.update(p.summary(maps))
         result = maps.result(design, self.base.kind, self.orientation, t0, extra)
-        result.robot = robot
+        result.robot, result.pictures = robot, self.pictures
         for p in self.parts:
             p.finish(result, maps)
         return result
