@@ -89,6 +89,10 @@ def test_sagging_refuses_pulleys_and_interference(tmp_path, planar2_data):
     spec_path = write_spec(tmp_path, planar2_data)
     r = invoke("size-motors", spec_path, "--out", tmp_path / "o3", "-q")
     assert r.exit_code == 2 and "swivel pulleys" in r.output, r.output
+    for command in ("trajectory", "simulate"):  # the table's reason as it is, before any file
+        r = invoke(command, spec_path, "square_fast", "--out", tmp_path / command, "-q")
+        assert r.exit_code == 2 and "--cable-model: cable model 'sagging' assumes point outlets" in r.output
+        assert "trajectories." not in r.output and not (tmp_path / command).exists(), r.output
     for model in ("sagging", "elastic"):
         r = invoke("fk", spec_path, "--lengths", "1.0,1.0", "--cable-model", model)
         assert r.exit_code == 2 and "swivel pulleys" in r.output and model in r.output, r.output

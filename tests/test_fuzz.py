@@ -27,6 +27,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from cdpr_design.errors import CdprError
+from cdpr_design.statics.robot import cable_model
 
 from .fuzzing import EXTREME_NUMBERS, ODD_STRINGS, feature_spec_data, hostile_values, mutated_feature_data, \
     mutated_spec_data, mutated_yaml, option_floats, spec_data
@@ -544,7 +545,7 @@ def test_fk_with_cable_models_and_free_orientation(data, where, lengths):
     g = design.workspace.grid
     pose = [lo + f * (hi - lo) for lo, hi, f in zip(g.lower, g.upper, where)] + list(design.workspace.orientation)
     L = list(kin.inverse_kinematics(design, pose)) if lengths is None else lengths[: design.m]
-    if job.cable_model_name(design) == "ideal":
+    if cable_model(design) == "ideal":
         res, exc = outcome(hjob.fk_data, design, L)
     else:
         res, exc = outcome(job.cable_fk_data, design, L)

@@ -143,3 +143,28 @@ def test_what_the_table_allows_resolves(planar2, cogiro):
     # without the requirement, or without a mass per length, no floor
     assert not np.any(resolve(cogiro).tension_floor)
     assert not np.any(resolve(_with(spec.load(DESIGNS / "planar4.yaml"), cable_frequency=5.0)).tension_floor)
+
+
+def test_commands_at_commanded_poses_take_a_free_effector_over_pulleys(planar2):
+    """Motor sizing and motion hold the effector at commanded poses: the hanging solver's limit
+    (point outlets) refuses the commands that run it, not these; the catenaries' limit (point
+    outlets) refuses every command."""
+    free_pulleys = _with(planar2, orientation="free", pulleys=True)
+    for command in R.COMMANDED_POSES:
+        r = resolve(free_pulleys, Analysis(command=command))
+        assert (r.outlets, r.orientation) == ("pulleys", "hanging")
+        with pytest.raises(InputError, match="^--cable-model: cable model 'sagging' assumes point outlets"):
+            resolve(_with(free_pulleys, model="sagging"), Analysis(command=command))
+    for command in ("workspace", "pose", "fk", "statics"):
+        with pytest.raises(InputError, match="^effector.orientation: free: the hanging solver"):
+            resolve(free_pulleys, Analysis(command=command))
+
+
+def test_robot_of_resolves_a_design_once_and_keeps_a_robot(planar2):
+    """The public functions of a command take a design or the robot the command resolved."""
+    r = R.robot_of(planar2, "motion")
+    assert r.analysis.command == "motion" and r.design is planar2
+    assert R.robot_of(r, "size-motors") is r
+    assert R.design_of(r) is planar2 and R.design_of(planar2) is planar2
+    with pytest.raises(InputError, match="assumes point outlets"):
+        R.robot_of(_with(planar2, model="sagging", pulleys=True), "size-motors")

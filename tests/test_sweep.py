@@ -447,7 +447,7 @@ def test_committed_ci_baseline_matches(tmp_path):
 
 
 def test_engines_give_the_identical_sweep_csv(tmp_path, monkeypatch):
-    """Small planar2 sweeps take the numpy engine, big ones the numba kernels (sweep._worth_kernels);
+    """Small planar2 sweeps take the numpy engine, big ones the numba kernels (sweep.kernels_worth_loading);
     a resumed sweep may mix them, so both must write the same bytes (signed zeros included)."""
     written = {}
     for engine in ("numba", "numpy"):
@@ -461,14 +461,16 @@ def test_engines_give_the_identical_sweep_csv(tmp_path, monkeypatch):
 
 
 def test_big_sweeps_load_the_kernels():
+    """Each process of a sweep loads the numba kernels first when it evaluates more grid poses
+    than the numpy engine is worth (the public decision, :data:`KERNELS_FROM_POSES`)."""
     design_data = planar2_raw()
     plan = sw.make_plan(spec.from_dict(design_data), [("effector.mass", sw.parse_values("0.5:2:3"))])
-    assert not bsweep._worth_kernels(plan, sw.Options(), len(plan), 2)  # 3 x 22,801 poses
-    assert not bsweep._worth_kernels(plan, sw.Options(), 40, 2)  # 456,000 poses a process
-    assert bsweep._worth_kernels(plan, sw.Options(), 40, 1)  # 912,000 poses in one process
-    assert not bsweep._worth_kernels(plan, sw.Options(), 40, 4)  # 228,000 poses a process
-    assert bsweep._worth_kernels(plan, sw.Options(), 1000, 8)  # 2.85 M poses a process
-    assert bsweep._worth_kernels(plan, sw.Options(step=0.001), 3, 8)  # 2.25 M poses a process (3 used)
+    assert not bsweep.kernels_worth_loading(plan, sw.Options(), len(plan), 2)  # 3 x 22,801 poses
+    assert not bsweep.kernels_worth_loading(plan, sw.Options(), 40, 2)  # 456,000 poses a process
+    assert bsweep.kernels_worth_loading(plan, sw.Options(), 40, 1)  # 912,000 poses in one process
+    assert not bsweep.kernels_worth_loading(plan, sw.Options(), 40, 4)  # 228,000 poses a process
+    assert bsweep.kernels_worth_loading(plan, sw.Options(), 1000, 8)  # 2.85 M poses a process
+    assert bsweep.kernels_worth_loading(plan, sw.Options(step=0.001), 3, 8)  # 2.25 M poses a process (3 used)
 
 
 def _worker_settings():

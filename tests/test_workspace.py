@@ -13,7 +13,6 @@ from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
 from cdpr_design.workspaces import grid as wsg
 from cdpr_design.statics import pose as sp
-from cdpr_design.workspaces import engine as eng
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Grid
 
@@ -339,23 +338,43 @@ def test_kernels_package_alone_is_not_the_kernels_loaded():
     assert out.stdout.split() == ["numpy", "False", "True"]
 
 
+def _chunk_stats_reference(feas, marg, ten, count, tpeak):
+    """The obvious reduction: the feasible rows among the first ``count``, their least and largest
+    margin (a zero without its sign) and, per cable, the largest tension into ``tpeak``."""
+    rows = [k for k in range(count) if feas[k]]
+    for k in rows:
+        tpeak[:] = np.maximum(tpeak, ten[k])
+    if not rows:
+        return 0, np.inf, -np.inf
+    return len(rows), min(float(marg[k]) for k in rows) + 0.0, max(float(marg[k]) for k in rows) + 0.0
+
+
 @pytest.mark.parametrize("count", [0, 1, 63, 64, 65, 1000, 4099])
-def test_chunk_stats_matches_numpy(count):
-    """The kernel's reduction equals the plain numpy one (only the first ``count`` rows count)."""
+def test_chunk_stats_matches_the_obvious_reduction(count):
+    """The kernel's reduction of a chunk equals the obvious one (only the first ``count`` rows
+    count; a margin of -0.0 is reported as 0.0).  The numpy engine's own reduction is checked
+    through the sweeps' summaries (test_numpy_engine_equals_numba_kernel)."""
     rng = np.random.default_rng(count)
     n = count + 17
     feas = (rng.random(n) < 0.6).astype(np.uint8)
     marg = rng.normal(size=n)
     marg[rng.random(n) < 0.1] = -0.0
     ten = rng.uniform(0, 20, size=(n, 3))
-    tp_k, tp_n = np.full(3, -np.inf), np.full(3, -np.inf)
+    tp_k, tp_r = np.full(3, -np.inf), np.full(3, -np.inf)
     got = K.chunk_stats(feas, marg, ten, count, tp_k)
-    ref = eng._chunk_stats_numpy(feas, marg, ten, count, tp_n)
-    assert got[0] == ref[0] == int(feas[:count].sum())
-    if ref[0]:
-        assert got[1:] == ref[1:]
-        assert not np.signbit(got[1]) or got[1] < 0
-    np.testing.assert_array_equal(tp_k, tp_n)
+    ref = _chunk_stats_reference(feas, marg, ten, count, tp_r)
+    assert got == ref and got[0] == int(feas[:count].sum())
+    assert not np.signbit(got[1]) or got[1] < 0
+    np.testing.assert_array_equal(tp_k, tp_r)
+
+
+def test_chunk_stats_reports_a_zero_margin_without_its_sign():
+    feas = np.ones(3, np.uint8)
+    ten = np.ones((3, 2))
+    got = K.chunk_stats(feas, np.array([-0.0, 1.0, -0.0]), ten, 3, np.full(2, -np.inf))
+    assert got == (3, 0.0, 1.0) and not np.signbit(got[1])
+    got = K.chunk_stats(feas, np.full(3, -0.0), ten, 3, np.full(2, -np.inf))
+    assert got == (3, 0.0, 0.0) and not np.signbit(got[1]) and not np.signbit(got[2])
 
 
 def test_warm_up_runs_the_sweeps_first_pose_with_the_whole_grids_robot(monkeypatch):

@@ -82,7 +82,7 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
     w = workers if workers is not None else default_workers()
     if w < 1:
         raise InputError(f"--workers: expected at least 1, got {w}")
-    job = Job(plan, options, kernels=_worth_kernels(plan, options, len(todo), w))
+    job = Job(plan, options, kernels=kernels_worth_loading(plan, options, len(todo), w))
     if scheduler:
         run_dask(job, todo, scheduler, w, chunk, emit, stats, connect_timeout)
     elif not pool and (w == 1 or len(todo) <= 1):
@@ -106,7 +106,7 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
 KERNELS_FROM_POSES = 500_000
 
 
-def _worth_kernels(plan: Plan, options: Options, variants: int, workers: int = 1) -> bool:
+def kernels_worth_loading(plan: Plan, options: Options, variants: int, workers: int = 1) -> bool:
     """Whether each of the sweep's processes (``workers``, at most one a variant) evaluates more
     grid poses than the numpy engine is worth (:data:`KERNELS_FROM_POSES`): then every process
     loads the numba kernels first."""

@@ -136,13 +136,13 @@ def fk(
     from cdpr_design.statics.robot import Analysis, resolve
 
     design = load_design(spec, cable_model)
-    resolve(design, Analysis(command="fk"))  # refused combinations: exit 2 with the reason
+    robot = resolve(design, Analysis(command="fk"))  # refused combinations: exit 2 with the reason
     L = parse_numbers(lengths, "--lengths", design.m, "cable lengths (one per cable)", limit=LENGTH)
     if any(v < 0 for v in L):
         raise InputError("--lengths: cable lengths must be non-negative")
     g = parse_pose(design, guess, "--guess") if guess is not None else None
-    if job.cable_model_name(design) != "ideal":
-        data = job.cable_fk_data(design, L, g)  # --lengths are unstretched lengths
+    if robot.cables != "ideal":
+        data = job.cable_fk_data(robot, L, g)  # --lengths are unstretched lengths
         if json_:
             emit_json(data)
             return
@@ -153,7 +153,7 @@ def fk(
             + [(f"tension {c} [N]", v) for c, v in data.get("tensions", {}).items()]
             + [("within tension bounds", "yes" if data["within_bounds"] else "no")]))
         return
-    data = hjob.fk_data(design, L, guess=g)
+    data = hjob.fk_data(robot, L, guess=g)
     if json_:
         emit_json(data)
         return

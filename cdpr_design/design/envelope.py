@@ -45,7 +45,7 @@ import numpy as np
 
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics import cables as cable_models
-from cdpr_design.statics.robot import cable_model, has_pulleys, tension_lower
+from cdpr_design.statics.robot import Robot, robot_of, tension_lower
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate_structure
 from cdpr_design import workspaces as workspace
@@ -115,11 +115,11 @@ def task_grid(design: Design, step: float | None = None) -> Grid | None:
     return Grid(tuple(float(x) for x in box[0]), tuple(float(x) for x in box[1]), tuple(st))
 
 
-def _structure_many(design: Design, positions: np.ndarray, Rb: np.ndarray):
+def _structure_many(robot: Robot, positions: np.ndarray, Rb: np.ndarray):
     """Structure matrices (k, n, m), lengths, free lengths (k, m) [m] and curvatures (k, m) [1/m]
     at positions (k, 3), fixed orientation.
 
-    With swivel pulleys (:func:`cdpr_design.statics.robot.has_pulleys`) the
+    With swivel pulleys (the robot's ``outlets``: ``pulleys``) the
     lengths are arc + free segment and u_i the free segment's unit vector
     from the tangent point (:mod:`cdpr_design.statics.pulley`), the free length from the
     tangent point to the attachment (the total length for a point outlet).  The curvatures
@@ -127,7 +127,8 @@ def _structure_many(design: Design, positions: np.ndarray, Rb: np.ndarray):
     |v^T H_i v| <= kappa_i |v|^2: 1 / L_i for a point outlet,
     max(1 / l_f, |kappa_t|) with a pulley (:meth:`CablePaths.max_curvature`).
     """
-    if has_pulleys(design):
+    design = robot.design
+    if robot.outlets == "pulleys":
         from cdpr_design.statics import pulley as pl
 
         paths = pl.design_cable_paths(design, positions[:, None, :] + Rb[None, :, :])
@@ -199,24 +200,29 @@ def _min_norm_general(W, wreq, tmin, tmax):
     return out
 
 
-def envelope_chunk(design: Design, positions: np.ndarray, orientation, A: float, V: float) -> dict:
+def envelope_chunk(design: Design | Robot, positions: np.ndarray, orientation, A: float, V: float) -> dict:
     """Per-pose worst cases for a chunk of positions (k, dim) [m] at a fixed orientation (rx, ry, rz) [rad].
+
+    ``design`` is resolved for ``size-motors`` unless it is already a :class:`Robot`
+    (:func:`~cdpr_design.statics.robot.robot_of`).
 
     A [m/s^2] and V [m/s] bound the platform's acceleration and speed.
     Returns a dict of (k, m) arrays: ``static``, ``peak``, ``low`` (least
     tension over the acceleration set) [N], ``accel`` (cable acceleration
     bound) [m/s^2], and a (k,) bool ``ok`` (W of full rank).
     """
+    robot = robot_of(design, "size-motors")
+    design = robot.design
     k = positions.shape[0]
     d = design.motion.dim
     pos3 = np.zeros((k, 3))
     pos3[:, :d] = positions
     R = kin.rotation_matrix(*orientation)
     Rb = design.attachments @ R.T
-    W, L, free, kappa = _structure_many(design, pos3, Rb)
+    W, L, free, kappa = _structure_many(robot, pos3, Rb)
     sag_ok, offset = None, 0.0
-    if cable_model(design) == "sagging":
-        sag_ok, Ws, t_eff, t_out = cable_models.sagging_structures(design, pos3, orientation)
+    if robot.cables == "sagging":
+        sag_ok, Ws, t_eff, t_out = cable_models.sagging_structures(robot, pos3, orientation)
         W[sag_ok] = Ws[sag_ok]
         offset = np.where(sag_ok[:, None], np.nan_to_num(t_out - t_eff), 0.0)
     w0, M = wrench_model(design, orientation)
@@ -278,14 +284,15 @@ def _redundant_chunk(design: Design, W, w0, M, A, free):
     return static, peak, low, ok
 
 
-def task_envelope(design: Design, *, step: float | None = None, positions: np.ndarray | None = None,
+def task_envelope(design: Design | Robot, *, step: float | None = None, positions: np.ndarray | None = None,
                   chunk: int = 4096, progress: Callable[[int, int], None] | None = None,
                   engine: str = "auto") -> Envelope:
     """Worst-case tensions, cable speeds and accelerations over the task poses.
 
     Parameters
     ----------
-    design : Design
+    design : Design or Robot
+        Resolved here for ``size-motors`` unless it is a :class:`Robot` already.
     step : float, optional
         Grid step [m] over the task box (default: ``workspace.grid.step``).
     positions : (k, dim) array, optional
@@ -298,6 +305,8 @@ def task_envelope(design: Design, *, step: float | None = None, positions: np.nd
     engine : {'auto', 'numba', 'numpy'}
         Engine of the workspace sweep used without a task box.
     """
+    robot = robot_of(design, "size-motors")
+    design = robot.design
     req = design.requirements
     A = float(req.max_acceleration or 0.0)
     V = float(req.max_speed or 0.0)
@@ -307,7 +316,7 @@ def task_envelope(design: Design, *, step: float | None = None, positions: np.nd
     for pos in blocks:
         if pos.shape[0] == 0:
             continue
-        if worst.add(pos, envelope_chunk(design, pos, ori, A, V)) and progress is not None:
+        if worst.add(pos, envelope_chunk(robot, pos, ori, A, V)) and progress is not None:
             progress(worst.total, worst.total)
     return worst.envelope(source, V)
 

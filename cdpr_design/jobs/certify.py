@@ -54,7 +54,7 @@ def run_certify(design, out: OutputDir, kind: str = "static", resolution: float 
     from cdpr_design.workspaces import certify as cert
 
     timings = timings or Timings()
-    cert.check_certifiable(design, kind)
+    robot = cert.check_certifiable(design, kind)
     if scheduler:
         batch.check_scheduler(scheduler)
     classifier = parallel_certify.classifier(1 if workers is None and not scheduler else workers, scheduler)
@@ -63,7 +63,7 @@ def run_certify(design, out: OutputDir, kind: str = "static", resolution: float 
     journal = CertifyJournal(out)
     journal.check_free()  # another certify writing this folder: refused before any work
     meta = {"journal": "cdpr-design certify", "name": design.name,
-            "fingerprint": fingerprint(design, kind, resolution, box, min_margin)}
+            "fingerprint": fingerprint(robot, kind, resolution, box, min_margin)}
     kept = kept_levels(journal, meta, resume, log or (lambda msg: None))
     lazy = LazyJournal(journal, meta, kept)
     limits = {} if max_boxes is None else {"max_boxes": max_boxes}
@@ -96,13 +96,13 @@ def run_certify(design, out: OutputDir, kind: str = "static", resolution: float 
     return result
 
 
-def fingerprint(design, kind: str, resolution, box, min_margin) -> str:
-    """A hash of everything that decides the boxes (the spec, its cable model, the options; not
-    the limits, which only stop a paving earlier): a journal is resumed only by its own paving."""
+def fingerprint(robot, kind: str, resolution, box, min_margin) -> str:
+    """A hash of everything that decides the boxes (the spec, the resolved robot's cable model, the
+    options; not the limits, which only stop a paving earlier): a journal is resumed only by its
+    own paving."""
     from cdpr_design import __version__
-    from cdpr_design.statics.robot import cable_model
 
-    blob = json.dumps({"spec": design.raw, "cable_model": cable_model(design), "kind": kind,
+    blob = json.dumps({"spec": robot.design.raw, "cable_model": robot.cables, "kind": kind,
                        "resolution": resolution, "box": box, "min_margin": min_margin, "version": __version__},
                       sort_keys=True, default=repr)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]

@@ -78,8 +78,12 @@ def _bare_poses(p: Path, text: str, coords, pos, what: str) -> np.ndarray:
 def sample_named(design, name: str, cycle_time: float | None = None, hold_end: float = 0.0,
                  option: str = "NAME"):
     """Sample spec trajectory ``name`` (reading a csv path's poses) every ``cycle_time`` [s],
-    holding the last set-point ``hold_end`` [s]; bad names, cycles and files are :class:`InputError`."""
+    holding the last set-point ``hold_end`` [s]; bad names, cycles and files are :class:`InputError`.
+    ``design``: a Design, or the :class:`~cdpr_design.statics.robot.Robot` the command resolved."""
     from cdpr_design.motion import trajectory as tr
+    from cdpr_design.statics.robot import design_of
+
+    given, design = design, design_of(design)
 
     traj = require_trajectory(design, name, option)
     if cycle_time is not None and not (math.isfinite(cycle_time) and 1e-5 <= cycle_time <= 1.0):
@@ -91,9 +95,17 @@ def sample_named(design, name: str, cycle_time: float | None = None, hold_end: f
             p = Path(design.source).resolve().parent / p
         poses = read_poses(p, design, f"trajectories.{name}.file")
     try:
-        return tr.sample(design, name, cycle_time, csv_poses=poses, hold_end=hold_end)
+        return tr.sample(given, name, cycle_time, csv_poses=poses, hold_end=hold_end)
     except (KeyError, ValueError) as exc:
         raise InputError(f"trajectories.{name}: {exc}") from None
+
+
+def motion_robot(design):
+    """The design resolved once for a motion command (``trajectory``, ``simulate``): a refused
+    combination is an :class:`InputError` with the reason (:data:`cdpr_design.statics.robot.REFUSALS`)."""
+    from cdpr_design.statics.robot import Analysis, resolve
+
+    return resolve(design, Analysis(command="motion"))
 
 
 def trajectory_samples(design, name: str | None):
@@ -128,8 +140,9 @@ def trajectory(design, name: str, cycle_time: float | None = None, out: str | Pa
     (``format='parquet'``: ``.parquet``), trajectory.json, trajectory.png and trajectory_axes.png
     into ``out`` (the pictures are drawn while the table is written)."""
     timings = Timings()
+    robot = motion_robot(design)
     with timings.phase("sweep_s"):
-        samples = sample_named(design, name, cycle_time)
+        samples = sample_named(robot, name, cycle_time)
     out_dir = output_dir(design, out, overwrite)
     for f in (file_name("trajectory", format), "trajectory.json", "trajectory.png", "trajectory_axes.png"):
         out_dir.target(f)  # a foreign file (or a folder) of that name: refused before any work
@@ -191,7 +204,8 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
     _check_simulation(settings, hold)
     if cable_segments is not None and not 2 <= cable_segments <= 200:
         raise InputError(f"--cable-segments: expected 2 to 200, got {cable_segments}")
-    samples = sample_named(design, name, cycle_time, hold_end=(0.5 + delay) if hold is None else hold)
+    robot = motion_robot(design)
+    samples = sample_named(robot, name, cycle_time, hold_end=(0.5 + delay) if hold is None else hold)
     if samples.cycle_time < timestep:
         raise InputError(f"--timestep: {timestep} s is longer than the cycle time {samples.cycle_time} s")
     out_dir = output_dir(design, out, overwrite)
@@ -199,7 +213,7 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
         out_dir.target(f)  # a foreign file (or a folder) of that name: refused before the simulation
     with stage(progress, f"simulate {name}") as cb, timings.phase("sweep_s"):
         try:
-            result = simulate(design, samples, feedforward=feedforward, compensate_stretch=compensate_stretch,
+            result = simulate(robot, samples, feedforward=feedforward, compensate_stretch=compensate_stretch,
                               progress=cb, cable_segments=cable_segments, **settings)
         except sim.SimulationError as exc:
             raise InputError(f"--timestep / --servo-bandwidth / --cable-damping: {exc}") from None

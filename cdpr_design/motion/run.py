@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cdpr_design.model.design import Design
+from cdpr_design.statics.robot import Robot
 
 
 @dataclass(frozen=True)
@@ -140,7 +141,7 @@ def cable_setpoints(samples, compensate_stretch: bool = True):
     return sp, samples.cable_speed, cs
 
 
-def simulate(design: Design, samples, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
+def simulate(design: Design | Robot, samples, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
              delay: float = 0.0, cable_damping: float = 0.7, joint_damping: float = 0.05,
              feedforward: bool = True, compensate_stretch: bool = True, settle: float = 3.0,
              progress=None, cable_segments: int | None = None) -> SimulationResult:
@@ -157,7 +158,9 @@ def simulate(design: Design, samples, *, timestep: float = 5e-4, servo_bandwidth
 
     Parameters
     ----------
-    design : Design
+    design : Design or Robot
+        Resolved for ``motion`` by the :class:`~cdpr_design.motion.simulation.Simulator` unless it
+        is a :class:`~cdpr_design.statics.robot.Robot` already.
     samples : trajectory.Samples
     progress : callable, optional
         Called as ``progress(done, total)`` every few hundred samples.
@@ -176,7 +179,7 @@ def simulate(design: Design, samples, *, timestep: float = 5e-4, servo_bandwidth
     k = samples.time.size
     dt = samples.cycle_time
     sim.reset(samples.pose[0], settle=settle, setpoints=None if cs is None else sp[0])
-    nc, m = samples.pose.shape[1], design.m
+    nc, m = samples.pose.shape[1], sim.m
     pose = np.empty((k, nc))
     ori = np.empty((k, 3))
     lengths, axis, tens, outlet = (np.empty((k, m)) for _ in range(4))

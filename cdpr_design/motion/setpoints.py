@@ -26,7 +26,7 @@ import numpy as np
 
 from cdpr_design.model.design import Design
 from cdpr_design.statics import cables
-from cdpr_design.statics.robot import cable_arrays, cable_model
+from cdpr_design.statics.robot import Robot, robot_of
 
 
 @dataclass(frozen=True)
@@ -90,7 +90,7 @@ class CableSamples:
                 "unsolved_samples": int(np.count_nonzero(~self.solved))}
 
 
-def cable_samples(design: Design, positions, Rb, wreq, lengths, tensions, feasible):
+def cable_samples(design: Design | Robot, positions, Rb, wreq, lengths, tensions, feasible):
     """The design's cable model along a path: (CableSamples, tensions (k, m) [N], feasible (k,)).
 
     ``positions`` (k, 3) [m], ``Rb`` (k, m, 3) rotated attachments [m],
@@ -98,17 +98,20 @@ def cable_samples(design: Design, positions, Rb, wreq, lengths, tensions, feasib
     chords [m], ``tensions`` and ``feasible`` the straight model's.  Elastic
     cables keep the straight tensions (a pushing cable has no length: NaN);
     sagging cables replace them by the catenaries' effector-end tensions and
-    the feasibility by the whole-cable bounds.  None for ideal designs.
+    the feasibility by the whole-cable bounds.  None for ideal designs.  ``design`` is resolved
+    for ``motion`` unless it is a :class:`~cdpr_design.statics.robot.Robot` already (its
+    ``cables``: the heaviest of the cables' models).
     """
-    model = cable_model(design)
+    robot = robot_of(design, "motion")
+    model = robot.cables
     if model == "ideal":
         return None, tensions, feasible
     if model == "elastic":
         t = np.where(tensions >= 0.0, tensions, np.nan)
-        L0 = cables.elastic_unstretched(lengths, t, cable_arrays(design).EA)
+        L0 = cables.elastic_unstretched(lengths, t, robot.cable.EA)
         sag = np.where(np.isfinite(t), 0.0, np.nan)
         return CableSamples(model, L0, lengths - L0, t, sag), tensions, feasible
-    s = cables.sagging_samples(design, positions, Rb, wreq)
+    s = cables.sagging_samples(robot, positions, Rb, wreq)
     res = CableSamples(model, s.unstretched_lengths, lengths - s.unstretched_lengths, s.outlet_tensions, s.sag,
                        s.status.astype(np.int64))
     return res, s.tensions, s.feasible

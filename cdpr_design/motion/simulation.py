@@ -79,7 +79,7 @@ from cdpr_design.motion.mjcf import Chains, build_xml, massive_cables
 from cdpr_design.statics import cables as cm
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
-from cdpr_design.statics.robot import Analysis, cable_arrays, cable_model, has_pulleys, resolve
+from cdpr_design.statics.robot import Robot, design_of, robot_of
 
 #: Segments of each massive cable (``cable_segments``): the chain's end forces
 #: differ from the catenary's by O((L/N)^2) (tests/test_simulation_cables.py).
@@ -148,7 +148,9 @@ class Simulator:
 
     Parameters
     ----------
-    design : Design
+    design : Design or Robot
+        Resolved here for ``motion`` (:func:`~cdpr_design.statics.robot.robot_of`) unless it is a
+        :class:`~cdpr_design.statics.robot.Robot` already.
     timestep : float
         Physics step [s] (default 0.5 ms; keep sqrt(sum k_i / m) * timestep well
         below 1).
@@ -176,7 +178,7 @@ class Simulator:
         Segments of each massive (``sagging``) cable, >= 2.
     """
 
-    def __init__(self, design: Design, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
+    def __init__(self, design: Design | Robot, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
                  delay: float = 0.0, cable_damping: float = 0.7, joint_damping: float = 0.05,
                  feedforward: bool = True, compensate_stretch: bool = True,
                  axial_stiffness: float | None = None, cable_segments: int = DEFAULT_CABLE_SEGMENTS):
@@ -186,12 +188,12 @@ class Simulator:
             raise ValueError(f"delay must be >= 0, got {delay}")
         if not servo_bandwidth > 0:
             raise ValueError(f"servo_bandwidth must be > 0, got {servo_bandwidth}")
-        massive = massive_cables(design)
+        massive = massive_cables(design_of(design))
         if massive and not (int(cable_segments) == cable_segments and cable_segments >= 2):
             raise ValueError(f"cable_segments must be an integer >= 2, got {cable_segments}")
-        if massive:
-            resolve(design, Analysis(command="motion"))  # refused where the catenaries cannot start
-        self.design = design
+        #: the design resolved for ``motion`` (refused where the catenaries cannot start)
+        self.robot = robot_of(design, "motion")
+        self.design = design = self.robot.design
         self.timestep = float(timestep)
         self.servo_bandwidth = float(servo_bandwidth)
         self.delay = float(delay)
@@ -233,7 +235,7 @@ class Simulator:
         # swivel pulleys: tangent exit points (mocap sites) and wrapped arc lengths r beta
         self._arc = np.zeros(self.m)
         self._pulley = None
-        if has_pulleys(design):
+        if self.robot.outlets == "pulleys":
             A, axes, radii = pl.design_pulleys(design)
             idx = np.flatnonzero(radii > 0)
             names = [design.cables[i].name for i in idx]
@@ -283,7 +285,7 @@ class Simulator:
 
         x = np.atleast_2d(np.asarray(pose, float))
         z = np.zeros_like(x)
-        return states(self.design, x, z, z)["tensions"][0]
+        return states(self.robot, x, z, z)["tensions"][0]
 
     def reset(self, pose=None, *, settle: float = 3.0, setpoints=None) -> SimState:
         """Put the robot at rest at a pose, with the axes holding its cable lengths.
@@ -334,7 +336,7 @@ class Simulator:
     def _hold_lengths(self, pose) -> np.ndarray:
         """Axis positions [m] holding a pose: chords, or the cable model's unstretched lengths."""
         L = kin.inverse_kinematics(self.design, pose)
-        if cable_model(self.design) == "ideal":
+        if self.robot.cables == "ideal":
             return L
         from cdpr_design.statics.pose import evaluate_pose
 
@@ -344,7 +346,7 @@ class Simulator:
     def _place_chains(self, lengths) -> None:
         """Massive cables on their catenaries for unstretched ``lengths`` (straight where none exists)."""
         ch = self._chains
-        arr = cable_arrays(self.design)
+        arr = self.robot.cable
         pts = []
         for j, i in enumerate(ch.idx):
             A, B = self.data.site_xpos[self.model.site(f"outlet_{self.design.cables[i].name}").id], \

@@ -41,7 +41,7 @@ from cdpr_design.motion.profile import MAX_SAMPLES, too_many_samples
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
 from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate, directions
-from cdpr_design.statics.robot import has_pulleys, tension_lower
+from cdpr_design.statics.robot import Robot, design_of, robot_of, tension_lower
 
 DEFAULT_CYCLE_TIME = 1e-3
 """Default sample period [s]: one PLC cycle."""
@@ -320,14 +320,16 @@ def motor_angles(design: Design, lengths) -> np.ndarray:
     return (lengths - L0[None, :]) / r[None, :] * gr[None, :]
 
 
-def sample(design: Design, trajectory: str | Trajectory, cycle_time: float | None = None, *,
+def sample(design: Design | Robot, trajectory: str | Trajectory, cycle_time: float | None = None, *,
            csv_poses=None, hold_start: float = 0.0, hold_end: float = 0.0,
            external=None) -> Samples:
     """Sample a trajectory of the design at a fixed cycle time.
 
     Parameters
     ----------
-    design : Design
+    design : Design or Robot
+        Resolved here for ``motion`` (:func:`~cdpr_design.statics.robot.robot_of`; a refused
+        combination raises an InputError, a ValueError) unless it is a :class:`Robot` already.
     trajectory : str or Trajectory
         A name of ``design.trajectories`` or a Trajectory object.
     cycle_time : float, optional
@@ -351,6 +353,7 @@ def sample(design: Design, trajectory: str | Trajectory, cycle_time: float | Non
     ValueError
         A csv path without its poses, or bad poses.
     """
+    given, design = design, design_of(design)
     traj = _lookup(design, trajectory)
     dt = float(cycle_time or traj.cycle_time or DEFAULT_CYCLE_TIME)
     if not dt > 0:
@@ -358,8 +361,9 @@ def sample(design: Design, trajectory: str | Trajectory, cycle_time: float | Non
     blocks = _path_blocks(design, traj, dt, csv_poses, hold_start, hold_end)
     pose, vel, acc, seg = blocks.stack()
     time = dt * np.arange(pose.shape[0])
-    st = states(design, pose, vel, acc, time=time, external=external)
-    cs, tensions, feasible = setpoints.cable_samples(design, st["positions"], st["attachments"], st["wrench"],
+    robot = robot_of(given, "motion")  # the path's errors first, then the robot's refusals
+    st = states(robot, pose, vel, acc, time=time, external=external)
+    cs, tensions, feasible = setpoints.cable_samples(robot, st["positions"], st["attachments"], st["wrench"],
                                                      st["lengths"], st["tensions"], st["feasible"])
     return Samples(
         name=traj.name, coords=tuple(design.motion.coords), cable_names=tuple(design.cable_names),
@@ -424,14 +428,15 @@ def _body_rotation(design: Design, P, V, Acc, time):
     return R, w, al
 
 
-def _cable_motion(design: Design, P, Rb, vB, aB):
+def _cable_motion(robot: Robot, P, Rb, vB, aB):
     """Lengths L [m], free lengths [m] (tangent point, or outlet, to attachment), pulling
     directions u, dL/dt [m/s] and d2L/dt2 [m/s^2] of every cable.
 
     ``P`` (k, 6) poses, ``Rb`` (k, m, 3) rotated attachments, ``vB`` and
     ``aB`` (k, m, 3) the attachment points' velocities and accelerations.
     """
-    if has_pulleys(design):
+    design = robot.design
+    if robot.outlets == "pulleys":
         # swivel pulleys: arc + free length, u along the free segment from the tangent point
         cp = pl.design_cable_paths(design, P[:, None, :3] + Rb)
         u = np.nan_to_num(cp.directions)
@@ -546,12 +551,13 @@ def _min_norm_tensions(W: np.ndarray, wreq: np.ndarray, tmin, tmax) -> np.ndarra
     return t
 
 
-def states(design: Design, pose, velocity, acceleration, *, time=None, external=None) -> dict:
+def states(design: Design | Robot, pose, velocity, acceleration, *, time=None, external=None) -> dict:
     """Cable lengths, speeds, accelerations and inertial tensions along a path.
 
     Parameters
     ----------
-    design : Design
+    design : Design or Robot
+        Resolved here for ``motion`` unless it is a :class:`Robot` already.
     pose, velocity, acceleration : (k, ncoords) arrays
         Pose [m, rad] and its time derivatives (angle rates for rotations).
     time : (k,) array, optional
@@ -585,13 +591,15 @@ def states(design: Design, pose, velocity, acceleration, *, time=None, external=
     :func:`cdpr_design.statics.pulley.cable_paths` (1 / l_f in the pulley plane,
     the swivel curvature across it).
     """
+    robot = robot_of(design, "motion")
+    design = robot.design
     x, xd, xdd = (np.atleast_2d(np.asarray(a, float)) for a in (pose, velocity, acceleration))
     P, V, Acc = _full(design, x), _full(design, xd), _full(design, xdd)
     R, w, al = _body_rotation(design, P, V, Acc, time)
     Rb = np.einsum("kij,mj->kmi", R, design.attachments)  # (k, m, 3)
     vB = V[:, None, :3] + np.cross(w[:, None, :], Rb)
     aB = Acc[:, None, :3] + np.cross(al[:, None, :], Rb) + np.cross(w[:, None, :], np.cross(w[:, None, :], Rb))
-    L, free, u, Ld, Ldd = _cable_motion(design, P, Rb, vB, aB)
+    L, free, u, Ld, Ldd = _cable_motion(robot, P, Rb, vB, aB)
     W = _structure(design, u, Rb)
     wreq = -_load_wrenches(design, R, Acc, w, al, external)
     lower = lower_bounds(design, free)

@@ -182,7 +182,7 @@ class PictureWorker:
     def render(self, jobs) -> list[tuple[str, bytes]]:
         """PNG bytes of each job ``(name, builder, args)``; builder: a figure function of
         :mod:`cdpr_design.plots` (or any importable function returning a figure)."""
-        jobs = _with_dpi(jobs)
+        jobs = request(jobs)
         pngs = self._render_remote(jobs)
         return pngs if pngs is not None else draw(jobs)
 
@@ -190,7 +190,7 @@ class PictureWorker:
         """Start :meth:`render` and return at once: the child draws while the caller works on
         (writes its tables); :meth:`Pending.result` waits for the PNG bytes.  Without a child
         the pictures are drawn in this process when the result is asked for."""
-        return Pending(self, _with_dpi(jobs))
+        return Pending(self, request(jobs))
 
     def _render_remote(self, jobs):
         """The child's PNGs of ``jobs`` (with dpi), or None when it cannot draw them."""
@@ -383,7 +383,9 @@ class Pending:
         return self._pngs
 
 
-def _with_dpi(jobs) -> list:
+def request(jobs) -> list:
+    """The request :class:`PictureWorker` sends its child for ``jobs`` ``(name, builder, args)``:
+    each with the pictures' resolution (what :func:`main` reads, :func:`write_message`)."""
     from cdpr_design.plots._style import DPI
 
     return [(name, builder, tuple(args), DPI) for name, builder, args in jobs]

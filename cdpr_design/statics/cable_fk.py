@@ -21,7 +21,7 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.robot import Analysis, Robot, resolve
+from cdpr_design.statics.robot import Robot, robot_of
 
 #: Largest accepted residuals: closure [m] and equilibrium [N] (relative to the load + 1 N).
 LENGTH_TOL = 1e-9
@@ -147,7 +147,7 @@ def _start(design: Design, L0, guess, unk: _Unknowns):
 SLACK_TOL = 1e-12
 
 
-def forward(design: Design, unstretched, guess=None) -> CableFK:
+def forward(design: Design | Robot, unstretched, guess=None) -> CableFK:
     """The pose [m, rad] of a design with elastic or sagging cables of unstretched lengths ``unstretched`` [m].
 
     The effector's force and moment balance (every row of its motion; an effector that
@@ -155,11 +155,14 @@ def forward(design: Design, unstretched, guess=None) -> CableFK:
     moment balance).  A weightless cable whose chord is shorter than its length is slack
     (no force); no cable is ever reported slack while its chord is longer than its length.
     Raises :class:`InputError` naming ``--lengths`` when no equilibrium is found
-    (the residuals say how far the best attempt was).
+    (the residuals say how far the best attempt was).  ``design`` is resolved for ``fk``
+    (:func:`~cdpr_design.statics.robot.robot_of`; refused: the cables below run from point
+    outlets) unless it is a :class:`~cdpr_design.statics.robot.Robot` already.
     """
     from scipy.optimize import least_squares
 
-    robot = resolve(design, Analysis(command="fk"))  # refused: the cables below run from point outlets
+    robot = robot_of(design, "fk")
+    design = robot.design
     if robot.cables == "ideal":
         raise InputError("cable model 'ideal': the forward kinematics of straight cables is kinematics.forward_kinematics")
     L0 = np.asarray(unstretched, float).reshape(-1)

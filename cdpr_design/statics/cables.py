@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cdpr_design.model.design import Design
-from cdpr_design.statics.robot import Analysis, cable_arrays, resolve
+from cdpr_design.statics.robot import Robot, cable_arrays, robot_of
 
 #: Status names of a sagging pose, by the kernel's code (``cable_status`` column).
 STATUS = ("ok", "no-tensions", "no-catenary", "not-converged", "singular")
@@ -84,8 +84,11 @@ def sagging_pose(design: Design, full: np.ndarray, wreq: np.ndarray, combos: np.
     return bool(feas), float(margin), t, L, W, CableState(ta, l0, sg, STATUS[st])
 
 
-def sagging_structures(design: Design, positions3: np.ndarray, orientation) -> tuple:
+def sagging_structures(design: Design | Robot, positions3: np.ndarray, orientation) -> tuple:
     """Sagging statics at many positions (k, 3) [m] at one orientation (3,) [rad], static load.
+
+    ``design`` is resolved for ``size-motors`` (refused where the catenaries cannot start) unless
+    it is a :class:`~cdpr_design.statics.robot.Robot` already.
 
     Returns (ok (k,) bool: converged and feasible, W (k, n, m) from the
     end-force directions, tensions (k, m) at the effector end [N], outlet
@@ -96,8 +99,8 @@ def sagging_structures(design: Design, positions3: np.ndarray, orientation) -> t
     from cdpr_design.statics.robot import KINDS, combinations
     from cdpr_design.statics.wrenches import wrench_vertices
 
-    resolve(design, Analysis(command="size-motors"))  # refused where the catenaries cannot start
-    arr = cable_arrays(design)
+    robot = robot_of(design, "size-motors")
+    design, arr = robot.design, robot.cable
     k, m, n = positions3.shape[0], design.m, design.n
     Rb = np.ascontiguousarray(design.attachments @ kin.rotation_matrix(*orientation).T)
     wreq = wrench_vertices(design, "static", orientation)
@@ -178,7 +181,7 @@ class SampleStates:
     feasible: np.ndarray
 
 
-def sagging_samples(design: Design, positions: np.ndarray, Rb: np.ndarray, wreq: np.ndarray) -> SampleStates:
+def sagging_samples(design: Design | Robot, positions: np.ndarray, Rb: np.ndarray, wreq: np.ndarray) -> SampleStates:
     """Sagging cables at k samples of a path, each with its own required wrench.
 
     ``positions`` (k, 3) [m], ``Rb`` (k, m, 3) the rotated attachments [m],
@@ -187,13 +190,15 @@ def sagging_samples(design: Design, positions: np.ndarray, Rb: np.ndarray, wreq:
     with minimum-norm tensions (:mod:`cdpr_design.kernels.sag_path`).  A
     sample whose shapes converge with tensions outside the bounds keeps the
     numbers of the same pose under [0, inf) and is flagged infeasible; one
-    whose shapes do not exist or do not converge has NaN and its status.
+    whose shapes do not exist or do not converge has NaN and its status.  ``design`` is resolved
+    for ``motion`` (refused where the catenaries cannot start) unless it is a
+    :class:`~cdpr_design.statics.robot.Robot` already.
     """
     from cdpr_design.kernels.sag_path import sag_samples
     from cdpr_design.statics.robot import combinations
 
-    resolve(design, Analysis(command="motion"))  # refused where the catenaries cannot start
-    arr = cable_arrays(design)
+    robot = robot_of(design, "motion")
+    design, arr = robot.design, robot.cable
     P = np.ascontiguousarray(positions, dtype=float)
     k, m = P.shape[0], design.m
     out = [np.full((k, m), np.nan) for _ in range(5)]

@@ -53,6 +53,10 @@ COMMANDS = ("workspace", "pose", "fk", "certify", "size-motors", "motion", "chec
 #: which puts the crossover at 45,000-90,000 poses; the commands measured it there, loosely:
 #: numpy 0.25 s faster at 63,001 poses, numba 0.3-0.5 s faster at 74,529 and 0.6-0.8 s at 90,601.
 NUMPY_MAX_POSES = 70_000
+#: Commands that hold the effector at commanded poses and never run the hanging solver (motor
+#: sizing over the task poses; trajectories and their simulation, in which a free effector hangs
+#: on the simulated cables): the hanging solver's limits do not refuse them.
+COMMANDED_POSES = ("size-motors", "motion")
 
 
 @dataclass(frozen=True)
@@ -140,7 +144,7 @@ REFUSALS: tuple[Refusal, ...] = (
             lambda f, a: f.cables == "sagging" and a.orientations is not None),
     Refusal("effector.orientation", "free: the hanging solver models point outlets, and this design has swivel "
                                     "pulleys (cables[].pulley)",
-            lambda f, a: _free(f) and f.outlets == "pulleys"),
+            lambda f, a: _free(f) and f.outlets == "pulleys" and a.command not in COMMANDED_POSES),
     Refusal("--cable-model", "an effector with effector.orientation: free hangs on ideal cables (the hanging "
                              "solver models rigid, weightless cables); use --cable-model ideal",
             lambda f, a: _free(f) and f.cables != "ideal" and a.command in ("workspace", "pose")),
@@ -291,6 +295,18 @@ class Robot:
     def hangs(self) -> bool:
         """Whether the effector's orientation is found by hanging (held: beside the commanded one)."""
         return self.orientation in ("held", "hanging")
+
+
+def robot_of(design: Design | Robot, command: str) -> Robot:
+    """``design`` resolved for ``command`` (an :class:`Analysis` of its defaults, :func:`resolve`),
+    or the :class:`Robot` a caller already resolved: the public functions of a command take either,
+    so the command resolves its design once and hands the robot down."""
+    return design if isinstance(design, Robot) else resolve(design, Analysis(command=command))
+
+
+def design_of(design: Design | Robot) -> Design:
+    """The :class:`~cdpr_design.model.design.Design` of a design or of a robot (its spec as data)."""
+    return design.design if isinstance(design, Robot) else design
 
 
 def cable_model(design: Design) -> str:

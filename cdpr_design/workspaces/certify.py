@@ -32,7 +32,7 @@ from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.robot import combinations
 from cdpr_design.statics.wrenches import wrench_vertices
-from cdpr_design.statics.robot import Analysis, resolve
+from cdpr_design.statics.robot import Analysis, Robot, resolve
 
 #: status codes of the kernels and their names in the outputs
 STATUS = {1: "inside", -1: "outside", 0: "boundary"}
@@ -41,11 +41,12 @@ KINDS = ("static", "wrench-feasible")
 #: Largest number of boxes classified by default (bounded memory: a box is 6 floats and a code).
 MAX_BOXES = 5_000_000
 
-def check_certifiable(design: Design, kind: str = "static") -> None:
-    """Raise an :class:`InputError` with the reason when ``design`` or ``kind`` is not certified."""
+def check_certifiable(design: Design, kind: str = "static") -> Robot:
+    """The robot certified (``design`` resolved for ``certify``); an :class:`InputError` with the
+    reason when ``design`` or ``kind`` is not certified."""
     if kind not in KINDS:
         raise InputError(f"--kind: certify covers {', '.join(KINDS)}, got {kind!r}")
-    resolve(design, Analysis(command="certify", kind=kind))  # the refusals' one table
+    return resolve(design, Analysis(command="certify", kind=kind))  # the refusals' one table
 
 
 @dataclass
