@@ -6,7 +6,7 @@ import numpy as np
 
 from cdpr_design.kernels._jit import jitable, njit, njit_inline, njit_noref
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
-from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
+from cdpr_design.kernels.hsm_small import hsm_one_arrays, hsm_two_arrays
 from cdpr_design.kernels.tension_qp import goldfarb_idnani, line_projection, null_space, plane_projection
 
 
@@ -54,10 +54,12 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
         _no_tensions(m, t_out)
         return False, np.nan
     closure_wanted = kind == KIND_WRENCH_CLOSURE
-    if r == 2:
-        margin0, margin, closure = hsm_two(W, wreq, nv, tmin, tmax, scr, closure_wanted)
+    if r == 2:  # (hsm_small's hsm_two, hsm_one on the scratch's arrays)
+        margin0, margin, closure = hsm_two_arrays(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[29],
+                                                  scr[19], scr[20], closure_wanted)
     elif r == 1:
-        margin0, margin, closure = hsm_one(W, wreq, nv, tmin, tmax, scr, closure_wanted)
+        margin0, margin, closure = hsm_one_arrays(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28],
+                                                  scr[19], scr[20], closure_wanted)
     else:
         margin0, margin, closure = hsm_enumerate(W, wreq, nv, tmin, tmax, scr)
     qp_ok = False
