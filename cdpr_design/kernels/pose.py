@@ -194,3 +194,34 @@ def row_buffers(n, m, nv):
     tensions t (m,) [N], lengths L (m,) [m] and the scratch (:func:`make_scratch`, ``nv``
     required-wrench rows).  A plain function from Python, as :func:`make_scratch`."""
     return np.empty((n, m)), np.empty(m), np.empty(m), make_scratch(n, m, nv)
+
+
+def pose_kernels(n: int, m: int) -> tuple[list, list]:
+    """The compiled functions :func:`eval_general` calls for ``n`` DOF and ``m`` cables, with the
+    argument types a sweep's buffers give them (:func:`row_buffers`): (tensions, margins), each a
+    list of (dispatcher, argument types); both empty for m <= n (:func:`eval_square_into`: one
+    small function).  Two independent sets, for :func:`cdpr_design.kernels.warm.compile_pose`."""
+    from numba import typeof
+
+    r = m - n
+    if r <= 0:
+        return [], []
+    W, t, _, scr = row_buffers(n, m, 1)
+    wreq = np.empty((1, n))
+    T = {name: typeof(a) for name, a in (("W", W), ("wreq", wreq), ("w", wreq[0]), ("t", t))}
+    S = [typeof(a) for a in scr]
+    i64, flag = typeof(m), typeof(True)
+    tensions = [(basis_factor, (T["W"], S[0], S[18], S[19], S[20])),
+                (null_space, (i64, i64, T["w"], S[0], S[8], S[9], S[25], S[19], S[20]))]
+    if r == 2:
+        tensions.append((plane_projection, (i64, T["t"], T["t"], T["t"], S[8], S[9], S[30])))
+        margins = [(hsm_two_arrays, (T["W"], T["wreq"], i64, T["t"], T["t"], S[0], S[1], S[2], S[28], S[29],
+                                     S[19], S[20], flag))]
+    elif r == 1:
+        tensions.append((line_projection, (i64, T["t"], T["t"], T["t"], S[8], S[9])))
+        margins = [(hsm_one_arrays, (T["W"], T["wreq"], i64, T["t"], T["t"], S[0], S[1], S[2], S[28], S[19],
+                                     S[20], flag))]
+    else:
+        tensions.append((goldfarb_idnani, (i64, i64, T["t"], T["t"], T["t"], typeof(scr))))
+        margins = [(hsm_enumerate, (T["W"], T["wreq"], i64, T["t"], T["t"], typeof(scr)))]
+    return tensions, margins
