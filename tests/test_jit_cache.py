@@ -191,7 +191,8 @@ for name, margins in (("ipanema3", hsm_small.hsm_two_arrays), ("planar4", hsm_sm
     p = ws.plan(ws.robot_for(d, g, engine="numba"), g)
     ws.warm_up(p)
     r = p.run()
-    np.save(f"{sys.argv[1]}/{name}.npy", np.column_stack([r.feasible, r.margin, r.tensions]))
+    np.save(f"{sys.argv[1]}/{name}.npy", np.concatenate([r.feasible_map.ravel(), r.margin_map.ravel(),
+                                                         r.tension_maps.ravel()]))
     print(name, sum(margins.stats.cache_misses.values()), sum(margins.stats.cache_hits.values()))
 """
 
@@ -215,7 +216,7 @@ def test_a_first_run_compiles_the_margins_in_another_process(tmp_path):
         d = spec.load(PACKAGE.parent / "designs" / f"{name}.yaml")
         g = ws.make_grid(d, step, True)
         res = ws.plan(ws.robot_for(d, g, engine="numba"), g).run()
-        mine = np.column_stack([res.feasible, res.margin, res.tensions])
+        mine = np.concatenate([res.feasible_map.ravel(), res.margin_map.ravel(), res.tension_maps.ravel()])
         np.testing.assert_array_equal(np.load(tmp_path / f"{name}.npy"), mine)
 
 
