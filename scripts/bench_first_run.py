@@ -120,7 +120,59 @@ After both, IPAnema 3's kernels compile into 20 functions (28 before), ``hsm_two
 (about 37 % of the compile by numba's events); still compiled twice: ``_setup`` (flag),
 ``_inside`` (``k`` 0 and int64) and ``_half_plane`` (-1 and int64).
 
-The targets (IPAnema 3 <= 10 s, every kernel <= 30 s) are still not met.
+Then (numba 0.68.1), each measured by numba's compile events (exclusive CPU per compiled
+function, ``numba.core.event``) and by compiling one function alone from an empty cache
+(``dispatcher.compile``, CPU-s, load average 6-11).  Kept, each bit-identical
+(``workspace.csv`` and ``summary.json`` of IPAnema 3 compared; ``hsm_small`` keeps its
+fast-math, so the code's shape could matter: outputs compared below):
+
+- ``hsm_small._setup`` called once before the closure flag's branch, with the flag a variable
+  (it was compiled once per constant value): ``hsm_two`` alone 10.3 -> 8.8 (means of three);
+- ``hsm_one`` / ``hsm_two`` delegate to ``hsm_one_arrays`` / ``hsm_two_arrays`` on the
+  scratch's arrays, which the sweeps' pose function calls (no 31-array tuple): 8.8 -> 6.7;
+- their two bodies (one per constant flag) compiled functions instead of ``inline="always"``
+  copies (numba's inlining deep-copies a body's IR block by block, each block with the whole
+  scope): 6.7 -> 5.9;
+- ``tension_qp.plane_projection``'s integers that reach ``_inside`` / ``_half_plane`` start as
+  ``np.int64``, not literals (type inference saw the literal first and compiled each callee
+  for it too): plane_projection alone 2.38 -> 2.04.
+
+IPAnema 3's whole cold command, compile events: 23.3 (main) -> 19.5 CPU-s.  Then compiling in
+two processes (``kernels/warm.py``, from ``workspaces.warm_up``): on a first run a
+straight-cable sweep has a second process compile its pose's margin functions (``hsm_two_arrays``
+and callees, about 6.5 CPU-s for IPAnema 3, plus about 1.5 s of imports) while this one
+compiles the tension functions (basis factor, null space, QP: about 4 CPU-s) and then the CSV
+formatter; the loop then links both from numba's cache.  IPAnema 3's command process: compile
+events 19.5 -> 12.9 CPU-s, CPU of the command with the second process about 1 CPU-s more than
+without.  Nothing is started when the kernels load from the cache (warm runs unchanged).
+
+Before (06565fd) and after (the above), two runs of this script (``--repeat 1``), one after the
+other, load average 2.6 rising to 10-15 (before) and 13.7 falling to 3 (after): the wall times
+are mostly waiting for the other sessions' processes; cold CPU includes the second process::
+
+    design       cold wall          cold CPU           warm wall          warm CPU
+    cogiro       120.9 -> 220.9 s   29.1 -> 22.6 s     11.92 -> 22.10 s   1.34 -> 1.49 s
+    crane4       258.0 -> 421.0 s   51.0 -> 42.8 s     26.07 -> 42.54 s   6.76 -> 5.75 s
+    ipanema1     108.7 -> 173.1 s   24.5 -> 19.7 s     12.77 -> 26.56 s   1.76 -> 2.08 s
+    ipanema2      85.9 -> 169.4 s   22.1 -> 22.9 s      4.95 -> 14.87 s   1.18 -> 1.55 s
+    ipanema3      88.9 -> 108.8 s   22.9 -> 22.6 s      9.91 -> 12.80 s   1.53 -> 1.84 s
+    planar2        9.2 -> 9.4 s      0.9 -> 1.0 s      11.63 -> 5.93 s    1.04 -> 1.06 s
+    planar4       89.1 -> 57.6 s    18.5 -> 18.5 s     14.38 -> 8.21 s    1.80 -> 1.51 s
+    pointmass3    41.0 -> 47.8 s     8.6 -> 9.8 s       4.69 -> 13.91 s   1.19 -> 1.61 s
+    sagging40    447.8 -> 325.2 s  112.2 -> 113.0 s    37.10 -> 19.52 s   6.78 -> 8.33 s
+    cold compile of every kernel the designs use (one cache): 129.8 -> 127.8 CPU-s
+
+IPAnema 3's cold command alone (``/usr/bin/time``: wall, and user + sys CPU of it and the
+processes it waited for), two interleaved pairs, load average 3.1-3.9 (other sessions on both
+cores): before 29.3 s / 26.5 CPU-s and 44.7 s / 27.8 CPU-s, after 25.4 s / 23.1 CPU-s and
+30.7 s / 23.5 CPU-s; the same ``workspace.csv``.
+
+Under these loads the command-level CPU figures move by 10-20 % between runs of the same code
+(pointmass3, sagging40 and planar2 have no changed kernel); the per-function figures above
+are the reliable ones.  The targets (IPAnema 3 <= 10 s, every kernel <= 30 s) are still not
+met: the sweep's loop (``_grid_loop_2``, 5-6 CPU-s: numba links every callee's IR into it and
+LLVM optimises it all again) is compiled after both processes, and the sagging kernels
+(sagging40's compile alone is about 105 of the 128 CPU-s) were not touched here.
 """
 
 from __future__ import annotations

@@ -196,6 +196,47 @@ def test_the_noref_loops_compile_in_a_new_process_with_an_empty_cache(tmp_path):
     assert r.stdout.splitlines() == [f"compiled {name}" for name in sorted(NOREF_PROBES)], r.stdout
 
 
+PARALLEL_PROBE = """
+import sys
+import numpy as np
+from cdpr_design import workspaces as ws
+from cdpr_design.kernels import hsm_small
+from cdpr_design.model import spec
+for name, margins in (("ipanema3", hsm_small.hsm_two_arrays), ("planar4", hsm_small.hsm_one_arrays)):
+    d = spec.load(f"designs/{name}.yaml")
+    g = ws.make_grid(d, 0.5 if name == "ipanema3" else 0.1, True)
+    p = ws.plan(ws.robot_for(d, g, engine="numba"), g)
+    ws.warm_up(p)
+    r = p.run()
+    np.save(f"{sys.argv[1]}/{name}.npy", np.concatenate([r.feasible_map.ravel(), r.margin_map.ravel(),
+                                                         r.tension_maps.ravel()]))
+    print(name, sum(margins.stats.cache_misses.values()), sum(margins.stats.cache_hits.values()))
+"""
+
+
+@pytest.mark.slow
+def test_a_first_run_compiles_the_margins_in_another_process(tmp_path):
+    """With an empty cache, ``warm_up`` of a straight-cable sweep has another process compile the
+    pose's margins (m - n = 2 and 1): this one loads them from the cache, compiles nothing of
+    them (the argument types :func:`~cdpr_design.kernels.pose.pose_kernels` gives are the
+    loop's), and sweeps exactly what a process that compiled everything itself sweeps."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(PACKAGE.parent))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    r = subprocess.run([sys.executable, "-c", PARALLEL_PROBE, str(tmp_path)], cwd=PACKAGE.parent, env=env,
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert r.stdout.split() == ["ipanema3", "0", "1", "planar4", "0", "1"], r.stdout
+    from cdpr_design import workspaces as ws
+    from cdpr_design.model import spec
+
+    for name, step in (("ipanema3", 0.5), ("planar4", 0.1)):
+        d = spec.load(PACKAGE.parent / "designs" / f"{name}.yaml")
+        g = ws.make_grid(d, step, True)
+        res = ws.plan(ws.robot_for(d, g, engine="numba"), g).run()
+        mine = np.concatenate([res.feasible_map.ravel(), res.margin_map.ravel(), res.tension_maps.ravel()])
+        np.testing.assert_array_equal(np.load(tmp_path / f"{name}.npy"), mine)
+
+
 LEAK_PROBE = """
 from numba.core.runtime import rtsys
 from cdpr_design import workspaces as ws

@@ -159,6 +159,13 @@ class ColumnWriter:
             self._thread = threading.Thread(target=self._run, name=f"write {self.path.name}", daemon=True)
             self._thread.start()
 
+    def warm_up(self) -> None:
+        """Compile (or load from numba's cache) the compiled CSV formatter now, on a table of one
+        row, if this writer will use it: a first run can do it while it waits for something else
+        (:func:`cdpr_design.kernels.warm.compile_pose`)."""
+        if self.format == "csv" and self.compiled:
+            _formatter(True).csv_rows([np.zeros(1), np.zeros(1, dtype=np.int64)])
+
     @property
     def _file(self) -> AtomicFile:
         """The temporary file, made on first use."""

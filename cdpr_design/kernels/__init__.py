@@ -27,6 +27,7 @@ module             what
 ``sagging``        statics of a pose with sagging cables; the sagging grid sweep
 ``sag_path``       sagging statics along a sampled trajectory
 ``stiffness``      the effector's least stiffness and lowest natural frequency at many poses
+``warm``           a pose's kernels compiled in two processes at once (a machine's first run)
 =================  ==========================================================
 """
 
@@ -51,7 +52,7 @@ _EXPORTS = {
 }
 
 _SUBMODULES = {"cable_shape", "catenary", "codes", "geometry", "hanging", "hsm", "hsm_small", "interference", "linalg",
-               "parallel", "pose", "sag_path", "sagging", "stiffness", "sweep", "tension_qp"}
+               "parallel", "pose", "sag_path", "sagging", "stiffness", "sweep", "tension_qp", "warm"}
 
 __all__ = sorted(_EXPORTS)
 

@@ -100,20 +100,33 @@ def _other_rows(e, nv, a, b, c, la, lb, lc, half, inv, margin):
 @njit_fast_noref
 def hsm_one(W, wreq, nv, tmin, tmax, scr, want_closure):
     """:func:`~cdpr_design.kernels.hsm.hsm_enumerate` for m = n + 1: (margin0, margin, closure);
-    ``closure`` is tested only when ``want_closure`` (else returned True)."""
-    # two copies, each with the flag a constant (the test drops out of the other)
+    ``closure`` is tested only when ``want_closure`` (else returned True).  ``scr`` from
+    :func:`~cdpr_design.kernels.hsm.make_scratch`."""
+    return hsm_one_arrays(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[19], scr[20], want_closure)
+
+
+@njit_fast_noref
+def hsm_one_arrays(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure):
+    """:func:`hsm_one` on the scratch's arrays themselves (``tab`` scr[0], ``M`` scr[1], ``e`` scr[2],
+    ``sv`` scr[28], ``nbc`` scr[19], ``bcol`` scr[20]): a compiled function that takes the scratch
+    tuple unpacks its 31 arrays, which costs compile time (see
+    :func:`~cdpr_design.kernels.tension_qp.null_space`)."""
+    _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure)
+    # two copies of the body, each compiled with the flag a constant (the test drops out of the
+    # other: numba compiles a function once per constant argument value); ``_setup`` once, with the
+    # flag a variable.  Compiled functions rather than inlined bodies: numba's inlining copies a
+    # body's IR block by block with its whole scope, quadratic in its size (IPAnema 3's
+    # ``hsm_two`` 6.7 -> 5.9 CPU-s)
     if want_closure:
-        return _one(W, wreq, nv, tmin, tmax, scr, True)
-    return _one(W, wreq, nv, tmin, tmax, scr, False)
+        return _one(W, wreq, nv, tab, M, e, sv, nbc, True)
+    return _one(W, wreq, nv, tab, M, e, sv, nbc, False)
 
 
-@njit_inline
-def _one(W, wreq, nv, tmin, tmax, scr, want_closure):
-    """The body of :func:`hsm_one`."""
+@njit_fast_noref
+def _one(W, wreq, nv, tab, M, e, sv, nbc, want_closure):
+    """The body of :func:`hsm_one_arrays`."""
     n, m = W.shape
-    tab, M, e, sv = scr[0], scr[1], scr[2], scr[28]
-    _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, scr[19], scr[20], want_closure)
-    c = scr[19][0]
+    c = nbc[0]
     margin0 = np.inf
     margin = np.inf
     closure = True
@@ -148,21 +161,33 @@ def _one(W, wreq, nv, tmin, tmax, scr, want_closure):
 @njit_fast_noref
 def hsm_two(W, wreq, nv, tmin, tmax, scr, want_closure):
     """:func:`~cdpr_design.kernels.hsm.hsm_enumerate` for m = n + 2: (margin0, margin, closure);
-    ``closure`` is tested only when ``want_closure`` (else returned True)."""
-    # two copies, each with the flag a constant (the test drops out of the other)
+    ``closure`` is tested only when ``want_closure`` (else returned True).  ``scr`` from
+    :func:`~cdpr_design.kernels.hsm.make_scratch`."""
+    return hsm_two_arrays(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[29], scr[19], scr[20],
+                          want_closure)
+
+
+@njit_fast_noref
+def hsm_two_arrays(W, wreq, nv, tmin, tmax, tab, M, e, sv, P, nbc, bcol, want_closure):
+    """:func:`hsm_two` on the scratch's arrays themselves (``tab`` scr[0], ``M`` scr[1], ``e`` scr[2],
+    ``sv`` scr[28], ``P`` scr[29], ``nbc`` scr[19], ``bcol`` scr[20]); see :func:`hsm_one_arrays`."""
+    _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure)
+    # two copies of the body, each compiled with the flag a constant (the test drops out of the
+    # other: numba compiles a function once per constant argument value); ``_setup`` once, with the
+    # flag a variable.  Compiled functions rather than inlined bodies: numba's inlining copies a
+    # body's IR block by block with its whole scope, quadratic in its size (IPAnema 3's
+    # ``hsm_two`` 6.7 -> 5.9 CPU-s)
     if want_closure:
-        return _two(W, wreq, nv, tmin, tmax, scr, True)
-    return _two(W, wreq, nv, tmin, tmax, scr, False)
+        return _two(W, wreq, nv, tab, M, e, sv, P, nbc, True)
+    return _two(W, wreq, nv, tab, M, e, sv, P, nbc, False)
 
 
-@njit_inline
-def _two(W, wreq, nv, tmin, tmax, scr, want_closure):
-    """The body of :func:`hsm_two`."""
+@njit_fast_noref
+def _two(W, wreq, nv, tab, M, e, sv, P, nbc, want_closure):
+    """The body of :func:`hsm_two_arrays`."""
     n, m = W.shape
-    tab, M, e, sv, P = scr[0], scr[1], scr[2], scr[28], scr[29]
-    _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, scr[19], scr[20], want_closure)
-    c1 = scr[19][0]
-    c2 = scr[19][1]
+    c1 = nbc[0]
+    c2 = nbc[1]
     for s in range(n):
         for t in range(s + 1, n):
             P[s, t] = tab[s, c1] * tab[t, c2] - tab[t, c1] * tab[s, c2]

@@ -6,7 +6,7 @@ import numpy as np
 
 from cdpr_design.kernels._jit import jitable, njit, njit_inline, njit_noref
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
-from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
+from cdpr_design.kernels.hsm_small import hsm_one_arrays, hsm_two_arrays
 from cdpr_design.kernels.tension_qp import goldfarb_idnani, line_projection, null_space, plane_projection
 
 
@@ -54,10 +54,12 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
         _no_tensions(m, t_out)
         return False, np.nan
     closure_wanted = kind == KIND_WRENCH_CLOSURE
-    if r == 2:
-        margin0, margin, closure = hsm_two(W, wreq, nv, tmin, tmax, scr, closure_wanted)
+    if r == 2:  # (hsm_small's hsm_two, hsm_one on the scratch's arrays)
+        margin0, margin, closure = hsm_two_arrays(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[29],
+                                                  scr[19], scr[20], closure_wanted)
     elif r == 1:
-        margin0, margin, closure = hsm_one(W, wreq, nv, tmin, tmax, scr, closure_wanted)
+        margin0, margin, closure = hsm_one_arrays(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28],
+                                                  scr[19], scr[20], closure_wanted)
     else:
         margin0, margin, closure = hsm_enumerate(W, wreq, nv, tmin, tmax, scr)
     qp_ok = False
@@ -204,3 +206,34 @@ def raise_floor(tmin, floor, L, lo):
         c = floor[i]
         lo[i] = max(tmin[i], c * L[i] * L[i]) if c > 0.0 else tmin[i]
     return lo
+
+
+def pose_kernels(n: int, m: int) -> tuple[list, list]:
+    """The compiled functions :func:`eval_general` calls for ``n`` DOF and ``m`` cables, with the
+    argument types a sweep's buffers give them (:func:`row_buffers`): (tensions, margins), each a
+    list of (dispatcher, argument types); both empty for m <= n (:func:`eval_square_into`: one
+    small function).  Two independent sets, for :func:`cdpr_design.kernels.warm.compile_pose`."""
+    from numba import typeof
+
+    r = m - n
+    if r <= 0:
+        return [], []
+    W, t, _, _, scr = row_buffers(n, m, 1)
+    wreq = np.empty((1, n))
+    T = {name: typeof(a) for name, a in (("W", W), ("wreq", wreq), ("w", wreq[0]), ("t", t))}
+    S = [typeof(a) for a in scr]
+    i64, flag = typeof(m), typeof(True)
+    tensions = [(basis_factor, (T["W"], S[0], S[18], S[19], S[20])),
+                (null_space, (i64, i64, T["w"], S[0], S[8], S[9], S[25], S[19], S[20]))]
+    if r == 2:
+        tensions.append((plane_projection, (i64, T["t"], T["t"], T["t"], S[8], S[9], S[30])))
+        margins = [(hsm_two_arrays, (T["W"], T["wreq"], i64, T["t"], T["t"], S[0], S[1], S[2], S[28], S[29],
+                                     S[19], S[20], flag))]
+    elif r == 1:
+        tensions.append((line_projection, (i64, T["t"], T["t"], T["t"], S[8], S[9])))
+        margins = [(hsm_one_arrays, (T["W"], T["wreq"], i64, T["t"], T["t"], S[0], S[1], S[2], S[28], S[19],
+                                     S[20], flag))]
+    else:
+        tensions.append((goldfarb_idnani, (i64, i64, T["t"], T["t"], T["t"], typeof(scr))))
+        margins = [(hsm_enumerate, (T["W"], T["wreq"], i64, T["t"], T["t"], typeof(scr)))]
+    return tensions, margins

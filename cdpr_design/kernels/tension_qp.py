@@ -195,8 +195,10 @@ def plane_projection(m, tmin, tmax, t, N, tp, H):
     tol = qp_tolerance(m, tmin, tmax)
     z0 = 0.0
     z1 = 0.0
-    act0 = -1
-    act1 = -1
+    # the integers that reach a compiled call start as np.int64, not a literal: numba's type
+    # inference would first see a literal (-1, 0) and compile the callee for it as well
+    act0 = np.int64(-1)
+    act1 = np.int64(-1)
     for _ in range(4 * m * m + 8):  # a guard: each step leaves z further from the origin
         # the most violated bound at z
         p = -1
@@ -211,7 +213,7 @@ def plane_projection(m, tmin, tmax, t, N, tp, H):
                 p = j + m
         if p < 0:
             break
-        k = 0
+        k = np.int64(0)
         for c in (act0, act1, p):
             if c >= 0:
                 H[k, 0], H[k, 1], H[k, 2] = _half_plane(N, tp, tmin, tmax, m, c)

@@ -15,7 +15,7 @@ from typing import Callable
 
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics.robot import ENGINES, KINDS, Analysis, Robot, resolve
-from cdpr_design.workspaces.engine import load_kernels
+from cdpr_design.workspaces.engine import StraightSweep, load_kernels
 from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, column_names,
                                          first_pose, make_grid, representative_pose)
 from cdpr_design.workspaces.plan import Plan, plan
@@ -124,8 +124,14 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     return plan(robot, g, orientation, orientations=orientations).run(on_chunk, progress, chunk, keep_maps)
 
 
-def warm_up(p: Plan) -> None:
+def warm_up(p: Plan, meanwhile: Callable[[], None] | None = None) -> None:
     """Sweep the plan's first pose alone, with the same robot: every numba kernel the whole
     sweep will run is loaded from numba's on-disk cache, or compiled on a machine's first run.
-    Lets a caller time numba's start-up apart from the sweep."""
+    Lets a caller time numba's start-up apart from the sweep.  The straight cables' kernels
+    compile their pose's functions in two processes at once first
+    (:func:`cdpr_design.kernels.warm.compile_pose`: nothing when they are in the cache; then
+    ``meanwhile``, more for this process to compile, is called while the other finishes)."""
+    base = p.base
+    if isinstance(base, StraightSweep) and base.K is not None and not base.planar2:
+        base.K.warm.compile_pose(p.robot.n, p.robot.m, meanwhile)
     p.on(first_pose(p.grid)).run(keep_maps=False)
