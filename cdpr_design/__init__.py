@@ -42,7 +42,7 @@ _LAZY = {
     "forward_kinematics": ("statics.kinematics", "forward_kinematics"),
     "structure_matrix": ("statics.kinematics", "structure_matrix"),
     "run_workspace": ("workspaces", "run"),
-    "evaluate_pose": ("statics.pose", "evaluate_pose"),
+    "evaluate_pose": ("workspaces.pose", "evaluate_pose"),
     "WorkspaceResult": ("workspaces", "WorkspaceResult"),
     "evaluate_design": ("design.evaluate", "evaluate"),
     "certify": ("workspaces.certify", "certify"),

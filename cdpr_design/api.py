@@ -78,15 +78,18 @@ def workspace(design: Design, kind: str = "static", *, step: float | None = None
 
 
 def pose(design: Design, at, kind: str = "static", *, objective: str = "min-norm", weights=None):
-    """One pose ``at`` (the motion's coordinates [m, rad]): a :class:`~cdpr_design.statics.pose.PoseResult`.
+    """One pose ``at`` (the motion's coordinates [m, rad]): a :class:`~cdpr_design.statics.pose.PoseResult`
+    (:func:`cdpr_design.workspaces.pose.evaluate_pose` of the design resolved for ``kind``).
 
     Lengths [m], tensions [N] (minimum 2-norm, or ``objective`` 'min-max' /
     'min-sum' with optional per-cable ``weights``; NaN where infeasible),
     ``feasible``, capacity ``margin`` [N], structure matrix ``W``, ``collisions``.
     """
-    from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design.statics.robot import Analysis, resolve
+    from cdpr_design.workspaces.pose import evaluate_pose
 
-    return evaluate_pose(design, at, kind, objective, weights)
+    robot = resolve(design, Analysis(command="statics", kind=kind, objective=objective, weights=weights is not None))
+    return evaluate_pose(robot, at, weights)
 
 
 def fk(design: Design, lengths, guess=None):

@@ -128,12 +128,12 @@ def agreement(design, poses, refs):
     Near a flat direction of the minimum-norm problem (a cable at a bound, the others nearly
     free to trade tension) the sagging problem may have several self-consistent minimum-norm
     solutions (fixed points; tests/test_sagging.py checks the kernel's KKT conditions)."""
-    from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design import api
 
     compared = active = agreed = other = smaller = 0
     worst = 0.0
     for pose, ref in zip(poses, refs):
-        res = evaluate_pose(design, pose)
+        res = api.pose(design, pose)
         if not (ref.ok and res.feasible):
             continue
         compared += 1

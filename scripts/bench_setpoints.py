@@ -3,7 +3,7 @@
 Sampling (``trajectory``): the paper's slow square on planar2 (8,121 samples
 at 1 ms) with ideal, elastic and sagging cables, and, as the baseline measured
 in the same process, the sagging statics of the same samples one pose at a
-time through the per-pose function (:func:`cdpr_design.statics.cables.sagging_pose`)
+time through the per-pose kernel (``tests/reference_pose.py``'s ``sagging_pose``)
 in a Python loop.  Reports samples/s, the sagging cost relative to the ideal
 sampling and the batched kernel's speed-up over the per-pose loop; the first
 (cold) call includes numba's compile or its on-disk cache load, the others
@@ -19,17 +19,19 @@ Run: python scripts/bench_setpoints.py [--no-sim]
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from cdpr_design.model import spec
-from cdpr_design.motion import run, trajectory
-from cdpr_design.statics import cables
-from cdpr_design.statics.pose import combinations
-
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from cdpr_design.model import spec  # noqa: E402
+from cdpr_design.motion import run, trajectory  # noqa: E402
+from cdpr_design.statics.robot import combinations  # noqa: E402
+from tests.reference_pose import sagging_pose  # noqa: E402
 
 
 def timed(fn, repeat=3):
@@ -51,8 +53,8 @@ def per_pose_loop(design, samples):
     combos = combinations(design.m, design.n)
     out = np.empty((len(samples), design.m))
     for j in range(len(samples)):
-        _, _, _, _, _, state = cables.sagging_pose(design, design.full_pose(samples.pose[j]),
-                                                   st["wrench"][j:j + 1].copy(), combos, 0)
+        _, _, _, _, _, state = sagging_pose(design, design.full_pose(samples.pose[j]),
+                                            st["wrench"][j:j + 1].copy(), combos, 0)
         out[j] = state.unstretched_lengths
     return out
 

@@ -56,7 +56,8 @@ from cdpr_design.kernels import parallel  # noqa: E402
 from cdpr_design.model import spec  # noqa: E402
 from cdpr_design.statics import kinematics as kin  # noqa: E402
 from cdpr_design.statics import stiffness as st  # noqa: E402
-from cdpr_design.statics.pose import KINDS, combinations, wrench_vertices  # noqa: E402
+from cdpr_design.statics.robot import KINDS, combinations  # noqa: E402
+from cdpr_design.statics.wrenches import wrench_vertices  # noqa: E402
 from cdpr_design.workspaces.grid import grid3  # noqa: E402
 
 CHUNK = 65536

@@ -36,7 +36,7 @@ from cdpr_design import kernels as K  # noqa: E402
 from cdpr_design.statics import kinematics as kin  # noqa: E402
 from cdpr_design import workspaces as ws  # noqa: E402
 from cdpr_design.workspaces import grid as wsg
-from cdpr_design.statics import pose as sp
+from cdpr_design.statics.robot import combinations
 t_import = time.perf_counter() - t_import
 
 
@@ -80,7 +80,7 @@ def per_pose_cvxpy(design, poses):
 
 
 def per_pose_plain_hsm(design, poses):
-    combos = sp.combinations(design.m, design.n)
+    combos = combinations(design.m, design.n)
     tmin, tmax = design.tension_min, design.tension_max
     Ws = [np.ascontiguousarray(kin.structure_matrix(design, p)) for p in poses]
     ws_ = [kin.required_wrench(design, p)[None, :] for p in poses]

@@ -1,7 +1,9 @@
 """A second, slower route to one pose's statics, kept for the tests: the kernel wrappers of
 :mod:`cdpr_design.statics.tension` and cvxpy composed by hand (geometry from
 :mod:`cdpr_design.statics.kinematics`, required wrenches written out here), against which the
-product's one pose API (:func:`cdpr_design.statics.pose.evaluate_pose`) is compared."""
+product's one pose API (:func:`cdpr_design.workspaces.pose.evaluate_pose`) is compared; and the
+per-pose sagging kernel called on one pose with any required wrench (:func:`sagging_pose`), the
+reference of the batched sagging kernels."""
 
 from __future__ import annotations
 
@@ -114,3 +116,29 @@ def analyse_pose(design: Design, pose, kind: str = "static", objective: str = "m
             feasible = False
     return PoseAnalysis(pose, kind, objective, bool(feasible), float(margin), t, W, wreq,
                         geo.lengths, rank_ok, closure)
+
+
+def sagging_pose(design: Design, full: np.ndarray, wreq: np.ndarray, combos: np.ndarray, kcode: int):
+    """One pose (full [x, y, z, rx, ry, rz] [m, rad]) with sagging cables under the required
+    wrenches ``wreq`` (nv, n) [N, N m] (any wrench: a path's samples add inertia), minimum-norm
+    tensions, through the per-pose kernel (:func:`cdpr_design.kernels.sagging.sag_pose`) called
+    once: the reference of the batched kernels (the product evaluates poses in batches).
+
+    Returns (feasible, margin [N], tensions (m,) [N], lengths (m,) [m], W (n, m), CableState).
+    The margin is NaN unless the shapes converged.
+    """
+    from cdpr_design.kernels import sagging as KS
+    from cdpr_design.statics.cables import MAX_ITERATIONS, STATUS, CableState
+    from cdpr_design.statics.robot import cable_arrays
+
+    arr = cable_arrays(design)
+    m, n = design.m, design.n
+    R = kin.rotation_matrix(*full[3:])
+    Rb = np.ascontiguousarray(design.attachments @ R.T)
+    W, cw, lo, hi, inf_hi, tq, scr, work = KS.make_sag_scratch(n, m, wreq.shape[0])
+    t, ta, l0, sg, L = KS.make_pose_outputs(m)
+    st, feas, margin, _ = KS.sag_pose(full[0], full[1], full[2], Rb, np.ascontiguousarray(design.outlets),
+                                      design.rows, arr.up, arr.w, arr.EA, wreq, design.tension_min,
+                                      design.tension_max, combos, kcode, MAX_ITERATIONS,
+                                      t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work)
+    return bool(feas), float(margin), t, L, W, CableState(ta, l0, sg, STATUS[st])

@@ -20,7 +20,7 @@ import pytest
 from cdpr_design import workspaces as ws
 from cdpr_design.model import spec
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.pose import evaluate_pose
+from cdpr_design import api
 
 from .helpers import collect_chunks, invoke, ipanema3_data, planar2_raw, write_spec
 
@@ -62,7 +62,7 @@ def _check(design, plain, floored, rng, samples=25, pose_kind="static"):
     picks = np.concatenate([rng.choice(np.flatnonzero(f1), samples // 2),
                             rng.choice(lost, samples - samples // 2)])
     for k in picks:
-        r = evaluate_pose(design, P1[k], pose_kind)
+        r = api.pose(design, P1[k], pose_kind)
         assert r.feasible == bool(f1[k]), P1[k]
         np.testing.assert_allclose(r.margin, marg[k], rtol=1e-9, atol=1e-9)
         if r.feasible:

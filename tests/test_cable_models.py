@@ -16,7 +16,7 @@ import pytest
 from cdpr_design.model import spec
 from cdpr_design.model.spec import with_cable_model
 from cdpr_design.statics import cables
-from cdpr_design.statics.pose import evaluate_pose
+from cdpr_design import api
 from cdpr_design.statics.robot import cable_model
 
 from .helpers import DESIGNS, PLANAR2, invoke, planar2_raw, read_csv, write_spec
@@ -139,8 +139,8 @@ def test_ideal_pose_json_is_unchanged():
 
 
 def test_elastic_pose_is_the_ideal_one_with_stretch(planar2):
-    ideal = evaluate_pose(planar2, [0.3, 0.9])
-    el = evaluate_pose(with_cable_model(planar2, "elastic"), [0.3, 0.9])
+    ideal = api.pose(planar2, [0.3, 0.9])
+    el = api.pose(with_cable_model(planar2, "elastic"), [0.3, 0.9])
     np.testing.assert_array_equal(el.tensions, ideal.tensions)
     assert el.margin == ideal.margin
     EA = 20000.0
@@ -170,8 +170,8 @@ def test_sagging_pose_json_keys_and_physics():
 @pytest.mark.slow
 def test_other_objectives_with_sagging_cables(planar2):
     d = with_cable_model(planar2, "sagging")
-    mn = evaluate_pose(d, [0.3, 0.9])
-    mm = evaluate_pose(d, [0.3, 0.9], objective="min-max")
+    mn = api.pose(d, [0.3, 0.9])
+    mm = api.pose(d, [0.3, 0.9], objective="min-max")
     assert mm.cable_state.status == "ok"
     # m = n: every objective has the same (unique) tensions
     np.testing.assert_allclose(mm.tensions, mn.tensions, rtol=1e-6)
@@ -265,7 +265,7 @@ def test_fk_inverts_the_inverse_statics(name, pose, model):
     from cdpr_design.statics.cable_fk import forward
 
     d = with_cable_model(spec.load(DESIGNS / name), model)
-    r = evaluate_pose(d, pose)
+    r = api.pose(d, pose)
     assert r.cable_state.status == "ok"
     fk = forward(d, r.cable_state.unstretched_lengths)
     np.testing.assert_allclose(fk.pose, pose, atol=1e-9)

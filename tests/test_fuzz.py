@@ -55,7 +55,7 @@ def compiled_kernels():
     """numba's first compile of the pose kernels (up to a minute each on a cold cache and a loaded
     machine) done before the timed examples: JOB_LIMIT is there to catch hangs, not compiles."""
     from cdpr_design.model import spec
-    from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design import api
 
     for name, kinds in (("planar4", ("static", "wrench-feasible", "wrench-closure")),
                         ("ipanema3", ("static", "wrench-feasible", "wrench-closure")),
@@ -64,7 +64,7 @@ def compiled_kernels():
         g = d.workspace.grid
         centre = [(lo + hi) / 2 for lo, hi in zip(g.lower, g.upper)] + list(d.workspace.orientation or [])
         for kind in kinds:
-            evaluate_pose(d, centre[: len(d.motion.coords)], kind)
+            api.pose(d, centre[: len(d.motion.coords)], kind)
 
 
 @pytest.fixture(scope="module")
@@ -207,14 +207,14 @@ number_text = st.one_of(st.floats(-3, 5).map(lambda v: f"{v:.4g}"), st.sampled_f
 def test_pose(data, at, kind, objective):
     from cdpr_design.cli.common import parse_pose
     from cdpr_design.jobs.pose import pose_data, stiffness_data
-    from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design import api
 
     design = load_design(data)
     assume(design is not None)
     pose, exc = outcome(parse_pose, design, ",".join(at))
     if exc is not None:
         return
-    res, exc = outcome(evaluate_pose, design, pose, kind, objective)
+    res, exc = outcome(lambda: api.pose(design, pose, kind, objective=objective))
     if res is not None:
         out = pose_data(design, res) | stiffness_data(design, pose, res.tensions)
         strict_json(out)
@@ -491,14 +491,14 @@ def pose_entry(design, at: str, kind: str) -> dict:
     from cdpr_design.cli.common import parse_numbers, parse_pose
     from cdpr_design.jobs import hanging as hjob
     from cdpr_design.jobs import pose as job
-    from cdpr_design.statics.pose import evaluate_pose
     from cdpr_design.statics.robot import Analysis, resolve
+    from cdpr_design.workspaces.pose import evaluate_pose
 
     robot = resolve(design, Analysis(command="pose", kind=kind))
     if robot.orientation == "hanging":
         return hjob.free_pose_data(robot, parse_numbers(at, "--at", design.motion.dim))
     p = parse_pose(design, at)
-    data = job.pose_data(design, evaluate_pose(design, p, kind, "min-norm"))
+    data = job.pose_data(design, evaluate_pose(robot, p))
     if robot.underconstrained and robot.cables == "ideal" and robot.outlets == "points":
         data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     return data

@@ -32,7 +32,7 @@ from cdpr_design.statics.hanging import at_positions, results
 from cdpr_design.statics.hanging import geometry as hg
 from cdpr_design.statics.hanging.balance import Balance
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.pose import evaluate_pose
+from cdpr_design import api
 from tests.helpers import DESIGNS, NO_KERNELS, ROOT
 from tests.test_hanging import G2, G3, check_equilibrium, random_planar2
 
@@ -418,7 +418,8 @@ def test_held_point_mass_fk_equals_the_free_one():
 def test_eval_rotated_equals_evaluate_pose(name):
     """Each pose at its own rotation gives what evaluate_pose gives at that pose (the
     workspace kernels, themselves tested against scipy and cvxpy)."""
-    from cdpr_design.statics.pose import combinations, wrench_vertices
+    from cdpr_design.statics.robot import combinations
+    from cdpr_design.statics.wrenches import wrench_vertices
 
     d = spec.load(DESIGNS / name)
     rng = np.random.default_rng(9)
@@ -442,7 +443,7 @@ def test_eval_rotated_equals_evaluate_pose(name):
     n_feasible = 0
     for i in set(range(k)) - {3}:
         pose = np.concatenate([P[i], ori[i]])[list(d.motion.pose_index)]
-        ref = evaluate_pose(d, pose)
+        ref = api.pose(d, pose)
         assert bool(feas[i]) == ref.feasible
         n_feasible += ref.feasible
         assert marg[i] == pytest.approx(ref.margin, rel=1e-9, abs=1e-9)

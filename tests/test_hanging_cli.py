@@ -24,7 +24,7 @@ from cdpr_design.kernels import hanging as K
 from cdpr_design.model import spec
 from cdpr_design.statics import hanging as H
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.pose import evaluate_pose
+from cdpr_design import api
 from cdpr_design.statics.robot import resolve
 from cdpr_design.workspaces.engine import StraightSweep
 from cdpr_design.workspaces.plan import Plan
@@ -124,7 +124,7 @@ def test_fixed_pose_and_fk_unchanged(planar2):
     res = invoke("pose", PLANAR2, "--at", "0.3,0.5", "--json")
     assert res.exit_code == 0, res.output
     data = json.loads(res.stdout)
-    p = evaluate_pose(planar2, [0.3, 0.5])
+    p = api.pose(planar2, [0.3, 0.5])
     assert data["feasible"] is True and data["margin"] == p.margin
     assert list(data["tensions"].values()) == list(p.tensions) and list(data["lengths"].values()) == list(p.lengths)
     assert data["tilt"] == pytest.approx(22.287, abs=1e-3) and data["hanging"]["feasible"]

@@ -286,14 +286,14 @@ def test_sizing_leaves_out_task_poses_with_a_zero_length_cable(catalogue):
     # as `pose` does (sizing counted it with 9.81 N on c3)
     from cdpr_design.design import envelope
     from cdpr_design.model import spec
-    from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design import api
 
     d = planar2_raw()
     d.pop("plc")
     d["cables"][0]["outlet"] = [0.0, 1.0]
     d["cables"].append({"name": "c3", "outlet": [0.0, 1.5], "attachment": [-0.06, 0.06]})
     design = spec.from_dict(d)
-    assert evaluate_pose(design, [0.06, 0.94]).feasible is False
+    assert api.pose(design, [0.06, 0.94]).feasible is False
     chunk = envelope.envelope_chunk(design, np.array([[0.06, 0.94], [0.75, 0.8]]), (0.0, 0.0, 0.0), 1.0, 1.0)
     assert list(chunk["ok"]) == [False, True]
     assert np.isnan(chunk["static"][0]).all() and np.isfinite(chunk["static"][1]).all()

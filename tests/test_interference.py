@@ -16,7 +16,7 @@ from cdpr_design.statics import interference as itf
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
-from cdpr_design.statics import pose as sp
+from cdpr_design import api
 
 from .helpers import PLANAR2, invoke
 
@@ -92,7 +92,7 @@ def test_two_cables_crossing_at_a_known_point(h, hit):
     assert r.effector_chords.max() == 0.0
     assert r.pairs == ([("c1", "c2")] if hit else [])
     # the sweep kernel gives the same verdict
-    res = sp.evaluate_pose(d, [0, 0, 0])
+    res = api.pose(d, [0, 0, 0])
     assert (("c1", "c2") in res.collisions) is hit
 
 

@@ -125,7 +125,7 @@ def test_a_noref_loop_cannot_allocate():
 _ROBOT = """
 import numpy as np
 from cdpr_design import kernels as K
-from cdpr_design.statics.pose import combinations
+from cdpr_design.statics.robot import combinations
 rng = np.random.default_rng(5)
 m = {m}
 A = rng.uniform(-2.0, 2.0, (m, 3)); Bp = rng.uniform(-0.3, 0.3, (m, 3)); rows = np.arange({n})

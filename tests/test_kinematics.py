@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 from cdpr_design import kernels as K
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.model import spec
-from cdpr_design.statics import pose as sp
+from cdpr_design import api
+from cdpr_design.statics.robot import combinations
 
 from .helpers import PLANAR2, point_mass
 
@@ -21,7 +22,7 @@ from .helpers import PLANAR2, point_mass
 def test_symmetric_point_mass_closed_form(half_span, depth, mass):
     """Two symmetric cables holding a point mass: T = m g / (2 sin theta)."""
     d = point_mass([(-half_span, 0.0), (half_span, 0.0)], mass)
-    r = sp.evaluate_pose(d, [0.0, -depth])
+    r = api.pose(d, [0.0, -depth])
     theta = np.arctan2(depth, half_span)
     expected = mass * 9.81 / (2 * np.sin(theta))
     np.testing.assert_allclose(r.tensions, [expected, expected], rtol=1e-12)
@@ -33,12 +34,12 @@ def test_algorithms_reference_point():
     """algorithms.md: outlets (0,2),(3,2), point (1,1), m g = 9.81 N, t in [1, 40]:
     t = (9.2489567, 7.3119423) N, capacity margin 5.9880342 N."""
     d = point_mass([(0.0, 2.0), (3.0, 2.0)], 1.0, (1.0, 40.0))
-    r = sp.evaluate_pose(d, [1.0, 1.0])
+    r = api.pose(d, [1.0, 1.0])
     np.testing.assert_allclose(r.tensions, [9.2489567, 7.3119423], atol=5e-8)
     assert r.margin == pytest.approx(5.9880342, abs=5e-8)
     # the general hyperplane-shifting margin gives the same figure
     ok, margin = K.hsm_margin(r.W, r.wrench[None, :], d.tension_min, d.tension_max,
-                              sp.combinations(2, 2))
+                              combinations(2, 2))
     assert ok and margin == pytest.approx(5.9880342, abs=5e-8)
 
 
@@ -156,7 +157,7 @@ def test_kernel_structure_matrix_matches_numpy(motion, m):
 
 def test_zero_length_cable_is_rank_deficient(planar2):
     # the platform origin placed so that c1's attachment sits on its outlet
-    r = sp.evaluate_pose(planar2, [0.06, 1.44])
+    r = api.pose(planar2, [0.06, 1.44])
     assert not r.feasible and np.isnan(r.margin) and np.isnan(r.tensions).all()
     assert r.lengths[0] == pytest.approx(0.0, abs=1e-15)
 
@@ -173,8 +174,8 @@ def test_translation_invariance(dx, dy, px, py):
     moved_raw["frame"] = {"lower": [dx, dy], "upper": [1.5 + dx, 1.5 + dy]}
     moved_raw["workspace"]["grid"] = {"step": 0.01}
     moved = spec.from_dict(moved_raw)
-    a = sp.evaluate_pose(base, [px, py])
-    b = sp.evaluate_pose(moved, [px + dx, py + dy])
+    a = api.pose(base, [px, py])
+    b = api.pose(moved, [px + dx, py + dy])
     assert a.feasible == b.feasible
     np.testing.assert_allclose(b.tensions, a.tensions, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(b.margin, a.margin, rtol=1e-9, atol=1e-9)

@@ -2,7 +2,7 @@
 cables, and the MuJoCo model's massive cables against the static catenary.
 
 References that do not share the code under test: L / (1 + T/EA) from the straight tensions; the
-per-pose sagging statics (:func:`cdpr_design.statics.cables.sagging_pose`) for the batched kernel;
+per-pose sagging statics (``reference_pose.sagging_pose``) for the batched kernel;
 the shallow-cable expansion of the catenary's length for a sag-dominated cable; the lumped-mass
 chain's known second-order convergence for the simulation.
 """
@@ -17,10 +17,11 @@ import pytest
 from cdpr_design.model import spec
 from cdpr_design.motion import simulation as S
 from cdpr_design.motion import trajectory as tr
-from cdpr_design.statics import cables
-from cdpr_design.statics.pose import combinations, evaluate_pose
+from cdpr_design import api
+from cdpr_design.statics.robot import combinations
 
 from .helpers import PLANAR2, invoke, read_csv, write_spec
+from .reference_pose import sagging_pose
 
 G = 9.81
 
@@ -90,7 +91,7 @@ def test_sagging_samples_match_the_per_pose_statics():
     combos = combinations(d.m, d.n)
     for j in range(0, len(s), 7):
         full = d.full_pose(s.pose[j])
-        feas, _, t, L, _, state = cables.sagging_pose(d, full, st["wrench"][j:j + 1].copy(), combos, 0)
+        feas, _, t, L, _, state = sagging_pose(d, full, st["wrench"][j:j + 1].copy(), combos, 0)
         assert feas and state.status == "ok"
         np.testing.assert_allclose(s.tensions[j], t, rtol=1e-12)
         np.testing.assert_allclose(s.cables.outlet_tensions[j], state.outlet_tensions, rtol=1e-12)
@@ -98,7 +99,7 @@ def test_sagging_samples_match_the_per_pose_statics():
         np.testing.assert_allclose(s.cables.sag[j], state.sag, rtol=1e-9)
         np.testing.assert_allclose(s.lengths[j], L, rtol=1e-13)
     # at rest (the first sample) the set-points are the pose command's
-    p0 = evaluate_pose(d, s.pose[0])
+    p0 = api.pose(d, s.pose[0])
     np.testing.assert_allclose(s.cables.unstretched[0], p0.cable_state.unstretched_lengths, rtol=1e-13)
 
 
@@ -203,8 +204,8 @@ def test_elastic_simulation_holds_the_pose_with_unstretched_setpoints():
     (L - L0) / sin(angle) for this symmetric pose (planar2, 1 kg, EA = 2e4 N)."""
     d = planar2_as("elastic")
     pose = [0.75, 0.8486]
-    L0 = evaluate_pose(d, pose).cable_state.unstretched_lengths
-    chord = evaluate_pose(d, pose).lengths
+    L0 = api.pose(d, pose).cable_state.unstretched_lengths
+    chord = api.pose(d, pose).lengths
     sim = S.Simulator(d)
     sim.reset(pose)
     st = sim.advance(L0, 0.5)
@@ -222,7 +223,7 @@ def test_elastic_simulation_holds_the_pose_with_unstretched_setpoints():
 def _sim_at_rest(d, pose, segments):
     """The robot settled (6 s with the simulator's settling damping) holding the static L0.
     A 4 ms step: the massive cables' springs run on their own sub-steps (mjcf.Chains.update)."""
-    L0 = evaluate_pose(d, pose).cable_state.unstretched_lengths
+    L0 = api.pose(d, pose).cable_state.unstretched_lengths
     sim = S.Simulator(d, cable_segments=segments, servo_bandwidth=np.inf, timestep=4e-3)
     return sim.reset(pose, setpoints=L0, settle=6.0)
 
@@ -243,7 +244,7 @@ def test_massive_cables_at_rest_agree_with_the_static_catenary():
     """
     d = spec.from_dict(hanging_data(mu=0.5, EA=1e5, mass=5.0))
     pose = np.array([1.5, -3.0])
-    ref = evaluate_pose(d, pose)
+    ref = api.pose(d, pose)
     assert ref.feasible and ref.cable_state.status == "ok"
     assert np.min(ref.cable_state.sag) > 0.1
     w = 0.5 * G

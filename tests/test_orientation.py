@@ -12,7 +12,7 @@ import pytest
 from cdpr_design.workspaces import orientation as hwm
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
-from cdpr_design.statics import pose as sp
+from cdpr_design import api
 from cdpr_design.errors import SpecError
 
 from .helpers import PLANAR2, collect_chunks, invoke, ipanema3_data, planar4_orient
@@ -100,7 +100,7 @@ def brute_range(d, pose_pos, scale, levels, count, interference):
 
     def ok(o):
         pose = np.concatenate([pose_pos, o])[list(d.motion.pose_index)]
-        r = sp.evaluate_pose(d, pose)
+        r = api.pose(d, pose)
         return r.feasible and (not interference or r.collisions == [])
 
     if not ok(nominal):

@@ -16,7 +16,7 @@ from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
-from cdpr_design.statics import pose as sp
+from cdpr_design import api
 from cdpr_design.errors import SpecError
 
 from .helpers import add_pulleys, ipanema3_data as _ipanema3_data, planar2_raw
@@ -162,8 +162,8 @@ def test_zero_radius_design_equals_point_outlet_design_in_every_api():
     pose = [0.3, -0.4, 1.2, 0.05, -0.03, 0.1]
     np.testing.assert_array_equal(kin.inverse_kinematics(d0, pose), kin.inverse_kinematics(dz, pose))
     np.testing.assert_allclose(kin.structure_matrix(d0, pose), kin.structure_matrix(dz, pose))
-    a = sp.evaluate_pose(d0, pose)
-    b = sp.evaluate_pose(dz, pose)
+    a = api.pose(d0, pose)
+    b = api.pose(dz, pose)
     assert a.feasible == b.feasible
     np.testing.assert_allclose(a.tensions, b.tensions, rtol=1e-9)
 
@@ -185,7 +185,7 @@ def test_structure_matrix_uses_the_true_outlet_points():
         W = kin.structure_matrix(d, pose)
         np.testing.assert_allclose(W, W_ref, atol=1e-13)
         # the numba kernel (sweeps, pose command) gives the same W and lengths
-        r = sp.evaluate_pose(d, pose)
+        r = api.pose(d, pose)
         np.testing.assert_allclose(r.W, W, atol=1e-12)
         np.testing.assert_allclose(r.lengths, g.lengths, rtol=1e-12)
 
@@ -236,7 +236,7 @@ def test_sweep_honours_pulleys():
     feas = np.concatenate([c.feasible for c in chunks])
     # spot-check feasibility and tensions against the per-pose evaluation
     for j in range(0, poses.shape[0], 37):
-        r = sp.evaluate_pose(d, poses[j])
+        r = api.pose(d, poses[j])
         assert bool(feas[j]) == r.feasible
     assert res.extra["pulleys"] is True
     # pulleys of radius 0 give the point-outlet sweep exactly

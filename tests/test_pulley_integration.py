@@ -8,7 +8,7 @@ free segment leaves the pulley's tangent point) must reach every analysis:
   derivatives (central finite differences) of the pulley-aware lengths of
   ``kinematics.inverse_kinematics`` (built on ``pulley.outlet_geometry``, an
   independent code path from the vectorised ``pulley.cable_paths``);
-- the sizing envelope's tensions are those of ``statics.pose.evaluate_pose``
+- the sizing envelope's tensions are those of ``the pose evaluation (``cd.pose``)``
   (pulley-aware numba kernel) at the same poses;
 - the Hessian of the length used for the cable-acceleration terms matches
   finite differences (Pott 2018, pulley kinematics: the level sets of L in
@@ -35,7 +35,7 @@ from cdpr_design.motion import trajectory as tr
 from cdpr_design.workspaces import orientation as hwm
 from cdpr_design import workspaces as ws
 from cdpr_design.workspaces import grid as wsg
-from cdpr_design.statics import pose as sp
+from cdpr_design import api
 from cdpr_design.statics.interference import HIT_NAMES, check_pose
 
 from .helpers import add_pulleys, invoke, ipanema3_data, planar2_raw, planar4_cables, planar4_orient, write_spec
@@ -238,7 +238,7 @@ def test_sizing_radius_to_zero_is_point_outlet_spatial(catalogue):
 @pytest.mark.slow
 @pytest.mark.parametrize("make,radius", [(planar2, 0.05), (planar4, 0.08), (ipanema3, 0.1)])
 def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
-    """Static tensions of the sizing envelope (A = V = 0) = statics.pose.evaluate_pose at every pose,
+    """Static tensions of the sizing envelope (A = V = 0) = the pose evaluation (``cd.pose``) at every pose,
     and the envelope's peak is their maximum."""
     d = make(radius)
     d0 = make(None)
@@ -253,7 +253,7 @@ def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
     rot = ev.rotation_coords(d, ori)
     ref = np.full((pos.shape[0], d.m), np.nan)
     for j, p in enumerate(pos):
-        r = sp.evaluate_pose(d, np.concatenate([p, rot]))
+        r = api.pose(d, np.concatenate([p, rot]))
         if r.feasible:
             ref[j] = r.tensions
     feas = np.all(np.isfinite(ref), axis=1)
@@ -350,7 +350,7 @@ def test_orientation_summary_has_collision_counts(mode):
         hit = {name: np.zeros(len(poses), bool) for name in kinds}
         for j, p in enumerate(poses):
             pose = np.r_[p[:2], o[2]]
-            st_[j] = sp.evaluate_pose(d, pose).feasible
+            st_[j] = api.pose(d, pose).feasible
             for name in check_pose(d, pose).kinds:
                 hit[name][j] = True
         np.testing.assert_array_equal(cf, ~np.any(list(hit.values()), axis=0))

@@ -31,7 +31,7 @@ from scipy.optimize import fsolve, least_squares
 from cdpr_design.kernels import catenary as C
 from cdpr_design.model import spec
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.pose import evaluate_pose
+from cdpr_design import api
 
 from .helpers import invoke, random_planar_data, read_csv, write_spec
 
@@ -277,7 +277,7 @@ def integrate_ends(H, VB, L0, w, EA):
 def bounded(design, pose, rng):
     """``design`` with tension bounds around its unbounded sagging tensions at ``pose``: with
     redundant cables t_min from 1 to 1.5 times the smallest (active), else half of it."""
-    free = evaluate_pose(design, pose)
+    free = api.pose(design, pose)
     lo = (float(rng.uniform(1.0, 1.5)) if design.m > design.n else 0.5) * np.min(free.tensions)
     return spec.from_dict(dict(design.raw, tension=[lo, 2.0 * np.max(free.cable_state.outlet_tensions)]))
 
@@ -362,7 +362,7 @@ def test_sagging_statics_matches_the_reference(family, seed):
         for d, r in ((design, ref), (capped, reference(capped, pose, bounds=True))):
             if r is None or not r.ok:
                 continue
-            res = evaluate_pose(d, pose)
+            res = api.pose(d, pose)
             st = res.cable_state
             assert st.status == "ok" and res.feasible, (d.raw, pose)
             if check_kkt(d, pose, res).any():
@@ -390,7 +390,7 @@ def test_sagging_solutions_balance_and_close(family, seed):
     active = checked = 0
     for design, pose, _ in random_cases(family, 8, seed):
         for d in (design, bounded(design, pose, rng)):
-            res = evaluate_pose(d, pose)
+            res = api.pose(d, pose)
             if not res.feasible:
                 continue
             checked += 1
@@ -432,11 +432,11 @@ def test_weightless_cables_are_the_elastic_ones(family, seed):
     """w -> 0: the ideal tensions (the straight cable's do not depend on EA) and L0 = L / (1 + T/EA);
     w = 0 exactly: the same to round-off; EA -> inf as well: the ideal cable (L0 = chord)."""
     for design, pose, _ in random_cases(family, 3, seed):
-        ideal = evaluate_pose(spec.with_cable_model(design, "ideal"), pose)
+        ideal = api.pose(spec.with_cable_model(design, "ideal"), pose)
         EA = design.cables[0].props.axial_stiffness
         for mass, tol in ((0.0, 1e-12), (1e-12, 1e-9)):
             for ea in (EA, 1e300):
-                res = evaluate_pose(with_cable(design, mass_per_length=mass, axial_stiffness=ea), pose)
+                res = api.pose(with_cable(design, mass_per_length=mass, axial_stiffness=ea), pose)
                 st = res.cable_state
                 assert res.feasible and st.status == "ok"
                 scale = ideal.tensions.max()
@@ -445,7 +445,7 @@ def test_weightless_cables_are_the_elastic_ones(family, seed):
                 np.testing.assert_allclose(st.unstretched_lengths, ideal.lengths / (1 + ideal.tensions / ea),
                                            rtol=tol, atol=0)
                 np.testing.assert_allclose(st.sag, 0.0, atol=tol * ideal.lengths.max())
-        elastic = evaluate_pose(spec.with_cable_model(design, "elastic"), pose)
+        elastic = api.pose(spec.with_cable_model(design, "elastic"), pose)
         np.testing.assert_allclose(elastic.cable_state.unstretched_lengths, ideal.lengths / (1 + ideal.tensions / EA))
 
 
@@ -455,11 +455,11 @@ def test_sagging_tensions_converge_linearly_to_the_ideal_ones(family, seed):
     """|t(w) - t_ideal| shrinks in proportion to w: over w / 10^k (k = 0..4) the error falls
     by 10 per decade (order 1, within 5 %) and err / w tends to a constant."""
     for design, pose, _ in random_cases(family, 2, seed):
-        ideal = evaluate_pose(spec.with_cable_model(design, "ideal"), pose).tensions
+        ideal = api.pose(spec.with_cable_model(design, "ideal"), pose).tensions
         mpl = design.cables[0].props.mass_per_length
         errs = []
         for k in range(5):
-            res = evaluate_pose(with_cable(design, mass_per_length=mpl / 10 ** k), pose)
+            res = api.pose(with_cable(design, mass_per_length=mpl / 10 ** k), pose)
             assert res.feasible
             errs.append(np.max(np.abs(res.tensions - ideal)) / ideal.max())
         orders = np.log10(np.array(errs[:-1]) / np.array(errs[1:]))
@@ -500,7 +500,7 @@ def test_planar10_reproduces_the_issue_figures():
     w, EA = 0.6, 1e6
     over_effector, over_ideal, length_error = [], [], []
     for pose in REGION:
-        res, ref = evaluate_pose(design, pose), evaluate_pose(ideal, pose)
+        res, ref = api.pose(design, pose), api.pose(ideal, pose)
         assert res.feasible and ref.feasible
         P, H, VB = end_forces(design, pose, res)
         TB, TA, L0 = res.tensions, res.cable_state.outlet_tensions, res.cable_state.unstretched_lengths
@@ -525,17 +525,17 @@ def test_planar10_outlet_bound_flips_feasibility():
     effector-end tension is below t_max; with t_max just above the outlet tension it is feasible
     again, just below it is not: the bound is applied at the outlet."""
     pose = [4.0, 5.0]
-    free = evaluate_pose(planar10(), pose)
+    free = api.pose(planar10(), pose)
     TB, TA = free.tensions, free.cable_state.outlet_tensions
     i = int(np.argmax(TA))
     tmax = 0.5 * (TB[i] + TA[i])
-    assert TB.max() < tmax < TA[i] and np.all(evaluate_pose(planar10(model="ideal"), pose).tensions < tmax)
-    assert evaluate_pose(planar10(tmax, "ideal"), pose).feasible
-    capped = evaluate_pose(planar10(tmax), pose)
+    assert TB.max() < tmax < TA[i] and np.all(api.pose(planar10(model="ideal"), pose).tensions < tmax)
+    assert api.pose(planar10(tmax, "ideal"), pose).feasible
+    capped = api.pose(planar10(tmax), pose)
     assert not capped.feasible and capped.cable_state.status == "ok"
     assert np.all(np.isnan(capped.tensions))
-    assert evaluate_pose(planar10(TA[i] * (1 + 1e-9)), pose).feasible
-    assert not evaluate_pose(planar10(TA[i] * (1 - 1e-9)), pose).feasible
+    assert api.pose(planar10(TA[i] * (1 + 1e-9)), pose).feasible
+    assert not api.pose(planar10(TA[i] * (1 - 1e-9)), pose).feasible
 
 
 # ---------------------------------------------------------------------------
@@ -581,10 +581,10 @@ def test_a_heavy_cable_holds_at_least_its_least_tension(tension_min):
     the lower cable there, with its shape, and balances the load; it is neither slack with
     zero force nor refused as having no catenary."""
     pose = [5.0, 5.0]
-    ideal = evaluate_pose(planar3(tension_min, "ideal"), pose)
+    ideal = api.pose(planar3(tension_min, "ideal"), pose)
     assert ideal.tensions[2] == pytest.approx(tension_min, abs=1e-9)
     design = planar3(tension_min)
-    res = evaluate_pose(design, pose)
+    res = api.pose(design, pose)
     assert res.feasible and res.cable_state.status == "ok", res.cable_state
     P = geometry(design, pose)
     tau_min, L0_min = least_tension_reference(P["X"][2], P["Z"][2], P["w"][2], P["EA"][2])

@@ -22,7 +22,7 @@ import pytest
 from scipy.optimize import fsolve, least_squares
 
 from cdpr_design.model import spec
-from cdpr_design.statics.pose import evaluate_pose
+from cdpr_design import api
 
 from .helpers import DESIGNS, invoke, write_spec
 from .test_sagging import G, columns, geometry, irvine
@@ -97,7 +97,7 @@ def test_a_light_effector_on_heavy_cables_is_held():
     refs = [s for s in square_solutions(design, [20.0, 10.0]) if s[3]]
     assert len(refs) == 1, refs
     tB, tA, L0, _ = refs[0]
-    res = evaluate_pose(design, [20.0, 10.0])
+    res = api.pose(design, [20.0, 10.0])
     assert res.cable_state.status == "ok" and res.feasible, res.cable_state.status
     np.testing.assert_allclose(res.tensions, tB, rtol=1e-8)
     np.testing.assert_allclose(res.cable_state.outlet_tensions, tA, rtol=1e-8)
@@ -146,7 +146,7 @@ def test_light_effectors_match_irvine_solved_independently():
     for _ in range(30):
         design, pose = _light_robot(rng)
         refs = [s for s in square_solutions(design, pose) if s[3]]
-        res = evaluate_pose(design, pose)
+        res = api.pose(design, pose)
         if refs:
             held += 1
             assert res.cable_state.status == "ok", (design.raw, pose, refs)
@@ -196,7 +196,7 @@ def test_random_singular_poses_are_nan_not_garbage():
         pos = design.outlets[i] - b
         pose = list(pos[: design.motion.dim]) + list(pose[design.motion.dim:])
         for objective in ("min-norm", "min-max"):
-            res = evaluate_pose(design, pose, objective=objective)
+            res = api.pose(design, pose, objective=objective)
             assert res.cable_state.status == "singular"
             assert not res.feasible and math.isnan(res.margin)
             assert np.all(np.isnan(res.W)), res.W
@@ -215,7 +215,7 @@ def test_a_taut_rope_solution_is_found():
     design = spec.from_dict(nocat_data())
     refs = [s for s in square_solutions(design, [5.0, 6.0], scales=(1, 2, 5, 10, 20, 40, 80)) if s[3]]
     assert len(refs) == 1
-    res = evaluate_pose(design, [5.0, 6.0])
+    res = api.pose(design, [5.0, 6.0])
     assert res.cable_state.status == "ok" and res.feasible
     np.testing.assert_allclose(res.tensions, refs[0][0], rtol=1e-8)
     np.testing.assert_allclose(res.cable_state.outlet_tensions, refs[0][1], rtol=1e-8)
@@ -234,7 +234,7 @@ def test_cogiro_poses_the_straight_start_missed(position):
 
     design = with_cable_model(spec.load(D / "cogiro.yaml"), "sagging")
     pose = position + [0.0, 0.0, 0.0]
-    res = evaluate_pose(design, pose)
+    res = api.pose(design, pose)
     assert res.cable_state.status == "ok" and res.feasible
     P, H, VB = end_forces(design, pose, res)
     F = H[:, None] * P["u"] + VB[:, None] * P["up"]
@@ -248,8 +248,8 @@ def test_other_objectives_hold_a_light_effector(objective):
     'feasible' with no tensions and the structure matrix of shapes it never converged to.
     With two cables every objective has the min-norm tensions."""
     design = spec.from_dict(sagging40(1.0, tension=[0.0, 400.0]))
-    ref = evaluate_pose(design, [20.0, 10.0])
-    res = evaluate_pose(design, [20.0, 10.0], objective=objective)
+    ref = api.pose(design, [20.0, 10.0])
+    res = api.pose(design, [20.0, 10.0], objective=objective)
     assert res.cable_state.status == "ok" and res.feasible
     np.testing.assert_allclose(res.tensions, ref.tensions, rtol=1e-9)
     np.testing.assert_allclose(res.W, ref.W, rtol=1e-9, atol=1e-12)

@@ -55,7 +55,7 @@ CHILD = textwrap.dedent(r'''
     from cdpr_design import workspaces as ws
     from cdpr_design.model import spec
     from cdpr_design.model.spec import with_cable_model
-    from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design import api
     from cdpr_design.io.csvfast import numba_rows
 
     out = {}
@@ -72,7 +72,7 @@ CHILD = textwrap.dedent(r'''
                 out[f"{tag}/{k}/{name}"] = numpy.asarray(v)
 
     def pose(tag, design, p, **kw):
-        r = evaluate_pose(design, p, **kw)
+        r = api.pose(design, p, **kw)
         out[f"{tag}/W"], out[f"{tag}/t"], out[f"{tag}/L"] = r.W, r.tensions, r.lengths
         out[f"{tag}/m"] = numpy.array([r.margin, float(r.feasible)])
         if r.cable_state is not None:

@@ -100,14 +100,14 @@ def test_stiffness_matrix_is_minus_wrench_derivative(motion):
 @pytest.mark.parametrize("motion", MOTIONS)
 def test_stiffness_symmetric_at_equilibrium(motion):
     """At an equilibrium (tensions balancing the weight) K is symmetric; away from one it need not be."""
-    from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design import api
 
     rng = np.random.default_rng(7 + MOTIONS.index(motion))
     seen = 0
     while seen < 30:
         design = random_robot(rng, motion)
         p = random_pose(rng, design)
-        r = evaluate_pose(design, p)
+        r = api.pose(design, p)
         if not np.all(np.isfinite(r.tensions)):
             continue
         K = st.pose_stiffness(design, p, r.tensions).matrix
@@ -216,10 +216,10 @@ def test_point_mass_on_two_cables_closed_form():
     hand in docs/algorithms.md): t = m g / (2 * 0.8) = 12.2625 N, k = EA/L0 = EA + t;
     Kxx = 0.72 k + 1.28 t = 0.72 EA + 2 t = 744.525 N/m, Kyy = 1.28 EA + 2 t = 1304.525 N/m,
     f = sqrt(K/m) / (2 pi) = 3.07075 Hz and 4.06473 Hz; strings sqrt(t/mu)/2 = 17.5089 Hz."""
-    from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design import api
 
     design = spec.from_dict(TWO_CABLES)
-    r = evaluate_pose(design, [0.0, 0.0])
+    r = api.pose(design, [0.0, 0.0])
     np.testing.assert_allclose(r.tensions, [12.2625, 12.2625], rtol=1e-12)
     s = st.pose_stiffness(design, [0.0, 0.0], r.tensions)
     np.testing.assert_allclose(s.matrix, [[744.525, 0.0], [0.0, 1304.525]], rtol=1e-12, atol=1e-10)
@@ -351,14 +351,14 @@ def test_mujoco_rings_at_the_lowest_frequency(name):
     The mode's coordinate is the displacement's M-weighted projection on the mode shape."""
     from pathlib import Path
 
-    from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design import api
 
     design = spec.load(Path(__file__).resolve().parents[1] / "designs" / f"{name}.yaml")
     if name == "planar4":
         design = spec.from_dict({**design.raw, "cable": {**design.raw.get("cable", {}), "model": "elastic"}})
     g = design.workspace.grid
     pose = np.array([(lo + hi) / 2 for lo, hi in zip(g.lower, g.upper)] + list(design.workspace.orientation))
-    r = evaluate_pose(design, pose)
+    r = api.pose(design, pose)
     s = st.pose_stiffness(design, pose, r.tensions)
     f0 = s.frequencies[0]
     periods = 40

@@ -12,7 +12,8 @@ from cdpr_design.statics import kinematics as kin
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
 from cdpr_design.workspaces import grid as wsg
-from cdpr_design.statics import pose as sp
+from cdpr_design.statics.robot import combinations
+from cdpr_design.statics.wrenches import wrench_vertices
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Grid
 
@@ -80,7 +81,7 @@ def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
     design = spec.from_dict(random_planar_data(rng, m=2))
     got = sweep_all(design, engine=engine)
     poses = got[0]
-    wreq = sp.wrench_vertices(design, "static")
+    wreq = wrench_vertices(design, "static")
     ref = numpy_reference(design, poses, wreq)
     # feasibility identical except where the margin is within rounding of zero
     band = np.abs(ref[1]) < 1e-9
@@ -95,7 +96,7 @@ def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
     n = g.size
     f2, m2, T2, L2 = np.empty(n, np.uint8), np.empty(n), np.empty((n, 2)), np.empty((n, 2))
     K.sweep_grid(0, n, lower, step, shape, design.attachments.copy(), design.outlets, design.rows,
-                 wreq, design.tension_min, design.tension_max, design.string_floor, sp.combinations(2, 2),
+                 wreq, design.tension_min, design.tension_max, design.string_floor, combinations(2, 2),
                  K.KIND_STATIC,
                  f2, m2, T2, L2)
     assert_same((f2, m2, T2, L2), got, design)
@@ -108,7 +109,7 @@ def test_planar2_wrench_feasible_matches_numpy(engine):
     data["workspace"]["external_wrench"] = {"lower": [-2.0, -1.0], "upper": [2.0, 1.0]}
     design = spec.from_dict(data)
     got = sweep_all(design, kind="wrench-feasible", step=0.03, engine=engine)
-    wreq = sp.wrench_vertices(design, "wrench-feasible")
+    wreq = wrench_vertices(design, "wrench-feasible")
     assert wreq.shape == (5, 2)
     ref = numpy_reference(design, got[0], wreq)
     assert_same(ref, got, design)

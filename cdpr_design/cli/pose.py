@@ -53,8 +53,8 @@ def pose(
     """One pose: cable lengths, tensions, feasibility, margin, structure matrix (and the hanging tilt)."""
     from cdpr_design.jobs import hanging as hjob
     from cdpr_design.jobs import pose as job
-    from cdpr_design.statics.pose import evaluate_pose
     from cdpr_design.statics.robot import Analysis, resolve
+    from cdpr_design.workspaces.pose import evaluate_pose
 
     design = load_design(spec, cable_model)
     robot = resolve(design, Analysis(command="pose", kind=kind.value, objective=objective.value,
@@ -69,7 +69,7 @@ def pose(
     else:
         p = parse_pose(design, at)
         c = parse_weights(design, weights)
-        result = evaluate_pose(design, p, kind.value, objective.value, c)
+        result = evaluate_pose(robot, p, c)
         data = job.pose_data(design, result)
         stiffness = job.stiffness_data(design, p, result.tensions)
         if robot.underconstrained and robot.cables == "ideal" and robot.outlets == "points":

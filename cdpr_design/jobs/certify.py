@@ -182,14 +182,16 @@ def witness(design, kind: str, lower, upper, min_margin: float = 0.0) -> dict | 
     import itertools
 
     from cdpr_design.statics.kinematics import pose_at
-    from cdpr_design.statics.pose import evaluate_pose
+    from cdpr_design.statics.robot import Analysis, resolve
+    from cdpr_design.workspaces.pose import evaluate_pose
 
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     points = [0.5 * (lower + upper)] + [np.array(c) for c in itertools.product(*zip(lower, upper))]
     ori = design.default_orientation_full()
+    robot = resolve(design, Analysis(command="statics", kind=kind))
     for p in points:
         pose = pose_at(design, np.pad(p, (0, 3 - p.size)), ori)
-        e = evaluate_pose(design, pose, kind)
+        e = evaluate_pose(robot, pose)
         if not e.feasible or not (e.margin >= min_margin):
             return {"pose": [float(v) for v in pose], "feasible": bool(e.feasible),
                     "margin": None if not np.isfinite(e.margin) else float(e.margin),

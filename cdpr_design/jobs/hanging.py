@@ -127,11 +127,10 @@ def free_pose_data(robot, position) -> dict:
     W = None
     if ok:
         from cdpr_design.statics.hanging.geometry import euler_xyz
-        from cdpr_design.statics.pose import _structure
-        from cdpr_design import kernels as K
+        from cdpr_design.statics.pose import structure
 
         full = np.concatenate([np.pad(np.asarray(position, float), (0, 3 - len(position))), euler_xyz(h.rotation[0])])
-        W = [[float(x) for x in row] for row in _structure(design, full, K)[1]]
+        W = [[float(x) for x in row] for row in structure(robot, full)[0]]
     if ok:
         pose = _motion_pose(design, position, ori)
     else:

@@ -338,9 +338,10 @@ class Simulator:
         L = kin.inverse_kinematics(self.design, pose)
         if self.robot.cables == "ideal":
             return L
-        from cdpr_design.statics.pose import evaluate_pose
+        from cdpr_design.statics.robot import Analysis, resolve
+        from cdpr_design.workspaces.pose import evaluate_pose
 
-        L0 = evaluate_pose(self.design, pose).cable_state.unstretched_lengths
+        L0 = evaluate_pose(resolve(self.design, Analysis(command="statics")), pose).cable_state.unstretched_lengths
         return np.where(np.isfinite(L0), L0, L)
 
     def _place_chains(self, lengths) -> None:

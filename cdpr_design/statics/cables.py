@@ -54,34 +54,34 @@ class CableState:
     status: str = "ok"
 
 
-def straight_state(design: Design, lengths: np.ndarray, tensions: np.ndarray) -> CableState:
-    """The :class:`CableState` of straight cables (ideal or elastic): outlet = effector tension, no sag."""
-    arr = cable_arrays(design)
+def straight_state(robot: Robot, lengths: np.ndarray, tensions: np.ndarray) -> CableState:
+    """The :class:`CableState` of straight cables (ideal or elastic) of ``robot`` at one pose or
+    many (``lengths`` [m], ``tensions`` [N], (m,) or (k, m)): outlet = effector tension, no sag,
+    unstretched lengths L / (1 + T/EA) (NaN where T is)."""
     t = np.asarray(tensions, float)
     sag = np.where(np.isfinite(t), 0.0, np.nan)
-    return CableState(t.copy(), elastic_unstretched(lengths, t, arr.EA), sag)
+    return CableState(t.copy(), elastic_unstretched(lengths, t, robot.cable.EA), sag)
 
 
-def sagging_pose(design: Design, full: np.ndarray, wreq: np.ndarray, combos: np.ndarray, kcode: int):
-    """One pose (full [x, y, z, rx, ry, rz] [m, rad]) with sagging cables, min-norm tensions.
-
-    Returns (feasible, margin [N], tensions (m,) [N], lengths (m,) [m], W (n, m),
-    CableState).  The margin is NaN unless the shapes converged.
-    """
+def sagging_structure(robot: Robot, full: np.ndarray) -> np.ndarray:
+    """The structure matrix W (n, m) of ``robot``'s sagging cables at one pose (full [x, y, z,
+    rx, ry, rz] [m, rad]): the end-force directions of the converged catenaries of the sweep's
+    solve (:func:`cdpr_design.kernels.sagging.sag_pose`, with the robot's kind and the same
+    inputs as the sweep's); NaN where the shapes are not known."""
     from cdpr_design.kernels import sagging as KS
     from cdpr_design.statics import kinematics as kin
+    from cdpr_design.statics.wrenches import wrench_vertices
 
-    arr = cable_arrays(design)
-    m, n = design.m, design.n
-    R = kin.rotation_matrix(*full[3:])
-    Rb = np.ascontiguousarray(design.attachments @ R.T)
-    W, cw, lo, hi, inf_hi, tq, scr, work = KS.make_sag_scratch(n, m, wreq.shape[0])
-    t, ta, l0, sg, L = KS.make_pose_outputs(m)
-    st, feas, margin, _ = KS.sag_pose(full[0], full[1], full[2], Rb, np.ascontiguousarray(design.outlets),
-                                      design.rows, arr.up, arr.w, arr.EA, wreq, design.tension_min,
-                                      design.tension_max, combos, kcode, MAX_ITERATIONS,
-                                      t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work)
-    return bool(feas), float(margin), t, L, W, CableState(ta, l0, sg, STATUS[st])
+    m, n = robot.m, robot.n
+    Rb = np.ascontiguousarray(robot.attachments @ kin.rotation_matrix(*full[3:]).T)
+    wreq = wrench_vertices(robot.design, robot.kind, full[3:])
+    c = robot.cable
+    Ws = np.full((1, n, m), np.nan)
+    KS.sag_points(np.ascontiguousarray(full[None, :3], dtype=float), Rb, robot.outlet_points, robot.rows, c.up, c.w,
+                  c.EA, wreq, robot.tension_min, robot.tension_max, robot.combos, robot.kcode, MAX_ITERATIONS,
+                  np.zeros(1, dtype=np.uint8), Ws, np.full((1, m), np.nan), np.full((1, m), np.nan),
+                  np.zeros(1, dtype=np.int8))
+    return Ws[0]
 
 
 def sagging_structures(design: Design | Robot, positions3: np.ndarray, orientation) -> tuple:
@@ -186,7 +186,7 @@ def sagging_samples(design: Design | Robot, positions: np.ndarray, Rb: np.ndarra
 
     ``positions`` (k, 3) [m], ``Rb`` (k, m, 3) the rotated attachments [m],
     ``wreq`` (k, n) the wrench the cables must exert on the effector [N, N m]
-    (gravity and inertia; motion's rows).  The kernel of :func:`sagging_pose`
+    (gravity and inertia; motion's rows).  The kernel of a sweep's sagging pose
     with minimum-norm tensions (:mod:`cdpr_design.kernels.sag_path`).  A
     sample whose shapes converge with tensions outside the bounds keeps the
     numbers of the same pose under [0, inf) and is flagged infeasible; one

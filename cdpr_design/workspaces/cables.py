@@ -40,6 +40,21 @@ def _extra(robot: Robot, outlet, L0, sag, status=None) -> dict:
     return out
 
 
+def cable_state(robot: Robot, r: Rows, k: int) -> cables.CableState | None:
+    """The :class:`~cdpr_design.statics.cables.CableState` of row ``k`` of ``r``, read back from the
+    cable model's columns (:func:`cable_columns`); None where the rows have none (ideal cables)."""
+    names = robot.design.cable_names
+    if not names or f"outlet_tension_{names[0]}" not in r.extra:
+        return None
+
+    def per_cable(prefix):
+        return np.array([r.extra[f"{prefix}_{c}"][k] for c in names], dtype=float)
+
+    status = int(r.extra["cable_status"][k]) if "cable_status" in r.extra else 0
+    return cables.CableState(per_cable("outlet_tension"), per_cable("unstretched_length"), per_cable("sag"),
+                             cables.STATUS[status])
+
+
 class CableSummary(Wrapper):
     """The summary keys of a non-ideal cable model over straight cables: ``cable_model`` and
     ``max_outlet_tension_per_cable`` (the outlet tension is the effector's); no columns (an
@@ -63,9 +78,8 @@ class ElasticColumns(CableSummary):
         self.columns = tuple(cable_columns(robot))
 
     def add(self, r: Rows, start: int, P: np.ndarray) -> None:
-        t = r.tensions
-        sag = np.where(np.isfinite(t), 0.0, np.nan)
-        r.extra.update(_extra(self.robot, t, cables.elastic_unstretched(r.lengths, t, self.robot.cable.EA), sag))
+        s = cables.straight_state(self.robot, r.lengths, r.tensions)
+        r.extra.update(_extra(self.robot, s.outlet_tensions, s.unstretched_lengths, s.sag))
 
 
 class ChordColumns(Wrapper):

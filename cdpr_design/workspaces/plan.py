@@ -29,7 +29,8 @@ import numpy as np
 from cdpr_design.model.design import Grid
 from cdpr_design.statics.robot import Robot
 from cdpr_design.workspaces import cables, engine, hanging
-from cdpr_design.workspaces.grid import CHUNK, Chunk, Maps, WorkspaceResult, chunk_poses, column_names, positions3
+from cdpr_design.workspaces.grid import (CHUNK, Chunk, Maps, Rows, WorkspaceResult, chunk_poses, column_names,
+                                         positions3)
 from cdpr_design.workspaces.parts import Base, Part, Wrapper
 
 
@@ -73,6 +74,23 @@ class Plan:
             names += [n for n in p.pictures if n not in names]
         return names
 
+    @property
+    def reads_positions(self) -> bool:
+        """Whether a part reads the chunks' positions (:attr:`~cdpr_design.workspaces.parts.Part.positions`)."""
+        return any(p.positions for p in self.parts)
+
+    def rows(self, start: int, count: int, P: np.ndarray | None = None) -> Rows:
+        """The rows of grid positions ``start .. start + count`` (at ``P`` (count, 3) [m], computed
+        here when a part reads them and they are not given): the base evaluator's, with every
+        wrapper's columns.  The body of :meth:`run`'s chunk loop, and the whole of a one-pose
+        evaluation (:func:`cdpr_design.workspaces.pose.evaluate_pose`)."""
+        if P is None and self.reads_positions:
+            P = positions3(self.grid, start, count)
+        r = self.base.rows(start, count, P)
+        for w in self.wrappers:
+            w.add(r, start, P)
+        return r
+
     def run(self, on_chunk: Callable[[Chunk], None] | None = None,
             progress: Callable[[int, int], None] | None = None, chunk: int = CHUNK,
             keep_maps: bool = True) -> WorkspaceResult:
@@ -83,16 +101,14 @@ class Plan:
         design = robot.design
         maps = Maps(g, design.m, keep_maps, extra_maps=tuple(n for p in self.parts for n in p.maps))
         names = self.extra_columns
-        wants_positions = on_chunk is not None or any(p.positions for p in self.parts)
+        wants_positions = on_chunk is not None or self.reads_positions
         total = g.size
         chunk = max(1, min(chunk, total))
         done = 0
         while done < total:
             cnt = min(chunk, total - done)
             P = positions3(g, done, cnt) if wants_positions else None
-            r = self.base.rows(done, cnt, P)
-            for w in self.wrappers:
-                w.add(r, done, P)
+            r = self.rows(done, cnt, P)
             maps.add(done, self.base.stats(r, maps.tpeak), r.feasible, r.margin, r.tensions, r.maps)
             if on_chunk is not None:
                 poses = r.poses if r.poses is not None else chunk_poses(design, P, self.orientation)
