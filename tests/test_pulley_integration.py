@@ -8,7 +8,7 @@ free segment leaves the pulley's tangent point) must reach every analysis:
   derivatives (central finite differences) of the pulley-aware lengths of
   ``kinematics.inverse_kinematics`` (built on ``pulley.outlet_geometry``, an
   independent code path from the vectorised ``pulley.cable_paths``);
-- the sizing envelope's tensions are those of ``the pose evaluation (``cd.pose``)``
+- the sizing envelope's tensions are those of the pose evaluation (``cd.pose``)
   (pulley-aware numba kernel) at the same poses;
 - the Hessian of the length used for the cable-acceleration terms matches
   finite differences (Pott 2018, pulley kinematics: the level sets of L in

@@ -206,7 +206,7 @@ def pose_stiffness(design: Design, pose, tensions) -> PoseStiffness:
     """:class:`PoseStiffness` at a pose (motion coordinates) held by ``tensions`` (m,) [N].
 
     The unstretched lengths are those the tensions stretch to the pose's lengths (an equilibrium
-    when the tensions balance the pose's wrench, as :func:`cdpr_design.statics.pose.evaluate_pose`'s do).
+    when the tensions balance the pose's wrench, as :func:`cdpr_design.workspaces.pose.evaluate_pose`'s do).
     """
     g = kin.cable_geometry(design, pose)
     t = np.asarray(tensions, float)

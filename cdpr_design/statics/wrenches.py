@@ -9,7 +9,7 @@ Kinds (:data:`cdpr_design.statics.robot.KINDS`, the kernels' ``KIND_*`` codes):
 
 :func:`wrench_vertices` gives the wrenches a kind requires at an orientation:
 what the pose evaluation
-(:mod:`cdpr_design.statics.pose`), the tension distribution
+(:mod:`cdpr_design.workspaces.pose`), the tension distribution
 (:mod:`cdpr_design.statics.tension`), the cable models
 (:mod:`cdpr_design.statics.cables`) and the sweeps share, below all of them.
 """
