@@ -4,7 +4,7 @@ numba compiles one function at a time, in the process that needs it: a first run
 compiled for about 20 CPU-s on one core while the other waited.  The functions a sweep's pose
 calls (:func:`~cdpr_design.kernels.pose.pose_kernels`) fall into two independent sets of about
 the same cost, the margins' and the tensions': :func:`compile_pose` compiles the margins' in a
-new process (``python -m cdpr_design.kernels.warm N M``) while this one compiles the
+new process (:func:`main`, run by ``python -c``) while this one compiles the
 tensions', both into numba's on-disk cache (``cache=True``; numba's cache files are written
 atomically, one per function), and waits for it.  The sweep's own loop, compiled next, then
 loads them from the cache instead of compiling them: numba caches a function with the code
@@ -64,17 +64,20 @@ def compile_pose(n: int, m: int, meanwhile: Callable[[], None] | None = None) ->
 def _start(n: int, m: int) -> subprocess.Popen | bool:
     """The other process, compiling the margins' functions; False if it cannot be started (then
     the sweep's loop compiles them, as without it)."""
+    # this process's environment is inherited (NUMBA_CACHE_DIR with it); the child puts this
+    # checkout first on its path, as the picture worker does
+    code = f"import sys; sys.path.insert(0, {_ROOT!r}); from {__name__} import main; main({n}, {m})"
     try:
-        return subprocess.Popen([sys.executable, "-m", __name__, str(n), str(m)], env=_env(),
+        return subprocess.Popen([sys.executable, "-c", code],
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     except OSError:
         return False
 
 
-def _env() -> dict:
-    """This process's environment (``NUMBA_CACHE_DIR`` with it), with this package first on the path."""
-    return dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (_ROOT, os.environ.get("PYTHONPATH")) if p))
+def main(n: int, m: int) -> None:
+    """The other process: compile the margins' functions of ``n`` DOF and ``m`` cables into the cache."""
+    _compile(pose_kernels(n, m)[1])
 
 
 if __name__ == "__main__":
-    _compile(pose_kernels(int(sys.argv[1]), int(sys.argv[2]))[1])
+    main(int(sys.argv[1]), int(sys.argv[2]))
