@@ -229,7 +229,8 @@ def envelope_chunk(design: Design | Robot, positions: np.ndarray, orientation, A
     if design.m == design.n:
         static, peak, low, ok = _square_chunk(W, w0, M, A)
     else:
-        static, peak, low, ok = _redundant_chunk(design, W, w0, M, A, free)
+        lower = tension_lower(robot.tension_min, robot.tension_floor, free)  # (k, m): the frequency floor
+        static, peak, low, ok = _redundant_chunk(design, W, w0, M, A, lower)
     if sag_ok is not None:
         # the winch holds the outlet tension: the effector's plus the cable's share of its weight
         ok &= sag_ok
@@ -261,14 +262,13 @@ def _square_chunk(W, w0, M, A):
     return static, peak, low, ok
 
 
-def _redundant_chunk(design: Design, W, w0, M, A, free):
+def _redundant_chunk(design: Design, W, w0, M, A, lower):
     """m > n: minimum 2-norm tensions [N] at w0 and at the vertices of the acceleration polytope,
-    each cable's lower bound raised at its free length ``free`` (k, m) [m] by
-    ``requirements.min_cable_frequency`` (:func:`~cdpr_design.statics.robot.tension_lower`)."""
+    within each pose's lower bounds ``lower`` (k, m) [N] (:func:`~cdpr_design.statics.robot.tension_lower`)
+    and the cables' upper bounds."""
     k, n, m = W.shape
     static, peak, low = (np.full((k, m), np.nan) for _ in range(3))
     ok = np.zeros(k, dtype=bool)
-    lower = np.broadcast_to(tension_lower(design.tension_min, design.string_floor, free), (k, m))
     dirs = acceleration_directions(design.motion.dim) * A
     wreq = np.vstack([w0[None, :], w0[None, :] + dirs @ M.T]) if A > 0 else w0[None, :]
     for j in range(k):

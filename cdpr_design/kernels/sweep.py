@@ -280,10 +280,11 @@ def _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floo
         ok = structure_matrix_pulley(px, py, pz, Rb, A, K, Eref, rad, rows, W, L, C)
         for i in range(m):
             lengths[k, i] = L[i]
-            dx = px + Rb[i, 0] - C[i, 0]  # the free length (tangent point to attachment), for the floor
-            dy = py + Rb[i, 1] - C[i, 1]
-            dz = pz + Rb[i, 2] - C[i, 2]
-            lo[i] = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if floor[i] > 0.0:  # the free length (tangent point to attachment), for raise_floor only
+                dx = px + Rb[i, 0] - C[i, 0]
+                dy = py + Rb[i, 1] - C[i, 1]
+                dz = pz + Rb[i, 2] - C[i, 2]
+                lo[i] = math.sqrt(dx * dx + dy * dy + dz * dz)
         if check:
             for i in range(m):
                 S0[i, 0] = px + Rb[i, 0]

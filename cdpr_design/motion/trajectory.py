@@ -486,18 +486,11 @@ def _load_wrenches(design: Design, R, Acc, w, al, external) -> np.ndarray:
 def within_bounds(design: Design, tensions, lower=None) -> np.ndarray:
     """Feasibility flags (k,): tensions (k, m) finite and within every cable's bounds
     (to :data:`TENSION_TOL` [N]); ``lower`` (k, m) [N] the samples' lower bounds (default
-    ``tension_min``; :func:`lower_bounds`)."""
+    ``tension_min``; :func:`~cdpr_design.statics.robot.tension_lower`)."""
     tmin, tmax = design.tension_min if lower is None else lower, design.tension_max
     with np.errstate(invalid="ignore"):
         return np.all(np.isfinite(tensions), axis=1) & np.all(tensions >= tmin - TENSION_TOL, axis=1) \
             & np.all(tensions <= tmax + TENSION_TOL, axis=1)
-
-
-def lower_bounds(design: Design, free_lengths) -> np.ndarray:
-    """The samples' lower tension bounds (k, m) [N] at cable free lengths (k, m) [m]: ``tension_min``
-    raised by ``requirements.min_cable_frequency`` (:func:`~cdpr_design.statics.robot.tension_lower`)."""
-    return np.broadcast_to(tension_lower(design.tension_min, design.string_floor, free_lengths),
-                           np.shape(free_lengths))
 
 
 def solve_tensions(design: Design, W: np.ndarray, wreq: np.ndarray, lower=None) -> np.ndarray:
@@ -508,7 +501,7 @@ def solve_tensions(design: Design, W: np.ndarray, wreq: np.ndarray, lower=None) 
     tensions within the cable bounds, min 1/2 |t|^2 s.t. W t = w_req,
     t_min <= t <= t_max (:func:`cdpr_design.statics.tension.min_norm` pose by
     pose), NaN where the bounds admit none; ``lower`` (k, m) [N] the samples' lower bounds
-    (default ``tension_min``; :func:`lower_bounds`).  m < n: the least-squares
+    (default ``tension_min``; :func:`~cdpr_design.statics.robot.tension_lower`).  m < n: the least-squares
     solution where it balances w_req exactly, else NaN.
     """
     k, n, m = W.shape
@@ -602,7 +595,7 @@ def states(design: Design | Robot, pose, velocity, acceleration, *, time=None, e
     L, free, u, Ld, Ldd = _cable_motion(robot, P, Rb, vB, aB)
     W = _structure(design, u, Rb)
     wreq = -_load_wrenches(design, R, Acc, w, al, external)
-    lower = lower_bounds(design, free)
+    lower = tension_lower(robot.tension_min, robot.tension_floor, free)  # (k, m): the frequency floor
     t = solve_tensions(design, W, wreq, lower)
     t[degenerate(u)] = np.nan  # a cable of zero length: infeasible, as for `pose` (statics.degenerate)
     return {"lengths": L, "cable_speed": Ld, "cable_accel": Ldd, "tensions": t,
@@ -618,6 +611,6 @@ def pose_at(samples: Samples, time) -> np.ndarray:
 
 
 __all__ = [
-    "DEFAULT_CYCLE_TIME", "Samples", "Segment", "TENSION_TOL", "lower_bounds", "motor_angles", "pose_at", "sample",
+    "DEFAULT_CYCLE_TIME", "Samples", "Segment", "TENSION_TOL", "motor_angles", "pose_at", "sample",
     "solve_tensions", "states", "within_bounds",
 ]
