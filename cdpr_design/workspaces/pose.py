@@ -54,7 +54,8 @@ def evaluate_pose(robot: Robot, pose, weights=None) -> PoseResult:
     lengths; with sagging cables the tensions are at the effector end of each catenary, the
     bounds hold along the whole cable and ``cable_state`` says whether the shapes converged
     (``wrench-closure`` ignores tensions, so it takes the chords: as tensions grow without bound
-    every cable straightens onto its chord).
+    every cable straightens onto its chord; the cables then have no shapes, and their outlet
+    tensions, unstretched lengths and sag are NaN, as in the sweep's columns).
     """
     from cdpr_design.statics.interference import collisions
     from cdpr_design.statics.tension import tensions_for_objective
@@ -79,9 +80,10 @@ def evaluate_pose(robot: Robot, pose, weights=None) -> PoseResult:
             lower = tension_lower(robot.tension_min, robot.tension_floor, free)  # the sweep's bounds there
             t2 = tensions_for_objective(W, wreq0, lower, robot.tension_max, objective, weights)
             t = np.full(design.m, np.nan) if t2 is None else t2
-        state = cable_state(robot, r, 0)  # elastic cables: the sweep's columns (ideal: None)
-        if state is not None and (other or robot.cables == "sagging"):
-            # at the objective's tensions; sagging cables under wrench closure: straight, on their chords
-            state = cables.straight_state(robot, L, t)
+        # the sweep's columns: elastic cables' state; sagging cables under wrench closure have no
+        # shapes (empty columns, status ok: nothing was solved); ideal cables: None
+        state = cable_state(robot, r, 0)
+        if other and robot.cables == "elastic":
+            state = cables.straight_state(robot, L, t)  # at the objective's tensions
     return PoseResult(np.asarray(pose, float), L, t, feasible, margin, W, wreq0, collisions(design, pose),
                       tuple(design.cable_names), robot.cables, state)
