@@ -27,11 +27,11 @@ MIN_BLOCK = 256
 
 
 class CertifyJob:
-    """What a worker needs to classify boxes: the design and the test's settings (the
+    """What a worker needs to classify boxes: the certified robot and the test's settings (the
     arguments of :class:`cdpr_design.workspaces.certify.Classifier`)."""
 
-    def __init__(self, design, kind: str, min_margin: float, tolerance_outlets=None, tolerance_attachments=None):
-        self.args = (design, kind, min_margin, tolerance_outlets, tolerance_attachments)
+    def __init__(self, robot, min_margin: float, tolerance_outlets=None, tolerance_attachments=None):
+        self.args = (robot, min_margin, tolerance_outlets, tolerance_attachments)
         self._classify = None
 
     def __getstate__(self):
@@ -44,7 +44,7 @@ class CertifyJob:
         """A worker set up: one kernel thread (the parallelism is across workers), the kernels
         loaded."""
         parallel.set_threads(1)
-        self.run_chunk([(0, *(np.zeros((1, self.args[0].motion.dim)),) * 2)])
+        self.run_chunk([(0, *(np.zeros((1, self.args[0].design.motion.dim)),) * 2)])
         return self
 
     def run_chunk(self, items) -> list[tuple[int, np.ndarray]]:

@@ -68,10 +68,10 @@ def run_certify(design, out: OutputDir, kind: str = "static", resolution: float 
     lazy = LazyJournal(journal, meta, kept)
     limits = {} if max_boxes is None else {"max_boxes": max_boxes}
     with timings.phase("load_s"), stage(progress, "loading the kernels (a first run compiles them)"):
-        cert.warm_up(design, kind)
+        cert.warm_up(robot)
     try:
         with timings.phase("sweep_s"), stage(progress, f"certify {design.name}") as cb:
-            result = cert.certify(design, kind, resolution, box, min_margin, time_limit=time_limit,
+            result = cert.certify(robot, kind, resolution, box, min_margin, time_limit=time_limit,
                                   progress=None if cb is None else (lambda done, todo: cb(done, done + todo)),
                                   classifier=classifier, replay=[decode(r) for r in kept],
                                   on_level=lambda k, st: lazy.append(level_record(k, st)), **limits)

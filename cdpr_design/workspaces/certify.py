@@ -30,9 +30,8 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.robot import combinations
-from cdpr_design.statics.wrenches import wrench_vertices
 from cdpr_design.statics.robot import Analysis, Robot, resolve
+from cdpr_design.statics.wrenches import wrench_vertices
 
 #: status codes of the kernels and their names in the outputs
 STATUS = {1: "inside", -1: "outside", 0: "boundary"}
@@ -41,9 +40,13 @@ KINDS = ("static", "wrench-feasible")
 #: Largest number of boxes classified by default (bounded memory: a box is 6 floats and a code).
 MAX_BOXES = 5_000_000
 
-def check_certifiable(design: Design, kind: str = "static") -> Robot:
-    """The robot certified (``design`` resolved for ``certify``); an :class:`InputError` with the
-    reason when ``design`` or ``kind`` is not certified."""
+def check_certifiable(design: Design | Robot, kind: str = "static") -> Robot:
+    """The robot certified (``design`` resolved for ``certify``, or the robot a caller resolved so);
+    an :class:`InputError` with the reason when ``design`` or ``kind`` is not certified."""
+    if isinstance(design, Robot):
+        if design.analysis.command != "certify":
+            raise ValueError(f"a robot resolved for {design.analysis.command!r}, not for certify")
+        return design
     if kind not in KINDS:
         raise InputError(f"--kind: certify covers {', '.join(KINDS)}, got {kind!r}")
     return resolve(design, Analysis(command="certify", kind=kind))  # the refusals' one table
@@ -149,22 +152,22 @@ def geometry_boxes(design: Design, tolerance_outlets=None, tolerance_attachments
 
 
 class Classifier:
-    """The interval test of boxes of positions for one design, kind, margin and tolerance."""
+    """The interval test of boxes of positions for one certified robot (:func:`check_certifiable`:
+    its design and kind), margin [N] and tolerances [m]."""
 
-    def __init__(self, design: Design, kind: str = "static", min_margin: float = 0.0,
-                 tolerance_outlets=None, tolerance_attachments=None):
+    def __init__(self, robot: Robot, min_margin: float = 0.0, tolerance_outlets=None, tolerance_attachments=None):
         from cdpr_design.kernels import certify as KC  # numba, on first use
 
         self.K = KC
-        self.design = design
+        design = robot.design
         self.dim = design.motion.dim
         self.geometry = geometry_boxes(design, tolerance_outlets, tolerance_attachments)
-        wv = wrench_vertices(design, kind, design.default_orientation_full())
-        self.wv = np.ascontiguousarray(wv if kind == "wrench-feasible" else wv[:1])
-        self.rows = design.rows
-        self.tmin, self.tmax = design.tension_min, design.tension_max
+        wv = wrench_vertices(design, robot.kind, design.default_orientation_full())
+        self.wv = np.ascontiguousarray(wv if robot.kind == "wrench-feasible" else wv[:1])
+        self.rows = robot.rows
+        self.tmin, self.tmax = robot.tension_min, robot.tension_max
         self.mu = float(min_margin)
-        self.facets = combinations(design.m, design.n)
+        self.facets = robot.combos
         self.bases = np.array(list(itertools.combinations(range(design.m), design.n)),
                               dtype=np.int64).reshape(-1, design.n)
 
@@ -200,7 +203,7 @@ def check_box(box, dim: int, name: str = "box") -> tuple:
     return tuple(map(float, lo)), tuple(map(float, hi))
 
 
-def certify(design: Design, kind: str = "static", resolution: float | None = None, box=None,
+def certify(design: Design | Robot, kind: str = "static", resolution: float | None = None, box=None,
             min_margin: float | None = None, max_boxes: int | None = MAX_BOXES, time_limit: float | None = None,
             tolerance_outlets=None, tolerance_attachments=None,
             progress: Callable[[int, int], None] | None = None,
@@ -210,6 +213,7 @@ def certify(design: Design, kind: str = "static", resolution: float | None = Non
     """Pave ``box`` (lower, upper) [m] (default the workspace grid's box) into proven
     ``inside``, proven ``outside`` and ``boundary`` boxes at the spec's fixed orientation.
 
+    ``design``: a design, or the robot :func:`check_certifiable` resolved (its kind then stands).
     ``kind``: ``static`` (gravity) or ``wrench-feasible`` (gravity plus every vertex of
     ``workspace.external_wrench``).  ``resolution`` [m]: the finest box edge (default the grid
     step).  ``min_margin`` [N]: prove a capacity margin of at least this much (inside) or
@@ -219,13 +223,14 @@ def certify(design: Design, kind: str = "static", resolution: float | None = Non
     spec's ``tolerance:``); ``inside`` then holds for every geometry within them.  ``progress(classified, pending)`` after each
     level of bisection.
 
-    ``classifier(design, kind, min_margin, tolerance_outlets, tolerance_attachments)``: a context
+    ``classifier(robot, min_margin, tolerance_outlets, tolerance_attachments)``: a context
     manager giving the box test used for the paving (default a :class:`Classifier` in this
     process; ``cdpr_design.batch.certify`` gives one spreading each level over worker processes
     or Dask).  ``replay``, ``on_level``: see :func:`pave` (a resumed run's journal).  The boxes do
     not depend on either.
     """
-    check_certifiable(design, kind)
+    robot = check_certifiable(design, kind)
+    design, kind = robot.design, robot.kind
     spec_outlets, spec_attachments = spec_tolerances(design)
     tolerance_outlets = spec_outlets if tolerance_outlets is None else tolerance_outlets
     tolerance_attachments = spec_attachments if tolerance_attachments is None else tolerance_attachments
@@ -249,7 +254,7 @@ def certify(design: Design, kind: str = "static", resolution: float | None = Non
         raise InputError(f"--time-limit: expected a positive number of seconds, got {time_limit}")
     make = classifier or (lambda *args: contextlib.nullcontext(Classifier(*args)))
     t0 = time.perf_counter()
-    with make(design, kind, mu, tolerance_outlets, tolerance_attachments) as classify:
+    with make(robot, mu, tolerance_outlets, tolerance_attachments) as classify:
         lower, upper, status, classified, truncated = pave(classify, np.array([lo0]), np.array([hi0]), res,
                                                           max_boxes, time_limit, progress, replay, on_level)
     tol = {k: v for k, v in (("outlets", tolerance_outlets), ("attachments", tolerance_attachments))
@@ -330,8 +335,9 @@ def bisect(lower: np.ndarray, upper: np.ndarray, axis: np.ndarray):
     return lo, hi
 
 
-def warm_up(design: Design, kind: str = "static") -> None:
+def warm_up(design: Design | Robot, kind: str = "static") -> None:
     """Classify one box: numba loads the kernels from its on-disk cache (or compiles them on a
     machine's first run), so a caller can time that apart from the paving."""
-    lo, hi = default_box(design)
-    Classifier(design, kind)(np.array([lo]), np.array([lo]))
+    robot = check_certifiable(design, kind)
+    lo, hi = default_box(robot.design)
+    Classifier(robot)(np.array([lo]), np.array([lo]))
