@@ -52,6 +52,9 @@ def _workspace_title(result, title_extra: str) -> str:
     if ori:
         title += "\norientation " + ", ".join(
             f"{n} = {np.degrees(v):.3g}°" for n, v in zip(d.motion.rotation_coords, ori))
+    f = d.requirements.min_cable_frequency
+    if f is not None:  # the tensions' lower bound rises with each cable's length (docs/algorithms.md)
+        title += f"\nevery cable's first string mode ≥ {f:g} Hz (requirements.min_cable_frequency)"
     if title_extra:
         title += "\n" + title_extra
     return title
