@@ -387,6 +387,40 @@ def test_small_redundancy_tensions_match_the_active_set_method(r):
     assert counts["active"] > 300 and counts["degenerate"] > 1000, counts
 
 
+def test_square_tensions_equal_the_active_set_method():
+    """m = n: square_projection (behind project_null for r = 0, and min_norm_tensions_square, which
+    the sagging kernels of a square robot call) against the general dual active-set method
+    goldfarb_idnani with r = 0 on the same factorisation, to the bit: the same verdict, the same
+    tensions (clipped into the bounds) or NaN; random problems with the load inside, near and
+    outside the bounds, exact zeros in W, an unbounded t_max; and min_norm_tensions (any m) equal
+    to min_norm_tensions_square there."""
+    rng = np.random.default_rng(80)
+    counts = dict(feasible=0, infeasible=0)
+    for trial in range(2000):
+        n, m, W, tmin, tmax = small_redundancy_problem(rng, trial, 0)
+        t0 = rng.uniform(tmin - 4.0, tmax + 4.0)
+        if trial % 7 == 3:  # within the tolerance of a bound
+            j = rng.integers(m)
+            t0[j] = tmin[j] - 1e-12 * tmax.max()
+        if trial % 11 == 4:
+            tmax[rng.integers(m)] = np.inf
+        w = W @ t0
+        scr = K.make_scratch(n, m, 1)
+        if not K.basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+            continue
+        K.null_space_setup(n, m, w, scr)
+        t_ref, t, t_sq, t_any = (np.empty(m) for _ in range(4))
+        ok_ref = K.goldfarb_idnani(m, 0, tmin, tmax, t_ref, scr)
+        ok = K.project_null(m, 0, tmin, tmax, t, scr)
+        assert ok == ok_ref and np.array_equal(t, t_ref, equal_nan=True), trial
+        ok_sq = K.min_norm_tensions_square(W, w, tmin, tmax, t_sq, K.make_scratch(n, m, 1))
+        ok_any = K.min_norm_tensions(W, w, tmin, tmax, t_any, K.make_scratch(n, m, 1))
+        assert ok_sq == ok_any == ok_ref, trial
+        assert np.array_equal(t_sq, t_ref, equal_nan=True) and np.array_equal(t_any, t_ref, equal_nan=True), trial
+        counts["feasible" if ok else "infeasible"] += 1
+    assert counts["feasible"] > 300 and counts["infeasible"] > 300, counts
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("motion,extra", CASES, ids=[f"{mo}-m=n+{k}" for mo, k in CASES])
 def test_grid_kernel_of_each_redundancy_equals_the_pose_kernel(motion, extra):

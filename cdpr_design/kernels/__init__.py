@@ -47,8 +47,9 @@ _EXPORTS = {
     **dict.fromkeys(("KIND_STATIC", "KIND_WRENCH_CLOSURE", "KIND_WRENCH_FEASIBLE", "eval_general",
                      "eval_pose", "eval_square"), "pose"),
     **dict.fromkeys(("chunk_stats", "sweep_grid", "sweep_grid_planar2", "sweep_points"), "sweep"),
-    **dict.fromkeys(("QP_TOL", "goldfarb_idnani", "min_norm_tensions", "null_space_setup", "project_null",
-                     "project_one", "project_two", "qp_tolerance"), "tension_qp"),
+    **dict.fromkeys(("QP_TOL", "goldfarb_idnani", "min_norm_tensions", "min_norm_tensions_square",
+                     "null_space_setup", "project_null", "project_one", "project_two", "qp_tolerance",
+                     "square_projection"), "tension_qp"),
 }
 
 _SUBMODULES = {"cable_shape", "catenary", "codes", "geometry", "hanging", "hsm", "hsm_small", "interference", "linalg",

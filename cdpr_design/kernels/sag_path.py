@@ -16,7 +16,8 @@ import numpy as np
 
 from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.parallel import run_blocks
-from cdpr_design.kernels.sagging import SAG_NO_TENSIONS, SAG_OK, make_pose_outputs, make_sag_scratch, sag_pose
+from cdpr_design.kernels.sagging import (SAG_NO_TENSIONS, SAG_OK, make_pose_outputs, make_sag_scratch, redundancy,
+                                         sag_pose)
 
 
 def sag_samples(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
@@ -34,14 +35,16 @@ def sag_samples(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
     kernel's SAG_* code); ``feasible`` (k,) uint8: converged with tensions
     within the bounds along the whole cable.
     """
+    redundant = redundancy(rows.shape[0], A.shape[0])
     run_blocks(sag_samples_block, P.shape[0], P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
-               tensions, outlet, L0, sag, lengths, status, feasible, grain=4)
+               tensions, outlet, L0, sag, lengths, status, feasible, redundant, grain=4)
 
 
 @njit
 def sag_samples_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
-                      tensions, outlet, L0, sag, lengths, status, feasible):
-    """Samples k0..k1-1 of :func:`sag_samples`, with their own scratch."""
+                      tensions, outlet, L0, sag, lengths, status, feasible, redundant):
+    """Samples k0..k1-1 of :func:`sag_samples`, with their own scratch (``redundant``:
+    :func:`~cdpr_design.kernels.sagging.redundancy`)."""
     m = A.shape[0]
     n = rows.shape[0]
     W, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, 1)
@@ -53,13 +56,14 @@ def sag_samples_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combo
             wj[0, r] = wreq[j, r]
         Rj = Rb[j]
         st, ok, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, tmin, tmax,
-                                combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work)
+                                combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work,
+                                redundant)
         solved = ok
         if st == SAG_OK and not ok:
             # converged but outside the bounds: the same pose under [0, inf)
             st, solved, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, zero,
                                         inf_hi, combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi,
-                                        tq, scr, work)
+                                        tq, scr, work, redundant)
             if st == SAG_OK and not solved:
                 st = SAG_NO_TENSIONS
         status[j] = st

@@ -45,7 +45,7 @@ from cdpr_design.kernels.catenary import catenary_sag
 from cdpr_design.kernels.geometry import fill_column, grid_index
 from cdpr_design.kernels.hsm import make_scratch
 from cdpr_design.kernels.pose import eval_general, eval_square
-from cdpr_design.kernels.tension_qp import min_norm_tensions
+from cdpr_design.kernels.tension_qp import min_norm_tensions, min_norm_tensions_square
 
 #: Status of a pose (``status`` column of a sagging sweep).
 #: Converged: feasible or not by its margin and tensions.
@@ -268,18 +268,36 @@ def _no_tensions(cw, lo):
 
 
 @njit
-def _distribute(W, w0, lo, hi, inf_hi, t, scr):
+def _distribute(W, w0, lo, hi, inf_hi, t, scr, redundant):
     """Minimum-norm tensions under (lo, hi); failing that under (lo, inf). Returns 2, 1 or 0."""
-    if min_norm_tensions(W, w0, lo, hi, t, scr):
+    if _min_norm(W, w0, lo, hi, t, scr, redundant):
         return 2
-    if min_norm_tensions(W, w0, lo, inf_hi, t, scr):
+    if _min_norm(W, w0, lo, inf_hi, t, scr, redundant):
         return 1
     return 0
 
 
 @njit
+def _min_norm(W, w, lo, hi, t, scr, redundant):
+    """:func:`~cdpr_design.kernels.tension_qp.min_norm_tensions`, its square case alone where
+    ``redundant`` is None (:func:`redundancy`)."""
+    if redundant is None:
+        return min_norm_tensions_square(W, w, lo, hi, t, scr)
+    return min_norm_tensions(W, w, lo, hi, t, scr)
+
+
+def redundancy(n: int, m: int):
+    """The ``redundant`` argument of the sagging kernels for ``n`` wrench rows and ``m`` cables:
+    None for m = n, else m - n.  numba compiles a kernel once per argument type and prunes the
+    branches on ``redundant is None`` before typing them, so a square robot's first run compiles
+    none of the redundant methods (the QP's and the margin's: sagging40's compile 89 -> 55 CPU-s)
+    and a redundant one none of the square ones."""
+    return None if m == n else m - n
+
+
+@njit
 def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-             t, outlet, L0, sag, lengths, W, cw, lo, hi, inf_hi, tq, scr, work):
+             t, outlet, L0, sag, lengths, W, cw, lo, hi, inf_hi, tq, scr, work, redundant):
     """One pose with sagging cables: (status, feasible, margin, iterations).
 
     Inputs as :func:`cdpr_design.kernels.sweep.sweep_grid` plus ``up`` (3,)
@@ -289,7 +307,8 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     unstretched lengths [m], ``sag`` largest distance from the chord [m] (all
     NaN unless the pose is feasible), ``lengths`` chord lengths [m].  ``W``,
     ``cw``, ``lo``, ``hi``, ``inf_hi`` (all inf), ``tq``, ``scr``, ``work`` are
-    scratch (:func:`make_sag_scratch`).
+    scratch (:func:`make_sag_scratch`).  ``redundant``: None where m = n, else m - n
+    (:func:`redundancy`).
     A slack cable (tension at or below :data:`SLACK` of the largest, where its
     lower bound is 0) pulls along its chord with no force; its outlet tension,
     unstretched length and sag are NaN (undetermined) in a feasible pose.
@@ -306,19 +325,19 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
         W[:, :] = math.nan  # no direction to pull in, and no shapes
         return SAG_SINGULAR, False, math.nan, 0
     _straight_columns(Rb, A, px, py, pz, rows, W)
-    if _distribute(W, wreq[0], tmin, tmax, inf_hi, tq, scr) == 0:
+    if _distribute(W, wreq[0], tmin, tmax, inf_hi, tq, scr, redundant) == 0:
         W[:, :] = math.nan
         return SAG_NO_TENSIONS, False, math.nan, 0
     t0 = work[2]
     for i in range(m):
         t0[i] = tq[i]
     status, bounded, it = _iterate(tq, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi, inf_hi,
-                                   scr, work, maxit)
+                                   scr, work, maxit, redundant)
     if status != SAG_OK:
         # the straight start can be too far (a light effector on heavy cables): follow the
         # solution from weightless cables; if that fails too, the pose keeps its first status
         st2, b2, it2 = _continued(tq, t0, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi,
-                                  inf_hi, scr, work, maxit)
+                                  inf_hi, scr, work, maxit, redundant)
         it += it2
         if st2 == SAG_OK:
             status, bounded = st2, b2
@@ -328,11 +347,10 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     for i in range(m):
         lo[i] = cw[i, _LO]
         hi[i] = cw[i, _HI]
-    n = W.shape[0]
-    if m == n:
+    if redundant is None:
         feasible, margin = eval_square(W, wreq, lo, hi, kind, t)
     else:
-        feasible, margin = eval_general(W, wreq, lo, hi, combos, kind, t, scr, m - n)
+        feasible, margin = eval_general(W, wreq, lo, hi, combos, kind, t, scr, m - W.shape[0])
     feasible = feasible and bounded == 2
     for i in range(m):
         t[i] = tq[i] if feasible else math.nan
@@ -344,7 +362,7 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
 
 
 @njit
-def _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr):
+def _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant):
     """q = the minimum-norm tensions for the shapes of t (W, cw, lo, hi follow t).
 
     Returns (code, fit): code 2 (within the shifted bounds), 1 (lower bounds
@@ -358,7 +376,7 @@ def _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi,
     for i in range(t.shape[0]):
         lo[i] = cw[i, _LO]
         hi[i] = cw[i, _HI]
-    return _distribute(W, w0, lo, hi, inf_hi, q, scr), fit
+    return _distribute(W, w0, lo, hi, inf_hi, q, scr, redundant), fit
 
 
 @njit
@@ -402,11 +420,11 @@ def _solve_in_place(J, b):
 
 
 @njit
-def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh):
+def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh, redundant):
     """One damped Newton step on G(t) = Q(t) - t (finite-difference Jacobian, one column
     per cable); t is updated in place.  Returns the map's (code, fit) at the new t (code -2: no step)."""
     m = t.shape[0]
-    r0 = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)[0]
+    r0 = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant)[0]
     if r0 <= 0:
         return -2, 0
     g0 = _gap(t, q)
@@ -416,11 +434,11 @@ def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_h
     for j in range(m):
         h = 1e-7 * (1.0 + abs(t[j]))
         th[j] = t[j] + h
-        rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)[0]
+        rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant)[0]
         if rj <= 0:
             h = -h
             th[j] = t[j] + h
-            rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)[0]
+            rj = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant)[0]
             if rj <= 0:
                 return -2, 0
         th[j] = t[j]
@@ -435,7 +453,7 @@ def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_h
     for _ in range(12):
         for i in range(m):
             th[i] = max(t[i] + alpha * d[i], 0.0)
-        r, fit = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        r, fit = _fixed_map(th, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant)
         if r > 0 and _gap(th, qh) < g0:
             for i in range(m):
                 t[i] = th[i]
@@ -446,13 +464,13 @@ def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_h
 
 
 @njit
-def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit):
+def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit, redundant):
     """Solve t = Q(t) from the straight tensions ``t`` (in place): fixed-point steps while they
     contract by half or better, damped Newton steps otherwise.  Returns (status, code, iterations);
     on SAG_OK, W, cw, lo, hi hold the shapes of the final t and code is the map's (2 or 1)."""
     m = t.shape[0]
     q, qh = work[0], work[1]
-    r, fit = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+    r, fit = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant)
     bump = 0
     while r == -1 and bump < 8:
         # a cable has no shape at its starting tension: start higher
@@ -460,7 +478,7 @@ def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr,
             t[i] = 1.5 * t[i] + 0.5 * w[i] * math.hypot(cw[i, _X], cw[i, _Z])
             cw[i, _TH] = math.nan
             cw[i, _L0] = math.nan
-        r, fit = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        r, fit = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant)
         bump += 1
     if r == -1:
         return SAG_NO_CATENARY, 0, 0
@@ -473,7 +491,7 @@ def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr,
             tscale = max(tscale, abs(t[i]))
         if fit == 1 and g <= 1e-9 * tscale and _balanced(W, t, w0, SAG_TOL):
             return SAG_OK, r, it
-        r2, fit2 = _fixed_map(q, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+        r2, fit2 = _fixed_map(q, qh, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant)
         if r2 > 0:
             g2 = _gap(q, qh)
             if g2 <= 0.5 * g or g2 <= 1e-13 * tscale or fit2 == 2:
@@ -482,12 +500,12 @@ def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr,
                     q[i] = qh[i]
                 r, fit, g = r2, fit2, g2
                 continue
-        r, fit = _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh)
+        r, fit = _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh, redundant)
         if r == -2:
             # a damped fixed-point step: half way to the map's tensions
             for i in range(m):
                 qh[i] = 0.5 * (t[i] + q[i])
-            r, fit = _fixed_map(qh, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+            r, fit = _fixed_map(qh, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant)
             if r > 0:
                 for i in range(m):
                     t[i] = qh[i]
@@ -495,7 +513,7 @@ def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr,
             return _no_tensions(cw, lo), 0, it
         if r < 0:
             # round-off stalls the steps: accept a balance ten times looser, else give up
-            r, fit = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr)
+            r, fit = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant)
             if r > 0 and fit == 1 and _gap(t, q) <= 1e-9 * tscale and _balanced(W, t, w0, 10.0 * SAG_TOL):
                 return SAG_OK, r, it
             return SAG_NOT_CONVERGED, 0, it
@@ -504,7 +522,7 @@ def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr,
 
 
 @njit
-def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit):
+def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit, redundant):
     """:func:`_iterate` followed from straight cables to heavy ones: the cables' weight per
     length is ``s w`` with s raised from 0 to 1, each step started from the tensions and
     shapes of the last converged s.  The fallback when the straight-cable start ``t0`` [N]
@@ -534,7 +552,7 @@ def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi
             cw[i, _TAU] = math.nan
             cw[i, _TP] = math.nan
         status, code, it = _iterate(t, Rb, up, ws, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi,
-                                    scr, work, maxit)
+                                    scr, work, maxit, redundant)
         total += it
         if status == SAG_OK:
             if s1 == 1.0:
@@ -573,14 +591,16 @@ def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA,
     ``L0`` [m], ``sag`` [m]; ``status`` (count,) int8.  Every pose starts from
     its own straight-cable solution, so rows do not depend on the chunking.
     """
+    redundant = redundancy(rows.shape[0], A.shape[0])
     run_blocks(sagging_grid_block, count, start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
-               combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, grain=16)
+               combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, redundant,
+               grain=16)
 
 
 @njit
 def sagging_grid_block(k0, k1, start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
-                       combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status):
-    """Rows k0..k1-1 of :func:`sweep_grid_sagging`, with their own scratch."""
+                       combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, redundant):
+    """Rows k0..k1-1 of :func:`sweep_grid_sagging`, with their own scratch (``redundant``: :func:`redundancy`)."""
     n = rows.shape[0]
     m = A.shape[0]
     ny = shape[1]
@@ -591,7 +611,7 @@ def sagging_grid_block(k0, k1, start, lower, step, shape, Rb, A, rows, up, w, EA
         ix, iy, iz = grid_index(start + k, ny, nz)
         st, f, mg, _ = sag_pose(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2],
                                 Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-                                t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)
+                                t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work, redundant)
         status[k] = st
         feasible[k] = 1 if f else 0
         margin[k] = mg
@@ -612,21 +632,23 @@ def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
     (k, m) [N], ``status`` (k,) int8.  For the sizing, which needs the
     structure matrix of each task pose.
     """
+    redundant = redundancy(rows.shape[0], A.shape[0])
     run_blocks(sag_points_block, P.shape[0], P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-               feasible, Ws, tensions, outlet, status, grain=16)
+               feasible, Ws, tensions, outlet, status, redundant, grain=16)
 
 
 @njit
 def sag_points_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-                     feasible, Ws, tensions, outlet, status):
-    """Rows k0..k1-1 of :func:`sag_points`, with their own scratch."""
+                     feasible, Ws, tensions, outlet, status, redundant):
+    """Rows k0..k1-1 of :func:`sag_points`, with their own scratch (``redundant``: :func:`redundancy`)."""
     n = rows.shape[0]
     m = A.shape[0]
     Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
     t, ta, l0, sg, L = make_pose_outputs(m)
     for j in range(k0, k1):
         st, f, mg, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rb, A, rows, up, w, EA, wreq, tmin, tmax,
-                                combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work)
+                                combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work,
+                                redundant)
         status[j] = st
         feasible[j] = 1 if f else 0
         for r in range(n):

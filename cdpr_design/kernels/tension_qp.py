@@ -88,11 +88,30 @@ def project_null(m, r, tmin, tmax, t, scr):
     form for one or two redundant cables (:func:`project_one`, :func:`project_two`), by the dual
     active-set method otherwise.  Returns False (``t`` NaN) when no tensions exist.  The sweeps'
     pose function makes the same choice inline (:func:`cdpr_design.kernels.pose.eval_general`)."""
+    if r == 0:
+        return square_projection(m, tmin, tmax, t, scr[9])
     if r == 1:
         return project_one(m, tmin, tmax, t, scr)
     if r == 2:
         return project_two(m, tmin, tmax, t, scr)
     return goldfarb_idnani(m, r, tmin, tmax, t, scr)
+
+
+@njit_noref
+def square_projection(m, tmin, tmax, t, tp):
+    """:func:`goldfarb_idnani` for r = 0 (as many cables as wrench rows): no null space, so the
+    tensions are ``tp`` (scr[9], t_p = W^-1 w): clipped into the bounds when no bound is violated
+    by more than :func:`qp_tolerance`, else none (``t`` NaN, False), as the dual method decides
+    with no direction to move in."""
+    tol = qp_tolerance(m, tmin, tmax)
+    for j in range(m):
+        if tp[j] - tmin[j] < -tol or tmax[j] - tp[j] < -tol:
+            for i in range(m):
+                t[i] = np.nan
+            return False
+    for j in range(m):
+        t[j] = min(max(tp[j], tmin[j]), tmax[j])
+    return True
 
 
 @njit_noref
@@ -402,3 +421,16 @@ def min_norm_tensions(W, w, tmin, tmax, t, scr):
         return False
     null_space_setup(n, m, w, scr)
     return project_null(m, m - n, tmin, tmax, t, scr)
+
+
+@njit_noref
+def min_norm_tensions_square(W, w, tmin, tmax, t, scr):
+    """:func:`min_norm_tensions` for m = n (the same numbers), compiling only the square case
+    (:func:`square_projection`) and none of the redundant methods: the tensions are unique."""
+    n, m = W.shape
+    for j in range(m):
+        t[j] = np.nan
+    if not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+        return False
+    null_space_setup(n, m, w, scr)
+    return square_projection(m, tmin, tmax, t, scr[9])
