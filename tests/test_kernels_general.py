@@ -425,7 +425,8 @@ def test_square_tensions_equal_the_active_set_method():
 @pytest.mark.parametrize("motion,extra", CASES, ids=[f"{mo}-m=n+{k}" for mo, k in CASES])
 def test_grid_kernel_of_each_redundancy_equals_the_pose_kernel(motion, extra):
     """The grid sweep runs one kernel per m - n (0, 1, 2, any other: ``sweep.grid_block``), each
-    compiled with its own methods; every row equals the per-pose kernel (``eval_pose``, whose
+    compiled with its own methods, and so does the hanging effector's (``hanging.rotated_block``);
+    every row of both equals the per-pose kernel (``eval_pose``, whose
     choice of method happens at run time, checked against the references above) for all three
     kinds -- including poses on an outlet (zero-length cable): feasibility, lengths and where the
     NaNs are exactly, margins and tensions to the last bits (1e-12 relative: the methods' sums
@@ -442,7 +443,7 @@ def test_grid_kernel_of_each_redundancy_equals_the_pose_kernel(motion, extra):
     m = n + extra
     A, B, rows, tmin, tmax = random_robot(rng, motion, m)
     _, R = random_pose(rng, motion)
-    Rb = np.ascontiguousarray(B @ R.T)
+    Rb = rotated(R, B)
     shape = np.array([7, 6, 4 if dim == 3 else 1])
     lower = np.array([-1.0, -1.0, -1.0 if dim == 3 else 0.0])
     step = np.array([1 / 3, 0.4, 2 / 3])
@@ -453,11 +454,11 @@ def test_grid_kernel_of_each_redundancy_equals_the_pose_kernel(motion, extra):
     for kind in (K.KIND_STATIC, K.KIND_WRENCH_FEASIBLE, K.KIND_WRENCH_CLOSURE):
         # balanced by tensions inside the bounds at grid pose 3,2,(1): feasible there
         wreq = np.array([W0 @ rng.uniform(tmin + 1.0, tmax - 1.0) for _ in range(3)])
-        plain = _grid_equals_pose_kernel(kind, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax,
+        plain = _grid_equals_pose_kernel(kind, count, lower, step, shape, R, B, A, rows, wreq, tmin, tmax,
                                          np.zeros(m), combos, dim)
         # a floor c L^2 reaching the middle of the bounds at L = 1.5 m, on every other cable
         floor = np.where(np.arange(m) % 2 == 0, 0.5 * (tmin + tmax) / 1.5**2, 0.0)
-        raised = _grid_equals_pose_kernel(kind, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax,
+        raised = _grid_equals_pose_kernel(kind, count, lower, step, shape, R, B, A, rows, wreq, tmin, tmax,
                                           floor, combos, dim)
         if kind != K.KIND_WRENCH_CLOSURE:  # closure ignores the bounds
             assert not np.array_equal(plain, raised) and not np.any(raised & ~plain)
@@ -469,14 +470,31 @@ def test_grid_kernel_of_each_redundancy_equals_the_pose_kernel(motion, extra):
             assert not got.all()
 
 
-def _grid_equals_pose_kernel(kind, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, dim):
+def rotated(R, B):
+    """R b_i (m, 3) as the kernels rotate them (``rotate_attachments``: the hanging kernel rotates
+    each pose's attachments itself, so every kernel here sees the same bits)."""
+    Rb = np.empty(B.shape)
+    K.rotate_attachments(np.ascontiguousarray(R), np.ascontiguousarray(B), Rb)
+    return Rb
+
+
+def _grid_equals_pose_kernel(kind, count, lower, step, shape, R, B, A, rows, wreq, tmin, tmax, floor, combos, dim):
     """Sweep the grid with ``sweep_grid`` and check every row against ``eval_pose`` with the pose's
-    lower bounds max(tmin, floor L^2) computed with numpy; returns the feasibility flags (bool)."""
+    lower bounds max(tmin, floor L^2) computed with numpy; the same for the hanging effector's
+    kernel (``hanging.eval_rotated``, one loop per m - n as well) given the grid's positions, each
+    with the rotation ``R`` of attachments ``B``; returns the feasibility flags (bool)."""
+    from cdpr_design.kernels.hanging import eval_rotated
     from cdpr_design.statics.robot import tension_lower
 
     n, m = rows.shape[0], A.shape[0]
+    Rb = rotated(R, B)
     got = (np.empty(count, np.uint8), np.empty(count), np.empty((count, m)), np.empty((count, m)))
     K.sweep_grid(0, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind, *got)
+    P = np.array([lower + step * np.array(ijk) for ijk in itertools.product(*map(range, shape))])
+    rot = (np.empty(count, np.uint8), np.empty(count), np.empty((count, m)), np.empty((count, m)))
+    eval_rotated(P, np.ascontiguousarray(np.broadcast_to(R, (count, 3, 3))), A, np.ascontiguousarray(B), rows,
+                 np.ascontiguousarray(np.broadcast_to(wreq, (count,) + wreq.shape)), tmin, tmax, floor, combos, kind,
+                 *rot)
     W = np.empty((n, m))
     L = np.empty(m)
     t = np.empty(m)
@@ -489,10 +507,11 @@ def _grid_equals_pose_kernel(kind, count, lower, step, shape, Rb, A, rows, wreq,
         else:
             on_outlet += 1
             f, mg, t[:] = False, np.nan, np.nan
-        np.testing.assert_array_equal(got[3][k], L)
-        assert got[0][k] == f, (kind, k)
-        np.testing.assert_allclose(got[1][k], mg, rtol=1e-12, atol=1e-10)
-        np.testing.assert_allclose(got[2][k], t, rtol=1e-12, atol=1e-10)
-        assert np.array_equal(np.isnan(got[2][k]), np.isnan(t)) and np.isnan(got[1][k]) == np.isnan(mg)
+        for rows_ in (got, rot):
+            np.testing.assert_array_equal(rows_[3][k], L)
+            assert rows_[0][k] == f, (kind, k)
+            np.testing.assert_allclose(rows_[1][k], mg, rtol=1e-12, atol=1e-10)
+            np.testing.assert_allclose(rows_[2][k], t, rtol=1e-12, atol=1e-10)
+            assert np.array_equal(np.isnan(rows_[2][k]), np.isnan(t)) and np.isnan(rows_[1][k]) == np.isnan(mg)
     assert on_outlet == 1
     return got[0].astype(bool)

@@ -49,10 +49,10 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_noref
+from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.geometry import rotate_attachments, structure_matrix
-from cdpr_design.kernels.pose import eval_row, raise_floor, row_buffers
+from cdpr_design.kernels.pose import RowBlock, eval_row, raise_floor
 
 #: A stable equilibrium with both tensions >= 0 was found.
 TILT_OK = 0
@@ -330,26 +330,62 @@ def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasib
     (the effector cannot hang there) gets feasible 0 and NaN margin, tensions
     and lengths.  Lower tension bounds and outputs as :func:`~cdpr_design.kernels.sweep.sweep_grid`.
     """
-    run_blocks(rotated_block, P.shape[0], P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind,
-               feasible, margin, tensions, lengths)
+    run_blocks(rotated_block(A.shape[0] - rows.shape[0]), P.shape[0], P, R, A, B, rows, wreq, tmin, tmax, floor,
+               combos, kind, feasible, margin, tensions, lengths)
 
 
-@njit
-def rotated_block(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                  lengths):
-    """Rows k0..k1-1 of :func:`eval_rotated`: the block's scratch, then :func:`_rotated_loop`."""
-    m = A.shape[0]
-    W, t, L, lo, scr = row_buffers(rows.shape[0], m, wreq.shape[1])
-    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                  lengths, W, t, L, lo, np.empty((m, 3)), scr)
+def rotated_block(r: int):
+    """The block computing rows k0..k1-1 of :func:`eval_rotated` for m - n = ``r``: one loop per
+    redundancy of 0, 1 and 2 with ``r`` a constant in :func:`_rotated_loop` (compiled with only its
+    own margin and QP method), any other ``r`` the general one, chosen here in Python as
+    :func:`cdpr_design.kernels.sweep.grid_block` does (crane4's first run compiled every method)."""
+    loop = {0: _rotated_loop_0, 1: _rotated_loop_1, 2: _rotated_loop_2}.get(r, _rotated_loop_any)
+    return RowBlock(loop, _rotated_dims, _attachment_buffer)
+
+
+def _rotated_dims(P, R, A, B, rows, wreq, *rest):
+    """(n, m, nv) of a rotated block's arguments (``wreq`` (k, nv, n))."""
+    return rows.shape[0], A.shape[0], wreq.shape[1]
+
+
+def _attachment_buffer(m):
+    """The rotated attachments R b_i (m, 3) of a block's current pose."""
+    return (np.empty((m, 3)),)
 
 
 @njit_noref
+def _rotated_loop_0(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                    lengths, W, t, L, lo, scr, Rb):
+    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                  lengths, W, t, L, lo, scr, Rb, 0)
+
+
+@njit_noref
+def _rotated_loop_1(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                    lengths, W, t, L, lo, scr, Rb):
+    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                  lengths, W, t, L, lo, scr, Rb, 1)
+
+
+@njit_noref
+def _rotated_loop_2(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                    lengths, W, t, L, lo, scr, Rb):
+    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                  lengths, W, t, L, lo, scr, Rb, 2)
+
+
+@njit_noref
+def _rotated_loop_any(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                      lengths, W, t, L, lo, scr, Rb):
+    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
+                  lengths, W, t, L, lo, scr, Rb, A.shape[0] - rows.shape[0])
+
+
+@njit_inline
 def _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                  lengths, W, t, L, lo, Rb, scr):
-    """The poses of :func:`rotated_block` with its scratch (no reference counting, see
-    :func:`cdpr_design.kernels.sweep.grid_block`)."""
-    n = rows.shape[0]
+                  lengths, W, t, L, lo, scr, Rb, r):
+    """The poses of :func:`rotated_block` with its buffers, for m - n = ``r`` (compiled without
+    reference counting, see :func:`cdpr_design.kernels.sweep.grid_block`)."""
     m = A.shape[0]
     for k in range(k0, k1):
         if not np.isfinite(R[k, 0, 0]):
@@ -364,4 +400,4 @@ def _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kin
         for i in range(m):
             lengths[k, i] = L[i]
         eval_row(k, ok, W, wreq[k], raise_floor(tmin, floor, L, lo), tmax, combos, kind, t, scr, feasible, margin,
-                 tensions, m - n)
+                 tensions, r)

@@ -197,6 +197,34 @@ def row_buffers(n, m, nv):
     return np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m), make_scratch(n, m, nv)
 
 
+class RowBlock:
+    """Rows k0..k1-1 of a sweep: the block's buffers (:func:`row_buffers`), then ``loop`` over its
+    poses, called as ``loop(k0, k1, *args, W, t, L, lo, scr, *extra(m))``.
+
+    ``loop`` is the compiled loop the caller chose in Python for the robot's m - n (each compiled
+    with only its own margin and QP method, :func:`eval_general`); ``dims(*args)`` gives (n, m, nv)
+    from the block's arguments; ``extra(m)`` more work arrays, if any.  Python, not compiled: a
+    compiled function carries the machine code of everything it calls, optimised and emitted again
+    with it, so a compiled block around the loop compiled the loop a second time (IPAnema 3's
+    kernels from an empty cache: 32.4 -> 28.9 CPU-s, ``scripts/bench_first_run.py``); from Python,
+    the buffers and the call cost tens of microseconds a block.
+    """
+
+    def __init__(self, loop, dims, extra=None):
+        self.loop, self.dims, self.extra = loop, dims, extra
+
+    @property
+    def signatures(self) -> list:
+        """The loop's compiled signatures (:func:`~cdpr_design.kernels.parallel.run_blocks`
+        runs the first block of a loop not compiled yet on the calling thread)."""
+        return self.loop.signatures
+
+    def __call__(self, k0, k1, *args):
+        n, m, nv = self.dims(*args)
+        more = () if self.extra is None else self.extra(m)
+        self.loop(k0, k1, *args, *row_buffers(n, m, nv), *more)
+
+
 @njit_inline
 def raise_floor(tmin, floor, L, lo):
     """The pose's lower tension bounds into ``lo`` (m,) [N]: max(``tmin``, ``floor`` L^2) for a cable

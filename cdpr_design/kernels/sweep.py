@@ -10,7 +10,7 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
 from cdpr_design.kernels.linalg import RANK_TOL
 from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
-from cdpr_design.kernels.pose import eval_row, raise_floor, row_buffers
+from cdpr_design.kernels.pose import RowBlock, eval_row, raise_floor, row_buffers
 from cdpr_design.kernels.interference import interference_pose
 from cdpr_design.kernels.parallel import run_blocks
 
@@ -41,7 +41,7 @@ def grid_block(r: int):
     loop it uses.  A pose of IPAnema 3 (r = 2) took 3.56 us on one core
     with one kernel for every r, 2.62 us with its own.
 
-    The block (:class:`_GridBlock`) allocates the block's buffers
+    The block (:class:`~cdpr_design.kernels.pose.RowBlock`) allocates the block's buffers
     (:func:`~cdpr_design.kernels.pose.row_buffers`) and hands them to its loop
     over the poses, compiled without reference counting
     (:data:`~cdpr_design.kernels._jit.njit_noref`): every array a pose's code
@@ -49,32 +49,12 @@ def grid_block(r: int):
     atomic increment and decrement per pose.  IPAnema 3: 2.66 -> 1.21 us a pose
     on one core.
     """
-    return _GridBlock({0: _grid_loop_0, 1: _grid_loop_1, 2: _grid_loop_2}.get(r, _grid_loop_any))
+    return RowBlock({0: _grid_loop_0, 1: _grid_loop_1, 2: _grid_loop_2}.get(r, _grid_loop_any), _grid_dims)
 
 
-class _GridBlock:
-    """Rows k0..k1-1 of :func:`sweep_grid`: the block's buffers, then ``loop`` over its poses.
-
-    Python, not compiled: a compiled function carries the machine code of everything it
-    calls, optimised and emitted again with it, so a compiled block around the loop compiled
-    the loop a second time (IPAnema 3's kernels from an empty cache: 32.4 -> 28.9 CPU-s,
-    ``scripts/bench_first_run.py``); from Python, the buffers and the call cost tens of
-    microseconds a block."""
-
-    def __init__(self, loop):
-        self.loop = loop
-
-    @property
-    def signatures(self) -> list:
-        """The loop's compiled signatures (:func:`~cdpr_design.kernels.parallel.run_blocks`
-        runs the first block of a loop not compiled yet on the calling thread)."""
-        return self.loop.signatures
-
-    def __call__(self, k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
-                 feasible, margin, tensions, lengths):
-        W, t, L, lo, scr = row_buffers(rows.shape[0], A.shape[0], wreq.shape[0])
-        self.loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
-                  feasible, margin, tensions, lengths, W, t, L, lo, scr)
+def _grid_dims(start, lower, step, shape, Rb, A, rows, wreq, *rest):
+    """(n, m, nv) of a grid block's arguments."""
+    return rows.shape[0], A.shape[0], wreq.shape[0]
 
 
 @njit_noref
