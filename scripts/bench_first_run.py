@@ -173,6 +173,31 @@ are the reliable ones.  The targets (IPAnema 3 <= 10 s, every kernel <= 30 s) ar
 met: the sweep's loop (``_grid_loop_2``, 5-6 CPU-s: numba links every callee's IR into it and
 LLVM optimises it all again) is compiled after both processes, and the sagging kernels
 (sagging40's compile alone is about 105 of the 128 CPU-s) were not touched here.
+
+Then (2026-11-28) two kernels that chose their method at run time, so compiled every method:
+the sagging cables' fixed point now takes ``redundant`` (None for m = n: numba compiles it per
+argument type and prunes the ``is None`` branch before typing it), and the hanging effector's
+rotated statics one loop per m - n chosen in Python, as the grid sweep's.  Compile events:
+sagging40 89.4 -> 55.9 CPU-s, crane4 44.1 -> 13.9.  ``--root`` at 86a3f90 (before both; outputs
+identical for every design), then this checkout alone after the second, ``--repeat 1``, two idle
+cores (load average 1.2-1.9)::
+
+    design       cold wall         cold CPU          warm wall        warm CPU
+    cogiro       18.5 -> 17.6 s    22.3 -> 21.6 s    2.16 -> 2.16 s   1.60 -> 1.58 s
+    crane4       48.7 -> 22.2 s    50.5 -> 24.4 s    6.36 -> 6.97 s   8.17 -> 8.76 s
+    ipanema1     17.8 -> 17.3 s    20.7 -> 22.2 s    2.52 -> 2.55 s   2.32 -> 2.27 s
+    ipanema2     16.6 -> 17.7 s    20.9 -> 21.9 s    1.91 -> 2.04 s   1.45 -> 1.49 s
+    ipanema3     18.6 -> 16.4 s    22.7 -> 20.5 s    2.38 -> 2.22 s   1.89 -> 1.77 s
+    planar2       1.7 -> 1.7 s      1.1 -> 1.0 s     1.70 -> 1.49 s   1.07 -> 0.97 s
+    planar4      14.4 -> 15.6 s    17.4 -> 18.6 s    1.79 -> 1.76 s   1.43 -> 1.40 s
+    pointmass3    8.7 -> 8.9 s      8.5 -> 8.7 s     1.50 -> 1.39 s   1.14 -> 1.07 s
+    sagging40    88.6 -> 58.5 s    91.6 -> 61.3 s    5.62 -> 5.62 s   8.01 -> 8.16 s
+    cold compile of every kernel the designs use (one cache): 132.2 -> 83.6 CPU-s
+
+The targets are still not met: IPAnema 3's first run is 16.4 s on two idle cores, every kernel
+84 CPU-s.  What is left is numba linking and optimising every callee again into each separately
+compiled caller (IPAnema 3's ``_grid_loop_2`` 5-6 CPU-s; the sagging chain's six levels about 26
+of sagging40's 56).
 """
 
 from __future__ import annotations
