@@ -132,6 +132,7 @@ CASES = ([("2T", m, "static") for m in range(2, 9)] + [("3T", m, "static") for m
             ("2T", 3, "wrench-feasible"), ("3T", 4, "wrench-feasible")])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("motion,m,kind", CASES)
 def test_random_robots_never_contradict_an_lp(motion, m, kind):
     seed = zlib.crc32(f"{motion} {m} {kind}".encode())

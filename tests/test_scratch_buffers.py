@@ -21,6 +21,7 @@ import sys
 import textwrap
 
 import numpy as np
+import pytest
 
 from .helpers import ROOT
 
@@ -120,6 +121,7 @@ def run_poisoned(which: str) -> dict:
     return pickle.loads(r.stdout)
 
 
+@pytest.mark.slow
 def test_no_output_depends_on_uninitialised_memory():
     a, b = run_poisoned("A"), run_poisoned("B")
     assert a.keys() == b.keys() and len(a) > 50
