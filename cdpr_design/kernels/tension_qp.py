@@ -415,22 +415,24 @@ def min_norm_tensions(W, w, tmin, tmax, t, scr):
     from :func:`make_scratch`.
     """
     n, m = W.shape
-    for j in range(m):
-        t[j] = np.nan
-    if not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
-        return False
-    null_space_setup(n, m, w, scr)
-    return project_null(m, m - n, tmin, tmax, t, scr)
+    return _reduced(W, w, t, scr) and project_null(m, m - n, tmin, tmax, t, scr)
 
 
 @njit_noref
 def min_norm_tensions_square(W, w, tmin, tmax, t, scr):
     """:func:`min_norm_tensions` for m = n (the same numbers), compiling only the square case
     (:func:`square_projection`) and none of the redundant methods: the tensions are unique."""
+    return _reduced(W, w, t, scr) and square_projection(W.shape[1], tmin, tmax, t, scr[9])
+
+
+@njit_noref
+def _reduced(W, w, t, scr):
+    """``t`` NaN, then the null-space reduction of W t = w into ``scr`` (the basis factorisation,
+    the null basis N and t_p: :func:`null_space_setup`); False when rank W < n."""
     n, m = W.shape
     for j in range(m):
         t[j] = np.nan
     if not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
         return False
     null_space_setup(n, m, w, scr)
-    return square_projection(m, tmin, tmax, t, scr[9])
+    return True
