@@ -218,3 +218,26 @@ def test_optimize_holds_every_stop_signal_through_a_trials_record():
         assert signal.getsignal(signal.SIGTERM) is stop
     finally:
         signal.signal(signal.SIGTERM, old)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=lambda s: s.name)
+def test_an_interrupt_a_finaliser_swallowed_is_raised_again(sig):
+    """The handler may run inside a finaliser (optuna's storage torn down: SQLAlchemy's weakref
+    callback), where Python prints "Exception ignored" and drops the KeyboardInterrupt; the command
+    must still end interrupted, not run on."""
+    from cdpr_design.cli.signals import interruptible
+
+    class Finalised:
+        def __del__(self):
+            os.kill(os.getpid(), sig)
+            time.sleep(0.01)  # the handler raises here, inside __del__
+
+    ran_on = []
+    with pytest.raises(KeyboardInterrupt):
+        with interruptible():
+            obj = Finalised()
+            del obj
+            for _ in range(500):  # 5 s: the interrupt must come back well before
+                time.sleep(0.01)
+            ran_on.append(True)
+    assert not ran_on
