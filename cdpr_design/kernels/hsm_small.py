@@ -112,14 +112,11 @@ def hsm_one_arrays(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closu
     tuple unpacks its 31 arrays, which costs compile time (see
     :func:`~cdpr_design.kernels.tension_qp.null_space`)."""
     _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure)
-    # two copies of the body, each compiled with the flag a constant (the test drops out of the
-    # other: numba compiles a function once per constant argument value); ``_setup`` once, with the
-    # flag a variable.  Compiled functions rather than inlined bodies: numba's inlining copies a
-    # body's IR block by block with its whole scope, quadratic in its size (IPAnema 3's
-    # ``hsm_two`` 6.7 -> 5.9 CPU-s)
-    if want_closure:
-        return _one(W, wreq, nv, tab, M, e, sv, nbc, True)
-    return _one(W, wreq, nv, tab, M, e, sv, nbc, False)
+    # the body compiled once, with the flag a variable: compiled with it a constant (a copy per
+    # value) it cost IPAnema 3's first run 2.5 CPU-s more and no measurable time a pose.  A
+    # compiled function rather than an inlined body: numba's inlining copies a body's IR block
+    # by block with its whole scope, quadratic in its size (``hsm_two`` 6.7 -> 5.9 CPU-s)
+    return _one(W, wreq, nv, tab, M, e, sv, nbc, want_closure)
 
 
 @njit_fast_noref
@@ -172,14 +169,8 @@ def hsm_two_arrays(W, wreq, nv, tmin, tmax, tab, M, e, sv, P, nbc, bcol, want_cl
     """:func:`hsm_two` on the scratch's arrays themselves (``tab`` scr[0], ``M`` scr[1], ``e`` scr[2],
     ``sv`` scr[28], ``P`` scr[29], ``nbc`` scr[19], ``bcol`` scr[20]); see :func:`hsm_one_arrays`."""
     _setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure)
-    # two copies of the body, each compiled with the flag a constant (the test drops out of the
-    # other: numba compiles a function once per constant argument value); ``_setup`` once, with the
-    # flag a variable.  Compiled functions rather than inlined bodies: numba's inlining copies a
-    # body's IR block by block with its whole scope, quadratic in its size (IPAnema 3's
-    # ``hsm_two`` 6.7 -> 5.9 CPU-s)
-    if want_closure:
-        return _two(W, wreq, nv, tab, M, e, sv, P, nbc, True)
-    return _two(W, wreq, nv, tab, M, e, sv, P, nbc, False)
+    # the body compiled once, with the flag a variable (see hsm_one_arrays)
+    return _two(W, wreq, nv, tab, M, e, sv, P, nbc, want_closure)
 
 
 @njit_fast_noref
