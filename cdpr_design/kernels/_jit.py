@@ -80,6 +80,11 @@ FAST = {"reassoc", "contract", "arcp"}
 njit_fast = nb.njit(fastmath=FAST, **JIT)
 #: Small helpers of the hot loops, inlined into their callers (no call, no reference counting per call).
 njit_inline = nb.njit(fastmath=FAST, inline="always", **JIT)
+#: A function with a single caller, inlined into it in numba's IR with the caller's own options:
+#: a separately compiled function is optimised by LLVM again, with everything it calls, in the
+#: module of every function that calls it, so each level of a chain of calls costs its whole
+#: depth again (the sagging cables' fixed point).
+njit_folded = nb.njit(inline="always", **JIT)
 #: The loops over poses: compiled without numba's reference counting (``_nrt=False``).
 #: numba counts references to every array a function binds or passes on -- an atomic
 #: increment and decrement per array per pose, the scratch tuple alone holding 31 -- and

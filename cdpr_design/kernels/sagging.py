@@ -30,6 +30,18 @@ with numbers.
 
 Vertical: ``up`` is the unit vector against gravity; for a planar robot it
 lies in the plane of motion, so every cable plane is that plane.
+
+Compile time.  The fixed point is a chain of calls (a block's loop ->
+:func:`sag_pose` -> :func:`_continued` -> :func:`_iterate` -> :func:`_newton_step`
+-> :func:`_fixed_map` -> the shapes and the tensions), and numba optimises a
+compiled function together with everything it calls, in the module of each
+caller again: every level cost the whole depth below it once more.  The
+functions with one call site in the chain (:func:`sag_pose` in each block,
+:func:`_continued`, :func:`_newton_step`) are folded into their callers
+(:data:`~cdpr_design.kernels._jit.njit_folded`): sagging40's first
+``workspace`` compiled 60.5 -> 40.0 CPU-s (numba's compile events), its
+outputs identical.  :func:`_iterate`, called twice, is not: folded as well, the
+two copies took 50.1.
 """
 
 from __future__ import annotations
@@ -38,7 +50,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import njit, njit_folded
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.cable_shape import cable_for_tension, least_tension
 from cdpr_design.kernels.catenary import catenary_sag
@@ -295,7 +307,7 @@ def redundancy(n: int, m: int):
     return None if m == n else m - n
 
 
-@njit
+@njit_folded
 def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
              t, outlet, L0, sag, lengths, W, cw, lo, hi, inf_hi, tq, scr, work, redundant):
     """One pose with sagging cables: (status, feasible, margin, iterations).
@@ -419,7 +431,7 @@ def _solve_in_place(J, b):
     return True
 
 
-@njit
+@njit_folded
 def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh, redundant):
     """One damped Newton step on G(t) = Q(t) - t (finite-difference Jacobian, one column
     per cable); t is updated in place.  Returns the map's (code, fit) at the new t (code -2: no step)."""
@@ -521,7 +533,7 @@ def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr,
     return SAG_NOT_CONVERGED, 0, maxit
 
 
-@njit
+@njit_folded
 def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit, redundant):
     """:func:`_iterate` followed from straight cables to heavy ones: the cables' weight per
     length is ``s w`` with s raised from 0 to 1, each step started from the tensions and
