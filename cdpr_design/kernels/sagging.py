@@ -41,7 +41,9 @@ functions with one call site in the chain (:func:`sag_pose` in each block,
 (:data:`~cdpr_design.kernels._jit.njit_folded`): sagging40's first
 ``workspace`` compiled 60.5 -> 40.0 CPU-s (numba's compile events), its
 outputs identical.  :func:`_iterate`, called twice, is not: folded as well, the
-two copies took 50.1.
+two copies took 50.1, and folded once (the straight start made the first pass of
+:func:`_continued`'s loop) 49.7: LLVM's time on one function grows faster than
+its size, so a large body is worth folding only where it saves a level.
 """
 
 from __future__ import annotations
