@@ -198,6 +198,38 @@ The targets are still not met: IPAnema 3's first run is 16.4 s on two idle cores
 84 CPU-s.  What is left is numba linking and optimising every callee again into each separately
 compiled caller (IPAnema 3's ``_grid_loop_2`` 5-6 CPU-s; the sagging chain's six levels about 26
 of sagging40's 56).
+
+Then (the same day, later) two more, each measured by compile events first: ``hsm_small``'s
+one- and two-redundant-cable bodies compiled once with the closure flag a variable (IPAnema 3's
+margins 7.6 -> 4.8 CPU-s alone; this is the change dropped above for a last-bit change in
+``max_margin``, taken now: with fast-math the rounding of a sum depends on the code around it,
+the 1-ulp difference is in the summary's ``max_margin`` of IPAnema 3 only, every CSV is
+identical, and the first run of every design with one or two redundant cables gains 2-3 s), and
+the sagging chain's single-call-site functions folded into their callers (sagging40 60.5 ->
+40.0 CPU-s of compile events).  ``--root`` at c86959e (before both), ``--repeat 1``, two idle
+cores (load average 1.1)::
+
+    design       cold wall         cold CPU          warm wall        warm CPU
+    cogiro       19.1 -> 11.5 s    22.6 -> 14.7 s    2.13 -> 1.84 s   1.61 -> 1.50 s
+    crane4       25.7 -> 16.4 s    26.0 -> 18.5 s    8.17 -> 5.84 s   8.55 -> 7.70 s
+    ipanema1     19.7 -> 13.3 s    23.9 -> 17.5 s    2.36 -> 2.11 s   2.22 -> 2.00 s
+    ipanema2     16.0 -> 13.5 s    20.3 -> 17.0 s    1.76 -> 1.98 s   1.40 -> 1.47 s
+    ipanema3     17.6 -> 14.3 s    21.8 -> 18.2 s    2.12 -> 1.78 s   1.69 -> 1.48 s   (max_margin: 1 ulp)
+    planar2       1.4 -> 1.7 s      0.9 -> 1.0 s     1.62 -> 1.62 s   1.00 -> 0.98 s
+    planar4      14.5 -> 12.1 s    17.0 -> 15.0 s    1.96 -> 1.64 s   1.52 -> 1.25 s
+    pointmass3   10.8 -> 9.6 s     10.5 -> 9.3 s     1.80 -> 1.56 s   1.30 -> 1.20 s
+    sagging40    62.0 -> 52.2 s    63.8 -> 54.8 s    5.55 -> 4.86 s   8.21 -> 7.22 s
+    cold compile of every kernel the designs use (one cache): 88.3 -> 76.5 CPU-s
+
+(The before column of the same code moves by about 10 % between runs: IPAnema 3 16.4 s
+earlier, 17.6 s here.)  IPAnema 3's first run, on a timeline of compile events: 1.1 s to
+the first compile (imports, the spec), the tension functions 4 s and the CSV formatter 1.6 s in
+this process while the other compiles the margins (started at 1.9 s, done at 7.8 s), then the
+loop alone, 5.2 s (numba's IR inlining 1.2, LLVM 2.9), then the sweep and the files, 0.8 s:
+with both processes busy until the loop, the loop is what stands between this and 10 s.
+Tried and dropped here: the facet body inlined in numba's IR once (5.6 against 4.6 CPU-s),
+``NUMBA_LOOP_VECTORIZE=0`` and ``NUMBA_OPT`` 1-2 (at most 10 % of the loop, and a process-wide
+switch would make a kernel's rounding depend on which process filled the cache).
 """
 
 from __future__ import annotations
