@@ -44,6 +44,14 @@ outputs identical.  :func:`_iterate`, called twice, is not: folded as well, the
 two copies took 50.1, and folded once (the straight start made the first pass of
 :func:`_continued`'s loop) 49.7: LLVM's time on one function grows faster than
 its size, so a large body is worth folding only where it saves a level.
+:func:`_distribute` and :func:`_min_norm` (two call sites, a few calls each) are
+folded too: each was a level over the whole tension QP, and without them the
+command compiled 44.2 -> 40.2 CPU-s (four interleaved pairs from empty caches:
+41.0/43.9/46.5/45.5 -> 37.7/40.5/42.9/39.7), its outputs identical.  Measured
+and left: folding the QP's own thin levels below them as well
+(:func:`~cdpr_design.kernels.tension_qp.min_norm_tensions_square`, ``_reduced``,
+``null_space_setup``: three pairs, no gain), and :func:`make_sag_scratch` compiled
+into its callers (within the noise).
 """
 
 from __future__ import annotations
@@ -281,7 +289,7 @@ def _no_tensions(cw, lo):
     return SAG_NO_TENSIONS
 
 
-@njit
+@njit_folded
 def _distribute(W, w0, lo, hi, inf_hi, t, scr, redundant):
     """Minimum-norm tensions under (lo, hi); failing that under (lo, inf). Returns 2, 1 or 0."""
     if _min_norm(W, w0, lo, hi, t, scr, redundant):
@@ -291,7 +299,7 @@ def _distribute(W, w0, lo, hi, inf_hi, t, scr, redundant):
     return 0
 
 
-@njit
+@njit_folded
 def _min_norm(W, w, lo, hi, t, scr, redundant):
     """:func:`~cdpr_design.kernels.tension_qp.min_norm_tensions`, its square case alone where
     ``redundant`` is None (:func:`redundancy`)."""
