@@ -202,7 +202,7 @@ import numpy as np
 from cdpr_design import workspaces as ws
 from cdpr_design.kernels import hsm_small
 from cdpr_design.model import spec
-for name, margins in (("ipanema3", hsm_small.hsm_two_arrays), ("planar4", hsm_small.hsm_one_arrays)):
+for name, margins in (("ipanema3", hsm_small.facets_two), ("planar4", hsm_small.facets_one)):
     d = spec.load(f"designs/{name}.yaml")
     g = ws.make_grid(d, 0.5 if name == "ipanema3" else 0.1, True)
     p = ws.plan(ws.robot_for(d, g, engine="numba"), g)

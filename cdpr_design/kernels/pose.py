@@ -6,7 +6,7 @@ import numpy as np
 
 from cdpr_design.kernels._jit import jitable, njit, njit_inline, njit_noref
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
-from cdpr_design.kernels.hsm_small import hsm_one_arrays, hsm_two_arrays
+from cdpr_design.kernels.hsm_small import facet_setup, facets_one, facets_two, hsm_one_arrays, hsm_two_arrays
 from cdpr_design.kernels.tension_qp import goldfarb_idnani, line_projection, null_space, plane_projection
 
 
@@ -253,14 +253,15 @@ def pose_kernels(n: int, m: int) -> tuple[list, list]:
     i64, flag = typeof(m), typeof(True)
     tensions = [(basis_factor, (T["W"], S[0], S[18], S[19], S[20])),
                 (null_space, (i64, i64, T["w"], S[0], S[8], S[9], S[25], S[19], S[20]))]
+    # the margins of r = 1, 2: hsm_small's per-pose setup and its facets, the two functions
+    # hsm_one_arrays / hsm_two_arrays (folded into the loop) call
+    setup = (facet_setup, (T["W"], T["wreq"], i64, T["t"], T["t"], S[0], S[1], S[2], S[28], S[19], S[20], flag))
     if r == 2:
         tensions.append((plane_projection, (i64, T["t"], T["t"], T["t"], S[8], S[9], S[30])))
-        margins = [(hsm_two_arrays, (T["W"], T["wreq"], i64, T["t"], T["t"], S[0], S[1], S[2], S[28], S[29],
-                                     S[19], S[20], flag))]
+        margins = [setup, (facets_two, (T["W"], T["wreq"], i64, S[0], S[1], S[2], S[28], S[29], S[19], flag))]
     elif r == 1:
         tensions.append((line_projection, (i64, T["t"], T["t"], T["t"], S[8], S[9])))
-        margins = [(hsm_one_arrays, (T["W"], T["wreq"], i64, T["t"], T["t"], S[0], S[1], S[2], S[28], S[19],
-                                     S[20], flag))]
+        margins = [setup, (facets_one, (T["W"], T["wreq"], i64, S[0], S[1], S[2], S[28], S[19], flag))]
     else:
         tensions.append((goldfarb_idnani, (i64, i64, T["t"], T["t"], T["t"], typeof(scr))))
         margins = [(hsm_enumerate, (T["W"], T["wreq"], i64, T["t"], T["t"], typeof(scr)))]
