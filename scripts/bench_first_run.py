@@ -230,6 +230,31 @@ with both processes busy until the loop, the loop is what stands between this an
 Tried and dropped here: the facet body inlined in numba's IR once (5.6 against 4.6 CPU-s),
 ``NUMBA_LOOP_VECTORIZE=0`` and ``NUMBA_OPT`` 1-2 (at most 10 % of the loop, and a process-wide
 switch would make a kernel's rounding depend on which process filled the cache).
+
+Then two more thin levels folded (sagging's ``_distribute`` / ``_min_norm`` over the QP, and
+``hsm_one_arrays`` / ``hsm_two_arrays``, whose setup and facets the other process now compiles).
+``--root`` at b414a3d, ``--repeat 1``, two idle cores (load average 1.2; the machine ran about
+10 % slower that day than the day before: the same b414a3d gave IPAnema 3 15.1 s, against 14.3)::
+
+    design       cold wall         cold CPU          warm wall        warm CPU
+    cogiro       16.1 -> 12.6 s    20.2 -> 16.6 s    2.04 -> 1.55 s   1.53 -> 1.21 s
+    crane4       19.8 -> 18.5 s    22.2 -> 20.9 s    6.63 -> 6.06 s   8.54 -> 7.78 s
+    ipanema1     15.8 -> 13.8 s    20.1 -> 17.4 s    2.18 -> 2.37 s   2.05 -> 2.19 s
+    ipanema2     15.5 -> 13.1 s    19.6 -> 16.6 s    2.14 -> 1.74 s   1.57 -> 1.32 s
+    ipanema3     15.1 -> 13.8 s    19.4 -> 17.4 s    1.93 -> 1.78 s   1.61 -> 1.48 s
+    planar2       1.3 -> 1.4 s      0.8 -> 0.8 s     1.45 -> 1.61 s   1.02 -> 1.09 s
+    planar4      12.0 -> 11.6 s    14.5 -> 14.2 s    1.92 -> 1.67 s   1.52 -> 1.37 s
+    pointmass3   10.5 -> 9.8 s     10.1 -> 9.7 s     1.65 -> 1.53 s   1.32 -> 1.17 s
+    sagging40    49.6 -> 47.2 s    52.3 -> 49.5 s    5.22 -> 4.93 s   7.78 -> 7.15 s
+    cold compile of every kernel the designs use (one cache): 69.4 -> 80.4 CPU-s
+
+Every output identical.  The total is one sequential run per checkout and within its noise:
+a second pair (every design in one new cache, all CPU of the commands, pictures drawn in
+them) gave 110.1 -> 112.6 CPU-s.  Measured and dropped: ``make_sag_scratch`` compiled into its
+callers (within the noise), the QP's thin levels below ``_min_norm`` folded (three pairs, no
+gain), the margins' setup moved to this process (this one then finished last), and a cheaper
+tension function first so that the other process starts sooner (numba's own first-compile
+start-up, about 0.6 s, goes to whichever comes first).
 """
 
 from __future__ import annotations
