@@ -201,7 +201,7 @@ def feature_spec_data(draw) -> dict:
     under = (motion == "2T" and m == 2) or (motion == "3T" and m <= 4)
     if under and draw(st.booleans()):
         data["effector"]["orientation"] = "free"
-        if not data["effector"]["mass"] > 0:  # it hangs under its weight (a weightless one is refused)
+        if not data["effector"]["mass"] >= 1e-12:  # it hangs under its weight (below 1e-12 N it is refused)
             data["effector"]["mass"] = _r(draw(st.floats(1e-3, 30.0)))
         dim = 3 if motion == "3T" else 2
         data["effector"]["center_of_mass"] = [0.0] * (dim - 1) + [-_r(draw(st.floats(0.0, 0.3)))]

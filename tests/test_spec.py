@@ -207,18 +207,43 @@ def test_a_held_weightless_effector_gets_its_statics_and_no_tilt(tmp_path, plana
     assert "tilt" not in header and not (tmp_path / "ws" / "tilt_map.png").exists()
 
 
-@pytest.mark.parametrize("mass, gravity", [(0.0, [0.0, -9.81]), (1.0, [0.0, 0.0])])
+@pytest.mark.parametrize("mass, gravity", [(0.0, [0.0, -9.81]), (1.0, [0.0, 0.0]), (1e-300, [0.0, -9.81]),
+                                           (1.0, [0.0, -1e-300]), (5e-14, [0.0, -9.81])])
 def test_a_hanging_effector_without_weight_is_refused_when_the_spec_is_read(tmp_path, planar2_data, mass, gravity):
     """effector.orientation: free on an under-constrained design: every analysis needs the hanging
-    pose, which a weightless effector does not have (workspace reported every pose infeasible)."""
+    pose, which a weightless effector does not have (workspace reported every pose infeasible).
+    A weight below 1e-12 N counts as none: a 1e-300 kg effector overflowed the balance, scaled by
+    its weight, and came out "balanced" on 1e-300 N tensions with numpy's warnings on stderr."""
     planar2_data["effector"].update(mass=mass, orientation="free")
     planar2_data["gravity"] = gravity
     p = write_spec(tmp_path, planar2_data)
     for args in (("workspace", p, "--out", tmp_path / "ws"), ("pose", p, "--at", "0.75,0.75"), ("fk", p, "--lengths", "1,1")):
         r = invoke(*args)
         assert r.exit_code == 2 and "effector.mass: effector.orientation: free" in r.output, (args, r.output)
-        assert "non-zero gravity" in r.output and "Traceback" not in r.output
+        assert "of at least 1e-12 N" in r.output and "Traceback" not in r.output
     assert not (tmp_path / "ws").exists()
+
+
+def test_a_light_hanging_effector_hangs_as_a_heavy_one(tmp_path, planar2_data):
+    """The hanging balance is solved scaled by the weight: a 1e-9 kg effector (just above the 1e-12 N
+    floor) hangs in the orientation a 1 kg one does, on tensions 1e-9 times theirs, with no numpy
+    warning on the way."""
+    import warnings
+
+    out = {}
+    for mass in (1.0, 1e-9):
+        planar2_data["effector"].update(mass=mass, orientation="free")
+        p = write_spec(tmp_path, planar2_data, f"m{mass:g}.yaml")
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)
+            r = invoke("pose", p, "--at", "0.6,0.7", "--json")
+        assert r.exit_code == 0 and "Warning" not in r.output, r.output
+        out[mass] = json.loads(r.stdout)
+    heavy, light = out[1.0], out[1e-9]
+    assert heavy["feasible"] and light["feasible"]
+    assert light["tilt"] == pytest.approx(heavy["tilt"], abs=1e-9)
+    for name, t in heavy["tensions"].items():
+        assert t > 0 and light["tensions"][name] == pytest.approx(1e-9 * t, rel=1e-6)
 
 
 def test_a_held_fully_constrained_design_needs_no_weight_even_when_free(tmp_path):

@@ -102,9 +102,34 @@ def min_string_tension(lengths, mass_per_length, frequency: float) -> np.ndarray
     return 4.0 * float(frequency) ** 2 * L * L * mu
 
 
+#: The least weight [N] an effector hangs under (:func:`has_weight`).  The balance of a hanging
+#: effector is solved scaled by its weight (forces) and its weight times its size (moments, the
+#: size at least 1 mm), and the squared scaled structure matrix overflows below about 1e-150 N
+#: (a 1e-300 kg effector gave infinities and a "balanced" pose with 1e-300 N tensions).  1e-12 N,
+#: a tenth of a nanogram at 1 g, is far below any effector a cable robot carries and far above that.
+MIN_WEIGHT = 1e-12
+
+
+def weight(mass: float, g) -> float:
+    """The weight [N] of ``mass`` [kg] under gravity ``g`` [m/s^2]."""
+    return float(mass) * float(np.linalg.norm(np.asarray(g, float)))
+
+
 def has_weight(mass: float, g) -> bool:
-    """Whether an effector of ``mass`` [kg] under gravity ``g`` [m/s^2] has a weight to hang under."""
-    return bool(mass > 0 and np.linalg.norm(np.asarray(g, float)) > 0)
+    """Whether an effector of ``mass`` [kg] under gravity ``g`` [m/s^2] has a weight to hang under:
+    at least :data:`MIN_WEIGHT`."""
+    return bool(weight(mass, g) >= MIN_WEIGHT)
+
+
+def weight_problem(mass: float, g) -> str | None:
+    """Why an under-constrained effector of ``mass`` [kg] under gravity ``g`` [m/s^2] cannot hang from
+    its cables (None when it has a weight, :func:`has_weight`): the message of both refusals."""
+    if has_weight(mass, g):
+        return None
+    gn = float(np.linalg.norm(np.asarray(g, float)))
+    return (f"an under-constrained effector hangs from its cables under its weight, so it needs a weight "
+            f"(effector.mass x |gravity|) of at least {MIN_WEIGHT:g} N (got {mass:g} kg and |gravity| = "
+            f"{gn:g} m/s^2)")
 
 
 def is_point_mass(B, tol: float = 1e-12) -> bool:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design.errors import quote
-from cdpr_design.model.design import MOTIONS, default_gravity, has_weight, is_underconstrained
+from cdpr_design.model.design import MOTIONS, default_gravity, is_underconstrained, weight_problem
 from cdpr_design.model.limits import net_id_problem
 from cdpr_design.model.schema import DesignSpec, WorkspaceSpecModel
 
@@ -115,7 +115,7 @@ def _check_frame_effector(p: Problems, s: DesignSpec) -> None:
 
 def _check_hanging_weight(p: Problems, s: DesignSpec) -> None:
     """An under-constrained design with ``effector.orientation: free`` hangs under its weight: it
-    needs effector.mass > 0 and a non-zero gravity (a fully constrained one is held either way)."""
+    needs a weight (:func:`~cdpr_design.model.design.has_weight`; a fully constrained one is held either way)."""
     mot = MOTIONS[s.motion]
     B = [c.attachment for c in s.cables]
     gravity = s.gravity if s.gravity is not None else default_gravity(mot.dim)
@@ -123,10 +123,9 @@ def _check_hanging_weight(p: Problems, s: DesignSpec) -> None:
         return
     if not is_underconstrained(len(B), B, mot.planar):
         return
-    if not has_weight(s.effector.mass, gravity):
-        p.append(("effector.mass", f"effector.orientation: free on an under-constrained design: the effector "
-                  f"hangs from its cables under its weight, so it needs effector.mass > 0 and a non-zero "
-                  f"gravity (got {s.effector.mass:g} kg and |gravity| = {np.linalg.norm(gravity):g} m/s^2)"))
+    why = weight_problem(s.effector.mass, gravity)
+    if why:
+        p.append(("effector.mass", f"effector.orientation: free: {why}"))
 
 
 def _check_inertia(p: Problems, inertia, dim: int) -> None:

@@ -25,7 +25,7 @@ import math
 import numpy as np
 
 from cdpr_design.errors import InputError
-from cdpr_design.model.design import has_weight
+from cdpr_design.model.design import weight_problem
 
 DOFS_PLANAR = (0, 1, 5)
 DOFS_SPATIAL = (0, 1, 2, 3, 4, 5)
@@ -423,13 +423,12 @@ def point_mass_rotation(geo: Geometry, planar: bool, nominal=None) -> np.ndarray
 # ----------------------------------------------------------------------------
 
 def check_weight(mass: float, g) -> None:
-    """An :class:`InputError` naming ``effector.mass`` and ``gravity`` unless the effector has a weight:
-    an under-constrained effector hangs from its cables under it (mass [kg] > 0, |g| [m/s^2] > 0)."""
-    gn = float(np.linalg.norm(np.asarray(g, float)))
-    if not has_weight(mass, g):
-        raise InputError(f"effector.mass, gravity: an under-constrained effector hangs from its cables under its "
-                         f"weight, so it needs effector.mass > 0 and a non-zero gravity (got {mass:g} kg and "
-                         f"|gravity| = {gn:g} m/s^2)")
+    """An :class:`InputError` naming ``effector.mass`` and ``gravity`` unless the effector has a weight
+    (:func:`~cdpr_design.model.design.has_weight`; mass [kg], g [m/s^2]): an under-constrained
+    effector hangs from its cables under it."""
+    why = weight_problem(mass, g)
+    if why:
+        raise InputError(f"effector.mass, gravity: {why}")
 
 
 def checked_geometry(A, B, c, mass, g, planar: bool) -> Geometry:
