@@ -18,6 +18,7 @@ import json
 import math
 import os
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -242,9 +243,11 @@ def test_fk(data, where, lengths):
         return
     L = lengths[: design.m]
     try:
-        res = kin.forward_kinematics(design, L)
-    except ValueError as exc:  # the library's own refusal of negative or non-finite lengths
-        assert not np.all(np.isfinite(np.asarray(L, float))) or min(L) < 0, exc
+        with warnings.catch_warnings():  # 1e300 m lengths overflowed the solver (numpy's warnings on stderr)
+            warnings.simplefilter("error", RuntimeWarning)
+            res = kin.forward_kinematics(design, L)
+    except ValueError as exc:  # the library's own refusal: negative, non-finite or beyond 10 km (as --lengths)
+        assert not np.all(np.isfinite(np.asarray(L, float))) or min(L) < 0 or max(L) > 1e4, exc
         return
     outcome(require_reached, res.residual, L)
     strict_json({"pose": list(res.pose), "residual": res.residual})

@@ -199,3 +199,26 @@ def test_gravity_and_inertial_wrench_planar_rigid_body():
     # angular acceleration about z: -I_com alpha plus the COM's tangential acceleration moment
     wa = kin.inertial_wrench(d, [1.0, 1.0, 0.0], [0.0, 0.0], angular_acceleration=[0, 0, 1.0])
     np.testing.assert_allclose(wa, [0.0, -2 * 0.1, -(0.05 + 2 * 0.1**2)], atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["ipanema3", "crane4", "sagging40"])
+@pytest.mark.parametrize("value", [1e300, 1e5, -1.0, float("nan")])
+def test_every_fk_refuses_lengths_out_of_range(name, value):
+    """The library's three forward kinematics (straight cables, a hanging effector, elastic and
+    sagging cables) take the range ``--lengths`` takes, 0 to 10 km: 1e300 m overflowed the first
+    two (numpy's warnings on stderr, a "pose" 1e300 m away) and made the third raise scipy's own
+    "initial guess outside of bounds"."""
+    import warnings
+
+    from cdpr_design.errors import InputError
+    from cdpr_design.jobs import hanging as hjob
+    from cdpr_design.jobs import pose as job
+
+    from .helpers import ROOT
+
+    design = spec.load(ROOT / "designs" / f"{name}.yaml")
+    solve = {"ipanema3": kin.forward_kinematics, "crane4": hjob.fk_data, "sagging40": job.cable_fk_data}[name]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        with pytest.raises(InputError, match=r"cable lengths must be finite and in [\[(]0, 10000\] m"):
+            solve(design, [value] * design.m)

@@ -75,6 +75,17 @@ FORCE = 1e9
 #: Any other number: magnitude at most 1e12, so that products of two stay finite.
 ANY = 1e12
 
+def lengths_problem(lengths, positive: bool = False) -> str | None:
+    """What is wrong with cable ``lengths`` [m] (a sequence) for a forward kinematics; None when each is
+    finite and from 0 (above 0 when ``positive``) to :data:`LENGTH`, the bound ``--lengths`` takes too
+    (the solvers square lengths and coordinates: 1e300 m overflowed them)."""
+    values = [float(v) for v in lengths]
+    bad = [v for v in values if not (math.isfinite(v) and (v > 0 if positive else v >= 0) and v <= LENGTH)]
+    if not bad:
+        return None
+    return f"cable lengths must be finite and in {'(0' if positive else '[0'}, {LENGTH:g}] m (got {bad[0]:g})"
+
+
 def net_id_problem(text) -> str | None:
     """What is wrong with ``text`` as an AMS net id (six numbers 0 to 255 joined by dots, as
     ``5.80.201.232.1.1``); None when nothing is."""

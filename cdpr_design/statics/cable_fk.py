@@ -20,6 +20,7 @@ import numpy as np
 
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
+from cdpr_design.model.limits import lengths_problem
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.robot import Robot, robot_of
 
@@ -166,8 +167,10 @@ def forward(design: Design | Robot, unstretched, guess=None) -> CableFK:
     if robot.cables == "ideal":
         raise InputError("cable model 'ideal': the forward kinematics of straight cables is kinematics.forward_kinematics")
     L0 = np.asarray(unstretched, float).reshape(-1)
-    if L0.size != design.m or not np.all(np.isfinite(L0)) or np.any(L0 <= 0):
-        raise InputError(f"--lengths: expected {design.m} positive unstretched lengths [m], got {list(L0)}")
+    why = lengths_problem(L0, positive=True)
+    if L0.size != design.m or why:
+        raise InputError(f"--lengths: expected {design.m} unstretched lengths [m], got {L0.size}"
+                         if L0.size != design.m else f"--lengths: unstretched {why}")
     arr = robot.cable
     unk = _unknowns(robot)
     n = len(unk.index)

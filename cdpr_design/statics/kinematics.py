@@ -19,7 +19,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
+from cdpr_design.model.limits import lengths_problem
 from cdpr_design.statics.robot import has_pulleys
 
 
@@ -320,8 +322,9 @@ def forward_kinematics(design: Design, lengths, guess=None, tol: float = 1e-12) 
     lengths = np.asarray(lengths, dtype=float).reshape(-1)
     if lengths.size != design.m:
         raise ValueError(f"expected {design.m} cable lengths, got {lengths.size}")
-    if np.any(lengths < 0) or not np.all(np.isfinite(lengths)):
-        raise ValueError("cable lengths must be finite and non-negative")
+    why = lengths_problem(lengths)
+    if why:
+        raise InputError(why)
     mot = design.motion
     if mot.name == "2T" and design.m == 2:
         p = planar2_closed_form(design, lengths)

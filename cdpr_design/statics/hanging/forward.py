@@ -43,6 +43,7 @@ import numpy as np
 
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import is_point_mass, is_underconstrained
+from cdpr_design.model.limits import lengths_problem
 from cdpr_design.statics.hanging import geometry as hg
 from cdpr_design.statics.hanging import refine as rf
 from cdpr_design.statics.hanging.results import Equilibrium, HangingFK, UnreachableLengths
@@ -69,8 +70,9 @@ def _name(names, i) -> str:
 
 def _check_pairs(geo, rho, ltol, names=None):
     """Raise :class:`UnreachableLengths` for a pair of cables that cannot both reach."""
-    if np.any(~np.isfinite(rho)) or np.any(rho < 0):
-        raise InputError("cable lengths must be finite and non-negative")
+    why = lengths_problem(rho)
+    if why:
+        raise InputError(why)
     if np.any(rho < 1e-6):
         raise InputError(f"cable {_name(names, int(np.argmin(rho)))} is shorter than 1 micrometre: its "
                          "attachment would be pinned at its outlet, which the cable model does not cover")
