@@ -116,3 +116,12 @@ def jitable(func):
     the allocation costs in a whole sweep (``numba.extending.register_jitable``).
     """
     return register_jitable(func)
+
+
+def pointer(dispatcher, sig):
+    """A C function pointer to ``dispatcher``'s function compiled for ``sig`` (a numba signature with
+    its return type): a numba ``cfunc`` with the dispatcher's own options, in numba's on-disk cache
+    (stamped as every kernel, :func:`source_digest`).  numba keys it apart from the dispatcher's
+    own compiled versions, so both can be cached.  For :mod:`cdpr_design.kernels.pointers`."""
+    options = {k: v for k, v in dispatcher.targetoptions.items() if k in ("fastmath", "nogil", "error_model", "_nrt")}
+    return nb.cfunc(sig, cache=True, **options)(dispatcher.py_func)

@@ -36,7 +36,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit_fast_noref, njit_folded, njit_inline, njit_noref
+from cdpr_design.kernels._jit import njit_fast_noref, njit_inline, njit_noref
 from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, gram_of_inverse
 
 
@@ -101,34 +101,21 @@ def _other_rows(e, nv, a, b, c, la, lb, lc, half, inv, margin):
 def hsm_one(W, wreq, nv, tmin, tmax, scr, want_closure):
     """:func:`~cdpr_design.kernels.hsm.hsm_enumerate` for m = n + 1: (margin0, margin, closure);
     ``closure`` is tested only when ``want_closure`` (else returned True).  ``scr`` from
-    :func:`~cdpr_design.kernels.hsm.make_scratch`."""
-    return hsm_one_arrays(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[19], scr[20], want_closure)
-
-
-@njit_folded
-def hsm_one_arrays(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure):
-    """:func:`hsm_one` on the scratch's arrays themselves (``tab`` scr[0], ``M`` scr[1], ``e`` scr[2],
-    ``sv`` scr[28], ``nbc`` scr[19], ``bcol`` scr[20]): a compiled function that takes the scratch
-    tuple unpacks its 31 arrays, which costs compile time (see
-    :func:`~cdpr_design.kernels.tension_qp.null_space`).
-
-    Two calls, folded into the caller (:data:`~cdpr_design.kernels._jit.njit_folded`): compiled
-    alone it was one more level over :func:`facet_setup` and the facets, compiled again with
-    them (numba optimises a function together with everything it calls), on the critical path
-    of a machine's first run (:func:`~cdpr_design.kernels.warm.compile_pose` compiles the two it
-    calls in the other process; IPAnema 3, seven interleaved pairs of first runs: faster in six,
-    by 0.6 s on average, outputs identical)."""
-    facet_setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure)
+    :func:`~cdpr_design.kernels.hsm.make_scratch`.  A pose's code calls the two functions
+    itself, on the scratch's arrays (:func:`~cdpr_design.kernels.pose.eval_small`)."""
+    facet_setup(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[19], scr[20], want_closure)
     # the body compiled once, with the flag a variable: compiled with it a constant (a copy per
     # value) it cost IPAnema 3's first run 2.5 CPU-s more and no measurable time a pose.  A
     # compiled function rather than an inlined body: numba's inlining copies a body's IR block
     # by block with its whole scope, quadratic in its size (``hsm_two`` 6.7 -> 5.9 CPU-s)
-    return facets_one(W, wreq, nv, tab, M, e, sv, nbc, want_closure)
+    return facets_one(W, wreq, nv, scr[0], scr[1], scr[2], scr[28], scr[29], scr[19], want_closure)
 
 
 @njit_fast_noref
-def facets_one(W, wreq, nv, tab, M, e, sv, nbc, want_closure):
-    """The body of :func:`hsm_one_arrays`."""
+def facets_one(W, wreq, nv, tab, M, e, sv, P, nbc, want_closure):
+    """The facets of :func:`hsm_one` (``tab`` scr[0], ``M`` scr[1], ``e`` scr[2], ``sv`` scr[28],
+    ``nbc`` scr[19]) after :func:`facet_setup`.  ``P`` (scr[29]) is not used: the arguments of :func:`facets_two`, so
+    that a pose's code calls either alike (:func:`~cdpr_design.kernels.pose.eval_small`)."""
     n, m = W.shape
     c = nbc[0]
     margin0 = np.inf
@@ -166,23 +153,15 @@ def facets_one(W, wreq, nv, tab, M, e, sv, nbc, want_closure):
 def hsm_two(W, wreq, nv, tmin, tmax, scr, want_closure):
     """:func:`~cdpr_design.kernels.hsm.hsm_enumerate` for m = n + 2: (margin0, margin, closure);
     ``closure`` is tested only when ``want_closure`` (else returned True).  ``scr`` from
-    :func:`~cdpr_design.kernels.hsm.make_scratch`."""
-    return hsm_two_arrays(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[29], scr[19], scr[20],
-                          want_closure)
-
-
-@njit_folded
-def hsm_two_arrays(W, wreq, nv, tmin, tmax, tab, M, e, sv, P, nbc, bcol, want_closure):
-    """:func:`hsm_two` on the scratch's arrays themselves (``tab`` scr[0], ``M`` scr[1], ``e`` scr[2],
-    ``sv`` scr[28], ``P`` scr[29], ``nbc`` scr[19], ``bcol`` scr[20]); see :func:`hsm_one_arrays`."""
-    facet_setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure)
-    # the body compiled once, with the flag a variable (see hsm_one_arrays)
-    return facets_two(W, wreq, nv, tab, M, e, sv, P, nbc, want_closure)
+    :func:`~cdpr_design.kernels.hsm.make_scratch`; see :func:`hsm_one`."""
+    facet_setup(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[19], scr[20], want_closure)
+    return facets_two(W, wreq, nv, scr[0], scr[1], scr[2], scr[28], scr[29], scr[19], want_closure)
 
 
 @njit_fast_noref
 def facets_two(W, wreq, nv, tab, M, e, sv, P, nbc, want_closure):
-    """The body of :func:`hsm_two_arrays`."""
+    """The facets of :func:`hsm_two` (``tab`` scr[0], ``M`` scr[1], ``e`` scr[2], ``sv`` scr[28], ``P``
+    scr[29], ``nbc`` scr[19]) after :func:`facet_setup`."""
     n, m = W.shape
     c1 = nbc[0]
     c2 = nbc[1]

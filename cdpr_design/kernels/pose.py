@@ -6,7 +6,7 @@ import numpy as np
 
 from cdpr_design.kernels._jit import jitable, njit, njit_inline, njit_noref
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
-from cdpr_design.kernels.hsm_small import facet_setup, facets_one, facets_two, hsm_one_arrays, hsm_two_arrays
+from cdpr_design.kernels.hsm_small import facet_setup, facets_one, facets_two
 from cdpr_design.kernels.tension_qp import goldfarb_idnani, line_projection, null_space, plane_projection
 
 
@@ -34,34 +34,26 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
 
     The methods are chosen by ``r`` as in :func:`~cdpr_design.kernels.hsm.hsm_factored`
     and :func:`~cdpr_design.kernels.tension_qp.project_null` (closed forms for
-    r = 1, 2), but called here directly, and this function is inlined into its
-    callers: a caller passing ``r`` as a constant
+    r = 1, 2: :func:`eval_small`), but called here directly, and this function is inlined
+    into its callers: a caller passing ``r`` as a constant
     (:func:`cdpr_design.kernels.sweep.grid_block`) compiles only the methods it
     needs.  Going through those two functions instead, called or inlined,
     costs 0.17-0.25 us a pose more (an inlined layer passing the scratch tuple
     on costs about 0.18 us by itself).  A pose of IPAnema 3 took 3.56 us on
     one core through them, 2.62 us this way.
     """
+    if r == 2:
+        return eval_small(W, wreq, tmin, tmax, kind, t_out, scr,
+                          basis_factor, null_space, facet_setup, facets_two, plane_projection)
+    if r == 1:
+        return eval_small(W, wreq, tmin, tmax, kind, t_out, scr,
+                          basis_factor, null_space, facet_setup, facets_one, line_projection)
     n, m = W.shape
     nv = wreq.shape[0] if kind != KIND_STATIC else 1
-    zero_column = False
-    for j in range(m):
-        s = 0.0
-        for i in range(n):
-            s += W[i, j] * W[i, j]
-        zero_column = zero_column or s == 0.0
-    if zero_column or not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+    if _zero_column(W) or not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
         _no_tensions(m, t_out)
         return False, np.nan
-    closure_wanted = kind == KIND_WRENCH_CLOSURE
-    if r == 2:  # (hsm_small's hsm_two, hsm_one on the scratch's arrays)
-        margin0, margin, closure = hsm_two_arrays(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[29],
-                                                  scr[19], scr[20], closure_wanted)
-    elif r == 1:
-        margin0, margin, closure = hsm_one_arrays(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28],
-                                                  scr[19], scr[20], closure_wanted)
-    else:
-        margin0, margin, closure = hsm_enumerate(W, wreq, nv, tmin, tmax, scr)
+    margin0, margin, closure = hsm_enumerate(W, wreq, nv, tmin, tmax, scr)
     qp_ok = False
     if not margin0 >= 0.0:
         _no_tensions(m, t_out)
@@ -76,14 +68,60 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
                 acc += tab[s, m + i] * wreq[0, i]
             t_out[bcol[s]] = min(max(acc, tmin[bcol[s]]), tmax[bcol[s]])
     else:  # writes t_out, NaN where no tensions exist
-        # (tension_qp's null_space_setup, project_two, project_one on the scratch's arrays)
+        # (tension_qp's null_space_setup on the scratch's arrays, then the general QP)
         null_space(n, m, wreq[0], scr[0], scr[8], scr[9], scr[25], scr[19], scr[20])
-        if r == 2:
-            qp_ok = plane_projection(m, tmin, tmax, t_out, scr[8], scr[9], scr[30])
-        elif r == 1:
-            qp_ok = line_projection(m, tmin, tmax, t_out, scr[8], scr[9])
-        else:
-            qp_ok = goldfarb_idnani(m, r, tmin, tmax, t_out, scr)
+        qp_ok = goldfarb_idnani(m, r, tmin, tmax, t_out, scr)
+    return _verdict(kind, closure, margin, qp_ok, r)
+
+
+@njit_inline
+def eval_small(W, wreq, tmin, tmax, kind, t_out, scr, factor, null, setup, facets, project):
+    """:func:`eval_general` for m - n = 1 or 2, with the five functions it calls given: the basis
+    factorisation ``factor`` (:func:`~cdpr_design.kernels.hsm.basis_factor`), the null basis ``null``
+    (:func:`~cdpr_design.kernels.tension_qp.null_space`), the margins' ``setup`` and ``facets``
+    (:mod:`~cdpr_design.kernels.hsm_small`: :func:`facet_setup`, then ``facets_one`` or
+    ``facets_two``) and the tensions' ``project`` (``line_projection`` or ``plane_projection``),
+    each on the scratch's arrays.  ``facets`` and ``project`` take the same arguments for r = 1
+    and 2, so this code is the same for both.
+
+    :func:`eval_general` passes the compiled functions themselves (numba calls them directly);
+    the grid sweep's loops pass pointers to them (:mod:`cdpr_design.kernels.pointers`), so that
+    a loop compiles without compiling them into it again.
+    """
+    n, m = W.shape
+    nv = wreq.shape[0] if kind != KIND_STATIC else 1
+    if _zero_column(W) or not factor(W, scr[0], scr[18], scr[19], scr[20]):
+        _no_tensions(m, t_out)
+        return False, np.nan
+    closure_wanted = kind == KIND_WRENCH_CLOSURE
+    setup(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[19], scr[20], closure_wanted)
+    margin0, margin, closure = facets(W, wreq, nv, scr[0], scr[1], scr[2], scr[28], scr[29], scr[19], closure_wanted)
+    qp_ok = False
+    if not margin0 >= 0.0:
+        _no_tensions(m, t_out)
+    else:  # writes t_out, NaN where no tensions exist
+        null(n, m, wreq[0], scr[0], scr[8], scr[9], scr[25], scr[19], scr[20])
+        qp_ok = project(m, tmin, tmax, t_out, scr[8], scr[9], scr[30])
+    return _verdict(kind, closure, margin, qp_ok, m - n)
+
+
+@njit_inline
+def _zero_column(W):
+    """Whether a column of ``W`` (n, m) is zero (a cable of zero length)."""
+    n, m = W.shape
+    zero = False
+    for j in range(m):
+        s = 0.0
+        for i in range(n):
+            s += W[i, j] * W[i, j]
+        zero = zero or s == 0.0
+    return zero
+
+
+@njit_inline
+def _verdict(kind, closure, margin, qp_ok, r):
+    """(feasible, margin) of a pose: wrench closure needs W to span positively (r > 0); the other
+    kinds a margin >= 0 and the QP's tensions."""
     if kind == KIND_WRENCH_CLOSURE:
         return closure and r > 0, margin
     return margin >= 0.0 and qp_ok, margin
@@ -171,20 +209,44 @@ def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin,
     ``feasible[k]`` (uint8), ``margin[k]`` (-0.0 as 0.0: one zero in the CSV,
     whatever the engine) [N] and ``tensions[k]`` [N].
     """
-    m = W.shape[1]
     if not ok:
-        feasible[k] = 0
-        margin[k] = np.nan
-        for i in range(m):
-            tensions[k, i] = np.nan
+        _empty_row(k, feasible, margin, tensions)
         return
     if r == 0:  # the square case's work arrays from the scratch: (n, n), (n,) and (n, m + n = 2n)
         f, mg = eval_square_into(W, wreq, tmin, tmax, kind, t, scr[4], scr[3], scr[0])
     else:
         f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr, r)
+    _put_row(k, f, mg, t, feasible, margin, tensions)
+
+
+@njit_inline
+def eval_row_small(k, ok, W, wreq, tmin, tmax, kind, t, scr, feasible, margin, tensions,
+                   factor, null, setup, facets, project):
+    """:func:`eval_row` for m - n = 1 or 2 with the five functions of :func:`eval_small` given (the
+    grid sweep's pointers, :mod:`cdpr_design.kernels.pointers`)."""
+    if not ok:
+        _empty_row(k, feasible, margin, tensions)
+        return
+    f, mg = eval_small(W, wreq, tmin, tmax, kind, t, scr, factor, null, setup, facets, project)
+    _put_row(k, f, mg, t, feasible, margin, tensions)
+
+
+@njit_inline
+def _empty_row(k, feasible, margin, tensions):
+    """Row ``k``: infeasible, margin and tensions NaN (a cable of zero length)."""
+    feasible[k] = 0
+    margin[k] = np.nan
+    for i in range(tensions.shape[1]):
+        tensions[k, i] = np.nan
+
+
+@njit_inline
+def _put_row(k, f, mg, t, feasible, margin, tensions):
+    """Row ``k``: feasibility ``f``, margin ``mg`` (-0.0 as 0.0: one zero in the CSV, whatever the
+    engine) [N] and tensions ``t`` [N]."""
     feasible[k] = 1 if f else 0
     margin[k] = mg + 0.0
-    for i in range(m):
+    for i in range(tensions.shape[1]):
         tensions[k, i] = t[i]
 
 
@@ -236,33 +298,39 @@ def raise_floor(tmin, floor, L, lo):
     return lo
 
 
-def pose_kernels(n: int, m: int) -> tuple[list, list]:
-    """The compiled functions :func:`eval_general` calls for ``n`` DOF and ``m`` cables, with the
-    argument types a sweep's buffers give them (:func:`row_buffers`): (tensions, margins), each a
-    list of (dispatcher, argument types); both empty for m <= n (:func:`eval_square_into`: one
-    small function).  Two independent sets, for :func:`cdpr_design.kernels.warm.compile_pose`."""
-    from numba import typeof
+def pose_kernels(n: int, m: int, wreq=None, tmax=None) -> tuple[list, list]:
+    """The compiled functions a pose calls for ``n`` DOF and ``m`` cables (:func:`eval_general`), with
+    the types a sweep gives them: (tensions, margins), each a list of (dispatcher, signature); both
+    empty for m <= n (:func:`eval_square_into`: one small function).  Two independent sets, for
+    :func:`cdpr_design.kernels.warm.compile_pose`.
+
+    The types are those of the block's buffers (:func:`row_buffers`) and of the sweep's ``wreq``
+    (nv, n) [N, N m] and ``tmax`` (m,) [N] (default: new C-contiguous arrays).  For m - n = 1, 2
+    the signatures are complete, return type and all, in the order of :func:`eval_small`'s
+    arguments (tensions: ``factor``, ``null``, ``project``; margins: ``setup``, ``facets``): the C
+    signatures of the pointers to them (:mod:`cdpr_design.kernels.pointers`)."""
+    from numba import typeof, types
 
     r = m - n
     if r <= 0:
         return [], []
     W, t, _, _, scr = row_buffers(n, m, 1)
-    wreq = np.empty((1, n))
+    wreq = np.empty((1, n)) if wreq is None else wreq
     T = {name: typeof(a) for name, a in (("W", W), ("wreq", wreq), ("w", wreq[0]), ("t", t))}
+    tx = T["t"] if tmax is None else typeof(tmax)
     S = [typeof(a) for a in scr]
-    i64, flag = typeof(m), typeof(True)
-    tensions = [(basis_factor, (T["W"], S[0], S[18], S[19], S[20])),
-                (null_space, (i64, i64, T["w"], S[0], S[8], S[9], S[25], S[19], S[20]))]
-    # the margins of r = 1, 2: hsm_small's per-pose setup and its facets, the two functions
-    # hsm_one_arrays / hsm_two_arrays (folded into the loop) call
-    setup = (facet_setup, (T["W"], T["wreq"], i64, T["t"], T["t"], S[0], S[1], S[2], S[28], S[19], S[20], flag))
-    if r == 2:
-        tensions.append((plane_projection, (i64, T["t"], T["t"], T["t"], S[8], S[9], S[30])))
-        margins = [setup, (facets_two, (T["W"], T["wreq"], i64, S[0], S[1], S[2], S[28], S[29], S[19], flag))]
-    elif r == 1:
-        tensions.append((line_projection, (i64, T["t"], T["t"], T["t"], S[8], S[9])))
-        margins = [setup, (facets_one, (T["W"], T["wreq"], i64, S[0], S[1], S[2], S[28], S[19], flag))]
+    i64, flag, ok = typeof(m), typeof(True), types.boolean
+    facets = types.Tuple((types.float64, types.float64, types.boolean))  # (margin0, margin, closure)
+    tensions = [(basis_factor, ok(T["W"], S[0], S[18], S[19], S[20])),
+                (null_space, types.none(i64, i64, T["w"], S[0], S[8], S[9], S[25], S[19], S[20]))]
+    if r <= 2:
+        project = plane_projection if r == 2 else line_projection
+        tensions.append((project, ok(i64, T["t"], tx, T["t"], S[8], S[9], S[30])))
+        margins = [(facet_setup, types.none(T["W"], T["wreq"], i64, T["t"], tx, S[0], S[1], S[2], S[28], S[19],
+                                            S[20], flag)),
+                   (facets_two if r == 2 else facets_one, facets(T["W"], T["wreq"], i64, S[0], S[1], S[2], S[28],
+                                                                 S[29], S[19], flag))]
     else:
-        tensions.append((goldfarb_idnani, (i64, i64, T["t"], T["t"], T["t"], typeof(scr))))
-        margins = [(hsm_enumerate, (T["W"], T["wreq"], i64, T["t"], T["t"], typeof(scr)))]
+        tensions.append((goldfarb_idnani, ok(i64, i64, T["t"], tx, T["t"], typeof(scr))))
+        margins = [(hsm_enumerate, facets(T["W"], T["wreq"], i64, T["t"], tx, typeof(scr)))]
     return tensions, margins

@@ -10,7 +10,8 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
 from cdpr_design.kernels.linalg import RANK_TOL
 from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
-from cdpr_design.kernels.pose import RowBlock, eval_row, raise_floor, row_buffers
+from cdpr_design.kernels.pointers import PointerBlock
+from cdpr_design.kernels.pose import RowBlock, eval_row, eval_row_small, raise_floor, row_buffers
 from cdpr_design.kernels.interference import interference_pose
 from cdpr_design.kernels.parallel import run_blocks
 
@@ -34,22 +35,24 @@ def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, 
 def grid_block(r: int):
     """The block function computing rows k0..k1-1 of :func:`sweep_grid` for m - n = ``r``.
 
-    One loop per redundancy of 0, 1 and 2, each with ``r`` a constant in
-    :func:`_grid_loop` and so compiled with only its own margin and QP method
-    (:func:`~cdpr_design.kernels.pose.eval_general`); any other ``r`` takes the
-    general one.  Chosen here, in Python, so that a design compiles only the
-    loop it uses.  A pose of IPAnema 3 (r = 2) took 3.56 us on one core
-    with one kernel for every r, 2.62 us with its own.
+    One loop per redundancy: m = n (:func:`_grid_loop_0`), m - n = 1 or 2 (:func:`_grid_loop_small`,
+    one loop for both: it is given the pose's functions as pointers,
+    :mod:`cdpr_design.kernels.pointers`, and so compiles without them, alone, and once for every
+    such design), and any other (:func:`_grid_loop_any`).  Chosen here, in Python, so that a design
+    compiles only the loop it uses, each with only its own margin and QP method
+    (:func:`~cdpr_design.kernels.pose.eval_general`).  A pose of IPAnema 3 (r = 2) took 3.56 us on
+    one core with one kernel for every r, 2.62 us with its own.
 
-    The block (:class:`~cdpr_design.kernels.pose.RowBlock`) allocates the block's buffers
-    (:func:`~cdpr_design.kernels.pose.row_buffers`) and hands them to its loop
-    over the poses, compiled without reference counting
-    (:data:`~cdpr_design.kernels._jit.njit_noref`): every array a pose's code
-    binds or passes on (the scratch tuple alone holds 31) otherwise costs an
-    atomic increment and decrement per pose.  IPAnema 3: 2.66 -> 1.21 us a pose
-    on one core.
+    The block (:class:`~cdpr_design.kernels.pose.RowBlock`,
+    :class:`~cdpr_design.kernels.pointers.PointerBlock`) allocates the block's buffers
+    (:func:`~cdpr_design.kernels.pose.row_buffers`) and hands them to its loop over the poses,
+    compiled without reference counting (:data:`~cdpr_design.kernels._jit.njit_noref`): every
+    array a pose's code binds or passes on (the scratch tuple alone holds 31) otherwise costs an
+    atomic increment and decrement per pose.  IPAnema 3: 2.66 -> 1.21 us a pose on one core.
     """
-    return RowBlock({0: _grid_loop_0, 1: _grid_loop_1, 2: _grid_loop_2}.get(r, _grid_loop_any), _grid_dims)
+    if r in (1, 2):
+        return PointerBlock(_grid_loop_small, _grid_parts)
+    return RowBlock(_grid_loop_0 if r == 0 else _grid_loop_any, _grid_dims)
 
 
 def _grid_dims(start, lower, step, shape, Rb, A, rows, wreq, *rest):
@@ -57,54 +60,60 @@ def _grid_dims(start, lower, step, shape, Rb, A, rows, wreq, *rest):
     return rows.shape[0], A.shape[0], wreq.shape[0]
 
 
-@njit_noref
-def _grid_loop_2(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
-                 feasible, margin, tensions, lengths, W, t, L, lo, scr):
-    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
-               feasible, margin, tensions, lengths, W, t, L, lo, scr, 2)
+def _grid_parts(start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, *rest):
+    """(n, m, nv, wreq, tmax) of a grid block's arguments."""
+    return rows.shape[0], A.shape[0], wreq.shape[0], wreq, tmax
 
 
 @njit_noref
-def _grid_loop_1(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
-                 feasible, margin, tensions, lengths, W, t, L, lo, scr):
-    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
-               feasible, margin, tensions, lengths, W, t, L, lo, scr, 1)
+def _grid_loop_small(factor, null, setup, facets, project, k0, k1, start, lower, step, shape, Rb, A, rows, wreq,
+                     tmin, tmax, floor, combos, kind, feasible, margin, tensions, lengths, W, t, L, lo, scr):
+    """Rows k0..k1-1 of :func:`sweep_grid` (grid poses start+k0 .. start+k1-1) for m - n = 1 or 2,
+    with the pose's five functions given (:func:`~cdpr_design.kernels.pose.eval_small`) and the
+    block's buffers (:func:`~cdpr_design.kernels.pose.row_buffers`)."""
+    ix, iy, iz = grid_index(start + k0, shape[1], shape[2])
+    for k in range(k0, k1):
+        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths)
+        eval_row_small(k, ok, W, wreq, lo, tmax, kind, t, scr, feasible, margin, tensions,
+                       factor, null, setup, facets, project)
 
 
 @njit_noref
 def _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
                  feasible, margin, tensions, lengths, W, t, L, lo, scr):
-    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
-               feasible, margin, tensions, lengths, W, t, L, lo, scr, 0)
+    """:func:`_grid_loop_small` for m = n."""
+    ix, iy, iz = grid_index(start + k0, shape[1], shape[2])
+    for k in range(k0, k1):
+        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths)
+        eval_row(k, ok, W, wreq, lo, tmax, combos, kind, t, scr, feasible, margin, tensions, 0)
 
 
 @njit_noref
 def _grid_loop_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
                    feasible, margin, tensions, lengths, W, t, L, lo, scr):
-    _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
-               feasible, margin, tensions, lengths, W, t, L, lo, scr, A.shape[0] - rows.shape[0])
+    """:func:`_grid_loop_small` for any other m - n (the general margin and QP)."""
+    r = A.shape[0] - rows.shape[0]
+    ix, iy, iz = grid_index(start + k0, shape[1], shape[2])
+    for k in range(k0, k1):
+        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths)
+        eval_row(k, ok, W, wreq, lo, tmax, combos, kind, t, scr, feasible, margin, tensions, r)
 
 
 @njit_inline
-def _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos,
-               kind, feasible, margin, tensions, lengths, W, t, L, lo, scr, r):
-    """Rows k0..k1-1 of :func:`sweep_grid` (grid poses start+k0 .. start+k1-1) with the block's
-    buffers (:func:`~cdpr_design.kernels.pose.row_buffers`), for m - n = ``r``."""
-    m = A.shape[0]
-    ny = shape[1]
-    nz = shape[2]
-    # grid indices of the block's first pose, then counted up (no division per pose)
-    ix, iy, iz = grid_index(start + k0, ny, nz)
-    for k in range(k0, k1):
-        px = lower[0] + ix * step[0]
-        py = lower[1] + iy * step[1]
-        pz = lower[2] + iz * step[2]
-        ix, iy, iz = next_grid_index(ix, iy, iz, ny, nz)
-        ok = structure_matrix(px, py, pz, Rb, A, rows, W, L)
-        for i in range(m):
-            lengths[k, i] = L[i]
-        eval_row(k, ok, W, wreq, raise_floor(tmin, floor, L, lo), tmax, combos, kind, t, scr, feasible, margin,
-                 tensions, r)
+def _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths):
+    """Row ``k``'s grid pose, at grid indices (ix, iy, iz): its structure matrix into ``W``, its
+    cable lengths into ``L`` and ``lengths[k]`` [m], its lower tension bounds into ``lo`` [N]
+    (:func:`~cdpr_design.kernels.pose.raise_floor`).  Returns (ok, the next pose's indices): ok
+    False for a cable of zero length.  The grid's indices are counted up, not divided per pose."""
+    px = lower[0] + ix * step[0]
+    py = lower[1] + iy * step[1]
+    pz = lower[2] + iz * step[2]
+    ix, iy, iz = next_grid_index(ix, iy, iz, shape[1], shape[2])
+    ok = structure_matrix(px, py, pz, Rb, A, rows, W, L)
+    for i in range(A.shape[0]):
+        lengths[k, i] = L[i]
+    raise_floor(tmin, floor, L, lo)
+    return ok, ix, iy, iz
 
 
 def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax, floor,

@@ -139,13 +139,14 @@ def project_one(m, tmin, tmax, t, scr):
     so z ends at the end of the feasible interval nearest 0.  Violations up to
     :func:`qp_tolerance` count as met, as in the general method.
     """
-    return line_projection(m, tmin, tmax, t, scr[8], scr[9])
+    return line_projection(m, tmin, tmax, t, scr[8], scr[9], scr[30])
 
 
 @njit_noref
-def line_projection(m, tmin, tmax, t, N, tp):
+def line_projection(m, tmin, tmax, t, N, tp, H):
     """:func:`project_one` on the scratch's null basis ``N`` (scr[8]) and ``tp`` (scr[9]) themselves
-    (see :func:`null_space`)."""
+    (see :func:`null_space`).  ``H`` is not used: the arguments of :func:`plane_projection`, so that
+    a pose's code calls either alike (:func:`~cdpr_design.kernels.pose.eval_small`)."""
     tol = qp_tolerance(m, tmin, tmax)
     z = 0.0
     way = 0.0  # the direction z moves in: +1, -1 (0: not moved yet)

@@ -6,16 +6,22 @@ calls (:func:`~cdpr_design.kernels.pose.pose_kernels`) fall into two independent
 the same cost, the margins' and the tensions': :func:`compile_pose` compiles the margins' in a
 new process (:func:`main`, run by ``python -c``) while this one compiles the
 tensions', both into numba's on-disk cache (``cache=True``; numba's cache files are written
-atomically, one per function), and waits for it.  The sweep's own loop, compiled next, then
-loads them from the cache instead of compiling them: numba caches a function with the code
-callers link in, so the loop's machine code is the one it would have had.
+atomically, one per function).
+
+For m - n = 1, 2 they are pointers (:mod:`cdpr_design.kernels.pointers`), and the grid sweep's
+loop compiles without them: :func:`compile_pose` returns once this process has its share (and
+the CSV formatter, ``meanwhile``), the loop compiles while the other process still works, and
+the sweep's block waits for it only when it needs the margins' pointers, then loads them from
+the cache.  For any other m - n :func:`compile_pose` waits for the other process, and the loop,
+compiled next, loads the functions from the cache instead of compiling them: numba caches a
+function with the code callers link in, so the loop's machine code is the one it would have had.
 
 Only on a first run: the other process starts when one of the tensions' functions was not in
 the cache (compiled, not loaded).  When they all loaded, nothing is started: a run that
 compiled this m - n's QP method compiled its margins too, as a rule (every cache entry is
 stamped with the whole package's sources, :mod:`cdpr_design.kernels._jit`); where it did not,
-and whatever the other process does not compile (it failed, or was stopped), the loop
-compiles itself, as it would without this.
+and whatever the other process does not compile (it failed, or was stopped), this process
+compiles them itself, as it would without this.
 """
 
 from __future__ import annotations
@@ -27,6 +33,7 @@ from typing import Callable
 
 import numba
 
+from cdpr_design.kernels import pointers
 from cdpr_design.kernels.pose import pose_kernels
 
 #: the folder holding the ``cdpr_design`` package, first on the other process's path
@@ -34,23 +41,30 @@ _ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__
 
 
 def _compile(functions) -> None:
-    for dispatcher, types in functions:
-        dispatcher.compile(types)
+    for dispatcher, sig in functions:
+        dispatcher.compile(sig.args)
 
 
 def compile_pose(n: int, m: int, meanwhile: Callable[[], None] | None = None) -> bool:
     """Compile (or load) the pose kernels for ``n`` DOF and ``m`` cables, the margins' in another
-    process when they are not in numba's cache; returns whether that process ran.  ``meanwhile``
-    is called, when it did, before waiting for it: more to compile in this process (the CSV
-    formatter), while the other finishes."""
+    process when they are not in numba's cache; returns whether that process was started.
+    ``meanwhile`` is called, when it was, while the other runs: more to compile in this process
+    (the CSV formatter).
+
+    For m - n = 1, 2 the kernels are pointers (:mod:`cdpr_design.kernels.pointers`) and the grid
+    loop does not need them to compile: this returns without waiting, and the sweep's block,
+    having compiled its loop, waits for the other process when it asks for the margins'
+    pointers.  For any other m - n this waits for it."""
     if numba.config.DISABLE_JIT:
         return False  # plain Python functions: nothing to compile
+    if m - n in (1, 2):
+        return _compile_pointers(n, m, meanwhile)
     tensions, margins = pose_kernels(n, m)
     other = None
     try:
-        for dispatcher, types in tensions:
+        for dispatcher, sig in tensions:
             missed = sum(dispatcher.stats.cache_misses.values())
-            dispatcher.compile(types)
+            dispatcher.compile(sig.args)
             if other is None and sum(dispatcher.stats.cache_misses.values()) > missed:
                 other = _start(n, m)
         if other and meanwhile is not None:
@@ -58,6 +72,21 @@ def compile_pose(n: int, m: int, meanwhile: Callable[[], None] | None = None) ->
     finally:
         if other:
             other.wait()
+    return bool(other)
+
+
+def _compile_pointers(n: int, m: int, meanwhile: Callable[[], None] | None) -> bool:
+    """:func:`compile_pose` for m - n = 1, 2: the tensions' pointers here, the margins' in the other
+    process, started as soon as the first of the tensions' was not in the cache."""
+    other = None
+    for k in pointers.TENSIONS:
+        made = pointers.pointers(n, m, which=(k,))[0]
+        if other is None and not made.cache_hits:
+            other = _start(n, m)
+            if other:
+                pointers.expect(n, m, other)
+    if other and meanwhile is not None:
+        meanwhile()
     return bool(other)
 
 
@@ -76,7 +105,10 @@ def _start(n: int, m: int) -> subprocess.Popen | bool:
 
 def main(n: int, m: int) -> None:
     """The other process: compile the margins' functions of ``n`` DOF and ``m`` cables into the cache."""
-    _compile(pose_kernels(n, m)[1])
+    if m - n in (1, 2):
+        pointers.pointers(n, m, which=pointers.MARGINS)
+    else:
+        _compile(pose_kernels(n, m)[1])
 
 
 if __name__ == "__main__":

@@ -1,0 +1,115 @@
+"""The functions a pose of m - n = 1 or 2 calls, as C function pointers, and the blocks of the loops
+that call them so.
+
+numba compiles a function together with everything it calls: the grid sweep's loop for m - n = 2
+linked the five functions its pose calls (:func:`~cdpr_design.kernels.pose.eval_small`) into its
+own code, optimised them again with it, and so could only compile once they were compiled.  On a
+machine's first run of IPAnema 3 that put the loop's compile (4-5 CPU-s) after the margins' (in
+the other process, :mod:`cdpr_design.kernels.warm`), each on the critical path.  Here the loop
+takes the five as arguments of numba's first-class function type, given pointers to them (a
+``cfunc`` of each, in numba's on-disk cache like every kernel, :func:`pointers`): it compiles on
+its own, while the other process still compiles the margins, and nothing is compiled twice.
+IPAnema 3's first run from an empty cache: see ``scripts/bench_first_run.py``; its sweep as fast
+as before (an indirect call a function, five a pose) and its outputs identical.
+
+The pointers are passed as five arguments, not a tuple: a tuple of functions makes numba warn that
+first-class functions are experimental, five arguments do not.  Under ``NUMBA_DISABLE_JIT`` the
+loops are Python functions and are given the Python functions themselves.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import threading
+
+import numba
+
+from cdpr_design.kernels._jit import pointer
+from cdpr_design.kernels.pose import pose_kernels, row_buffers
+
+#: the pointers made in this process, by (function, signature)
+_made: dict = {}
+#: the other process compiling the margins' pointers (kernels.warm), by (n, m)
+_pending: dict[tuple[int, int], subprocess.Popen] = {}
+_lock = threading.Lock()
+
+
+def expect(n: int, m: int, process: subprocess.Popen) -> None:
+    """Note that ``process`` compiles the margins' pointers of ``n`` DOF and ``m`` cables into the
+    cache: :func:`pointers` waits for it before making them here (loaded, not compiled again)."""
+    with _lock:
+        _pending[(n, m)] = process
+
+
+#: positions in :func:`pointers` of the tensions' functions (factor, null, project) and the margins'
+TENSIONS = (0, 1, 4)
+MARGINS = (2, 3)
+
+
+def pointers(n: int, m: int, wreq=None, tmax=None, which=(0, 1, 2, 3, 4)) -> list:
+    """Pointers to the pose's functions of ``n`` DOF and ``m`` cables (m - n = 1, 2) for a sweep's
+    ``wreq`` and ``tmax`` (:func:`~cdpr_design.kernels.pose.pose_kernels`): those at the positions
+    ``which`` of :func:`~cdpr_design.kernels.pose.eval_small`'s five (:data:`TENSIONS`,
+    :data:`MARGINS`).  Each is compiled, or loaded from numba's cache, once per process; the
+    margins' after the other process compiling them finished (:func:`expect`).  Under
+    ``NUMBA_DISABLE_JIT``, the Python functions."""
+    tensions, margins = pose_kernels(n, m, wreq, tmax)
+    five = tensions[:2] + margins + tensions[2:]
+    if any(k in MARGINS for k in which):
+        with _lock:
+            other = _pending.pop((n, m), None)
+        if other is not None:
+            other.wait()
+    if numba.config.DISABLE_JIT:
+        return [five[k][0] for k in which]
+    out = []
+    for k in which:
+        with _lock:
+            if five[k] not in _made:
+                _made[five[k]] = pointer(*five[k])
+            out.append(_made[five[k]])
+    return out
+
+
+def signature_types(n: int, m: int, wreq=None, tmax=None) -> tuple:
+    """The numba types of :func:`pointers` (``which="all"``): what a loop taking them is compiled for."""
+    from numba import types
+
+    tensions, margins = pose_kernels(n, m, wreq, tmax)
+    return tuple(types.FunctionType(sig) for _, sig in tensions[:2] + margins + tensions[2:])
+
+
+class PointerBlock:
+    """Rows k0..k1-1 of a sweep whose loop takes the pose's functions as pointers (m - n = 1, 2): the
+    block's buffers (:func:`~cdpr_design.kernels.pose.row_buffers`), then
+    ``loop(*pointers, k0, k1, *args, W, t, L, lo, scr)``.
+
+    ``parts(*args)`` gives (n, m, nv, wreq, tmax) from the block's arguments.  The first call
+    compiles the loop for the pointers' types before it asks for them (:func:`pointers`), so on a
+    machine's first run the loop compiles while the other process compiles the margins.  Python,
+    as :class:`~cdpr_design.kernels.pose.RowBlock`.
+    """
+
+    def __init__(self, loop, parts):
+        self.loop, self.parts = loop, parts
+        self._fns: dict = {}
+
+    @property
+    def signatures(self) -> list:
+        """The loop's compiled signatures (:func:`~cdpr_design.kernels.parallel.run_blocks` runs the
+        first block of a loop not compiled yet on the calling thread)."""
+        return self.loop.signatures
+
+    def __call__(self, k0, k1, *args):
+        n, m, nv, wreq, tmax = self.parts(*args)
+        buffers = row_buffers(n, m, nv)
+        key = (n, m, numba.typeof(wreq), numba.typeof(tmax))
+        fns = self._fns.get(key)
+        if fns is None:
+            if not numba.config.DISABLE_JIT:
+                from numba import typeof, types
+
+                self.loop.compile(signature_types(n, m, wreq, tmax) + (types.int64, types.int64)
+                                  + tuple(typeof(a) for a in args + buffers))
+            fns = self._fns[key] = tuple(pointers(n, m, wreq, tmax))
+        self.loop(*fns, k0, k1, *args, *buffers)
