@@ -119,9 +119,16 @@ def jitable(func):
 
 
 def pointer(dispatcher, sig):
-    """A C function pointer to ``dispatcher``'s function compiled for ``sig`` (a numba signature with
-    its return type): a numba ``cfunc`` with the dispatcher's own options, in numba's on-disk cache
-    (stamped as every kernel, :func:`source_digest`).  numba keys it apart from the dispatcher's
-    own compiled versions, so both can be cached.  For :mod:`cdpr_design.kernels.pointers`."""
-    options = {k: v for k, v in dispatcher.targetoptions.items() if k in ("fastmath", "nogil", "error_model", "_nrt")}
-    return nb.cfunc(sig, cache=True, **options)(dispatcher.py_func)
+    """A C function pointer to ``dispatcher`` compiled for ``sig`` (a numba signature with its return
+    type): the dispatcher's own compiled function, compiled or loaded from numba's cache for
+    ``sig``'s argument types, through the C wrapper numba makes of every compiled function
+    (numba's ``CompileResultWAP``, its wrapper-address protocol: typed as a first-class function
+    ``FunctionType(sig)``).  Nothing is compiled twice: callers that call ``dispatcher`` directly
+    link the same compiled function.  For :mod:`cdpr_design.kernels.pointers`."""
+    from numba.core.types.function_type import CompileResultWAP
+
+    dispatcher.compile(sig.args)
+    cres = dispatcher.overloads[tuple(sig.args)]
+    if cres.signature != sig:
+        raise TypeError(f"{dispatcher.py_func.__name__} compiles to {cres.signature}, not the pointer's {sig}")
+    return CompileResultWAP(cres)

@@ -6,9 +6,10 @@ linked the five functions its pose calls (:func:`~cdpr_design.kernels.pose.eval_
 own code, optimised them again with it, and so could only compile once they were compiled.  On a
 machine's first run of IPAnema 3 that put the loop's compile (4-5 CPU-s) after the margins' (in
 the other process, :mod:`cdpr_design.kernels.warm`), each on the critical path.  Here the loop
-takes the five as arguments of numba's first-class function type, given pointers to them (a
-``cfunc`` of each, in numba's on-disk cache like every kernel, :func:`pointers`): it compiles on
-its own, while the other process still compiles the margins, and nothing is compiled twice.
+takes the five as arguments of numba's first-class function type, given pointers to them (the C
+wrappers numba makes of the compiled functions themselves, :func:`pointers`): it compiles on its
+own, while the other process still compiles the margins, once for m - n = 1 and 2, and nothing
+is compiled twice (the loops that call the five directly link the same compiled functions).
 IPAnema 3's first run from an empty cache: see ``scripts/bench_first_run.py``; its sweep as fast
 as before (an indirect call a function, five a pose) and its outputs identical.
 

@@ -78,10 +78,12 @@ def compile_pose(n: int, m: int, meanwhile: Callable[[], None] | None = None) ->
 def _compile_pointers(n: int, m: int, meanwhile: Callable[[], None] | None) -> bool:
     """:func:`compile_pose` for m - n = 1, 2: the tensions' pointers here, the margins' in the other
     process, started as soon as the first of the tensions' was not in the cache."""
+    tensions, _ = pose_kernels(n, m)
     other = None
-    for k in pointers.TENSIONS:
-        made = pointers.pointers(n, m, which=(k,))[0]
-        if other is None and not made.cache_hits:
+    for k, (dispatcher, _) in zip(pointers.TENSIONS, tensions[:2] + tensions[2:]):
+        missed = sum(dispatcher.stats.cache_misses.values())
+        pointers.pointers(n, m, which=(k,))
+        if other is None and sum(dispatcher.stats.cache_misses.values()) > missed:
             other = _start(n, m)
             if other:
                 pointers.expect(n, m, other)
