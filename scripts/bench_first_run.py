@@ -255,6 +255,36 @@ callers (within the noise), the QP's thin levels below ``_min_norm`` folded (thr
 gain), the margins' setup moved to this process (this one then finished last), and a cheaper
 tension function first so that the other process starts sooner (numba's own first-compile
 start-up, about 0.6 s, goes to whichever comes first).
+
+Then the grid loop of m - n = 1, 2 given the pose's five functions as pointers
+(``kernels/pointers.py``: the C wrappers of their compiled versions), so that it compiles alone,
+while the other process still compiles the margins, and once for both redundancies.  Measured
+on its own first, the loop's compile shrank less than expected (IPAnema 3's loop 4.45 -> 3.61
+CPU-s in numba's pipeline: numba's own inlining and typing of the loop's body stay); the gain is
+that it no longer waits.  A first version compiled the pointers as ``cfunc``s of their own, and
+the every-kernel total rose 73.3 -> 83.2 CPU-s (the other loops still compile the functions as
+before); the compiled functions' own wrappers compile nothing twice.  ``--root`` at 247171b,
+``--repeat 1``, two idle cores (load average 0.9-1.2)::
+
+    design       cold wall         cold CPU          warm wall        warm CPU
+    cogiro       14.4 -> 12.1 s    18.3 -> 16.4 s    2.01 -> 2.19 s   1.57 -> 1.72 s
+    crane4       19.9 -> 22.1 s    22.1 -> 24.3 s    6.65 -> 5.46 s   8.41 -> 7.36 s
+    ipanema1     14.6 -> 9.2 s     18.4 -> 12.8 s    2.26 -> 2.26 s   2.10 -> 2.04 s
+    ipanema2     14.8 -> 10.1 s    19.1 -> 14.0 s    1.94 -> 1.85 s   1.45 -> 1.40 s
+    ipanema3     14.6 -> 10.4 s    17.9 -> 14.4 s    2.25 -> 2.22 s   1.86 -> 1.83 s
+    planar2       1.7 -> 1.6 s      1.1 -> 1.0 s     1.66 -> 1.55 s   1.04 -> 0.75 s
+    planar4      14.2 -> 9.5 s     17.2 -> 12.4 s    1.98 -> 1.75 s   1.55 -> 1.37 s
+    pointmass3   10.6 -> 10.5 s    10.4 -> 10.3 s    1.61 -> 1.96 s   1.23 -> 1.49 s
+    sagging40    51.0 -> 47.9 s    52.8 -> 49.8 s    5.09 -> 4.17 s   6.69 -> 6.07 s
+    cold compile of every kernel the designs use (one cache): 73.8 -> 75.6 CPU-s
+
+Every output identical.  crane4, pointmass3 and sagging40 do not use the changed loop: their
+moves are the noise.  Four interleaved pairs of IPAnema 3's first run: 15.46 / 13.65 / 14.22 /
+16.22 -> 11.25 / 10.79 / 11.51 / 11.61 s (the cfunc version; the wrappers' are at least as
+fast); its sweep 0.12 s either way (56,000 poses, two threads, three warm runs each).  Where
+its first run goes now: 1.4 s to the first compile, the tension functions to 4.9 s, the CSV
+formatter to 6.5 s, the loop (3.7 CPU-s, with the structure matrix it calls) to 10.2 s, then
+the sweep and the files; the other process is done with the margins at about 7 s.
 """
 
 from __future__ import annotations
