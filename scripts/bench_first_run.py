@@ -280,8 +280,8 @@ before); the compiled functions' own wrappers compile nothing twice.  ``--root``
 
 Every output identical.  crane4, pointmass3 and sagging40 do not use the changed loop: their
 moves are the noise.  Four interleaved pairs of IPAnema 3's first run: 15.46 / 13.65 / 14.22 /
-16.22 -> 11.25 / 10.79 / 11.51 / 11.61 s (the cfunc version; the wrappers' are at least as
-fast); its sweep 0.12 s either way (56,000 poses, two threads, three warm runs each).  Where
+16.22 -> 11.25 / 10.79 / 11.51 / 11.61 s with the cfuncs, three with the wrappers 14.55 / 14.90 /
+14.04 -> 10.40 / 10.85 / 10.81 s; its sweep 0.12 s either way (56,000 poses, two threads, three warm runs each).  Where
 its first run goes now: 1.4 s to the first compile, the tension functions to 4.9 s, the CSV
 formatter to 6.5 s, the loop (3.7 CPU-s, with the structure matrix it calls) to 10.2 s, then
 the sweep and the files; the other process is done with the margins at about 7 s.
