@@ -73,7 +73,7 @@ def pointers(n: int, m: int, wreq=None, tmax=None, which=(0, 1, 2, 3, 4)) -> lis
 
 
 def signature_types(n: int, m: int, wreq=None, tmax=None) -> tuple:
-    """The numba types of :func:`pointers` (``which="all"``): what a loop taking them is compiled for."""
+    """The numba types of the five :func:`pointers`, in their order: what a loop taking them is compiled for."""
     from numba import types
 
     tensions, margins = pose_kernels(n, m, wreq, tmax)
