@@ -54,8 +54,7 @@ def pointers(n: int, m: int, wreq=None, tmax=None, which=(0, 1, 2, 3, 4)) -> lis
     :data:`MARGINS`).  Each is compiled, or loaded from numba's cache, once per process; the
     margins' after the other process compiling them finished (:func:`expect`).  Under
     ``NUMBA_DISABLE_JIT``, the Python functions."""
-    tensions, margins = pose_kernels(n, m, wreq, tmax)
-    five = tensions[:2] + margins + tensions[2:]
+    five = pose_functions(n, m, wreq, tmax)
     if any(k in MARGINS for k in which):
         with _lock:
             other = _pending.pop((n, m), None)
@@ -72,12 +71,18 @@ def pointers(n: int, m: int, wreq=None, tmax=None, which=(0, 1, 2, 3, 4)) -> lis
     return out
 
 
+def pose_functions(n: int, m: int, wreq=None, tmax=None) -> list:
+    """The five (dispatcher, signature) of :func:`~cdpr_design.kernels.pose.pose_kernels`, in the
+    order of :func:`~cdpr_design.kernels.pose.eval_small`'s arguments (:data:`TENSIONS`, :data:`MARGINS`)."""
+    tensions, margins = pose_kernels(n, m, wreq, tmax)
+    return tensions[:2] + margins + tensions[2:]
+
+
 def signature_types(n: int, m: int, wreq=None, tmax=None) -> tuple:
     """The numba types of the five :func:`pointers`, in their order: what a loop taking them is compiled for."""
     from numba import types
 
-    tensions, margins = pose_kernels(n, m, wreq, tmax)
-    return tuple(types.FunctionType(sig) for _, sig in tensions[:2] + margins + tensions[2:])
+    return tuple(types.FunctionType(sig) for _, sig in pose_functions(n, m, wreq, tmax))
 
 
 class PointerBlock:

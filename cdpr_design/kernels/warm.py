@@ -78,9 +78,10 @@ def compile_pose(n: int, m: int, meanwhile: Callable[[], None] | None = None) ->
 def _compile_pointers(n: int, m: int, meanwhile: Callable[[], None] | None) -> bool:
     """:func:`compile_pose` for m - n = 1, 2: the tensions' pointers here, the margins' in the other
     process, started as soon as the first of the tensions' was not in the cache."""
-    tensions, _ = pose_kernels(n, m)
+    five = pointers.pose_functions(n, m)
     other = None
-    for k, (dispatcher, _) in zip(pointers.TENSIONS, tensions[:2] + tensions[2:]):
+    for k in pointers.TENSIONS:
+        dispatcher = five[k][0]
         missed = sum(dispatcher.stats.cache_misses.values())
         pointers.pointers(n, m, which=(k,))
         if other is None and sum(dispatcher.stats.cache_misses.values()) > missed:

@@ -75,6 +75,7 @@ FORCE = 1e9
 #: Any other number: magnitude at most 1e12, so that products of two stay finite.
 ANY = 1e12
 
+
 def lengths_problem(lengths, positive: bool = False) -> str | None:
     """What is wrong with cable ``lengths`` [m] (a sequence) for a forward kinematics; None when each is
     finite and from 0 (above 0 when ``positive``) to :data:`LENGTH`, the bound ``--lengths`` takes too

@@ -167,10 +167,11 @@ def forward(design: Design | Robot, unstretched, guess=None) -> CableFK:
     if robot.cables == "ideal":
         raise InputError("cable model 'ideal': the forward kinematics of straight cables is kinematics.forward_kinematics")
     L0 = np.asarray(unstretched, float).reshape(-1)
+    if L0.size != design.m:
+        raise InputError(f"--lengths: expected {design.m} unstretched lengths [m], got {L0.size}")
     why = lengths_problem(L0, positive=True)
-    if L0.size != design.m or why:
-        raise InputError(f"--lengths: expected {design.m} unstretched lengths [m], got {L0.size}"
-                         if L0.size != design.m else f"--lengths: unstretched {why}")
+    if why:
+        raise InputError(f"--lengths: unstretched {why}")
     arr = robot.cable
     unk = _unknowns(robot)
     n = len(unk.index)
