@@ -1,21 +1,24 @@
-"""The functions a pose of m - n = 1 or 2 calls, as C function pointers, and the blocks of the loops
-that call them so.
+"""The functions a grid pose of m - n = 1 or 2 calls, as C function pointers, and the blocks of the
+loops that call them so.
 
 numba compiles a function together with everything it calls: the grid sweep's loop for m - n = 2
-linked the five functions its pose calls (:func:`~cdpr_design.kernels.pose.eval_small`) into its
-own code, optimised them again with it, and so could only compile once they were compiled.  On a
+linked the functions its pose calls (:func:`~cdpr_design.kernels.pose.eval_small`) into its own
+code, optimised them again with it, and so could only compile once they were compiled.  On a
 machine's first run of IPAnema 3 that put the loop's compile (4-5 CPU-s) after the margins' (in
 the other process, :mod:`cdpr_design.kernels.warm`), each on the critical path.  Here the loop
-takes the five as arguments of numba's first-class function type, given pointers to them (the C
-wrappers numba makes of the compiled functions themselves, :func:`pointers`): it compiles on its
-own, while the other process still compiles the margins, once for m - n = 1 and 2, and nothing
-is compiled twice (the loops that call the five directly link the same compiled functions).
-IPAnema 3's first run from an empty cache: see ``scripts/bench_first_run.py``; its sweep as fast
-as before (an indirect call a function, five a pose) and its outputs identical.
+takes six functions as arguments of numba's first-class function type -- ``eval_small``'s five
+and the structure matrix (:func:`~cdpr_design.kernels.geometry.structure_matrix`) -- given
+pointers to them (the C wrappers numba makes of the compiled functions themselves,
+:func:`pointers`): it compiles on its own, while the other process still compiles its share
+(:data:`HERE`, :data:`THERE`), once for m - n = 1 and 2, and nothing is compiled twice (the loops
+that call the six directly link the same compiled functions).  It is also given only the twelve
+scratch arrays its pose works in (:func:`~cdpr_design.kernels.pose.small_scratch`).  IPAnema 3's
+first run from an empty cache: see ``scripts/bench_first_run.py``; its sweep as fast as before
+(an indirect call a function, six a pose) and its outputs identical.
 
-The pointers are passed as five arguments, not a tuple: a tuple of functions makes numba warn that
-first-class functions are experimental, five arguments do not.  Under ``NUMBA_DISABLE_JIT`` the
-loops are Python functions and are given the Python functions themselves.
+The pointers are passed as six arguments, not a tuple: a tuple of functions makes numba warn that
+first-class functions are experimental, separate arguments do not.  Under ``NUMBA_DISABLE_JIT``
+the loops are Python functions and are given the Python functions themselves.
 """
 
 from __future__ import annotations
@@ -24,9 +27,11 @@ import subprocess
 import threading
 
 import numba
+import numpy as np
 
 from cdpr_design.kernels._jit import pointer
-from cdpr_design.kernels.pose import pose_kernels, row_buffers
+from cdpr_design.kernels.geometry import structure_matrix
+from cdpr_design.kernels.pose import pose_kernels, row_buffers, small_scratch
 
 #: the pointers made in this process, by (function, signature)
 _made: dict = {}
@@ -42,44 +47,51 @@ def expect(n: int, m: int, process: subprocess.Popen) -> None:
         _pending[(n, m)] = process
 
 
-#: positions in :func:`pointers` of the tensions' functions (factor, null, project) and the margins'
-TENSIONS = (0, 1, 4)
-MARGINS = (2, 3)
+#: positions in :func:`pointers` of the functions a first run compiles in this process (the basis
+#: factorisation and the tensions' projection) and in the other (the null basis, the margins' setup
+#: and facets, the structure matrix; :mod:`cdpr_design.kernels.warm`): about the same time each
+HERE = (0, 4)
+THERE = (1, 2, 3, 5)
 
 
-def pointers(n: int, m: int, wreq=None, tmax=None, which=(0, 1, 2, 3, 4)) -> list:
-    """Pointers to the pose's functions of ``n`` DOF and ``m`` cables (m - n = 1, 2) for a sweep's
-    ``wreq`` and ``tmax`` (:func:`~cdpr_design.kernels.pose.pose_kernels`): those at the positions
-    ``which`` of :func:`~cdpr_design.kernels.pose.eval_small`'s five (:data:`TENSIONS`,
-    :data:`MARGINS`).  Each is compiled, or loaded from numba's cache, once per process; the
-    margins' after the other process compiling them finished (:func:`expect`).  Under
-    ``NUMBA_DISABLE_JIT``, the Python functions."""
-    five = pose_functions(n, m, wreq, tmax)
-    if any(k in MARGINS for k in which):
+def pointers(n: int, m: int, wreq=None, tmax=None, which=(0, 1, 2, 3, 4, 5)) -> list:
+    """Pointers to the grid pose's functions of ``n`` DOF and ``m`` cables (m - n = 1, 2) for a
+    sweep's ``wreq`` and ``tmax``: those at the positions ``which`` of :func:`pose_functions`' six
+    (:data:`HERE`, :data:`THERE`).  Each is compiled, or loaded from numba's cache, once per
+    process; those of :data:`THERE` after the other process compiling them finished
+    (:func:`expect`).  Under ``NUMBA_DISABLE_JIT``, the Python functions."""
+    six = pose_functions(n, m, wreq, tmax)
+    if any(k in THERE for k in which):
         with _lock:
             other = _pending.pop((n, m), None)
         if other is not None:
             other.wait()
     if numba.config.DISABLE_JIT:
-        return [five[k][0] for k in which]
+        return [six[k][0] for k in which]
     out = []
     for k in which:
         with _lock:
-            if five[k] not in _made:
-                _made[five[k]] = pointer(*five[k])
-            out.append(_made[five[k]])
+            if six[k] not in _made:
+                _made[six[k]] = pointer(*six[k])
+            out.append(_made[six[k]])
     return out
 
 
 def pose_functions(n: int, m: int, wreq=None, tmax=None) -> list:
-    """The five (dispatcher, signature) of :func:`~cdpr_design.kernels.pose.pose_kernels`, in the
-    order of :func:`~cdpr_design.kernels.pose.eval_small`'s arguments (:data:`TENSIONS`, :data:`MARGINS`)."""
+    """The six (dispatcher, signature) a grid pose calls, in the order of the grid loop's arguments:
+    :func:`~cdpr_design.kernels.pose.pose_kernels`' five in the order of
+    :func:`~cdpr_design.kernels.pose.eval_small`'s, then the structure matrix for the grid's types
+    (C-contiguous float64 arrays Rb, A (m, 3) [m], W (n, m), L (m,) [m], the int64 rows)."""
+    from numba import typeof, types
+
     tensions, margins = pose_kernels(n, m, wreq, tmax)
-    return tensions[:2] + margins + tensions[2:]
+    f8, vec, mat = types.float64, typeof(np.empty(1)), typeof(np.empty((1, 1)))
+    structure = (structure_matrix, types.boolean(f8, f8, f8, mat, mat, typeof(np.empty(1, dtype=np.int64)), mat, vec))
+    return tensions[:2] + margins + tensions[2:] + [structure]
 
 
 def signature_types(n: int, m: int, wreq=None, tmax=None) -> tuple:
-    """The numba types of the five :func:`pointers`, in their order: what a loop taking them is compiled for."""
+    """The numba types of the six :func:`pointers`, in their order: what a loop taking them is compiled for."""
     from numba import types
 
     return tuple(types.FunctionType(sig) for _, sig in pose_functions(n, m, wreq, tmax))
@@ -87,8 +99,8 @@ def signature_types(n: int, m: int, wreq=None, tmax=None) -> tuple:
 
 class PointerBlock:
     """Rows k0..k1-1 of a sweep whose loop takes the pose's functions as pointers (m - n = 1, 2): the
-    block's buffers (:func:`~cdpr_design.kernels.pose.row_buffers`), then
-    ``loop(*pointers, k0, k1, *args, W, t, L, lo, scr)``.
+    block's buffers (:func:`~cdpr_design.kernels.pose.row_buffers`, the scratch as its
+    :func:`~cdpr_design.kernels.pose.small_scratch`), then ``loop(*pointers, k0, k1, *args, W, t, L, lo, scr)``.
 
     ``parts(*args)`` gives (n, m, nv, wreq, tmax) from the block's arguments.  The first call
     compiles the loop for the pointers' types before it asks for them (:func:`pointers`), so on a
@@ -108,7 +120,8 @@ class PointerBlock:
 
     def __call__(self, k0, k1, *args):
         n, m, nv, wreq, tmax = self.parts(*args)
-        buffers = row_buffers(n, m, nv)
+        W, t, L, lo, scr = row_buffers(n, m, nv)
+        buffers = W, t, L, lo, small_scratch(scr)
         key = (n, m, numba.typeof(wreq), numba.typeof(tmax))
         fns = self._fns.get(key)
         if fns is None:

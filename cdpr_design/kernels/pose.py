@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
 
 from cdpr_design.kernels._jit import jitable, njit, njit_inline, njit_noref
@@ -43,10 +45,10 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
     one core through them, 2.62 us this way.
     """
     if r == 2:
-        return eval_small(W, wreq, tmin, tmax, kind, t_out, scr,
+        return eval_small(W, wreq, tmin, tmax, kind, t_out, small_scratch(scr),
                           basis_factor, null_space, facet_setup, facets_two, plane_projection)
     if r == 1:
-        return eval_small(W, wreq, tmin, tmax, kind, t_out, scr,
+        return eval_small(W, wreq, tmin, tmax, kind, t_out, small_scratch(scr),
                           basis_factor, null_space, facet_setup, facets_one, line_projection)
     n, m = W.shape
     nv = wreq.shape[0] if kind != KIND_STATIC else 1
@@ -75,14 +77,14 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
 
 
 @njit_inline
-def eval_small(W, wreq, tmin, tmax, kind, t_out, scr, factor, null, setup, facets, project):
+def eval_small(W, wreq, tmin, tmax, kind, t_out, S, factor, null, setup, facets, project):
     """:func:`eval_general` for m - n = 1 or 2, with the five functions it calls given: the basis
     factorisation ``factor`` (:func:`~cdpr_design.kernels.hsm.basis_factor`), the null basis ``null``
     (:func:`~cdpr_design.kernels.tension_qp.null_space`), the margins' ``setup`` and ``facets``
     (:mod:`~cdpr_design.kernels.hsm_small`: :func:`facet_setup`, then ``facets_one`` or
     ``facets_two``) and the tensions' ``project`` (``line_projection`` or ``plane_projection``),
-    each on the scratch's arrays.  ``facets`` and ``project`` take the same arguments for r = 1
-    and 2, so this code is the same for both.
+    each on the scratch's arrays ``S`` (:func:`small_scratch`).  ``facets`` and ``project`` take the
+    same arguments for r = 1 and 2, so this code is the same for both.
 
     :func:`eval_general` passes the compiled functions themselves (numba calls them directly);
     the grid sweep's loops pass pointers to them (:mod:`cdpr_design.kernels.pointers`), so that
@@ -90,19 +92,34 @@ def eval_small(W, wreq, tmin, tmax, kind, t_out, scr, factor, null, setup, facet
     """
     n, m = W.shape
     nv = wreq.shape[0] if kind != KIND_STATIC else 1
-    if _zero_column(W) or not factor(W, scr[0], scr[18], scr[19], scr[20]):
+    if _zero_column(W) or not factor(W, S.tab, S.slot, S.nbc, S.bcol):
         _no_tensions(m, t_out)
         return False, np.nan
     closure_wanted = kind == KIND_WRENCH_CLOSURE
-    setup(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[19], scr[20], closure_wanted)
-    margin0, margin, closure = facets(W, wreq, nv, scr[0], scr[1], scr[2], scr[28], scr[29], scr[19], closure_wanted)
+    setup(W, wreq, nv, tmin, tmax, S.tab, S.M, S.Gw, S.ranges, S.nbc, S.bcol, closure_wanted)
+    margin0, margin, closure = facets(W, wreq, nv, S.tab, S.M, S.Gw, S.ranges, S.minors, S.nbc, closure_wanted)
     qp_ok = False
     if not margin0 >= 0.0:
         _no_tensions(m, t_out)
     else:  # writes t_out, NaN where no tensions exist
-        null(n, m, wreq[0], scr[0], scr[8], scr[9], scr[25], scr[19], scr[20])
-        qp_ok = project(m, tmin, tmax, t_out, scr[8], scr[9], scr[30])
+        null(n, m, wreq[0], S.tab, S.N, S.tp, S.tb, S.nbc, S.bcol)
+        qp_ok = project(m, tmin, tmax, t_out, S.N, S.tp, S.half)
     return _verdict(kind, closure, margin, qp_ok, m - n)
+
+
+#: The arrays of the scratch (:func:`~cdpr_design.kernels.hsm.make_scratch`, its positions in brackets)
+#: that :func:`eval_small` works in: ``tab`` [0] (n, m + n), ``M`` [1], ``Gw`` [2], the null basis ``N``
+#: [8], ``tp`` [9], the basis' ``slot`` [18], ``nbc`` [19] and ``bcol`` [20], ``tb`` [25], the margins'
+#: ``ranges`` [28] and ``minors`` [29], the projection's ``half`` planes [30].  A loop given these
+#: twelve compiles faster than one given all 31 (:mod:`cdpr_design.kernels.pointers`).
+SmallScratch = namedtuple("SmallScratch", "tab M Gw N tp slot nbc bcol tb ranges minors half")
+
+
+@jitable
+def small_scratch(scr):
+    """The :class:`SmallScratch` of ``scr`` (:func:`~cdpr_design.kernels.hsm.make_scratch`): the same arrays."""
+    return SmallScratch(scr[0], scr[1], scr[2], scr[8], scr[9], scr[18], scr[19], scr[20], scr[25], scr[28],
+                        scr[29], scr[30])
 
 
 @njit_inline

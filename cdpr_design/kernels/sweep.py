@@ -66,14 +66,18 @@ def _grid_parts(start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, *rest)
 
 
 @njit_noref
-def _grid_loop_small(factor, null, setup, facets, project, k0, k1, start, lower, step, shape, Rb, A, rows, wreq,
-                     tmin, tmax, floor, combos, kind, feasible, margin, tensions, lengths, W, t, L, lo, scr):
+def _grid_loop_small(factor, null, setup, facets, project, structure, k0, k1, start, lower, step, shape, Rb, A,
+                     rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions, lengths, W, t, L, lo,
+                     scr):
     """Rows k0..k1-1 of :func:`sweep_grid` (grid poses start+k0 .. start+k1-1) for m - n = 1 or 2,
-    with the pose's five functions given (:func:`~cdpr_design.kernels.pose.eval_small`) and the
-    block's buffers (:func:`~cdpr_design.kernels.pose.row_buffers`)."""
+    with the pose's six functions given (:func:`~cdpr_design.kernels.pose.eval_small`'s five and
+    the structure matrix, :mod:`~cdpr_design.kernels.pointers`) and the block's buffers
+    (:func:`~cdpr_design.kernels.pose.row_buffers`, the scratch as its
+    :func:`~cdpr_design.kernels.pose.small_scratch`)."""
     ix, iy, iz = grid_index(start + k0, shape[1], shape[2])
     for k in range(k0, k1):
-        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths)
+        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths,
+                                    structure)
         eval_row_small(k, ok, W, wreq, lo, tmax, kind, t, scr, feasible, margin, tensions,
                        factor, null, setup, facets, project)
 
@@ -84,7 +88,8 @@ def _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tma
     """:func:`_grid_loop_small` for m = n."""
     ix, iy, iz = grid_index(start + k0, shape[1], shape[2])
     for k in range(k0, k1):
-        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths)
+        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths,
+                                    structure_matrix)
         eval_row(k, ok, W, wreq, lo, tmax, combos, kind, t, scr, feasible, margin, tensions, 0)
 
 
@@ -95,13 +100,15 @@ def _grid_loop_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, t
     r = A.shape[0] - rows.shape[0]
     ix, iy, iz = grid_index(start + k0, shape[1], shape[2])
     for k in range(k0, k1):
-        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths)
+        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths,
+                                    structure_matrix)
         eval_row(k, ok, W, wreq, lo, tmax, combos, kind, t, scr, feasible, margin, tensions, r)
 
 
 @njit_inline
-def _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths):
-    """Row ``k``'s grid pose, at grid indices (ix, iy, iz): its structure matrix into ``W``, its
+def _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths, structure):
+    """Row ``k``'s grid pose, at grid indices (ix, iy, iz): its structure matrix into ``W`` (by
+    ``structure``: :func:`~cdpr_design.kernels.geometry.structure_matrix` or a pointer to it), its
     cable lengths into ``L`` and ``lengths[k]`` [m], its lower tension bounds into ``lo`` [N]
     (:func:`~cdpr_design.kernels.pose.raise_floor`).  Returns (ok, the next pose's indices): ok
     False for a cable of zero length.  The grid's indices are counted up, not divided per pose."""
@@ -109,7 +116,7 @@ def _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L
     py = lower[1] + iy * step[1]
     pz = lower[2] + iz * step[2]
     ix, iy, iz = next_grid_index(ix, iy, iz, shape[1], shape[2])
-    ok = structure_matrix(px, py, pz, Rb, A, rows, W, L)
+    ok = structure(px, py, pz, Rb, A, rows, W, L)
     for i in range(A.shape[0]):
         lengths[k, i] = L[i]
     raise_floor(tmin, floor, L, lo)
@@ -227,6 +234,13 @@ def chunk_stats(feasible, margin, tensions, count, tpeak):
                 if t > tpeak[i]:
                     tpeak[i] = t
     return nf, lo + 0.0, hi + 0.0
+
+
+def compile_chunk_stats() -> None:
+    """Compile (or load from numba's cache) :func:`chunk_stats` for the types the sweeps give it
+    (C-contiguous uint8, float64 and (rows, m) float64 arrays, an int): what a first run's other
+    process compiles while this one compiles the sweep's loop (:mod:`cdpr_design.kernels.warm`)."""
+    chunk_stats(np.zeros(1, dtype=np.uint8), np.zeros(1), np.zeros((1, 1)), 1, np.zeros(1))
 
 
 def sweep_points(P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,

@@ -8,11 +8,16 @@ new process (:func:`main`, run by ``python -c``) while this one compiles the
 tensions', both into numba's on-disk cache (``cache=True``; numba's cache files are written
 atomically, one per function).
 
-For m - n = 1, 2 they are pointers (:mod:`cdpr_design.kernels.pointers`), and the grid sweep's
-loop compiles without them: :func:`compile_pose` returns once this process has its share (and
-the CSV formatter, ``meanwhile``), the loop compiles while the other process still works, and
-the sweep's block waits for it only when it needs the margins' pointers, then loads them from
-the cache.  For any other m - n :func:`compile_pose` waits for the other process, and the loop,
+For m - n = 1, 2 they are pointers (:mod:`cdpr_design.kernels.pointers`), with the structure
+matrix, and the grid sweep's loop compiles without them: this process compiles the basis
+factorisation and the tensions' projection (:data:`~cdpr_design.kernels.pointers.HERE`), the
+other the null basis, the margins' setup and facets and the structure matrix
+(:data:`~cdpr_design.kernels.pointers.THERE`), then the chunk statistics; :func:`compile_pose`
+returns once this process has its share (and the CSV formatter, ``meanwhile``), the loop
+compiles while the other process still works, and the sweep's block waits for it only when it
+needs the other's pointers, then loads them from the cache.  The shares are chosen so that both
+processes finish at about the same time (IPAnema 3, ``scripts/bench_first_run.py``).  For any
+other m - n :func:`compile_pose` waits for the other process, and the loop,
 compiled next, loads the functions from the cache instead of compiling them: numba caches a
 function with the code callers link in, so the loop's machine code is the one it would have had.
 
@@ -35,6 +40,7 @@ import numba
 
 from cdpr_design.kernels import pointers
 from cdpr_design.kernels.pose import pose_kernels
+from cdpr_design.kernels.sweep import compile_chunk_stats
 
 #: the folder holding the ``cdpr_design`` package, first on the other process's path
 _ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -53,7 +59,7 @@ def compile_pose(n: int, m: int, meanwhile: Callable[[], None] | None = None) ->
 
     For m - n = 1, 2 the kernels are pointers (:mod:`cdpr_design.kernels.pointers`) and the grid
     loop does not need them to compile: this returns without waiting, and the sweep's block,
-    having compiled its loop, waits for the other process when it asks for the margins'
+    having compiled its loop, waits for the other process when it asks for that process's
     pointers.  For any other m - n this waits for it."""
     if numba.config.DISABLE_JIT:
         return False  # plain Python functions: nothing to compile
@@ -76,12 +82,13 @@ def compile_pose(n: int, m: int, meanwhile: Callable[[], None] | None = None) ->
 
 
 def _compile_pointers(n: int, m: int, meanwhile: Callable[[], None] | None) -> bool:
-    """:func:`compile_pose` for m - n = 1, 2: the tensions' pointers here, the margins' in the other
-    process, started as soon as the first of the tensions' was not in the cache."""
-    five = pointers.pose_functions(n, m)
+    """:func:`compile_pose` for m - n = 1, 2: the pointers of :data:`~cdpr_design.kernels.pointers.HERE`
+    here, the others in the other process, started as soon as the first of this one's was not in
+    the cache."""
+    six = pointers.pose_functions(n, m)
     other = None
-    for k in pointers.TENSIONS:
-        dispatcher = five[k][0]
+    for k in pointers.HERE:
+        dispatcher = six[k][0]
         missed = sum(dispatcher.stats.cache_misses.values())
         pointers.pointers(n, m, which=(k,))
         if other is None and sum(dispatcher.stats.cache_misses.values()) > missed:
@@ -107,11 +114,13 @@ def _start(n: int, m: int) -> subprocess.Popen | bool:
 
 
 def main(n: int, m: int) -> None:
-    """The other process: compile the margins' functions of ``n`` DOF and ``m`` cables into the cache."""
+    """The other process: compile the margins' functions of ``n`` DOF and ``m`` cables (for m - n = 1, 2
+    the pointers of :data:`~cdpr_design.kernels.pointers.THERE`), then the chunk statistics, into the cache."""
     if m - n in (1, 2):
-        pointers.pointers(n, m, which=pointers.MARGINS)
+        pointers.pointers(n, m, which=pointers.THERE)
     else:
         _compile(pose_kernels(n, m)[1])
+    compile_chunk_stats()
 
 
 if __name__ == "__main__":
