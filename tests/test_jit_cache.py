@@ -200,12 +200,13 @@ PARALLEL_PROBE = """
 import sys
 import numpy as np
 from cdpr_design import workspaces as ws
-from cdpr_design.kernels import geometry, hsm_small, sweep, tension_qp
+from cdpr_design.kernels import geometry, hsm_small, sweep, tension_qp, warm
 from cdpr_design.model import spec
 for name, facets in (("ipanema3", hsm_small.facets_two), ("planar4", hsm_small.facets_one)):
     d = spec.load(f"designs/{name}.yaml")
     g = ws.make_grid(d, 0.5 if name == "ipanema3" else 0.1, True)
     p = ws.plan(ws.robot_for(d, g, engine="numba"), g)
+    print(name, warm.compile_pose(p.robot.n, p.robot.m))  # True: the other process was kept
     ws.warm_up(p)
     r = p.run()
     np.save(f"{sys.argv[1]}/{name}.npy", np.concatenate([r.feasible_map.ravel(), r.margin_map.ravel(),
@@ -224,13 +225,21 @@ def test_a_first_run_compiles_the_margins_in_another_process(tmp_path):
     and the structure matrix, which the sweep's loop is given pointers to) and the chunk
     statistics: this one loads them from the cache, compiles nothing of them (the types
     :func:`~cdpr_design.kernels.pointers.pose_functions` gives are the sweep's), and sweeps exactly
-    what a process that compiled everything itself sweeps."""
+    what a process that compiled everything itself sweeps.  planar4 after IPAnema 3 in the same
+    process is a first run of m - n = 1 and has its own other process; a process that loads them
+    all from the cache keeps none."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(PACKAGE.parent))
     env.pop("NUMBA_DISABLE_JIT", None)
     r = subprocess.run([sys.executable, "-c", PARALLEL_PROBE, str(tmp_path)], cwd=PACKAGE.parent, env=env,
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr[-3000:]
-    assert r.stdout.split() == ["ipanema3", "0", "1"] * 5 + ["planar4", "0", "1"] * 5, r.stdout
+    assert r.stdout.split() == (["ipanema3", "True"] + ["ipanema3", "0", "1"] * 5
+                                + ["planar4", "True"] + ["planar4", "0", "1"] * 5), r.stdout
+    # a run that loads them (the cache is full now) keeps no other process, nor does a second call
+    again = "from cdpr_design.kernels import warm; print(warm.compile_pose(6, 8), warm.compile_pose(6, 8))"
+    r = subprocess.run([sys.executable, "-c", again], cwd=PACKAGE.parent, env=env, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert r.stdout.split() == ["False", "False"], r.stdout
     from cdpr_design import workspaces as ws
     from cdpr_design.model import spec
 
@@ -240,6 +249,15 @@ def test_a_first_run_compiles_the_margins_in_another_process(tmp_path):
         res = ws.plan(ws.robot_for(d, g, engine="numba"), g).run()
         mine = np.concatenate([res.feasible_map.ravel(), res.margin_map.ravel(), res.tension_maps.ravel()])
         np.testing.assert_array_equal(np.load(tmp_path / f"{name}.npy"), mine)
+
+
+def test_a_square_design_starts_no_other_process():
+    """m = n: the pose calls one small function (``eval_square_into``), so there is nothing for another
+    process to compile (``compile_pose`` once took the QP of an empty list: an IndexError)."""
+    from cdpr_design.kernels import warm
+
+    assert warm.compile_pose(3, 3) is False
+    assert warm.compile_pose(6, 6) is False
 
 
 LEAK_PROBE = """

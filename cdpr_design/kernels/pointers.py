@@ -47,10 +47,11 @@ def expect(n: int, m: int, process: subprocess.Popen) -> None:
         _pending[(n, m)] = process
 
 
-#: positions in :func:`pointers` of the functions a first run compiles in this process (the basis
-#: factorisation and the tensions' projection) and in the other (the null basis, the margins' setup
-#: and facets, the structure matrix; :mod:`cdpr_design.kernels.warm`): about the same time each
-HERE = (0, 4)
+#: positions in :func:`pointers` of the functions a first run compiles in this process (the tensions'
+#: projection, first: the one of the two whose code differs between m - n = 1 and 2, and the basis
+#: factorisation) and in the other (the null basis, the margins' setup and facets, the structure
+#: matrix; :mod:`cdpr_design.kernels.warm`): about the same time each
+HERE = (4, 0)
 THERE = (1, 2, 3, 5)
 
 

@@ -21,12 +21,14 @@ other m - n :func:`compile_pose` waits for the other process, and the loop,
 compiled next, loads the functions from the cache instead of compiling them: numba caches a
 function with the code callers link in, so the loop's machine code is the one it would have had.
 
-Only on a first run: the other process starts when one of the tensions' functions was not in
-the cache (compiled, not loaded).  When they all loaded, nothing is started: a run that
-compiled this m - n's QP method compiled its margins too, as a rule (every cache entry is
-stamped with the whole package's sources, :mod:`cdpr_design.kernels._jit`); where it did not,
-and whatever the other process does not compile (it failed, or was stopped), this process
-compiles them itself, as it would without this.
+Only on a first run: the other process is started, then this one compiles or loads a function of
+its share whose code is this m - n's, and the other is kept only if that was a compile (not in
+the cache, :func:`_first_run`); started before the answer is known, it imports numba while this
+process does.  When it loaded, the other process is stopped: a run that compiled this m - n's QP method
+compiled its margins too, as a rule (every cache entry is stamped with the whole package's
+sources, :mod:`cdpr_design.kernels._jit`); where it did not, and whatever the other process does
+not compile (it failed, or was stopped), this process compiles them itself, as it would without
+this.
 """
 
 from __future__ import annotations
@@ -53,7 +55,7 @@ def _compile(functions) -> None:
 
 def compile_pose(n: int, m: int, meanwhile: Callable[[], None] | None = None) -> bool:
     """Compile (or load) the pose kernels for ``n`` DOF and ``m`` cables, the margins' in another
-    process when they are not in numba's cache; returns whether that process was started.
+    process when they are not in numba's cache; returns whether that process was kept (a first run).
     ``meanwhile`` is called, when it was, while the other runs: more to compile in this process
     (the CSV formatter).
 
@@ -65,14 +67,12 @@ def compile_pose(n: int, m: int, meanwhile: Callable[[], None] | None = None) ->
         return False  # plain Python functions: nothing to compile
     if m - n in (1, 2):
         return _compile_pointers(n, m, meanwhile)
-    tensions, margins = pose_kernels(n, m)
-    other = None
+    tensions, _ = pose_kernels(n, m)  # the QP last: its code is this m - n's
+    if not tensions:
+        return False  # m = n: one small function, nothing to share
+    other = _first_run(n, m, *tensions[-1])
     try:
-        for dispatcher, sig in tensions:
-            missed = sum(dispatcher.stats.cache_misses.values())
-            dispatcher.compile(sig.args)
-            if other is None and sum(dispatcher.stats.cache_misses.values()) > missed:
-                other = _start(n, m)
+        _compile(tensions[:-1])
         if other and meanwhile is not None:
             meanwhile()
     finally:
@@ -83,21 +83,43 @@ def compile_pose(n: int, m: int, meanwhile: Callable[[], None] | None = None) ->
 
 def _compile_pointers(n: int, m: int, meanwhile: Callable[[], None] | None) -> bool:
     """:func:`compile_pose` for m - n = 1, 2: the pointers of :data:`~cdpr_design.kernels.pointers.HERE`
-    here, the others in the other process, started as soon as the first of this one's was not in
-    the cache."""
+    here, the others in the other process."""
     six = pointers.pose_functions(n, m)
-    other = None
-    for k in pointers.HERE:
-        dispatcher = six[k][0]
-        missed = sum(dispatcher.stats.cache_misses.values())
-        pointers.pointers(n, m, which=(k,))
-        if other is None and sum(dispatcher.stats.cache_misses.values()) > missed:
-            other = _start(n, m)
-            if other:
-                pointers.expect(n, m, other)
+    other = _first_run(n, m, *six[pointers.HERE[0]])
+    if other:
+        pointers.expect(n, m, other)
+    pointers.pointers(n, m, which=pointers.HERE)
     if other and meanwhile is not None:
         meanwhile()
     return bool(other)
+
+
+def _first_run(n: int, m: int, dispatcher, sig) -> subprocess.Popen | None:
+    """The other process if this is a machine's first run of this m - n, else None.
+
+    The other process is started first, then ``dispatcher`` (of this process's share, one whose
+    code is this m - n's own: the tensions' QP or projection) compiled or loaded here for ``sig``:
+    the other is kept if that was a compile (not in numba's cache), and stopped if it loaded --
+    then so will the rest.  Started before the answer is known, the other process imports numba
+    while this one does (about 0.8 s of IPAnema 3's first run, ``scripts/bench_first_run.py``);
+    on a run that loads, it is stopped after about that, on the other core (0.4-0.5 CPU-s).
+    Nothing is started when this process has ``dispatcher`` already (compiled or loaded by an
+    earlier sweep of the same m - n: the functions' types do not depend on n and m)."""
+    if tuple(sig.args) in dispatcher.overloads:
+        return None
+    other = _start(n, m)
+    missed = sum(dispatcher.stats.cache_misses.values())
+    try:
+        dispatcher.compile(sig.args)
+        compiled = sum(dispatcher.stats.cache_misses.values()) > missed
+    except BaseException:
+        compiled = False
+        raise
+    finally:
+        if other and not compiled:
+            other.kill()
+            other.wait()
+    return other if other and compiled else None
 
 
 def _start(n: int, m: int) -> subprocess.Popen | bool:
