@@ -285,6 +285,59 @@ moves are the noise.  Four interleaved pairs of IPAnema 3's first run: 15.46 / 1
 its first run goes now: 1.4 s to the first compile, the tension functions to 4.9 s, the CSV
 formatter to 6.5 s, the loop (3.7 CPU-s, with the structure matrix it calls) to 10.2 s, then
 the sweep and the files; the other process is done with the margins at about 7 s.
+
+Then (2026-11-28, later) three changes on that timeline, each timed on it first:
+
+- the loop is given the structure matrix as a sixth pointer and only the twelve scratch arrays
+  its pose uses (``pose.SmallScratch``, not the 31-array tuple): the loop alone, compiled for
+  IPAnema 3's types in a new process, 3.05 / 3.26 / 3.40 -> 2.06 / 2.08 / 2.22 CPU-s;
+- the shares rebalanced: the other process compiles the null basis, the margins' setup and
+  facets, the structure matrix and the chunk statistics, this one the projection, the basis
+  factorisation and the CSV formatter (moving the formatter to the other process instead made
+  it finish 1.5 s after this one);
+- the other process started before this one knows whether it is a first run, and stopped when
+  the first function asked for here loads (``warm._first_run``): it then imports numba while
+  this process does, 0.8 s sooner.  A warm run pays for it on the other core: IPAnema 3, eight
+  interleaved warm pairs, wall 2.13 -> 2.19 s (median), CPU of the command and what it waits for
+  1.79 -> 2.25 CPU-s.
+
+Interleaved cold pairs of IPAnema 3 (``NUMBA_CACHE_DIR`` new each run, ``--quiet``; the machine's
+speed drifted by up to 40 % between batches, the same code taking 6.4 or 9.3 s): b8bc845 (the
+start of this session) against the first two changes, six pairs, medians 11.5 -> 9.4 s; those
+against the third as well, five pairs, 8.9 -> 8.1 s.  Timeline of one first run after all three
+(compile events, both processes)::
+
+    0.84  other process started
+    1.36- 2.17  basis_factor (with numba's own start-up)   | 1.75- 2.70 null_space (with it)
+    2.19- 4.21  plane_projection                            | 2.72- 3.52 facet_setup
+    4.23- 5.40  format_rows (CSV)                           | 3.53- 5.87 facets_two
+    5.41- 7.33  _grid_loop_small                            | 5.90- 6.50 structure_matrix
+                                                            | 6.51- 6.74 chunk_stats, exit
+    8.08  exit (sweep, files, pictures)
+
+(there the probe was still ``basis_factor``; it is the projection now, the function whose code
+is this m - n's own, so that a process sweeping m - n = 2 and then 1 has another process for
+each).  ``--root`` at b8bc845, ``--repeat 1``, two idle cores (load average 1.0-1.2; the after
+half ran about 20 % faster than the before half, as the unchanged planar2, pointmass3 and
+sagging40 show)::
+
+    design       cold wall         cold CPU          warm wall        warm CPU
+    cogiro       11.0 -> 7.6 s     14.8 -> 12.7 s    2.06 -> 1.82 s   1.57 -> 1.80 s
+    crane4       28.4 -> 23.5 s    30.4 -> 25.9 s    6.41 -> 6.48 s   8.34 -> 8.49 s
+    ipanema1     11.6 -> 9.4 s     16.6 -> 15.7 s    2.64 -> 2.45 s   2.40 -> 2.76 s
+    ipanema2     10.7 -> 8.6 s     14.8 -> 14.2 s    1.84 -> 2.02 s   1.45 -> 2.05 s
+    ipanema3     11.0 -> 8.1 s     15.3 -> 14.0 s    2.20 -> 1.60 s   1.80 -> 1.65 s
+    planar2       1.8 -> 1.3 s      1.0 -> 0.8 s     1.86 -> 1.26 s   1.00 -> 0.75 s
+    planar4      10.8 -> 6.7 s     14.0 -> 10.9 s    1.96 -> 1.79 s   1.57 -> 1.88 s
+    pointmass3   12.8 -> 10.2 s    12.2 -> 10.1 s    1.76 -> 1.37 s   1.35 -> 0.98 s
+    sagging40    56.5 -> 48.2 s    58.0 -> 50.5 s    4.27 -> 4.13 s   6.12 -> 6.11 s
+    cold compile of every kernel the designs use (one cache): 75.1 -> 77.7 CPU-s
+
+Every output identical.  IPAnema 3's first runs on two cores since the third change: 6.4-9.5 s
+in the eleven runs above (the pairs and this table), 9.3 and 10.1 s in two with the compile-event
+logger on in a slow phase of the machine; the every-kernel total is not reduced (the other process's own start-up is in it):
+sagging40's chain of separately compiled functions, each optimised again with its callees in
+every caller, is most of it.
 """
 
 from __future__ import annotations

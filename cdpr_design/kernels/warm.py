@@ -109,14 +109,12 @@ def _first_run(n: int, m: int, dispatcher, sig) -> subprocess.Popen | None:
         return None
     other = _start(n, m)
     missed = sum(dispatcher.stats.cache_misses.values())
+    compiled = False
     try:
         dispatcher.compile(sig.args)
         compiled = sum(dispatcher.stats.cache_misses.values()) > missed
-    except BaseException:
-        compiled = False
-        raise
     finally:
-        if other and not compiled:
+        if other and not compiled:  # it loaded (or failed): the other process has nothing to do
             other.kill()
             other.wait()
     return other if other and compiled else None
