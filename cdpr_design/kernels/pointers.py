@@ -52,7 +52,7 @@ def expect(n: int, m: int, process: subprocess.Popen) -> None:
 #: factorisation) and in the other (the null basis, the margins' setup and facets, the structure
 #: matrix; :mod:`cdpr_design.kernels.warm`): about the same time each
 HERE = (4, 0)
-THERE = (1, 2, 3, 5)
+THERE = tuple(k for k in range(6) if k not in HERE)
 
 
 def pointers(n: int, m: int, wreq=None, tmax=None, which=(0, 1, 2, 3, 4, 5)) -> list:
