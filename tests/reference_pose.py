@@ -140,5 +140,7 @@ def sagging_pose(design: Design, full: np.ndarray, wreq: np.ndarray, combos: np.
     st, feas, margin, _ = KS.sag_pose(full[0], full[1], full[2], Rb, np.ascontiguousarray(design.outlets),
                                       design.rows, arr.up, arr.w, arr.EA, wreq, design.tension_min,
                                       design.tension_max, combos, kcode, MAX_ITERATIONS,
-                                      t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work, KS.redundancy(n, m))
+                                      t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work, KS.redundancy(n, m),
+                                      KS.fixed_point(arr.up, arr.w, arr.EA, design.tension_min, design.tension_max,
+                                                     design.rows, MAX_ITERATIONS, KS.redundancy(n, m)))
     return bool(feas), float(margin), t, L, W, CableState(ta, l0, sg, STATUS[st])

@@ -132,3 +132,22 @@ def pointer(dispatcher, sig):
     if cres.signature != sig:
         raise TypeError(f"{dispatcher.py_func.__name__} compiles to {cres.signature}, not the pointer's {sig}")
     return CompileResultWAP(cres)
+
+
+#: the pointers :func:`pointer_for` made in this process, by (dispatcher, argument types)
+_pointers: dict = {}
+
+
+def pointer_for(dispatcher, args):
+    """:func:`pointer` to ``dispatcher`` compiled for the numba types of the values ``args`` (what
+    a kernel will pass it), made once per process and types.  Under ``NUMBA_DISABLE_JIT``,
+    ``dispatcher`` itself (a Python function)."""
+    if nb.config.DISABLE_JIT:
+        return dispatcher
+    types = tuple(nb.typeof(a) for a in args)
+    key = (dispatcher, types)
+    made = _pointers.get(key)
+    if made is None:
+        dispatcher.compile(types)
+        made = _pointers[key] = pointer(dispatcher, dispatcher.overloads[types].signature)
+    return made

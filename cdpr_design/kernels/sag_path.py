@@ -16,8 +16,8 @@ import numpy as np
 
 from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.parallel import run_blocks
-from cdpr_design.kernels.sagging import (SAG_NO_TENSIONS, SAG_OK, make_pose_outputs, make_sag_scratch, redundancy,
-                                         sag_pose)
+from cdpr_design.kernels.sagging import (SAG_NO_TENSIONS, SAG_OK, fixed_point, make_pose_outputs, make_sag_scratch,
+                                         redundancy, sag_pose)
 
 
 def sag_samples(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
@@ -36,15 +36,17 @@ def sag_samples(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
     within the bounds along the whole cable.
     """
     redundant = redundancy(rows.shape[0], A.shape[0])
+    iterate = fixed_point(up, w, EA, tmin, tmax, rows, maxit, redundant)
     run_blocks(sag_samples_block, P.shape[0], P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
-               tensions, outlet, L0, sag, lengths, status, feasible, redundant, grain=4)
+               tensions, outlet, L0, sag, lengths, status, feasible, redundant, iterate, grain=4)
 
 
 @njit
 def sag_samples_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
-                      tensions, outlet, L0, sag, lengths, status, feasible, redundant):
+                      tensions, outlet, L0, sag, lengths, status, feasible, redundant, iterate):
     """Samples k0..k1-1 of :func:`sag_samples`, with their own scratch (``redundant``:
-    :func:`~cdpr_design.kernels.sagging.redundancy`)."""
+    :func:`~cdpr_design.kernels.sagging.redundancy`; ``iterate``:
+    :func:`~cdpr_design.kernels.sagging.fixed_point`)."""
     m = A.shape[0]
     n = rows.shape[0]
     W, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, 1)
@@ -57,13 +59,13 @@ def sag_samples_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combo
         Rj = Rb[j]
         st, ok, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, tmin, tmax,
                                 combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work,
-                                redundant)
+                                redundant, iterate)
         solved = ok
         if st == SAG_OK and not ok:
             # converged but outside the bounds: the same pose under [0, inf)
             st, solved, _, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rj, A, rows, up, w, EA, wj, zero,
                                         inf_hi, combos, 0, maxit, t, ta, l0, sg, L, W, cw, lo, hi, inf_hi,
-                                        tq, scr, work, redundant)
+                                        tq, scr, work, redundant, iterate)
             if st == SAG_OK and not solved:
                 st = SAG_NO_TENSIONS
         status[j] = st

@@ -51,7 +51,10 @@ command compiled 44.2 -> 40.2 CPU-s (four interleaved pairs from empty caches:
 and left: folding the QP's own thin levels below them as well
 (:func:`~cdpr_design.kernels.tension_qp.min_norm_tensions_square`, ``_reduced``,
 ``null_space_setup``: three pairs, no gain), and :func:`make_sag_scratch` compiled
-into its callers (within the noise).
+into its callers (within the noise).  The blocks call :func:`_iterate` through a C
+function pointer (:func:`fixed_point`), not linked into their own modules, and the
+verdict on the converged pose is :func:`_evaluate`, a function of its own (21.4 -> 18.5
+CPU-s); :func:`_fixed_map` through a pointer as well gained nothing and slowed the sweep.
 """
 
 from __future__ import annotations
@@ -60,7 +63,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_folded
+from cdpr_design.kernels._jit import jitable, njit, njit_folded, pointer_for
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.cable_shape import cable_for_tension, least_tension
 from cdpr_design.kernels.catenary import catenary_sag
@@ -317,9 +320,28 @@ def redundancy(n: int, m: int):
     return None if m == n else m - n
 
 
+def fixed_point(up, w, EA, tmin, tmax, rows, maxit, redundant):
+    """The fixed point a sagging kernel's blocks give :func:`sag_pose` (its ``iterate``):
+    :func:`_iterate` compiled for the types of the kernel's arguments (C-contiguous arrays, as
+    :func:`sweep_grid_sagging` takes them) and of its scratch (:func:`make_sag_scratch`), as a
+    C function pointer (:func:`~cdpr_design.kernels._jit.pointer_for`).
+
+    The blocks call it through the pointer rather than linking it: numba optimises a compiled
+    function together with everything it calls, so a block that called :func:`_iterate` directly
+    had the whole fixed point below it (the shapes, the catenaries, the tension QP) optimised by
+    LLVM once more in its own module.  sagging40's first ``workspace`` compiled 21.4 -> 18.5 CPU-s
+    (numba's compile events), its outputs identical; an indirect call per pose costs nothing
+    beside its catenary solves (about 70 us a pose)."""
+    n, m = rows.shape[0], w.shape[0]
+    W, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, 1)
+    Rb, w0 = np.empty((m, 3)), np.empty(n)  # a pose's rotated attachments [m], required wrench [N, N m]
+    return pointer_for(_iterate, (tq, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work,
+                                  maxit, redundant))
+
+
 @njit_folded
 def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-             t, outlet, L0, sag, lengths, W, cw, lo, hi, inf_hi, tq, scr, work, redundant):
+             t, outlet, L0, sag, lengths, W, cw, lo, hi, inf_hi, tq, scr, work, redundant, iterate):
     """One pose with sagging cables: (status, feasible, margin, iterations).
 
     Inputs as :func:`cdpr_design.kernels.sweep.sweep_grid` plus ``up`` (3,)
@@ -330,7 +352,7 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     NaN unless the pose is feasible), ``lengths`` chord lengths [m].  ``W``,
     ``cw``, ``lo``, ``hi``, ``inf_hi`` (all inf), ``tq``, ``scr``, ``work`` are
     scratch (:func:`make_sag_scratch`).  ``redundant``: None where m = n, else m - n
-    (:func:`redundancy`).
+    (:func:`redundancy`).  ``iterate``: the fixed point (:func:`fixed_point`).
     A slack cable (tension at or below :data:`SLACK` of the largest, where its
     lower bound is 0) pulls along its chord with no force; its outlet tension,
     unstretched length and sag are NaN (undetermined) in a feasible pose.
@@ -353,13 +375,13 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     t0 = work[2]
     for i in range(m):
         t0[i] = tq[i]
-    status, bounded, it = _iterate(tq, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi, inf_hi,
+    status, bounded, it = iterate(tq, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi, inf_hi,
                                    scr, work, maxit, redundant)
     if status != SAG_OK:
         # the straight start can be too far (a light effector on heavy cables): follow the
         # solution from weightless cables; if that fails too, the pose keeps its first status
         st2, b2, it2 = _continued(tq, t0, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi,
-                                  inf_hi, scr, work, maxit, redundant)
+                                  inf_hi, scr, work, maxit, redundant, iterate)
         it += it2
         if st2 == SAG_OK:
             status, bounded = st2, b2
@@ -369,10 +391,7 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     for i in range(m):
         lo[i] = cw[i, _LO]
         hi[i] = cw[i, _HI]
-    if redundant is None:
-        feasible, margin = eval_square(W, wreq, lo, hi, kind, t)
-    else:
-        feasible, margin = eval_general(W, wreq, lo, hi, combos, kind, t, scr, m - W.shape[0])
+    feasible, margin = _evaluate(W, wreq, lo, hi, combos, kind, t, scr, redundant)
     feasible = feasible and bounded == 2
     for i in range(m):
         t[i] = tq[i] if feasible else math.nan
@@ -381,6 +400,18 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
             L0[i] = cw[i, _L0]
             sag[i] = catenary_sag(cw[i, _H], cw[i, _VB], cw[i, _L0], w[i], EA[i])[0]
     return SAG_OK, feasible, margin + 0.0, it
+
+
+@njit
+def _evaluate(W, wreq, lo, hi, combos, kind, t, scr, redundant):
+    """(feasible, margin) of the converged structure matrix ``W`` under the shifted bounds: the
+    square case alone where ``redundant`` is None.  A function of its own, not in
+    :func:`sag_pose`'s body: numba prunes the branch of an argument that is None before it
+    inlines the other's :func:`~cdpr_design.kernels.pose.eval_general`, so a square robot's
+    kernels do not copy that body in (it would, folded into the blocks)."""
+    if redundant is None:
+        return eval_square(W, wreq, lo, hi, kind, t)
+    return eval_general(W, wreq, lo, hi, combos, kind, t, scr, redundant)
 
 
 @njit
@@ -544,7 +575,8 @@ def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr,
 
 
 @njit_folded
-def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit, redundant):
+def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit, redundant,
+               iterate):
     """:func:`_iterate` followed from straight cables to heavy ones: the cables' weight per
     length is ``s w`` with s raised from 0 to 1, each step started from the tensions and
     shapes of the last converged s.  The fallback when the straight-cable start ``t0`` [N]
@@ -552,7 +584,8 @@ def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi
     cables: at the straight tensions the cables' end forces point below the horizontal and
     no tensions balance the load, yet a solution exists at higher tensions).  A step that
     fails is halved, down to :data:`MIN_WEIGHT_STEP`; then it returns the status of its
-    last failure.  Returns :func:`_iterate`'s (status, code, iterations), ``t``
+    last failure (``iterate``: :func:`_iterate`, as :func:`sag_pose` was given it).  Returns
+    :func:`_iterate`'s (status, code, iterations), ``t``
     (m,) holding the tensions on SAG_OK; ``t0`` and ``work[3]`` are overwritten.
     """
     m = t.shape[0]
@@ -573,7 +606,7 @@ def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi
             cw[i, _TM] = math.nan
             cw[i, _TAU] = math.nan
             cw[i, _TP] = math.nan
-        status, code, it = _iterate(t, Rb, up, ws, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi,
+        status, code, it = iterate(t, Rb, up, ws, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi,
                                     scr, work, maxit, redundant)
         total += it
         if status == SAG_OK:
@@ -591,7 +624,7 @@ def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi
     return last, 0, total
 
 
-@njit
+@jitable
 def make_sag_scratch(n, m, nv):
     """Scratch for :func:`sag_pose`: (W, cw, lo, hi, inf_hi, tq, scr, work)."""
     inf_hi = np.full(m, np.inf)
@@ -614,15 +647,18 @@ def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA,
     its own straight-cable solution, so rows do not depend on the chunking.
     """
     redundant = redundancy(rows.shape[0], A.shape[0])
+    iterate = fixed_point(up, w, EA, tmin, tmax, rows, maxit, redundant)
     run_blocks(sagging_grid_block, count, start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
-               combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, redundant,
+               combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, redundant, iterate,
                grain=16)
 
 
 @njit
 def sagging_grid_block(k0, k1, start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
-                       combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, redundant):
-    """Rows k0..k1-1 of :func:`sweep_grid_sagging`, with their own scratch (``redundant``: :func:`redundancy`)."""
+                       combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, redundant,
+                       iterate):
+    """Rows k0..k1-1 of :func:`sweep_grid_sagging`, with their own scratch (``redundant``: :func:`redundancy`;
+    ``iterate``: :func:`fixed_point`)."""
     n = rows.shape[0]
     m = A.shape[0]
     ny = shape[1]
@@ -633,7 +669,7 @@ def sagging_grid_block(k0, k1, start, lower, step, shape, Rb, A, rows, up, w, EA
         ix, iy, iz = grid_index(start + k, ny, nz)
         st, f, mg, _ = sag_pose(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2],
                                 Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-                                t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work, redundant)
+                                t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work, redundant, iterate)
         status[k] = st
         feasible[k] = 1 if f else 0
         margin[k] = mg
@@ -655,14 +691,16 @@ def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
     structure matrix of each task pose.
     """
     redundant = redundancy(rows.shape[0], A.shape[0])
+    iterate = fixed_point(up, w, EA, tmin, tmax, rows, maxit, redundant)
     run_blocks(sag_points_block, P.shape[0], P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-               feasible, Ws, tensions, outlet, status, redundant, grain=16)
+               feasible, Ws, tensions, outlet, status, redundant, iterate, grain=16)
 
 
 @njit
 def sag_points_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-                     feasible, Ws, tensions, outlet, status, redundant):
-    """Rows k0..k1-1 of :func:`sag_points`, with their own scratch (``redundant``: :func:`redundancy`)."""
+                     feasible, Ws, tensions, outlet, status, redundant, iterate):
+    """Rows k0..k1-1 of :func:`sag_points`, with their own scratch (``redundant``: :func:`redundancy`;
+    ``iterate``: :func:`fixed_point`)."""
     n = rows.shape[0]
     m = A.shape[0]
     Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
@@ -670,7 +708,7 @@ def sag_points_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos
     for j in range(k0, k1):
         st, f, mg, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rb, A, rows, up, w, EA, wreq, tmin, tmax,
                                 combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work,
-                                redundant)
+                                redundant, iterate)
         status[j] = st
         feasible[j] = 1 if f else 0
         for r in range(n):
