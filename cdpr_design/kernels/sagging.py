@@ -55,6 +55,11 @@ into its callers (within the noise).  The blocks call :func:`_iterate` through a
 function pointer (:func:`fixed_point`), not linked into their own modules, and the
 verdict on the converged pose is :func:`_evaluate`, a function of its own (21.4 -> 18.5
 CPU-s); :func:`_fixed_map` through a pointer as well gained nothing and slowed the sweep.
+The fixed point and everything below it that takes arrays is compiled without numba's
+reference counting (:data:`~cdpr_design.kernels._jit.njit_noref`; the Newton step's
+Jacobian is in the scratch, :func:`make_sag_scratch`): no counter code around each of the
+many calls with a dozen arrays, 18.5 -> 17.0 CPU-s, and sagging40's sweep 1.78 -> 1.06 s (74,681
+poses, two threads), outputs identical.
 """
 
 from __future__ import annotations
@@ -63,7 +68,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import jitable, njit, njit_folded, pointer_for
+from cdpr_design.kernels._jit import jitable, njit, njit_folded, njit_noref, pointer_for
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.cable_shape import cable_for_tension, least_tension
 from cdpr_design.kernels.catenary import catenary_sag
@@ -107,7 +112,7 @@ _TAU, _TP, _THP, _LP = range(18, 22)
 NCW = 22
 
 
-@njit
+@njit_noref
 def _span(px, py, pz, Rb, A, up, cw, lengths):
     """Per-cable chord length, span X, height Z and horizontal unit vector; False if a length is 0."""
     ok = True
@@ -139,7 +144,7 @@ def _span(px, py, pz, Rb, A, up, cw, lengths):
     return ok
 
 
-@njit
+@njit_noref
 def _least_shape(i, X, Z, w, EA, cw):
     """Cable i's least tension (:func:`least_tension`), computed once per pose into ``cw``."""
     if math.isnan(cw[i, _TM]):
@@ -147,7 +152,7 @@ def _least_shape(i, X, Z, w, EA, cw):
     return cw[i, _TM]
 
 
-@njit
+@njit_noref
 def _secant_start(i, tau, cw):
     """A start (th, L0) for cable i at tension tau: the last shape, moved along the secant
     through the last two shapes when they are at distinct tensions and tau is not far off."""
@@ -163,7 +168,7 @@ def _secant_start(i, tau, cw):
     return th, L0
 
 
-@njit
+@njit_noref
 def _slack_column(i, X, Z, up, tmin, tmax, Rb, rows, cw, W):
     """A slack cable: no force, shape and length undetermined; column along the chord."""
     cw[i, _TH] = math.nan
@@ -185,7 +190,7 @@ def _slack_column(i, X, Z, up, tmin, tmax, Rb, rows, cw, W):
     fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
 
 
-@njit
+@njit_noref
 def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
     """Cable shapes for effector-end tensions ``t`` (m) [N]: the structure matrix ``W``
     from the end-force directions, and in ``cw`` each cable's (th, L0, H, VB), the
@@ -254,7 +259,7 @@ def shapes_for(t, Rb, up, w, EA, tmin, tmax, rows, cw, W, maxit):
     return out
 
 
-@njit
+@njit_noref
 def _straight_columns(Rb, A, px, py, pz, rows, W):
     for i in range(A.shape[0]):
         lx = A[i, 0] - px - Rb[i, 0]
@@ -264,7 +269,7 @@ def _straight_columns(Rb, A, px, py, pz, rows, W):
         fill_column(W, i, rows, lx / li, ly / li, lz / li, Rb[i, 0], Rb[i, 1], Rb[i, 2])
 
 
-@njit
+@njit_noref
 def _balanced(W, t, w0, tol):
     """Whether W t = w0 to tol (1 + |w0| + max t) [N]."""
     n, m = W.shape
@@ -282,7 +287,7 @@ def _balanced(W, t, w0, tol):
     return True
 
 
-@njit
+@njit_noref
 def _no_tensions(cw, lo):
     """The status of a pose whose bounds admit no tensions: :data:`SAG_NO_CATENARY` when a
     cable's lower bound is its least tension, else :data:`SAG_NO_TENSIONS`."""
@@ -331,7 +336,7 @@ def fixed_point(up, w, EA, tmin, tmax, rows, maxit, redundant):
     had the whole fixed point below it (the shapes, the catenaries, the tension QP) optimised by
     LLVM once more in its own module.  sagging40's first ``workspace`` compiled 21.4 -> 18.5 CPU-s
     (numba's compile events), its outputs identical; an indirect call per pose costs nothing
-    beside its catenary solves (about 70 us a pose)."""
+    beside its catenary solves (about 28 us a pose on one thread)."""
     n, m = rows.shape[0], w.shape[0]
     W, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, 1)
     Rb, w0 = np.empty((m, 3)), np.empty(n)  # a pose's rotated attachments [m], required wrench [N, N m]
@@ -414,7 +419,7 @@ def _evaluate(W, wreq, lo, hi, combos, kind, t, scr, redundant):
     return eval_general(W, wreq, lo, hi, combos, kind, t, scr, redundant)
 
 
-@njit
+@njit_noref
 def _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant):
     """q = the minimum-norm tensions for the shapes of t (W, cw, lo, hi follow t).
 
@@ -432,7 +437,7 @@ def _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi,
     return _distribute(W, w0, lo, hi, inf_hi, q, scr, redundant), fit
 
 
-@njit
+@njit_noref
 def _gap(t, q):
     g = 0.0
     for i in range(t.shape[0]):
@@ -440,7 +445,7 @@ def _gap(t, q):
     return g
 
 
-@njit
+@njit_noref
 def _solve_in_place(J, b):
     """Solve J x = b by Gaussian elimination with partial pivoting (x in b); False if singular."""
     m = b.shape[0]
@@ -473,7 +478,7 @@ def _solve_in_place(J, b):
 
 
 @njit_folded
-def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh, redundant):
+def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh, work, redundant):
     """One damped Newton step on G(t) = Q(t) - t (finite-difference Jacobian, one column
     per cable); t is updated in place.  Returns the map's (code, fit) at the new t (code -2: no step)."""
     m = t.shape[0]
@@ -481,9 +486,9 @@ def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_h
     if r0 <= 0:
         return -2, 0
     g0 = _gap(t, q)
-    J = np.empty((m, m))
-    rhs = np.empty(m)
-    th = t.copy()
+    J, rhs, th = work[6:], work[4], work[5]
+    for i in range(m):
+        th[i] = t[i]
     for j in range(m):
         h = 1e-7 * (1.0 + abs(t[j]))
         th[j] = t[j] + h
@@ -516,7 +521,7 @@ def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_h
     return -2, 0
 
 
-@njit
+@njit_noref
 def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, work, maxit, redundant):
     """Solve t = Q(t) from the straight tensions ``t`` (in place): fixed-point steps while they
     contract by half or better, damped Newton steps otherwise.  Returns (status, code, iterations);
@@ -553,7 +558,8 @@ def _iterate(t, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr,
                     q[i] = qh[i]
                 r, fit, g = r2, fit2, g2
                 continue
-        r, fit = _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh, redundant)
+        r, fit = _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh, work,
+                              redundant)
         if r == -2:
             # a damped fixed-point step: half way to the map's tensions
             for i in range(m):
@@ -626,10 +632,12 @@ def _continued(t, t0, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi
 
 @jitable
 def make_sag_scratch(n, m, nv):
-    """Scratch for :func:`sag_pose`: (W, cw, lo, hi, inf_hi, tq, scr, work)."""
+    """Scratch for :func:`sag_pose`: (W, cw, lo, hi, inf_hi, tq, scr, work); ``work`` (6 + m, m)
+    holds :func:`_iterate`'s rows (the map's tensions at t and at a trial t, the straight start, the
+    continuation's weights, the Newton step's right-hand side and trial t, then its m x m Jacobian)."""
     inf_hi = np.full(m, np.inf)
     return (np.empty((n, m)), np.empty((m, NCW)), np.empty(m), np.empty(m), inf_hi, np.empty(m),
-            make_scratch(n, m, nv), np.empty((4, m)))
+            make_scratch(n, m, nv), np.empty((6 + m, m)))
 
 
 @njit
