@@ -170,6 +170,17 @@ from cdpr_design.workspaces.hardware import Evaluator
 d = spec.load("designs/planar4.yaml")
 Evaluator(resolve(d, Analysis(collisions=True)))(np.zeros((16, 3)), [0.0, 0.0, 0.0])
 """,
+    "sagging": """
+import numpy as np
+from cdpr_design import workspaces
+from cdpr_design.model import spec
+from cdpr_design.statics import cables
+d = spec.load("designs/sagging40.yaml")
+workspaces.run(d, step=4.0)
+at = np.array([[20.0, 10.0, 0.0]])
+cables.sagging_structures(d, at, np.zeros(3))
+cables.sagging_samples(d, at, d.attachments[None], np.array([[0.0, 5.0 * 9.81]]))
+""",
     "catenary": """
 import numpy as np
 from cdpr_design.kernels import catenary as c
@@ -190,10 +201,10 @@ def test_the_noref_loops_compile_in_a_new_process_with_an_empty_cache(tmp_path):
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
     env.pop("NUMBA_DISABLE_JIT", None)
     probe = "".join(f"{NOREF_PROBES[name]}\nprint('compiled', {name!r}, flush=True)\n"
-                    for name in sorted(NOREF_PROBES))
+                    for name in sorted(NOREF_PROBES)) + NO_ARRAY_RETURNS
     r = subprocess.run([sys.executable, "-c", probe], cwd=PACKAGE.parent, env=env, capture_output=True, text=True)
     assert r.returncode == 0, f"after {r.stdout.splitlines()[-1:]}: {r.stderr[-3000:]}"
-    assert r.stdout.splitlines() == [f"compiled {name}" for name in sorted(NOREF_PROBES)], r.stdout
+    assert r.stdout.splitlines() == [f"compiled {name}" for name in sorted(NOREF_PROBES)] + ["done"], r.stdout
 
 
 PARALLEL_PROBE = """
@@ -297,11 +308,28 @@ def test_sweeps_free_every_array_they_allocate():
     assert any(int(line.split()[2]) > 0 for line in lines), lines
 
 
-ORDER_PROBE = """
+#: No compiled function declared without reference counting returns an array (its caller would
+#: release a reference it was never given): every such function of the kernels this process compiled.
+NO_ARRAY_RETURNS = """
 import numba as nb
 from numba.core import types
-from cdpr_design.kernels import catenary, geometry, hanging, hsm, hsm_small, interference, linalg, pose, sweep
-from cdpr_design.kernels import tension_qp
+from cdpr_design.kernels import catenary, geometry, hanging, hsm, hsm_small, interference, linalg, pose, sag_path
+from cdpr_design.kernels import sagging, sweep, tension_qp
+
+def arrays_in(ty):
+    return isinstance(ty, types.Array) or any(arrays_in(x) for x in getattr(ty, "types", ()))
+
+for mod in (catenary, geometry, hanging, hsm, hsm_small, interference, linalg, pose, sag_path, sagging, sweep,
+            tension_qp):
+    for name, f in vars(mod).items():
+        if isinstance(f, nb.core.registry.CPUDispatcher) and f.targetoptions.get("_nrt") is False:
+            for sig in f.nopython_signatures:
+                assert not arrays_in(sig.return_type), (mod.__name__, name, sig)
+print("done")
+"""
+
+ORDER_PROBE = """
+from cdpr_design.kernels import sweep
 t = np.empty(m)
 K.eval_pose(rng.normal(size=(3, m)), wreq, tmin, tmax, combinations(m, 3), K.KIND_STATIC, t)  # its callees first
 loops = {3: sweep._grid_loop_0, 4: sweep._grid_loop_small, 5: sweep._grid_loop_small, 7: sweep._grid_loop_any}
@@ -309,17 +337,7 @@ for m, loop in loops.items():  # then each grid loop (one of each redundancy)
     grid_loop(m)
     ir = "".join(loop.inspect_llvm().values())
     print("counting calls in the loop", m, ir.count("NRT_incref") + ir.count("NRT_decref"))
-
-def arrays_in(ty):
-    return isinstance(ty, types.Array) or any(arrays_in(x) for x in getattr(ty, "types", ()))
-
-for mod in (catenary, geometry, hanging, hsm, hsm_small, interference, linalg, pose, sweep, tension_qp):
-    for name, f in vars(mod).items():
-        if isinstance(f, nb.core.registry.CPUDispatcher) and f.targetoptions.get("_nrt") is False:
-            for sig in f.nopython_signatures:
-                assert not arrays_in(sig.return_type), (mod.__name__, name, sig)
-print("done")
-"""
+""" + NO_ARRAY_RETURNS
 
 
 @pytest.mark.slow

@@ -93,8 +93,8 @@ njit_folded = nb.njit(inline="always", **JIT)
 #: that allocates them and outlives the loop.  Neither the loop nor anything it calls may
 #: allocate: numba compiles the calls with the same option, and refuses an allocation there
 #: when it compiles (so the kernels that solve a polynomial's roots with fresh arrays, the
-#: hanging tilt, keep reference counting; the sagging cables' fixed point does without it, its
-#: Newton step's arrays in its scratch: sagging40's sweep 1.78 -> 1.06 s on two threads, its
+#: hanging tilt, keep reference counting; the sagging cables' loops and fixed point do without it,
+#: the Newton step's arrays in the block's scratch: sagging40's sweep 1.78 -> 1.06 s on two threads, its
 #: compile 8 % shorter without the counter code around its many calls).  A
 #: callee that does not set the option itself takes its first caller's, for good (numba's
 #: cache keeps it): an allocating callee fails where it is first reached from such a loop,

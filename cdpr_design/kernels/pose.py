@@ -277,8 +277,9 @@ def row_buffers(n, m, nv):
 
 
 class RowBlock:
-    """Rows k0..k1-1 of a sweep: the block's buffers (:func:`row_buffers`), then ``loop`` over its
-    poses, called as ``loop(k0, k1, *args, W, t, L, lo, scr, *extra(m))``.
+    """Rows k0..k1-1 of a sweep: the block's buffers (``buffers(n, m, nv)``, by default the straight
+    cables' :func:`row_buffers`), then ``loop`` over its poses, called as
+    ``loop(k0, k1, *args, *buffers(n, m, nv), *extra(m))`` (``loop(k0, k1, *args, W, t, L, lo, scr)``).
 
     ``loop`` is the compiled loop the caller chose in Python for the robot's m - n (each compiled
     with only its own margin and QP method, :func:`eval_general`); ``dims(*args)`` gives (n, m, nv)
@@ -289,8 +290,9 @@ class RowBlock:
     the buffers and the call cost tens of microseconds a block.
     """
 
-    def __init__(self, loop, dims, extra=None):
+    def __init__(self, loop, dims, extra=None, buffers=None):
         self.loop, self.dims, self.extra = loop, dims, extra
+        self.buffers = row_buffers if buffers is None else buffers
 
     @property
     def signatures(self) -> list:
@@ -301,7 +303,7 @@ class RowBlock:
     def __call__(self, k0, k1, *args):
         n, m, nv = self.dims(*args)
         more = () if self.extra is None else self.extra(m)
-        self.loop(k0, k1, *args, *row_buffers(n, m, nv), *more)
+        self.loop(k0, k1, *args, *self.buffers(n, m, nv), *more)
 
 
 @njit_inline

@@ -14,10 +14,10 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import njit_noref
 from cdpr_design.kernels.parallel import run_blocks
-from cdpr_design.kernels.sagging import (SAG_NO_TENSIONS, SAG_OK, fixed_point, make_pose_outputs, make_sag_scratch,
-                                         redundancy, sag_pose)
+from cdpr_design.kernels.pose import RowBlock
+from cdpr_design.kernels.sagging import SAG_NO_TENSIONS, SAG_OK, fixed_point, redundancy, sag_buffers, sag_pose
 
 
 def sag_samples(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
@@ -37,22 +37,30 @@ def sag_samples(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
     """
     redundant = redundancy(rows.shape[0], A.shape[0])
     iterate = fixed_point(up, w, EA, tmin, tmax, rows, maxit, redundant)
-    run_blocks(sag_samples_block, P.shape[0], P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
+    run_blocks(_SAMPLES_BLOCK, P.shape[0], P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
                tensions, outlet, L0, sag, lengths, status, feasible, redundant, iterate, grain=4)
 
 
-@njit
-def sag_samples_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
-                      tensions, outlet, L0, sag, lengths, status, feasible, redundant, iterate):
-    """Samples k0..k1-1 of :func:`sag_samples`, with their own scratch (``redundant``:
+def _samples_dims(P, Rb, A, rows, *rest):
+    """(n, m, nv) of :func:`sag_samples`' arguments: one required wrench a sample."""
+    return rows.shape[0], A.shape[0], 1
+
+
+def _sample_buffers(n, m, nv):
+    """:func:`~cdpr_design.kernels.sagging.sag_buffers`, then a sample's lower bounds for its
+    second solve (zeros (m,) [N]) and its required wrench (1, n) [N, N m]."""
+    return sag_buffers(n, m, nv) + (np.zeros(m), np.empty((1, n)))
+
+
+@njit_noref
+def _samples_loop(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, maxit,
+                  tensions, outlet, L0, sag, lengths, status, feasible, redundant, iterate,
+                  W, cw, lo, hi, inf_hi, tq, scr, work, t, ta, l0, sg, L, zero, wj):
+    """Samples k0..k1-1 of :func:`sag_samples` (``redundant``:
     :func:`~cdpr_design.kernels.sagging.redundancy`; ``iterate``:
-    :func:`~cdpr_design.kernels.sagging.fixed_point`)."""
+    :func:`~cdpr_design.kernels.sagging.fixed_point`), with the block's buffers (:func:`_sample_buffers`)."""
     m = A.shape[0]
     n = rows.shape[0]
-    W, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, 1)
-    zero = np.zeros(m)
-    t, ta, l0, sg, L = make_pose_outputs(m)
-    wj = np.empty((1, n))
     for j in range(k0, k1):
         for r in range(n):
             wj[0, r] = wreq[j, r]
@@ -77,3 +85,6 @@ def sag_samples_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combo
             L0[j, i] = l0[i] if solved else math.nan
             sag[j, i] = sg[i] if solved else math.nan
             lengths[j, i] = L[i]
+
+
+_SAMPLES_BLOCK = RowBlock(_samples_loop, _samples_dims, buffers=_sample_buffers)

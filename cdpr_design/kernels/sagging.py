@@ -59,7 +59,8 @@ The fixed point and everything below it that takes arrays is compiled without nu
 reference counting (:data:`~cdpr_design.kernels._jit.njit_noref`; the Newton step's
 Jacobian is in the scratch, :func:`make_sag_scratch`): no counter code around each of the
 many calls with a dozen arrays, 18.5 -> 17.0 CPU-s, and sagging40's sweep 1.78 -> 1.06 s (74,681
-poses, two threads), outputs identical.
+poses, two threads), outputs identical.  So are the blocks' loops over poses, given their buffers
+by a Python block (:func:`sag_buffers`, :class:`~cdpr_design.kernels.pose.RowBlock`): 17.0 -> 16.0.
 """
 
 from __future__ import annotations
@@ -68,13 +69,13 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import jitable, njit, njit_folded, njit_noref, pointer_for
+from cdpr_design.kernels._jit import jitable, njit_folded, njit_noref, pointer_for
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.cable_shape import cable_for_tension, least_tension
 from cdpr_design.kernels.catenary import catenary_sag
 from cdpr_design.kernels.geometry import fill_column, grid_index
 from cdpr_design.kernels.hsm import make_scratch
-from cdpr_design.kernels.pose import eval_general, eval_square
+from cdpr_design.kernels.pose import RowBlock, eval_general, eval_square_into
 from cdpr_design.kernels.tension_qp import min_norm_tensions, min_norm_tensions_square
 
 #: Status of a pose (``status`` column of a sagging sweep).
@@ -407,15 +408,17 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     return SAG_OK, feasible, margin + 0.0, it
 
 
-@njit
+@njit_noref
 def _evaluate(W, wreq, lo, hi, combos, kind, t, scr, redundant):
     """(feasible, margin) of the converged structure matrix ``W`` under the shifted bounds: the
     square case alone where ``redundant`` is None.  A function of its own, not in
     :func:`sag_pose`'s body: numba prunes the branch of an argument that is None before it
     inlines the other's :func:`~cdpr_design.kernels.pose.eval_general`, so a square robot's
-    kernels do not copy that body in (it would, folded into the blocks)."""
-    if redundant is None:
-        return eval_square(W, wreq, lo, hi, kind, t)
+    kernels do not copy that body in (it would, folded into the blocks).  Both work in the
+    scratch ``scr`` (:func:`~cdpr_design.kernels.hsm.make_scratch`; the square case as the
+    straight sweeps', :func:`~cdpr_design.kernels.pose.eval_row`): nothing is allocated."""
+    if redundant is None:  # the square case's work arrays from the scratch, as the straight sweeps'
+        return eval_square_into(W, wreq, lo, hi, kind, t, scr[4], scr[3], scr[0])
     return eval_general(W, wreq, lo, hi, combos, kind, t, scr, redundant)
 
 
@@ -640,7 +643,7 @@ def make_sag_scratch(n, m, nv):
             make_scratch(n, m, nv), np.empty((6 + m, m)))
 
 
-@njit
+@jitable
 def make_pose_outputs(m):
     """The per-cable outputs of :func:`sag_pose`: (tensions, outlet, L0, sag, lengths), each (m,)."""
     return np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
@@ -656,23 +659,32 @@ def sweep_grid_sagging(start, count, lower, step, shape, Rb, A, rows, up, w, EA,
     """
     redundant = redundancy(rows.shape[0], A.shape[0])
     iterate = fixed_point(up, w, EA, tmin, tmax, rows, maxit, redundant)
-    run_blocks(sagging_grid_block, count, start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
+    run_blocks(_GRID_BLOCK, count, start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
                combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, redundant, iterate,
                grain=16)
 
 
-@njit
-def sagging_grid_block(k0, k1, start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
-                       combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, redundant,
-                       iterate):
-    """Rows k0..k1-1 of :func:`sweep_grid_sagging`, with their own scratch (``redundant``: :func:`redundancy`;
-    ``iterate``: :func:`fixed_point`)."""
-    n = rows.shape[0]
+def sag_buffers(n, m, nv):
+    """A sagging block's buffers: :func:`make_sag_scratch`'s, then :func:`make_pose_outputs`'
+    (numpy: the blocks' loops allocate nothing, :class:`~cdpr_design.kernels.pose.RowBlock`)."""
+    return make_sag_scratch(n, m, nv) + make_pose_outputs(m)
+
+
+def _grid_dims(start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, *rest):
+    """(n, m, nv) of :func:`sweep_grid_sagging`'s arguments."""
+    return rows.shape[0], A.shape[0], wreq.shape[0]
+
+
+@njit_noref
+def _grid_loop(k0, k1, start, lower, step, shape, Rb, A, rows, up, w, EA, wreq, tmin, tmax,
+               combos, kind, maxit, feasible, margin, tensions, lengths, outlet, L0, sag, status, redundant,
+               iterate, Wb, cw, lo, hi, inf_hi, tq, scr, work, t, ta, l0, sg, L):
+    """Rows k0..k1-1 of :func:`sweep_grid_sagging` (``redundant``: :func:`redundancy`; ``iterate``:
+    :func:`fixed_point`), with the block's buffers (:func:`sag_buffers`): compiled without
+    reference counting, as the straight sweeps' loops (:data:`~cdpr_design.kernels._jit.NOREF`)."""
     m = A.shape[0]
     ny = shape[1]
     nz = shape[2]
-    Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
-    t, ta, l0, sg, L = make_pose_outputs(m)
     for k in range(k0, k1):
         ix, iy, iz = grid_index(start + k, ny, nz)
         st, f, mg, _ = sag_pose(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2],
@@ -689,6 +701,9 @@ def sagging_grid_block(k0, k1, start, lower, step, shape, Rb, A, rows, up, w, EA
             sag[k, i] = sg[i]
 
 
+_GRID_BLOCK = RowBlock(_grid_loop, _grid_dims, buffers=sag_buffers)
+
+
 def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
                feasible, Ws, tensions, outlet, status):
     """:func:`sag_pose` at positions ``P`` (k, 3) [m] (one orientation, in ``Rb``).
@@ -700,19 +715,23 @@ def sag_points(P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
     """
     redundant = redundancy(rows.shape[0], A.shape[0])
     iterate = fixed_point(up, w, EA, tmin, tmax, rows, maxit, redundant)
-    run_blocks(sag_points_block, P.shape[0], P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
+    run_blocks(_POINTS_BLOCK, P.shape[0], P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
                feasible, Ws, tensions, outlet, status, redundant, iterate, grain=16)
 
 
-@njit
-def sag_points_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
-                     feasible, Ws, tensions, outlet, status, redundant, iterate):
-    """Rows k0..k1-1 of :func:`sag_points`, with their own scratch (``redundant``: :func:`redundancy`;
-    ``iterate``: :func:`fixed_point`)."""
+def _points_dims(P, Rb, A, rows, up, w, EA, wreq, *rest):
+    """(n, m, nv) of :func:`sag_points`' arguments."""
+    return rows.shape[0], A.shape[0], wreq.shape[0]
+
+
+@njit_noref
+def _points_loop(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind, maxit,
+                 feasible, Ws, tensions, outlet, status, redundant, iterate, Wb, cw, lo, hi, inf_hi, tq, scr, work,
+                 t, ta, l0, sg, L):
+    """Rows k0..k1-1 of :func:`sag_points` (``redundant``: :func:`redundancy`; ``iterate``:
+    :func:`fixed_point`), with the block's buffers (:func:`sag_buffers`)."""
     n = rows.shape[0]
     m = A.shape[0]
-    Wb, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, wreq.shape[0])
-    t, ta, l0, sg, L = make_pose_outputs(m)
     for j in range(k0, k1):
         st, f, mg, _ = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rb, A, rows, up, w, EA, wreq, tmin, tmax,
                                 combos, kind, maxit, t, ta, l0, sg, L, Wb, cw, lo, hi, inf_hi, tq, scr, work,
@@ -725,3 +744,6 @@ def sag_points_block(k0, k1, P, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos
         for i in range(m):
             tensions[j, i] = t[i]
             outlet[j, i] = ta[i]
+
+
+_POINTS_BLOCK = RowBlock(_points_loop, _points_dims, buffers=sag_buffers)
