@@ -52,7 +52,8 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.geometry import rotate_attachments, structure_matrix
-from cdpr_design.kernels.pose import RowBlock, eval_row, raise_floor
+from cdpr_design.kernels.pointers import PointerBlock
+from cdpr_design.kernels.pose import RowBlock, eval_row, eval_row_small, raise_floor
 
 #: A stable equilibrium with both tensions >= 0 was found.
 TILT_OK = 0
@@ -335,17 +336,25 @@ def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasib
 
 
 def rotated_block(r: int):
-    """The block computing rows k0..k1-1 of :func:`eval_rotated` for m - n = ``r``: one loop per
-    redundancy of 0, 1 and 2 with ``r`` a constant in :func:`_rotated_loop` (compiled with only its
-    own margin and QP method), any other ``r`` the general one, chosen here in Python as
-    :func:`cdpr_design.kernels.sweep.grid_block` does (crane4's first run compiled every method)."""
-    loop = {0: _rotated_loop_0, 1: _rotated_loop_1, 2: _rotated_loop_2}.get(r, _rotated_loop_any)
-    return RowBlock(loop, _rotated_dims, _attachment_buffer)
+    """The block computing rows k0..k1-1 of :func:`eval_rotated` for m - n = ``r``, chosen here in
+    Python as :func:`cdpr_design.kernels.sweep.grid_block` does (crane4's first run compiled every
+    method): m = n and any r > 2 each a loop of its own, with ``r`` a constant in
+    :func:`_rotated_loop` (compiled with only its own margin and QP method); r = 1 and 2 one loop
+    given the pose's functions as pointers, as the grid's (:mod:`~cdpr_design.kernels.pointers`),
+    so that it compiles alone, without them (crane4's first run: its loop 2.5 -> 0.8 CPU-s of compile events, outputs identical)."""
+    if r in (1, 2):
+        return PointerBlock(_rotated_loop_small, _rotated_parts, _attachment_buffer)
+    return RowBlock(_rotated_loop_0 if r == 0 else _rotated_loop_any, _rotated_dims, _attachment_buffer)
 
 
 def _rotated_dims(P, R, A, B, rows, wreq, *rest):
     """(n, m, nv) of a rotated block's arguments (``wreq`` (k, nv, n))."""
     return rows.shape[0], A.shape[0], wreq.shape[1]
+
+
+def _rotated_parts(P, R, A, B, rows, wreq, tmin, tmax, *rest):
+    """(n, m, nv, a pose's required wrenches (nv, n), tmax) of a rotated block's arguments."""
+    return rows.shape[0], A.shape[0], wreq.shape[1], wreq[0], tmax
 
 
 def _attachment_buffer(m):
@@ -361,17 +370,22 @@ def _rotated_loop_0(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, k
 
 
 @njit_noref
-def _rotated_loop_1(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                    lengths, W, t, L, lo, scr, Rb):
-    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                  lengths, W, t, L, lo, scr, Rb, 1)
-
-
-@njit_noref
-def _rotated_loop_2(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                    lengths, W, t, L, lo, scr, Rb):
-    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                  lengths, W, t, L, lo, scr, Rb, 2)
+def _rotated_loop_small(factor, null, setup, facets, project, structure, k0, k1, P, R, A, B, rows, wreq, tmin,
+                        tmax, floor, combos, kind, feasible, margin, tensions, lengths, W, t, L, lo, scr, Rb):
+    """:func:`_rotated_loop` for m - n = 1 or 2, with the pose's six functions given
+    (:func:`~cdpr_design.kernels.pointers.pointers`) and the scratch as its
+    :func:`~cdpr_design.kernels.pose.small_scratch`."""
+    m = A.shape[0]
+    for k in range(k0, k1):
+        if not np.isfinite(R[k, 0, 0]):
+            _no_hanging_row(k, m, feasible, margin, tensions, lengths)
+            continue
+        rotate_attachments(R[k], B, Rb)
+        ok = structure(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
+        for i in range(m):
+            lengths[k, i] = L[i]
+        eval_row_small(k, ok, W, wreq[k], raise_floor(tmin, floor, L, lo), tmax, kind, t, scr, feasible, margin,
+                       tensions, factor, null, setup, facets, project)
 
 
 @njit_noref
@@ -389,11 +403,7 @@ def _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kin
     m = A.shape[0]
     for k in range(k0, k1):
         if not np.isfinite(R[k, 0, 0]):
-            feasible[k] = 0
-            margin[k] = np.nan
-            for i in range(m):
-                tensions[k, i] = np.nan
-                lengths[k, i] = np.nan
+            _no_hanging_row(k, m, feasible, margin, tensions, lengths)
             continue
         rotate_attachments(R[k], B, Rb)
         ok = structure_matrix(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
@@ -401,3 +411,14 @@ def _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kin
             lengths[k, i] = L[i]
         eval_row(k, ok, W, wreq[k], raise_floor(tmin, floor, L, lo), tmax, combos, kind, t, scr, feasible, margin,
                  tensions, r)
+
+
+@njit_inline
+def _no_hanging_row(k, m, feasible, margin, tensions, lengths):
+    """Row ``k`` of a pose where the effector cannot hang (its rotation NaN): infeasible, margin,
+    tensions and lengths NaN."""
+    feasible[k] = 0
+    margin[k] = np.nan
+    for i in range(m):
+        tensions[k, i] = np.nan
+        lengths[k, i] = np.nan

@@ -103,14 +103,16 @@ class PointerBlock:
     block's buffers (:func:`~cdpr_design.kernels.pose.row_buffers`, the scratch as its
     :func:`~cdpr_design.kernels.pose.small_scratch`), then ``loop(*pointers, k0, k1, *args, W, t, L, lo, scr)``.
 
-    ``parts(*args)`` gives (n, m, nv, wreq, tmax) from the block's arguments.  The first call
+    ``parts(*args)`` gives (n, m, nv, wreq, tmax) from the block's arguments (``wreq`` (nv, n) a
+    pose's required wrenches), ``extra(m)`` more work arrays after the scratch, if any (as
+    :class:`~cdpr_design.kernels.pose.RowBlock`'s).  The first call
     compiles the loop for the pointers' types before it asks for them (:func:`pointers`), so on a
     machine's first run the loop compiles while the other process compiles the margins.  Python,
     as :class:`~cdpr_design.kernels.pose.RowBlock`.
     """
 
-    def __init__(self, loop, parts):
-        self.loop, self.parts = loop, parts
+    def __init__(self, loop, parts, extra=None):
+        self.loop, self.parts, self.extra = loop, parts, extra
         self._fns: dict = {}
 
     @property
@@ -122,7 +124,7 @@ class PointerBlock:
     def __call__(self, k0, k1, *args):
         n, m, nv, wreq, tmax = self.parts(*args)
         W, t, L, lo, scr = row_buffers(n, m, nv)
-        buffers = W, t, L, lo, small_scratch(scr)
+        buffers = (W, t, L, lo, small_scratch(scr)) + (() if self.extra is None else self.extra(m))
         key = (n, m, numba.typeof(wreq), numba.typeof(tmax))
         fns = self._fns.get(key)
         if fns is None:
