@@ -338,6 +338,61 @@ in the eleven runs above (the pairs and this table), 9.3 and 10.1 s in two with 
 logger on in a slow phase of the machine; the every-kernel total is not reduced (the other process's own start-up is in it):
 sagging40's chain of separately compiled functions, each optimised again with its callees in
 every caller, is most of it.
+
+Then (2026-11-29) the sagging kernels and crane4's loop, each measured first by numba's compile
+events of the design's first ``workspace`` (CPU-s; outputs compared each time):
+
+- the sagging blocks call the fixed point's loop (``_iterate``) through a C function pointer
+  (``sagging.fixed_point``), not linked into each block's module, and the converged pose's
+  verdict is a function of its own (``_evaluate``: a square robot's block no longer copies the
+  redundant verdict's body before pruning it): sagging40 21.4 -> 18.5.  The next level
+  (``_fixed_map``) through a pointer as well: no gain and a slower sweep; dropped;
+- the fixed point and everything below it that takes arrays compiled without reference counting
+  (the Newton step's Jacobian in the scratch): 18.5 -> 17.0, and sagging40's sweep 1.78 -> 1.06 s;
+- the sagging blocks' loops without reference counting too, their buffers from a Python
+  ``RowBlock``: 17.0 -> 16.0;
+- the loop over hanging orientations for one or two redundant cables given the pose's six
+  functions as pointers, as the grid's: crane4's loop 2.5 -> 0.8, its first run 5.6 -> 4.3.
+
+This machine ran about twice as fast as in the runs above (c1bd809's IPAnema 3 3.4 s cold here,
+8.1 s there).  ``--root`` at c1bd809 (before the four), ``--repeat 2``, two idle cores (load
+average 2.4 / 1.5; the after half about 10 % slower than the before, as the unchanged designs
+show)::
+
+    design       cold wall         cold CPU          warm wall        warm CPU
+    cogiro        3.5 -> 3.6 s      6.1 -> 6.3 s     0.87 -> 0.88 s   0.90 -> 0.94 s
+    crane4       11.4 -> 6.7 s     12.4 -> 7.8 s     2.30 -> 2.42 s   3.14 -> 3.27 s
+    ipanema1      3.4 -> 3.8 s      5.9 -> 6.6 s     0.98 -> 1.03 s   1.13 -> 1.19 s
+    ipanema2      3.2 -> 3.6 s      5.5 -> 6.3 s     0.76 -> 0.86 s   0.78 -> 0.89 s
+    ipanema3      3.4 -> 3.7 s      6.0 -> 6.4 s     0.87 -> 0.92 s   0.95 -> 1.01 s
+    planar2       0.6 -> 0.6 s      0.4 -> 0.4 s     0.59 -> 0.65 s   0.39 -> 0.43 s
+    planar4       2.7 -> 3.1 s      4.7 -> 5.4 s     0.73 -> 0.83 s   0.80 -> 0.90 s
+    pointmass3    4.4 -> 4.8 s      4.4 -> 4.7 s     0.69 -> 0.75 s   0.54 -> 0.59 s
+    sagging40    22.1 -> 18.4 s    23.8 -> 19.3 s    2.58 -> 1.89 s   4.12 -> 2.69 s
+    cold compile of every kernel the designs use (one cache): 34.1 -> 24.5 CPU-s
+
+Every output identical.  And on the same machine, the version issue 36 was filed against
+(ea1dd26, whose every-kernel total was "about 60 s" then) against this one, ``--repeat 1``, two
+idle cores (load average 0.8 / 1.1)::
+
+    design       cold wall         cold CPU          warm wall        warm CPU
+    cogiro       11.4 -> 3.9 s     11.3 -> 6.6 s     0.68 -> 0.97 s   0.49 -> 1.01 s
+    crane4       21.6 -> 7.2 s     22.6 -> 8.3 s     2.30 -> 2.54 s   3.18 -> 3.40 s   (*)
+    ipanema1     11.6 -> 3.9 s     11.7 -> 6.7 s     0.89 -> 1.10 s   0.82 -> 1.26 s
+    ipanema2     11.5 -> 3.8 s     11.4 -> 6.5 s     0.63 -> 0.90 s   0.45 -> 0.93 s
+    ipanema3     11.3 -> 3.8 s     11.2 -> 6.5 s     0.71 -> 0.95 s   0.56 -> 1.01 s   (*)
+    planar2       0.7 -> 0.7 s      0.4 -> 0.4 s     0.66 -> 0.66 s   0.43 -> 0.43 s
+    planar4       9.2 -> 3.1 s      9.1 -> 5.4 s     0.59 -> 0.83 s   0.44 -> 0.89 s
+    pointmass3    5.2 -> 4.9 s      5.1 -> 4.9 s     0.57 -> 0.79 s   0.40 -> 0.62 s
+    sagging40    44.8 -> 18.9 s    46.8 -> 19.8 s    2.82 -> 1.89 s   4.71 -> 2.70 s
+    cold compile of every kernel the designs use (one cache): 57.8 -> 24.6 CPU-s
+
+(*) outputs differ by later fixes, not by how the kernels compile: crane4's poses rejected for
+their tilt have an empty margin now (25765f0), IPAnema 3's ``max_margin`` is 1 ulp off (the
+margins' closed forms with the closure flag a variable, above).  The warm runs of the designs
+with numba kernels cost 0.2-0.3 s and 0.4-0.5 CPU-s more than at ea1dd26: numba loads its cache
+its own way again (issue 36's item 6, measured when ``numba_startup`` went) and a run that might be
+a first one starts the other process until it knows (above).
 """
 
 from __future__ import annotations

@@ -382,7 +382,7 @@ def sag_pose(px, py, pz, Rb, A, rows, up, w, EA, wreq, tmin, tmax, combos, kind,
     for i in range(m):
         t0[i] = tq[i]
     status, bounded, it = iterate(tq, Rb, up, w, EA, wreq[0], tmin, tmax, rows, cw, W, lo, hi, inf_hi,
-                                   scr, work, maxit, redundant)
+                                  scr, work, maxit, redundant)
     if status != SAG_OK:
         # the straight start can be too far (a light effector on heavy cables): follow the
         # solution from weightless cables; if that fails too, the pose keeps its first status
@@ -483,7 +483,9 @@ def _solve_in_place(J, b):
 @njit_folded
 def _newton_step(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, qh, work, redundant):
     """One damped Newton step on G(t) = Q(t) - t (finite-difference Jacobian, one column
-    per cable); t is updated in place.  Returns the map's (code, fit) at the new t (code -2: no step)."""
+    per cable); t is updated in place.  Returns the map's (code, fit) at the new t (code -2: no step).
+    The Jacobian, the right-hand side and the trial tensions are rows of ``work``
+    (:func:`make_sag_scratch`)."""
     m = t.shape[0]
     r0 = _fixed_map(t, q, Rb, up, w, EA, w0, tmin, tmax, rows, cw, W, lo, hi, inf_hi, scr, redundant)[0]
     if r0 <= 0:
