@@ -376,17 +376,11 @@ def _rotated_loop_small(factor, null, setup, facets, project, structure, k0, k1,
     """:func:`_rotated_loop` for m - n = 1 or 2, with the pose's six functions given
     (:func:`~cdpr_design.kernels.pointers.pointers`) and the scratch as its
     :func:`~cdpr_design.kernels.pose.small_scratch`."""
-    m = A.shape[0]
     for k in range(k0, k1):
-        if not np.isfinite(R[k, 0, 0]):
-            _no_hanging_row(k, m, feasible, margin, tensions, lengths)
-            continue
-        rotate_attachments(R[k], B, Rb)
-        ok = structure(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
-        for i in range(m):
-            lengths[k, i] = L[i]
-        eval_row_small(k, ok, W, wreq[k], raise_floor(tmin, floor, L, lo), tmax, kind, t, scr, feasible, margin,
-                       tensions, factor, null, setup, facets, project)
+        hangs, ok = _rotated_pose(k, P, R, A, B, rows, Rb, W, L, feasible, margin, tensions, lengths, structure)
+        if hangs:
+            eval_row_small(k, ok, W, wreq[k], raise_floor(tmin, floor, L, lo), tmax, kind, t, scr, feasible,
+                           margin, tensions, factor, null, setup, facets, project)
 
 
 @njit_noref
@@ -401,25 +395,31 @@ def _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kin
                   lengths, W, t, L, lo, scr, Rb, r):
     """The poses of :func:`rotated_block` with its buffers, for m - n = ``r`` (compiled without
     reference counting, see :func:`cdpr_design.kernels.sweep.grid_block`)."""
-    m = A.shape[0]
     for k in range(k0, k1):
-        if not np.isfinite(R[k, 0, 0]):
-            _no_hanging_row(k, m, feasible, margin, tensions, lengths)
-            continue
-        rotate_attachments(R[k], B, Rb)
-        ok = structure_matrix(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
-        for i in range(m):
-            lengths[k, i] = L[i]
-        eval_row(k, ok, W, wreq[k], raise_floor(tmin, floor, L, lo), tmax, combos, kind, t, scr, feasible, margin,
-                 tensions, r)
+        hangs, ok = _rotated_pose(k, P, R, A, B, rows, Rb, W, L, feasible, margin, tensions, lengths,
+                                  structure_matrix)
+        if hangs:
+            eval_row(k, ok, W, wreq[k], raise_floor(tmin, floor, L, lo), tmax, combos, kind, t, scr, feasible,
+                     margin, tensions, r)
 
 
 @njit_inline
-def _no_hanging_row(k, m, feasible, margin, tensions, lengths):
-    """Row ``k`` of a pose where the effector cannot hang (its rotation NaN): infeasible, margin,
-    tensions and lengths NaN."""
-    feasible[k] = 0
-    margin[k] = np.nan
+def _rotated_pose(k, P, R, A, B, rows, Rb, W, L, feasible, margin, tensions, lengths, structure):
+    """Row ``k``'s pose at its own rotation ``R[k]``: the rotated attachments into ``Rb``, the
+    structure matrix into ``W`` (by ``structure``: :func:`~cdpr_design.kernels.geometry.structure_matrix`
+    or a pointer to it), the cable lengths into ``L`` and ``lengths[k]`` [m].  Returns (hangs, ok):
+    hangs False where the effector cannot hang there (its rotation NaN: the row is then
+    infeasible, its margin, tensions and lengths NaN), ok False for a cable of zero length."""
+    m = A.shape[0]
+    if not np.isfinite(R[k, 0, 0]):
+        feasible[k] = 0
+        margin[k] = np.nan
+        for i in range(m):
+            tensions[k, i] = np.nan
+            lengths[k, i] = np.nan
+        return False, False
+    rotate_attachments(R[k], B, Rb)
+    ok = structure(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
     for i in range(m):
-        tensions[k, i] = np.nan
-        lengths[k, i] = np.nan
+        lengths[k, i] = L[i]
+    return True, ok
