@@ -97,6 +97,30 @@ def test_size_motors_writes_contract_columns(tmp_path, data):
     assert {a["motor"] for a in json.loads(r.stdout)["axes"]} == {"AM8121-0F00"}
 
 
+def test_size_motors_with_a_trajectory_sizes_on_its_duty_cycle(tmp_path, data):
+    # the command's sizing is the library's on the trajectory's samples, not the default cycle
+    from cdpr_design.design import sizing as sz
+    from cdpr_design.motion import trajectory as tr
+
+    p = write_spec(tmp_path, data)
+    r = invoke("size-motors", p, "--trajectory", "square_fast", "--out", tmp_path / "t", "--json")
+    assert r.exit_code == 0, r.output
+    js = json.loads(r.stdout)
+    design = spec.load(p)
+    want = sz.size_motors(design, spec.load_catalogue(), samples=tr.sample(design, "square_fast")).summary()
+    assert js["cycle"] == want["cycle"] == "trajectory square_fast"
+    for got, ref in zip(js["axes"], want["axes"], strict=True):
+        assert got["rms_motor_torque"] == pytest.approx(ref["rms_motor_torque"], rel=1e-12)
+        assert got["peak_motor_speed"] == pytest.approx(ref["peak_motor_speed"], rel=1e-12)
+    default = json.loads(invoke("size-motors", p, "--out", tmp_path / "d", "--json").stdout)
+    assert default["cycle"] != js["cycle"]
+    assert [a["rms_motor_torque"] for a in default["axes"]] != [a["rms_motor_torque"] for a in js["axes"]]
+    # an unknown name: exit 2 naming the option, nothing written
+    r = invoke("size-motors", p, "--trajectory", "nope", "--out", tmp_path / "n")
+    assert r.exit_code == 2 and "--trajectory" in r.output and "nope" in r.output, r.output
+    assert "Traceback" not in r.output and not (tmp_path / "n").exists()
+
+
 def test_report_writes_every_artefact(tmp_path, data):
     p = write_spec(tmp_path, data)
     out = tmp_path / "rep"

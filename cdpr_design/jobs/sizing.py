@@ -48,14 +48,16 @@ def size_motors(design, catalogue: Path | None = None, trajectory: str | None = 
     (``format='parquet'``: ``.parquet``) into ``out``."""
     from cdpr_design.design import sizing as sz
     from cdpr_design.model import spec
+    from cdpr_design.statics.robot import robot_of
 
     timings = Timings()
     cat = spec.load_catalogue(catalogue)
-    samples = trajectory_samples(design, trajectory)
+    robot = robot_of(design, "size-motors")  # once: the trajectory's samples and the sizing take it
+    samples = trajectory_samples(robot, trajectory)
     out_dir = output_dir(design, out, overwrite)
     out_dir.target(file_name("motor_sizing", format))  # a foreign file: refused before any work
     with timings.phase("sweep_s"):
-        result = sz.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor,
+        result = sz.size_motors(robot, cat, step=step, samples=samples, safety_factor=safety_factor,
                                 motor=motor, engine=engine)
     with timings.phase("write_s"), out_dir:
         write_motor_sizing(out_dir, result, format, design)
