@@ -348,9 +348,9 @@ def rotated_block(r: int):
     return RowBlock(_rotated_loop_0 if r == 0 else _rotated_loop_any, _rotated_dims, _attachment_buffer)
 
 
-def _rotated_dims(P, R, A, B, rows, wreq, *rest):
-    """(n, m, nv) of a rotated block's arguments (``wreq`` (k, nv, n))."""
-    return rows.shape[0], A.shape[0], wreq.shape[1]
+def _rotated_dims(*args):
+    """(n, m, nv) of a rotated block's arguments (the first three of :func:`_rotated_parts`)."""
+    return _rotated_parts(*args)[:3]
 
 
 def _rotated_parts(P, R, A, B, rows, wreq, tmin, tmax, *rest):

@@ -55,9 +55,9 @@ def grid_block(r: int):
     return RowBlock(_grid_loop_0 if r == 0 else _grid_loop_any, _grid_dims)
 
 
-def _grid_dims(start, lower, step, shape, Rb, A, rows, wreq, *rest):
-    """(n, m, nv) of a grid block's arguments."""
-    return rows.shape[0], A.shape[0], wreq.shape[0]
+def _grid_dims(*args):
+    """(n, m, nv) of a grid block's arguments (the first three of :func:`_grid_parts`)."""
+    return _grid_parts(*args)[:3]
 
 
 def _grid_parts(start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, *rest):
