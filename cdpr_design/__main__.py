@@ -9,9 +9,7 @@ import sys
 def main() -> None:
     # a command allocates most of its objects once, at start-up (typer, pydantic, numba), and
     # keeps them: collecting the youngest generation every 200,000 allocations instead of every
-    # 700 saves 0.2-0.25 s of CPU there (measured on IPAnema 3's workspace command: at 50,000,
-    # three collections, 31-35 ms in all, still ran in the command and two, 40 ms, in the
-    # picture worker's warm-up; at 200,000, one of 0.2 ms).  Cycles made later are still collected
+    # 700 walks those objects far fewer times (figures: docs/performance.md).  Cycles made later are still collected
     gc.set_threshold(200_000, 20, 20)
     # past a file-size limit (``ulimit -f``) a write fails with EFBIG, which the command reports (exit 2
     # naming the file), instead of SIGXFSZ ending the process: Python ignores it at start-up, said here
@@ -21,7 +19,7 @@ def main() -> None:
     # start the picture worker before importing the command line (typer, rich, pydantic):
     # its matplotlib import then overlaps the rest of the parent's start-up.  numpy first:
     # the worker is a copy of this process where it can be (plots.worker.can_fork), which
-    # then has numpy, Python and its site already (0.3 s of CPU less than a new interpreter)
+    # then has numpy, Python and its site already (less CPU than a new interpreter)
     from cdpr_design.cli import env
 
     env.settle_blas_threads()  # before anything imports numpy

@@ -14,12 +14,12 @@ from cdpr_design.errors import InputError, quote
 
 #: Settings of the LocalCluster: the nannies hand dask's configuration to
 #: their workers, so these reach them too.  Neither dask's statistical profiler
-#: (a stack walk every 10 ms) nor its GIL monitor (every 1 ms), which take the
-#: GIL from short Python-heavy tasks; the event-loop health check, memory
-#: monitor and system monitor at 1-2 s instead of 20-500 ms (no dashboard is
-#: served, and a sweep's memory is bounded chunk buffers): with two cores shared
-#: by the scheduler, the nannies and the workers, these cost about 0.4 s of CPU
-#: per 1,000 variants.  ``MALLOC_TRIM_THRESHOLD_`` is not set (see
+#: nor its GIL monitor, which take the GIL from short Python-heavy tasks; the
+#: event-loop health check, memory monitor and system monitor at the intervals
+#: below instead of dask's shorter defaults (no dashboard is served, and a
+#: sweep's memory is bounded chunk buffers): with two cores shared by the
+#: scheduler, the nannies and the workers, they cost CPU on every variant
+#: (docs/performance.md).  ``MALLOC_TRIM_THRESHOLD_`` is not set (see
 #: :func:`start_local_cluster`).
 LOCAL_CLUSTER_CONFIG = {
     "distributed.worker.profile.enabled": False,
@@ -69,8 +69,8 @@ def start_local_cluster(LocalCluster, workers: int):
     dask's nannies start workers with ``MALLOC_TRIM_THRESHOLD_=65536``
     (``distributed.nanny.pre-spawn-environ``).  Setting that variable turns off
     glibc's dynamic mmap threshold, so every array above 128 kB is a fresh
-    mmap with its page faults: a variant's sweep ran 1.6-2x slower than in a
-    pool worker.  The sweep's memory is bounded chunk buffers, so the workers
+    mmap with its page faults: a variant's sweep ran slower than in a pool
+    worker (docs/performance.md).  The sweep's memory is bounded chunk buffers, so the workers
     keep glibc's default.
 
     Before spawning a worker, dask's nanny writes its pre-spawn variables
@@ -173,7 +173,7 @@ def dask_session(job, scheduler: str, w: int, connect_timeout: float = 10.0):
         raise
     client.close()
     if cluster is not None:
-        # every row is in: the cluster closes (~0.5 s: the workers shut down and
+        # every row is in: the cluster closes (the workers shut down and
         # exit) while the caller goes on; wait_closed() joins it
         closer = threading.Thread(target=cluster.close, name="cdpr-design LocalCluster close")
         closer.start()

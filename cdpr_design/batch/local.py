@@ -244,7 +244,7 @@ def pool_session(job, w: int, start_method: str = "spawn"):
         ex.shutdown(wait=False, cancel_futures=True)
         _terminate([p for p in mp.active_children() if p not in before])
         raise
-    # every row is in: the workers' exit (~0.4 s of interpreter teardown with
+    # every row is in: the workers' exit (interpreter teardown with
     # numba loaded) overlaps the caller's next steps; wait_closed() joins it
     closer = threading.Thread(target=ex.shutdown, kwargs={"wait": True}, name="cdpr-design pool shutdown")
     closer.start()

@@ -96,12 +96,10 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
 
 
 #: Grid poses a sweep process evaluates from which every process loads the numba kernels.  A
-#: sweep's processes run the kernels on one thread each, each pays numba's start-up (0.45-0.5 s
-#: for planar2's kernels), and a variant's sweep computes no tilt map and writes no rows, so
-#: numpy's closed form costs only ~3 us a pose there: measured with planar2's variants (22,801
-#: poses each, 2 processes, the whole ``sweep`` command, two runs an engine): numpy faster by
-#: 0.1-0.9 s from 4 to 20 variants (91,000-456,000 poses, 0.2 s at 10), even at 40 (912,000:
-#: 3.3-3.6 s either way), numba faster at 80 (1.8 M poses: 3.3 s against 3.4-4.0 s).  Not
+#: sweep's processes run the kernels on one thread each, each pays numba's start-up, and a
+#: variant's sweep computes no tilt map and writes no rows, so numpy's closed form is cheap a
+#: pose there: the crossover measured with planar2's variants, the whole ``sweep`` command, lies
+#: between 912,000 and 1.8 M poses (docs/performance.md).  Not
 #: ``statics.robot.NUMPY_MAX_POSES`` (one ``workspace`` command, kernels on two threads).
 KERNELS_FROM_POSES = 500_000
 

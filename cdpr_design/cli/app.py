@@ -30,8 +30,8 @@ COMMANDS = {
 def make_app(argv: Sequence[str] | None = None) -> typer.Typer:
     """The Typer app.  Given the command line ``argv`` (after the program's name) whose first
     word is a command, only that command's module is imported and registered: typer then
-    builds that command's options alone (about 0.1 s of CPU less at every start than
-    building all thirteen, measured).  Else every command (the help's list, an unknown
+    builds that command's options alone, less work at every start than building all
+    thirteen.  Else every command (the help's list, an unknown
     command's error)."""
     one = argv is not None and len(argv) > 0 and argv[0] in COMMANDS
     app = typer.Typer(
@@ -74,5 +74,5 @@ def main() -> None:
     finally:
         _picture_worker.discard()
         # the command is done: the interpreter's exit then skips its last garbage collections over
-        # every object alive (numba's type system and compiled libraries: 0.3-0.7 s of a process)
+        # every object alive (numba's type system and compiled libraries among them)
         gc.freeze()

@@ -31,8 +31,7 @@ if TYPE_CHECKING:
 
 class _Console:
     """A rich ``Console`` made when first used: a command that prints nothing for a person
-    (``--json``: no table, message or progress bar) never imports rich, 40 ms of CPU on its
-    way to its work."""
+    (``--json``: no table, message or progress bar) never imports rich."""
 
     def __init__(self, **options):
         self._options = options

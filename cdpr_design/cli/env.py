@@ -18,7 +18,7 @@ import os
 from cdpr_design.errors import InputError
 
 #: Cycles (as a power of two) an idle OpenBLAS thread busy-waits for work before it sleeps.
-#: OpenBLAS's default, 28, is about 0.1 s at 2.5 GHz per thread; 4 is its least.
+#: OpenBLAS's default is 28; 4 is its least.
 BLAS_THREAD_TIMEOUT = "4"
 
 
@@ -26,10 +26,9 @@ def settle_blas_threads(environ=os.environ) -> None:
     """Let numpy's and scipy's OpenBLAS threads sleep at once when they have no work
     (``OPENBLAS_THREAD_TIMEOUT``, unless the user set it); call before numpy is imported.
 
-    OpenBLAS starts its threads when it loads and each busy-waits about 0.1 s
-    for work before it sleeps, and again after every call it shares out: 0.1-0.15
-    s of CPU per command on two cores (measured: a process that only imports
-    numpy used 0.41 CPU-s, 0.27 with this).  A command keeps its cores busy with
+    OpenBLAS starts its threads when it loads and each busy-waits for work
+    before it sleeps, and again after every call it shares out (the CPU this
+    saves: docs/performance.md).  A command keeps its cores busy with
     its own work (the sweep's threads, the picture worker), so that CPU comes
     out of its wall time.  BLAS still runs on all cores where a call is large
     enough to share out; only the wait is shorter.

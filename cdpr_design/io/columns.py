@@ -350,8 +350,7 @@ def _formatter(compiled: bool):
 
 def _parquet_writer(fh, schema):
     """A ParquetWriter of ``schema`` on ``fh``: dictionary encoding for every column but the
-    floating-point ones (IPAnema 3's 154,440 x 24 workspace table: 0.26 s and 22.1 MB with it
-    on every column, 0.06 s and 19.0 MB with it on none; scripts/bench_outputs.py)."""
+    floating-point ones, where it costs time and makes the file larger (docs/performance.md)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 

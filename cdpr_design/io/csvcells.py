@@ -44,7 +44,7 @@ def _digit_tables():
     (the j-th digit from the left in byte j, little-endian), their trailing zeros (5 for 00000),
     and the exponent suffixes ``e-400`` .. ``e+400`` as little-endian bytes (index X + 400)."""
     # the numbers as a (10,) * 5 grid, the j-th digit along axis j (in row-major order the flat
-    # index is the number): no division (2 ms, not 15)
+    # index is the number): no division
     char = np.arange(48, 58, dtype=_U)  # "0".."9"
     first = np.arange(10) == 0
     digits = np.zeros((10,) * 5, dtype=_U)

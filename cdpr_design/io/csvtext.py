@@ -22,26 +22,12 @@ digits, exponent suffix and separator -- with unused bytes zero; the row
 block's bytes with the zeros removed are the CSV text.
 
 Why two formatters: :mod:`~cdpr_design.io.csvfast` formats the same bytes
-by the same algorithm in numba, 3-4x faster a cell (41-65 ns against 155-187
-ns), but in a process that has not loaded numba yet its first table costs
-numba's start-up, about 0.8 s of CPU (0.22-0.26 s to import numba, the rest
-to load the cached machine code).  ``scripts/bench_csv.py``, CPU seconds of a
-fresh process (import and format), least of 3, on the 2-core development
-machine under load:
-
-=========================================  =======  ===================  =====================
-table (cells)                              numpy    numba, cold process  numba, kernels loaded
-=========================================  =======  ===================  =====================
-planar2 workspace, 22,801 x 10 (0.23 M)    0.073 s  0.868 s              0.034 s
-IPAnema 3 workspace, 154,440 x 24 (3.7 M)  0.745 s  1.044 s              0.227 s
-1,000,000 x 10 (10 M)                      1.938 s  1.361 s              0.671 s
-=========================================  =======  ===================  =====================
-
-So the numpy formatter saves a command that does not otherwise load numba
-(planar2's sweep on the numpy engine, a trajectory, a motor sizing, a study's
-table) up to 0.8 s -- 12x on planar2's table -- and loses only beyond about
-6 million cells; where a sweep ran on the kernels the compiled one is 2-3x
-faster.  The writer's caller says which
+by the same algorithm in numba, faster a cell, but in a process that has not
+loaded numba yet its first table costs numba's start-up (importing numba and
+loading the cached machine code).  So the numpy formatter serves a command
+that does not otherwise load numba (planar2's sweep on the numpy engine, a
+trajectory, a motor sizing, a study's table), and the compiled one a command
+that ran the kernels (figures: docs/performance.md).  The writer's caller says which
 (:class:`~cdpr_design.io.columns.ColumnWriter`'s ``compiled``).
 """
 

@@ -2,7 +2,7 @@
 
 Kernels take contiguous float64 arrays in SI units and never model objects;
 the jit options are set once in :mod:`cdpr_design.kernels._jit`.  Importing
-a kernel imports numba (about 0.4 s); this package itself is cheap and loads
+a kernel imports numba (slow to import); this package itself is cheap and loads
 each submodule the first time one of its names is used
 (``from cdpr_design import kernels as K; K.sweep_grid``), so the layers above
 can import it at the top and :mod:`cdpr_design.kernels.parallel` (the thread

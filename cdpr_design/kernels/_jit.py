@@ -88,18 +88,18 @@ njit_folded = nb.njit(inline="always", **JIT)
 #: The loops over poses: compiled without numba's reference counting (``_nrt=False``).
 #: numba counts references to every array a function binds or passes on -- an atomic
 #: increment and decrement per array per pose, the scratch tuple alone holding 31 -- and
-#: the kernels' block loops spent more than half their time on it (IPAnema 3: 2.66 ->
-#: 1.21 us a pose on one core without).  Such a loop gets its arrays from a block function
+#: the kernels' block loops spent more than half their time on it (docs/performance.md).
+#: Such a loop gets its arrays from a block function
 #: that allocates them and outlives the loop.  Neither the loop nor anything it calls may
 #: allocate: numba compiles the calls with the same option, and refuses an allocation there
 #: when it compiles (so the kernels that solve a polynomial's roots with fresh arrays, the
 #: hanging tilt, keep reference counting; the sagging cables' loops and fixed point do without it,
-#: the Newton step's arrays in the block's scratch: sagging40's sweep 1.78 -> 1.06 s on two threads, its
-#: compile 8 % shorter without the counter code around its many calls).  A
+#: the Newton step's arrays in the block's scratch: a faster sweep and a shorter compile without
+#: the counter code around its many calls).  A
 #: callee that does not set the option itself takes its first caller's, for good (numba's
 #: cache keeps it): an allocating callee fails where it is first reached from such a loop,
-#: and a counting one reached first from elsewhere would slow the loop down (IPAnema 3 1.2
-#: -> 1.9 us a pose).  So every kernel that allocates nothing is declared without counting
+#: and a counting one reached first from elsewhere would slow the loop down.  So every
+#: kernel that allocates nothing is declared without counting
 #: (``njit_noref``, ``njit_fast_noref``), and only the ones that allocate use ``njit``.
 #: ``tests/test_jit_cache.py`` compiles each loop first, and after the per-pose kernel, in
 #: a new process with an empty cache, and fails if numba stops honouring the option.
@@ -113,8 +113,8 @@ def jitable(func):
 
     For the functions that only allocate a kernel's arrays (:func:`~cdpr_design.kernels.hsm.make_scratch`):
     called from Python, numpy allocates them and nothing is compiled -- a compiled function
-    returning a tuple of 31 arrays took 1.5-3 CPU-s to compile on a machine's first run, more than
-    the allocation costs in a whole sweep (``numba.extending.register_jitable``).
+    returning a tuple of 31 arrays costs more to compile on a machine's first run than the
+    allocation costs in a whole sweep (``numba.extending.register_jitable``).
     """
     return register_jitable(func)
 

@@ -341,8 +341,7 @@ def rotated_block(r: int):
     method): m = n and any r > 2 each a loop of its own, with ``r`` a constant in
     :func:`_rotated_loop` (compiled with only its own margin and QP method); r = 1 and 2 one loop
     given the pose's functions as pointers, as the grid's (:mod:`~cdpr_design.kernels.pointers`),
-    so that it compiles alone, without them (crane4's first run: its loop 2.5 -> 0.8 CPU-s of
-    compile events, outputs identical)."""
+    so that it compiles alone, without them (docs/performance.md)."""
     if r in (1, 2):
         return PointerBlock(_rotated_loop_small, _rotated_parts, _attachment_buffer)
     return RowBlock(_rotated_loop_0 if r == 0 else _rotated_loop_any, _rotated_dims, _attachment_buffer)

@@ -105,9 +105,9 @@ def hsm_one(W, wreq, nv, tmin, tmax, scr, want_closure):
     itself, on the scratch's arrays (:func:`~cdpr_design.kernels.pose.eval_small`)."""
     facet_setup(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[19], scr[20], want_closure)
     # the body compiled once, with the flag a variable: compiled with it a constant (a copy per
-    # value) it cost IPAnema 3's first run 2.5 CPU-s more and no measurable time a pose.  A
+    # value) it cost a first run more compile and no measurable time a pose.  A
     # compiled function rather than an inlined body: numba's inlining copies a body's IR block
-    # by block with its whole scope, quadratic in its size (``hsm_two`` 6.7 -> 5.9 CPU-s)
+    # by block with its whole scope, quadratic in its size (docs/performance.md)
     return facets_one(W, wreq, nv, scr[0], scr[1], scr[2], scr[28], scr[29], scr[19], want_closure)
 
 

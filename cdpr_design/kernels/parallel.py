@@ -13,17 +13,15 @@ Why threads here rather than numba's ``prange``:
 
 - compile time: a ``parallel=True`` function is compiled again around its
   whole call chain (numba re-optimises every function it links in), which cost
-  about a quarter of a cold start (IPAnema 3's grid sweep: 65 s with
-  ``prange``, 47 s for its block function alone, measured on the development
-  machine);
+  about a quarter of a cold start (docs/performance.md);
 - fork safety: numba's threading layer is often GNU OpenMP, which a
   ``fork`` after a parallel region can deadlock; with no ``prange`` it is
   never started;
 - interruption: Ctrl-C reaches the waiting main thread at once, and the blocks
   not yet started are dropped.
 
-The speed is the same: rows are independent and blocks are large (tens of
-microseconds of dispatch per block against milliseconds of work).  Results
+The speed is the same: rows are independent and blocks are large (a block's
+dispatch is small beside its work).  Results
 do not depend on the thread count or on the block size.
 
 The thread count is ``numba.config.NUMBA_NUM_THREADS`` (numba's own setting:

@@ -4,7 +4,7 @@ loops that call them so.
 numba compiles a function together with everything it calls: the grid sweep's loop for m - n = 2
 linked the functions its pose calls (:func:`~cdpr_design.kernels.pose.eval_small`) into its own
 code, optimised them again with it, and so could only compile once they were compiled.  On a
-machine's first run of IPAnema 3 that put the loop's compile (4-5 CPU-s) after the margins' (in
+machine's first run of IPAnema 3 that put the loop's compile after the margins' (in
 the other process, :mod:`cdpr_design.kernels.warm`), each on the critical path.  Here the loop
 takes six functions as arguments of numba's first-class function type -- ``eval_small``'s five
 and the structure matrix (:func:`~cdpr_design.kernels.geometry.structure_matrix`) -- given
@@ -12,9 +12,8 @@ pointers to them (the C wrappers numba makes of the compiled functions themselve
 :func:`pointers`): it compiles on its own, while the other process still compiles its share
 (:data:`HERE`, :data:`THERE`), once for m - n = 1 and 2, and nothing is compiled twice (the loops
 that call the six directly link the same compiled functions).  It is also given only the twelve
-scratch arrays its pose works in (:func:`~cdpr_design.kernels.pose.small_scratch`).  IPAnema 3's
-first run from an empty cache: see ``scripts/bench_first_run.py``; its sweep as fast as before
-(an indirect call a function, six a pose) and its outputs identical.
+scratch arrays its pose works in (:func:`~cdpr_design.kernels.pose.small_scratch`): an indirect
+call a function, six a pose, the outputs identical (first-run figures: docs/performance.md).
 
 The pointers are passed as six arguments, not a tuple: a tuple of functions makes numba warn that
 first-class functions are experimental, separate arguments do not.  Under ``NUMBA_DISABLE_JIT``

@@ -40,9 +40,8 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
     into its callers: a caller passing ``r`` as a constant
     (:func:`cdpr_design.kernels.sweep.grid_block`) compiles only the methods it
     needs.  Going through those two functions instead, called or inlined,
-    costs 0.17-0.25 us a pose more (an inlined layer passing the scratch tuple
-    on costs about 0.18 us by itself).  A pose of IPAnema 3 took 3.56 us on
-    one core through them, 2.62 us this way.
+    costs time a pose (an inlined layer passing the scratch tuple on costs by
+    itself; docs/performance.md).
     """
     if r == 2:
         return eval_small(W, wreq, tmin, tmax, kind, t_out, small_scratch(scr),
@@ -285,9 +284,8 @@ class RowBlock:
     with only its own margin and QP method, :func:`eval_general`); ``dims(*args)`` gives (n, m, nv)
     from the block's arguments; ``extra(m)`` more work arrays, if any.  Python, not compiled: a
     compiled function carries the machine code of everything it calls, optimised and emitted again
-    with it, so a compiled block around the loop compiled the loop a second time (IPAnema 3's
-    kernels from an empty cache: 32.4 -> 28.9 CPU-s, ``scripts/bench_first_run.py``); from Python,
-    the buffers and the call cost tens of microseconds a block.
+    with it, so a compiled block around the loop compiled the loop a second time
+    (docs/performance.md); from Python, the buffers and the call cost little a block.
     """
 
     def __init__(self, loop, dims, extra=None, buffers=None):

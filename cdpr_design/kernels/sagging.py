@@ -38,29 +38,26 @@ compiled function together with everything it calls, in the module of each
 caller again: every level cost the whole depth below it once more.  The
 functions with one call site in the chain (:func:`sag_pose` in each block,
 :func:`_continued`, :func:`_newton_step`) are folded into their callers
-(:data:`~cdpr_design.kernels._jit.njit_folded`): sagging40's first
-``workspace`` compiled 60.5 -> 40.0 CPU-s (numba's compile events), its
-outputs identical.  :func:`_iterate`, called twice, is not: folded as well, the
-two copies took 50.1, and folded once (the straight start made the first pass of
-:func:`_continued`'s loop) 49.7: LLVM's time on one function grows faster than
-its size, so a large body is worth folding only where it saves a level.
+(:data:`~cdpr_design.kernels._jit.njit_folded`), the outputs identical.
+:func:`_iterate`, called twice, is not: folded as well (twice, or once with the
+straight start made the first pass of :func:`_continued`'s loop) it compiled
+longer: LLVM's time on one function grows faster than its size, so a large
+body is worth folding only where it saves a level.
 :func:`_distribute` and :func:`_min_norm` (two call sites, a few calls each) are
-folded too: each was a level over the whole tension QP, and without them the
-command compiled 44.2 -> 40.2 CPU-s (four interleaved pairs from empty caches:
-41.0/43.9/46.5/45.5 -> 37.7/40.5/42.9/39.7), its outputs identical.  Measured
-and left: folding the QP's own thin levels below them as well
+folded too: each was a level over the whole tension QP, the outputs
+identical.  Measured and left: folding the QP's own thin levels below them as well
 (:func:`~cdpr_design.kernels.tension_qp.min_norm_tensions_square`, ``_reduced``,
 ``null_space_setup``: three pairs, no gain), and :func:`make_sag_scratch` compiled
 into its callers (within the noise).  The blocks call :func:`_iterate` through a C
 function pointer (:func:`fixed_point`), not linked into their own modules, and the
-verdict on the converged pose is :func:`_evaluate`, a function of its own (21.4 -> 18.5
-CPU-s); :func:`_fixed_map` through a pointer as well gained nothing and slowed the sweep.
+verdict on the converged pose is :func:`_evaluate`, a function of its own;
+:func:`_fixed_map` through a pointer as well gained nothing and slowed the sweep.
 The fixed point and everything below it that takes arrays is compiled without numba's
 reference counting (:data:`~cdpr_design.kernels._jit.njit_noref`; the Newton step's
 Jacobian is in the scratch, :func:`make_sag_scratch`): no counter code around each of the
-many calls with a dozen arrays, 18.5 -> 17.0 CPU-s, and sagging40's sweep 1.78 -> 1.06 s (74,681
-poses, two threads), outputs identical.  So are the blocks' loops over poses, given their buffers
-by a Python block (:func:`sag_buffers`, :class:`~cdpr_design.kernels.pose.RowBlock`): 17.0 -> 16.0.
+many calls with a dozen arrays, outputs identical.  So are the blocks' loops over poses, given their
+buffers by a Python block (:func:`sag_buffers`, :class:`~cdpr_design.kernels.pose.RowBlock`).
+The compile times and sweep times of each of these steps: docs/performance.md.
 """
 
 from __future__ import annotations
@@ -321,8 +318,8 @@ def redundancy(n: int, m: int):
     """The ``redundant`` argument of the sagging kernels for ``n`` wrench rows and ``m`` cables:
     None for m = n, else m - n.  numba compiles a kernel once per argument type and prunes the
     branches on ``redundant is None`` before typing them, so a square robot's first run compiles
-    none of the redundant methods (the QP's and the margin's: sagging40's compile 89 -> 55 CPU-s)
-    and a redundant one none of the square ones."""
+    none of the redundant methods (the QP's and the margin's) and a redundant one none of the
+    square ones."""
     return None if m == n else m - n
 
 
@@ -335,9 +332,8 @@ def fixed_point(up, w, EA, tmin, tmax, rows, maxit, redundant):
     The blocks call it through the pointer rather than linking it: numba optimises a compiled
     function together with everything it calls, so a block that called :func:`_iterate` directly
     had the whole fixed point below it (the shapes, the catenaries, the tension QP) optimised by
-    LLVM once more in its own module.  sagging40's first ``workspace`` compiled 21.4 -> 18.5 CPU-s
-    (numba's compile events), its outputs identical; an indirect call per pose costs nothing
-    beside its catenary solves (about 28 us a pose on one thread)."""
+    LLVM once more in its own module.  The outputs are identical; an indirect call per pose
+    costs nothing beside its catenary solves (docs/performance.md)."""
     n, m = rows.shape[0], w.shape[0]
     W, cw, lo, hi, inf_hi, tq, scr, work = make_sag_scratch(n, m, 1)
     Rb, w0 = np.empty((m, 3)), np.empty(n)  # a pose's rotated attachments [m], required wrench [N, N m]

@@ -40,15 +40,15 @@ def grid_block(r: int):
     :mod:`cdpr_design.kernels.pointers`, and so compiles without them, alone, and once for every
     such design), and any other (:func:`_grid_loop_any`).  Chosen here, in Python, so that a design
     compiles only the loop it uses, each with only its own margin and QP method
-    (:func:`~cdpr_design.kernels.pose.eval_general`).  A pose of IPAnema 3 (r = 2) took 3.56 us on
-    one core with one kernel for every r, 2.62 us with its own.
+    (:func:`~cdpr_design.kernels.pose.eval_general`), which is also faster a pose than one kernel
+    for every r (docs/performance.md).
 
     The block (:class:`~cdpr_design.kernels.pose.RowBlock`,
     :class:`~cdpr_design.kernels.pointers.PointerBlock`) allocates the block's buffers
     (:func:`~cdpr_design.kernels.pose.row_buffers`) and hands them to its loop over the poses,
     compiled without reference counting (:data:`~cdpr_design.kernels._jit.njit_noref`): every
     array a pose's code binds or passes on (the scratch tuple alone holds 31) otherwise costs an
-    atomic increment and decrement per pose.  IPAnema 3: 2.66 -> 1.21 us a pose on one core.
+    atomic increment and decrement per pose.
     """
     if r in (1, 2):
         return PointerBlock(_grid_loop_small, _grid_parts)

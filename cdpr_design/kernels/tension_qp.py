@@ -31,7 +31,7 @@ def null_space_setup(n, m, w, scr):
 def null_space(n, m, w, tab, N, tp, tb, nbc, bcol):
     """:func:`null_space_setup` on the scratch's arrays themselves (``tab`` scr[0], ``N`` scr[8],
     ``tp`` scr[9], ``tb`` scr[25], ``nbc`` scr[19], ``bcol`` scr[20]): a compiled function that
-    takes the scratch tuple unpacks its 31 arrays, which cost 0.3-0.4 CPU-s of compile per function."""
+    takes the scratch tuple unpacks its 31 arrays, which costs compile time in every such function."""
     r = m - n
     for k in range(r):
         col = nbc[k]

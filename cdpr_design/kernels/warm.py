@@ -1,7 +1,7 @@
 """Compile a pose's kernels in two processes at once, on a machine's first run.
 
 numba compiles one function at a time, in the process that needs it: a first run of IPAnema 3
-compiled for about 20 CPU-s on one core while the other waited.  The functions a sweep's pose
+compiled on one core while the other waited.  The functions a sweep's pose
 calls (:func:`~cdpr_design.kernels.pose.pose_kernels`) fall into two independent sets of about
 the same cost, the margins' and the tensions': :func:`compile_pose` compiles the margins' in a
 new process (:func:`main`, run by ``python -c``) while this one compiles the
@@ -16,7 +16,7 @@ other the null basis, the margins' setup and facets and the structure matrix
 returns once this process has its share (and the CSV formatter, ``meanwhile``), the loop
 compiles while the other process still works, and the sweep's block waits for it only when it
 needs the other's pointers, then loads them from the cache.  The shares are chosen so that both
-processes finish at about the same time (IPAnema 3, ``scripts/bench_first_run.py``).  For any
+processes finish at about the same time (IPAnema 3, docs/performance.md).  For any
 other m - n :func:`compile_pose` waits for the other process, and the loop,
 compiled next, loads the functions from the cache instead of compiling them: numba caches a
 function with the code callers link in, so the loop's machine code is the one it would have had.
@@ -101,8 +101,7 @@ def _first_run(n: int, m: int, dispatcher, sig) -> subprocess.Popen | None:
     code is this m - n's own: the tensions' QP or projection) compiled or loaded here for ``sig``:
     the other is kept if that was a compile (not in numba's cache), and stopped if it loaded --
     then so will the rest.  Started before the answer is known, the other process imports numba
-    while this one does (about 0.8 s of IPAnema 3's first run, ``scripts/bench_first_run.py``);
-    on a run that loads, it is stopped after about that, on the other core (0.4-0.5 CPU-s).
+    while this one does; on a run that loads, it is stopped after about that, on the other core.
     Nothing is started when this process has ``dispatcher`` already (compiled or loaded by an
     earlier sweep of the same m - n: the functions' types do not depend on n and m)."""
     if tuple(sig.args) in dispatcher.overloads:

@@ -46,8 +46,8 @@ from cdpr_design.model.spec_checks import MODEL_NEEDS, cable_model_problems, che
 
 
 class _UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
-    """``yaml.SafeLoader`` (libyaml's parser when PyYAML has it: ten times faster, the same
-    documents) that refuses a key given twice in one mapping."""
+    """``yaml.SafeLoader`` (libyaml's parser when PyYAML has it: the same documents, parsed
+    in C) that refuses a key given twice in one mapping."""
 
 
 def _construct_mapping(loader, node, deep=False):

@@ -131,7 +131,7 @@ def _outer_ticks(axs, n: int, xlabel: str = "x [m]", ylabel: str = "y [m]") -> N
     matplotlib's default locator picks for the panel (those within the limits).
     The other panels get tick marks at the same places, drawn as one line of
     markers a side instead of matplotlib's ticks: each of those is two lines, a
-    grid line and two texts, made, laid out and drawn in 1-2 ms, most of a
+    grid line and two texts, made, laid out and drawn one by one, most of a
     picture's time when every panel had its own.
     """
     from matplotlib.ticker import FixedLocator, NullLocator

@@ -11,10 +11,9 @@ parent writes the files itself (atomic, manifest-checked, see
 
 The child runs at its parent's CPU priority.  It once lowered its own
 (``nice`` +10), so that the parent's sweep threads went first where the two
-overlap: 3 % of IPAnema 3's command on an idle two-core machine.  But a
-lowered priority is lowered against every other process too: with three busy
-processes beside it, planar4's ``workspace`` took 17.6 s instead of 3.4 s
-(medians of four), the pictures waiting behind them.
+overlap, a few percent on an idle machine.  But a lowered priority is
+lowered against every other process too: with busy processes beside it, the
+pictures waited behind them (docs/performance.md).
 
 Whenever the child cannot be used (it failed to start, died, or a figure
 raised there) ``render`` draws in-process instead, so errors surface exactly
@@ -28,8 +27,7 @@ The child is a copy of the parent (``os.fork``) where that is safe
 alive), else a new interpreter.  A copy starts with what the parent has
 imported: the command line starts the worker (:func:`prestart`) once numpy
 is imported and before typer, rich and pydantic, so its child skips Python's
-start-up, its site and numpy (IPAnema 3's command: the child's CPU to the
-end of its warm-up 1.03-1.15 s as a new interpreter, 0.80-0.91 s as a copy).
+start-up, its site and numpy.
 This module imports nothing heavy itself.
 
 Protocol on the child's pipes (a new interpreter's stdin/stdout): length-prefixed pickles.  A request is
@@ -53,9 +51,8 @@ from pathlib import Path
 
 _LEN = struct.Struct("<Q")
 
-#: zlib level of the PNGs: 3 encodes in two thirds of the time of PIL's default 6 (about 20 ms
-#: less for a 1700 x 800 pixel picture); with this round's layouts the files came out 5-33 %
-#: larger than before (scripts/bench_pictures.py, layout and compression together)
+#: zlib level of the PNGs: 3 encodes faster than PIL's default 6, the files somewhat larger
+#: (docs/performance.md)
 PNG_COMPRESSION = 3
 
 
@@ -155,8 +152,8 @@ class PictureWorker:
         Start a child even though matplotlib is imported here already (tests).
     fork : bool or None
         How the child starts: True, a copy of this process (``os.fork``), which has
-        Python, its site and whatever this process imported so far (numpy: 0.2-0.3 s
-        of CPU a child started afresh spends before its matplotlib import); False, a
+        Python, its site and whatever this process imported so far (numpy, which a child
+        started afresh imports before matplotlib); False, a
         new interpreter.  None: a copy where that is safe (:func:`can_fork`), else new.
     """
 
@@ -459,7 +456,7 @@ def discard() -> None:
 #: What a request of the ``workspace`` and ``report`` commands unpickles: its result's classes
 #: (the design, the grid, an orientation sweep's maps) and the figure functions.
 #: :func:`_warm_up` imports them while the parent still sweeps, not once the request is there
-#: (40-50 ms, then on the command's critical path).  None of them imports numba
+#: (then on the command's critical path).  None of them imports numba
 #: (:func:`draw_parallel` forks only without it).
 PRELOAD = ("cdpr_design.workspaces.grid", "cdpr_design.workspaces.orientation", "cdpr_design.plots.workspace",
            "cdpr_design.plots.hanging")
@@ -472,7 +469,7 @@ def _warm_up() -> None:
     collection walks them again.  Frozen objects are still freed when their reference counts
     drop to zero.  The warm-up's cyclic garbage (about 2,800 objects, the warm-up figure's
     among them) is frozen with the rest rather than collected first: a collection there walks
-    every one of those objects, 35-50 ms of the worker's CPU while the command starts up."""
+    every one of those objects, on the worker's CPU while the command starts up."""
     import importlib
 
     from cdpr_design.plots._style import pyplot

@@ -47,11 +47,9 @@ ENGINES = ("auto", "numba", "numpy")
 KINDS = {"static": 0, "wrench-feasible": 1, "wrench-closure": 2}
 #: Commands that analyse a design (``Analysis.command``).
 COMMANDS = ("workspace", "pose", "fk", "certify", "size-motors", "motion", "check", "report", "statics")
-#: Largest closed-form grid ``auto`` gives to numpy.  Measured on planar2 (with its hanging
-#: tilt), warm, the whole ``workspace`` command in a new process, two runs an engine and size:
-#: numpy 13-18 us a pose, numba 5-7 us a pose on two threads plus 0.45-0.5 s of numba start-up,
-#: which puts the crossover at 45,000-90,000 poses; the commands measured it there, loosely:
-#: numpy 0.25 s faster at 63,001 poses, numba 0.3-0.5 s faster at 74,529 and 0.6-0.8 s at 90,601.
+#: Largest closed-form grid ``auto`` gives to numpy: numpy is slower a pose than the kernels but
+#: pays no numba start-up; the crossover, measured on planar2's whole ``workspace`` command, is
+#: between 63,001 and 74,529 poses (docs/performance.md).
 NUMPY_MAX_POSES = 70_000
 #: Commands that hold the effector at commanded poses and never run the hanging solver (motor
 #: sizing over the task poses; trajectories and their simulation, in which a free effector hangs

@@ -11,7 +11,7 @@ The robot's ``engine`` (:func:`cdpr_design.statics.robot.resolve`) says which:
 ``auto`` takes numpy for closed-form grids up to
 :data:`~cdpr_design.statics.robot.NUMPY_MAX_POSES` poses while the kernels are
 not loaded in the process: numba's start-up (its import and the cached
-kernels' load, 0.3-0.5 s) would cost more than the sweep itself.
+kernels' load) would cost more than the sweep itself.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ LOADED = "cdpr_design.kernels.sweep"
 
 
 def kernels():
-    """The numba kernels, imported on first use (importing numba takes ~0.4 s): :data:`LOADED`
+    """The numba kernels, imported on first use (importing numba is slow): :data:`LOADED`
     now, the rest of the (lazy) package as its names are used."""
     import importlib
 

@@ -20,7 +20,7 @@ from cdpr_design.errors import SpecError
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics.kinematics import pose_at
 
-#: Largest grid swept without ``force=True`` (poses): about 10 s of the numba kernels on one core.
+#: Largest grid swept without ``force=True`` (poses).
 MAX_POSES = 20_000_000
 #: Largest grid swept even with ``force=True`` (poses): grid indices and positions stay exact in float64.
 HARD_MAX_POSES = 2 ** 53

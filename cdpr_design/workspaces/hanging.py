@@ -112,7 +112,7 @@ HANG_GRAIN = 256
 #: ``BLOCKS_PER_THREAD`` a thread, so a 262,144-row chunk still gets blocks of 16,384): Ctrl-C
 #: waits for the blocks begun, seconds rather than the whole chunk.  Blocks are otherwise as
 #: large as the threads allow: two threads of small numpy calls mostly wait for each other's GIL
-#: (crane4 in 12 blocks on two threads took 2.2 s, in 2 blocks 0.97 s, on one thread 1.45 s).
+#: (docs/performance.md).
 HANG_BLOCK = 4096
 
 
@@ -120,7 +120,7 @@ def _hang_in_blocks(geo: Geometry, P, planar: bool, nominal) -> HangingOrientati
     """:func:`~cdpr_design.statics.hanging.at_positions.hanging_orientations` (numpy) at positions
     ``P`` (k, 3) [m], in blocks of rows on the kernels' threads (:func:`~cdpr_design.kernels.parallel.run_blocks`):
     its stacked linear algebra and einsum release the GIL, so the blocks share the cores
-    (crane4's 2,873 positions: 1.4 s -> 0.95 s on two).  Each position is solved on its own,
+    (docs/performance.md).  Each position is solved on its own,
     so the answers do not depend on the blocks (tests/test_parallel.py)."""
     from cdpr_design.kernels.parallel import run_blocks, threads
 

@@ -10,8 +10,7 @@ many positions with numpy, with the kernel's order and tolerances, and
 
 It is on the product path where numba is not loaded: a planar two-cable
 sweep that the numpy engine runs (numba's import and the cached kernels'
-load cost about 0.8 s of CPU, the 961 positions of planar2 at a 0.05 m step
-0.02 s here), and the ``pose`` command, which also lists the other balanced
+load cost more than such a sweep here), and the ``pose`` command, which also lists the other balanced
 orientations (``alternatives``) that the kernel does not return.
 
 Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging.geometry`.
