@@ -171,7 +171,7 @@ def test_every_command_is_registered_by_the_module_cli_app_names():
 def test_every_command_answers_help_and_the_program_lists_them(tmp_path):
     """``cdpr-design --help`` lists every command; ``cdpr-design <command> --help`` of a command
     line naming one command shows that command's usage (what each command costs to start is
-    reported by scripts/bench_startup.py, in CPU time)."""
+    reported by scripts/bench.py startup, in CPU time)."""
     res = subprocess.run([sys.executable, "-m", "cdpr_design", "--help"], capture_output=True, text=True,
                          check=True, cwd=tmp_path)
     assert all(f"  {name} " in res.stdout for name in ("workspace", "size-motors", "optimize", "compare"))

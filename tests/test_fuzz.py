@@ -38,7 +38,7 @@ CORPUS = ROOT / "tests" / "data" / "fuzz_corpus"
 SCALE = float(os.environ.get("CDPR_FUZZ_SCALE", "1"))
 #: Longest a spec may take to load or refuse [s]; longest a command's run [s]: a guard against hangs, not a
 #: speed check, so it allows numba's cold compile of a command's kernels on a loaded 2-core machine (67 s seen
-#: for cable_models.png's sweeps at the lowest dependency versions; speed is scripts/bench_*'s to report).
+#: for cable_models.png's sweeps at the lowest dependency versions; speed is scripts/bench.py's to report).
 LOAD_LIMIT, JOB_LIMIT = 2.0, 300.0
 _counter = itertools.count()
 

@@ -1,4 +1,4 @@
-"""Benchmark of ``cdpr-design optimize``: trials per second on planar2 and IPAnema 3, and the 2-worker speed-up.
+"""``cdpr-design optimize``: trials per second on planar2 and IPAnema 3, and the 2-worker speed-up.
 
 Problems (each a study in a temporary folder):
 
@@ -22,56 +22,48 @@ optuna and SQLite, waiting for the claim lock, idle at the end).  Also the
 first IPAnema 3 trial in a fresh process with a warm and a cold (empty)
 numba cache.
 
-With ``--samplers``, also the choice of the multi-objective sampler: on
+With the option ``samplers``, also the choice of the multi-objective sampler: on
 planar2 (the two outlets; maximise the task minimum margin, minimise the peak
 tension; the spec's requirements as constraints) multi-objective TPE and
 NSGA-II (optuna's defaults otherwise) run the same number of trials for
 several seeds, and the hypervolume of each run's front of complete trials
 is compared (the reference point: the worst complete values of all runs).
-
-    python scripts/bench_optimize.py            # about 4 minutes on 2 cores
-    python scripts/bench_optimize.py --quick    # fewer trials, no cold cache
-    python scripts/bench_optimize.py --samplers # the sampler comparison only (about 5 minutes)
 """
 
 from __future__ import annotations
 
-import argparse
 import os
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from benchmarks import harness as h
 
-from cdpr_design import batch  # noqa: E402
-from cdpr_design import optimize as opt  # noqa: E402
-from cdpr_design.model import spec  # noqa: E402
+OPTIONS = {"trials": 120, "cold": True, "samplers": False}
+QUICK = {"trials": 40, "cold": False}
 
 LOWER_OUTLETS = [f"cables.c{k}.outlet.2=-0.6:1.5" for k in (5, 6, 7, 8)]
 
 
 def planar2_light():
-    raw = spec.load(ROOT / "designs" / "planar2.yaml").raw
+    from cdpr_design.model import spec
+
+    raw = spec.load(h.ROOT / "designs" / "planar2.yaml").raw
     raw = {**raw, "winch": {k: v for k, v in raw["winch"].items() if k != "motor"},
            "requirements": {k: v for k, v in raw["requirements"].items() if k not in ("max_speed", "max_acceleration")}}
     return spec.from_dict(raw)
 
 
 def ipanema3(task_box: bool):
-    raw = dict(spec.load(ROOT / "designs" / "ipanema3.yaml").raw)
+    from cdpr_design.model import spec
+
+    raw = dict(spec.load(h.ROOT / "designs" / "ipanema3.yaml").raw)
     if task_box:
         raw["requirements"] = {"task_box": {"lower": [-1.5, -1.0, 0.75], "upper": [1.5, 1.0, 1.75]}}
         raw["workspace"] = {**raw["workspace"], "grid": {**raw["workspace"]["grid"], "step": 0.25}}
     return spec.from_dict(raw, source="designs/ipanema3.yaml")
 
 
-def problems(quick: bool):
-    cat = spec.load_catalogue()
-    n = 40 if quick else 120
+def problems(n: int):
     return [
         ("planar2, 2 outlets, task box", planar2_light(),
          ["cables.0.outlet.0=-0.5:0.5", "cables.1.outlet.0=1:2"], ["task_min_margin"], [], None, 3 * n // 2),
@@ -79,7 +71,7 @@ def problems(quick: bool):
          n // 2),
         ("IPAnema 3 workspace at 1 m, 5 keys, 2 objectives", ipanema3(False), LOWER_OUTLETS + ["tension.1=1000:4000"],
          ["fraction"], ["peak_motor_torque"], 1.0, n // 3),
-    ], cat
+    ]
 
 
 def cpu_s() -> float:
@@ -88,8 +80,12 @@ def cpu_s() -> float:
     return t.user + t.system + t.children_user + t.children_system
 
 
-def run(pb, trials: int, workers: int) -> tuple[float, float, list, dict]:
-    """Wall time [s], CPU time [s], the trials, and where a worker's time went (:func:`timing`)."""
+def study(pb, trials: int, workers: int, out: dict | None = None) -> h.Timing:
+    """One study of ``trials`` on ``workers``; its trials and where a worker's time went in ``out``."""
+    import time
+
+    from cdpr_design import optimize as opt
+
     with tempfile.TemporaryDirectory() as tmp:
         c0, w0 = cpu_s(), time.time()
         st = opt.run(pb, Path(tmp), trials, workers=workers, seed=1)
@@ -97,7 +93,9 @@ def run(pb, trials: int, workers: int) -> tuple[float, float, list, dict]:
         done = opt.finished(opt.study.load(tmp))
         rows = opt.results.trials(done)
     assert len(rows) == trials, (len(rows), trials)
-    return st.elapsed_s, cpu, rows, timing(done, w0, st.elapsed_s)
+    if out is not None:
+        out.update(rows=rows, timing=timing(done, w0, st.elapsed_s))
+    return h.Timing(st.elapsed_s, cpu)
 
 
 def timing(done, start: float, elapsed: float) -> dict:
@@ -124,39 +122,31 @@ def print_timing(t: dict) -> None:
               f"waiting between trials {1e3 * d['gap'] / max(1, n - 1):.0f} ms; idle at the end {d['tail']:.2f} s")
 
 
-def baseline(pb, rows) -> float:
-    """The same variants evaluated without optuna, in this process [s]."""
+def evaluations(pb, rows) -> None:
+    """The same variants evaluated without optuna, in this process."""
+    from cdpr_design import optimize as opt
+
     job = pb.job()
-    t = time.perf_counter()
     for r in rows:
         opt.problem.evaluate(pb, job, r.number, r.params)
-    return time.perf_counter() - t
 
 
-FIRST = """
-import time, sys; t0 = time.perf_counter()
-sys.path.insert(0, {root!r}); sys.argv = ["x", "--quick"]
-import runpy; m = runpy.run_path({script!r}, run_name="bench")
-from cdpr_design import optimize as opt, batch
-from cdpr_design.model import spec
-pb = opt.make_problem(m["ipanema3"](True), m["LOWER_OUTLETS"], ["task_min_margin"], None, None,
-                      batch.Options(catalogue=spec.load_catalogue()))
-t1 = time.perf_counter()
-opt.problem.evaluate(pb, pb.job(), 0, {{p.key: (p.low + p.high) / 2 for p in pb.space.params}})
-t2 = time.perf_counter()
-opt.problem.evaluate(pb, pb.job(), 1, {{p.key: p.low for p in pb.space.params}})
-print(f"{{t1 - t0:.2f}} {{t2 - t1:.2f}} {{time.perf_counter() - t2:.3f}}")
-"""
+def first_trial() -> list[float]:
+    """Seconds of a fresh process's imports and problem, its first IPAnema 3 evaluation, its second."""
+    import time
 
+    t0 = time.perf_counter()
+    from cdpr_design import batch
+    from cdpr_design import optimize as opt
+    from cdpr_design.model import spec
 
-def first_trial(cache_dir: str | None) -> list[float]:
-    env = dict(os.environ)
-    if cache_dir:
-        env["NUMBA_CACHE_DIR"] = cache_dir
-    code = FIRST.format(root=str(ROOT), script=str(Path(__file__).resolve()))
-    out = subprocess.run([sys.executable, "-c", code], env=env, cwd=ROOT, capture_output=True, text=True,
-                         check=True).stdout.split()
-    return [float(x) for x in out]
+    pb = opt.make_problem(ipanema3(True), LOWER_OUTLETS, ["task_min_margin"], None, None,
+                          batch.Options(catalogue=spec.load_catalogue()))
+    t1 = time.perf_counter()
+    opt.problem.evaluate(pb, pb.job(), 0, {p.key: (p.low + p.high) / 2 for p in pb.space.params})
+    t2 = time.perf_counter()
+    opt.problem.evaluate(pb, pb.job(), 1, {p.key: p.low for p in pb.space.params})
+    return [t1 - t0, t2 - t1, time.perf_counter() - t2]
 
 
 def hypervolume(points, ref) -> float:
@@ -175,7 +165,11 @@ def compare_samplers(trials: int, seeds: range) -> None:
 
     from cdpr_design.optimize import study as st
 
-    design = spec.load(ROOT / "designs" / "planar2.yaml")
+    from cdpr_design import batch
+    from cdpr_design import optimize as opt
+    from cdpr_design.model import spec
+
+    design = spec.load(h.ROOT / "designs" / "planar2.yaml")
     pb = opt.make_problem(design, ["cables.0.outlet.0=-0.5:0.5", "cables.1.outlet.0=1:2"], ["task_min_margin"],
                           ["peak_tension"], None, batch.Options(catalogue=spec.load_catalogue()))
     samplers = {"multi-objective TPE (ours)": st.make_sampler,
@@ -202,38 +196,33 @@ def compare_samplers(trials: int, seeds: range) -> None:
         print(f"  {name:28s} " + "  ".join(f"{h:6.2f}" for h in hv) + f"   mean {sum(hv) / len(hv):6.2f}")
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true", help="fewer trials, no cold-cache start-up")
-    ap.add_argument("--samplers", action="store_true", help="only the multi-objective sampler comparison")
-    args = ap.parse_args()
-    if args.samplers:
+def run(b: h.Bench) -> None:
+    from cdpr_design import batch
+    from cdpr_design import optimize as opt
+    from cdpr_design.model import spec
+
+    if b.opt["samplers"]:
         compare_samplers(100, range(5))
-        return
-    print(f"cores: {batch.default_workers()}, load average before: {os.getloadavg()[0]:.2f}")
-    print("first IPAnema 3 trial in a fresh process (imports, first evaluation, second) [s]:")
-    imp, first, second = first_trial(None)
-    print(f"  warm numba cache: {imp:.2f} + {first:.2f}, then {second:.3f}")
-    if not args.quick:
-        with tempfile.TemporaryDirectory() as d:
-            imp, first, second = first_trial(d)
-        print(f"  cold numba cache: {imp:.2f} + {first:.2f} (compiles), then {second:.3f}")
-    cases, cat = problems(args.quick)
-    for name, design, vary, maxi, mini, step, trials in cases:
+    caches = {"warm": None} | ({"cold": b.fresh_cache()} if b.opt["cold"] else {})
+    for what, cache in caches.items():
+        imp, first, second = h.call_in_child("benchmarks.optimize.first_trial", cache=cache)
+        b.row(f"first IPAnema 3 trial in a fresh process, {what} numba cache", f"imports {imp:.2f} s + first "
+              f"evaluation {first:.2f} s, then {second:.3f} s")
+    cat = spec.load_catalogue()
+    for name, design, vary, maxi, mini, step, trials in problems(b.opt["trials"]):
         pb = opt.make_problem(design, vary, maxi, mini, None, batch.Options(step=step, catalogue=cat))
-        run(pb, 3, 1)  # warm this process (kernels, optuna, SQLite)
-        t1, c1, rows, _ = run(pb, trials, 1)
-        t2, c2, _, tm2 = run(pb, trials, 2)
-        base = baseline(pb, rows)
-        print(f"\n{name} ({pb.describe()['evaluates']}), {trials} trials:")
-        print(f"  1 worker : {t1:6.1f} s  {trials / t1:6.2f} trials/s  CPU {c1:6.1f} s")
-        print(f"  2 workers: {t2:6.1f} s  {trials / t2:6.2f} trials/s  CPU {c2:6.1f} s  (speed-up {t1 / t2:.2f}x)")
-        print(f"  per trial, 1 worker: {1e3 * t1 / trials:.0f} ms = evaluation {1e3 * base / trials:.0f} ms "
-              f"(the same variants without optuna) + optuna and SQLite {1e3 * (t1 - base) / trials:.0f} ms")
-        print("  2 workers, where the time went:")
-        print_timing(tm2)
-    print(f"\nload average after: {os.getloadavg()[0]:.2f} (other work on the machine skews the ratios)")
-
-
-if __name__ == "__main__":
-    main()
+        study(pb, 3, 1)  # this process warm (kernels, optuna, SQLite)
+        one, two = {}, {}
+        t = h.rounds({"1": lambda: study(pb, trials, 1, one), "2": lambda: study(pb, trials, 2, two),
+                      "evaluations": lambda: evaluations(pb, one["rows"]) if one else None}, b.rounds)
+        label = f"optimize {name} ({pb.describe()['evaluates']}), {trials} trials"
+        b.row(f"{label}: 2 workers", f"{trials / h.best(t['2']):.2f} trials/s, CPU "
+              f"{h.spread(x.cpu for x in t['2']).text()} s", h.ratios(t["1"], t["2"]), "1 worker (wall)")
+        b.row(f"{label}: 1 worker", f"{trials / h.best(t['1']):.2f} trials/s, CPU "
+              f"{h.spread(x.cpu for x in t['1']).text()} s", h.ratios(t["evaluations"], t["1"]),
+              "the same evaluations without optuna (share of the trial's time)")
+        for w, d in two["timing"].items():
+            n = d["trials"]
+            b.say(f"2 workers, worker {w}: {n} trials, first after {d['startup']:.2f} s; per trial: evaluation "
+                  f"{1e3 * d['eval'] / n:.0f} ms, optuna and SQLite {1e3 * d['other'] / n:.0f} ms, waiting between "
+                  f"trials {1e3 * d['gap'] / max(1, n - 1):.0f} ms; idle at the end {d['tail']:.2f} s")
