@@ -5,9 +5,11 @@ pinned to its declared lower bound (``name>=X`` becomes ``name==X`` in a pip
 constraints file); everything they pull in comes at its newest allowed
 version, as ``uv``'s ``--resolution lowest-direct`` would have it.  The
 project is installed with those constraints into a new virtual environment in
-a temporary folder (nothing of this machine's site-packages is seen), and
-pytest runs there on the given selection, by default the fast tier
-(``-m "not slow"``).  Numba compiles into a cache folder of that environment,
+a temporary folder.  Nothing of this machine's site-packages is seen: the
+environment is made without them, ``PYTHONPATH`` cleared and the user site off,
+and checked before the tests (every path it imports from is its own, every
+direct dependency at its bound).  pytest runs there on the given selection, by
+default the fast tier (``-m "not slow"``).  Numba compiles into a cache folder of that environment,
 so the kernels cached for the usual environment are left alone.
 
 Usage::
@@ -24,6 +26,7 @@ Exit status: pytest's (0: passed), or 1 when the environment could not be made
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import re
 import shutil
@@ -70,6 +73,37 @@ def constraints_text(bounds: dict[str, str]) -> str:
     return "".join(f"{name}=={version}\n" for name, version in bounds.items())
 
 
+def isolated_env(venv: Path | None = None) -> dict:
+    """This process's environment without what would let the machine's packages into the new
+    environment: no ``PYTHONPATH``, ``PYTHONHOME`` or ``VIRTUAL_ENV``, the user site off
+    (``PYTHONNOUSERSITE``); with ``venv``, its ``bin`` first on the ``PATH``."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
+    env["PYTHONNOUSERSITE"] = "1"
+    if venv is not None:
+        env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
+    return env
+
+
+#: Run by the new environment's Python: every path it imports from is inside that environment or
+#: the base interpreter's standard library (no other site-packages), and each direct dependency's
+#: installed version equals its bound (argv[1]: JSON of name -> bound).
+CHECK = r"""
+import importlib.metadata as md, json, re, sys, sysconfig
+assert sys.prefix != sys.base_prefix, "not a virtual environment"
+std = {sysconfig.get_path("stdlib"), sysconfig.get_path("platstdlib")}
+leaks = [p for p in sys.path if "site-packages" in p and not p.startswith(sys.prefix)]
+assert not leaks, f"site-packages from outside the environment on sys.path: {leaks}"
+def key(v):
+    parts = [int(x) for x in re.findall(r"\d+", v.split("+")[0])[:3]]
+    while parts and parts[-1] == 0:
+        parts.pop()
+    return parts
+wrong = {n: (b, md.version(n)) for n, b in json.loads(sys.argv[1]).items() if key(md.version(n)) != key(b)}
+assert not wrong, f"not at the lower bound (bound, installed): {wrong}"
+print(f"isolated: {sys.prefix}; every direct dependency at its lower bound")
+"""
+
+
 def run(cmd, **kw) -> int:
     print("+", " ".join(map(str, cmd)), flush=True)
     return subprocess.run(list(map(str, cmd)), **kw).returncode
@@ -79,17 +113,18 @@ def make_venv(venv: Path, python: str, text: str) -> bool:
     """A new environment at ``venv`` with the project installed (editable, with the test extra) under
     the constraints ``text`` (kept as ``venv/lowest-constraints.txt``); False when pip failed (its
     output in ``venv/install.log``)."""
-    if run([python, "-m", "venv", venv]) != 0:
+    env = isolated_env()
+    if run([python, "-m", "venv", "--clear", venv], env=env) != 0:  # without --system-site-packages
         return False
     constraints = venv / "lowest-constraints.txt"
     constraints.write_text(text)
     py = venv / "bin" / "python"
     log = venv / "install.log"
     with open(log, "w") as fh:
-        ok = run([py, "-m", "pip", "install", "--upgrade", "pip"], stdout=fh, stderr=subprocess.STDOUT) == 0
+        ok = run([py, "-m", "pip", "install", "--upgrade", "pip"], stdout=fh, stderr=subprocess.STDOUT, env=env) == 0
         # a constraints file given here replaces any the machine's pip configuration names
         ok = ok and run([py, "-m", "pip", "install", "--constraint", constraints, "-e", f"{ROOT}[test]"],
-                        stdout=fh, stderr=subprocess.STDOUT) == 0
+                        stdout=fh, stderr=subprocess.STDOUT, env=env) == 0
     if not ok:
         print(log.read_text()[-4000:], file=sys.stderr)
         print(f"pip failed: {log}", file=sys.stderr)
@@ -107,7 +142,8 @@ def main(argv=None) -> int:
                     f"{' '.join(DEFAULT_SELECTION)})")
     args = ap.parse_args(argv)
 
-    text = constraints_text(lower_bounds(requirements()))
+    bounds = lower_bounds(requirements())
+    text = constraints_text(bounds)
     if args.print:
         print(text, end="")
         return 0
@@ -117,11 +153,13 @@ def main(argv=None) -> int:
         if not (args.keep and (venv / "bin" / "python").exists()) and not make_venv(venv, args.python, text):
             return 1
         py = venv / "bin" / "python"
-        freeze = subprocess.run([py, "-m", "pip", "freeze", "--exclude-editable"], capture_output=True, text=True)
+        env = isolated_env(venv)
+        freeze = subprocess.run([py, "-m", "pip", "freeze", "--exclude-editable"], capture_output=True, text=True,
+                                env=env)
         print(f"installed ({venv}):\n{freeze.stdout}", flush=True)
-        env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PYTHONHOME", "VIRTUAL_ENV")}
-        env["PATH"] = f"{venv / 'bin'}{os.pathsep}{env.get('PATH', '')}"
-        env.setdefault("NUMBA_CACHE_DIR", str(venv / "numba-cache"))  # not the usual environment's cache
+        if run([py, "-c", CHECK, json.dumps(bounds)], cwd=venv, env=env) != 0:
+            return 1
+        env["NUMBA_CACHE_DIR"] = str(venv / "numba-cache")  # not the usual environment's cache
         return run([py, "-m", "pytest", *(args.pytest_args or DEFAULT_SELECTION)], cwd=ROOT, env=env)
     finally:
         if not args.keep:
