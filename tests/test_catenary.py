@@ -719,7 +719,11 @@ def test_profile_and_sag(f, ld):
     sag, sstar = C.catenary_sag(H, VB, L0, w, EA)
     assert sag >= distf[kf] - 1e-12 * c                   # the kernel's max is not below any sample
     assert sag - distf[kf] <= 1e-9 * sag + 1e-14 * c      # nor above the fine sampling's by more than its spacing allows
-    assert abs(sstar - sf[kf]) <= 2 * (sf[1] - sf[0]) + 1e-6 * L0 or sag <= 1e-9 * c
+    # where the sampled distances cannot tell sstar from the sampled maximum (a light cable's flat
+    # maximum: they differ by less than their rounding), the samples do not locate it any closer
+    xs, zs = C.catenary_profile(H, VB, L0, w, EA, np.array([sstar]))
+    unresolved = abs((xs[0] * Z - zs[0] * X) / c - distf[kf]) <= 1e-14 * c
+    assert abs(sstar - sf[kf]) <= 2 * (sf[1] - sf[0]) + 1e-6 * L0 or sag <= 1e-9 * c or unresolved
 
 
 def test_sag_limits():
