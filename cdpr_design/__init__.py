@@ -45,7 +45,7 @@ _LAZY = {
     "evaluate_pose": ("workspaces.pose", "evaluate_pose"),
     "WorkspaceResult": ("workspaces", "WorkspaceResult"),
     "evaluate_design": ("design.evaluate", "evaluate"),
-    "certify": ("workspaces.certify", "certify"),
+    "certify": ("api", "certify"),
     "CertifyResult": ("workspaces.certify", "CertifyResult"),
 }
 

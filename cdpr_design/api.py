@@ -125,11 +125,25 @@ def size_motors(design: Design, catalogue=None, *, step: float | None = None, tr
     from cdpr_design.model import spec
     from cdpr_design.model.catalogue import Catalogue
 
-    cat = catalogue if isinstance(catalogue, Catalogue) else spec.load_catalogue(catalogue)
-    from cdpr_design.jobs.motion import trajectory_samples
+    from cdpr_design.jobs.motion import design_samples
+    from cdpr_design.statics.robot import Analysis, resolve
 
-    samples = trajectory_samples(design, trajectory)  # None without a trajectory
-    return sizing.size_motors(design, cat, step=step, samples=samples, safety_factor=safety_factor, motor=motor)
+    cat = catalogue if isinstance(catalogue, Catalogue) else spec.load_catalogue(catalogue)
+    samples = design_samples(design, trajectory)  # None without a trajectory
+    sizing.check_options(design, cat, safety_factor, motor)  # the options first, then the robot
+    robot = resolve(design, Analysis(command="size-motors"))
+    return sizing.size_motors(robot, cat, step=step, samples=samples, safety_factor=safety_factor, motor=motor)
+
+
+def certify(design: Design, kind: str = "static", **options):
+    """Prove the workspace between grid samples by interval analysis: a
+    :class:`~cdpr_design.workspaces.certify.CertifyResult` of ``design`` resolved for ``certify``
+    and ``kind`` (``static`` or ``wrench-feasible``); ``options`` as for
+    :func:`cdpr_design.workspaces.certify.certify` (``resolution`` [m], ``box``, ``min_margin`` [N],
+    ``max_boxes``, ``time_limit`` [s], ``tolerance_outlets``, ``tolerance_attachments`` [m]...)."""
+    from cdpr_design.workspaces import certify as cert
+
+    return cert.certify(cert.check_certifiable(design, kind), **options)
 
 
 def sweep(design: Design, vary: dict, *, step: float | None = None, workers: int = 1,

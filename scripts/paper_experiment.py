@@ -37,6 +37,7 @@ sys.path.insert(0, str(ROOT))
 
 from cdpr_design.motion.run import simulate
 from cdpr_design.model import spec
+from cdpr_design.statics.robot import Analysis, resolve  # noqa: E402
 from cdpr_design.motion import trajectory  # noqa: E402
 
 #: The paper's Table 1 [ms]: velocity -> (simulated axis 1, axis 2, prototype axis 1, axis 2).
@@ -51,9 +52,9 @@ PAPER_T2 = {
 
 
 def run(design, name: str, delay: float) -> dict:
-    samples = trajectory.sample(design, name, hold_end=0.5 + delay)
+    samples = trajectory.sample(resolve(design, Analysis(command="motion")), name, hold_end=0.5 + delay)
     t0 = time.perf_counter()
-    res = simulate(design, samples, delay=delay)
+    res = simulate(resolve(design, Analysis(command="motion")), samples, delay=delay)
     wall = time.perf_counter() - t0
     s = res.summary()
     s["wall_s"] = wall

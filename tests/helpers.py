@@ -191,3 +191,11 @@ def collect_chunks(run, *args, **kwargs):
     res = run(*args, on_chunk=chunks.append, **kwargs)
     assert chunks, "the sweep streamed no chunk"
     return res, chunks
+
+
+def resolved(design, command: str = "workspace", **options):
+    """``design`` resolved for ``command`` (:func:`cdpr_design.statics.robot.resolve`): what the
+    library's functions below the jobs take."""
+    from cdpr_design.statics.robot import Analysis, resolve
+
+    return resolve(design, Analysis(command=command, **options))

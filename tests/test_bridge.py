@@ -27,7 +27,7 @@ from cdpr_design.plc.ads import AdsTransport
 from cdpr_design.plc.symbols import ADST_REAL64, PlcLayout, check_symbol_info
 from cdpr_design.plc.testplc import LOOPBACK, TEST_LOCAL_NET_ID, TEST_PLC_NET_ID, TestPlc
 
-from .helpers import invoke, subprocess_env, write_spec
+from .helpers import invoke, subprocess_env, write_spec, resolved
 
 PLC = {
     "ams_net_id": TEST_PLC_NET_ID, "port": 851, "host": LOOPBACK, "cycle_time": 0.01,
@@ -156,15 +156,14 @@ def test_stalls_degrade_timing_not_the_path(design):
     The loop used to run the last set-point ramp on through the stalled time
     and then step to the new set-point: 6.5 cm off the L here.
     """
-    samples = trajectory.sample(design, "probe")
+    samples = trajectory.sample(resolved(design, "motion"), "probe")
     clock = FakeClock()
     stalls = [(t, 0.12) for t in (0.3, 0.8, 0.95, 1.1, 1.5)]
     sim = br.make_simulator(design, 0.01, samples.lengths[0])
     rows = plc_rows.RowMaker(design)
     log = []
-    res = br.run(FakePlc(design, samples, clock, stalls), sim, cycle_time=0.01,
-                 duration=samples.duration + 0.3, spin=0.0, clock=clock, sleep=clock.sleep,
-                 on_row=lambda sp, st: log.append(rows.values(sp, st)))
+    res = br.run(FakePlc(design, samples, clock, stalls), sim, br.Loop(0.01, samples.duration + 0.3, spin=0.0),
+                 clock=clock, sleep=clock.sleep, on_row=lambda sp, st: log.append(rows.values(sp, st)))
     assert res.overruns == len(stalls) and res.slips == 0
     assert res.sim_time == pytest.approx(samples.duration + 0.3, abs=1e-6)
     log = np.array(log)
@@ -204,13 +203,13 @@ class RecordingSim:
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_reference_is_continuous_and_never_overshoots(design, seed):
     """Whatever the timing, the axes' reference never steps and never leaves the set-points' hull."""
-    samples = trajectory.sample(design, "probe")
+    samples = trajectory.sample(resolved(design, "motion"), "probe")
     clock = FakeClock()
     rng = np.random.default_rng(seed)
     stalls = sorted((float(t), float(rng.uniform(0.005, 0.2))) for t in rng.uniform(0, 2.0, 12))
     sim = RecordingSim(samples.lengths[0])
-    res = br.run(FakePlc(design, samples, clock, stalls), sim, cycle_time=0.01,
-                 duration=samples.duration + 0.2, spin=0.0, clock=clock, sleep=clock.sleep)
+    res = br.run(FakePlc(design, samples, clock, stalls), sim, br.Loop(0.01, samples.duration + 0.2, spin=0.0),
+                 clock=clock, sleep=clock.sleep)
     assert res.overruns >= 1 and res.cycles > 50
     ends = [sp + v * d for _, sp, v, d in sim.calls]
     assert len(sim.calls) > 50  # the continuity check below runs over many steps
@@ -243,7 +242,7 @@ def test_delay_trace_sees_the_hold_of_the_written_values():
 
 def test_setpoints_from_the_test_plc_move_the_effector(design):
     """The loop closes: PLC set-points -> simulated robot -> PLC actuals, heartbeat, pose."""
-    samples = trajectory.sample(design, "probe")
+    samples = trajectory.sample(resolved(design, "motion"), "probe")
     lay = PlcLayout.from_design(design)
     with TestPlc(lay, samples.time, samples.lengths) as plc:
         tr = AdsTransport(lay, plc.net_id, 851, plc.address, timeout=0.1,
@@ -254,7 +253,7 @@ def test_setpoints_from_the_test_plc_move_the_effector(design):
         sim = br.make_simulator(design, 0.01, sp0)
         rows = plc_rows.RowMaker(design)
         log = []
-        res = br.run(tr, sim, cycle_time=0.01, duration=samples.duration + 0.3,
+        res = br.run(tr, sim, br.Loop(0.01, samples.duration + 0.3),
                      on_row=lambda sp, st: log.append(rows.values(sp, st)))
         final = sim.state()
         hb = plc.value(PLC["heartbeat"])
@@ -370,7 +369,7 @@ def _wait_running(proc, out: Path, timeout=60.0):
 @pytest.mark.parametrize("how", ["stop_server", "freeze"])
 def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_data, design, how):
     lay = PlcLayout.from_design(design)
-    samples = trajectory.sample(design, "square_slow")
+    samples = trajectory.sample(resolved(design, "motion"), "square_slow")
     with TestPlc(lay, samples.time, samples.lengths) as plc:
         p = _spec_for(tmp_path, loop_data, plc.address, plc.net_id)
         proc, out = _start_bridge(tmp_path, p, "--duration", "60", "--timeout", "0.05",
@@ -401,7 +400,7 @@ def test_plc_that_stops_answering_ends_the_run_without_hanging(tmp_path, loop_da
 def test_reconnect_retries_then_gives_up(tmp_path, loop_data, design):
     """--reconnect: the lost PLC is retried with back-off, then the run ends (exit 3)."""
     lay = PlcLayout.from_design(design)
-    samples = trajectory.sample(design, "probe")
+    samples = trajectory.sample(resolved(design, "motion"), "probe")
     with TestPlc(lay, samples.time, samples.lengths) as plc:
         p = _spec_for(tmp_path, loop_data, plc.address, plc.net_id)
         proc, out = _start_bridge(tmp_path, p, "--duration", "60", "--reconnect", "2",
@@ -472,7 +471,7 @@ def test_test_plc_plays_the_unstretched_lengths_of_elastic_cables(tmp_path, loop
     data = {**loop_data, "cable": {**loop_data["cable"], "model": "elastic"}}
     p = write_spec(tmp_path, data)
     d = spec.load(p)
-    samples = trajectory.sample(d, "probe")
+    samples = trajectory.sample(resolved(d, "motion"), "probe")
     L0, chords = samples.cables.unstretched, samples.lengths
     assert np.all(chords - L0 > 1e-4)  # the stretch is there to see (planar2: EA = 2e4 N)
     out = tmp_path / "o"

@@ -22,7 +22,7 @@ from cdpr_design.model import spec
 from cdpr_design.statics import kinematics as kin
 from cdpr_design import api
 
-from .helpers import collect_chunks, invoke, ipanema3_data, planar2_raw, write_spec
+from .helpers import collect_chunks, invoke, ipanema3_data, planar2_raw, write_spec, resolved
 
 TOL = 1e-9  # [N], relative to tensions of tens to thousands of newtons
 
@@ -199,8 +199,8 @@ def test_trajectory_tensions_and_sizing_take_the_floor():
     plain, d = spec.from_dict(_four_cables(None)), spec.from_dict(_four_cables(8.0))  # 4 f^2 mu = 12.8 N/m^2
     P = np.array([[0.5, 0.6], [1.0, 1.0], [1.4, 1.5], [0.3, 1.7]])
     zero = np.zeros_like(P)
-    s, s0 = tr.states(d, P, zero, zero), tr.states(plain, P, zero, zero)
-    e = ev.envelope_chunk(d, P, np.zeros(3), 0.0, 0.0)
+    s, s0 = tr.states(resolved(d, "motion"), P, zero, zero), tr.states(resolved(plain, "motion"), P, zero, zero)
+    e = ev.envelope_chunk(resolved(d, "size-motors"), P, np.zeros(3), 0.0, 0.0)
     for k, p in enumerate(P):
         W = kin.structure_matrix(d, p)
         w = -kin.gravity_wrench(d, p)
@@ -213,7 +213,7 @@ def test_trajectory_tensions_and_sizing_take_the_floor():
     assert np.all(s["tensions"] >= s0["tensions"] - 1e-9) and np.any(s["tensions"] > s0["tensions"] + 1.0)
     # a floor above the upper bound at the far corner: infeasible there, as in the workspace
     far = spec.from_dict({**_four_cables(30.0), "tension": [1.0, 200.0]})  # 180 N/m^2: 200 N at 1.05 m
-    f = tr.states(far, P, zero, zero)["feasible"]
+    f = tr.states(resolved(far, "motion"), P, zero, zero)["feasible"]
     assert not f.all()
 
 

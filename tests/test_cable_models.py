@@ -19,7 +19,7 @@ from cdpr_design.statics import cables
 from cdpr_design import api
 from cdpr_design.statics.robot import cable_model
 
-from .helpers import DESIGNS, PLANAR2, invoke, planar2_raw, read_csv, write_spec
+from .helpers import DESIGNS, PLANAR2, invoke, planar2_raw, read_csv, write_spec, resolved
 
 SAG40 = DESIGNS / "sagging40.yaml"
 
@@ -31,12 +31,12 @@ SAG40 = DESIGNS / "sagging40.yaml"
 
 def test_default_model_is_ideal_and_spec_keys_resolve(planar2_data):
     d = spec.from_dict(planar2_data)
-    assert cable_model(d) == "ideal"
+    assert cable_model(d).name == "ideal"
     planar2_data["cable"]["model"] = "elastic"
     planar2_data["cables"][1]["model"] = "sagging"
     d = spec.from_dict(planar2_data)
     assert [c.props.model for c in d.cables] == ["elastic", "sagging"]
-    assert cable_model(d) == "sagging"  # the heaviest
+    assert cable_model(d).name == "sagging"  # the heaviest
 
 
 @pytest.mark.parametrize("model, drop, key", [
@@ -73,7 +73,7 @@ def test_cable_model_option_errors(tmp_path):
 def test_with_cable_model_keeps_the_override_in_raw(planar2):
     d = with_cable_model(planar2, "sagging")
     assert d.raw["cable"]["model"] == "sagging"
-    assert cable_model(spec.from_dict(d.raw)) == "sagging"
+    assert cable_model(spec.from_dict(d.raw)).name == "sagging"
     assert with_cable_model(planar2, None) is planar2
 
 
@@ -250,8 +250,8 @@ def test_sagging_is_more_restrictive_near_the_top_of_sagging40():
 def test_sizing_uses_the_winch_side_tension(planar2):
     from cdpr_design.design.envelope import task_envelope
 
-    e_i = task_envelope(planar2)
-    e_s = task_envelope(with_cable_model(planar2, "sagging"))
+    e_i = task_envelope(resolved(planar2, "size-motors"))
+    e_s = task_envelope(resolved(with_cable_model(planar2, "sagging"), "size-motors"))
     assert np.all(e_s.static_tension > e_i.static_tension)
     assert np.all(e_s.peak_tension > e_i.peak_tension)
     # the difference is about the cable's weight share: w L < 0.004 * 9.81 * 2.2 m
@@ -267,7 +267,7 @@ def test_fk_inverts_the_inverse_statics(name, pose, model):
     d = with_cable_model(spec.load(DESIGNS / name), model)
     r = api.pose(d, pose)
     assert r.cable_state.status == "ok"
-    fk = forward(d, r.cable_state.unstretched_lengths)
+    fk = forward(resolved(d, "fk"), r.cable_state.unstretched_lengths)
     np.testing.assert_allclose(fk.pose, pose, atol=1e-9)
     np.testing.assert_allclose(fk.tensions, r.tensions, rtol=1e-7)
     np.testing.assert_allclose(fk.outlet_tensions, r.cable_state.outlet_tensions, rtol=1e-7)
@@ -290,7 +290,7 @@ def test_fk_elastic_slack_cable(planar2):
     from cdpr_design.statics.cable_fk import forward
 
     d = with_cable_model(planar2, "elastic")
-    fk = forward(d, [1.0, 3.0])
+    fk = forward(resolved(d, "fk"), [1.0, 3.0])
     assert fk.slack == ["c2"] and fk.tensions[1] == 0.0
     # hanging straight below the outlet of c1, at the stretched length
     assert abs(fk.pose[0] - (0.0 + 0.06)) < 1e-9
@@ -321,7 +321,7 @@ def test_trajectory_duty_cycle_uses_the_winch_side_tension(planar2):
     from cdpr_design.motion import trajectory
 
     d = with_cable_model(planar2, "sagging")
-    samples = trajectory.sample(d, "square_slow")
+    samples = trajectory.sample(resolved(d, "motion"), "square_slow")
     cyc = trajectory_cycle(samples)
     np.testing.assert_array_equal(cyc.tension, samples.cables.outlet_tensions)
     ok = np.isfinite(samples.tensions)

@@ -13,7 +13,7 @@ from scipy.optimize import linprog
 
 from cdpr_design.errors import InputError
 from cdpr_design.model import spec
-from cdpr_design.workspaces.certify import certify
+from cdpr_design.api import certify
 
 G = 9.81
 

@@ -15,7 +15,7 @@ import pytest
 import cdpr_design as cd
 from cdpr_design.batch import certify as batch_certify
 from cdpr_design.batch import wait_closed
-from cdpr_design.workspaces.certify import certify
+from cdpr_design.api import certify
 
 ROOT = Path(__file__).resolve().parents[1]
 PLANAR2 = "designs/planar2.yaml"

@@ -12,7 +12,7 @@ import pytest
 from cdpr_design.model import spec
 from cdpr_design.design.evaluate import check_table, evaluate
 
-from .helpers import invoke, write_spec
+from .helpers import invoke, write_spec, resolved
 
 CONTRACT = ["cable", "peak_tension", "peak_cable_speed", "drum_torque", "peak_motor_torque",
             "rms_motor_torque", "peak_motor_speed", "motor", "torque_margin", "speed_margin"]
@@ -107,7 +107,7 @@ def test_size_motors_with_a_trajectory_sizes_on_its_duty_cycle(tmp_path, data):
     assert r.exit_code == 0, r.output
     js = json.loads(r.stdout)
     design = spec.load(p)
-    want = sz.size_motors(design, spec.load_catalogue(), samples=tr.sample(design, "square_fast")).summary()
+    want = sz.size_motors(resolved(design, "size-motors"), spec.load_catalogue(), samples=tr.sample(resolved(design, "motion"), "square_fast")).summary()
     assert js["cycle"] == want["cycle"] == "trajectory square_fast"
     for got, ref in zip(js["axes"], want["axes"], strict=True):
         assert got["rms_motor_torque"] == pytest.approx(ref["rms_motor_torque"], rel=1e-12)

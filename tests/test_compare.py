@@ -11,12 +11,12 @@ from hypothesis import strategies as st
 from cdpr_design.motion import compare as C
 from cdpr_design.motion import trajectory as tr
 
-from .helpers import invoke
+from .helpers import invoke, resolved
 
 
 @pytest.fixture(scope="module")
 def fast(planar2):
-    return tr.sample(planar2, "square_fast", hold_start=0.3, hold_end=0.5)
+    return tr.sample(resolved(planar2, "motion"), "square_fast", hold_start=0.3, hold_end=0.5)
 
 
 def smooth(t):

@@ -32,7 +32,7 @@ from cdpr_design.statics.robot import cable_model
 
 from .fuzzing import EXTREME_NUMBERS, ODD_STRINGS, feature_spec_data, hostile_values, mutated_feature_data, \
     mutated_spec_data, mutated_yaml, option_floats, spec_data
-from .helpers import PLANAR2, ROOT
+from .helpers import PLANAR2, ROOT, resolved
 
 CORPUS = ROOT / "tests" / "data" / "fuzz_corpus"
 SCALE = float(os.environ.get("CDPR_FUZZ_SCALE", "1"))
@@ -339,8 +339,8 @@ def test_sweep_job(work, data, vary, rank_by):
     design = load_design(data)
     assume(design is not None)
     out = fresh(work, "sw")
-    res, exc = outcome(job.sweep, design, [f"{k}={v}" for k, v in vary], workers=1, rank_by=rank_by, step=0.25,
-                       picture=False, out=out)
+    res, exc = outcome(job.sweep, design, job.SweepSettings([f"{k}={v}" for k, v in vary], workers=1, rank_by=rank_by,
+                                                          step=0.25, picture=False, out=out))
     check_folder(out, exc is not None)
     if res is not None:
         strict_json(res.summary)
@@ -498,11 +498,11 @@ def pose_entry(design, at: str, kind: str) -> dict:
     from cdpr_design.workspaces.pose import evaluate_pose
 
     robot = resolve(design, Analysis(command="pose", kind=kind))
-    if robot.orientation == "hanging":
+    if robot.orientation.free:
         return hjob.free_pose_data(robot, parse_numbers(at, "--at", design.motion.dim))
     p = parse_pose(design, at)
     data = job.pose_data(design, evaluate_pose(robot, p))
-    if robot.underconstrained and robot.cables == "ideal" and robot.outlets == "points":
+    if robot.underconstrained and robot.cables.rigid and not robot.outlets.pulleys:
         data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     return data
 
@@ -518,7 +518,7 @@ def test_pose_with_cable_models_and_free_orientation(data, where, kind):
     pose = [lo + f * (hi - lo) for lo, hi, f in zip(g.lower, g.upper, where)]
     from cdpr_design.statics.robot import facts
 
-    if facts(design).orientation != "hanging":
+    if not facts(design).orientation.free:
         pose += list(design.workspace.orientation)
     res, exc = outcome(pose_entry, design, ",".join(f"{v:.6g}" for v in pose), kind)
     if res is not None:
@@ -548,10 +548,10 @@ def test_fk_with_cable_models_and_free_orientation(data, where, lengths):
     g = design.workspace.grid
     pose = [lo + f * (hi - lo) for lo, hi, f in zip(g.lower, g.upper, where)] + list(design.workspace.orientation)
     L = list(kin.inverse_kinematics(design, pose)) if lengths is None else lengths[: design.m]
-    if cable_model(design) == "ideal":
-        res, exc = outcome(hjob.fk_data, design, L)
+    if cable_model(design).rigid:
+        res, exc = outcome(lambda d, lengths: hjob.fk_data(resolved(d, "fk"), lengths), design, L)
     else:
-        res, exc = outcome(job.cable_fk_data, design, L)
+        res, exc = outcome(lambda d, lengths: job.cable_fk_data(resolved(d, "fk"), lengths), design, L)
     if res is not None:
         strict_json(res)
         assert reached(res["residual"], np.asarray(L, float)), f"a pose {res['residual']:.3g} m off reported"
@@ -622,8 +622,8 @@ def test_optimize_job(work, data, vary, maximize, minimize, require, trials, wor
     design = load_design(data)
     assume(design is not None)
     out = fresh(work, "opt")
-    res, exc = outcome(job.optimize, design, vary, maximize, minimize, require, trials, workers, seed, timeout,
-                       picture=False, out=out)
+    res, exc = outcome(job.optimize, design, job.OptimizeSettings(vary, maximize, minimize, require, trials, workers,
+                                                                  seed, timeout, picture=False, out=out))
     check_folder(out, exc is not None)
     if res is not None:
         strict_json(res.summary)
@@ -682,8 +682,8 @@ def test_found_optimize_options_out_of_range_are_refused_before_any_work(tmp_pat
 
     kwargs = {"trials": 2, **options}
     with pytest.raises(InputError, match=option):
-        job.optimize(planar2, ["cables.0.outlet.0=-0.5:0.5"], ["task_min_margin"], out=tmp_path / "o",
-                     picture=False, **kwargs)
+        job.optimize(planar2, job.OptimizeSettings(["cables.0.outlet.0=-0.5:0.5"], ["task_min_margin"],
+                                                   out=tmp_path / "o", picture=False, **kwargs))
     assert not (tmp_path / "o").exists()
 
 

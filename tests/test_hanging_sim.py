@@ -28,14 +28,14 @@ from scipy.spatial.transform import Rotation
 from cdpr_design.model import spec
 from cdpr_design.motion.simulation import Simulator
 from cdpr_design.statics import hanging as H
-from tests.helpers import DESIGNS, PLANAR2
+from tests.helpers import DESIGNS, PLANAR2, resolved
 
 
 def release(design, position, R, lengths, tensions, duration, *, kick=0.0, damping=0.0):
     """Simulate the body released at (position, R) with the axes holding ``lengths`` and
     the stretch of ``tensions`` taken up; return the largest position [m] and rotation [rad]
     deviation over the last half of the run."""
-    sim = Simulator(design, servo_bandwidth=np.inf, joint_damping=damping)
+    sim = Simulator(resolved(design, "motion"), servo_bandwidth=np.inf, joint_damping=damping)
     planar = design.motion.planar
     sim.reset(np.asarray(position)[: len(design.motion.coords)] if not design.motion.rotational else None, settle=0)
     sim.q = np.asarray(lengths, float).copy()  # the axes already hold the lengths: no velocity step

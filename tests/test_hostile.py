@@ -18,7 +18,7 @@ import pytest
 
 from cdpr_design.cli.common import QuietOpt, command
 
-from .helpers import PLANAR2, ROOT, invoke, planar2_raw, read_csv, subprocess_env, write_spec
+from .helpers import PLANAR2, ROOT, invoke, planar2_raw, read_csv, subprocess_env, write_spec, resolved
 
 
 def run_cli(*args, timeout: float = 60, cwd=None):
@@ -142,7 +142,7 @@ def test_size_motors_library_refuses_bad_steps(planar2, catalogue, step):
     from cdpr_design.errors import SpecError
 
     with pytest.raises(SpecError, match="--step: expected a positive number"):
-        sizing.size_motors(planar2, catalogue, step=step)
+        sizing.size_motors(resolved(planar2, "size-motors"), catalogue, step=step)
 
 
 def test_an_out_under_a_file_is_refused(tmp_path):
@@ -274,7 +274,7 @@ def test_a_sample_at_a_zero_length_cable_is_infeasible_as_pose_says(tmp_path):
     from cdpr_design.jobs.motion import sample_named
     from cdpr_design.model import spec
 
-    s = sample_named(spec.load(p), "z")
+    s = sample_named(resolved(spec.load(p), "motion"), "z")
     assert np.allclose(s.pose[0], [0.06, 1.44]) and s.lengths[0, 0] < 1e-12
     assert not s.feasible[0] and np.all(np.isnan(s.tensions[0]))
     assert s.feasible[1:].all() and not s.all_feasible
@@ -294,7 +294,7 @@ def test_sizing_leaves_out_task_poses_with_a_zero_length_cable(catalogue):
     d["cables"].append({"name": "c3", "outlet": [0.0, 1.5], "attachment": [-0.06, 0.06]})
     design = spec.from_dict(d)
     assert api.pose(design, [0.06, 0.94]).feasible is False
-    chunk = envelope.envelope_chunk(design, np.array([[0.06, 0.94], [0.75, 0.8]]), (0.0, 0.0, 0.0), 1.0, 1.0)
+    chunk = envelope.envelope_chunk(resolved(design, "size-motors"), np.array([[0.06, 0.94], [0.75, 0.8]]), (0.0, 0.0, 0.0), 1.0, 1.0)
     assert list(chunk["ok"]) == [False, True]
     assert np.isnan(chunk["static"][0]).all() and np.isfinite(chunk["static"][1]).all()
 

@@ -175,11 +175,12 @@ import numpy as np
 from cdpr_design import workspaces
 from cdpr_design.model import spec
 from cdpr_design.statics import cables
+from cdpr_design.statics.robot import Analysis, resolve
 d = spec.load("designs/sagging40.yaml")
 workspaces.run(d, step=4.0)
 at = np.array([[20.0, 10.0, 0.0]])
-cables.sagging_structures(d, at, np.zeros(3))
-cables.sagging_samples(d, at, d.attachments[None], np.array([[0.0, 5.0 * 9.81]]))
+cables.sagging_structures(resolve(d, Analysis(command="size-motors")), at, np.zeros(3))
+cables.sagging_samples(resolve(d, Analysis(command="motion")), at, d.attachments[None], np.array([[0.0, 5.0 * 9.81]]))
 """,
     "catenary": """
 import numpy as np

@@ -20,7 +20,7 @@ from cdpr_design.motion import trajectory as tr
 from cdpr_design import api
 from cdpr_design.statics.robot import combinations
 
-from .helpers import PLANAR2, invoke, read_csv, write_spec
+from .helpers import PLANAR2, invoke, read_csv, write_spec, resolved
 from .reference_pose import sagging_pose
 
 G = 9.81
@@ -52,7 +52,7 @@ def planar2_as(model):
 
 
 def test_ideal_samples_have_no_cable_model_outputs(planar2):
-    s = tr.sample(planar2, "square_fast")
+    s = tr.sample(resolved(planar2, "motion"), "square_fast")
     assert s.cables is None
     assert not any(k.startswith(("unstretched", "setpoint", "outlet", "sag_", "cable_status")) for k in s.columns())
     assert "cable_model" not in s.summary()
@@ -62,8 +62,8 @@ def test_elastic_setpoints_are_the_stretched_chords_shortened(planar2):
     """Elastic cables: tensions, lengths and every historical column are the ideal ones; the
     set-point is L0 = L / (1 + T/EA) (EA = 2e4 N in planar2), the ideal set-point's error
     L - L0 = L T / (EA + T) > 0."""
-    ideal = tr.sample(planar2, "square_fast")
-    el = tr.sample(planar2_as("elastic"), "square_fast")
+    ideal = tr.sample(resolved(planar2, "motion"), "square_fast")
+    el = tr.sample(resolved(planar2_as("elastic"), "motion"), "square_fast")
     ci, ce = ideal.columns(), el.columns()
     for key, col in ci.items():
         np.testing.assert_array_equal(ce[key], col, err_msg=key)
@@ -85,8 +85,8 @@ def test_sagging_samples_match_the_per_pose_statics():
     """The batched kernel along a path (inertia included) against the per-pose sagging statics with
     the same required wrench, sample by sample: same tensions, outlet tensions, lengths and sag."""
     d = planar2_as("sagging")
-    s = tr.sample(d, "square_fast", cycle_time=0.01)
-    st = tr.states(d, s.pose, s.velocity, s.acceleration, time=s.time)
+    s = tr.sample(resolved(d, "motion"), "square_fast", cycle_time=0.01)
+    st = tr.states(resolved(d, "motion"), s.pose, s.velocity, s.acceleration, time=s.time)
     assert len(s) > 100 and np.all(s.cables.status == 0) and s.all_feasible
     combos = combinations(d.m, d.n)
     for j in range(0, len(s), 7):
@@ -110,7 +110,7 @@ def test_sag_dominated_setpoint_error_has_the_catenarys_size():
     a = w X / 2H) less the stretch T c / EA.  The neglected terms are O(a^2) relative (a = 0.07
     here), the tolerance."""
     d = spec.from_dict(hanging_data())
-    s = tr.sample(d, "down")
+    s = tr.sample(resolved(d, "motion"), "down")
     c = s.cables
     j = 0  # at rest
     assert c.status[j] == 0
@@ -131,7 +131,7 @@ def test_a_sample_without_a_solution_is_flagged_never_a_number(tmp_path):
     no sagging statics.  They carry a status, empty cells and feasible 0; trajectory.json counts
     them; simulate refuses to command them (exit 2 naming the trajectory)."""
     data = hanging_data(mu=0.05, waypoints=((0.0, -1.0), (0.0, 0.5)))
-    s = tr.sample(spec.from_dict(data), "down")
+    s = tr.sample(resolved(spec.from_dict(data), "motion"), "down")
     bad = s.cables.status != 0
     assert bad.any() and (~bad).any()
     assert not s.feasible[bad].any()
@@ -206,12 +206,12 @@ def test_elastic_simulation_holds_the_pose_with_unstretched_setpoints():
     pose = [0.75, 0.8486]
     L0 = api.pose(d, pose).cable_state.unstretched_lengths
     chord = api.pose(d, pose).lengths
-    sim = S.Simulator(d)
+    sim = S.Simulator(resolved(d, "motion"))
     sim.reset(pose)
     st = sim.advance(L0, 0.5)
     np.testing.assert_allclose(st.pose, pose, atol=1e-6)
     np.testing.assert_allclose(st.axis, L0, rtol=1e-12)
-    sim = S.Simulator(d, compensate_stretch=False)
+    sim = S.Simulator(resolved(d, "motion"), compensate_stretch=False)
     sim.reset(pose, setpoints=chord)
     st = sim.advance(chord, 0.5)
     B = np.array(pose) + np.array([0.06, 0.06])  # c2's attachment
@@ -224,7 +224,7 @@ def _sim_at_rest(d, pose, segments):
     """The robot settled (6 s with the simulator's settling damping) holding the static L0.
     A 4 ms step: the massive cables' springs run on their own sub-steps (mjcf.Chains.update)."""
     L0 = api.pose(d, pose).cable_state.unstretched_lengths
-    sim = S.Simulator(d, cable_segments=segments, servo_bandwidth=np.inf, timestep=4e-3)
+    sim = S.Simulator(resolved(d, "motion"), cable_segments=segments, servo_bandwidth=np.inf, timestep=4e-3)
     return sim.reset(pose, setpoints=L0, settle=6.0)
 
 
@@ -267,11 +267,11 @@ def test_massive_cables_at_rest_agree_with_the_static_catenary():
 
 def test_massive_cable_model_builds_flexes():
     d = spec.from_dict(hanging_data(mu=0.5, EA=1e5, mass=5.0))
-    sim = S.Simulator(d, cable_segments=6)
+    sim = S.Simulator(resolved(d, "motion"), cable_segments=6)
     m = sim.model
     assert m.nflex == 2 and m.nflexedge == 12 and list(m.flex_dim) == [1, 1]
     assert m.nv == 3 + 2 * 5 * 2  # effector (x, y, phi) + 5 inner vertices per cable on 2 slides
     with pytest.raises(ValueError, match="cable_segments"):
-        S.Simulator(d, cable_segments=1)
+        S.Simulator(resolved(d, "motion"), cable_segments=1)
     # an ideal design has no flex at all (its model is the historical one)
-    assert S.Simulator(spec.from_dict(hanging_data(model="ideal"))).model.nflex == 0
+    assert S.Simulator(resolved(spec.from_dict(hanging_data(model="ideal")), "motion")).model.nflex == 0

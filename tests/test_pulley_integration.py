@@ -38,7 +38,7 @@ from cdpr_design.workspaces import grid as wsg
 from cdpr_design import api
 from cdpr_design.statics.interference import HIT_NAMES, check_pose
 
-from .helpers import add_pulleys, invoke, ipanema3_data, planar2_raw, planar4_cables, planar4_orient, write_spec
+from .helpers import add_pulleys, invoke, ipanema3_data, planar2_raw, planar4_cables, planar4_orient, write_spec, resolved
 
 
 def planar2(radius=None):
@@ -166,8 +166,8 @@ def test_trajectory_radius_to_zero_is_point_outlet(make, name):
     d0, d1 = make(None), make(1e-9)
     from cdpr_design.statics.robot import resolve
 
-    assert resolve(d0).outlets == "points" and resolve(d1).outlets == "pulleys"
-    s0, s1 = tr.sample(d0, name), tr.sample(d1, name)
+    assert resolve(d0).outlets.name == "points" and resolve(d1).outlets.name == "pulleys"
+    s0, s1 = tr.sample(resolved(d0, "motion"), name), tr.sample(resolved(d1, "motion"), name)
     np.testing.assert_array_equal(s0.time, s1.time)
     np.testing.assert_allclose(s1.lengths, s0.lengths, rtol=0, atol=1e-8)
     np.testing.assert_allclose(s1.cable_speed, s0.cable_speed, rtol=0, atol=1e-7)
@@ -181,7 +181,7 @@ def test_trajectory_radius_to_zero_is_point_outlet(make, name):
                                               (planar4, 0.08, "ring"), (ipanema3, 0.1, "swing")])
 def test_trajectory_speeds_are_derivatives_of_pulley_lengths(make, radius, name):
     d, d0 = make(radius), make(None)
-    s = tr.sample(d, name)
+    s = tr.sample(resolved(d, "motion"), name)
     ik = kin.lengths_many(d, s.pose) if not d.motion.rotational else \
         np.array([kin.inverse_kinematics(d, p) for p in s.pose[::5]])
     np.testing.assert_allclose(s.lengths[:: (1 if not d.motion.rotational else 5)], ik, rtol=0, atol=1e-10)
@@ -198,7 +198,7 @@ def test_trajectory_speeds_are_derivatives_of_pulley_lengths(make, radius, name)
     err = np.abs(fd - speed)
     assert err.max() < 1e-5 * max(1.0, np.abs(speed).max())
     # the point-outlet speeds differ from the pulley lengths' derivatives by far more
-    s0 = tr.sample(d0, name)
+    s0 = tr.sample(resolved(d0, "motion"), name)
     assert np.abs(s0.cable_speed[1:-1][smooth] - fd).max() > 20 * err.max()
     # accelerations: second differences
     fd2 = ((L[2:] - 2 * L[1:-1] + L[:-2]) / dt[0] ** 2)[smooth]
@@ -207,7 +207,7 @@ def test_trajectory_speeds_are_derivatives_of_pulley_lengths(make, radius, name)
     assert err2.max() < 1e-3 * max(1.0, np.abs(acc).max())
     assert np.abs(s0.cable_accel[1:-1][smooth] - fd2).max() > 5 * err2.max()
     # the structure matrix the tensions solve uses the pulley's tangent point
-    st = tr.states(d, s.pose[::50], s.velocity[::50], s.acceleration[::50], time=s.time[::50])
+    st = tr.states(resolved(d, "motion"), s.pose[::50], s.velocity[::50], s.acceleration[::50], time=s.time[::50])
     for j, p in enumerate(s.pose[::50]):
         np.testing.assert_allclose(st["structure"][j], kin.structure_matrix(d, p), atol=1e-12)
 
@@ -220,18 +220,18 @@ def test_trajectory_speeds_are_derivatives_of_pulley_lengths(make, radius, name)
 @pytest.mark.parametrize("make", [planar2, planar4])
 def test_sizing_radius_to_zero_is_point_outlet(make, catalogue):
     d0, d1 = make(None), make(1e-9)
-    r0 = sz.size_motors(d0, catalogue, step=0.05).rows()
-    r1 = sz.size_motors(d1, catalogue, step=0.05).rows()
+    r0 = sz.size_motors(resolved(d0, "size-motors"), catalogue, step=0.05).rows()
+    r1 = sz.size_motors(resolved(d1, "size-motors"), catalogue, step=0.05).rows()
     _rows_close(r0, r1, 1e-6)
 
 
 def test_sizing_radius_to_zero_is_point_outlet_spatial(catalogue):
     d0, d1 = ipanema3(None), ipanema3(1e-9)
     pos = np.array([[0.0, 0.0, 1.2], [1.5, -1.0, 1.8], [-2.0, 1.0, 0.8]])
-    e0 = ev.task_envelope(d0, positions=pos)
-    e1 = ev.task_envelope(d1, positions=pos)
-    r0 = sz.size_motors(d0, catalogue, envelope=e0).rows()
-    r1 = sz.size_motors(d1, catalogue, envelope=e1).rows()
+    e0 = ev.task_envelope(resolved(d0, "size-motors"), positions=pos)
+    e1 = ev.task_envelope(resolved(d1, "size-motors"), positions=pos)
+    r0 = sz.size_motors(resolved(d0, "size-motors"), catalogue, envelope=e0).rows()
+    r1 = sz.size_motors(resolved(d1, "size-motors"), catalogue, envelope=e1).rows()
     _rows_close(r0, r1, 1e-6)
 
 
@@ -248,8 +248,8 @@ def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
         g = ev.task_grid(d, 0.1)
         pos = wsg.grid_positions(g, 0, g.size)
     ori = d.default_orientation_full()
-    e = ev.envelope_chunk(d, pos, ori, 0.0, 0.0)
-    e0 = ev.envelope_chunk(d0, pos, ori, 0.0, 0.0)
+    e = ev.envelope_chunk(resolved(d, "size-motors"), pos, ori, 0.0, 0.0)
+    e0 = ev.envelope_chunk(resolved(d0, "size-motors"), pos, ori, 0.0, 0.0)
     rot = ev.rotation_coords(d, ori)
     ref = np.full((pos.shape[0], d.m), np.nan)
     for j, p in enumerate(pos):
@@ -259,7 +259,7 @@ def test_sizing_tensions_equal_per_pose_evaluation(make, radius):
     feas = np.all(np.isfinite(ref), axis=1)
     assert feas.sum() >= min(3, pos.shape[0])
     np.testing.assert_allclose(e["static"][feas], ref[feas], rtol=1e-6, atol=1e-6)
-    env = ev.task_envelope(d, positions=pos[feas])
+    env = ev.task_envelope(resolved(d, "size-motors"), positions=pos[feas])
     assert env.static_tension == pytest.approx(ref[feas].max(axis=0), rel=1e-6, abs=1e-6)
     # not the point-outlet figures: the pulley changes the tensions
     assert np.nanmax(np.abs(e0["static"][feas] - ref[feas])) > 1e-4
@@ -273,7 +273,7 @@ def test_sizing_cable_acceleration_bound_with_pulleys():
     A, V = 2.0, 0.5
     pos = np.array([[0.7, 0.8], [1.2, 1.3], [1.0, 0.6]])
     ori = d.default_orientation_full()
-    e = ev.envelope_chunk(d, pos, ori, A, V)
+    e = ev.envelope_chunk(resolved(d, "size-motors"), pos, ori, A, V)
     rng = np.random.default_rng(3)
     rot = ev.rotation_coords(d, ori)
     for j, p in enumerate(pos):
@@ -284,7 +284,7 @@ def test_sizing_cable_acceleration_bound_with_pulleys():
             v *= V / np.linalg.norm(v)
             a = rng.normal(size=2)
             a *= A / np.linalg.norm(a)
-            st = tr.states(d, pose[None], np.r_[v, 0.0][None], np.r_[a, 0.0][None])
+            st = tr.states(resolved(d, "motion"), pose[None], np.r_[v, 0.0][None], np.r_[a, 0.0][None])
             best = np.maximum(best, np.abs(st["cable_accel"][0]))
         assert np.all(best <= e["accel"][j] + 1e-9)
         assert np.all(best >= 0.97 * e["accel"][j])
@@ -299,8 +299,8 @@ def test_sizing_cable_acceleration_bound_with_pulleys():
 def test_simulation_uses_pulley_lengths():
     """The MuJoCo model's cable lengths are arc + free segment (tendon from the tangent point)."""
     d = planar4(0.08)
-    s = tr.sample(d, "tilt")
-    res = simulate(d, s)
+    s = tr.sample(resolved(d, "motion"), "tilt")
+    res = simulate(resolved(d, "motion"), s)
     # the lengths the model reports are the pulley-aware lengths at the simulated pose (where
     # it is nearly at rest: MuJoCo's tendon lengths are those of the step's start)
     rest = np.flatnonzero(np.linalg.norm(s.velocity, axis=1) < 1e-3)
@@ -311,7 +311,7 @@ def test_simulation_uses_pulley_lengths():
     # the cable stretch make (sub-millimetre); a straight outlet tendon would be off by ~r
     assert res.summary()["max_error"] < 2e-3
     assert np.abs(res.lengths - res.target_lengths).max() < 1e-3
-    sm = sim.Simulator(d)
+    sm = sim.Simulator(resolved(d, "motion"))
     st0 = sm.reset([1.0, 1.0, 0.05], settle=0.0)
     np.testing.assert_allclose(st0.lengths, kin.inverse_kinematics(d, [1.0, 1.0, 0.05]), atol=1e-12)
     assert np.all(np.abs(st0.lengths - kin.inverse_kinematics(planar4(None), [1.0, 1.0, 0.05])) > 0.01)

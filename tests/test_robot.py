@@ -55,20 +55,20 @@ def test_strategies_of_the_shipped_designs(planar2, ipanema3):
     """planar2 is under-constrained and held (its tilt reported beside), ideal, from points;
     IPAnema 3 fully constrained; the arrays are the design's, built once."""
     r = resolve(planar2)
-    assert (r.cables, r.outlets, r.orientation, r.underconstrained) == ("ideal", "points", "held", True)
+    assert (r.cables.name, r.outlets.name, r.orientation.name, r.underconstrained) == ("ideal", "points", "held", True)
     assert r.engine == "numpy" and r.tilt_limit is None
     np.testing.assert_array_equal(r.outlet_points, planar2.outlets)
     np.testing.assert_array_equal(r.tension_max, planar2.tension_max)
     assert r.combos.shape == (2, 1)
     r = resolve(ipanema3)
-    assert (r.cables, r.outlets, r.orientation, r.underconstrained) == ("ideal", "points", "commanded", False)
+    assert (r.cables.name, r.outlets.name, r.orientation.name, r.underconstrained) == ("ideal", "points", "commanded", False)
     assert r.engine == "numba"
     assert resolve(_with(planar2, orientation="free"), max_tilt=10.0).tilt_limit == 10.0
-    assert resolve(_with(planar2, orientation="free")).orientation == "hanging"
+    assert resolve(_with(planar2, orientation="free")).orientation.name == "hanging"
     # a held effector needs a weight, ideal cables and point outlets to hang: else commanded
-    assert resolve(_with(planar2, mass=0.0)).orientation == "commanded"
-    assert resolve(_with(planar2, model="elastic")).orientation == "commanded"
-    assert resolve(_with(planar2, pulleys=True)).outlets == "pulleys"
+    assert resolve(_with(planar2, mass=0.0)).orientation.name == "commanded"
+    assert resolve(_with(planar2, model="elastic")).orientation.name == "commanded"
+    assert resolve(_with(planar2, pulleys=True)).outlets.name == "pulleys"
 
 
 def _cases(planar2, ipanema3, cogiro):
@@ -152,7 +152,7 @@ def test_commands_at_commanded_poses_take_a_free_effector_over_pulleys(planar2):
     free_pulleys = _with(planar2, orientation="free", pulleys=True)
     for command in R.COMMANDED_POSES:
         r = resolve(free_pulleys, Analysis(command=command))
-        assert (r.outlets, r.orientation) == ("pulleys", "hanging")
+        assert (r.outlets.name, r.orientation.name) == ("pulleys", "hanging")
         with pytest.raises(InputError, match="^--cable-model: cable model 'sagging' assumes point outlets"):
             resolve(_with(free_pulleys, model="sagging"), Analysis(command=command))
     for command in ("workspace", "pose", "fk", "statics"):
@@ -160,11 +160,42 @@ def test_commands_at_commanded_poses_take_a_free_effector_over_pulleys(planar2):
             resolve(free_pulleys, Analysis(command=command))
 
 
-def test_robot_of_resolves_a_design_once_and_keeps_a_robot(planar2):
-    """The public functions of a command take a design or the robot the command resolved."""
-    r = R.robot_of(planar2, "motion")
-    assert r.analysis.command == "motion" and r.design is planar2
-    assert R.robot_of(r, "size-motors") is r
-    assert R.design_of(r) is planar2 and R.design_of(planar2) is planar2
-    with pytest.raises(InputError, match="assumes point outlets"):
-        R.robot_of(_with(planar2, model="sagging", pulleys=True), "size-motors")
+def test_strategies_answer_what_the_layers_below_ask(planar2, cogiro):
+    """Each strategy object answers for its model: straight, rigid, stretching, sagging under a
+    kind, the cable columns; its name is what the outputs report."""
+    names = ("c1", "c2")
+    for model, straight, rigid, stretches, cols in (("ideal", True, True, False, 0), ("elastic", True, False, True, 6),
+                                                    ("sagging", False, False, False, 7)):
+        c = resolve(_with(cogiro, model=model)).cables
+        assert (c.name, str(c), c.straight, c.rigid, c.stretches) == (model, model, straight, rigid, stretches)
+        assert len(c.state_columns(names)) == cols
+        assert c.sags("static") == c.sags("wrench-feasible") == (model == "sagging") and not c.sags("wrench-closure")
+        assert c.chords("wrench-closure") == (model == "sagging") and not c.chords("static")
+    assert not resolve(planar2).outlets.pulleys and resolve(_with(planar2, pulleys=True)).outlets.pulleys
+    held, free = resolve(planar2).orientation, resolve(_with(planar2, orientation="free")).orientation
+    assert (held.tilt_beside, held.free, free.tilt_beside, free.free) == (True, False, False, True)
+
+
+def test_one_pose_is_a_new_resolution_of_the_pose_statics(planar2, cogiro):
+    """A pose's robot: the same design and engine resolved for one commanded pose (a free
+    effector's orientation commanded; no collisions, orientation set, tilt limit or stiffness);
+    the robot asked is left as it was."""
+    free = resolve(_with(planar2, orientation="free"), Analysis(command="pose", max_tilt=20.0))
+    one = free.one_pose()
+    assert one is not free and one.design is free.design and one.engine == free.engine
+    assert (free.orientation.name, one.orientation.name) == ("hanging", "commanded")
+    assert one.tilt_limit is None and free.tilt_limit == 20.0 and one.analysis.max_tilt is None
+    r = resolve(_with(cogiro, model="elastic"), Analysis(collisions=True, orientations="total"))
+    one = r.one_pose()
+    assert not one.analysis.collisions and one.analysis.orientations is None and one.engine == r.engine
+    assert (r.analysis.collisions, r.analysis.orientations) == (True, "total")
+    np.testing.assert_array_equal(one.outlet_points, r.outlet_points)
+
+
+def test_every_command_says_what_it_needs():
+    """The refusal rows are keyed on capabilities: every command states its needs, from the known set."""
+    assert set(R.NEEDS) == set(R.COMMANDS)
+    for command, needs in R.NEEDS.items():
+        assert needs <= set(R.CAPABILITIES), command
+        assert Analysis(command=command).needs == needs
+    assert set(R.COMMANDED_POSES) == {"size-motors", "motion"}

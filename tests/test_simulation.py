@@ -13,11 +13,11 @@ from cdpr_design.model import spec
 from cdpr_design.motion import trajectory as tr
 from cdpr_design.motion.compare import estimate_delay
 
-from .helpers import PLANAR2, csv_header, invoke, static_tensions
+from .helpers import PLANAR2, csv_header, invoke, static_tensions, resolved
 
 
 def test_model_builds_with_tendons_that_only_pull(planar2):
-    sim = S.Simulator(planar2)
+    sim = S.Simulator(resolved(planar2, "motion"))
     m = sim.model
     assert m.ntendon == 2 and m.nu == 2 and m.nv == 3  # slide x, slide y, hinge z
     np.testing.assert_array_equal(m.actuator_forcelimited, [1, 1])
@@ -28,7 +28,7 @@ def test_model_builds_with_tendons_that_only_pull(planar2):
 def test_rest_at_symmetric_pose_matches_static_tensions(planar2):
     """At x = 0.75 the cable lines meet above the centre of mass: no tilt, and the simulated
     tensions equal the statics A T = B of the paper (eq. 6-9) within 1 % (in fact 1e-6)."""
-    sim = S.Simulator(planar2)
+    sim = S.Simulator(resolved(planar2, "motion"))
     pose = [0.75, 0.8486]
     st = sim.reset(pose)
     st = sim.advance(kin.inverse_kinematics(planar2, pose), 1.0)
@@ -43,7 +43,7 @@ def test_rest_at_symmetric_pose_matches_static_tensions(planar2):
 def test_rest_off_centre_tilts_and_balances(planar2, pose):
     """Off centre the rigid effector tilts (three-force equilibrium); its tensions are within 1 %
     of the point-mass statics, and exactly those of the statics at the tilted pose."""
-    sim = S.Simulator(planar2)
+    sim = S.Simulator(resolved(planar2, "motion"))
     sim.reset(pose, settle=4.0)
     st = sim.advance(kin.inverse_kinematics(planar2, pose), 0.5)
     t_static = static_tensions(planar2, pose)
@@ -64,7 +64,7 @@ def test_cable_commanded_too_long_goes_slack(planar2):
     any lengths both cables can reach, so slack needs more than the effector can hang away):
     the effector ends up swinging on c2 alone, c1 goes slack with tension exactly 0, and no
     tension is ever negative."""
-    sim = S.Simulator(planar2)
+    sim = S.Simulator(resolved(planar2, "motion"))
     pose = [0.75, 0.8]
     sim.reset(pose)
     L = kin.inverse_kinematics(planar2, pose)
@@ -87,10 +87,10 @@ def test_cable_commanded_too_long_goes_slack(planar2):
 def test_servo_without_feedforward_lags_by_one_over_bandwidth(planar2):
     """A first-order position loop without velocity feed-forward follows a ramp 1/omega late;
     with a transport delay added, the lag is 1/omega + delay."""
-    s = tr.sample(planar2, "square_slow", hold_end=0.3)
+    s = tr.sample(resolved(planar2, "motion"), "square_slow", hold_end=0.3)
     s = _truncate(s, 3000)
     for wc, delay in [(20.0, 0.0), (50.0, 0.05)]:
-        r = simulate(planar2, s, servo_bandwidth=wc, feedforward=False, delay=delay, settle=0.0)
+        r = simulate(resolved(planar2, "motion"), s, servo_bandwidth=wc, feedforward=False, delay=delay, settle=0.0)
         for i in range(2):
             d = estimate_delay(s.cycle_time, s.lengths[:, i], r.axis[:, i])
             assert d == pytest.approx(1 / wc + delay, abs=2e-3)
@@ -108,8 +108,8 @@ def _truncate(s, k):
 def test_square_fast_tracking_and_delay(planar2):
     """The paper's square at 1 m/s: tracking below 1.5 mm RMS with the trapezoidal profile and
     feed-forward; with a 130 ms transport delay the measured axis delay is 130 ms."""
-    s = tr.sample(planar2, "square_fast", hold_end=0.4)
-    r = simulate(planar2, s)
+    s = tr.sample(resolved(planar2, "motion"), "square_fast", hold_end=0.4)
+    r = simulate(resolved(planar2, "motion"), s)
     summ = r.summary()
     assert summ["rms_error"] < 1.5e-3
     assert min(summ["min_tension"].values()) >= 0.0
@@ -118,7 +118,7 @@ def test_square_fast_tracking_and_delay(planar2):
         assert row["error_pct"] < 0.5
     for c in ("length_c1", "length_c2"):
         assert abs(summ["delay"][c]) < 2e-3
-    rd = simulate(planar2, s, delay=0.13)
+    rd = simulate(resolved(planar2, "motion"), s, delay=0.13)
     sd = rd.summary()
     for c in ("length_c1", "length_c2"):
         assert sd["delay"][c] == pytest.approx(0.13, abs=2e-3)
@@ -139,7 +139,7 @@ def test_spatial_point_mass_at_rest():
         "cables": [{"name": f"k{i}", "outlet": [1.5 * np.cos(a), 1.5 * np.sin(a), 3.0],
                     "attachment": [0.0, 0.0, 0.0]} for i, a in enumerate([0.0, 2.1, 4.2])],
     })
-    sim = S.Simulator(d)
+    sim = S.Simulator(resolved(d, "motion"))
     assert sim.model.nq == 7
     pose = [0.2, -0.1, 1.5]
     sim.reset(pose)
@@ -151,8 +151,8 @@ def test_spatial_point_mass_at_rest():
 
 def test_bad_arguments(planar2):
     with pytest.raises(ValueError, match="delay"):
-        S.Simulator(planar2, delay=-1.0)
-    sim = S.Simulator(planar2)
+        S.Simulator(resolved(planar2, "motion"), delay=-1.0)
+    sim = S.Simulator(resolved(planar2, "motion"))
     sim.reset()
     with pytest.raises(ValueError, match="expected 2 set-points"):
         sim.advance([1.0], 0.01)

@@ -18,7 +18,7 @@ from cdpr_design.model import catalogue as cat
 from cdpr_design.model import spec
 from cdpr_design.errors import InputError, SpecError
 
-from .helpers import planar2_raw
+from .helpers import planar2_raw, resolved
 
 G = 9.81
 
@@ -50,7 +50,7 @@ def test_planar2_hand_computed_sizing(base, catalogue):
     spec efficiency 0.9, drum 2e-5 kg m^2, AM8112 rotor 7.5e-6 kg m^2.
     """
     d = spec.from_dict(one_pose(base, gear_ratio=3.0, efficiency=0.9))
-    res = sz.size_motors(d, catalogue)
+    res = sz.size_motors(resolved(d, "size-motors"), catalogue)
     r, i, eta, A, V = 0.036, 3.0, 0.9, 5.0, 1.0
     L = 0.69 * math.sqrt(2)
     t0 = G / math.sqrt(2)
@@ -85,7 +85,7 @@ def test_paper_tension_limit_from_the_motor(base, catalogue):
     section 3): an AM8112 on an EL7211 (0.72 N m usable peak, robots.md) on a direct
     36 mm drum holds exactly 20 N; its own 1.32 N m peak would need a 66 mm drum."""
     d = spec.from_dict(base)
-    res = sz.size_motors(d, catalogue)
+    res = sz.size_motors(resolved(d, "size-motors"), catalogue)
     assert all(a.implied_tension_max == pytest.approx(20.0, rel=1e-12) for a in res.axes)
     assert all(a.tension_max == 20.0 for a in res.axes)
     assert wn.drum_radius_for(20.0, catalogue.motor("AM8112-0F21-EL7211").usable_peak_torque) == pytest.approx(0.036)
@@ -127,7 +127,7 @@ def test_square_closed_form_matches_brute_force(seed):
     d = spec.from_dict(data)
     pos = np.array([[float(rng.uniform(0.6, 1.4)), float(rng.uniform(0.5, 1.2))]])
     A = float(rng.uniform(1, 8))
-    e = ev.envelope_chunk(d, pos, d.default_orientation_full(), A, 0.0)
+    e = ev.envelope_chunk(resolved(d, "size-motors"), pos, d.default_orientation_full(), A, 0.0)
     pose = np.concatenate([pos[0], [0.0]]) if rigid else pos[0]
     brute = _brute_peak(d, pose, A)
     assert np.all(brute <= e["peak"][0] + 1e-9)
@@ -148,7 +148,7 @@ def test_redundant_envelope_against_cvxpy():
     d = spec.from_dict(data)
     A = 5.0
     pos = np.array([[0.7, 1.2], [1.3, 0.8]])
-    e = ev.envelope_chunk(d, pos, np.zeros(3), A, 0.0)
+    e = ev.envelope_chunk(resolved(d, "size-motors"), pos, np.zeros(3), A, 0.0)
     dirs = ev.acceleration_directions(2)
     for k, p in enumerate(pos):
         W = kin.structure_matrix(d, p)
@@ -174,8 +174,8 @@ def test_heavier_effector_needs_no_less_torque(base, catalogue, m1, dm, x, y):
     d1["effector"]["mass"] = m1
     d2 = copy.deepcopy(d1)
     d2["effector"]["mass"] = m1 + dm
-    a = sz.size_motors(spec.from_dict(d1), catalogue).axes
-    b = sz.size_motors(spec.from_dict(d2), catalogue).axes
+    a = sz.size_motors(resolved(spec.from_dict(d1), "size-motors"), catalogue).axes
+    b = sz.size_motors(resolved(spec.from_dict(d2), "size-motors"), catalogue).axes
     assert len(a) == len(b) == 2
     for p, q in zip(a, b):
         assert q.peak_tension >= p.peak_tension - 1e-12
@@ -187,8 +187,8 @@ def test_heavier_effector_needs_no_less_torque(base, catalogue, m1, dm, x, y):
 @given(r=st.floats(0.005, 0.1), f=st.floats(1.01, 3.0), x=st.floats(0.4, 1.1), y=st.floats(0.4, 1.1))
 def test_larger_drum_more_torque_less_speed(base, catalogue, r, f, x, y):
     """With a light drum the load term T r / (i eta) dominates the inertia term."""
-    a = sz.size_motors(spec.from_dict(one_pose(base, x, y, drum_radius=r, drum_inertia=0.0)), catalogue).axes
-    b = sz.size_motors(spec.from_dict(one_pose(base, x, y, drum_radius=r * f, drum_inertia=0.0)), catalogue).axes
+    a = sz.size_motors(resolved(spec.from_dict(one_pose(base, x, y, drum_radius=r, drum_inertia=0.0)), "size-motors"), catalogue).axes
+    b = sz.size_motors(resolved(spec.from_dict(one_pose(base, x, y, drum_radius=r * f, drum_inertia=0.0)), "size-motors"), catalogue).axes
     assert len(a) == len(b) == 2
     for p, q in zip(a, b):
         assert q.drum_torque > p.drum_torque
@@ -223,13 +223,13 @@ def test_motor_exactly_at_the_limit_passes_just_under_fails(base, shave):
     data = one_pose(base, 0.6, 0.9)
     data["winch"].pop("motor")
     d = spec.from_dict(data)
-    probe = sz.size_motors(d, _exact_catalogue(100.0, 100.0, 1e6)).axes  # rotor inertia 0 for all
+    probe = sz.size_motors(resolved(d, "size-motors"), _exact_catalogue(100.0, 100.0, 1e6)).axes  # rotor inertia 0 for all
     for k, p in enumerate(probe):  # one catalogue per axis, at that axis's requirement
         cat = _exact_catalogue(p.peak_motor_torque, p.rms_motor_torque, p.peak_motor_speed, shave)
-        a = sz.size_motors(d, cat).axes[k]
+        a = sz.size_motors(resolved(d, "size-motors"), cat).axes[k]
         assert a.motor == "exact" and a.fits
         assert min(a.peak_torque_margin, a.rms_torque_margin, a.speed_margin) == 1.0
-        under = sz.size_motors(d, cat, motor="under").axes[k]
+        under = sz.size_motors(resolved(d, "size-motors"), cat, motor="under").axes[k]
         assert not under.fits and under.motor == "under"
         assert min(under.peak_torque_margin, under.rms_torque_margin, under.speed_margin) < 1.0
 
@@ -238,7 +238,7 @@ def test_smallest_fitting_motor_and_best_combination(base, catalogue):
     data = one_pose(base, 0.75, 0.9, drum_radius=[0.02, 0.05, 0.1], gear_ratio=[1, 5])
     data["winch"].pop("motor")
     data["winch"].pop("efficiency")
-    res = sz.size_motors(spec.from_dict(data), catalogue)
+    res = sz.size_motors(resolved(spec.from_dict(data), "size-motors"), catalogue)
     order = [m.name for m in catalogue.by_size()]
     for a in res.axes:
         assert a.fits and a.motor == order[0]  # the smallest motor fits on some winch
@@ -250,27 +250,27 @@ def test_smallest_fitting_motor_and_best_combination(base, catalogue):
     heavy["effector"]["mass"] = 500.0
     heavy["winch"]["drum_radius"] = 0.2
     heavy["winch"]["gear_ratio"] = 1
-    res = sz.size_motors(spec.from_dict(heavy), catalogue)
+    res = sz.size_motors(resolved(spec.from_dict(heavy), "size-motors"), catalogue)
     assert not res.ok and all(a.motor == "" and a.torque_margin < 1 for a in res.axes)
 
 
 def test_safety_factor_scales_margins(base, catalogue):
     d = spec.from_dict(one_pose(base))
-    a = sz.size_motors(d, catalogue).axes[0]
-    b = sz.size_motors(d, catalogue, safety_factor=2.0).axes[0]
+    a = sz.size_motors(resolved(d, "size-motors"), catalogue).axes[0]
+    b = sz.size_motors(resolved(d, "size-motors"), catalogue, safety_factor=2.0).axes[0]
     assert b.torque_margin == pytest.approx(a.torque_margin / 2)
     assert b.speed_margin == pytest.approx(a.speed_margin / 2)
     with pytest.raises(InputError, match="safety-factor"):
-        sz.size_motors(d, catalogue, safety_factor=0.5)
+        sz.size_motors(resolved(d, "size-motors"), catalogue, safety_factor=0.5)
 
 
 def test_unknown_motor_is_input_error(base, catalogue):
     data = one_pose(base)
     data["winch"]["motor"] = "NoSuchMotor"
     with pytest.raises(InputError, match=r"winch.motor: 'NoSuchMotor'"):
-        sz.size_motors(spec.from_dict(data), catalogue)
+        sz.size_motors(resolved(spec.from_dict(data), "size-motors"), catalogue)
     with pytest.raises(InputError, match="--motor"):
-        sz.size_motors(spec.from_dict(one_pose(base)), catalogue, motor="nope")
+        sz.size_motors(resolved(spec.from_dict(one_pose(base)), "size-motors"), catalogue, motor="nope")
 
 
 def test_trajectory_duty_cycle_rms(base, catalogue):
@@ -285,7 +285,7 @@ def test_trajectory_duty_cycle_rms(base, catalogue):
         cable_accel = np.array([[-1.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 0.0]])
         feasible = np.ones(4, bool)
 
-    res = sz.size_motors(d, catalogue, samples=S())
+    res = sz.size_motors(resolved(d, "size-motors"), catalogue, samples=S())
     a = res.axes[0]
     r, J = 0.036, 7.5e-6 + 2e-5
     tau = S.tensions[:, 0] * r - J / r * S.cable_accel[:, 0]

@@ -18,7 +18,7 @@ from cdpr_design.model import spec
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import tension as T
 
-from .helpers import DESIGNS, random_planar_data
+from .helpers import DESIGNS, random_planar_data, resolved
 
 RTOL = 1e-9  # relative to the largest tension (at least 1 N)
 
@@ -167,7 +167,7 @@ def test_sizing_calls_the_kernel(monkeypatch, tmax):
         return out
 
     monkeypatch.setattr(T, "min_norm_many", spy)
-    env = ev.task_envelope(d)
+    env = ev.task_envelope(resolved(d, "size-motors"))
     assert len(calls) == env.poses == 25
     lo, inf = d.tension_min, np.full(d.m, np.inf)
     peak = np.full(d.m, -np.inf)

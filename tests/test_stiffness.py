@@ -20,7 +20,7 @@ from cdpr_design.model import spec
 from cdpr_design.model.design import min_string_tension
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import stiffness as st
-from tests.helpers import invoke, write_spec
+from tests.helpers import invoke, resolved, write_spec
 
 MOTIONS = ("2T", "1R2T", "3T", "3R3T")
 
@@ -299,7 +299,7 @@ def ring(design, pose, mode, amplitude, duration):
     (times [s], displacements (k, n) from the start pose)."""
     from cdpr_design.motion.simulation import Simulator
 
-    sim = Simulator(design, timestep=2e-4, servo_bandwidth=np.inf, cable_damping=0.0, joint_damping=0.0)
+    sim = Simulator(resolved(design, "motion"), timestep=2e-4, servo_bandwidth=np.inf, cable_damping=0.0, joint_damping=0.0)
     s0 = sim.reset(pose, settle=2.0)
     x0 = np.asarray(s0.pose, float)
     q = sim.data.qpos

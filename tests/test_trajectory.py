@@ -15,7 +15,7 @@ from cdpr_design.motion import profile
 from cdpr_design.motion import trajectory as tr
 from cdpr_design.model.design import Trajectory
 
-from .helpers import PLANAR2, csv_header, invoke, point_mass, static_tensions, write_spec
+from .helpers import PLANAR2, csv_header, invoke, point_mass, static_tensions, write_spec, resolved
 
 REL = 1e-9
 
@@ -71,7 +71,7 @@ def test_trapezoid_minimum_time_closed_form():
 @pytest.mark.parametrize("name", ["square_slow", "square_fast"])
 def test_square_hits_every_corner_within_limits(planar2, name):
     traj = planar2.trajectories[name]
-    s = tr.sample(planar2, name)
+    s = tr.sample(resolved(planar2, "motion"), name)
     corners = paths.path_waypoints(planar2, traj)
     assert corners.shape == (5, 2)
     np.testing.assert_array_equal(s.pose[0], corners[0])
@@ -95,7 +95,7 @@ def test_square_hits_every_corner_within_limits(planar2, name):
 def test_cable_speed_is_the_derivative_of_length(planar2, name):
     """dL/dt (analytic) against finite differences of the lengths: the trapezoid-rule bound
     |dL/dt_fd - mean of the two speeds| <= max|d2L/dt2| dt / 4, and d2L/dt2 likewise."""
-    s = tr.sample(planar2, name)
+    s = tr.sample(resolved(planar2, "motion"), name)
     dt = s.cycle_time
     fd = np.diff(s.lengths, axis=0) / dt
     avg = 0.5 * (s.cable_speed[1:] + s.cable_speed[:-1])
@@ -111,7 +111,7 @@ def test_cable_speed_is_the_derivative_of_length(planar2, name):
 
 
 def test_motor_angle_sign_and_zero(planar2):
-    s = tr.sample(planar2, "square_fast")
+    s = tr.sample(resolved(planar2, "motion"), "square_fast")
     r = planar2.cables[0].winch.drum_radius
     gr = planar2.cables[0].winch.gear_ratio
     np.testing.assert_array_equal(s.motor_angle[0], 0.0)
@@ -128,7 +128,7 @@ def test_static_tensions_reference_point():
     d = point_mass([(0.0, 2.0), (3.0, 2.0)], 1.0, (1.0, 40.0), size=[0.1, 0.1])
     traj = Trajectory(name="t", type="polyline", speed=0.5, acceleration=2.0,
                       waypoints=((1.0, 1.0), (1.5, 1.0)))
-    s = tr.sample(d, traj)
+    s = tr.sample(resolved(d, "motion"), traj)
     np.testing.assert_allclose(s.tensions[0], [9.2489567, 7.3119423], atol=5e-8)
     np.testing.assert_allclose(s.tensions[-1], static_tensions(d, [1.5, 1.0]), rtol=1e-12)
 
@@ -141,7 +141,7 @@ def test_inertial_tension_equals_static_under_shifted_gravity(ax, ay, x, y):
     d = point_mass(outlets, 1.3, size=[0.1, 0.1])
     g = np.array([0.0, -9.81])
     dg = point_mass(outlets, 1.3, gravity=list(g - [ax, ay]), size=[0.1, 0.1])
-    st_ = tr.states(d, [[x, y]], [[0.3, -0.2]], [[ax, ay]])
+    st_ = tr.states(resolved(d, "motion"), [[x, y]], [[0.3, -0.2]], [[ax, ay]])
     np.testing.assert_allclose(st_["tensions"][0], static_tensions(dg, [x, y]), rtol=1e-10, atol=1e-10)
 
 
@@ -156,7 +156,7 @@ def test_rotating_path_against_per_pose_kinematics():
     d = rigid_1r2t()
     traj = Trajectory(name="r", type="polyline", speed=0.4, acceleration=3.0,
                       waypoints=((1.2, 1.0, 0.0), (1.6, 1.2, 0.3), (1.4, 0.9, -0.2)))
-    s = tr.sample(d, traj)
+    s = tr.sample(resolved(d, "motion"), traj)
     idx = np.linspace(0, len(s) - 1, 41).astype(int)
     for k in idx:
         p, v, a = s.pose[k], s.velocity[k], s.acceleration[k]
@@ -174,7 +174,7 @@ def test_rotating_path_against_per_pose_kinematics():
 def test_circle_total_acceleration_and_closure(planar2):
     traj = Trajectory(name="c", type="circle", speed=1.0, acceleration=5.0, center=(0.75, 0.8), radius=0.1,
                       laps=2)
-    s = tr.sample(planar2, traj)
+    s = tr.sample(resolved(planar2, "motion"), traj)
     r = np.linalg.norm(s.pose - [0.75, 0.8], axis=1)
     np.testing.assert_allclose(r, 0.1, rtol=1e-12)
     assert np.linalg.norm(s.acceleration, axis=1).max() <= 5.0 * (1 + REL)
@@ -191,7 +191,7 @@ def test_circle_total_acceleration_and_closure(planar2):
 def test_start_laps_holds_and_csv(planar2):
     traj = Trajectory(name="p", type="polyline", speed=0.5, acceleration=2.0,
                       waypoints=((0.6, 0.7), (0.9, 0.7)), start=(0.75, 0.9), laps=2)
-    s = tr.sample(planar2, traj, hold_start=0.1, hold_end=0.2)
+    s = tr.sample(resolved(planar2, "motion"), traj, hold_start=0.1, hold_end=0.2)
     kinds = [g.kind for g in s.segments]
     assert kinds == ["approach", "line", "line", "line"]  # approach, out, back (closing), out
     np.testing.assert_array_equal(s.pose[0], [0.75, 0.9])
@@ -199,14 +199,14 @@ def test_start_laps_holds_and_csv(planar2):
     np.testing.assert_array_equal(s.pose[-201:], np.repeat([[0.9, 0.7]], 201, axis=0))
     # a csv path is the polyline through the given poses
     c = Trajectory(name="c", type="csv", speed=0.5, acceleration=2.0, file="x.csv")
-    s2 = tr.sample(planar2, c, csv_poses=np.array([[0.6, 0.7], [0.9, 0.7]]))
-    s3 = tr.sample(planar2, Trajectory(name="c", type="polyline", speed=0.5, acceleration=2.0,
+    s2 = tr.sample(resolved(planar2, "motion"), c, csv_poses=np.array([[0.6, 0.7], [0.9, 0.7]]))
+    s3 = tr.sample(resolved(planar2, "motion"), Trajectory(name="c", type="polyline", speed=0.5, acceleration=2.0,
                                        waypoints=((0.6, 0.7), (0.9, 0.7))))
     np.testing.assert_array_equal(s2.pose, s3.pose)
     with pytest.raises(ValueError, match="csv"):
-        tr.sample(planar2, c)
+        tr.sample(resolved(planar2, "motion"), c)
     with pytest.raises(KeyError, match="square_slow"):
-        tr.sample(planar2, "nope")
+        tr.sample(resolved(planar2, "motion"), "nope")
 
 
 def test_feasibility_flag_tracks_tension_bounds(planar2):
@@ -214,7 +214,7 @@ def test_feasibility_flag_tracks_tension_bounds(planar2):
     without going slack: those samples are infeasible (tension below t_min = 0)."""
     traj = Trajectory(name="drop", type="polyline", speed=2.0, acceleration=15.0,
                       waypoints=((0.75, 1.0), (0.75, 0.5)))
-    s = tr.sample(planar2, traj)
+    s = tr.sample(resolved(planar2, "motion"), traj)
     low = np.any(s.tensions < planar2.tension_min - 1e-9, axis=1)
     assert low.any()
     np.testing.assert_array_equal(s.feasible, ~low & np.all(s.tensions <= planar2.tension_max + 1e-9, axis=1))
@@ -230,7 +230,7 @@ def test_spatial_3r3t_speeds_match_per_pose():
     d = point_mass(outs, 5.0, (0.0, 1000.0), motion="3R3T", attachments=att, size=[0.2, 0.2, 0.2])
     traj = Trajectory(name="s", type="polyline", speed=0.3, acceleration=2.0,
                       waypoints=((0, 0, 1, 0, 0, 0), (0.2, 0.1, 1.1, 0.1, -0.1, 0.2)))
-    s = tr.sample(d, traj)
+    s = tr.sample(resolved(d, "motion"), traj)
     for k in np.linspace(0, len(s) - 1, 15).astype(int):
         np.testing.assert_allclose(s.cable_speed[k], kin.length_rates(d, s.pose[k], s.velocity[k]),
                                    atol=1e-12)
@@ -307,8 +307,8 @@ def test_redundant_robot_min_norm_tensions_against_cvxpy():
     d = redundant_4_cable()
     traj = Trajectory(name="r", type="polyline", speed=0.5, acceleration=4.0,
                       waypoints=((0.8, 0.6, 0.0), (1.2, 0.9, 0.2)))
-    s = tr.sample(d, traj, cycle_time=0.01)
-    st_ = tr.states(d, s.pose, s.velocity, s.acceleration, time=s.time)
+    s = tr.sample(resolved(d, "motion"), traj, cycle_time=0.01)
+    st_ = tr.states(resolved(d, "motion"), s.pose, s.velocity, s.acceleration, time=s.time)
     assert s.all_feasible
     for k in np.linspace(0, len(s) - 1, 12).astype(int):
         W = st_["structure"][k]
@@ -330,7 +330,7 @@ def test_summary_tension_extremes_skip_nan_samples_without_a_warning(planar2):
     import dataclasses
     import warnings
 
-    s = tr.sample(planar2, "square_slow")
+    s = tr.sample(resolved(planar2, "motion"), "square_slow")
     T = np.full_like(s.tensions, np.nan)
     T[:3, 0] = [1.0, 3.0, np.nan]
     with warnings.catch_warnings():

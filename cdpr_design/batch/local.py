@@ -114,8 +114,9 @@ def evaluate_variant(job: Job, index: int, values: Sequence) -> dict:
         samples = None
         if opt.trajectory is not None:
             from cdpr_design.motion import trajectory as tr
+            from cdpr_design.statics.robot import Analysis, resolve
 
-            samples = tr.sample(design, opt.trajectory)
+            samples = tr.sample(resolve(design, Analysis(command="motion")), opt.trajectory)
         row = ev.evaluate(design, step=opt.step, catalogue=opt.catalogue, samples=samples,
                           safety_factor=opt.safety_factor, motor=opt.motor, engine=job.engine(),
                           figures=opt.figures)

@@ -49,11 +49,11 @@ def certify(
 
     with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:
         design = load_design(spec, cable_model)
-        result, out_dir = job.certify(design, out, overwrite, kind=kind.value, resolution=resolution,
-                                      min_margin=min_margin, max_boxes=max_boxes, time_limit=time_limit,
-                                      format=format.value, pictures=pictures, progress=bars(quiet or json_),
-                                      workers=workers, scheduler=scheduler, resume=resume,
-                                      log=lambda msg: info(quiet or json_, msg))
+        settings = job.CertifySettings(kind=kind.value, resolution=resolution, min_margin=min_margin,
+                                       max_boxes=max_boxes, time_limit=time_limit, format=format.value,
+                                       workers=workers, scheduler=scheduler, resume=resume)
+        result, out_dir = job.certify(design, settings, out, overwrite, pictures=pictures,
+                                      progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg))
     s = result.summary()
     if json_:
         emit_json(s)

@@ -102,10 +102,10 @@ def optimize(
     from cdpr_design.jobs import optimize as job
 
     design = load_design(spec)
-    run = job.optimize(design, vary, maximize, minimize, require, trials, workers, seed, timeout, resume,
-                       catalogue, trajectory, safety_factor, motor, step, not no_picture, out, overwrite,
-                       progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg),
-                       engine=env.engine(), format=format.value)
+    settings = job.OptimizeSettings(vary, maximize, minimize, require, trials, workers, seed, timeout, resume,
+                                    catalogue, trajectory, safety_factor, motor, step, not no_picture, out,
+                                    overwrite, env.engine(), format.value)
+    run = job.optimize(design, settings, progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg))
     if json_:
         emit_json(run.summary)
     else:

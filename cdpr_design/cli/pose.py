@@ -59,7 +59,7 @@ def pose(
     design = load_design(spec, cable_model)
     robot = resolve(design, Analysis(command="pose", kind=kind.value, objective=objective.value,
                                      weights=weights is not None))
-    if robot.orientation == "hanging":
+    if robot.orientation.free:
         coords = design.motion.position_coords
         position = parse_numbers(at, "--at", len(coords), f"numbers ({','.join(coords)}): effector.orientation "
                                  "is free, so the position alone is commanded and the orientation hangs")
@@ -72,7 +72,7 @@ def pose(
         result = evaluate_pose(robot, p, c)
         data = job.pose_data(design, result)
         stiffness = job.stiffness_data(design, p, result.tensions)
-        if robot.underconstrained and robot.cables == "ideal" and robot.outlets == "points":
+        if robot.underconstrained and robot.cables.rigid and not robot.outlets.pulleys:
             data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     data["objective"] = objective.value
     data.update(stiffness)
@@ -141,7 +141,7 @@ def fk(
     if any(v < 0 for v in L):
         raise InputError("--lengths: cable lengths must be non-negative")
     g = parse_pose(design, guess, "--guess") if guess is not None else None
-    if robot.cables != "ideal":
+    if not robot.cables.rigid:
         data = job.cable_fk_data(robot, L, g)  # --lengths are unstretched lengths
         if json_:
             emit_json(data)

@@ -112,10 +112,10 @@ def sweep(
     from cdpr_design.jobs import sweep as job
 
     design = load_design(spec)
-    run = job.sweep(design, vary, workers, scheduler, resume, rank_by, check_against, tolerance, abs_tolerance,
-                    strict, catalogue, trajectory, safety_factor, motor, step, top, not no_picture, out, overwrite,
-                    progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg), engine=env.engine(),
-                    format=format.value, max_variants=max_variants)
+    settings = job.SweepSettings(vary, workers, scheduler, resume, rank_by, check_against, tolerance, abs_tolerance,
+                                 strict, catalogue, trajectory, safety_factor, motor, step, top, not no_picture, out,
+                                 overwrite, env.engine(), format.value, max_variants)
+    run = job.sweep(design, settings, progress=bars(quiet or json_), log=lambda msg: info(quiet or json_, msg))
     if json_:
         emit_json(run.summary)
     else:

@@ -45,9 +45,9 @@ import numpy as np
 
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics import cables as cable_models
-from cdpr_design.statics.robot import Robot, robot_of, tension_lower
+from cdpr_design.statics.robot import Robot, tension_lower
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate_structure
+from cdpr_design.statics.degenerate import degenerate_structure
 from cdpr_design import workspaces as workspace
 from cdpr_design.workspaces import grid as wsg
 
@@ -128,21 +128,7 @@ def _structure_many(robot: Robot, positions: np.ndarray, Rb: np.ndarray):
     max(1 / l_f, |kappa_t|) with a pulley (:meth:`CablePaths.max_curvature`).
     """
     design = robot.design
-    if robot.outlets == "pulleys":
-        from cdpr_design.statics import pulley as pl
-
-        paths = pl.design_cable_paths(design, positions[:, None, :] + Rb[None, :, :])
-        L, free = paths.lengths, paths.free_lengths
-        u = paths.directions.copy()
-        u[~(paths.free_lengths > MIN_CABLE_LENGTH)] = 0.0
-        kappa = paths.max_curvature()
-    else:
-        vec = design.outlets[None, :, :] - positions[:, None, :] - Rb[None, :, :]
-        L = free = np.linalg.norm(vec, axis=2)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            u = vec / L[:, :, None]
-            kappa = 1.0 / L
-        u[L <= MIN_CABLE_LENGTH] = 0.0
+    L, free, u, kappa = robot.outlets.envelope_paths(design, positions, Rb[None, :, :])
     mom = np.cross(Rb[None, :, :], u)
     full = np.concatenate([u, mom], axis=2)  # (k, m, 6)
     W = np.transpose(full[:, :, list(design.motion.wrench_rows)], (0, 2, 1))
@@ -200,18 +186,15 @@ def _min_norm_general(W, wreq, tmin, tmax):
     return out
 
 
-def envelope_chunk(design: Design | Robot, positions: np.ndarray, orientation, A: float, V: float) -> dict:
-    """Per-pose worst cases for a chunk of positions (k, dim) [m] at a fixed orientation (rx, ry, rz) [rad].
-
-    ``design`` is resolved for ``size-motors`` unless it is already a :class:`Robot`
-    (:func:`~cdpr_design.statics.robot.robot_of`).
+def envelope_chunk(robot: Robot, positions: np.ndarray, orientation, A: float, V: float) -> dict:
+    """Per-pose worst cases of ``robot`` (resolved for ``size-motors``) for a chunk of positions
+    (k, dim) [m] at a fixed orientation (rx, ry, rz) [rad].
 
     A [m/s^2] and V [m/s] bound the platform's acceleration and speed.
     Returns a dict of (k, m) arrays: ``static``, ``peak``, ``low`` (least
     tension over the acceleration set) [N], ``accel`` (cable acceleration
     bound) [m/s^2], and a (k,) bool ``ok`` (W of full rank).
     """
-    robot = robot_of(design, "size-motors")
     design = robot.design
     k = positions.shape[0]
     d = design.motion.dim
@@ -221,7 +204,7 @@ def envelope_chunk(design: Design | Robot, positions: np.ndarray, orientation, A
     Rb = design.attachments @ R.T
     W, L, free, kappa = _structure_many(robot, pos3, Rb)
     sag_ok, offset = None, 0.0
-    if robot.cables == "sagging":
+    if not robot.cables.straight:
         sag_ok, Ws, t_eff, t_out = cable_models.sagging_structures(robot, pos3, orientation)
         W[sag_ok] = Ws[sag_ok]
         offset = np.where(sag_ok[:, None], np.nan_to_num(t_out - t_eff), 0.0)
@@ -284,15 +267,15 @@ def _redundant_chunk(design: Design, W, w0, M, A, lower):
     return static, peak, low, ok
 
 
-def task_envelope(design: Design | Robot, *, step: float | None = None, positions: np.ndarray | None = None,
+def task_envelope(robot: Robot, *, step: float | None = None, positions: np.ndarray | None = None,
                   chunk: int = 4096, progress: Callable[[int, int], None] | None = None,
                   engine: str = "auto") -> Envelope:
     """Worst-case tensions, cable speeds and accelerations over the task poses.
 
     Parameters
     ----------
-    design : Design or Robot
-        Resolved here for ``size-motors`` unless it is a :class:`Robot` already.
+    robot : Robot
+        The design resolved for ``size-motors`` (:func:`~cdpr_design.statics.robot.resolve`).
     step : float, optional
         Grid step [m] over the task box (default: ``workspace.grid.step``).
     positions : (k, dim) array, optional
@@ -305,7 +288,6 @@ def task_envelope(design: Design | Robot, *, step: float | None = None, position
     engine : {'auto', 'numba', 'numpy'}
         Engine of the workspace sweep used without a task box.
     """
-    robot = robot_of(design, "size-motors")
     design = robot.design
     req = design.requirements
     A = float(req.max_acceleration or 0.0)

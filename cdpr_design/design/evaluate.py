@@ -184,8 +184,13 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catal
                       tilt=False)
     stiffness = stiffness_asked(design, figures) and task_grid(design, step) is not None
     task, task_least = task_sweep(design, step, engine=engine, stiffness=stiffness)
-    sizing = sz.size_motors(design, catalogue, step=step, samples=samples, safety_factor=safety_factor,
-                            motor=motor, engine=engine) if need_sizing else None
+    sizing = None
+    if need_sizing:
+        from cdpr_design.statics.robot import Analysis, resolve
+
+        sz.check_options(design, catalogue, safety_factor, motor)  # the options first, then the robot
+        sizing = sz.size_motors(resolve(design, Analysis(command="size-motors")), catalogue, step=step,
+                                samples=samples, safety_factor=safety_factor, motor=motor, engine=engine)
     row = _workspace_figures(design, wres, task, task_least)
     if sizing is not None:
         row.update(_sizing_figures(sizing))

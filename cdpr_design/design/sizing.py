@@ -37,7 +37,7 @@ from cdpr_design.errors import InputError, quote
 from cdpr_design.io.tables import Table, rows_to_columns
 from cdpr_design.model.catalogue import Catalogue, Motor
 from cdpr_design.model.design import Cable, Design
-from cdpr_design.statics.robot import Robot, design_of
+from cdpr_design.statics.robot import Robot
 
 
 @dataclass
@@ -151,7 +151,7 @@ def _efficiency_given(design: Design, index: int) -> bool:
     return False
 
 
-def size_motors(design: Design | Robot, catalogue: Catalogue, *, step: float | None = None,
+def size_motors(robot: Robot, catalogue: Catalogue, *, step: float | None = None,
                 samples=None, safety_factor: float | None = None, motor: str | None = None,
                 envelope: Envelope | None = None,
                 progress: Callable[[int, int], None] | None = None, engine: str = "auto") -> SizingResult:
@@ -159,9 +159,8 @@ def size_motors(design: Design | Robot, catalogue: Catalogue, *, step: float | N
 
     Parameters
     ----------
-    design : Design or Robot
-        Resolved here for ``size-motors`` (:func:`~cdpr_design.statics.robot.robot_of`) unless it
-        is a :class:`~cdpr_design.statics.robot.Robot` already.
+    robot : Robot
+        The design resolved for ``size-motors`` (:func:`~cdpr_design.statics.robot.resolve`).
     catalogue : Catalogue
     step : float, optional
         Grid step [m] over the task box.
@@ -191,10 +190,9 @@ def size_motors(design: Design | Robot, catalogue: Catalogue, *, step: float | N
         A motor named by the spec or ``motor`` is not in the catalogue, or the
         safety factor is below 1.
     """
-    sf = check_options(design_of(design), catalogue, safety_factor, motor)  # the options first, then the robot
-    # the robot resolved once for the sizing (task_envelope resolves a design)
-    env = envelope if envelope is not None else task_envelope(design, step=step, progress=progress, engine=engine)
-    design = design_of(design)
+    design = robot.design
+    sf = check_options(design, catalogue, safety_factor, motor)
+    env = envelope if envelope is not None else task_envelope(robot, step=step, progress=progress, engine=engine)
     notes = []
     if samples is not None:
         cycle = trajectory_cycle(samples)

@@ -20,7 +20,7 @@ from cdpr_design.errors import STOP_SIGNALS, InputError
 from cdpr_design.io.files import OutputDir
 from cdpr_design.io.tables import fmt
 from cdpr_design.jobs.common import output_dir
-from cdpr_design.jobs.motion import require_trajectory, trajectory_samples
+from cdpr_design.jobs.motion import design_samples, require_trajectory
 from cdpr_design.jobs.tables import Timings
 
 
@@ -166,7 +166,7 @@ def bridge(design, test_plc: str | None = None, duration: float | None = None, c
     samples = plc_lengths = None
     if test_plc is not None:
         require_trajectory(design, test_plc, "--test-plc")
-        samples = trajectory_samples(design, test_plc)
+        samples = design_samples(design, test_plc)
         plc_lengths = _test_plc_setpoints(samples, test_plc)
         if duration is None:
             duration = samples.duration + 0.5
@@ -228,8 +228,8 @@ def _session(design, layout, samples, plc_lengths, test_plc, where, dt, timeout,
         log_file.write(",".join(csv_header(design)) + "\n")
         log(f"bridge running: {where.net_id}:{where.port} at {where.host}, cycle {dt * 1e3:.3g} ms"
             + (f", {duration:.3g} s" if duration else ", Ctrl-C to stop"))
-        res = br.run(transport, sim, cycle_time=dt, duration=duration, on_row=_row_logger(log_file, rows, timings),
-                     should_stop=lambda: stop["flag"], reconnect=reconnect, on_status=status)
+        res = br.run(transport, sim, br.Loop(dt, duration, reconnect=reconnect),
+                     on_row=_row_logger(log_file, rows, timings), should_stop=lambda: stop["flag"], on_status=status)
         if stop["flag"] and res.stopped == "stop":
             res.stopped = "interrupted"
     except KeyboardInterrupt:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import base64
 import hashlib
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -23,24 +24,44 @@ from cdpr_design.plots.worker import PictureWorker
 FILES = ("certify.png", "summary.json")
 
 
-def certify(design, out: str | Path | None = None, overwrite: bool = False, **options):
+@dataclass(frozen=True)
+class CertifySettings:
+    """The options of a ``certify`` run (docs/cli.md): the ``kind``, the finest box edge
+    ``resolution`` [m], the ``box`` (lower, upper) [m] paved, the ``min_margin`` [N] proven, the
+    ``max_boxes`` and ``time_limit`` [s] that stop the bisection
+    (:func:`cdpr_design.workspaces.certify.certify`), the table ``format`` (``csv`` or
+    ``parquet``), ``workers``, ``scheduler`` and ``resume`` (:func:`run_certify`)."""
+
+    kind: str = "static"
+    resolution: float | None = None
+    box: tuple | None = None
+    min_margin: float | None = None
+    max_boxes: int | None = None
+    time_limit: float | None = None
+    format: str = "csv"
+    workers: int | None = None
+    scheduler: str | None = None
+    resume: bool = False
+
+
+def certify(design, settings: CertifySettings, out: str | Path | None = None, overwrite: bool = False, *,
+            pictures: PictureWorker | None = None, progress: Progress | None = None,
+            log: Callable[[str], None] | None = None):
     """The ``certify`` command: :func:`run_certify` into the folder ``out`` (default
     ``out/<design name>/``; ``overwrite``: replace foreign files).  Returns (result, folder).
     The files are put in place together when all are written
     (:class:`~cdpr_design.io.files.OutputDir`): a failure leaves the folder's earlier files whole."""
     out_dir = output_dir(design, out, overwrite)
     with out_dir:
-        result = run_certify(design, out_dir, **options)
+        result = run_certify(design, out_dir, settings, pictures=pictures, progress=progress, log=log)
     return result, out_dir
 
 
-def run_certify(design, out: OutputDir, kind: str = "static", resolution: float | None = None, box=None,
-                min_margin: float | None = None, max_boxes: int | None = None, time_limit: float | None = None,
-                format: str = "csv", pictures: PictureWorker | None = None, progress: Progress | None = None,
-                timings: Timings | None = None, workers: int | None = None, scheduler: str | None = None,
-                resume: bool = False, log: Callable[[str], None] | None = None):
-    """Certify (:func:`cdpr_design.workspaces.certify.certify`, the options are its own), then
-    write the boxes, the picture and ``summary.json`` (with the ``timings``: ``load_s`` the
+def run_certify(design, out: OutputDir, settings: CertifySettings, pictures: PictureWorker | None = None,
+                progress: Progress | None = None, timings: Timings | None = None,
+                log: Callable[[str], None] | None = None):
+    """Certify (:func:`cdpr_design.workspaces.certify.certify` with the options of ``settings``),
+    then write the boxes, the picture and ``summary.json`` (with the ``timings``: ``load_s`` the
     kernels' load or compile, ``sweep_s`` the branch-and-prune).
 
     ``workers`` processes (None or 1: in this process, the kernels on every core) or the Dask
@@ -54,6 +75,9 @@ def run_certify(design, out: OutputDir, kind: str = "static", resolution: float 
     from cdpr_design.workspaces import certify as cert
 
     timings = timings or Timings()
+    kind, resolution, box, min_margin = settings.kind, settings.resolution, settings.box, settings.min_margin
+    max_boxes, time_limit, format = settings.max_boxes, settings.time_limit, settings.format
+    workers, scheduler, resume = settings.workers, settings.scheduler, settings.resume
     robot = cert.check_certifiable(design, kind)
     if scheduler:
         batch.check_scheduler(scheduler)
@@ -71,7 +95,7 @@ def run_certify(design, out: OutputDir, kind: str = "static", resolution: float 
         cert.warm_up(robot)
     try:
         with timings.phase("sweep_s"), stage(progress, f"certify {design.name}") as cb:
-            result = cert.certify(robot, kind, resolution, box, min_margin, time_limit=time_limit,
+            result = cert.certify(robot, resolution, box, min_margin, time_limit=time_limit,
                                   progress=None if cb is None else (lambda done, todo: cb(done, done + todo)),
                                   classifier=classifier, replay=[decode(r) for r in kept],
                                   on_level=lambda k, st: lazy.append(level_record(k, st)), **limits)
@@ -102,7 +126,7 @@ def fingerprint(robot, kind: str, resolution, box, min_margin) -> str:
     own paving."""
     from cdpr_design import __version__
 
-    blob = json.dumps({"spec": robot.design.raw, "cable_model": robot.cables, "kind": kind,
+    blob = json.dumps({"spec": robot.design.raw, "cable_model": robot.cables.name, "kind": kind,
                        "resolution": resolution, "box": box, "min_margin": min_margin, "version": __version__},
                       sort_keys=True, default=repr)
     return hashlib.sha256(blob.encode()).hexdigest()[:20]
@@ -162,7 +186,7 @@ def certify_task(design, kind: str = "static", resolution: float | None = None, 
     res = resolution if resolution is not None else max(max(b - a for a, b in zip(lo, hi)) / TASK_DIVISIONS, 1e-6)
     mu = design.requirements.min_margin
     mu = mu if mu is not None and mu > 0 else None
-    r = cert.certify(design, kind, res, (lo, hi), mu, max_boxes=max_boxes)
+    r = cert.certify(cert.check_certifiable(design, kind), res, (lo, hi), mu, max_boxes=max_boxes)
     counts = r.counts()
     row = {"requirement": "certified", "figure": f"{100 * r.measure(1) / max(r.summary()['box_measure'], 1e-300):.4g} % "
            f"proven ({counts['inside']} inside, {counts['boundary']} boundary, {counts['outside']} outside)",

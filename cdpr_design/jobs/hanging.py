@@ -45,24 +45,22 @@ def _equilibrium_data(design, e) -> dict:
             "slack": [design.cable_names[i] for i in e.slack], "energy": float(e.energy), "stable": bool(e.stable)}
 
 
-def fk_data(design, lengths, guess=None) -> dict:
+def fk_data(robot, lengths, guess=None) -> dict:
     """The ``fk --json`` object: where the effector rests for cable ``lengths`` [m].
 
     ``guess`` (motion coordinates) adds its orientation as a start of the
     search (rotational motions).  Designs with swivel pulleys take the
     kinematic solve (:func:`cdpr_design.statics.kinematics.forward_kinematics`):
-    the geometrico-static solver models point outlets.  ``design``: a Design, or the
-    :class:`~cdpr_design.statics.robot.Robot` the command resolved.
+    the geometrico-static solver models point outlets.  ``robot``: the
+    :class:`~cdpr_design.statics.robot.Robot` the command resolved for ``fk``.
     """
     from cdpr_design.statics import hanging as H
     from cdpr_design.statics import kinematics as kin
     from cdpr_design.statics.reach import require_reached
-    from cdpr_design.statics.robot import robot_of
 
-    robot = robot_of(design, "fk")
     design = robot.design
     rho = np.asarray(lengths, float)
-    if robot.outlets == "pulleys":
+    if robot.outlets.pulleys:
         res = kin.forward_kinematics(design, rho, guess=guess)
         require_reached(res.residual, rho)  # lengths no pose has: exit 2 with the residual, never a pose
         return {"pose": [float(v) for v in res.pose], "residual": float(res.residual),

@@ -75,16 +75,14 @@ def _bare_poses(p: Path, text: str, coords, pos, what: str) -> np.ndarray:
     return arr
 
 
-def sample_named(design, name: str, cycle_time: float | None = None, hold_end: float = 0.0,
+def sample_named(robot, name: str, cycle_time: float | None = None, hold_end: float = 0.0,
                  option: str = "NAME"):
-    """Sample spec trajectory ``name`` (reading a csv path's poses) every ``cycle_time`` [s],
-    holding the last set-point ``hold_end`` [s]; bad names, cycles and files are :class:`InputError`.
-    ``design``: a Design, or the :class:`~cdpr_design.statics.robot.Robot` the command resolved."""
+    """Sample spec trajectory ``name`` of the :class:`~cdpr_design.statics.robot.Robot` the command
+    resolved (reading a csv path's poses) every ``cycle_time`` [s], holding the last set-point
+    ``hold_end`` [s]; bad names, cycles and files are :class:`InputError`."""
     from cdpr_design.motion import trajectory as tr
-    from cdpr_design.statics.robot import design_of
 
-    given, design = design, design_of(design)
-
+    design = robot.design
     traj = require_trajectory(design, name, option)
     if cycle_time is not None and not (math.isfinite(cycle_time) and 1e-5 <= cycle_time <= 1.0):
         raise InputError(f"--cycle-time: expected 1e-5 to 1 s, got {cycle_time}")
@@ -95,7 +93,7 @@ def sample_named(design, name: str, cycle_time: float | None = None, hold_end: f
             p = Path(design.source).resolve().parent / p
         poses = read_poses(p, design, f"trajectories.{name}.file")
     try:
-        return tr.sample(given, name, cycle_time, csv_poses=poses, hold_end=hold_end)
+        return tr.sample(robot, name, cycle_time, csv_poses=poses, hold_end=hold_end)
     except (KeyError, ValueError) as exc:
         raise InputError(f"trajectories.{name}: {exc}") from None
 
@@ -108,9 +106,19 @@ def motion_robot(design):
     return resolve(design, Analysis(command="motion"))
 
 
-def trajectory_samples(design, name: str | None):
-    """The spec trajectory ``name`` sampled at its own cycle (None: no trajectory), for ``--trajectory``."""
-    return None if name is None else sample_named(design, name, option="--trajectory")
+def trajectory_samples(robot, name: str | None):
+    """The spec trajectory ``name`` of the command's resolved robot sampled at its own cycle (None:
+    no trajectory), for ``--trajectory``."""
+    return None if name is None else sample_named(robot, name, option="--trajectory")
+
+
+def design_samples(design, name: str | None):
+    """:func:`trajectory_samples` of ``design`` resolved for ``motion`` (:func:`motion_robot`) when
+    a trajectory is named: the name is checked first (``--trajectory``), then the design's refusals."""
+    if name is None:
+        return None
+    require_trajectory(design, name, "--trajectory")
+    return trajectory_samples(motion_robot(design), name)
 
 
 def path_map(design, engine: str = "auto"):

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, NamedTuple, Sequence
 
@@ -118,43 +119,67 @@ def _summary(design, problem, stats, rows, best, front, importances, out_dir) ->
     }
 
 
-def optimize(design, vary: Sequence[str], maximize: Sequence[str] | None = None,
-             minimize: Sequence[str] | None = None, require: Sequence[str] | None = None, trials: int = 100,
-             workers: int | None = None, seed: int | None = None, timeout: float | None = None,
-             resume: bool = False, catalogue: Path | None = None, trajectory: str | None = None,
-             safety_factor: float | None = None, motor: str | None = None, step: float | None = None,
-             picture: bool = True, out: str | Path | None = None, overwrite: bool = False,
-             progress: Progress | None = None, log: Callable[[str], None] | None = None,
-             engine: str = "auto", format: str = "csv") -> OptimizeRun:
-    """The ``optimize`` command: search ``vary`` (KEY=LO:HI[:log] / KEY=a,b,c) for the objectives
-    ``maximize`` / ``minimize`` under the spec's requirements and ``require`` (FIGURE>=X / FIGURE<=X),
-    ``trials`` trials in ``workers`` processes (``resume`` continues the study in ``out``; ``timeout`` [s]
-    stops starting trials), then write optimize.csv, pareto.csv (``format='parquet'``: ``.parquet``),
-    best.yaml and optimize.png.  ``step`` [m]: grid step of the evaluations; ``log`` receives messages.
-    The summary's ``timings``: ``sweep_s`` the search, ``write_s`` the files, ``pictures_s`` optimize.png."""
+@dataclass(frozen=True)
+class OptimizeSettings:
+    """The options of an ``optimize`` run (docs/cli.md): search ``vary`` (KEY=LO:HI[:log] /
+    KEY=a,b,c) for the objectives ``maximize`` / ``minimize`` under the spec's requirements and
+    ``require`` (FIGURE>=X / FIGURE<=X); ``trials`` trials in ``workers`` processes from ``seed``
+    (``resume`` continues the study in ``out``; ``timeout`` [s] stops starting trials); each trial
+    evaluated with ``catalogue``, ``trajectory``, ``safety_factor``, ``motor``, grid ``step`` [m]
+    and ``engine``; ``picture`` optimize.png drawn, tables in ``format`` (``csv`` or ``parquet``)
+    in ``out`` (``overwrite`` foreign files)."""
+
+    vary: Sequence[str]
+    maximize: Sequence[str] | None = None
+    minimize: Sequence[str] | None = None
+    require: Sequence[str] | None = None
+    trials: int = 100
+    workers: int | None = None
+    seed: int | None = None
+    timeout: float | None = None
+    resume: bool = False
+    catalogue: Path | None = None
+    trajectory: str | None = None
+    safety_factor: float | None = None
+    motor: str | None = None
+    step: float | None = None
+    picture: bool = True
+    out: str | Path | None = None
+    overwrite: bool = False
+    engine: str = "auto"
+    format: str = "csv"
+
+
+def optimize(design, settings: OptimizeSettings, progress: Progress | None = None,
+             log: Callable[[str], None] | None = None) -> OptimizeRun:
+    """The ``optimize`` command: the search of ``settings`` (:class:`OptimizeSettings`), then
+    optimize.csv, pareto.csv (``format='parquet'``: ``.parquet``), best.yaml and optimize.png
+    written; ``log`` receives messages.  The summary's ``timings``: ``sweep_s`` the search,
+    ``write_s`` the files, ``pictures_s`` optimize.png."""
     from cdpr_design import batch
     from cdpr_design import optimize as opt
     from cdpr_design.model import spec
 
+    o = settings
     timings = Timings()
-    check_format(format)
-    if trajectory is not None and require_trajectory(design, trajectory, "--trajectory").type == "csv":
-        raise InputError(f"--trajectory {trajectory}: a csv trajectory cannot follow the varied design; "
+    check_format(o.format)
+    if o.trajectory is not None and require_trajectory(design, o.trajectory, "--trajectory").type == "csv":
+        raise InputError(f"--trajectory {o.trajectory}: a csv trajectory cannot follow the varied design; "
                          "use a square, polyline or circle path")
-    options = batch.Options(step=step, safety_factor=safety_factor, motor=motor, trajectory=trajectory,
-                            catalogue=spec.load_catalogue(catalogue), engine=engine)
-    problem = opt.make_problem(design, vary, maximize, minimize, require, options)
-    workers = _check_options(trials, workers, seed, timeout, step)
-    out_dir = output_dir(design, out, overwrite)
-    for name in (file_name("optimize", format), file_name("pareto", format), *OUTPUTS, opt.DB):
+    options = batch.Options(step=o.step, safety_factor=o.safety_factor, motor=o.motor, trajectory=o.trajectory,
+                            catalogue=spec.load_catalogue(o.catalogue), engine=o.engine)
+    problem = opt.make_problem(design, o.vary, o.maximize, o.minimize, o.require, options)
+    workers = _check_options(o.trials, o.workers, o.seed, o.timeout, o.step)
+    out_dir = output_dir(design, o.out, o.overwrite)
+    for name in (file_name("optimize", o.format), file_name("pareto", o.format), *OUTPUTS, opt.DB):
         out_dir.target(name)  # refuse foreign files before any work
-    opt.study.check_file(out_dir.path, resume)  # and an optimize.db that is no study to continue (kept)
+    opt.study.check_file(out_dir.path, o.resume)  # and an optimize.db that is no study to continue (kept)
     out_dir.wrote(opt.DB)
     with timings.phase("sweep_s"):
         with stage(progress, f"optimize {design.name}") as cb:
             try:
-                stats = opt.run(problem, out_dir.path, trials, workers=workers, seed=seed, timeout=timeout,
-                                resume=resume, progress=cb, log=log)
+                stats = opt.run(problem, out_dir.path, o.trials, workers=workers, seed=o.seed, timeout=o.timeout,
+                                resume=o.resume, progress=cb, log=log)
             except WriteError:
                 if not (out_dir.path / opt.DB).exists():  # a new study that could not be written: removed
                     with contextlib.suppress(InputError):
@@ -165,7 +190,7 @@ def optimize(design, vary: Sequence[str], maximize: Sequence[str] | None = None,
         front = opt.pareto(problem, rows) if len(problem.objectives) > 1 else []
         best = opt.best(problem, rows)
         importances = opt.importances(study, problem)
-    write_outputs(out_dir, design, problem, rows, best, front, importances, picture, format, timings)
+    write_outputs(out_dir, design, problem, rows, best, front, importances, o.picture, o.format, timings)
     summary = _summary(design, problem, stats, rows, best, front, importances, out_dir)
     summary["timings"] = timings.as_dict()
     return OptimizeRun(summary, problem, stats, rows, best, front, out_dir)

@@ -34,20 +34,18 @@ def cable_model_data(design, result) -> dict:
             "cable_status": st.status}
 
 
-def cable_fk_data(design, unstretched, guess=None) -> dict:
-    """The ``fk --json`` object with elastic or sagging cables (``unstretched`` lengths [m]);
-    ``design``: a Design, or the :class:`~cdpr_design.statics.robot.Robot` the command resolved."""
+def cable_fk_data(robot, unstretched, guess=None) -> dict:
+    """The ``fk --json`` object with elastic or sagging cables (``unstretched`` lengths [m]) of the
+    :class:`~cdpr_design.statics.robot.Robot` the command resolved for ``fk``."""
     from cdpr_design.statics.cable_fk import forward
-    from cdpr_design.statics.robot import robot_of
 
-    robot = robot_of(design, "fk")
     design = robot.design
     res = forward(robot, unstretched, guess)
     names = design.cable_names
     free = {} if res.tilt is None else {"orientation": res.orientation, "tilt": res.tilt,
                                         "effector_orientation": design.effector.orientation}
     return {"pose": [float(v) for v in res.pose], "residual": res.length_residual, "method": res.method,
-            "cable_model": robot.cables, "force_residual": res.force_residual,
+            "cable_model": robot.cables.name, "force_residual": res.force_residual,
             "tensions": {c: float(v) for c, v in zip(names, res.tensions)},
             "outlet_tensions": {c: float(v) for c, v in zip(names, res.outlet_tensions)},
             "slack": res.slack,

@@ -9,7 +9,7 @@ from cdpr_design.io.columns import file_name
 from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
 from cdpr_design.jobs.tables import Timings, write_table
-from cdpr_design.jobs.motion import trajectory_samples
+from cdpr_design.jobs.motion import design_samples, trajectory_samples
 from cdpr_design.jobs.workspace import finish_workspace, start_workspace
 from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
@@ -48,11 +48,11 @@ def size_motors(design, catalogue: Path | None = None, trajectory: str | None = 
     (``format='parquet'``: ``.parquet``) into ``out``."""
     from cdpr_design.design import sizing as sz
     from cdpr_design.model import spec
-    from cdpr_design.statics.robot import robot_of
+    from cdpr_design.statics.robot import Analysis, resolve
 
     timings = Timings()
     cat = spec.load_catalogue(catalogue)
-    robot = robot_of(design, "size-motors")  # once: the trajectory's samples and the sizing take it
+    robot = resolve(design, Analysis(command="size-motors"))  # once: the trajectory's samples and the sizing take it
     samples = trajectory_samples(robot, trajectory)
     out_dir = output_dir(design, out, overwrite)
     out_dir.target(file_name("motor_sizing", format))  # a foreign file: refused before any work
@@ -73,7 +73,7 @@ def evaluate(design, catalogue, trajectory=None, safety_factor: float | None = N
     from cdpr_design.design import evaluate as ev
 
     samples = trajectory if trajectory is None or not isinstance(trajectory, str) else \
-        trajectory_samples(design, trajectory)
+        design_samples(design, trajectory)
     with stage(progress, f"evaluate {design.name}") as cb:
         return ev.evaluate_full(design, step=step, catalogue=catalogue, samples=samples,
                                 safety_factor=safety_factor, motor=motor,
@@ -121,7 +121,7 @@ def report(design, catalogue: Path | None = None, trajectory: str | None = None,
     timings = Timings()
     # every option checked before the first file is written (the workspace's)
     cat = spec.load_catalogue(catalogue)
-    samples = trajectory_samples(design, trajectory)  # an unknown name: --trajectory, before any work
+    samples = design_samples(design, trajectory)  # an unknown name: --trajectory, before any work
     sz.check_options(design, cat, safety_factor, motor)
     if step is not None:
         check_step(step, "--step")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, NamedTuple, Sequence
 
@@ -157,62 +158,88 @@ def _run_journalled(design, plan, options, out_dir, workers, scheduler, resume, 
     return stats, records
 
 
-def sweep(design, vary: Sequence[str] | None = None, workers: int | None = None, scheduler: str | None = None,
-          resume: bool = False, rank_by: str | None = None, check_against: Path | None = None,
-          tolerance: float = 1e-6, abs_tolerance: float = 1e-9, strict: bool = False,
-          catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
-          motor: str | None = None, step: float | None = None, top: int = 10, picture: bool = True,
-          out: str | Path | None = None, overwrite: bool = False, progress: Progress | None = None,
-          log: Callable[[str], None] | None = None, engine: str = "auto", format: str = "csv",
-          max_variants: int | None = None) -> SweepRun:
-    """The ``sweep`` command: evaluate every variant (``vary``: KEY=VALUES items, default the
-    spec's sweep.vary), journalled in ``out`` (``resume`` continues it), then write sweep.csv,
-    sweep_best.csv and sweep.png and compare with the baseline ``check_against``.
-    ``step`` [m]; ``log`` receives messages (resuming); ``engine``: of every variant's grid sweeps;
-    ``format``: ``csv`` or ``parquet`` tables; ``max_variants``: the most variants run (default
-    :data:`cdpr_design.batch.variants.MAX_VARIANTS`)."""
+@dataclass(frozen=True)
+class SweepSettings:
+    """The options of a ``sweep`` run (docs/cli.md): ``vary`` KEY=VALUES items (default the spec's
+    ``sweep.vary``), ``workers`` processes or a Dask ``scheduler``, ``resume`` the journal in ``out``,
+    ``rank_by`` a figure, the baseline ``check_against`` compared within ``tolerance`` (relative)
+    plus ``abs_tolerance``, ``strict`` improvements fail too; every variant evaluated with
+    ``catalogue``, ``trajectory``, ``safety_factor``, ``motor``, grid ``step`` [m] and ``engine``;
+    ``top`` best variants listed, ``picture`` sweep.png drawn, tables in ``format`` (``csv`` or
+    ``parquet``) in ``out`` (``overwrite`` foreign files); ``max_variants`` the most variants run
+    (default :data:`cdpr_design.batch.variants.MAX_VARIANTS`)."""
+
+    vary: Sequence[str] | None = None
+    workers: int | None = None
+    scheduler: str | None = None
+    resume: bool = False
+    rank_by: str | None = None
+    check_against: Path | None = None
+    tolerance: float = 1e-6
+    abs_tolerance: float = 1e-9
+    strict: bool = False
+    catalogue: Path | None = None
+    trajectory: str | None = None
+    safety_factor: float | None = None
+    motor: str | None = None
+    step: float | None = None
+    top: int = 10
+    picture: bool = True
+    out: str | Path | None = None
+    overwrite: bool = False
+    engine: str = "auto"
+    format: str = "csv"
+    max_variants: int | None = None
+
+
+def sweep(design, settings: SweepSettings, progress: Progress | None = None,
+          log: Callable[[str], None] | None = None) -> SweepRun:
+    """The ``sweep`` command: evaluate every variant of ``settings`` (:class:`SweepSettings`),
+    journalled in its ``out`` (``resume`` continues it), then write sweep.csv, sweep_best.csv and
+    sweep.png and compare with the baseline ``check_against``; ``log`` receives messages (resuming)."""
     from cdpr_design import batch as sw
     from cdpr_design.model import spec
 
+    o = settings
     section = design.sweep or {}
-    plan = sw.make_plan(design, [sw.parse_vary(v) for v in vary] if vary else sw.vary_from_spec(section),
-                        max_variants=max_variants or sw.MAX_VARIANTS)
-    rank_name, descending = sw.parse_rank(rank_by or section.get("rank_by"))
-    workers = _check_options(design, workers, step, tolerance, abs_tolerance, trajectory)
-    if scheduler:
-        sw.check_scheduler(scheduler)
-    baseline = _read_baseline(check_against, plan)
-    cat = spec.load_catalogue(catalogue)
-    _check_motor(design, cat, safety_factor, motor)
-    options = sw.Options(step=step, safety_factor=safety_factor, motor=motor, trajectory=trajectory,
-                         catalogue=cat, engine=engine)
+    plan = sw.make_plan(design, [sw.parse_vary(v) for v in o.vary] if o.vary else sw.vary_from_spec(section),
+                        max_variants=o.max_variants or sw.MAX_VARIANTS)
+    rank_name, descending = sw.parse_rank(o.rank_by or section.get("rank_by"))
+    workers = _check_options(design, o.workers, o.step, o.tolerance, o.abs_tolerance, o.trajectory)
+    if o.scheduler:
+        sw.check_scheduler(o.scheduler)
+    baseline = _read_baseline(o.check_against, plan)
+    cat = spec.load_catalogue(o.catalogue)
+    _check_motor(design, cat, o.safety_factor, o.motor)
+    options = sw.Options(step=o.step, safety_factor=o.safety_factor, motor=o.motor, trajectory=o.trajectory,
+                         catalogue=cat, engine=o.engine)
     timings = Timings()
-    out_dir = output_dir(design, out, overwrite)
-    for name in (file_name("sweep", format), file_name("sweep_best", format), "sweep.png", SweepJournal.NAME):
+    out_dir = output_dir(design, o.out, o.overwrite)
+    for name in (file_name("sweep", o.format), file_name("sweep_best", o.format), "sweep.png", SweepJournal.NAME):
         out_dir.target(name)  # refuse foreign files before any work
     with timings.phase("sweep_s"):
-        stats, records = _run_journalled(design, plan, options, out_dir, workers, scheduler, resume,
+        stats, records = _run_journalled(design, plan, options, out_dir, workers, o.scheduler, o.resume,
                                          log or (lambda msg: None), progress)
         header, rows = sw.table(plan, records)
         bh, brows = sw.best(header, rows, rank_name, descending)
     write_sweep(out_dir, header, rows, bh, brows, plan.keys,
-                title=f"{design.name}: sweep of {', '.join(plan.keys)}", rank_by=rank_name, picture=picture,
-                format=format, design=design, timings=timings)
+                title=f"{design.name}: sweep of {', '.join(plan.keys)}", rank_by=rank_name, picture=o.picture,
+                format=o.format, design=design, timings=timings)
     regressions, improvements = [], []
     if baseline is not None:
         regressions, improvements = sw.compare(header, text_rows(rows), baseline[0], baseline[1], plan.keys,
-                                               tolerance, abs_tolerance, strict, str(check_against))
+                                               o.tolerance, o.abs_tolerance, o.strict, str(o.check_against))
     failed = [r for r in rows if r[header.index("error")]]
     summary = {
         "name": design.name, "keys": plan.keys, "variants": len(plan), "evaluated": stats.evaluated,
         "resumed": stats.skipped, "errors": len(failed), "passed": len(brows),
-        "rank_by": rank_name, "best": [dict(zip(bh, r)) for r in brows[:top]],
+        "rank_by": rank_name, "best": [dict(zip(bh, r)) for r in brows[:o.top]],
         "backend": stats.backend, "workers": stats.workers, "chunk": stats.chunk,
         "elapsed_s": stats.elapsed_s, "files": str(out_dir.path),
     }
     summary["timings"] = timings.as_dict()
     if baseline is not None:
-        summary["baseline"] = str(check_against)
+        summary["baseline"] = str(o.check_against)
         summary["regressions"] = [d.as_dict() for d in regressions]
         summary["improvements"] = [d.as_dict() for d in improvements]
     return SweepRun(summary, plan, stats, header, rows, bh, brows, failed, rank_name, descending,

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cdpr_design.model.design import Design
 from cdpr_design.statics.robot import Robot
 
 
@@ -141,7 +140,7 @@ def cable_setpoints(samples, compensate_stretch: bool = True):
     return sp, samples.cable_speed, cs
 
 
-def simulate(design: Design | Robot, samples, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
+def simulate(robot: Robot, samples, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
              delay: float = 0.0, cable_damping: float = 0.7, joint_damping: float = 0.05,
              feedforward: bool = True, compensate_stretch: bool = True, settle: float = 3.0,
              progress=None, cable_segments: int | None = None) -> SimulationResult:
@@ -158,9 +157,8 @@ def simulate(design: Design | Robot, samples, *, timestep: float = 5e-4, servo_b
 
     Parameters
     ----------
-    design : Design or Robot
-        Resolved for ``motion`` by the :class:`~cdpr_design.motion.simulation.Simulator` unless it
-        is a :class:`~cdpr_design.statics.robot.Robot` already.
+    robot : Robot
+        The design resolved for ``motion`` (:func:`~cdpr_design.statics.robot.resolve`).
     samples : trajectory.Samples
     progress : callable, optional
         Called as ``progress(done, total)`` every few hundred samples.
@@ -172,7 +170,7 @@ def simulate(design: Design | Robot, samples, *, timestep: float = 5e-4, servo_b
     from cdpr_design.motion.simulation import DEFAULT_CABLE_SEGMENTS, Simulator
 
     sp, vel, cs = cable_setpoints(samples, compensate_stretch)
-    sim = Simulator(design, timestep=timestep, servo_bandwidth=servo_bandwidth, delay=delay,
+    sim = Simulator(robot, timestep=timestep, servo_bandwidth=servo_bandwidth, delay=delay,
                     cable_damping=cable_damping, joint_damping=joint_damping,
                     feedforward=feedforward, compensate_stretch=compensate_stretch,
                     cable_segments=cable_segments or DEFAULT_CABLE_SEGMENTS)

@@ -24,9 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cdpr_design.model.design import Design
 from cdpr_design.statics import cables
-from cdpr_design.statics.robot import Robot, robot_of
+from cdpr_design.statics.robot import Robot
 
 
 @dataclass(frozen=True)
@@ -90,28 +89,26 @@ class CableSamples:
                 "unsolved_samples": int(np.count_nonzero(~self.solved))}
 
 
-def cable_samples(design: Design | Robot, positions, Rb, wreq, lengths, tensions, feasible):
-    """The design's cable model along a path: (CableSamples, tensions (k, m) [N], feasible (k,)).
+def cable_samples(robot: Robot, positions, Rb, wreq, lengths, tensions, feasible):
+    """The cable model of ``robot`` (resolved for ``motion``) along a path: (CableSamples, tensions (k, m) [N], feasible (k,)).
 
     ``positions`` (k, 3) [m], ``Rb`` (k, m, 3) rotated attachments [m],
     ``wreq`` (k, n) the wrench the cables exert [N, N m], ``lengths`` (k, m)
     chords [m], ``tensions`` and ``feasible`` the straight model's.  Elastic
     cables keep the straight tensions (a pushing cable has no length: NaN);
     sagging cables replace them by the catenaries' effector-end tensions and
-    the feasibility by the whole-cable bounds.  None for ideal designs.  ``design`` is resolved
-    for ``motion`` unless it is a :class:`~cdpr_design.statics.robot.Robot` already (its
-    ``cables``: the heaviest of the cables' models).
+    the feasibility by the whole-cable bounds.  None for ideal designs (``robot.cables``: the
+    heaviest of the cables' models).
     """
-    robot = robot_of(design, "motion")
     model = robot.cables
-    if model == "ideal":
+    if model.rigid:
         return None, tensions, feasible
-    if model == "elastic":
+    if model.stretches:
         t = np.where(tensions >= 0.0, tensions, np.nan)
         L0 = cables.elastic_unstretched(lengths, t, robot.cable.EA)
         sag = np.where(np.isfinite(t), 0.0, np.nan)
-        return CableSamples(model, L0, lengths - L0, t, sag), tensions, feasible
+        return CableSamples(model.name, L0, lengths - L0, t, sag), tensions, feasible
     s = cables.sagging_samples(robot, positions, Rb, wreq)
-    res = CableSamples(model, s.unstretched_lengths, lengths - s.unstretched_lengths, s.outlet_tensions, s.sag,
+    res = CableSamples(model.name, s.unstretched_lengths, lengths - s.unstretched_lengths, s.outlet_tensions, s.sag,
                        s.status.astype(np.int64))
     return res, s.tensions, s.feasible

@@ -51,7 +51,7 @@ cable lengths from outlet to attachment (with a pulley: arc + free segment);
 
 Typical use (the PLC bridge does the same, one cycle at a time)::
 
-    sim = Simulator(design, delay=0.13)
+    sim = Simulator(resolve(design, Analysis(command="motion")), delay=0.13)
     sim.reset([0.65, 0.75])                  # at rest, settled under gravity
     for k in range(n):
         s = sim.advance(setpoint_lengths[k], 0.001)   # -> SimState
@@ -74,12 +74,11 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from cdpr_design.model.design import Design
 from cdpr_design.motion.mjcf import Chains, build_xml, massive_cables
 from cdpr_design.statics import cables as cm
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import pulley as pl
-from cdpr_design.statics.robot import Robot, design_of, robot_of
+from cdpr_design.statics.robot import Robot
 
 #: Segments of each massive cable (``cable_segments``): the chain's end forces
 #: differ from the catenary's by O((L/N)^2) (tests/test_simulation_cables.py).
@@ -148,9 +147,8 @@ class Simulator:
 
     Parameters
     ----------
-    design : Design or Robot
-        Resolved here for ``motion`` (:func:`~cdpr_design.statics.robot.robot_of`) unless it is a
-        :class:`~cdpr_design.statics.robot.Robot` already.
+    robot : Robot
+        The design resolved for ``motion`` (:func:`~cdpr_design.statics.robot.resolve`).
     timestep : float
         Physics step [s] (default 0.5 ms; keep sqrt(sum k_i / m) * timestep well
         below 1).
@@ -178,7 +176,7 @@ class Simulator:
         Segments of each massive (``sagging``) cable, >= 2.
     """
 
-    def __init__(self, design: Design | Robot, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
+    def __init__(self, robot: Robot, *, timestep: float = 5e-4, servo_bandwidth: float = 300.0,
                  delay: float = 0.0, cable_damping: float = 0.7, joint_damping: float = 0.05,
                  feedforward: bool = True, compensate_stretch: bool = True,
                  axial_stiffness: float | None = None, cable_segments: int = DEFAULT_CABLE_SEGMENTS):
@@ -188,11 +186,11 @@ class Simulator:
             raise ValueError(f"delay must be >= 0, got {delay}")
         if not servo_bandwidth > 0:
             raise ValueError(f"servo_bandwidth must be > 0, got {servo_bandwidth}")
-        massive = massive_cables(design_of(design))
+        massive = massive_cables(robot.design)
         if massive and not (int(cable_segments) == cable_segments and cable_segments >= 2):
             raise ValueError(f"cable_segments must be an integer >= 2, got {cable_segments}")
         #: the design resolved for ``motion`` (refused where the catenaries cannot start)
-        self.robot = robot_of(design, "motion")
+        self.robot = robot
         self.design = design = self.robot.design
         self.timestep = float(timestep)
         self.servo_bandwidth = float(servo_bandwidth)
@@ -235,7 +233,7 @@ class Simulator:
         # swivel pulleys: tangent exit points (mocap sites) and wrapped arc lengths r beta
         self._arc = np.zeros(self.m)
         self._pulley = None
-        if self.robot.outlets == "pulleys":
+        if self.robot.outlets.pulleys:
             A, axes, radii = pl.design_pulleys(design)
             idx = np.flatnonzero(radii > 0)
             names = [design.cables[i].name for i in idx]
@@ -336,7 +334,7 @@ class Simulator:
     def _hold_lengths(self, pose) -> np.ndarray:
         """Axis positions [m] holding a pose: chords, or the cable model's unstretched lengths."""
         L = kin.inverse_kinematics(self.design, pose)
-        if self.robot.cables == "ideal":
+        if self.robot.cables.rigid:
             return L
         from cdpr_design.statics.robot import Analysis, resolve
         from cdpr_design.workspaces.pose import evaluate_pose

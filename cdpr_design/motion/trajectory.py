@@ -39,9 +39,8 @@ from cdpr_design.model.design import Design, Trajectory
 from cdpr_design.motion import paths, setpoints
 from cdpr_design.motion.profile import MAX_SAMPLES, too_many_samples
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics import pulley as pl
-from cdpr_design.statics.degenerate import MIN_CABLE_LENGTH, degenerate, directions
-from cdpr_design.statics.robot import Robot, design_of, robot_of, tension_lower
+from cdpr_design.statics.degenerate import degenerate
+from cdpr_design.statics.robot import Robot, tension_lower
 
 DEFAULT_CYCLE_TIME = 1e-3
 """Default sample period [s]: one PLC cycle."""
@@ -320,18 +319,17 @@ def motor_angles(design: Design, lengths) -> np.ndarray:
     return (lengths - L0[None, :]) / r[None, :] * gr[None, :]
 
 
-def sample(design: Design | Robot, trajectory: str | Trajectory, cycle_time: float | None = None, *,
+def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None = None, *,
            csv_poses=None, hold_start: float = 0.0, hold_end: float = 0.0,
            external=None) -> Samples:
-    """Sample a trajectory of the design at a fixed cycle time.
+    """Sample a trajectory of the robot's design at a fixed cycle time.
 
     Parameters
     ----------
-    design : Design or Robot
-        Resolved here for ``motion`` (:func:`~cdpr_design.statics.robot.robot_of`; a refused
-        combination raises an InputError, a ValueError) unless it is a :class:`Robot` already.
+    robot : Robot
+        The design resolved for ``motion`` (:func:`~cdpr_design.statics.robot.resolve`).
     trajectory : str or Trajectory
-        A name of ``design.trajectories`` or a Trajectory object.
+        A name of the design's ``trajectories`` or a Trajectory object.
     cycle_time : float, optional
         Sample period [s]; default: the trajectory's ``cycle_time``, else 1 ms.
     csv_poses : (q, dim or ncoords) array, optional
@@ -353,7 +351,7 @@ def sample(design: Design | Robot, trajectory: str | Trajectory, cycle_time: flo
     ValueError
         A csv path without its poses, or bad poses.
     """
-    given, design = design, design_of(design)
+    design = robot.design
     traj = _lookup(design, trajectory)
     dt = float(cycle_time or traj.cycle_time or DEFAULT_CYCLE_TIME)
     if not dt > 0:
@@ -361,7 +359,6 @@ def sample(design: Design | Robot, trajectory: str | Trajectory, cycle_time: flo
     blocks = _path_blocks(design, traj, dt, csv_poses, hold_start, hold_end)
     pose, vel, acc, seg = blocks.stack()
     time = dt * np.arange(pose.shape[0])
-    robot = robot_of(given, "motion")  # the path's errors first, then the robot's refusals
     st = states(robot, pose, vel, acc, time=time, external=external)
     cs, tensions, feasible = setpoints.cable_samples(robot, st["positions"], st["attachments"], st["wrench"],
                                                      st["lengths"], st["tensions"], st["feasible"])
@@ -435,22 +432,7 @@ def _cable_motion(robot: Robot, P, Rb, vB, aB):
     ``P`` (k, 6) poses, ``Rb`` (k, m, 3) rotated attachments, ``vB`` and
     ``aB`` (k, m, 3) the attachment points' velocities and accelerations.
     """
-    design = robot.design
-    if robot.outlets == "pulleys":
-        # swivel pulleys: arc + free length, u along the free segment from the tangent point
-        cp = pl.design_cable_paths(design, P[:, None, :3] + Rb)
-        u = np.nan_to_num(cp.directions)
-        u[~(cp.free_lengths > MIN_CABLE_LENGTH)] = 0.0  # no direction: a degenerate sample
-        Ld = -np.einsum("kmi,kmi->km", u, vB)
-        Ldd = cp.second_derivative(vB) - np.einsum("kmi,kmi->km", u, aB)
-        return cp.lengths, cp.free_lengths, u, Ld, Ldd
-    vec = design.outlets[None, :, :] - P[:, None, :3] - Rb
-    L = np.linalg.norm(vec, axis=2)
-    u = directions(vec, L)  # zero for a cable of zero length: a degenerate sample
-    Ld = -np.einsum("kmi,kmi->km", u, vB)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        Ldd = (np.einsum("kmi,kmi->km", vB, vB) - Ld ** 2) / L - np.einsum("kmi,kmi->km", u, aB)
-    return L, L, u, Ld, Ldd
+    return robot.outlets.motion_paths(robot.design, P[:, :3], Rb, vB, aB)
 
 
 def _structure(design: Design, u, Rb) -> np.ndarray:
@@ -544,13 +526,13 @@ def _min_norm_tensions(W: np.ndarray, wreq: np.ndarray, tmin, tmax) -> np.ndarra
     return t
 
 
-def states(design: Design | Robot, pose, velocity, acceleration, *, time=None, external=None) -> dict:
+def states(robot: Robot, pose, velocity, acceleration, *, time=None, external=None) -> dict:
     """Cable lengths, speeds, accelerations and inertial tensions along a path.
 
     Parameters
     ----------
-    design : Design or Robot
-        Resolved here for ``motion`` unless it is a :class:`Robot` already.
+    robot : Robot
+        The design resolved for ``motion`` (:func:`~cdpr_design.statics.robot.resolve`).
     pose, velocity, acceleration : (k, ncoords) arrays
         Pose [m, rad] and its time derivatives (angle rates for rotations).
     time : (k,) array, optional
@@ -584,7 +566,6 @@ def states(design: Design | Robot, pose, velocity, acceleration, *, time=None, e
     :func:`cdpr_design.statics.pulley.cable_paths` (1 / l_f in the pulley plane,
     the swivel curvature across it).
     """
-    robot = robot_of(design, "motion")
     design = robot.design
     x, xd, xdd = (np.atleast_2d(np.asarray(a, float)) for a in (pose, velocity, acceleration))
     P, V, Acc = _full(design, x), _full(design, xd), _full(design, xdd)

@@ -445,12 +445,39 @@ class _Gateway:
         return True
 
 
-def run(transport: Transport, simulator, *, cycle_time: float, duration: float | None = None,
-        on_row: Callable | None = None, should_stop: Callable[[], bool] | None = None,
-        max_missed: int = 3, reconnect: int = 0, backoff: tuple[float, float] = (0.1, 2.0),
-        spin: float = 2e-4, on_status: Callable[[str], None] | None = None,
-        max_catchup: float = 0.1, max_lag: float = 0.5, velocity_window: float | None = None,
-        keep: int = 1 << 20, clock=time.perf_counter, sleep=time.sleep) -> BridgeResult:
+@dataclass(frozen=True)
+class Loop:
+    """The timing of the gateway loop (:func:`run`).
+
+    ``cycle_time`` [s] the period; ``duration`` [s] stop after this much simulated (= wall-clock)
+    time (None: until stopped); ``max_missed`` consecutive failed cycles after which the PLC
+    counts as lost; ``reconnect`` reconnection attempts per outage (0: none), with back-off
+    doubling from ``backoff[0]`` up to ``backoff[1]`` seconds (while the link is down the model
+    holds the last reference); ``spin`` [s] busy-wait the last ``spin`` seconds before each
+    cycle start (the OS sleep overshoots by ~0.1 ms); ``max_catchup`` [s] the most model time one
+    cycle may simulate (a late cycle catches up at most this much, so the PLC keeps being
+    served); ``max_lag`` [s] when the model falls further than this behind real time (a machine
+    too slow for real time) it *slips*: the lag is dropped and counted in ``slips`` (the only
+    case where the reference may jump); ``velocity_window`` [s] the span of set-point samples the
+    velocity is estimated over (default max(2 cycles, 4 ms): the PLC's own task quantises its
+    set-points in time); ``keep`` cycles kept for the delay estimate (bounded memory).
+    """
+
+    cycle_time: float
+    duration: float | None = None
+    max_missed: int = 3
+    reconnect: int = 0
+    backoff: tuple[float, float] = (0.1, 2.0)
+    spin: float = 2e-4
+    max_catchup: float = 0.1
+    max_lag: float = 0.5
+    velocity_window: float | None = None
+    keep: int = 1 << 20
+
+
+def run(transport: Transport, simulator, loop: Loop, *, on_row: Callable | None = None,
+        should_stop: Callable[[], bool] | None = None, on_status: Callable[[str], None] | None = None,
+        clock=time.perf_counter, sleep=time.sleep) -> BridgeResult:
     """Run the gateway loop until ``duration``, a stop request, Ctrl-C or a lost PLC.
 
     Parameters
@@ -463,10 +490,8 @@ def run(transport: Transport, simulator, *, cycle_time: float, duration: float |
         ``tensions`` [N] (and ``setpoints`` [m], the reference the axes
         follow, when it has them); ``timestep`` [s] when it steps in whole
         physics steps (:class:`cdpr_design.motion.simulation.Simulator`).
-    cycle_time : float
-        Period [s].
-    duration : float, optional
-        Stop after this much simulated (= wall-clock) time [s].
+    loop : Loop
+        The period, the duration and the loop's limits.
     on_row : callable, optional
         ``on_row(setpoints, state)`` once per cycle (logging), one cycle
         late: ``setpoints`` are the PLC's set-points at ``state.time``,
@@ -474,28 +499,10 @@ def run(transport: Transport, simulator, *, cycle_time: float, duration: float |
         the end get the reference the model followed).
     should_stop : callable, optional
         Polled each cycle; True ends the run (``stopped="stop"``).
-    max_missed : int
-        Consecutive failed cycles after which the PLC counts as lost.
-    reconnect : int
-        Reconnection attempts per outage (0: none), with back-off doubling
-        from ``backoff[0]`` up to ``backoff[1]`` seconds.  While the link is
-        down the model holds the last reference.
-    spin : float
-        Busy-wait the last ``spin`` seconds before each cycle start (the OS
-        sleep overshoots by ~0.1 ms) [s].
-    max_catchup : float
-        Most model time one cycle may simulate [s] (a late cycle catches up
-        at most this much, so the PLC keeps being served).
-    max_lag : float
-        When the model falls further than this behind real time [s] (a
-        machine too slow for real time), it *slips*: the lag is dropped and
-        counted in ``slips`` (the only case where the reference may jump).
-    velocity_window : float, optional
-        Span of set-point samples the velocity is estimated over [s];
-        default max(2 cycles, 4 ms) (the PLC's own task quantises its
-        set-points in time).
-    keep : int
-        Cycles kept for the delay estimate (bounded memory).
+    on_status : callable, optional
+        ``on_status(message)`` on a lost link, a reconnection and a slip.
+    clock, sleep : callable
+        The wall clock [s] and the sleep the loop times itself by.
 
     Returns
     -------
@@ -507,6 +514,9 @@ def run(transport: Transport, simulator, *, cycle_time: float, duration: float |
     -----
     The timing model is in the module notes.
     """
+    cycle_time, duration, max_missed, reconnect = loop.cycle_time, loop.duration, loop.max_missed, loop.reconnect
+    backoff, spin, max_catchup, max_lag = loop.backoff, loop.spin, loop.max_catchup, loop.max_lag
+    velocity_window, keep = loop.velocity_window, loop.keep
     dt = float(cycle_time)
     if not dt > 0:
         raise ValueError("cycle_time must be positive")
@@ -569,8 +579,9 @@ def make_simulator(design, cycle_time: float, initial_lengths=None):
     PLC's first set-points), so the first cycle does not jerk the robot.
     """
     from cdpr_design.motion.simulation import Simulator
+    from cdpr_design.statics.robot import Analysis, resolve
 
-    sim = Simulator(design)
+    sim = Simulator(resolve(design, Analysis(command="motion")))
     pose = None
     if initial_lengths is not None:
         from cdpr_design.statics.kinematics import forward_kinematics

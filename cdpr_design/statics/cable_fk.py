@@ -22,7 +22,7 @@ from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
 from cdpr_design.model.limits import lengths_problem
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.robot import Robot, robot_of
+from cdpr_design.statics.robot import Robot
 
 #: Largest accepted residuals: closure [m] and equilibrium [N] (relative to the load + 1 N).
 LENGTH_TOL = 1e-9
@@ -69,7 +69,7 @@ def _unknowns(robot: Robot) -> _Unknowns:
     """The pose coordinates solved for and the wrench rows balanced: a hanging effector also
     finds its orientation (every rotation), others the motion's coordinates."""
     design = robot.design
-    if robot.orientation == "hanging":
+    if robot.orientation.free:
         idx = (0, 1, 5) if design.motion.planar else tuple(range(6))
         return _Unknowns(idx, idx, True)
     return _Unknowns(tuple(design.motion.pose_index), tuple(design.motion.wrench_rows), False)
@@ -148,23 +148,21 @@ def _start(design: Design, L0, guess, unk: _Unknowns):
 SLACK_TOL = 1e-12
 
 
-def forward(design: Design | Robot, unstretched, guess=None) -> CableFK:
-    """The pose [m, rad] of a design with elastic or sagging cables of unstretched lengths ``unstretched`` [m].
+def forward(robot: Robot, unstretched, guess=None) -> CableFK:
+    """The pose [m, rad] of a robot with elastic or sagging cables of unstretched lengths ``unstretched`` [m].
 
     The effector's force and moment balance (every row of its motion; an effector that
     hangs freely, ``effector.orientation: free``, also finds its orientation from the
     moment balance).  A weightless cable whose chord is shorter than its length is slack
     (no force); no cable is ever reported slack while its chord is longer than its length.
     Raises :class:`InputError` naming ``--lengths`` when no equilibrium is found
-    (the residuals say how far the best attempt was).  ``design`` is resolved for ``fk``
-    (:func:`~cdpr_design.statics.robot.robot_of`; refused: the cables below run from point
-    outlets) unless it is a :class:`~cdpr_design.statics.robot.Robot` already.
+    (the residuals say how far the best attempt was).  ``robot``: the design resolved for ``fk``
+    (:func:`~cdpr_design.statics.robot.resolve`; refused: the cables below run from point outlets).
     """
     from scipy.optimize import least_squares
 
-    robot = robot_of(design, "fk")
     design = robot.design
-    if robot.cables == "ideal":
+    if robot.cables.rigid:
         raise InputError("cable model 'ideal': the forward kinematics of straight cables is kinematics.forward_kinematics")
     L0 = np.asarray(unstretched, float).reshape(-1)
     if L0.size != design.m:

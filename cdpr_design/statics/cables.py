@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cdpr_design.model.design import Design
-from cdpr_design.statics.robot import Robot, cable_arrays, robot_of
+from cdpr_design.statics.robot import Robot, cable_arrays
 
 #: Status names of a sagging pose, by the kernel's code (``cable_status`` column).
 STATUS = ("ok", "no-tensions", "no-catenary", "not-converged", "singular")
@@ -84,11 +84,9 @@ def sagging_structure(robot: Robot, full: np.ndarray) -> np.ndarray:
     return Ws[0]
 
 
-def sagging_structures(design: Design | Robot, positions3: np.ndarray, orientation) -> tuple:
-    """Sagging statics at many positions (k, 3) [m] at one orientation (3,) [rad], static load.
-
-    ``design`` is resolved for ``size-motors`` (refused where the catenaries cannot start) unless
-    it is a :class:`~cdpr_design.statics.robot.Robot` already.
+def sagging_structures(robot: Robot, positions3: np.ndarray, orientation) -> tuple:
+    """Sagging statics of ``robot`` (resolved for ``size-motors``) at many positions (k, 3) [m]
+    at one orientation (3,) [rad], static load.
 
     Returns (ok (k,) bool: converged and feasible, W (k, n, m) from the
     end-force directions, tensions (k, m) at the effector end [N], outlet
@@ -99,7 +97,6 @@ def sagging_structures(design: Design | Robot, positions3: np.ndarray, orientati
     from cdpr_design.statics.robot import KINDS, combinations
     from cdpr_design.statics.wrenches import wrench_vertices
 
-    robot = robot_of(design, "size-motors")
     design, arr = robot.design, robot.cable
     k, m, n = positions3.shape[0], design.m, design.n
     Rb = np.ascontiguousarray(design.attachments @ kin.rotation_matrix(*orientation).T)
@@ -181,8 +178,9 @@ class SampleStates:
     feasible: np.ndarray
 
 
-def sagging_samples(design: Design | Robot, positions: np.ndarray, Rb: np.ndarray, wreq: np.ndarray) -> SampleStates:
-    """Sagging cables at k samples of a path, each with its own required wrench.
+def sagging_samples(robot: Robot, positions: np.ndarray, Rb: np.ndarray, wreq: np.ndarray) -> SampleStates:
+    """Sagging cables of ``robot`` (resolved for ``motion``) at k samples of a path, each with its
+    own required wrench.
 
     ``positions`` (k, 3) [m], ``Rb`` (k, m, 3) the rotated attachments [m],
     ``wreq`` (k, n) the wrench the cables must exert on the effector [N, N m]
@@ -190,14 +188,11 @@ def sagging_samples(design: Design | Robot, positions: np.ndarray, Rb: np.ndarra
     with minimum-norm tensions (:mod:`cdpr_design.kernels.sag_path`).  A
     sample whose shapes converge with tensions outside the bounds keeps the
     numbers of the same pose under [0, inf) and is flagged infeasible; one
-    whose shapes do not exist or do not converge has NaN and its status.  ``design`` is resolved
-    for ``motion`` (refused where the catenaries cannot start) unless it is a
-    :class:`~cdpr_design.statics.robot.Robot` already.
+    whose shapes do not exist or do not converge has NaN and its status.
     """
     from cdpr_design.kernels.sag_path import sag_samples
     from cdpr_design.statics.robot import combinations
 
-    robot = robot_of(design, "motion")
     design, arr = robot.design, robot.cable
     P = np.ascontiguousarray(positions, dtype=float)
     k, m = P.shape[0], design.m

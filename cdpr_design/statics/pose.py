@@ -62,18 +62,4 @@ def structure(robot: Robot, full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ry, rz] [m, rad] and their free lengths (m,) [m] (from the pulley's tangent point, else the
     outlet, to the attachment), swivel pulleys honoured (the sweep kernels' geometry: true
     outlet points); W's columns are unspecified where a cable has zero length."""
-    from cdpr_design import kernels as K  # numba, on first use
-    from cdpr_design.statics import kinematics as kin
-
-    Rb = np.ascontiguousarray(robot.attachments @ kin.rotation_matrix(*full[3:]).T)
-    W, L = np.empty((robot.n, robot.m)), np.empty(robot.m)
-    if robot.outlets == "pulleys":
-        from cdpr_design.statics.interference import hardware_arrays
-
-        hw = hardware_arrays(robot.design)
-        C = np.empty((robot.m, 3))
-        K.structure_matrix_pulley(full[0], full[1], full[2], Rb, robot.outlet_points, hw.axes, hw.eref, hw.radii,
-                                  robot.rows, W, L, C)
-        return W, np.linalg.norm(full[:3] + Rb - C, axis=1)
-    K.structure_matrix(full[0], full[1], full[2], Rb, robot.outlet_points, robot.rows, W, L)
-    return W, L
+    return robot.outlets.structure(robot, full)

@@ -7,25 +7,31 @@ runs (its kind, its options); the :class:`Robot` it gets back holds
 - the arrays every computation reads (outlets, attachments, tension bounds,
   the balanced wrench rows, the cables' weight and stiffness, the effector's
   mass), built once;
-- the strategies, as plain fields every layer below takes without asking the
-  design again:
+- the strategies, as objects every layer below asks without asking the design again
+  (:mod:`cdpr_design.statics.strategies`):
 
-  ``cables``       ``ideal`` | ``elastic`` | ``sagging`` (the heaviest of the cables' models)
-  ``outlets``      ``points`` | ``pulleys`` (swivel pulleys of positive radius)
-  ``orientation``  ``commanded`` (the command fixes it) | ``held`` (an under-constrained
-                   effector held at the commanded orientation, the tilt it would hang with
-                   reported beside) | ``hanging`` (``effector.orientation: free``: it hangs
-                   where the cables and gravity put it, within ``tilt_limit``)
+  ``cables``       :class:`~cdpr_design.statics.strategies.CableModel`: ``ideal`` | ``elastic`` |
+                   ``sagging`` (the heaviest of the cables' models)
+  ``outlets``      :class:`~cdpr_design.statics.strategies.Outlets`: ``points`` | ``pulleys``
+                   (swivel pulleys of positive radius)
+  ``orientation``  :class:`~cdpr_design.statics.strategies.Orientation`: ``commanded`` (the
+                   command fixes it) | ``held`` (an under-constrained effector held at the
+                   commanded orientation, the tilt it would hang with reported beside) |
+                   ``hanging`` (``effector.orientation: free``: it hangs where the cables and
+                   gravity put it, within ``tilt_limit``)
   ``engine``       ``numpy`` (the closed form of two cables and two wrench rows, vectorised)
                    | ``numba`` (the kernels)
 
 Every combination of a design and an analysis that is not computed is refused
 here, by the one table :data:`REFUSALS`, with its reason: nowhere else in the
-package decides it (docs/architecture.md).
+package decides it (docs/architecture.md).  A row is keyed on what the analysis
+needs (:data:`NEEDS`: the hanging solver, straight cables, a fixed orientation...),
+not on the command that asks it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from dataclasses import dataclass, field
 from typing import Callable
@@ -34,13 +40,15 @@ import numpy as np
 
 from cdpr_design.errors import InputError, SpecError
 from cdpr_design.model.design import Design, has_weight, is_underconstrained
+from cdpr_design.statics import strategies as S
+from cdpr_design.statics.strategies import CableModel, Orientation, Outlets
 
-#: Cable models, lightest first (docs/cable-models.md).
-CABLE_MODELS = ("ideal", "elastic", "sagging")
+#: Cable models, lightest first (docs/cable-models.md): their names.
+CABLE_MODELS = tuple(c.name for c in S.CABLE_MODELS)
 #: How the cables leave the frame.
-OUTLETS = ("points", "pulleys")
+OUTLETS = (S.POINTS.name, S.PULLEYS.name)
 #: How the effector's orientation is decided (see the module doc).
-ORIENTATIONS = ("commanded", "held", "hanging")
+ORIENTATIONS = (S.COMMANDED.name, S.HELD.name, S.HANGING.name)
 #: Engines of a grid sweep, as asked (``auto`` is decided by :func:`resolve`).
 ENGINES = ("auto", "numba", "numpy")
 #: Kinds of workspace and their kernel codes (= ``kernels.KIND_*``; a test checks).
@@ -51,10 +59,32 @@ COMMANDS = ("workspace", "pose", "fk", "certify", "size-motors", "motion", "chec
 #: pays no numba start-up; the crossover, measured on planar2's whole ``workspace`` command, is
 #: between 63,001 and 74,529 poses (docs/performance.md).
 NUMPY_MAX_POSES = 70_000
+#: What an analysis needs of the robot, the capabilities the rows of :data:`REFUSALS` are keyed on:
+#: ``hanging-solver`` it runs the hanging solver (a free effector's orientation found at its poses;
+#: point outlets); ``hanging-statics`` it reports a free effector's statics where it hangs (rigid
+#: cables, its weight alone: static); ``tension-choice`` it distributes the tensions by an objective
+#: or weights; ``cable-fk`` it solves the pose of given unstretched lengths of elastic or sagging
+#: cables (point outlets); ``tension-bounds`` it checks the tension bounds (the cable-frequency
+#: floor of straight cables); ``interval-tests`` it proves the workspace by interval tests
+#: (straight cables from point outlets, one fixed orientation, constant tension bounds).
+CAPABILITIES = ("hanging-solver", "hanging-statics", "tension-choice", "cable-fk", "tension-bounds",
+                "interval-tests")
+#: What each command needs (:data:`CAPABILITIES`).
+NEEDS: dict[str, frozenset[str]] = {
+    "workspace": frozenset({"hanging-solver", "hanging-statics", "tension-bounds"}),
+    "pose": frozenset({"hanging-solver", "hanging-statics", "tension-choice", "tension-bounds"}),
+    "fk": frozenset({"hanging-solver", "cable-fk"}),
+    "certify": frozenset({"hanging-solver", "tension-bounds", "interval-tests"}),
+    "size-motors": frozenset({"tension-bounds"}),
+    "motion": frozenset({"tension-bounds"}),
+    "check": frozenset({"hanging-solver", "tension-bounds"}),
+    "report": frozenset({"hanging-solver", "tension-bounds"}),
+    "statics": frozenset({"hanging-solver", "tension-bounds"}),
+}
 #: Commands that hold the effector at commanded poses and never run the hanging solver (motor
 #: sizing over the task poses; trajectories and their simulation, in which a free effector hangs
 #: on the simulated cables): the hanging solver's limits do not refuse them.
-COMMANDED_POSES = ("size-motors", "motion")
+COMMANDED_POSES = tuple(c for c in COMMANDS if "hanging-solver" not in NEEDS[c])
 
 
 @dataclass(frozen=True)
@@ -66,7 +96,9 @@ class Analysis:
     None; ``max_tilt`` [deg] a tilt limit asked on the command line; ``objective`` and
     ``weights`` the tension distribution of ``pose``; ``engine`` one of :data:`ENGINES`;
     ``poses`` the size of the grid to sweep (the engine's choice); ``stiffness`` the sweep adds
-    the least stiffness and the lowest natural frequency of every feasible pose.
+    the least stiffness and the lowest natural frequency of every feasible pose; ``hold`` the
+    orientation is commanded at every pose, also of a free effector (one pose's statics,
+    :meth:`one_pose`).
     """
 
     command: str = "workspace"
@@ -79,6 +111,19 @@ class Analysis:
     engine: str = "auto"
     poses: int = 1
     stiffness: bool = False
+    hold: bool = False
+
+    @property
+    def needs(self) -> frozenset[str]:
+        """What the analysis needs of the robot (:data:`NEEDS` of its command; nothing for an unknown one)."""
+        return NEEDS.get(self.command, frozenset())
+
+    def one_pose(self, engine: str) -> Analysis:
+        """This analysis at one commanded pose, on ``engine``: its statics only (the pose fixes the
+        orientation a free effector would find; no interference mask, orientation set, tilt
+        limit or stiffness columns)."""
+        return dataclasses.replace(self, collisions=False, orientations=None, max_tilt=None, stiffness=False,
+                                   hold=True, engine=engine)
 
 
 @dataclass(frozen=True)
@@ -86,9 +131,9 @@ class Facts:
     """What :func:`resolve` decides about a design before it checks the analysis against
     :data:`REFUSALS` (the strategies of a :class:`Robot`)."""
 
-    cables: str
-    outlets: str
-    orientation: str
+    cables: CableModel
+    outlets: Outlets
+    orientation: Orientation
     underconstrained: bool
     weight: bool
     rotational: bool
@@ -122,7 +167,7 @@ def check_kind(kind: str) -> None:
 
 
 def _free(f: Facts) -> bool:
-    return f.orientation == "hanging"
+    return f.orientation.free
 
 
 #: Every combination that is not computed, and why: the one table (see the module doc).
@@ -133,19 +178,19 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal("--cable-model", "cable model 'sagging' assumes point outlets, and this design has swivel pulleys "
                              "(cables[].pulley): the catenaries start at the outlet points; use --cable-model "
                              "elastic or ideal",
-            lambda f, a: f.cables == "sagging" and f.outlets == "pulleys"),
+            lambda f, a: not f.cables.straight and f.outlets.pulleys),
     Refusal("--collisions", "cable model 'sagging': the interference checks assume straight cables; use "
                             "--cable-model elastic or ideal for this analysis",
-            lambda f, a: f.cables == "sagging" and a.collisions),
+            lambda f, a: not f.cables.straight and a.collisions),
     Refusal("--orientations", "cable model 'sagging': orientation workspaces assume straight cables; use "
                               "--cable-model elastic or ideal for this analysis",
-            lambda f, a: f.cables == "sagging" and a.orientations is not None),
+            lambda f, a: not f.cables.straight and a.orientations is not None),
     Refusal("effector.orientation", "free: the hanging solver models point outlets, and this design has swivel "
                                     "pulleys (cables[].pulley)",
-            lambda f, a: _free(f) and f.outlets == "pulleys" and a.command not in COMMANDED_POSES),
+            lambda f, a: _free(f) and f.outlets.pulleys and "hanging-solver" in a.needs),
     Refusal("--cable-model", "an effector with effector.orientation: free hangs on ideal cables (the hanging "
                              "solver models rigid, weightless cables); use --cable-model ideal",
-            lambda f, a: _free(f) and f.cables != "ideal" and a.command in ("workspace", "pose")),
+            lambda f, a: _free(f) and not f.cables.rigid and "hanging-statics" in a.needs),
     Refusal("--orientations", "an under-constrained design with effector.orientation: free does not command "
                               "its orientation (it hangs); use effector.orientation: fixed to sweep commanded "
                               "orientations",
@@ -155,7 +200,7 @@ REFUSALS: tuple[Refusal, ...] = (
             lambda f, a: a.orientations is not None and not f.rotational),
     Refusal("--kind {a.kind}", "an under-constrained design with effector.orientation: free hangs under gravity alone "
                       "(static only)",
-            lambda f, a: _free(f) and a.kind != "static" and a.command in ("workspace", "pose")),
+            lambda f, a: _free(f) and a.kind != "static" and "hanging-statics" in a.needs),
     Refusal("--collisions", "an under-constrained design with effector.orientation: free is swept without "
                             "interference checks (interference at the hanging pose is not modelled)",
             lambda f, a: _free(f) and a.collisions),
@@ -165,13 +210,13 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal("--max-tilt", "expected an angle in [0, 180] degrees",
             lambda f, a: a.max_tilt is not None and not (0.0 <= a.max_tilt <= 180.0)),
     Refusal("--weights", "a hanging effector's tensions are unique (they balance its weight, force and moment)",
-            lambda f, a: _free(f) and a.command == "pose" and a.weights),
+            lambda f, a: _free(f) and "tension-choice" in a.needs and a.weights),
     Refusal("--objective", "a hanging effector's tensions are unique (they balance its weight, force and "
                            "moment)",
-            lambda f, a: _free(f) and a.command == "pose" and a.objective != "min-norm"),
+            lambda f, a: _free(f) and "tension-choice" in a.needs and a.objective != "min-norm"),
     Refusal("fk", "the forward kinematics of elastic and sagging cables takes point outlets, not swivel "
                   "pulleys; use --cable-model ideal for this design",
-            lambda f, a: a.command == "fk" and f.cables != "ideal" and f.outlets == "pulleys"),
+            lambda f, a: "cable-fk" in a.needs and not f.cables.rigid and f.outlets.pulleys),
     Refusal("--stiffness", "{f.stiffness}",
             lambda f, a: a.stiffness and f.stiffness is not None),
     Refusal("--stiffness", "an orientation workspace's rows stand for a set of orientations, not one pose "
@@ -184,26 +229,26 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal("requirements.min_cable_frequency", "cable model 'sagging': the lower tension bound 4 f^2 L^2 mu "
                                                 "is a taut straight cable's, and a sagging cable's own modes are "
                                                 "not modelled; use --cable-model elastic or ideal",
-            lambda f, a: f.string_floor and f.cables == "sagging" and a.command != "fk"),
+            lambda f, a: f.string_floor and not f.cables.straight and "tension-bounds" in a.needs),
     Refusal("requirements.min_cable_frequency", "certify: the interval tests hold constant tension bounds, and "
                                                 "this bound grows with the cable's length (4 f^2 L^2 mu); leave "
                                                 "it out to certify the workspace of the other bounds",
-            lambda f, a: f.string_floor and a.command == "certify"),
+            lambda f, a: f.string_floor and "interval-tests" in a.needs),
     Refusal("certify", "cable model 'sagging': the interval tests assume straight cables (ideal or elastic); "
                        "use --cable-model ideal or elastic",
-            lambda f, a: a.command == "certify" and f.cables == "sagging"),
+            lambda f, a: "interval-tests" in a.needs and not f.cables.straight),
     Refusal("certify", "swivel pulleys (cables[].pulley): the interval tests take point outlets",
-            lambda f, a: a.command == "certify" and f.outlets == "pulleys"),
+            lambda f, a: "interval-tests" in a.needs and f.outlets.pulleys),
     Refusal("certify", "effector.orientation: free: the hanging orientation changes with the position, and the "
                        "interval tests hold one fixed orientation",
-            lambda f, a: a.command == "certify" and _free(f)),
+            lambda f, a: "interval-tests" in a.needs and _free(f)),
 )
 
 
 def _numpy_covers(f: Facts, a: Analysis) -> bool:
     """Whether the numpy closed form sweeps this analysis: two cables, two wrench rows, not wrench
     closure, straight cables from point outlets, no interference checks, one orientation."""
-    return (f.closed_form and a.kind != "wrench-closure" and f.cables != "sagging" and f.outlets == "points"
+    return (f.closed_form and a.kind != "wrench-closure" and f.cables.straight and not f.outlets.pulleys
             and not a.collisions and a.orientations is None and not _free(f))
 
 
@@ -243,9 +288,9 @@ class Robot:
 
     design: Design
     analysis: Analysis
-    cables: str
-    outlets: str
-    orientation: str
+    cables: CableModel
+    outlets: Outlets
+    orientation: Orientation
     underconstrained: bool
     engine: str
     tilt_limit: float | None
@@ -287,29 +332,22 @@ class Robot:
     @property
     def straight(self) -> bool:
         """Whether the statics take straight cables (ideal or elastic)."""
-        return self.cables != "sagging"
+        return self.cables.straight
 
     @property
     def hangs(self) -> bool:
         """Whether the effector's orientation is found by hanging (held: beside the commanded one)."""
-        return self.orientation in ("held", "hanging")
+        return self.orientation.free or self.orientation.tilt_beside
+
+    def one_pose(self) -> Robot:
+        """The robot of this design for one commanded pose of this analysis
+        (:meth:`Analysis.one_pose`, on this robot's engine), resolved."""
+        return resolve(self.design, self.analysis.one_pose(self.engine))
 
 
-def robot_of(design: Design | Robot, command: str) -> Robot:
-    """``design`` resolved for ``command`` (an :class:`Analysis` of its defaults, :func:`resolve`),
-    or the :class:`Robot` a caller already resolved: the public functions of a command take either,
-    so the command resolves its design once and hands the robot down."""
-    return design if isinstance(design, Robot) else resolve(design, Analysis(command=command))
-
-
-def design_of(design: Design | Robot) -> Design:
-    """The :class:`~cdpr_design.model.design.Design` of a design or of a robot (its spec as data)."""
-    return design.design if isinstance(design, Robot) else design
-
-
-def cable_model(design: Design) -> str:
+def cable_model(design: Design) -> CableModel:
     """The design's cable model: the heaviest of its cables' models (:data:`CABLE_MODELS`)."""
-    return CABLE_MODELS[max(CABLE_MODELS.index(c.props.model) for c in design.cables)]
+    return S.CABLE_MODELS[max(CABLE_MODELS.index(c.props.model) for c in design.cables)]
 
 
 def has_pulleys(design: Design) -> bool:
@@ -341,32 +379,35 @@ def combinations(m: int, n: int) -> np.ndarray:
     return np.array(c, dtype=np.int64).reshape(len(c), k)
 
 
-def facts(design: Design) -> Facts:
-    """The strategies of ``design`` that do not depend on the analysis (see the module doc)."""
+def facts(design: Design, hold: bool = False) -> Facts:
+    """The strategies of ``design`` (see the module doc); ``hold``: the orientation commanded at
+    every pose, also of a free effector (:attr:`Analysis.hold`)."""
     cables = cable_model(design)
-    outlets = "pulleys" if has_pulleys(design) else "points"
+    outlets = S.PULLEYS if has_pulleys(design) else S.POINTS
     under = underconstrained(design)
     weight = has_weight(design.effector.mass, design.gravity)
-    if under and design.effector.orientation == "free":
-        orientation = "hanging"
-    elif under and weight and outlets == "points" and cables == "ideal":
-        orientation = "held"  # the tilt it would hang with is reported beside the commanded orientation
+    if under and design.effector.orientation == "free" and not hold:
+        orientation: Orientation = S.HANGING
+    elif under and design.effector.orientation == "free":
+        orientation = S.COMMANDED
+    elif under and weight and not outlets.pulleys and cables.rigid:
+        orientation = S.HELD  # the tilt it would hang with is reported beside the commanded orientation
     else:
-        orientation = "commanded"
+        orientation = S.COMMANDED
     return Facts(cables, outlets, orientation, under, weight, design.motion.rotational,
                  design.m == 2 and design.n == 2, design.motion.name,
                  stiffness_reason(design, cables, outlets, orientation), bool(np.any(design.string_floor > 0)))
 
 
-def stiffness_reason(design: Design, cables: str, outlets: str, orientation: str) -> str | None:
+def stiffness_reason(design: Design, cables: CableModel, outlets: Outlets, orientation: Orientation) -> str | None:
     """Why the stiffness of the design's effector on its cables is not defined, or None (it is:
     straight cables from point outlets, each with an axial stiffness, the orientation commanded
     or held; :mod:`cdpr_design.statics.stiffness`)."""
-    if cables == "sagging":
+    if not cables.straight:
         return "sagging cables: the elastic catenary's stiffness is not modelled (use --cable-model elastic)"
-    if outlets == "pulleys":
+    if outlets.pulleys:
         return "swivel pulleys: the stiffness of a cable over a pulley is not modelled"
-    if orientation == "hanging":
+    if orientation.free:
         return "effector.orientation: free: the hanging effector's stiffness is not modelled"
     missing = [c.name for c in design.cables if not c.props.axial_stiffness]
     if missing:
@@ -388,7 +429,7 @@ def resolve(design: Design, analysis: Analysis | None = None, **options) -> Robo
     """
     a = analysis if analysis is not None else Analysis(**options)
     check_kind(a.kind)
-    f = facts(design)
+    f = facts(design, a.hold)
     r = refusal(f, a)
     if r is not None:
         raise InputError(r.message(f, a))
@@ -425,6 +466,6 @@ def _engine(f: Facts, a: Analysis) -> str:
 
 def _tilt_limit(design: Design, f: Facts, a: Analysis) -> float | None:
     """The tilt limit [deg] of a hanging effector: ``--max-tilt``, else ``requirements.max_tilt``."""
-    if f.orientation != "hanging":
+    if not f.orientation.free:
         return None
     return float(a.max_tilt) if a.max_tilt is not None else design.requirements.max_tilt

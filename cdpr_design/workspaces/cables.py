@@ -107,17 +107,12 @@ def cable_columns(robot: Robot) -> list[str]:
     """The table columns a non-ideal cable model adds, per cable c: ``outlet_tension_<c>`` [N],
     ``unstretched_length_<c>`` [m], ``sag_<c>`` [m]; sagging cables add ``cable_status``
     (an index into :data:`cdpr_design.statics.cables.STATUS`)."""
-    if robot.cables == "ideal":
-        return []
-    names = robot.design.cable_names
-    cols = ([f"outlet_tension_{c}" for c in names] + [f"unstretched_length_{c}" for c in names]
-            + [f"sag_{c}" for c in names])
-    return cols + (["cable_status"] if robot.cables == "sagging" else [])
+    return robot.cables.state_columns(robot.design.cable_names)
 
 
 def cable_summary(robot: Robot, status_counts: np.ndarray | None, outlet_peak: np.ndarray | None) -> dict:
     """The keys a non-ideal cable model adds to the workspace summary."""
-    out: dict = {"cable_model": robot.cables}
+    out: dict = {"cable_model": robot.cables.name}
     if status_counts is not None:
         out["cable_status"] = {name: int(n) for name, n in zip(cables.STATUS, status_counts)}
     if outlet_peak is not None:

@@ -40,13 +40,9 @@ KINDS = ("static", "wrench-feasible")
 #: Largest number of boxes classified by default (bounded memory: a box is 6 floats and a code).
 MAX_BOXES = 5_000_000
 
-def check_certifiable(design: Design | Robot, kind: str = "static") -> Robot:
-    """The robot certified (``design`` resolved for ``certify``, or the robot a caller resolved so);
-    an :class:`InputError` with the reason when ``design`` or ``kind`` is not certified."""
-    if isinstance(design, Robot):
-        if design.analysis.command != "certify":
-            raise ValueError(f"a robot resolved for {design.analysis.command!r}, not for certify")
-        return design
+def check_certifiable(design: Design, kind: str = "static") -> Robot:
+    """The robot certified: ``design`` resolved for ``certify`` and ``kind``; an
+    :class:`InputError` with the reason when ``design`` or ``kind`` is not certified."""
     if kind not in KINDS:
         raise InputError(f"--kind: certify covers {', '.join(KINDS)}, got {kind!r}")
     return resolve(design, Analysis(command="certify", kind=kind))  # the refusals' one table
@@ -203,7 +199,7 @@ def check_box(box, dim: int, name: str = "box") -> tuple:
     return tuple(map(float, lo)), tuple(map(float, hi))
 
 
-def certify(design: Design | Robot, kind: str = "static", resolution: float | None = None, box=None,
+def certify(robot: Robot, resolution: float | None = None, box=None,
             min_margin: float | None = None, max_boxes: int | None = MAX_BOXES, time_limit: float | None = None,
             tolerance_outlets=None, tolerance_attachments=None,
             progress: Callable[[int, int], None] | None = None,
@@ -213,8 +209,8 @@ def certify(design: Design | Robot, kind: str = "static", resolution: float | No
     """Pave ``box`` (lower, upper) [m] (default the workspace grid's box) into proven
     ``inside``, proven ``outside`` and ``boundary`` boxes at the spec's fixed orientation.
 
-    ``design``: a design, or the robot :func:`check_certifiable` resolved (its kind then stands).
-    ``kind``: ``static`` (gravity) or ``wrench-feasible`` (gravity plus every vertex of
+    ``robot``: the design resolved for ``certify`` (:func:`check_certifiable`); its kind,
+    ``static`` (gravity) or ``wrench-feasible`` (gravity plus every vertex of
     ``workspace.external_wrench``).  ``resolution`` [m]: the finest box edge (default the grid
     step).  ``min_margin`` [N]: prove a capacity margin of at least this much (inside) or
     less (outside) instead of feasibility.  ``max_boxes``, ``time_limit`` [s]: stop bisecting
@@ -229,7 +225,8 @@ def certify(design: Design | Robot, kind: str = "static", resolution: float | No
     or Dask).  ``replay``, ``on_level``: see :func:`pave` (a resumed run's journal).  The boxes do
     not depend on either.
     """
-    robot = check_certifiable(design, kind)
+    if "interval-tests" not in robot.analysis.needs:
+        raise ValueError(f"a robot resolved for {robot.analysis.command!r}, not for certify")
     design, kind = robot.design, robot.kind
     spec_outlets, spec_attachments = spec_tolerances(design)
     tolerance_outlets = spec_outlets if tolerance_outlets is None else tolerance_outlets
@@ -335,9 +332,9 @@ def bisect(lower: np.ndarray, upper: np.ndarray, axis: np.ndarray):
     return lo, hi
 
 
-def warm_up(design: Design | Robot, kind: str = "static") -> None:
-    """Classify one box: numba loads the kernels from its on-disk cache (or compiles them on a
-    machine's first run), so a caller can time that apart from the paving."""
-    robot = check_certifiable(design, kind)
+def warm_up(robot: Robot) -> None:
+    """Classify one box of ``robot`` (resolved for ``certify``): numba loads the kernels from its
+    on-disk cache (or compiles them on a machine's first run), so a caller can time that apart
+    from the paving."""
     lo, hi = default_box(robot.design)
     Classifier(robot)(np.array([lo]), np.array([lo]))

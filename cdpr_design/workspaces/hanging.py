@@ -155,7 +155,7 @@ class _Stats:
         num = lambda x: float(x) if np.isfinite(x) else None  # noqa: E731
         out = {**classification(robot),
                "hangs": self.hangs, "max_tilt": num(self.max_feasible), "max_tilt_hanging": num(self.max_hanging)}
-        if robot.orientation == "hanging":
+        if robot.orientation.free:
             out.update(tilt_limit=limit, tilt_limited=self.limited if limit is not None else None)
         return out
 

@@ -116,7 +116,7 @@ class HardwareSweep(Base):
         return Rows(feas, marg, ten, L, extra)
 
     def summary(self, maps) -> dict:
-        extra = {"pulleys": self.robot.outlets == "pulleys", "interference": bool(self.interference)}
+        extra = {"pulleys": self.robot.outlets.pulleys, "interference": bool(self.interference)}
         if self.interference:
             extra.update(collision_free=self.n_free, feasible_statics=self.n_stat, collisions_by_kind=self.counts)
         return extra

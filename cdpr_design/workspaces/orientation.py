@@ -204,7 +204,7 @@ class OrientationSweep(Base):
 
     def summary(self, maps) -> dict:
         return _summary_extra(self.design, self.mode, self.oset, self.level_sets, self.scale, self.tally,
-                              self.interference, self.robot.outlets == "pulleys")
+                              self.interference, self.robot.outlets.pulleys)
 
     def finish(self, result, maps) -> None:
         result.orientation_maps = OrientationMaps(self.mode, maps.xmaps["value"], self.oset, self.scale)

@@ -143,24 +143,24 @@ def plan(robot: Robot, grid: Grid, orientation=None, *, tilt: bool = True, orien
         from cdpr_design.workspaces.orientation import OrientationSweep  # the kernels' package, on first use
 
         base: Base = OrientationSweep(robot, ori, orientations)
-        if robot.cables != "ideal":  # elastic: straight, so the same statics
+        if not robot.cables.rigid:  # elastic: straight, so the same statics
             wrappers.append(cables.CableSummary(robot))
         return Plan(robot, grid, ori, base, tuple(wrappers), tilt, orientations)
-    if robot.orientation == "hanging":
+    if robot.orientation.free:
         return Plan(robot, grid, ori, hanging.FreeSweep(robot, ori, grid), (), tilt, orientations)
-    if robot.cables == "sagging" and a.kind != "wrench-closure":
+    if robot.cables.sags(a.kind):
         base = cables.SaggingSweep(robot, ori, grid)
-    elif a.collisions or robot.outlets == "pulleys":
+    elif a.collisions or robot.outlets.pulleys:
         from cdpr_design.workspaces.hardware import HardwareSweep  # the kernels' package, on first use
 
         base = HardwareSweep(robot, ori)
     else:
         base = engine.StraightSweep(robot, ori, grid)
-    if robot.cables == "elastic":
+    if robot.cables.stretches:
         wrappers.append(cables.ElasticColumns(robot))
-    elif robot.cables == "sagging" and a.kind == "wrench-closure":
+    elif robot.cables.chords(a.kind):
         wrappers.append(cables.ChordColumns(robot))
-    if robot.orientation == "held" and tilt:
+    if robot.orientation.tilt_beside and tilt:
         wrappers.append(hanging.HeldTilt(robot, ori))
     elif tilt:
         wrappers.append(hanging.Classification(robot))

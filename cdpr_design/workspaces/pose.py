@@ -14,8 +14,6 @@ statics of one pose: the structure matrix (:func:`cdpr_design.statics.pose.struc
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from cdpr_design.model.design import Grid
@@ -29,12 +27,11 @@ from cdpr_design.workspaces.plan import Plan, plan
 
 def pose_plan(robot: Robot, full: np.ndarray) -> Plan:
     """The sweep plan of ``robot`` on the one-position grid of a full pose [x, y, z, rx, ry, rz]
-    [m, rad], at its orientation: its statics only (the commanded pose fixes the orientation a
-    hanging effector would find; interference is named, not masked: ``collisions``; no tilt,
-    orientation set or stiffness columns)."""
-    a = dataclasses.replace(robot.analysis, collisions=False, orientations=None, stiffness=False)
-    orientation = "commanded" if robot.orientation == "hanging" else robot.orientation
-    one = dataclasses.replace(robot, analysis=a, orientation=orientation)
+    [m, rad], at its orientation: the plan of the robot resolved for one pose
+    (:meth:`~cdpr_design.statics.robot.Robot.one_pose`), its statics only (the commanded pose fixes
+    the orientation a hanging effector would find; interference is named, not masked:
+    ``collisions``; no tilt, orientation set or stiffness columns)."""
+    one = robot.one_pose()
     position = tuple(float(v) for v in full[: robot.design.motion.dim])
     return plan(one, Grid(position, position, (1.0,) * len(position)), full[3:], tilt=False)
 
@@ -68,8 +65,7 @@ def evaluate_pose(robot: Robot, pose, weights=None) -> PoseResult:
     wreq0 = wrench_vertices(design, robot.kind, full[3:])[0]
     objective = robot.analysis.objective
     other = objective != "min-norm" or weights is not None
-    sagging = robot.cables == "sagging" and robot.kind != "wrench-closure"
-    if sagging:
+    if robot.cables.sags(robot.kind):
         W, state = cables.sagging_structure(robot, full), cable_state(robot, r, 0)
         if other and feasible:
             t2, W, state = cables.sagging_for_objective(design, full, wreq0, objective, weights, start=t)
@@ -83,7 +79,7 @@ def evaluate_pose(robot: Robot, pose, weights=None) -> PoseResult:
         # the sweep's columns: elastic cables' state; sagging cables under wrench closure have no
         # shapes (empty columns, status ok: nothing was solved); ideal cables: None
         state = cable_state(robot, r, 0)
-        if other and robot.cables == "elastic":
+        if other and robot.cables.stretches:
             state = cables.straight_state(robot, L, t)  # at the objective's tensions
     return PoseResult(np.asarray(pose, float), L, t, feasible, margin, W, wreq0, collisions(design, pose),
-                      tuple(design.cable_names), robot.cables, state)
+                      tuple(design.cable_names), robot.cables.name, state)

@@ -74,12 +74,13 @@ def run(b: h.Bench) -> None:
     from cdpr_design.plc.rows import RowMaker
     from cdpr_design.plc.symbols import PlcLayout
     from cdpr_design.plc.testplc import TestPlc
+    from cdpr_design.statics.robot import Analysis, resolve
 
     d = design_on_loopback()
     layout = PlcLayout.from_design(d)
-    samples = trajectory.sample(d, "square_fast")
+    samples = trajectory.sample(resolve(d, Analysis(command="motion")), "square_fast")
     seconds = b.opt["seconds"] or samples.duration + 0.5
-    off = motion_run.simulate(d, samples).summary()["delay"]
+    off = motion_run.simulate(resolve(d, Analysis(command="motion")), samples).summary()["delay"]
     with TestPlc(layout, samples.time, samples.lengths) as plc:
         t = h.rounds({"sum": lambda: exchange_only(layout, plc, "sum", b.opt["exchanges"]),
                       "handles": lambda: exchange_only(layout, plc, "handles", b.opt["exchanges"] // 2)}, b.rounds)
@@ -90,7 +91,7 @@ def run(b: h.Bench) -> None:
             tr = transport(layout, plc)
             sim = br.make_simulator(d, dt, tr.read_setpoints())
             rows = RowMaker(d)
-            res = br.run(tr, sim, cycle_time=dt, duration=seconds, on_row=lambda sp, st: rows.values(sp, st))
+            res = br.run(tr, sim, br.Loop(dt, seconds), on_row=lambda sp, st: rows.values(sp, st))
             log = plc.log()
             tr.close()
         s = res.summary()

@@ -19,16 +19,17 @@ def run(b: h.Bench) -> None:
     import cdpr_design as cd
     from cdpr_design import workspaces as ws
     from cdpr_design.model.design import Grid
-    from cdpr_design.workspaces.certify import certify, warm_up
+    from cdpr_design.workspaces.certify import certify, check_certifiable, warm_up
 
     d = cd.load(h.ROOT / "designs" / f"{b.opt['design']}.yaml")
-    warm_up(d)
+    robot = check_certifiable(d)
+    warm_up(robot)
     g0 = d.workspace.grid
     ws.run(d, grid=Grid(g0.lower, g0.lower, g0.step), force=True, engine="numba", keep_maps=False, tilt=False)
     for res in b.opt["resolutions"]:
         g = Grid(g0.lower, g0.upper, (res,) * len(g0.lower))
         out = {}
-        t = h.rounds({"certify": lambda: out.__setitem__("c", certify(d, resolution=res, max_boxes=b.opt["max_boxes"])),
+        t = h.rounds({"certify": lambda: out.__setitem__("c", certify(robot, resolution=res, max_boxes=b.opt["max_boxes"])),
                       "grid": lambda: out.__setitem__("g", ws.run(d, grid=g, force=True, engine="numba",
                                                                   keep_maps=False, tilt=False))}, b.rounds)
         s, w = out["c"].summary(), out["g"]

@@ -27,10 +27,10 @@ def per_pose_loop(design, samples):
     """The sagging statics of every sample through the per-pose function (the baseline)."""
     sys.path.insert(0, str(h.ROOT))
     from cdpr_design.motion import trajectory
-    from cdpr_design.statics.robot import combinations
+    from cdpr_design.statics.robot import Analysis, combinations, resolve
     from tests.reference_pose import sagging_pose
 
-    st = trajectory.states(design, samples.pose, samples.velocity, samples.acceleration, time=samples.time)
+    st = trajectory.states(resolve(design, Analysis(command="motion")), samples.pose, samples.velocity, samples.acceleration, time=samples.time)
     combos = combinations(design.m, design.n)
     out = np.empty((len(samples), design.m))
     for j in range(len(samples)):
@@ -44,6 +44,7 @@ def run(b: h.Bench) -> None:
     from cdpr_design.model import spec
     from cdpr_design.motion import run as motion_run
     from cdpr_design.motion import trajectory
+    from cdpr_design.statics.robot import Analysis, resolve
 
     base = spec.load(h.ROOT / "designs" / "planar2.yaml")
     designs = {m: base if m == "ideal" else spec.with_cable_model(base, m) for m in ("ideal", "elastic", "sagging")}
@@ -52,7 +53,7 @@ def run(b: h.Bench) -> None:
     s = first["sagging"][1]
     ref = per_pose_loop(d, s)
     assert np.allclose(ref, s.cables.unstretched, rtol=1e-12, equal_nan=True)
-    variants = {m: (lambda d=d: trajectory.sample(d, "square_slow")) for m, d in designs.items()}
+    variants = {m: (lambda d=d: trajectory.sample(resolve(d, Analysis(command="motion")), "square_slow")) for m, d in designs.items()}
     t = h.rounds(variants | {"loop": lambda: per_pose_loop(d, s)}, b.rounds)
     n = len(s)
     for m in designs:
@@ -66,8 +67,9 @@ def run(b: h.Bench) -> None:
         return
     times = {}
     for m, dm in designs.items():
-        samples = trajectory.sample(dm, "square_fast", hold_end=0.5)
-        times[m], res = h.timed(motion_run.simulate, dm, samples)
+        robot = resolve(dm, Analysis(command="motion"))
+        samples = trajectory.sample(robot, "square_fast", hold_end=0.5)
+        times[m], res = h.timed(motion_run.simulate, robot, samples)
         sub = f", {res.settings['cable_segments']} segments a cable" if "cable_segments" in res.settings else ""
         b.row(f"planar2 simulate square_fast, {m} cables{sub}", f"{times[m].wall:.2f} s, {times[m].cpu:.2f} CPU-s",
               h.ratios([times[m]], [times["ideal"]], "cpu") if m != "ideal" else None,
