@@ -649,7 +649,7 @@ def test_a_trial_left_running_is_evaluated_again_on_resume(tmp_path, light_spec)
     stopped_point = {p.key: p.suggest(stopped) for p in pb.space.params}
     stopped.set_user_attr("interrupted", True)
     study.tell(stopped, state=optuna.trial.TrialState.FAIL)
-    assert opt.study.counted(study) == 4  # the RUNNING one counts until a resume marks it
+    assert opt.study.counted(study, opt.study.storage(tmp_path)) == 4  # the RUNNING one counts until a resume marks it
     stats = opt.run(pb, tmp_path, 6, seed=0, resume=True)
     assert (stats.resumed, stats.requeued, stats.evaluated) == (3, 2, 3)
     rows = opt.results.trials(opt.finished(opt.study.load(tmp_path)))

@@ -189,12 +189,18 @@ def interrupted_count(study) -> int:
     return sum(_interrupted(t) for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.FAIL,)))
 
 
-def counted(study, interrupted: int | None = None) -> int:
+def _n_trials(study, store, states=None) -> int:
+    """The study's trials (in ``states``): one COUNT query of its storage ``store`` (optuna's storage
+    API, ``get_n_trials``) rather than loading the trials."""
+    return store.get_n_trials(store.get_study_id_from_name(study.study_name), state=states)
+
+
+def counted(study, store, interrupted: int | None = None) -> int:
     """Trials that count towards the total: every trial but the interrupted ones (``interrupted``:
-    their number if known).  One COUNT query (optuna's storage API) rather than loading the trials."""
+    their number if known); ``store`` the study's storage (:func:`storage`)."""
     if interrupted is None:
         interrupted = interrupted_count(study)
-    return study._storage.get_n_trials(study._study_id) - interrupted
+    return _n_trials(study, store) - interrupted
 
 
 def finished(study) -> list:
@@ -204,30 +210,24 @@ def finished(study) -> list:
     return [t for t in study.get_trials(deepcopy=False, states=states) if not _interrupted(t)]
 
 
-def done_count(study, interrupted: int) -> int:
-    """Finished trials that count (one COUNT query; ``interrupted``: their number, constant in a run)."""
+def done_count(study, store, interrupted: int) -> int:
+    """Finished trials that count (one COUNT query of ``store``; ``interrupted``: their number,
+    constant in a run)."""
     TS = _optuna().trial.TrialState
-    return study._storage.get_n_trials(study._study_id, state=(TS.COMPLETE, TS.FAIL)) - interrupted
+    return _n_trials(study, store, (TS.COMPLETE, TS.FAIL)) - interrupted
 
 
-def _claim(study, total: int, lock: Path, interrupted: int, queued: bool):
-    """(a new trial while fewer than ``total`` trials count, else None; whether trials may still be
-    queued).  ``queued``: whether they may be (only a resumed run queues trials, before any worker
-    starts; once none is left none comes, and the query for them is spared).
+def _claim(study, store, total: int, lock: Path, interrupted: int):
+    """A new trial (``Study.ask``: a queued trial taken, or a new row) while fewer than ``total``
+    trials count, else None.
 
-    Only the trial's creation (a queued trial taken, or a new row) is under the lock; the sampling
-    (TPE over every trial so far, the slow part of optuna's ``ask``) runs outside it, so workers
-    sample in parallel.  This is ``Study.ask`` split in two (optuna 5; its private helpers)."""
-    optuna = _optuna()
+    Only the count and ``ask`` are under the lock: optuna samples a trial's parameters (TPE over
+    every trial so far, the slow part) at its first ``suggest``, outside it, so workers sample in
+    parallel."""
     with flock(lock):
-        if counted(study, interrupted) >= total:
-            return None, queued
-        study._thread_local.cached_all_trials = None
-        trial_id = study._pop_waiting_trial_id() if queued else None
-        if trial_id is None:
-            queued = False
-            trial_id = study._storage.create_new_trial(study._study_id)
-    return optuna.Trial(study, trial_id), queued
+        if counted(study, store, interrupted) >= total:
+            return None
+        return study.ask()
 
 
 def _tell(study, trial, problem: Problem, outcome, seconds: float, worker: int) -> None:
@@ -254,9 +254,9 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
     ``parent``: the process id of the run; a worker whose run has died stops after its trial.
     ``store``: the storage already open in this process (default: open it)."""
     optuna = _optuna()
-    study = optuna.load_study(study_name=STUDY, storage=store or storage(folder), sampler=make_sampler(seed))
+    store = store or storage(folder)
+    study = optuna.load_study(study_name=STUDY, storage=store, sampler=make_sampler(seed))
     interrupted = interrupted_count(study)
-    queued = bool(study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.WAITING,)))
     job = problem.job()
     lock = Path(folder) / CLAIM_LOCK
     done = 0
@@ -268,7 +268,7 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
         trial = None
         try:
             with signals_held():  # a trial created is a trial in hand
-                trial, queued = _claim(study, total, lock, interrupted, queued)
+                trial = _claim(study, store, total, lock, interrupted)
             if trial is None:
                 break
             values = {p.key: p.suggest(trial) for p in problem.space.params}
@@ -378,28 +378,29 @@ def open_study(problem: Problem, folder: Path, resume: bool, log: Callable[[str]
         study = optuna.create_study(study_name=STUDY, storage=st, directions=problem.directions)
         study.set_user_attr("fingerprint", problem.fingerprint())
         study.set_user_attr("problem", problem.describe())
-        return study, 0, 0
+        return study, st, 0, 0
     study = optuna.load_study(study_name=STUDY, storage=st)
     if study.user_attrs.get("fingerprint") != problem.fingerprint():
         raise InputError(f"--resume: the study in {folder} is from another search (other spec, keys, ranges, "
                          "objectives, limits or options); run without --resume and another --out to start over")
-    requeued = requeue_interrupted(study)
-    return study, len(finished(study)), requeued
+    requeued = requeue_interrupted(study, st)
+    return study, st, len(finished(study)), requeued
 
 
-def requeue_interrupted(study) -> int:
+def requeue_interrupted(study, store) -> int:
     """Mark trials left RUNNING (a killed run) interrupted, and queue every interrupted trial's
     parameters again, once (the study's user attribute ``requeued`` lists the trials queued again).
-    The number queued now."""
+    ``store``: the study's storage.  The number queued now."""
     optuna = _optuna()
     TS = optuna.trial.TrialState
-    st = study._storage
+    study_id = store.get_study_id_from_name(study.study_name)
     done = set(study.user_attrs.get("requeued") or ())
     n = 0
     for t in study.get_trials(deepcopy=False, states=(TS.RUNNING, TS.FAIL)):
         if t.state == TS.RUNNING:
-            st.set_trial_user_attr(t._trial_id, "interrupted", True)
-            st.set_trial_state_values(t._trial_id, TS.FAIL)
+            trial_id = store.get_trial_id_from_study_id_trial_number(study_id, t.number)
+            store.set_trial_user_attr(trial_id, "interrupted", True)
+            store.set_trial_state_values(trial_id, TS.FAIL)
         elif not _interrupted(t) or t.number in done:
             continue
         done.add(t.number)
@@ -434,7 +435,7 @@ def run(problem: Problem, folder: Path, total: int, *, workers: int = 1, seed: i
 def _run(problem, folder, total, workers, seed, timeout, resume, progress, log, start_method, t0) -> RunStats:
     """:func:`run` under the run's lock."""
     _wait_for_orphans(folder, log)
-    study, before, requeued = open_study(problem, folder, resume, log)
+    study, store, before, requeued = open_study(problem, folder, resume, log)
     stats = RunStats(requested=total, resumed=before, requeued=requeued, workers=workers)
     if resume and before:
         log(f"resuming: {before} of {total} trials already done"
@@ -452,16 +453,16 @@ def _run(problem, folder, total, workers, seed, timeout, resume, progress, log, 
     if progress is not None:
         progress(min(before, total), total)
     if workers == 1:
-        stats.evaluated = work(problem, folder, total, seed, deadline, on_trial=tick, store=study._storage)
+        stats.evaluated = work(problem, folder, total, seed, deadline, on_trial=tick, store=store)
     else:
-        stats.evaluated = _run_pool(problem, folder, total, workers, seed, deadline, study, progress,
+        stats.evaluated = _run_pool(problem, folder, total, workers, seed, deadline, study, store, progress,
                                     start_method)
     stats.elapsed_s = time.perf_counter() - t0
     stats.stopped_by_timeout = len(finished(study)) < total
     return stats
 
 
-def _run_pool(problem, folder, total, workers, seed, deadline, study, progress, start_method) -> int:
+def _run_pool(problem, folder, total, workers, seed, deadline, study, store, progress, start_method) -> int:
     """This process as worker 0 (set up already: it starts evaluating at once) and ``workers - 1``
     worker processes, each running :func:`work` on the shared study; progress by counting its trials."""
     import multiprocessing as mp
@@ -476,7 +477,7 @@ def _run_pool(problem, folder, total, workers, seed, deadline, study, progress, 
             if f.done():
                 f.result()  # a worker's error surfaces here
         if progress is not None:
-            progress(min(done_count(study, interrupted), total), total)
+            progress(min(done_count(study, store, interrupted), total), total)
 
     try:
         futures = [ex.submit(_worker_main, problem, str(folder), total,
@@ -484,7 +485,7 @@ def _run_pool(problem, folder, total, workers, seed, deadline, study, progress, 
                    for k in range(1, workers)]
         with parallel.threads_kept():  # this process's trials ran on one thread, the command goes on as before
             here = work(problem, folder, total, seed, deadline, 0, single_thread=True, on_trial=tick,
-                        store=study._storage)
+                        store=store)
         pending = set(futures)
         while pending:
             _, pending = wait(pending, timeout=0.5, return_when=FIRST_EXCEPTION)
