@@ -22,7 +22,7 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Design
 from cdpr_design.model.limits import lengths_problem
-from cdpr_design.statics.robot import has_pulleys
+from cdpr_design.statics.pulley import has_pulleys
 
 
 def rotation_matrix(rx: float = 0.0, ry: float = 0.0, rz: float = 0.0) -> np.ndarray:

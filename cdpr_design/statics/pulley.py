@@ -273,6 +273,11 @@ def cable_paths(outlets, axes, radii, points) -> CablePaths:
     return CablePaths(C, L, free, u, beta, t, kappa)
 
 
+def has_pulleys(design) -> bool:
+    """Whether any cable of ``design`` leaves its outlet over a swivel pulley of positive radius."""
+    return any(c.pulley is not None and c.pulley.radius > 0 for c in design.cables)
+
+
 def design_cable_paths(design, points) -> CablePaths:
     """:func:`cable_paths` of a design's cables for attachment points (k, m, 3) [m]."""
     A, axes, radii = design_pulleys(design)

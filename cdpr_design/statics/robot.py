@@ -40,6 +40,7 @@ import numpy as np
 
 from cdpr_design.errors import InputError, SpecError
 from cdpr_design.model.design import Design, has_weight, is_underconstrained
+from cdpr_design.statics.pulley import has_pulleys
 from cdpr_design.statics import strategies as S
 from cdpr_design.statics.strategies import CableModel, Orientation, Outlets
 
@@ -348,11 +349,6 @@ class Robot:
 def cable_model(design: Design) -> CableModel:
     """The design's cable model: the heaviest of its cables' models (:data:`CABLE_MODELS`)."""
     return S.CABLE_MODELS[max(CABLE_MODELS.index(c.props.model) for c in design.cables)]
-
-
-def has_pulleys(design: Design) -> bool:
-    """Whether any cable leaves its outlet over a swivel pulley of positive radius."""
-    return any(c.pulley is not None and c.pulley.radius > 0 for c in design.cables)
 
 
 def underconstrained(design: Design) -> bool:
