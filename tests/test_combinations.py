@@ -14,6 +14,11 @@ The axes:
   which the spec format allows only with ``free``;
 - output option: plain, ``--collisions``, ``--orientations total``, ``--html --format parquet``.
 
+Every computed combination also has its boundary and frame loads: the summary's keys, a positive
+``boundary_measure`` exactly when a pose is feasible, ``boundary.csv`` (planar) or a closed,
+consistently wound ``workspace.stl`` enclosing ``boundary_measure`` (spatial, read back with numpy:
+an independent reading of the binary STL), one ``frame_loads.csv`` row per cable.
+
 Every variant gets an explicit ``workspace.orientation_set`` on rotational motions (the nominal
 orientation and +-0.1 rad about its last rotation coordinate: 3 orientations) so that a row of
 ``--orientations total`` can be checked against ``pose`` at each of them.
@@ -246,6 +251,46 @@ def _agreement(spec: Path, raw: dict, header: list[str], rows: list[dict], kind:
     return problems
 
 
+def _solid_problems(out: Path, raw: dict, rows: list[dict]) -> list[str]:
+    """What is wrong with the boundary and the frame loads of a computed combination: the summary's
+    keys, boundary.csv (planar) or a closed workspace.stl whose volume is boundary_measure
+    (spatial), one frame_loads row per cable, a positive measure when a pose is feasible."""
+    import numpy as np
+
+    s = json.loads((out / "summary.json").read_text())
+    problems = []
+    if not all(k in s for k in ("boundary_measure", "boundary_surface", "frame_loads")):
+        return ["summary.json lacks boundary_measure, boundary_surface or frame_loads"]
+    feasible = any(r["feasible"] == 1.0 for r in rows) and min(s["grid"]["shape"]) > 1  # a flat grid: no volume
+    if feasible != (s["boundary_measure"] > 0):
+        problems.append(f"boundary_measure {s['boundary_measure']} with feasible poses: {feasible}")
+    ext = "parquet" if (out / "workspace.parquet").exists() else "csv"
+    if raw["motion"] in ("2T", "1R2T"):
+        if not (out / f"boundary.{ext}").exists():
+            problems.append(f"no boundary.{ext}")
+    else:
+        data = (out / "workspace.stl").read_bytes()
+        n = int(np.frombuffer(data[80:84], "<u4")[0])
+        tri = np.frombuffer(data[84:], dtype=[("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")])["v"]
+        if len(tri) != n or (n > 0) != feasible:
+            problems.append(f"workspace.stl: {n} triangles, {len(tri)} read, feasible poses: {feasible}")
+        elif n:
+            ids = np.unique(tri.reshape(-1, 3), axis=0, return_inverse=True)[1].reshape(-1, 3)
+            e = ids[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+            fwd, back = np.sort(e[:, 0] * (n * 3) + e[:, 1]), np.sort(e[:, 1] * (n * 3) + e[:, 0])
+            if not (np.all(fwd[1:] != fwd[:-1]) and np.array_equal(fwd, back)):
+                problems.append("workspace.stl is not closed and consistently wound")
+            v = tri.astype(float)
+            volume = float(np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2])).sum() / 6)
+            if abs(volume - s["boundary_measure"]) > 1e-4 * max(1.0, abs(volume)):
+                problems.append(f"workspace.stl encloses {volume}, boundary_measure {s['boundary_measure']}")
+    if ext == "csv":
+        text = (out / "frame_loads.csv").read_text().splitlines()
+        if [line.split(",")[0] for line in text[1:]] != [c["name"] for c in raw["cables"]]:
+            problems.append("frame_loads.csv has not one row per cable")
+    return problems
+
+
 def run_combination(folder: Path, design: Path, kind: str, model: str, mode: str, option: str) -> Outcome:
     """Run ``workspace`` for one combination in this process and judge it (see the module's text)."""
     key = (design.stem, kind, model, mode, option)
@@ -259,7 +304,7 @@ def run_combination(folder: Path, design: Path, kind: str, model: str, mode: str
         return Outcome(key, status, reason, detail)
     try:
         header, rows = _read_table(out)
-        problems = _agreement(spec, raw, header, rows, kind, model, option)
+        problems = _agreement(spec, raw, header, rows, kind, model, option) + _solid_problems(out, raw, rows)
     except Exception as e:  # noqa: BLE001 - the test reports it as this combination's failure
         return Outcome(key, "failed", f"checking the table: {type(e).__name__}: {e}",
                        traceback.format_exc().rstrip().splitlines()[-3:])

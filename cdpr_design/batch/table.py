@@ -19,13 +19,14 @@ HIGHER_IS_BETTER = frozenset({
     "implied_tension_max", "min_margin_figure", "checks_passed",
     "check_task_box", "check_min_margin", "check_min_fraction", "check_motors",
     "task_min_stiffness", "task_lowest_frequency", "check_min_stiffness", "check_min_frequency",
+    "boundary_measure", "check_max_frame_load",
 })
 
 
 #: Figures where a smaller value is better.
 LOWER_IS_BETTER = frozenset({
     "max_tension", "peak_tension", "peak_cable_speed", "peak_motor_torque",
-    "rms_motor_torque", "peak_motor_speed",
+    "rms_motor_torque", "peak_motor_speed", "max_frame_load",
 })
 
 
@@ -35,6 +36,7 @@ KNOWN_FIGURES = HIGHER_IS_BETTER | LOWER_IS_BETTER | frozenset({
     "name", "motion", "cables", "kind", "poses", "task_poses", "sizing_poses", "motor",
     "tension_max", "drum_radius", "gear_ratio", "safety_factor", "duty_cycle",
     "req_min_margin", "req_min_fraction", "req_min_stiffness", "req_min_frequency",
+    "boundary_surface", "req_max_frame_load",
 })
 
 
@@ -43,6 +45,7 @@ KNOWN_FIGURES = HIGHER_IS_BETTER | LOWER_IS_BETTER | frozenset({
 NUMERIC_FIGURES = HIGHER_IS_BETTER | LOWER_IS_BETTER | frozenset({
     "cables", "poses", "task_poses", "sizing_poses", "tension_max", "safety_factor",
     "req_min_margin", "req_min_fraction", "req_min_stiffness", "req_min_frequency",
+    "boundary_surface", "req_max_frame_load",
 })
 
 

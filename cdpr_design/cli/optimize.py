@@ -18,7 +18,7 @@ if TYPE_CHECKING:
 _FIGURES = ("task_min_margin, min_margin_figure, task_fraction, task_feasible, fraction, measure, feasible, "
             "min_margin, max_margin, max_tension, peak_tension, peak_tension_<cable>, peak_cable_speed, "
             "peak_motor_torque, rms_motor_torque, peak_motor_speed, torque_margin, speed_margin, "
-            "implied_tension_max, task_min_stiffness, task_lowest_frequency")
+            "implied_tension_max, task_min_stiffness, task_lowest_frequency, boundary_measure, max_frame_load")
 
 
 def best_table(run) -> Table:

@@ -39,6 +39,24 @@ def sizing_table(design, result) -> Table:
     return t
 
 
+def frame_load_console_table(design, rows: list[dict], total: dict) -> Table:
+    """One row per cable: ``frame_loads.csv``'s forces [N] on the frame at its outlet."""
+    axes = "xy" if design.motion.planar else "xyz"
+    t = table(f"{design.name} — loads on the frame ({total['poses']:,} feasible workspace poses)")
+    cols = [("cable", "cable"), ("max |F| [N]", "max_force")]
+    cols += [(f"f{a} [N]", f"f{a}") for a in axes] + [("limit |F| [N]", "limit_max_force")]
+    for head, key in cols:
+        t.add_column(head, no_wrap=True)
+    for r in rows:
+        cells = [r["cable"], fmt(r["max_force"], 4)]
+        cells += [f"{fmt(r[f'min_f{a}'], 3)} .. {fmt(r[f'max_f{a}'], 3)}" for a in axes]
+        t.add_row(*cells, fmt(r["limit_max_force"], 4))
+    tf, tm = total["total_force"]["max_magnitude"], total["total_moment"]["max_magnitude"]
+    t.caption = (f"with the sweep's tensions; limit: each cable at its upper bound along its directions; total force "
+                 f"≤ {fmt(tf, 4)} N, moment about the origin ≤ {fmt(tm, 4)} N m")
+    return t
+
+
 def checks_table(design, rows: list[dict]) -> Table:
     """One row per requirement: its figure, its limit, pass or FAIL."""
     t = table(f"{design.name} — requirements")
@@ -75,6 +93,7 @@ def size_motors(
         emit_json(summary)
         return
     out_console.print(sizing_table(design, result))
+    out_console.print(frame_load_console_table(design, summary["frame_loads_per_cable"], summary["frame_loads"]))
     info(quiet, f"duty cycle: {result.cycle}")
     for note in result.notes:
         info(quiet, f"note: {note}")
@@ -112,6 +131,11 @@ def report(
         emit_json({**e.row, "checks": checks, "timings": timings})
         return
     out_console.print(sizing_table(design, e.sizing))
+    if e.workspace is not None and e.workspace.frame_loads is not None:
+        s = e.workspace.summary()["frame_loads"]
+        cols = e.workspace.frame_loads.rows(design.cable_names)
+        rows = [{k: v[i] for k, v in cols.items()} for i in range(design.m)]
+        out_console.print(frame_load_console_table(design, rows, s))
     if checks:
         out_console.print(checks_table(design, checks))
     ext = format.value

@@ -68,6 +68,8 @@ def workspace(
         f"{design.name} — {s['kind']} workspace",
         [("poses", f"{s['poses']:,}"), ("feasible", f"{s['feasible']:,}"),
          ("fraction", f"{100 * s['fraction']:.2f} %"), ("measure", f"{s['measure']:.4g} {unit}"),
+         ("inside the boundary", f"{s['boundary_measure']:.4g} {unit}"),
+         ("largest force on the frame [N]", s["frame_loads"]["max_force"]),
          ("min margin [N]", s["min_margin"]), ("max margin [N]", s["max_margin"]),
          ("max tension [N]", s["max_tension"]), ("elapsed [s]", s["elapsed_s"]),
          timings_row(s["timings"])]

@@ -21,6 +21,9 @@ Checks (``check_<name>``: True pass, False fail, None not asked for):
 - ``motors``: every axis's motor covers peak torque, RMS torque and speed with
   the safety factor.  Asked for when the spec names a motor or gives
   ``max_speed`` / ``max_acceleration``;
+- ``max_frame_load`` (only when the spec asks): the largest force a cable puts on the frame at its
+  outlet over the feasible workspace grid, with the sweep's tensions
+  (:mod:`cdpr_design.workspaces.frame_loads`), is at most ``requirements.max_frame_load``;
 - ``min_stiffness``, ``min_frequency`` (only when the spec asks, or the figures
   ``task_min_stiffness`` / ``task_lowest_frequency`` are wanted): the least
   stiffness [N/m] and the lowest natural frequency [Hz] over the feasible poses
@@ -54,6 +57,9 @@ STIFFNESS_FIGURES = frozenset(f for _, _, f, _ in STIFFNESS_CHECKS)
 #: Figures of the static workspace sweep (the whole workspace grid).
 WORKSPACE_FIGURES = frozenset({"kind", "poses", "feasible", "fraction", "measure", "min_margin", "max_margin",
                                "max_tension"})
+#: Figures of the workspace's boundary and of the frame loads (a sweep planned with ``solid``):
+#: the area or volume inside the boundary, its perimeter or surface, the largest force on the frame.
+SOLID_FIGURES = frozenset({"boundary_measure", "boundary_surface", "max_frame_load"})
 #: Figures of the motor sizing (also ``peak_tension_<cable>`` and ``motor_<cable>``).
 SIZING_FIGURES = frozenset({"sizing_poses", "peak_tension", "peak_cable_speed", "peak_motor_torque",
                             "rms_motor_torque", "peak_motor_speed", "motor", "torque_margin", "speed_margin",
@@ -141,7 +147,8 @@ def parts_needed(design: Design, figures: Iterable[str] | None, motor: str | Non
         return True, True
     figures = set(figures)
     req = design.requirements
-    workspace = req.task_box is None or req.min_fraction is not None or bool(figures & WORKSPACE_FIGURES)
+    workspace = (req.task_box is None or req.min_fraction is not None or req.max_frame_load is not None
+                 or bool(figures & (WORKSPACE_FIGURES | SOLID_FIGURES)))
     sizing = motors_asked(design, motor) or any(
         f in SIZING_FIGURES or f.startswith(("peak_tension_", "motor_")) for f in figures)
     return workspace, sizing
@@ -180,8 +187,10 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catal
     wres = workspace_result
     if wres is None and need_ws:
         # the figures and checks use no hanging tilt of a held effector (report passes its own sweep)
+        solid = (figures is None or bool(set(figures) & SOLID_FIGURES)
+                 or design.requirements.max_frame_load is not None)
         wres = ws.run(design, "static", step=step, keep_maps=keep_maps, progress=progress, engine=engine,
-                      tilt=False)
+                      tilt=False, solid=solid)
     stiffness = stiffness_asked(design, figures) and task_grid(design, step) is not None
     task, task_least = task_sweep(design, step, engine=engine, stiffness=stiffness)
     sizing = None
@@ -214,6 +223,10 @@ def _workspace_figures(design: Design, wres: ws.WorkspaceResult | None, task: ws
             "min_margin": _f(wres.min_margin), "max_margin": _f(wres.max_margin),
             "max_tension": _f(np.nanmax(wres.max_tension)) if np.isfinite(wres.max_tension).any() else None,
         })
+        if wres.boundary is not None:
+            s = wres.summary()
+            row.update(boundary_measure=_f(s["boundary_measure"]), boundary_surface=_f(s["boundary_surface"]),
+                       max_frame_load=_f(s["frame_loads"]["max_force"]))
     if task is not None:
         row.update(task_poses=int(task.poses), task_feasible=int(task.feasible),
                    task_fraction=float(task.fraction), task_min_margin=_f(task_least)
@@ -266,6 +279,10 @@ def _checks(design: Design, wres: ws.WorkspaceResult | None, task: ws.WorkspaceR
     checks["min_fraction"] = (wres.fraction >= req.min_fraction) if req.min_fraction is not None else None
     row["req_min_fraction"] = req.min_fraction
     checks["motors"] = sizing.ok if motors_asked(design, motor) else None
+    if req.max_frame_load is not None:  # the workspace's loads on the frame (a solid sweep)
+        load = row.get("max_frame_load") if "max_frame_load" in row else _max_frame_load(wres)
+        row["max_frame_load"], row["req_max_frame_load"] = load, req.max_frame_load
+        checks["max_frame_load"] = load is not None and load <= req.max_frame_load
     if stiffness:  # the task box's least stiffness and lowest frequency (STIFFNESS_CHECKS)
         s = task.summary()
         for name, req_name, figure, key in STIFFNESS_CHECKS:
@@ -276,6 +293,13 @@ def _checks(design: Design, wres: ws.WorkspaceResult | None, task: ws.WorkspaceR
         row[f"check_{name}"] = None if checks[name] is None else bool(checks[name])
     row["checks_passed"] = all(v is not False for v in checks.values())
     return row
+
+
+def _max_frame_load(wres: ws.WorkspaceResult | None) -> float | None:
+    """The largest force [N] on the frame at an outlet over the feasible grid poses (None: none feasible)."""
+    if wres is None or wres.frame_loads is None:
+        return None
+    return _f(wres.summary()["frame_loads"]["max_force"])
 
 
 def evaluate(design: Design, *, step: float | None = None, catalogue: Catalogue | None = None,
@@ -314,6 +338,9 @@ def check_table(row: dict) -> list[dict]:
             unit = " N/m" if name == "min_stiffness" else " Hz"
             out.append({"requirement": name, "figure": num(row[figure], unit),
                         "limit": f">= {row[f'req_{req_name}']:g}{unit}", "passed": row[f"check_{name}"]})
+    if row.get("check_max_frame_load") is not None:
+        out.append({"requirement": "max_frame_load", "figure": num(row["max_frame_load"], " N"),
+                    "limit": f"<= {row['req_max_frame_load']:g} N", "passed": row["check_max_frame_load"]})
     if row["check_motors"] is not None:
         out.append({"requirement": "motors", "figure": f"{row['motor'] or 'none fits'}: torque margin "
                     f"{num(row['torque_margin'])}, speed margin {num(row['speed_margin'])}",

@@ -5,6 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import NamedTuple
 
+import numpy as np
+
 from cdpr_design.io.columns import file_name
 from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
@@ -59,9 +61,22 @@ def size_motors(design, catalogue: Path | None = None, trajectory: str | None = 
     with timings.phase("sweep_s"):
         result = sz.size_motors(robot, cat, step=step, samples=samples, safety_factor=safety_factor,
                                 motor=motor, engine=engine)
+        loads = frame_loads(design, step, engine)
     with timings.phase("write_s"), out_dir:
         write_motor_sizing(out_dir, result, format, design)
-    return SizingRun(result, out_dir, {**result.summary(), "timings": timings.as_dict()})
+    return SizingRun(result, out_dir, {**result.summary(), **loads, "timings": timings.as_dict()})
+
+
+def frame_loads(design, step: float | None = None, engine: str = "auto") -> dict:
+    """The loads on the frame over the static workspace grid (``step`` [m]): the summary's
+    ``frame_loads`` object and ``frame_loads_per_cable`` (``frame_loads.csv``'s rows as objects)."""
+    from cdpr_design import workspaces as ws
+
+    r = ws.run(design, "static", step=step, keep_maps=False, engine=engine, tilt=False, frame_loads=True)
+    cols = r.frame_loads.rows(design.cable_names)
+    rows = [{k: (v[i] if k == "cable" or np.isfinite(v[i]) else None) for k, v in cols.items()}
+            for i in range(design.m)]
+    return {"frame_loads": r.summary()["frame_loads"], "frame_loads_per_cable": rows}
 
 
 def evaluate(design, catalogue, trajectory=None, safety_factor: float | None = None,

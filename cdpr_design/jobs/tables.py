@@ -31,6 +31,9 @@ _EXACT = {
     "max_tension": "N", "task_min_margin": "N", "min_margin_figure": "N", "req_min_margin": "N",
     "feasible": "0/1", "collision_free": "0/1", "fits": "0/1", "checks_passed": "0/1",
 }
+# frame_loads.csv (cdpr_design.workspaces.frame_loads): forces on the frame [N]
+_EXACT.update({f"{pre}{name}": "N" for pre in ("", "limit_")
+               for name in ["max_force"] + [f"{mm}_f{a}" for a in "xyz" for mm in ("min", "max")]})
 #: Units of column-name prefixes, longest first (per-cable and per-coordinate columns).
 _PREFIX = sorted([
     ("tension_", "N"), ("outlet_tension_", "N"), ("peak_tension_", "N"), ("length_", "m"),

@@ -9,10 +9,12 @@ from pathlib import Path
 import numpy as np
 
 from cdpr_design.io.files import OutputDir
+from cdpr_design.jobs.solid import solid_names, write_solid
 from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage, submit_pictures
 from cdpr_design.jobs.tables import Timings, grid_metadata, table_metadata
 from cdpr_design.plots import workspace as wsplots
 from cdpr_design.plots.hanging import tilt_figure
+from cdpr_design.plots.solid import frame_load_figure
 from cdpr_design.plots.stiffness import stiffness_figure
 from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
@@ -88,16 +90,19 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
 
     timings = timings if timings is not None else Timings()
     grid = ws.make_grid(design, step, force)
-    p = ws.plan(ws.robot_for(design, grid, kind, collisions, orientations, engine, max_tilt, stiffness), grid)
+    p = ws.plan(ws.robot_for(design, grid, kind, collisions, orientations, engine, max_tilt, stiffness), grid,
+                solid=True)
     meta = table_metadata(design, "workspace", p.columns, kind=kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])
-    files = output_names(p, html)
+    files = output_names(p, html) + solid_names(design, format)
     for name in files:
         out.target(name)  # a foreign file of that name: refused before any work
     writer = out.table("workspace", format, metadata=meta, names=p.columns, background=True,
                        compiled=p.robot.engine == "numba")  # the kernels loaded: their formatter costs no start-up
     try:
         result = _sweep(p, progress, writer, timings)
+        with timings.phase("write_s"):
+            write_solid(out, result, format)
         pics = workspace_pictures(result, p.pictures) + ([("report.html", report_html, (result,))] if html else [])
         pending = submit_pictures(out, pics, pictures, timings)
         writer.close()
@@ -118,7 +123,7 @@ def output_names(p, html: bool = False) -> list[str]:
 def finish_workspace(out: OutputDir, result, pending, timings: Timings) -> None:
     """Wait for the pictures of :func:`start_workspace`, then write ``summary.json`` with the timings."""
     pending.wait()
-    result.extra["timings"] = timings.as_dict()
+    result.extra["timings"] = timings.as_dict() | {"boundary_s": round(result.boundary.elapsed_s, 4)}
     out.write_json("summary.json", result.summary())
 
 
@@ -153,7 +158,7 @@ def _sweep(p, progress, writer, timings):
 #: it sweeps the grid again, :func:`cable_model_picture`).
 FIGURES = {"workspace.png": wsplots.workspace_figure, "tension_map.png": wsplots.tension_figure,
            "tilt_map.png": tilt_figure, "orientation_workspace.png": wsplots.orientation_figure,
-           "stiffness_map.png": stiffness_figure}
+           "stiffness_map.png": stiffness_figure, "frame_loads.png": frame_load_figure}
 
 
 def workspace_pictures(result, names: list[str] | None = None) -> list:

@@ -322,6 +322,8 @@ class Requirements:
     min_stiffness: float | None = None
     #: lowest natural frequency [Hz] allowed over the task box
     min_frequency: float | None = None
+    #: largest force [N] a cable may put on the frame at its outlet over the feasible workspace grid
+    max_frame_load: float | None = None
 
 
 @dataclass(frozen=True)

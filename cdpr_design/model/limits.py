@@ -132,6 +132,7 @@ BOUNDS: dict[str, tuple[float, float, str]] = {
     "requirements.safety_factor": (1.0, 100.0, ""),
     "requirements.min_cable_frequency": (0.0, 1e6, "Hz"),
     "requirements.min_stiffness": (0.0, 1e12, "N/m"), "requirements.min_frequency": (0.0, 1e6, "Hz"),
+    "requirements.max_frame_load": (0.0, FORCE, "N"),
     "trajectories.*.speed": (1e-6, 1e3, "m/s"), "trajectories.*.acceleration": (1e-6, 1e6, "m/s^2"),
     "trajectories.*.jerk": (1e-6, 1e9, "m/s^3"), "trajectories.*.cycle_time": (1e-5, 1.0, "s"),
     "trajectories.*.center": (-LENGTH, LENGTH, "m"), "trajectories.*.start": (-LENGTH, LENGTH, "m"),

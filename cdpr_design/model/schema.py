@@ -155,6 +155,9 @@ class RequirementsSpec(StrictModel):
                           "(check; elastic cables, or ideal ones with axial_stiffness)")
     min_frequency: PosFloat | None = Field(
         None, description="Lowest natural frequency [Hz] of the effector on its cables allowed over the task box")
+    max_frame_load: PosFloat | None = Field(
+        None, description="Largest force [N] a cable may put on the frame at its outlet over the feasible "
+                          "workspace grid (check)")
 
 
 class TrajectorySpec(StrictModel):

@@ -46,6 +46,7 @@ _UNDEFINED_WHY = {
     "speed_margin": "no axis turns (no max_speed)",
     "task_min_stiffness": "no task pose is feasible, or the stiffness is not defined there",
     "task_lowest_frequency": "no task pose is feasible, or its equilibrium is unstable",
+    "max_frame_load": "no pose of the workspace is feasible",
 }
 
 
@@ -146,14 +147,16 @@ def spec_checks(design, motor: str | None = None) -> list[str]:
     asked = {"task_box": req.task_box is not None, "min_margin": req.min_margin is not None,
              "min_fraction": req.min_fraction is not None, "motors": motors_asked(design, motor),
              "min_stiffness": req.min_stiffness is not None and req.task_box is not None,
-             "min_frequency": req.min_frequency is not None and req.task_box is not None}
-    return [c for c in CHECKS + ("min_stiffness", "min_frequency") if asked[c]]
+             "min_frequency": req.min_frequency is not None and req.task_box is not None,
+             "max_frame_load": req.max_frame_load is not None}
+    return [c for c in CHECKS + ("min_stiffness", "min_frequency", "max_frame_load") if asked[c]]
 
 
 #: The figures behind each spec check (columns of optimize.csv).
 CHECK_FIGURES = {"task_box": ("task_feasible", "task_poses"), "min_margin": ("min_margin_figure",),
                  "min_fraction": ("fraction",), "motors": ("torque_margin", "speed_margin"),
-                 "min_stiffness": ("task_min_stiffness",), "min_frequency": ("task_lowest_frequency",)}
+                 "min_stiffness": ("task_min_stiffness",), "min_frequency": ("task_lowest_frequency",),
+                 "max_frame_load": ("max_frame_load",)}
 
 
 def check_violation(name: str, row: dict) -> tuple[float, str]:
@@ -173,6 +176,10 @@ def check_violation(name: str, row: dict) -> tuple[float, str]:
         unit = "N/m" if name == "min_stiffness" else "Hz"
         v = UNDEFINED if f is None else limit - f
         return v, f"{name} ({'undefined' if f is None else f'{f:.4g} {unit}'} < {limit:g} {unit})"
+    if name == "max_frame_load":
+        f, limit = number(row.get("max_frame_load")), row["req_max_frame_load"]
+        v = UNDEFINED if f is None else f - limit
+        return v, f"max_frame_load ({'undefined' if f is None else f'{f:.4g} N'} > {limit:g} N)"
     if name == "min_fraction":
         f = number(row.get("fraction"))
         v = UNDEFINED if f is None else row["req_min_fraction"] - f

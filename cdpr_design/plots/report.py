@@ -2,8 +2,10 @@
 
 :func:`report_html` returns the page as text (nothing is written): the
 design's name and summary table, an interactive workspace figure (planar: a
-heat map of the capacity margin; spatial: the feasible poses as 3-D points),
-the cable-tension map, the motor-sizing table and the requirement checks.
+heat map of the capacity margin with the boundary between the grid points;
+spatial: that boundary as a surface to turn, the feasible poses as 3-D points
+a click away), the cable-tension map, the loads on the frame, the
+motor-sizing table and the requirement checks.
 Hovering a cell or point shows its pose, margin and tensions.
 
 The page needs no network: plotly's JavaScript is inlined once, and each
@@ -70,6 +72,8 @@ def report_html(result=None, sizing=None, checks=None, summary: dict | None = No
         for fid, heading, (fig, note) in figures:
             parts += [f"<h2>{heading}</h2>", f'<div id="{fid}" class="figure"></div>',
                       f'<p class="note">{_esc(note)}</p>']
+    if result is not None and getattr(result, "frame_loads", None) is not None:
+        parts += ["<h2>Loads on the frame</h2>", frame_load_table(result)]
     if sizing is not None:
         parts += ["<h2>Motor sizing</h2>", _sizing_table(sizing)]
     if checks is not None:
@@ -126,7 +130,7 @@ def _planar_workspace(result) -> tuple[dict, str]:
          "colorscale": MARGIN_SCALE, "zmin": 0.0, "customdata": ten, "hovertemplate": hover,
          "colorbar": {"title": {"text": "capacity margin [N]"}}},
         _outlets(d, planar=True),
-    ]
+    ] + _boundary_lines(result)
     layout = {"title": {"text": _title(result)}, "xaxis": {"title": {"text": "x [m]"}},
               "yaxis": {"title": {"text": "y [m]"}, "scaleanchor": "x", "scaleratio": 1},
               "shapes": [_frame_shape(d)], "legend": {"orientation": "h"}}
@@ -157,12 +161,43 @@ def _spatial_workspace(result) -> tuple[dict, str]:
         _outlets(d, planar=False),
         _frame_edges(d),
     ]
+    mesh = _boundary_mesh(result)
+    if mesh is not None:  # the surface first; the points a click away in the legend
+        traces[0]["visible"] = "legendonly"
+        traces.insert(0, mesh)
     scene = {"xaxis": {"title": {"text": "x [m]"}}, "yaxis": {"title": {"text": "y [m]"}},
              "zaxis": {"title": {"text": "z [m]"}}, "aspectmode": "data"}
     layout = {"title": {"text": _title(result)}, "scene": scene, "legend": {"orientation": "h"}}
-    note = (f"{idx[0].size:,} feasible poses drawn" + (f" (every {k}th grid cell per axis)" if k > 1 else "")
+    note = (f"{idx[0].size:,} feasible poses" + (f" (every {k}th grid cell per axis)" if k > 1 else "")
+            + (", shown by clicking them in the legend, and the workspace's boundary (workspace.stl)"
+               if mesh is not None else " drawn")
             + ". Drag to turn, scroll to zoom; hover a point for its pose, margin and tensions.")
     return {"data": traces, "layout": layout}, note
+
+
+def _boundary_lines(result) -> list[dict]:
+    """The planar boundary's loops as one line trace (gaps between loops), or none."""
+    b = getattr(result, "boundary", None)
+    if b is None or not b.loops:
+        return []
+    xs: list = []
+    ys: list = []
+    for lp in b.loops:
+        xs += list(lp[:, 0]) + [float(lp[0, 0]), None]
+        ys += list(lp[:, 1]) + [float(lp[0, 1]), None]
+    return [{"type": "scatter", "mode": "lines", "x": xs, "y": ys, "name": "boundary between grid points",
+             "line": {"color": "#D55E00", "width": 2}, "hoverinfo": "skip"}]
+
+
+def _boundary_mesh(result) -> dict | None:
+    """The spatial boundary (the closed mesh of workspace.stl) as a mesh trace, or None."""
+    b = getattr(result, "boundary", None)
+    if b is None or len(b.faces) == 0:
+        return None
+    v, f = b.vertices, b.faces
+    return {"type": "mesh3d", "x": v[:, 0], "y": v[:, 1], "z": v[:, 2], "i": f[:, 0], "j": f[:, 1], "k": f[:, 2],
+            "name": "workspace boundary", "color": "#56B4E9", "opacity": 0.55, "flatshading": True,
+            "showlegend": True, "hoverinfo": "skip"}
 
 
 def tension_plotly(result) -> tuple[dict, str]:
@@ -249,7 +284,9 @@ def _frame_edges(d) -> dict:
 # ----------------------------------------------------------------------------
 
 _SUMMARY_ROWS = [("poses", "grid poses", ""), ("feasible", "feasible poses", ""), ("fraction", "feasible fraction", ""),
-                 ("measure", "measure", "measure_unit"), ("min_margin", "least margin", "N"),
+                 ("measure", "measure", "measure_unit"),
+                 ("boundary_measure", "inside the boundary between grid points", "measure_unit"),
+                 ("min_margin", "least margin", "N"),
                  ("max_margin", "largest margin", "N"), ("max_tension", "largest tension", "N"),
                  ("elapsed_s", "sweep time", "s")]
 
@@ -277,6 +314,20 @@ def _sizing_table(sizing) -> str:
     body = [[_cell(r.get(k)) if k != "fits" else _verdict(bool(r.get(k))) for k, _ in _SIZING_COLS] for r in rows]
     note = f'<p class="note">Duty cycle: {_esc(sizing.cycle)}; safety factor {sizing.safety_factor:g}.</p>'
     return _table([h for _, h in _SIZING_COLS], body) + note
+
+
+def frame_load_table(result) -> str:
+    """``frame_loads.csv`` as an HTML table (N), with the total force and moment's envelope."""
+    d = result.design
+    cols = result.frame_loads.rows(d.cable_names)
+    names = [n for n in cols if n != "cable"]
+    body = [[_esc(c)] + [_cell(cols[n][i]) for n in names] for i, c in enumerate(cols["cable"])]
+    s = result.frame_loads.summary(d.cable_names)
+    note = (f'<p class="note">Forces [N] on the frame at each outlet over the {s["poses"]:,} feasible poses, '
+            "with the sweep's tensions; <code>limit_</code>: each cable at its upper tension bound along every "
+            "direction it takes. Total force up to " + _cell(s["total_force"]["max_magnitude"]) + " N, moment "
+            "about the frame's origin up to " + _cell(s["total_moment"]["max_magnitude"]) + " N m.</p>")
+    return _table(["cable"] + names, body) + note
 
 
 def _checks_table(checks: list[dict]) -> str:

@@ -14,6 +14,7 @@ from cdpr_design.plots._frame import (colour_bar, contourable, draw_robot, exten
                                       frame_rect, pad_limits, panel_grid, pose_txt, single_panel, slices,
                                       used_panels, z_slices)
 from cdpr_design.plots._style import BLUE, VERMILLION, cmap_grey_bad, pyplot
+from cdpr_design.plots.solid import draw_boundary, draw_slice_outline
 
 _KIND_TEXT = {"static": "static-equilibrium", "wrench-feasible": "wrench-feasible",
               "wrench-closure": "wrench-closure"}
@@ -25,10 +26,11 @@ def _own_figure(ax, what: str) -> None:
 
 
 def workspace_figure(result, title_extra: str = "", ax=None):
-    """Feasible region shaded by capacity margin [N], with frame, outlets, cables and effector.
+    """Feasible region shaded by capacity margin [N], with frame, outlets, cables and effector,
+    and the boundary between the grid points where the sweep found it (red).
 
     Planar motions: one panel.  Spatial motions: a stack of z-slices (x-y
-    panels), each with the frame's footprint and the outlets.
+    panels), each with the frame's footprint, the outlets and the boundary's outline there.
     """
     d = result.design
     feas = result.feasible_map.astype(bool)
@@ -76,6 +78,7 @@ def _planar_workspace(result, feas, marg, vmax, title, ax):
     if contourable(result.map_axes):  # a grid of one row or column has no outline to draw
         ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
                    colors="k", linewidths=0.8, zorder=2)
+    draw_boundary(ax, result)
     frame_rect(ax, d)
     draw_robot(ax, d, rep)
     if d.requirements.task_box is not None:
@@ -100,6 +103,9 @@ def _spatial_workspace(result, feas, marg, vmax, title):
     zs = slices(result)
     fig, axs, cax = panel_grid(len(zs), min(3, len(zs)), d, title_lines=title.count("\n") + 1)
     im = z_slices(axs, result, marg, feas, zs, cmap_grey_bad("viridis"), vmax)
+    z_axis, eps = result.map_axes[2], 1e-6 * result.grid.step[2]
+    for k, ax in used_panels(axs, len(zs)):  # the box's top and bottom faces cut just inside
+        draw_slice_outline(ax, result, float(np.clip(z_axis[zs[k]], z_axis[0] + eps, z_axis[-1] - eps)))
     fig.suptitle(title, fontsize=10)
     colour_bar(fig, im, cax, "capacity margin [N] (grey: infeasible)")
     return fig
@@ -189,6 +195,7 @@ def _planar_orientation(result, val, feas, title, label, ax):
     if result.orientation_maps.mode == "total" and feas.any() and contourable(result.map_axes):
         ax.contour(result.map_axes[0], result.map_axes[1], feas.T.astype(float), levels=[0.5],
                    colors="k", linewidths=0.8, zorder=2)
+    draw_boundary(ax, result)
     frame_rect(ax, d)
     ax.plot(d.outlets[:, 0], d.outlets[:, 1], "v", ms=7, mfc=VERMILLION, mec="k", zorder=5)
     pad_limits(ax, d)

@@ -48,7 +48,7 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         progress: Callable[[int, int], None] | None = None, force: bool = False,
         chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False,
         engine: str = "auto", max_tilt: float | None = None, tilt: bool = True,
-        stiffness: bool = False) -> WorkspaceResult:
+        stiffness: bool = False, solid: bool = False, frame_loads: bool = False) -> WorkspaceResult:
     """Sweep the workspace grid and return the summary and maps.
 
     Parameters
@@ -94,6 +94,13 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     stiffness : bool
         Also the least stiffness [N/m] and the lowest natural frequency [Hz] of every feasible
         pose (:mod:`~cdpr_design.workspaces.stiffness`): columns, maps and summary keys.
+    solid : bool
+        Also the boundary between the grid points (``result.boundary``, summary keys
+        ``boundary_measure``, ``boundary_surface``; :mod:`~cdpr_design.workspaces.boundary`) and
+        the loads on the frame (``result.frame_loads``, summary key ``frame_loads``;
+        :mod:`~cdpr_design.workspaces.frame_loads`).
+    frame_loads : bool
+        The loads on the frame alone (``result.frame_loads``, summary key ``frame_loads``).
 
     What is computed (cable model, outlets, how the orientation is decided, engine) is the
     resolved robot's (:func:`~cdpr_design.statics.robot.resolve`); the sweep is its
@@ -101,7 +108,8 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     """
     g = _grid(design, step, grid, force)
     robot = robot_for(design, g, kind, interference, None, engine, max_tilt, stiffness)
-    return plan(robot, g, orientation, tilt=tilt).run(on_chunk, progress, chunk, keep_maps)
+    return plan(robot, g, orientation, tilt=tilt, solid=solid, frame_loads=frame_loads).run(on_chunk, progress, chunk,
+                                                                                            keep_maps)
 
 
 def run_orientations(design: Design, mode: str = "total", kind: str = "static", step: float | None = None,
@@ -109,7 +117,7 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
                      on_chunk: Callable[[Chunk], None] | None = None,
                      progress: Callable[[int, int], None] | None = None, force: bool = False,
                      chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False,
-                     engine: str = "auto") -> WorkspaceResult:
+                     engine: str = "auto", solid: bool = False) -> WorkspaceResult:
     """Total orientation workspace (``mode='total'``) or orientation range per position (``'range'``).
 
     ``orientation`` is the nominal orientation (3,) [rad] (default
@@ -121,7 +129,8 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     """
     g = _grid(design, step, grid, force)
     robot = robot_for(design, g, kind, interference, mode, engine)
-    return plan(robot, g, orientation, orientations=orientations).run(on_chunk, progress, chunk, keep_maps)
+    return plan(robot, g, orientation, orientations=orientations, solid=solid).run(on_chunk, progress, chunk,
+                                                                                  keep_maps)
 
 
 def warm_up(p: Plan, meanwhile: Callable[[], None] | None = None) -> None:

@@ -157,6 +157,18 @@ class SaggingSweep(Base):
             np.fmax(self.opeak, outlet[f].max(axis=0), out=self.opeak)
         return Rows(feas, marg, ten, lens, _extra(r, outlet, L0, sag, status))
 
+    def feasible_at(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Feasibility (k,) bool at positions ``P`` (k, 3) [m]: the same pose solve at explicit
+        positions (:func:`cdpr_design.kernels.sagging.sag_points`); no margins (NaN)."""
+        from cdpr_design.kernels.sagging import sag_points
+
+        r, k, m, c = self.robot, P.shape[0], self.robot.m, self.robot.cable
+        feas, status = np.empty(k, dtype=np.uint8), np.empty(k, dtype=np.int8)
+        sag_points(np.ascontiguousarray(P, dtype=float), self.Rb, r.outlet_points, r.rows, c.up, c.w, c.EA, self.wreq,
+                   r.tension_min, r.tension_max, r.combos, r.kcode, cables.MAX_ITERATIONS, feas,
+                   np.empty((k, r.n, m)), np.empty((k, m)), np.empty((k, m)), status)
+        return feas.astype(bool), np.full(k, np.nan)
+
     def summary(self, maps) -> dict:
         opeak = self.opeak.copy()
         opeak[~np.isfinite(opeak)] = np.nan

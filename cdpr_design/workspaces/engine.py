@@ -57,7 +57,7 @@ class StraightSweep(Base):
     def __init__(self, robot: Robot, ori: np.ndarray, g: Grid):
         design = robot.design
         R = kin.rotation_matrix(*ori)
-        self.robot, self.kind, self.g = robot, robot.kind, g
+        self.robot, self.kind, self.g, self.ori = robot, robot.kind, g, ori
         self.Rb = np.ascontiguousarray(robot.attachments @ R.T)
         self.wreq = wrench_vertices(design, robot.kind, ori)
         self.numpy = robot.engine == "numpy"
@@ -72,7 +72,7 @@ class StraightSweep(Base):
         feas, marg = np.empty(cnt, dtype=np.uint8), np.empty(cnt)
         ten, lens = np.empty((cnt, m)), np.empty((cnt, m))
         if self.numpy:
-            _planar2_numpy(self.g, start, cnt, self.Rb, r.outlet_points, self.wreq_used, r.tension_min,
+            _planar2_numpy(grid_positions(self.g, start, cnt), self.Rb, r.outlet_points, self.wreq_used, r.tension_min,
                            r.tension_max, r.tension_floor, feas, marg, ten, lens)
         elif self.planar2:
             self.K.sweep_grid_planar2(start, cnt, self.lower, self.step, self.shape, self.Rb, r.outlet_points,
@@ -84,22 +84,41 @@ class StraightSweep(Base):
                               marg, ten, lens)
         return Rows(feas, marg, ten, lens)
 
+    def feasible_at(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Feasibility (k,) bool and capacity margin (k,) [N] at positions ``P`` (k, 3) [m]: numpy's
+        closed form, or the kernels' statics at explicit positions
+        (:func:`cdpr_design.kernels.hanging.eval_rotated`, every pose at the sweep's orientation)."""
+        r, k, m = self.robot, P.shape[0], self.robot.m
+        feas, marg = np.empty(k, dtype=np.uint8), np.empty(k)
+        if self.numpy:
+            _planar2_numpy(P[:, :2], self.Rb, r.outlet_points, self.wreq_used, r.tension_min, r.tension_max,
+                           r.tension_floor, feas, marg, np.empty((k, m)), np.empty((k, m)))
+            return feas.astype(bool), marg
+        from cdpr_design.kernels import hanging as KH
+
+        R = np.ascontiguousarray(np.broadcast_to(kin.rotation_matrix(*self.ori), (k, 3, 3)))
+        wreq = np.ascontiguousarray(np.broadcast_to(self.wreq, (k,) + self.wreq.shape))
+        KH.eval_rotated(np.ascontiguousarray(P, dtype=float), R, r.outlet_points, r.attachments, r.rows, wreq,
+                        r.tension_min, r.tension_max, r.tension_floor, r.combos, r.kcode, feas, marg,
+                        np.empty((k, m)), np.empty((k, m)))
+        return feas.astype(bool), marg
+
     def stats(self, rows: Rows, tpeak: np.ndarray) -> tuple:
         if self.numpy:  # numba's start-up is what the numpy engine saves
             return _chunk_stats_numpy(rows.feasible, rows.margin, rows.tensions, rows.feasible.shape[0], tpeak)
         return self.K.chunk_stats(rows.feasible, rows.margin, rows.tensions, rows.feasible.shape[0], tpeak)
 
 
-def _planar2_numpy(g: Grid, start, count, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensions, lengths):
+def _planar2_numpy(pos, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensions, lengths):
     """``kernels.sweep_grid_planar2`` vectorised with numpy: same formulas, same order.
 
     Two cables, two wrench rows: t = W^-1 w in closed form, the capacity margin
     min_i min(t_i - t_min,i, t_max,i - t_i) / ||row_i(W^-1)||, the other rows of
     ``wreq`` (wrench-feasible) lowering the margin; t_min,i raised to ``floor``[i] L_i^2 where
-    ``floor``[i] > 0 (:func:`~cdpr_design.statics.robot.tension_lower`).  Fills rows 0 .. count of
-    the output buffers exactly as the kernel does.
+    ``floor``[i] > 0 (:func:`~cdpr_design.statics.robot.tension_lower`).  ``pos`` (count, 2) [m]
+    the positions; fills rows 0 .. count of the output buffers exactly as the kernel does.
     """
-    pos = grid_positions(g, start, count)
+    count = pos.shape[0]
     px, py = pos[:, 0], pos[:, 1]
     lx0 = (A[0, 0] - Rb[0, 0]) - px
     ly0 = (A[0, 1] - Rb[0, 1]) - py

@@ -120,6 +120,12 @@ class WorkspaceResult:
     stiffness: dict | None = None
     #: the picture files the sweep's plan declared (:attr:`~cdpr_design.workspaces.plan.Plan.pictures`)
     pictures: list = field(default_factory=list)
+    #: the boundary between the grid points (a :class:`~cdpr_design.workspaces.boundary.Boundary`;
+    #: sweeps planned with ``solid``)
+    boundary: object = None
+    #: the loads on the frame (a :class:`~cdpr_design.workspaces.frame_loads.FrameLoadTable`;
+    #: sweeps planned with ``solid``)
+    frame_loads: object = None
 
     @property
     def fraction(self) -> float:

@@ -41,6 +41,13 @@ class Base(Part):
         for a part that does not read them, :attr:`Part.positions`)."""
         raise NotImplementedError
 
+    def feasible_at(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Feasibility (k,) bool and capacity margin (k,) [N] (NaN where there is none) at any
+        positions ``P`` (k, 3) [m], with the rows' own test (a part that reads positions: its
+        :meth:`rows`; the others say how)."""
+        r = self.rows(0, P.shape[0], P)
+        return r.feasible.astype(bool), np.asarray(r.margin, float)
+
     def stats(self, r: Rows, tpeak: np.ndarray) -> tuple:
         """(feasible count, least margin [N], largest margin [N]) of ``r``; raises ``tpeak`` [N]."""
         from cdpr_design import kernels as K

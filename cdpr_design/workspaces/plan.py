@@ -20,6 +20,7 @@ the sweep, and :meth:`Plan.run` is the one chunk loop of every sweep.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Callable
@@ -29,6 +30,8 @@ import numpy as np
 from cdpr_design.model.design import Grid
 from cdpr_design.statics.robot import Robot
 from cdpr_design.workspaces import cables, engine, hanging
+from cdpr_design.workspaces.boundary import BoundaryField
+from cdpr_design.workspaces.frame_loads import FrameLoads
 from cdpr_design.workspaces.grid import (CHUNK, Chunk, Maps, Rows, WorkspaceResult, chunk_poses, column_names,
                                          positions3)
 from cdpr_design.workspaces.parts import Base, Part, Wrapper
@@ -47,10 +50,21 @@ class Plan:
     #: the options :func:`plan` was given (:meth:`on` makes the same plan for another grid)
     tilt: bool = True
     orientations: np.ndarray | None = None
+    solid: bool = False
+    frame_loads: bool = False
 
     def on(self, grid: Grid) -> "Plan":
         """The same plan (robot, orientation, options) over another grid."""
-        return plan(self.robot, grid, self.orientation, tilt=self.tilt, orientations=self.orientations)
+        return plan(self.robot, grid, self.orientation, tilt=self.tilt, orientations=self.orientations,
+                    solid=self.solid, frame_loads=self.frame_loads)
+
+    def point_test(self) -> Callable[[np.ndarray], tuple]:
+        """The feasibility test of the plan's robot at any positions, at the plan's orientation: a
+        function of ``P`` (k, 3) [m] giving feasibility (k,) bool and the capacity margin (k,) [N]
+        (NaN where there is none), the base evaluator's own
+        (:meth:`~cdpr_design.workspaces.parts.Base.feasible_at`) on a new plan over the same grid,
+        so that the sweep's tallies are left alone."""
+        return plan(self.robot, self.grid, self.orientation, tilt=False, orientations=self.orientations).base.feasible_at
 
     @property
     def parts(self) -> tuple[Part, ...]:
@@ -127,14 +141,29 @@ class Plan:
         return result
 
 
-def plan(robot: Robot, grid: Grid, orientation=None, *, tilt: bool = True, orientations=None) -> Plan:
+def plan(robot: Robot, grid: Grid, orientation=None, *, tilt: bool = True, orientations=None,
+         solid: bool = False, frame_loads: bool = False) -> Plan:
     """The :class:`Plan` of a workspace sweep of ``robot`` over ``grid`` at ``orientation`` (3,) [rad]
     (default ``workspace.orientation``; with ``robot.analysis.orientations`` the nominal one).
 
     ``tilt``: False leaves out the tilt a *held* under-constrained effector would hang with (a
     figure only; a hanging effector's orientation is always found: its statics depend on it).
     ``orientations`` (q, 3) [rad]: the ``total`` mode's set (default ``workspace.orientation_set``).
+    ``solid``: also the boundary between the grid points and the loads on the frame
+    (:mod:`~cdpr_design.workspaces.boundary`, :mod:`~cdpr_design.workspaces.frame_loads`);
+    ``frame_loads``: the loads on the frame alone.
     """
+    p = _plan(robot, grid, orientation, tilt, orientations)
+    if not (solid or frame_loads):
+        return p
+    parts: tuple = (FrameLoads(robot, p.orientation),)
+    if solid:
+        parts += (BoundaryField(robot, grid, p.point_test),)
+    return dataclasses.replace(p, wrappers=p.wrappers + parts, solid=solid, frame_loads=frame_loads)
+
+
+def _plan(robot: Robot, grid: Grid, orientation, tilt: bool, orientations) -> Plan:
+    """:func:`plan` without the ``solid`` parts."""
     design = robot.design
     ori = design.default_orientation_full() if orientation is None else np.asarray(orientation, float)
     a = robot.analysis

@@ -57,6 +57,18 @@ class WorkspaceTable(Table):
         """The grid's shape (nx, ny[, nz]): ``feasible.reshape(shape)`` is a map."""
         return self.result.grid.shape
 
+    @property
+    def boundary(self):
+        """The boundary between the grid points (a :class:`~cdpr_design.workspaces.boundary.Boundary`:
+        ``measure``, ``surface``, ``loops`` or ``vertices`` and ``faces``)."""
+        return self.result.boundary
+
+    @property
+    def frame_loads(self):
+        """The loads on the frame (a :class:`~cdpr_design.workspaces.frame_loads.FrameLoadTable`:
+        ``rows(cable_names)`` is ``frame_loads.csv``, ``summary(cable_names)`` the summary's object)."""
+        return self.result.frame_loads
+
     def summary(self) -> dict:
         """The ``summary.json`` figures of the sweep."""
         return self.result.summary()
@@ -76,6 +88,8 @@ def collect(design: Design, kind: str = "static", *, step: float | None = None, 
             max_poses: int = MAX_COLLECT, **options) -> WorkspaceTable:
     """Sweep like :func:`cdpr_design.workspaces.run` and keep every row.
 
+    The boundary between the grid points and the frame loads come with it (``boundary``,
+    ``frame_loads``; summary keys ``boundary_measure``, ``boundary_surface``, ``frame_loads``).
     ``options`` are those of :func:`~cdpr_design.workspaces.run` (``orientation``,
     ``interference``, ``engine``, ``force``, ...); with ``orientations='total'``
     or ``'range'`` the sweep is :func:`~cdpr_design.workspaces.run_orientations`.
@@ -91,9 +105,9 @@ def collect(design: Design, kind: str = "static", *, step: float | None = None, 
     chunks: list[Chunk] = []
     mode = options.pop("orientations", None)
     if mode is not None:
-        res = ws.run_orientations(design, mode, kind, grid=g, on_chunk=chunks.append, **options)
+        res = ws.run_orientations(design, mode, kind, grid=g, on_chunk=chunks.append, solid=True, **options)
     else:
-        res = ws.run(design, kind, grid=g, on_chunk=chunks.append, **options)
+        res = ws.run(design, kind, grid=g, on_chunk=chunks.append, solid=True, **options)
     extra_names = list(chunks[0].extra) if chunks else []
     return WorkspaceTable(
         design=design,

@@ -1,0 +1,503 @@
+"""The workspace's boundary between the grid points: loops (planar) or a closed surface (spatial).
+
+A sweep gives feasibility at the grid points only; the boundary of the feasible set lies
+between them.  :class:`BoundaryField` is a part of the sweep plan
+(:mod:`cdpr_design.workspaces.plan`) that keeps, while the chunks stream past, one float32 per
+grid pose: the capacity margin [N] with its sign set by the pose's feasibility (4 bytes a pose;
+the rows themselves are not kept).  After the sweep:
+
+1. the field, scaled into [0.1, 1] in magnitude and padded with one layer of infeasible
+   values outside the grid's box, is contoured at 0 by marching squares
+   (:func:`skimage.measure.find_contours`) or marching cubes (Lewiner's variant,
+   :func:`skimage.measure.marching_cubes`): every vertex lies on one grid edge whose two ends
+   differ in feasibility, and the topology between them is decided by the margins;
+2. each vertex is moved along its edge to the feasible set's boundary with the sweep's own
+   feasibility test at positions on it (:func:`crossings`: regula falsi on the capacity margin
+   where it has one, bisection otherwise; within step / 2^BISECTIONS of a change of
+   feasibility); a vertex on an edge leaving the box is put on the box's face,
+   so the boundary is clipped by the grid's box and encloses a closed region or solid;
+3. the measure is the region's area (the loops' shoelace sums; a hole's loop runs the other
+   way) or the solid's volume (the divergence theorem over the triangles), the surface its
+   perimeter or surface area (the parts on the box's faces included).
+
+Spatial meshes are welded (the vertices put on a box edge or corner coincide), their
+degenerate triangles dropped, and checked: every edge shared by exactly two triangles that run
+along it in opposite directions (closed and consistently wound), the normals outwards; anything
+else is a bug, raised.
+(Marching squares and cubes: Lorensen & Cline, SIGGRAPH 1987; Lewiner, Lopes, Vieira & Tavares,
+J. Graphics Tools 8(2), 2003.)
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from cdpr_design.model.design import Grid
+from cdpr_design.workspaces.grid import Maps, Rows, WorkspaceResult
+from cdpr_design.workspaces.parts import Wrapper
+
+#: A vertex is within step / 2**BISECTIONS of where feasibility changes along its grid edge.
+BISECTIONS = 10
+#: Smallest scaled field magnitude: a vertex's first estimate is never at a grid point.
+FLOOR = 0.1
+#: A run of feasible (or infeasible) poses between two crossings shorter than this many grid steps
+#: is not resolved; more than THIN_SHARE of the crossings bounding such runs: a warning.
+MIN_STEPS = 3
+THIN_SHARE = 0.1
+#: Values of the field contoured at once (a slab of planes of the grid's first axis).
+SLAB_VALUES = 1 << 20
+#: Positions per call of the feasibility test during the refinement.
+BATCH = 1 << 13
+
+_log = logging.getLogger(__name__)
+
+
+@dataclass
+class Boundary:
+    """The feasible set's boundary inside the grid's box.
+
+    ``dim`` 2 or 3; ``measure`` [m^2 or m^3] the enclosed area or volume; ``surface`` [m or m^2]
+    the perimeter or surface area of the closed region (its parts on the box's faces included).
+    Planar: ``loops`` a list of (k, 2) arrays [m], each closed loop in order (the last vertex
+    joins the first), outer loops counter-clockwise and holes clockwise.  Spatial: ``vertices``
+    (V, 3) [m] and ``faces`` (F, 3) int64 of a closed, consistently wound triangle mesh with
+    outward normals (empty without a feasible pose).  ``warning``: why the grid may be too
+    coarse to resolve the boundary, or None.
+    """
+
+    dim: int
+    measure: float = 0.0
+    surface: float = 0.0
+    loops: list = field(default_factory=list)
+    vertices: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    faces: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), dtype=np.int64))
+    warning: str | None = None
+    #: the time it took after the sweep [s] (contouring and refinement)
+    elapsed_s: float = 0.0
+
+    def summary(self) -> dict:
+        """``boundary_measure``, ``boundary_surface`` and, when the grid is too coarse,
+        ``boundary_warning`` (summary.json keys)."""
+        out = {"boundary_measure": float(self.measure), "boundary_surface": float(self.surface)}
+        if self.warning:
+            out["boundary_warning"] = self.warning
+        return out
+
+    def loop_table(self) -> dict:
+        """``boundary.csv``'s columns: ``x``, ``y`` [m] and ``loop`` (0, 1, ...) of every vertex."""
+        if not self.loops:
+            return {"x": np.zeros(0), "y": np.zeros(0), "loop": np.zeros(0, dtype=np.int64)}
+        xy = np.concatenate(self.loops)
+        ids = np.concatenate([np.full(len(lp), i, dtype=np.int64) for i, lp in enumerate(self.loops)])
+        return {"x": xy[:, 0], "y": xy[:, 1], "loop": ids}
+
+
+class BoundaryField(Wrapper):
+    """The sweep plan's part that finds the :class:`Boundary` (see the module doc) from the rows'
+    feasibility and margins as the chunks stream past; adds no column.
+
+    ``grid`` the sweep's grid; ``evaluator`` makes, on first use, the feasibility test at
+    positions: a callable (k, 3) [m] -> (k,) bool; ``scale`` [N] the margin that maps to the
+    middle of the contoured field's magnitudes (the robot's mean finite tension bound).  Summary
+    keys ``boundary_measure``, ``boundary_surface`` (and ``boundary_warning``); the result's
+    ``boundary``.
+    """
+
+    positions = False
+
+    def __init__(self, robot, grid: Grid, evaluator: Callable[[], Callable[[np.ndarray], np.ndarray]]):
+        super().__init__(robot)
+        tmax = np.asarray(robot.tension_max, float)
+        finite = tmax[np.isfinite(tmax) & (tmax > 0)]
+        self.slabs = Slabs(grid, float(finite.mean()) if finite.size else 1.0)
+        self.evaluator = evaluator
+        self.boundary: Boundary | None = None
+
+    def add(self, r: Rows, start: int, P: np.ndarray | None) -> None:
+        self.slabs.add(start, r.feasible, r.margin)
+
+    def summary(self, maps: Maps) -> dict:
+        t0 = time.perf_counter()
+        self.boundary = self.slabs.boundary(self.evaluator)
+        self.boundary.elapsed_s = self.slabs.busy_s + time.perf_counter() - t0
+        return self.boundary.summary()
+
+    def finish(self, result: WorkspaceResult, maps: Maps) -> None:
+        result.boundary = self.boundary
+
+
+def signed_margin(feasible: np.ndarray, margin: np.ndarray) -> np.ndarray:
+    """float32 (k,): |margin| [N] positive where ``feasible``, negative elsewhere; a pose
+    without a finite margin (or a zero one) keeps its sign with the magnitude 1e-30."""
+    mag = np.abs(np.asarray(margin, dtype=np.float32))
+    mag = np.where(np.isfinite(mag) & (mag > 1e-30), mag, np.float32(1e-30))
+    return np.where(np.asarray(feasible).astype(bool), mag, -mag).astype(np.float32)
+
+
+def find_boundary(grid: Grid, field: np.ndarray, evaluator, scale: float = 1.0) -> Boundary:
+    """The :class:`Boundary` of a whole signed margin ``field`` (the grid's shape,
+    :func:`signed_margin`) of a sweep over ``grid``, as :class:`BoundaryField` finds it from the
+    streamed rows; ``evaluator()`` gives the feasibility test at positions (k, 3) [m]."""
+    slabs = Slabs(grid, scale)
+    flat = np.ascontiguousarray(field, dtype=np.float32).reshape(-1)
+    slabs.add(0, flat > 0, np.abs(flat))
+    return slabs.boundary(evaluator)
+
+
+class Slabs:
+    """The contouring of a streamed field, one slab of consecutive planes of the grid's first axis
+    at a time: what it holds is the planes of one slab as float32 (at least two, about
+    :data:`SLAB_VALUES` values: 4 MB), the boundary's vertices and faces found so far, and per grid line of the first axis the
+    last crossing (the coarse-grid warning).  Rows arrive in grid order (C order, first axis
+    slowest), each once.
+
+    Vertices are named by their grid edge (its lower end's index in the padded grid, times the
+    dimension, plus the edge's axis), so that the pieces of two slabs sharing a plane weld
+    exactly; the positions are found for each named edge once, after the sweep.
+    """
+
+    def __init__(self, grid: Grid, scale: float):
+        self.grid, self.scale = grid, scale
+        self.dim = len(grid.shape)
+        self.shape = tuple(int(n) for n in grid.shape)
+        self.plane_size = int(np.prod(self.shape[1:], dtype=np.int64))
+        self.pshape = tuple(n + 2 for n in self.shape)  # the padded grid
+        self.prev = self._pad_plane(None)  # the pad plane before the first one
+        self.held: list = []  # planes received since the last slab was contoured
+        self.cur = np.empty(self.plane_size, dtype=np.float32)
+        self.filled = 0  # values of plane `self.plane` received
+        self.plane = 0
+        self.any_feasible = False
+        self.keys, self.lower, self.axis, self.lo_in, self.pieces = [], [], [], [], []
+        self.ends_margin: list = []  # per vertex: the margins [N] at its edge's feasible and other end
+        self.thin = self.ends = 0
+        self.last_cross = np.full(self.plane_size, -(1 << 40), dtype=np.int64)
+        self.busy_s = 0.0
+
+    def _pad_plane(self, values) -> np.ndarray:
+        """A plane of the padded grid (the other axes padded with one infeasible layer)."""
+        out = np.full(self.pshape[1:], -1.0, dtype=np.float32)
+        if values is not None:
+            out[(slice(1, -1),) * (self.dim - 1)] = values.reshape(self.shape[1:])
+        return out
+
+    def add(self, start: int, feasible, margin) -> None:
+        """Rows ``start ..`` (feasible flags and margins [N]) in grid order."""
+        t0 = time.perf_counter()
+        if start != self.plane * self.plane_size + self.filled:
+            raise ValueError(f"rows from {start}: the boundary takes the grid's rows in order, each once")
+        v = _scaled(signed_margin(feasible, margin), self.scale)
+        self.any_feasible |= bool((v > 0).any())
+        k = 0
+        while k < len(v):
+            take = min(len(v) - k, self.plane_size - self.filled)
+            self.cur[self.filled:self.filled + take] = v[k:k + take]
+            self.filled += take
+            k += take
+            if self.filled == self.plane_size:
+                self._plane_done()
+        self.busy_s += time.perf_counter() - t0
+
+    def _plane_done(self) -> None:
+        plane = self._pad_plane(self.cur)
+        self._count_runs(plane)
+        self.held.append(plane)
+        self.plane += 1
+        self.filled = 0
+        if len(self.held) * plane.size >= SLAB_VALUES:
+            self._flush()
+
+    def _flush(self) -> None:
+        """Contour the planes held (after the last one contoured) and keep only the last."""
+        if self.held:
+            self._slab(np.stack([self.prev] + self.held), self.plane - len(self.held))
+            self.prev, self.held = self.held[-1], []
+
+    def _count_runs(self, plane: np.ndarray) -> None:
+        """The coarse-grid tally (:func:`coarse_warning`'s rule) of one more plane: runs within it
+        and along the first axis up to it."""
+        inner = plane[(slice(1, -1),) * (self.dim - 1)] > 0
+        if self.plane > 0:
+            last = self.held[-1] if self.held else self.prev
+            prev = (last[(slice(1, -1),) * (self.dim - 1)] > 0).reshape(-1)
+            change = np.flatnonzero(prev != inner.reshape(-1))
+            self.ends += len(change)
+            self.thin += int(np.count_nonzero(self.plane - self.last_cross[change] < MIN_STEPS))
+            self.last_cross[change] = self.plane
+        for ax in range(inner.ndim):
+            if inner.shape[ax] < 2:
+                continue
+            f = np.moveaxis(inner, ax, -1).reshape(-1, inner.shape[ax])
+            rows, cols = np.nonzero(f[:, 1:] != f[:, :-1])
+            self.ends += len(rows)
+            self.thin += int(np.count_nonzero((rows[1:] == rows[:-1]) & (np.diff(cols) < MIN_STEPS)))
+
+    def _slab(self, f: np.ndarray, i: int) -> None:
+        """Contour the slab ``f`` of padded planes i, i + 1, ... (grid planes i - 1, i, ...)."""
+        from skimage import measure
+
+        if not (f > 0).any():
+            return
+        if self.dim == 2:
+            pieces = [c for c in measure.find_contours(f, 0.0) if len(c) > 1]
+            if not pieces:
+                return
+            verts = np.concatenate(pieces)
+            sizes = np.array([len(c) for c in pieces])
+            first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+            seg = np.arange(len(verts) - 1)
+            seg = seg[~np.isin(seg, first + sizes - 1)]  # consecutive points of one piece
+            faces = np.stack([seg, seg + 1], axis=1)
+        else:
+            verts, faces, _, _ = measure.marching_cubes(f, 0.0, method="lewiner", allow_degenerate=True)
+        lower, axis = _edge_ends(verts.astype(float))
+        upper = lower.copy()
+        upper[np.arange(len(lower)), axis] += 1
+        f_lo, f_hi = f[tuple(lower.T)], f[tuple(upper.T)]
+        lo_in = f_lo > 0
+        self.ends_margin.append(np.stack([_unscaled(np.where(lo_in, f_lo, f_hi), self.scale),
+                                          -_unscaled(np.where(lo_in, f_hi, f_lo), self.scale)], axis=1))
+        lower[:, 0] += i  # padded plane index of the slab's first plane
+        key = np.ravel_multi_index(tuple(lower.T), self.pshape).astype(np.int64) * self.dim + axis
+        self.keys.append(key)
+        self.lower.append(lower)
+        self.axis.append(axis)
+        self.lo_in.append(lo_in)
+        self.pieces.append(key[faces])
+
+    def boundary(self, evaluator) -> Boundary:
+        """The :class:`Boundary`, once every row has arrived; ``evaluator()`` gives the feasibility
+        test at positions (k, 3) [m] (called only when a grid edge inside the box crosses)."""
+        t0 = time.perf_counter()
+        if self.plane == self.shape[0]:  # the pad plane after the last one
+            self.held.append(self._pad_plane(None))
+            self.plane += 1
+            self._flush()
+        self.busy_s += time.perf_counter() - t0
+        dim = self.dim
+        if not self.any_feasible:
+            return Boundary(dim)
+        if min(self.shape) < 2:  # a flat grid encloses no area or volume
+            warning = (f"the grid has one pose along an axis ({' x '.join(map(str, self.shape))}): it encloses no "
+                       f"{'area' if dim == 2 else 'volume'}, boundary_measure is 0 (a smaller --step resolves it)")
+            _log.warning(warning)
+            return Boundary(dim, warning=warning)
+        warning = None
+        if self.ends and self.thin > THIN_SHARE * self.ends:
+            warning = (f"the grid (step {min(self.grid.step):g} m) may be too coarse to resolve the workspace's "
+                       f"boundary: {self.thin} runs of poses between two crossings are shorter than {MIN_STEPS} "
+                       f"steps; boundary_measure is uncertain there (a smaller --step resolves it)")
+            _log.warning(warning)
+        keys, first, inverse = np.unique(np.concatenate(self.keys), return_index=True, return_inverse=True)
+        lower = np.concatenate(self.lower)[first]
+        axis = np.concatenate(self.axis)[first]
+        lo_in = np.concatenate(self.lo_in)[first]
+        ends = np.concatenate(self.ends_margin)[first]
+        pts, snapped = _positions(lower, axis, lo_in, ends, self.grid, evaluator)
+        faces = np.searchsorted(keys, np.concatenate(self.pieces))
+        if dim == 2:
+            loops = _loops(faces, pts, snapped, lower, axis, lo_in, self.grid)
+            area = sum(_shoelace(lp) for lp in loops)
+            perimeter = sum(float(np.linalg.norm(np.diff(np.vstack([lp, lp[:1]]), axis=0), axis=1).sum())
+                            for lp in loops)
+            return Boundary(2, float(area), perimeter, loops=loops, warning=warning)
+        verts, faces = _weld(pts, faces)
+        return Boundary(3, mesh_volume(verts, faces), mesh_area(verts, faces), vertices=verts, faces=faces,
+                        warning=warning)
+
+
+def _scaled(v: np.ndarray, scale: float) -> np.ndarray:
+    """The contoured field of signed margins ``v`` [N]: the same signs, the magnitudes mapped
+    monotonically into [FLOOR, 1) (|m| = ``scale`` to the middle), one map for every slab so
+    that two slabs decide a shared face alike."""
+    mag = np.abs(v)
+    return np.sign(v) * (FLOOR + (1.0 - FLOOR) * mag / (mag + np.float32(scale))).astype(np.float32)
+
+
+def _unscaled(v: np.ndarray, scale: float) -> np.ndarray:
+    """|margin| [N] back from :func:`_scaled` values (NaN where it was none: the floor)."""
+    x = (np.abs(v).astype(float) - FLOOR) / (1.0 - FLOOR)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = scale * x / (1.0 - x)
+    return np.where(x > 1e-6, out, np.nan)
+
+
+def _edge_ends(idx: np.ndarray):
+    """For vertices ``idx`` (V, d) in padded index coordinates, each on one grid edge: the
+    integer index of the edge's lower end (V, d) and the edge's axis (V,)."""
+    base = np.floor(idx)
+    frac = idx - base
+    axis = np.argmax(frac, axis=1)
+    return base.astype(np.int64), axis
+
+
+def _positions(lower, axis, lo_in, ends, grid: Grid, evaluator):
+    """Positions [m] (V, d) of the vertices on the padded grid edges (``lower`` end, ``axis``,
+    ``lo_in``: the lower end feasible; ``ends`` (V, 2) the margins [N] at the feasible and the
+    other end) moved onto the boundary, and whether each was put on the box's face (its edge
+    leaves the box)."""
+    lower_m, step = np.asarray(grid.lower, float), np.asarray(grid.step, float)
+    upper = lower.copy()
+    upper[np.arange(len(lower)), axis] += 1
+    inside_end = np.where(lo_in[:, None], lower, upper) - 1  # grid indices of the feasible end
+    outside_end = np.where(lo_in[:, None], upper, lower) - 1
+    shape = np.asarray(grid.shape)
+    leaves = np.any((outside_end < 0) | (outside_end >= shape), axis=1)
+    a = lower_m + inside_end * step
+    b = lower_m + outside_end * step
+    out = a.copy()
+    todo = np.flatnonzero(~leaves)
+    if todo.size:
+        t = crossings(a[todo], b[todo], ends[todo, 0], ends[todo, 1], evaluator())
+        out[todo] = a[todo] + t[:, None] * (b[todo] - a[todo])
+    return out, leaves
+
+
+def crossings(a: np.ndarray, b: np.ndarray, m_a: np.ndarray, m_b: np.ndarray, test) -> np.ndarray:
+    """Where feasibility changes on the segments a -> b (V, d) [m], ``a`` feasible and ``b`` not:
+    the fraction t (V,) of the way, within 2**-BISECTIONS of a change (the middle of a bracket
+    [lo, hi] with ``a + lo (b - a)`` feasible, ``a + hi (b - a)`` not, hi - lo <= 2**-BISECTIONS).
+
+    ``m_a`` >= 0 and ``m_b`` <= 0 [N] the capacity margins at the ends (NaN where unknown);
+    ``test(P)`` gives feasibility and margins at positions (k, 3) [m].  Where the bracket's two
+    margins are known and agree with feasibility, the next guess is their secant (regula falsi,
+    the margin being a continuous function that changes sign with feasibility) and the test is
+    made just either side of it, which usually closes the bracket at once; elsewhere, and after a
+    round that did not halve the bracket, it is bisected."""
+    n, d = a.shape
+    tol = 2.0 ** -BISECTIONS
+    lo, hi = np.zeros(n), np.ones(n)
+    mlo = np.where(m_a > 0, m_a, np.nan)
+    mhi = np.where(m_b < 0, m_b, np.nan)
+    halve = np.zeros(n, dtype=bool)
+    for _ in range(3 * BISECTIONS):
+        act = np.flatnonzero(hi - lo > tol)
+        if act.size == 0:
+            break
+        l, h = lo[act], hi[act]
+        secant = np.isfinite(mlo[act]) & np.isfinite(mhi[act]) & ~halve[act]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            guess = np.where(secant, l + (h - l) * mlo[act] / (mlo[act] - mhi[act]), 0.5 * (l + h))
+        eps = 0.5 * tol
+        t1 = np.where(secant, np.clip(guess - eps, l + 0.25 * eps, h - 0.25 * eps), guess)
+        t2 = np.clip(guess + eps, l + 0.25 * eps, h - 0.25 * eps)
+        idx = np.concatenate([act, act[secant]])
+        ts = np.concatenate([t1, t2[secant]])
+        P = np.zeros((len(ts), 3))
+        P[:, :d] = a[idx] + ts[:, None] * (b[idx] - a[idx])
+        ok, marg = np.empty(len(ts), dtype=bool), np.empty(len(ts))
+        for k in range(0, len(ts), BATCH):
+            f, mg = test(np.ascontiguousarray(P[k:k + BATCH]))
+            ok[k:k + BATCH], marg[k:k + BATCH] = f, mg
+        width = hi[act] - lo[act]
+        for sel in (slice(0, len(act)), slice(len(act), None)):  # the lower points first, then the upper
+            i, t, f, mg = idx[sel], ts[sel], ok[sel], marg[sel]
+            up = f & (t > lo[i])
+            lo[i[up]], mlo[i[up]] = t[up], np.where(mg[up] > 0, mg[up], np.nan)
+            down = ~f & (t < hi[i])
+            hi[i[down]], mhi[i[down]] = t[down], np.where(mg[down] < 0, mg[down], np.nan)
+        halve[act] = (hi[act] - lo[act]) > 0.5 * width
+    return 0.5 * (lo + hi)
+
+
+def _loops(segments, pts, snapped, lower, axis, lo_in, grid: Grid) -> list:
+    """The closed loops (k, 2) [m] of the planar boundary from its segments (pairs of vertex
+    ids), each turned so that the feasible set is on its left (outer loops counter-clockwise,
+    holes clockwise); vertices put on one box point merged."""
+    n = len(pts)
+    nbr = np.full((n, 2), -1, dtype=np.int64)
+    deg = np.zeros(n, dtype=np.int64)
+    for u, v in segments:
+        nbr[u, deg[u]] = v
+        deg[u] += 1
+        nbr[v, deg[v]] = u
+        deg[v] += 1
+    if np.any(deg != 2):
+        raise RuntimeError("the workspace's boundary is not made of closed loops: a bug, please report it "
+                           "with the spec")
+    step = np.asarray(grid.step, float)
+    inside = np.asarray(grid.lower, float) + (np.where(lo_in[:, None], lower, lower + np.eye(2, dtype=np.int64)[axis])
+                                             - 1) * step
+    seen = np.zeros(n, dtype=bool)
+    loops = []
+    for s0 in range(n):
+        if seen[s0]:
+            continue
+        order, prev, cur = [], -1, s0
+        while not seen[cur]:
+            seen[cur] = True
+            order.append(cur)
+            nxt = nbr[cur, 0] if nbr[cur, 0] != prev else nbr[cur, 1]
+            prev, cur = cur, nxt
+        idx = np.array(order)
+        lp = pts[idx]
+        tangent = np.roll(lp, -1, axis=0) - np.roll(lp, 1, axis=0)
+        side = inside[idx] - lp
+        cross = tangent[:, 0] * side[:, 1] - tangent[:, 1] * side[:, 0]
+        free = ~snapped[idx]
+        vote = np.sign(cross[free]).sum() if free.any() else np.sign(_shoelace(lp))
+        if vote < 0:
+            lp = lp[::-1]
+        keep = np.any(lp != np.roll(lp, 1, axis=0), axis=1)
+        if keep.sum() >= 3:
+            loops.append(lp[keep])
+    return loops
+
+
+def _weld(pts, faces):
+    """The mesh with the vertices at one position merged (those put on a box edge or corner), its
+    degenerate triangles dropped, checked closed (:func:`check_closed`), normals outwards."""
+    uniq, inv = np.unique(pts, axis=0, return_inverse=True)
+    faces = inv.reshape(-1)[faces]
+    good = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
+    faces = faces[good].astype(np.int64)
+    used = np.unique(faces)
+    remap = np.full(len(uniq), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    verts, faces = uniq[used], remap[faces]
+    check_closed(verts, faces)
+    if mesh_volume(verts, faces) < 0:
+        faces = faces[:, ::-1].copy()
+    return verts, faces
+
+
+def _shoelace(loop: np.ndarray) -> float:
+    """Signed area [m^2] of a closed loop (k, 2): positive when counter-clockwise."""
+    x, y = loop[:, 0], loop[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def check_closed(verts: np.ndarray, faces: np.ndarray) -> None:
+    """Raise RuntimeError unless the mesh is closed and consistently wound: every directed edge
+    (a, b) of its triangles occurs exactly once and its reverse (b, a) exactly once, so every edge
+    is shared by exactly two triangles that run along it in opposite directions."""
+    if len(faces) == 0:
+        return
+    e = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64)
+    n = int(len(verts))
+    key = np.sort(e[:, 0] * n + e[:, 1])
+    back = np.sort(e[:, 1] * n + e[:, 0])
+    if not (np.all(key[1:] != key[:-1]) and np.array_equal(key, back)):
+        raise RuntimeError("the workspace's boundary mesh is not closed and consistently wound "
+                           f"({len(faces)} triangles): a bug, please report it with the spec")
+
+
+def mesh_volume(verts: np.ndarray, faces: np.ndarray) -> float:
+    """Signed volume [m^3] enclosed by a closed triangle mesh (positive with outward normals)."""
+    if len(faces) == 0:
+        return 0.0
+    a, b, c = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+def mesh_area(verts: np.ndarray, faces: np.ndarray) -> float:
+    """Surface area [m^2] of a triangle mesh."""
+    if len(faces) == 0:
+        return 0.0
+    a, b, c = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
+    return float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
