@@ -351,3 +351,28 @@ def test_size_motors_and_the_report_show_the_frame_loads(tmp_path):
     assert res.exit_code == 0, res.output
     page = (tmp_path / "w" / "report.html").read_text()
     assert '"mesh3d"' in page and "Loads on the frame" in page and "limit_max_force" in page
+
+
+def test_rotations_are_the_kinematics_ones():
+    from cdpr_design.statics.kinematics import rotation_matrix
+    from cdpr_design.workspaces.frame_loads import rotations
+
+    a = np.random.default_rng(2).uniform(-3, 3, (20, 3))
+    np.testing.assert_allclose(rotations(a), np.array([rotation_matrix(*x) for x in a]), atol=1e-15)
+
+
+@pytest.mark.slow
+def test_a_hanging_effector_puts_its_weight_on_the_frame():
+    """crane4 hangs its load (effector.orientation: free): at every feasible pose the frame carries
+    the load's weight, straight down, whatever orientation it hangs in."""
+    d = spec.load(DESIGNS / "crane4.yaml")
+    g = ws.make_grid(d, 0.5)
+    robot = ws.robot_for(d, g)
+    assert robot.orientation == "hanging"
+    r = ws.plan(robot, g, solid=True).run()
+    s = r.summary()["frame_loads"]
+    w = d.effector.mass * 9.81
+    assert s["poses"] == r.feasible > 0
+    assert s["total_force"]["min"]["z"] == pytest.approx(-w, rel=1e-6)
+    assert s["total_force"]["max"]["z"] == pytest.approx(-w, rel=1e-6)
+    assert max(abs(s["total_force"][m][a]) for m in ("min", "max") for a in "xy") < 1e-6 * w

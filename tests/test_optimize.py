@@ -102,10 +102,11 @@ def test_objectives_and_limits(planar2):
     assert lim.violation(1.0) == pytest.approx(0.2) and lim.violation(1.5) < 0
     assert lim.violation(None) == opt.objectives.UNDEFINED
     assert opt.objectives.parse_limit(planar2, "peak_tension<=15").violation(17) == 2
-    # every figure offered is a numeric column of report's row (the task box's stiffness figures
-    # are computed when an objective or a limit asks for them)
+    # every figure offered is a numeric column of report's row (the task box's stiffness figures,
+    # the boundary's and the frame loads' are computed when an objective or a limit asks for them)
     row = opt.problem.evaluate_variant(opt.make_problem(
-        planar2, ["effector.mass=0.5:2"], ["fraction", "task_min_stiffness", "task_lowest_frequency"], None, None,
+        planar2, ["effector.mass=0.5:2"], ["fraction", "task_min_stiffness", "task_lowest_frequency",
+                                           "boundary_measure"], ["max_frame_load"], None,
         batch.Options()).job(), 0, [1.0])["figures"]
     for f in opt.known_figures(planar2):
         assert isinstance(row[f], (int, float)) and not isinstance(row[f], bool), f

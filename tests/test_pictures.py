@@ -165,7 +165,8 @@ def test_command_output_identical_with_and_without_worker(tmp_path):
                         "--quiet", "--json"], check=True, env=env, capture_output=True, cwd=tmp_path)
         outs[flag] = {p.name: p.read_bytes() for p in out.iterdir() if p.suffix in (".png", ".csv")}
     # planar2 is under-constrained: its tilt map comes with the workspace
-    assert set(outs["1"]) == {"workspace.png", "tension_map.png", "tilt_map.png", "workspace.csv"}
+    assert set(outs["1"]) == {"workspace.png", "tension_map.png", "tilt_map.png", "workspace.csv", "boundary.csv",
+                              "frame_loads.csv", "frame_loads.png"}
     assert outs["1"] == outs["0"]
 
 

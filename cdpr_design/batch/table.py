@@ -91,7 +91,8 @@ def parse_rank(text: str | None) -> tuple[str, bool]:
     if direction not in ("", "asc", "desc"):
         raise InputError(f"--rank-by {quote(text)}: expected FIGURE, FIGURE:asc or FIGURE:desc")
     if not (name in KNOWN_FIGURES or name.startswith(("peak_tension_", "motor_"))):
-        known = ", ".join(sorted(HIGHER_IS_BETTER | LOWER_IS_BETTER))
+        known = ", ".join(sorted(f for f in HIGHER_IS_BETTER | LOWER_IS_BETTER if not f.startswith("check_"))
+                          + ["check_<requirement>"])
         raise InputError(f"--rank-by {quote(name)}: not a figure of design_report.csv (numbers: {known})")
     if direction:
         return name, direction == "desc"

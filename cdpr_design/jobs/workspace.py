@@ -94,7 +94,7 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
                 solid=True)
     meta = table_metadata(design, "workspace", p.columns, kind=kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])
-    files = output_names(p, html) + solid_names(design, format)
+    files = output_names(p, html, format)
     for name in files:
         out.target(name)  # a foreign file of that name: refused before any work
     writer = out.table("workspace", format, metadata=meta, names=p.columns, background=True,
@@ -113,11 +113,13 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
     return result, pending
 
 
-def output_names(p, html: bool = False) -> list[str]:
+def output_names(p, html: bool = False, format: str = "csv") -> list[str]:
     """Every file :func:`start_workspace` writes besides its table, known before the sweep: the
-    pictures the sweep plan ``p`` declares, ``summary.json`` and, with ``html``, ``report.html``."""
+    pictures the sweep plan ``p`` declares, ``summary.json``, with ``html`` ``report.html``, and
+    (a plan made with ``solid``) the boundary's and the frame loads' files (tables in ``format``)."""
     pics = p.pictures
-    return pics[:2] + ["summary.json"] + pics[2:] + (["report.html"] if html else [])
+    return (pics[:2] + ["summary.json"] + pics[2:] + (["report.html"] if html else [])
+            + (solid_names(p.robot.design, format) if p.solid else []))
 
 
 def finish_workspace(out: OutputDir, result, pending, timings: Timings) -> None:

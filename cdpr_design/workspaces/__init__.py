@@ -143,4 +143,6 @@ def warm_up(p: Plan, meanwhile: Callable[[], None] | None = None) -> None:
     base = p.base
     if isinstance(base, StraightSweep) and base.K is not None and not base.planar2:
         base.K.warm.compile_pose(p.robot.n, p.robot.m, meanwhile)
-    p.on(first_pose(p.grid)).run(keep_maps=False)
+    # the frame loads' kernel too; no boundary (a one-pose grid encloses nothing)
+    plan(p.robot, first_pose(p.grid), p.orientation, tilt=p.tilt, orientations=p.orientations,
+         frame_loads=p.solid or p.frame_loads).run(keep_maps=False)

@@ -215,19 +215,35 @@ class FrameLoads(Wrapper):
         self.table.add_envelope(cab, tot, self.robot.tension_max)
 
     def _rotations(self, r: Rows, rows: np.ndarray) -> np.ndarray:
-        """Rotation matrices (k, 3, 3) of the rows (the hanging orientation where the rows hold
-        one, else the sweep's), or one (3, 3) for all."""
-        mot = self.robot.design.motion
-        if r.poses is None or not mot.rotational or self.robot.orientation != "hanging":
+        """Rotation matrices (k, 3, 3) of the rows where the effector hangs (its orientation in the
+        rows' ``orientation_*`` columns, R = Rx Ry Rz), else the sweep's one (3, 3)."""
+        if self.robot.orientation != "hanging":
             return self.R
-        full = np.array([self.robot.design.full_pose(p) for p in r.poses[rows]])
-        return np.array([kin.rotation_matrix(*o) for o in full[:, 3:]])
+        angles = np.zeros((len(rows), 3))
+        for j, a in enumerate(("rx", "ry", "rz")):
+            if f"orientation_{a}" in r.extra:
+                angles[:, j] = r.extra[f"orientation_{a}"][rows]
+        if "orientation_phi" in r.extra:
+            angles[:, 2] = r.extra["orientation_phi"][rows]
+        return rotations(angles)
 
     def summary(self, maps: Maps) -> dict:
         return {"frame_loads": self.table.summary(self.robot.design.cable_names)}
 
     def finish(self, result: WorkspaceResult, maps: Maps) -> None:
         result.frame_loads = self.table
+
+
+def rotations(angles: np.ndarray) -> np.ndarray:
+    """R = Rx(rx) Ry(ry) Rz(rz) (k, 3, 3) of xyz Euler angles ``angles`` (k, 3) [rad]
+    (:func:`cdpr_design.statics.kinematics.rotation_matrix` for many at once)."""
+    c, s = np.cos(angles), np.sin(angles)
+    k = len(angles)
+    one, zero = np.ones(k), np.zeros(k)
+    Rx = np.stack([one, zero, zero, zero, c[:, 0], -s[:, 0], zero, s[:, 0], c[:, 0]], 1).reshape(k, 3, 3)
+    Ry = np.stack([c[:, 1], zero, s[:, 1], zero, one, zero, -s[:, 1], zero, c[:, 1]], 1).reshape(k, 3, 3)
+    Rz = np.stack([c[:, 2], -s[:, 2], zero, s[:, 2], c[:, 2], zero, zero, zero, one], 1).reshape(k, 3, 3)
+    return Rx @ Ry @ Rz
 
 
 def outlet_forces(robot: Robot, P: np.ndarray, R: np.ndarray, t: np.ndarray, extra: dict,
