@@ -36,6 +36,7 @@ BENCHMARKS = {
     "csv": "the numpy and numba CSV formatters, each in a fresh process",
     "pictures": "the workspace pictures' CPU, against another checkout's",
     "stiffness": "the stiffness kernel's cost beside the sweep's",
+    "boundary": "IPAnema 3's sweep with the workspace's boundary and the frame loads against without",
     "interference": "IPAnema 3's sweep with interference checks against without",
     "hanging": "planar2's tilt map, kernel against per-pose scipy",
     "hanging_spatial": "crane4's hanging orientations against per-position scipy",

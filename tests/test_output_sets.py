@@ -276,7 +276,7 @@ def test_workspace_and_size_motors_on_one_folder_both_end_with_a_correct_record(
     assert a.finish() == 0, "".join(a.err)
     assert b.finish() == 0, "".join(b.err)
     outputs = {"workspace.csv", "workspace.png", "tension_map.png", "tilt_map.png", "summary.json",
-               "motor_sizing.csv"}
+               "boundary.csv", "frame_loads.csv", "frame_loads.png", "motor_sizing.csv"}
     assert record(out) == outputs  # was: motor_sizing.csv dropped out of the record
     assert {p.name for p in out.iterdir()} == outputs | {MANIFEST, LOCK}
     consistent_workspace(out)

@@ -1,0 +1,43 @@
+"""What the workspace's boundary and the frame loads add to a sweep (``workspaces.run(solid=True)``).
+
+For each design, on the grid of ``steps`` [m] per axis (IPAnema 3's default: (0.1, 0.1, 0.05),
+838,201 poses), warm (the kernels compiled or loaded outside the timing), in interleaved
+rounds in this process: the plain sweep (the baseline) and the sweep with the boundary between
+the grid points and the frame loads, CPU of this process (threads included); the ratio of each
+round, the boundary's own wall time (contouring, refinement with the exact test, welding) and
+its vertices and triangles.
+"""
+
+from __future__ import annotations
+
+from benchmarks import harness as h
+
+OPTIONS = {"designs": ("ipanema3",), "steps": (0.1, 0.1, 0.05)}
+QUICK = {"steps": (0.2, 0.2, 0.1)}
+
+
+def run(b: h.Bench) -> None:
+    from cdpr_design import workspaces as ws
+    from cdpr_design.model import spec
+    from cdpr_design.model.design import Grid
+
+    for name in b.opt["designs"]:
+        d = spec.load(h.ROOT / "designs" / f"{name}.yaml")
+        g0 = d.workspace.grid
+        g = Grid(g0.lower, g0.upper, tuple(float(s) for s in b.opt["steps"])[:len(g0.lower)])
+        robot = ws.robot_for(d, g)
+        ws.plan(robot, Grid(g.lower, g.upper, tuple(4 * s for s in g.step)), solid=True).run()  # kernels, imports
+        results = {}
+
+        def sweep(solid: bool):
+            t, r = h.timed(ws.plan(robot, g, solid=solid).run)
+            results[solid] = r
+            return t
+
+        got = h.rounds({"plain": lambda: sweep(False), "solid": lambda: sweep(True)}, b.rounds)
+        bnd = results[True].boundary
+        b.row(f"{name}, {g.size:,} poses: the sweep with the boundary and the frame loads",
+              h.seconds(h.spread(t.cpu for t in got["solid"])) + " CPU",
+              h.ratios(got["solid"], got["plain"], "cpu"), "the plain sweep (CPU)",
+              f"boundary {bnd.elapsed_s:.3g} s wall, {len(bnd.vertices) or sum(map(len, bnd.loops)):,} vertices, "
+              f"{len(bnd.faces):,} triangles")
