@@ -23,6 +23,7 @@ def main() -> None:
     from cdpr_design.cli import env
 
     env.settle_blas_threads()  # before anything imports numpy
+    env.use_kernel_cache()  # before anything imports numba
     from cdpr_design.plots import worker as _picture_worker
 
     if _picture_worker.wanted(sys.argv[1:]):

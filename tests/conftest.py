@@ -7,6 +7,12 @@ import signal
 
 import pytest
 
+from cdpr_design.cli import env as _cli_env
+
+# numba's cache as the command line chooses it (a folder per version of the kernels' sources), before
+# anything imports numba: the tests' kernels and the commands they start share it
+_cli_env.use_kernel_cache()
+
 from .helpers import DESIGNS, PLANAR2, ROOT, planar2_raw, random_planar_data, write_spec  # noqa: F401
 
 

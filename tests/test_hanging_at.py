@@ -26,6 +26,7 @@ from scipy.optimize import least_squares, minimize
 from scipy.spatial.transform import Rotation
 
 from cdpr_design.kernels import hanging as K
+from cdpr_design.kernels.pose import Outputs, Statics
 from cdpr_design.model import spec
 from cdpr_design.statics import hanging as H
 from cdpr_design.statics.hanging import at_positions, results
@@ -437,8 +438,9 @@ def test_eval_rotated_equals_evaluate_pose(name):
     m = d.m
     feas, marg, ten, L = np.empty(k, np.uint8), np.empty(k), np.empty((k, m)), np.empty((k, m))
     R[3] = np.nan  # a pose where the effector cannot hang
-    K.eval_rotated(P, R, d.outlets, np.ascontiguousarray(d.attachments), d.rows, wreq, d.tension_min,
-                   d.tension_max, d.string_floor, combinations(m, d.n), 0, feas, marg, ten, L)
+    K.eval_rotated(P, R, np.ascontiguousarray(d.attachments),
+                   Statics(d.outlets, d.rows, d.tension_min, d.tension_max, d.string_floor, combinations(m, d.n), 0),
+                   wreq, Outputs(feas, marg, ten, L))
     assert feas[3] == 0 and np.isnan(marg[3]) and np.all(np.isnan(L[3]))
     n_feasible = 0
     for i in set(range(k)) - {3}:

@@ -497,12 +497,12 @@ def _grid_equals_pose_kernel(kind, count, lower, step, shape, R, B, A, rows, wre
     n, m = rows.shape[0], A.shape[0]
     Rb = rotated(R, B)
     got = (np.empty(count, np.uint8), np.empty(count), np.empty((count, m)), np.empty((count, m)))
-    K.sweep_grid(0, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind, *got)
+    statics = K.Statics(A, rows, tmin, tmax, floor, combos, kind)
+    K.sweep_grid(K.GridPoses(0, lower, step, shape, Rb), statics, wreq, K.Outputs(*got))
     P = np.array([lower + step * np.array(ijk) for ijk in itertools.product(*map(range, shape))])
     rot = (np.empty(count, np.uint8), np.empty(count), np.empty((count, m)), np.empty((count, m)))
-    eval_rotated(P, np.ascontiguousarray(np.broadcast_to(R, (count, 3, 3))), A, np.ascontiguousarray(B), rows,
-                 np.ascontiguousarray(np.broadcast_to(wreq, (count,) + wreq.shape)), tmin, tmax, floor, combos, kind,
-                 *rot)
+    eval_rotated(P, np.ascontiguousarray(np.broadcast_to(R, (count, 3, 3))), np.ascontiguousarray(B), statics,
+                 np.ascontiguousarray(np.broadcast_to(wreq, (count,) + wreq.shape)), K.Outputs(*rot))
     W = np.empty((n, m))
     L = np.empty(m)
     t = np.empty(m)

@@ -95,10 +95,10 @@ def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
     lower, step, shape = wsg.grid3(g)
     n = g.size
     f2, m2, T2, L2 = np.empty(n, np.uint8), np.empty(n), np.empty((n, 2)), np.empty((n, 2))
-    K.sweep_grid(0, n, lower, step, shape, design.attachments.copy(), design.outlets, design.rows,
-                 wreq, design.tension_min, design.tension_max, design.string_floor, combinations(2, 2),
-                 K.KIND_STATIC,
-                 f2, m2, T2, L2)
+    K.sweep_grid(K.GridPoses(0, lower, step, shape, design.attachments.copy()),
+                 K.Statics(design.outlets, design.rows, design.tension_min, design.tension_max, design.string_floor,
+                           combinations(2, 2), K.KIND_STATIC),
+                 wreq, K.Outputs(f2, m2, T2, L2))
     assert_same((f2, m2, T2, L2), got, design)
 
 

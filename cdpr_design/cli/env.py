@@ -5,7 +5,7 @@
 - ``CDPR_DESIGN_ENGINE``: ``auto`` (default), ``numba`` or ``numpy``, the
   engine of the workspace sweeps (:data:`cdpr_design.workspaces.engine.ENGINES`).
 
-And one it sets for the libraries below it (:func:`settle_blas_threads`).
+And two it sets for the libraries below it (:func:`settle_blas_threads`, :func:`use_kernel_cache`).
 
 This module imports nothing heavy: ``python -m cdpr_design`` reads it before
 anything else.
@@ -34,6 +34,18 @@ def settle_blas_threads(environ=os.environ) -> None:
     enough to share out; only the wait is shorter.
     """
     environ.setdefault("OPENBLAS_THREAD_TIMEOUT", BLAS_THREAD_TIMEOUT)
+
+
+def use_kernel_cache(environ=os.environ) -> str:
+    """Point numba's cache (``NUMBA_CACHE_DIR``) at the kernels' folder for their current sources
+    (:func:`cdpr_design.kernels.cache.folder`): under the user's ``NUMBA_CACHE_DIR`` if set, else
+    under the user's cache folder.  Call before anything imports numba (it reads the variable
+    once); commands this one starts inherit it.  Returns the folder."""
+    from cdpr_design.kernels import cache
+
+    chosen = cache.folder(environ.get("NUMBA_CACHE_DIR") or cache.default_base(environ))
+    environ["NUMBA_CACHE_DIR"] = chosen
+    return chosen
 
 
 def picture_worker_enabled(environ=os.environ) -> bool:

@@ -161,8 +161,7 @@ class ColumnWriter:
 
     def warm_up(self) -> None:
         """Compile (or load from numba's cache) the compiled CSV formatter now, on a table of one
-        row, if this writer will use it: a first run can do it while it waits for something else
-        (:func:`cdpr_design.kernels.warm.compile_pose`)."""
+        row, if this writer will use it (a caller times numba's start-up apart from the writing)."""
         if self.format == "csv" and self.compiled:
             _formatter(True).csv_rows([np.zeros(1), np.zeros(1, dtype=np.int64)])
 

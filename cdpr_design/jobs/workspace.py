@@ -148,7 +148,8 @@ def _sweep(p, progress, writer, timings):
 
     # numba's start-up, apart from the sweep's time (a machine's first run compiles the kernels)
     with timings.phase("load_s"), stage(progress, f"loading the kernels ({LOAD_HINT})"):
-        ws.warm_up(p, writer.warm_up)
+        ws.warm_up(p)
+        writer.warm_up()
     t0 = time.perf_counter()
     with stage(progress, f"workspace {design.name}") as cb:
         result = p.run(on_chunk, cb)

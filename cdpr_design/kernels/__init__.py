@@ -27,7 +27,7 @@ module             what
 ``sagging``        statics of a pose with sagging cables; the sagging grid sweep
 ``sag_path``       sagging statics along a sampled trajectory
 ``stiffness``      the effector's least stiffness and lowest natural frequency at many poses
-``warm``           a pose's kernels compiled in two processes at once (a machine's first run)
+``cache``          where numba caches the kernels: a folder per version of their sources (no numba)
 =================  ==========================================================
 """
 
@@ -44,16 +44,17 @@ _EXPORTS = {
     **dict.fromkeys(("cable_cable_dist", "cable_effector_chord", "interference_pose", "seg_seg_dist2",
                      "segment_box_chord"), "interference"),
     **dict.fromkeys(("RANK_TOL", "det_small", "householder_qr", "inverse_small"), "linalg"),
-    **dict.fromkeys(("KIND_STATIC", "KIND_WRENCH_CLOSURE", "KIND_WRENCH_FEASIBLE", "eval_general",
+    **dict.fromkeys(("KIND_STATIC", "KIND_WRENCH_CLOSURE", "KIND_WRENCH_FEASIBLE", "Outputs", "Statics", "eval_general",
                      "eval_pose", "eval_square"), "pose"),
-    **dict.fromkeys(("chunk_stats", "sweep_grid", "sweep_grid_planar2", "sweep_points"), "sweep"),
+    **dict.fromkeys(("GridPoses", "Interference", "Pulleys", "chunk_stats", "sweep_grid", "sweep_grid_planar2",
+                     "sweep_points"), "sweep"),
     **dict.fromkeys(("QP_TOL", "goldfarb_idnani", "min_norm_tensions", "min_norm_tensions_square",
                      "null_space_setup", "project_null", "project_one", "project_two", "qp_tolerance",
                      "square_projection"), "tension_qp"),
 }
 
 _SUBMODULES = {"cable_shape", "catenary", "codes", "geometry", "hanging", "hsm", "hsm_small", "interference", "linalg",
-               "parallel", "pose", "sag_path", "sagging", "stiffness", "sweep", "tension_qp", "warm"}
+               "parallel", "pose", "sag_path", "sagging", "stiffness", "sweep", "tension_qp", "cache"}
 
 __all__ = sorted(_EXPORTS)
 

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit_inline, njit_noref
+from cdpr_design.kernels._jit import njit, njit_folded, njit_inline
 
 
 @njit_inline
@@ -35,7 +35,7 @@ def next_grid_index(ix, iy, iz, ny, nz):
     return ix, iy, iz
 
 
-@njit_noref
+@njit
 def rotation(rx, ry, rz, R):
     """R = Rx(rx) Ry(ry) Rz(rz) written into ``R`` (3, 3)."""
     cx, sx = math.cos(rx), math.sin(rx)
@@ -52,7 +52,7 @@ def rotation(rx, ry, rz, R):
     R[2, 2] = cx * cy
 
 
-@njit_noref
+@njit_folded
 def rotate_attachments(R, B, Rb):
     """Rb[i] = R @ B[i] for every attachment."""
     for i in range(B.shape[0]):
@@ -60,7 +60,7 @@ def rotate_attachments(R, B, Rb):
             Rb[i, r] = R[r, 0] * B[i, 0] + R[r, 1] * B[i, 1] + R[r, 2] * B[i, 2]
 
 
-@njit_noref
+@njit_folded
 def structure_matrix(px, py, pz, Rb, A, rows, W, L):
     """Fill the structure matrix ``W`` (n, m) and lengths ``L`` (m) at one pose.
 
@@ -86,7 +86,7 @@ def structure_matrix(px, py, pz, Rb, A, rows, W, L):
     return ok
 
 
-@njit_noref
+@njit_folded
 def fill_column(W, i, rows, ux, uy, uz, bx, by, bz):
     """Column i of the structure matrix: [u ; (R b) x u] restricted to ``rows``."""
     for k in range(rows.shape[0]):
@@ -105,7 +105,7 @@ def fill_column(W, i, rows, ux, uy, uz, bx, by, bz):
             W[k, i] = bx * uy - by * ux
 
 
-@njit_noref
+@njit_folded
 def pulley_exit(A, i, k, eref, r, bx, by, bz, C):
     """Swivel pulley of cable i: tangent point into ``C[i]``; returns (total, free) length [m].
 
@@ -153,7 +153,7 @@ def pulley_exit(A, i, k, eref, r, bx, by, bz, C):
     return r * beta + free, free
 
 
-@njit_noref
+@njit_folded
 def structure_matrix_pulley(px, py, pz, Rb, A, K, Eref, rad, rows, W, L, C):
     """:func:`structure_matrix` with swivel-pulley outlets.
 

@@ -46,14 +46,17 @@ Robotics 31(2), 468-478, 2015.
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
+from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.geometry import rotate_attachments, structure_matrix
-from cdpr_design.kernels.pointers import PointerBlock
-from cdpr_design.kernels.pose import RowBlock, eval_row, eval_row_small, raise_floor
+from cdpr_design.kernels.hsm_small import facets_one, facets_two
+from cdpr_design.kernels.pose import (ROW_DONE, ROW_EMPTY, ROW_POSE, PoseBlock, raise_floor, rows_any,
+                                      rows_small, rows_square)
+from cdpr_design.kernels.tension_qp import line_projection, plane_projection
 
 #: A stable equilibrium with both tensions >= 0 was found.
 TILT_OK = 0
@@ -321,104 +324,88 @@ def _tilt_block(k0, k1, A, B, c, mass, gx, gy, P, phi, t, h, status, nbal):
         nbal[i] = nb_
 
 
-def eval_rotated(P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions, lengths):
+def eval_rotated(P, R, B, statics, wreq, out):
     """Feasibility, capacity margin and tensions at positions each with its own orientation.
 
-    :func:`cdpr_design.kernels.sweep.sweep_grid` for explicit positions ``P``
-    (k, 3) [m] at rotations ``R`` (k, 3, 3) (a hanging effector's), with the
-    required wrenches ``wreq`` (k, nv, n) [N, N m] of each pose; ``B`` (m, 3)
-    the attachments in platform coordinates.  A pose whose rotation is NaN
-    (the effector cannot hang there) gets feasible 0 and NaN margin, tensions
-    and lengths.  Lower tension bounds and outputs as :func:`~cdpr_design.kernels.sweep.sweep_grid`.
+    :func:`cdpr_design.kernels.sweep.sweep_grid` for explicit positions ``P`` (k, 3) [m] at
+    rotations ``R`` (k, 3, 3) (a hanging effector's), with the required wrenches ``wreq``
+    (k, nv, n) [N, N m] of each pose; ``B`` (m, 3) the attachments in platform coordinates;
+    ``statics`` the straight cables (:class:`~cdpr_design.kernels.pose.Statics`).  A pose whose
+    rotation is NaN (the effector cannot hang there) gets feasible 0 and NaN margin, tensions and
+    lengths.  Lower tension bounds and outputs (:class:`~cdpr_design.kernels.pose.Outputs`) as
+    :func:`~cdpr_design.kernels.sweep.sweep_grid`.
     """
-    run_blocks(rotated_block(A.shape[0] - rows.shape[0]), P.shape[0], P, R, A, B, rows, wreq, tmin, tmax, floor,
-               combos, kind, feasible, margin, tensions, lengths)
+    run_blocks(rotated_block(statics.A.shape[0] - statics.rows.shape[0]), P.shape[0],
+               Rotated(P, R, B, np.empty_like(B), wreq), statics, out, wreq[0])
+
+
+#: The poses of :func:`eval_rotated`: positions ``P`` (k, 3) [m], rotations ``R`` (k, 3, 3), the
+#: attachments ``B`` (m, 3) [m] in platform coordinates, the rotated ones ``Rb`` (m, 3) [m] (work:
+#: each block gets its own, :class:`_RotatedBlock`), the required wrenches ``wreq`` (k, nv, n) [N, N m].
+Rotated = namedtuple("Rotated", "P R B Rb wreq")
 
 
 def rotated_block(r: int):
-    """The block computing rows k0..k1-1 of :func:`eval_rotated` for m - n = ``r``, chosen here in
-    Python as :func:`cdpr_design.kernels.sweep.grid_block` does (crane4's first run compiled every
-    method): m = n and any r > 2 each a loop of its own, with ``r`` a constant in
-    :func:`_rotated_loop` (compiled with only its own margin and QP method); r = 1 and 2 one loop
-    given the pose's functions as pointers, as the grid's (:mod:`~cdpr_design.kernels.pointers`),
-    so that it compiles alone, without them (docs/performance.md)."""
-    if r in (1, 2):
-        return PointerBlock(_rotated_loop_small, _rotated_parts, _attachment_buffer)
-    return RowBlock(_rotated_loop_0 if r == 0 else _rotated_loop_any, _rotated_dims, _attachment_buffer)
+    """The block computing rows of :func:`eval_rotated` for m - n = ``r``, chosen here in Python as
+    :func:`cdpr_design.kernels.sweep.grid_block` does: m = n, 1, 2 and any other r each a loop of
+    its own (compiled with only its own margin and QP method)."""
+    return _RotatedBlock(_ROTATED_LOOPS.get(r, _rotated_loop_any))
 
 
-def _rotated_dims(*args):
-    """(n, m, nv) of a rotated block's arguments (the first three of :func:`_rotated_parts`)."""
-    return _rotated_parts(*args)[:3]
+class _RotatedBlock(PoseBlock):
+    """A :class:`~cdpr_design.kernels.pose.PoseBlock` whose poses get the block's own rotated attachments."""
+
+    def __call__(self, k0, k1, src, st, out, w):
+        super().__call__(k0, k1, src._replace(Rb=np.empty_like(src.B)), st, out, w)
 
 
-def _rotated_parts(P, R, A, B, rows, wreq, tmin, tmax, *rest):
-    """(n, m, nv, a pose's required wrenches (nv, n), tmax) of a rotated block's arguments."""
-    return rows.shape[0], A.shape[0], wreq.shape[1], wreq[0], tmax
-
-
-def _attachment_buffer(m):
-    """The rotated attachments R b_i (m, 3) of a block's current pose."""
-    return (np.empty((m, 3)),)
-
-
-@njit_noref
-def _rotated_loop_0(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                    lengths, W, t, L, lo, scr, Rb):
-    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                  lengths, W, t, L, lo, scr, Rb, 0)
-
-
-@njit_noref
-def _rotated_loop_small(factor, null, setup, facets, project, structure, k0, k1, P, R, A, B, rows, wreq, tmin,
-                        tmax, floor, combos, kind, feasible, margin, tensions, lengths, W, t, L, lo, scr, Rb):
-    """:func:`_rotated_loop` for m - n = 1 or 2, with the pose's six functions given
-    (:func:`~cdpr_design.kernels.pointers.pointers`) and the scratch as its
-    :func:`~cdpr_design.kernels.pose.small_scratch`."""
-    for k in range(k0, k1):
-        hangs, ok = _rotated_pose(k, P, R, A, B, rows, Rb, W, L, feasible, margin, tensions, lengths, structure)
-        if hangs:
-            eval_row_small(k, ok, W, wreq[k], raise_floor(tmin, floor, L, lo), tmax, kind, t, scr, feasible,
-                           margin, tensions, factor, null, setup, facets, project)
-
-
-@njit_noref
-def _rotated_loop_any(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                      lengths, W, t, L, lo, scr, Rb):
-    _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                  lengths, W, t, L, lo, scr, Rb, A.shape[0] - rows.shape[0])
-
-
-@njit_inline
-def _rotated_loop(k0, k1, P, R, A, B, rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions,
-                  lengths, W, t, L, lo, scr, Rb, r):
-    """The poses of :func:`rotated_block` with its buffers, for m - n = ``r`` (compiled without
-    reference counting, see :func:`cdpr_design.kernels.sweep.grid_block`)."""
-    for k in range(k0, k1):
-        hangs, ok = _rotated_pose(k, P, R, A, B, rows, Rb, W, L, feasible, margin, tensions, lengths,
-                                  structure_matrix)
-        if hangs:
-            eval_row(k, ok, W, wreq[k], raise_floor(tmin, floor, L, lo), tmax, combos, kind, t, scr, feasible,
-                     margin, tensions, r)
-
-
-@njit_inline
-def _rotated_pose(k, P, R, A, B, rows, Rb, W, L, feasible, margin, tensions, lengths, structure):
-    """Row ``k``'s pose at its own rotation ``R[k]``: the rotated attachments into ``Rb``, the
-    structure matrix into ``W`` (by ``structure``: :func:`~cdpr_design.kernels.geometry.structure_matrix`
-    or a pointer to it), the cable lengths into ``L`` and ``lengths[k]`` [m].  Returns (hangs, ok):
-    hangs False where the effector cannot hang there (its rotation NaN: the row is then
-    infeasible, its margin, tensions and lengths NaN), ok False for a cable of zero length."""
-    m = A.shape[0]
+@njit
+def _place_rotated(k, src, st, W, L, lo, w, out):
+    """Row ``k``'s pose at its own rotation ``src.R[k]``: the rotated attachments into ``src.Rb``, the
+    structure matrix into ``W``, the cable lengths into ``L`` and ``out.lengths[k]`` [m], the lower
+    tension bounds into ``lo`` [N], the pose's required wrenches into ``w``.  ROW_DONE where the
+    effector cannot hang there (its rotation NaN: the row is then written infeasible, its margin,
+    tensions and lengths NaN), ROW_EMPTY for a cable of zero length."""
+    lengths = out.lengths
+    m = lengths.shape[1]
+    R, P, Rb, wreq = src.R, src.P, src.Rb, src.wreq
     if not np.isfinite(R[k, 0, 0]):
-        feasible[k] = 0
-        margin[k] = np.nan
+        out.feasible[k] = 0
+        out.margin[k] = np.nan
         for i in range(m):
-            tensions[k, i] = np.nan
+            out.tensions[k, i] = np.nan
             lengths[k, i] = np.nan
-        return False, False
-    rotate_attachments(R[k], B, Rb)
-    ok = structure(P[k, 0], P[k, 1], P[k, 2], Rb, A, rows, W, L)
+        return ROW_DONE
+    rotate_attachments(R[k], src.B, Rb)
+    ok = structure_matrix(P[k, 0], P[k, 1], P[k, 2], Rb, st.A, st.rows, W, L)
     for i in range(m):
         lengths[k, i] = L[i]
-    return True, ok
+    raise_floor(st.tmin, st.floor, L, lo)
+    for v in range(w.shape[0]):
+        for j in range(w.shape[1]):
+            w[v, j] = wreq[k, v, j]
+    return ROW_POSE if ok else ROW_EMPTY
+
+
+@njit
+def _rotated_loop_0(k0, k1, src, st, out, buf):
+    rows_square(k0, k1, _place_rotated, src, st, out, buf)
+
+
+@njit
+def _rotated_loop_1(k0, k1, src, st, out, buf):
+    rows_small(k0, k1, _place_rotated, src, st, out, buf, facets_one, line_projection)
+
+
+@njit
+def _rotated_loop_2(k0, k1, src, st, out, buf):
+    rows_small(k0, k1, _place_rotated, src, st, out, buf, facets_two, plane_projection)
+
+
+@njit
+def _rotated_loop_any(k0, k1, src, st, out, buf):
+    rows_any(k0, k1, _place_rotated, src, st, out, buf)
+
+
+#: the rotated loop of each redundancy m - n that has its own (:func:`rotated_block`)
+_ROTATED_LOOPS = {0: _rotated_loop_0, 1: _rotated_loop_1, 2: _rotated_loop_2}

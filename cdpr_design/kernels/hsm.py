@@ -8,10 +8,11 @@ m != n, with the wrench-closure test from the same facets (Gouttefarde & Krut
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import jitable, njit, njit_fast_noref, njit_inline, njit_noref
+from cdpr_design.kernels._jit import jitable, njit, njit_fast, njit_folded, njit_inline
 from cdpr_design.kernels.hsm_small import hsm_one, hsm_two
 from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, det_in_place, det_small, gram_of_inverse, inverse_into
 
@@ -38,7 +39,7 @@ def square_work(n):
     return np.empty((n, n)), np.empty(n), np.empty((n, 2 * n))
 
 
-@njit_noref
+@njit_folded
 def square_eval_into(W, wreq, tmin, tmax, t, Winv, rn, a):
     """:func:`square_eval` with its work arrays given (allocates nothing): ``Winv`` (n, n),
     ``rn`` (n,) and ``a`` (n, >= 2n)."""
@@ -194,50 +195,64 @@ def hsm_margin(W, wreq, tmin, tmax, combos):
     return True, margin
 
 
+#: The scratch arrays of a pose (:func:`make_scratch`), by name; the positions are those of the
+#: fields (``scr[0]`` is ``scr.tab``).  n DOF, m cables, r = max(m - n, 1), nv required-wrench rows.
+Scratch = namedtuple("Scratch", [
+    "tab",      # 0 (n, m + n) [G W | G], G = W_B^-1
+    "M",        # 1 (n, n) M = G G^T
+    "Gw",       # 2 (max(nv, 1), n) G w_v
+    "Gt",       # 3 (n,) G W t_mid
+    "A",        # 4 (n, n) A (k, k+1)
+    "minor",    # 5 (n, n) minor
+    "mu",       # 6 (n + 1,) mu
+    "ctol",     # 7 (m,) closure tolerance per column
+    "N",        # 8 (m, r) orthonormal null basis
+    "tp",       # 9 (m,) t_p
+    "J",        # 10 (r, r) J
+    "RA",       # 11 (r, r) R of the active normals
+    "NA",       # 12 (r, r) active normals
+    "VA",       # 13 (r, r) Householder vectors
+    "z",        # 14 (r,) z
+    "d",        # 15 (r,) d
+    "dual",     # 16 (r,) dual direction
+    "mult",     # 17 (r + 1,) multipliers
+    "slot",     # 18 (m,) int64 slot of each column (-1: non-basic)
+    "nbc",      # 19 (max(m - n, 1),) int64 non-basic columns
+    "bcol",     # 20 (n,) int64 basis column of each slot
+    "spare",    # 21 (n,) int64 (spare)
+    "free",     # 22 (n,) int64 facet: free slots
+    "fnb",      # 23 (n,) int64 facet: non-basic columns of S (positions in nbc)
+    "active",   # 24 (2 m + 1,) int64 active constraints
+    "tb",       # 25 (m,) t_b (basic solution)
+    "l",        # 26 (m,) facet: l_j
+    "trange",   # 27 (m,) t_max - t_min
+    "ranges",   # 28 (2, m) hsm_small: range and closure tolerance per position
+    "minors",   # 29 (n, n) hsm_small: 2 x 2 minors of F
+    "half",     # 30 (3, 4) project_two: half-planes (g0, g1, h, bound)
+])
+
+
 @jitable
 def make_scratch(n, m, nv):
-    """Scratch arrays for :func:`eval_general` (allocate once per block of poses).
+    """The :class:`Scratch` arrays of :func:`~cdpr_design.kernels.pose.eval_general` for ``n`` DOF,
+    ``m`` cables and ``nv`` required-wrench rows (allocate once per block of poses).
 
-    A tuple so that every array keeps its contiguous type; ``nv`` is the
-    number of required-wrench rows.  A plain function from Python (numpy allocates;
-    nothing is compiled), compiled into the kernels that call it
+    A named tuple so that every array keeps its contiguous type.  A plain function from Python (numpy
+    allocates; nothing is compiled), compiled into the kernels that call it
     (:data:`~cdpr_design.kernels._jit.jitable`).
     """
     r = max(m - n, 1)
-    return (np.empty((n, m + n)),       # 0 tab: [G W | G], G = W_B^-1
-            np.empty((n, n)),           # 1 M = G G^T
-            np.empty((max(nv, 1), n)),  # 2 G w_v
-            np.empty(n),                # 3 G W t_mid
-            np.empty((n, n)),           # 4 A (k, k+1)
-            np.empty((n, n)),           # 5 minor
-            np.empty(n + 1),            # 6 mu
-            np.empty(m),                # 7 closure tolerance per column
-            np.empty((m, r)),           # 8 N, orthonormal null basis
-            np.empty(m),                # 9 t_p
-            np.empty((r, r)),           # 10 J
-            np.empty((r, r)),           # 11 R of the active normals
-            np.empty((r, r)),           # 12 active normals
-            np.empty((r, r)),           # 13 Householder vectors
-            np.empty(r),                # 14 z
-            np.empty(r),                # 15 d
-            np.empty(r),                # 16 dual direction
-            np.empty(r + 1),            # 17 multipliers
-            np.empty(m, dtype=np.int64),      # 18 slot of each column (-1: non-basic)
-            np.empty(max(m - n, 1), dtype=np.int64),  # 19 non-basic columns
-            np.empty(n, dtype=np.int64),      # 20 basis column of each slot
-            np.empty(n, dtype=np.int64),      # 21 (spare)
-            np.empty(n, dtype=np.int64),      # 22 facet: free slots
-            np.empty(n, dtype=np.int64),      # 23 facet: non-basic columns of S (positions in nbc)
-            np.empty(2 * m + 1, dtype=np.int64),  # 24 active constraints
-            np.empty(m),                # 25 t_b (basic solution)
-            np.empty(m),                # 26 facet: l_j
-            np.empty(m),                # 27 t_max - t_min
-            np.empty((2, m)),           # 28 hsm_small: range and closure tolerance per position
-            np.empty((n, n)),           # 29 hsm_small: 2 x 2 minors of F
-            np.empty((3, 4)))           # 30 project_two: half-planes (g0, g1, h, bound)
+    return Scratch(np.empty((n, m + n)), np.empty((n, n)), np.empty((max(nv, 1), n)), np.empty(n),
+                   np.empty((n, n)), np.empty((n, n)), np.empty(n + 1), np.empty(m), np.empty((m, r)),
+                   np.empty(m), np.empty((r, r)), np.empty((r, r)), np.empty((r, r)), np.empty((r, r)),
+                   np.empty(r), np.empty(r), np.empty(r), np.empty(r + 1), np.empty(m, dtype=np.int64),
+                   np.empty(max(m - n, 1), dtype=np.int64), np.empty(n, dtype=np.int64),
+                   np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64),
+                   np.empty(2 * m + 1, dtype=np.int64), np.empty(m), np.empty(m), np.empty(m),
+                   np.empty((2, m)), np.empty((n, n)), np.empty((3, 4)))
 
 
-@njit_noref
+@njit
 def basis_factor(W, tab, slot, nbc, bcol):
     """Basis factorisation W P = W_B [I F] by Gauss-Jordan with complete pivoting.
 
@@ -260,9 +275,10 @@ def basis_factor(W, tab, slot, nbc, bcol):
             tab[i, m + j] = 1.0 if i == j else 0.0
     for j in range(m):
         slot[j] = -1
-    if scale == 0.0 or m < n:
-        return False
-    for c in range(n):
+    # one return, at the end: numba then counts no reference to the arrays (an early return kept
+    # a count per array per call)
+    ok = scale != 0.0 and m >= n
+    for c in range(n if ok else 0):
         best = -1.0
         pr = -1
         pc = -1
@@ -273,7 +289,8 @@ def basis_factor(W, tab, slot, nbc, bcol):
                     pr = i
                     pc = j
         if best <= RANK_TOL * scale:
-            return False
+            ok = False
+            break
         if pr != c:
             for j in range(m + n):
                 tmp = tab[c, j]
@@ -293,14 +310,14 @@ def basis_factor(W, tab, slot, nbc, bcol):
                         tab[i, j] -= f * tab[c, j]
                     tab[i, pc] = 0.0
     k = 0
-    for j in range(m):
+    for j in range(m if ok else 0):
         if slot[j] < 0:
             nbc[k] = j
             k += 1
-    return True
+    return ok
 
 
-@njit_noref
+@njit
 def _null_vector(A, k, mu, minor):
     """Null vector mu (k+1) of A (k, k+1) by the generalised cross product.
 
@@ -344,7 +361,7 @@ def _null_vector(A, k, mu, minor):
     return bound2 > 0.0 and nrm2 > RANK_TOL * RANK_TOL * bound2
 
 
-@njit_noref
+@njit
 def _next_comb(idx, k, nn):
     """Advance idx[:k] to the next k-subset of range(nn) (lexicographic); False at the end."""
     i = k - 1
@@ -358,7 +375,7 @@ def _next_comb(idx, k, nn):
     return True
 
 
-@njit_fast_noref
+@njit_fast
 def hsm_factored(W, wreq, nv, tmin, tmax, scr, want_closure):
     """Capacity margins and wrench closure of the factored W: (margin0, margin, closure).
 
@@ -377,7 +394,7 @@ def hsm_factored(W, wreq, nv, tmin, tmax, scr, want_closure):
     return hsm_enumerate(W, wreq, nv, tmin, tmax, scr)
 
 
-@njit_fast_noref
+@njit_fast
 def hsm_enumerate(W, wreq, nv, tmin, tmax, scr):
     """Hyperplane shifting on the factored W: capacity margins and wrench closure.
 

@@ -36,17 +36,17 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit_fast_noref, njit_inline, njit_noref
+from cdpr_design.kernels._jit import njit_fast, njit_folded, njit_inline
 from cdpr_design.kernels.linalg import CLOSURE_TOL, RANK_TOL, gram_of_inverse
 
 
-@njit_fast_noref
+@njit_fast
 def facet_setup(W, wreq, nv, tmin, tmax, tab, M, e, sv, nbc, bcol, want_closure):
-    """Per-pose quantities in basis-slot order: M = G G^T, e_v = G (W t_mid - w_v) (``e`` row v),
+    """Per-pose quantities in basis-slot order, after M = G G^T (``M``, :func:`~cdpr_design.kernels.linalg.gram_of_inverse`):
+    e_v = G (W t_mid - w_v) (``e`` row v),
     and per position p (slots 0..n-1, then the non-basic columns) the tension range ``sv[0, p]``
     and (``want_closure``) the closure tolerance ``sv[1, p]``."""
     n, m = W.shape
-    gram_of_inverse(tab, n, m, M)
     for i in range(n):
         s = 0.0
         for j in range(m):
@@ -88,7 +88,7 @@ def _width(la, lb, lc, da, db, dc, ka, kb, kc, nrm2, want_closure):
     return (abs(la) * da + abs(lb) * db + abs(lc) * dc) * (0.5 * inv), inv, closes
 
 
-@njit_noref
+@njit_folded
 def _other_rows(e, nv, a, b, c, la, lb, lc, half, inv, margin):
     """``margin`` lowered by rows 1..nv-1 of the required wrenches (centre l_a e_a + l_b e_b + l_c e_c)."""
     for v in range(1, nv):
@@ -97,12 +97,13 @@ def _other_rows(e, nv, a, b, c, la, lb, lc, half, inv, margin):
     return margin
 
 
-@njit_fast_noref
+@njit_fast
 def hsm_one(W, wreq, nv, tmin, tmax, scr, want_closure):
     """:func:`~cdpr_design.kernels.hsm.hsm_enumerate` for m = n + 1: (margin0, margin, closure);
     ``closure`` is tested only when ``want_closure`` (else returned True).  ``scr`` from
     :func:`~cdpr_design.kernels.hsm.make_scratch`.  A pose's code calls the two functions
     itself, on the scratch's arrays (:func:`~cdpr_design.kernels.pose.eval_small`)."""
+    gram_of_inverse(scr[0], W.shape[0], W.shape[1], scr[1])
     facet_setup(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[19], scr[20], want_closure)
     # the body compiled once, with the flag a variable: compiled with it a constant (a copy per
     # value) it cost a first run more compile and no measurable time a pose.  A
@@ -111,7 +112,7 @@ def hsm_one(W, wreq, nv, tmin, tmax, scr, want_closure):
     return facets_one(W, wreq, nv, scr[0], scr[1], scr[2], scr[28], scr[29], scr[19], want_closure)
 
 
-@njit_fast_noref
+@njit_fast
 def facets_one(W, wreq, nv, tab, M, e, sv, P, nbc, want_closure):
     """The facets of :func:`hsm_one` (``tab`` scr[0], ``M`` scr[1], ``e`` scr[2], ``sv`` scr[28],
     ``nbc`` scr[19]) after :func:`facet_setup`.  ``P`` (scr[29]) is not used: the arguments of :func:`facets_two`, so
@@ -149,16 +150,17 @@ def facets_one(W, wreq, nv, tab, M, e, sv, P, nbc, want_closure):
     return margin0, margin, closure
 
 
-@njit_fast_noref
+@njit_fast
 def hsm_two(W, wreq, nv, tmin, tmax, scr, want_closure):
     """:func:`~cdpr_design.kernels.hsm.hsm_enumerate` for m = n + 2: (margin0, margin, closure);
     ``closure`` is tested only when ``want_closure`` (else returned True).  ``scr`` from
     :func:`~cdpr_design.kernels.hsm.make_scratch`; see :func:`hsm_one`."""
+    gram_of_inverse(scr[0], W.shape[0], W.shape[1], scr[1])
     facet_setup(W, wreq, nv, tmin, tmax, scr[0], scr[1], scr[2], scr[28], scr[19], scr[20], want_closure)
     return facets_two(W, wreq, nv, scr[0], scr[1], scr[2], scr[28], scr[29], scr[19], want_closure)
 
 
-@njit_fast_noref
+@njit_fast
 def facets_two(W, wreq, nv, tab, M, e, sv, P, nbc, want_closure):
     """The facets of :func:`hsm_two` (``tab`` scr[0], ``M`` scr[1], ``e`` scr[2], ``sv`` scr[28], ``P``
     scr[29], ``nbc`` scr[19]) after :func:`facet_setup`."""

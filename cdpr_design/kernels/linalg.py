@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_noref
+from cdpr_design.kernels._jit import njit, njit_folded
 
 
 #: Relative tolerance below which a facet normal or a pivot counts as zero.
@@ -16,7 +16,7 @@ RANK_TOL = 1e-10
 CLOSURE_TOL = 1e-12
 
 
-@njit_noref
+@njit
 def gram_of_inverse(tab, n, m, M):
     """M = G G^T (n x n) of the basis inverse G held in columns ``m..m+n-1`` of the
     factored tableau ``tab`` (:func:`cdpr_design.kernels.hsm.basis_factor`): the metric
@@ -40,7 +40,7 @@ def det_small(M, k):
     return det_in_place(a, k)
 
 
-@njit_noref
+@njit
 def det_in_place(a, k):
     """Determinant of the leading k x k block of ``a``, which it overwrites (partial pivoting;
     allocates nothing)."""
@@ -78,7 +78,7 @@ def inverse_small(W, Winv):
     return inverse_into(W, Winv, np.empty((W.shape[0], 2 * W.shape[0])))
 
 
-@njit_noref
+@njit_folded
 def inverse_into(W, Winv, a):
     """:func:`inverse_small` with the work array ``a`` (n, >= 2n) given (allocates nothing)."""
     n = W.shape[0]
@@ -119,7 +119,7 @@ def inverse_into(W, Winv, a):
     return True
 
 
-@njit_noref
+@njit
 def householder_qr(A, p, q, Q, R, V):
     """Full QR of the leading (p, q) block of ``A`` (p >= q): A = Q [R; 0].
 

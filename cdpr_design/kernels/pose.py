@@ -6,9 +6,10 @@ from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import jitable, njit, njit_inline, njit_noref
+from cdpr_design.kernels._jit import jitable, njit, njit_inline
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
 from cdpr_design.kernels.hsm_small import facet_setup, facets_one, facets_two
+from cdpr_design.kernels.linalg import gram_of_inverse
 from cdpr_design.kernels.tension_qp import goldfarb_idnani, line_projection, null_space, plane_projection
 
 
@@ -35,23 +36,46 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
     (zero-length cable): (False, NaN), tensions NaN.
 
     The methods are chosen by ``r`` as in :func:`~cdpr_design.kernels.hsm.hsm_factored`
-    and :func:`~cdpr_design.kernels.tension_qp.project_null` (closed forms for
-    r = 1, 2: :func:`eval_small`), but called here directly, and this function is inlined
-    into its callers: a caller passing ``r`` as a constant
-    (:func:`cdpr_design.kernels.sweep.grid_block`) compiles only the methods it
-    needs.  Going through those two functions instead, called or inlined,
-    costs time a pose (an inlined layer passing the scratch tuple on costs by
-    itself; docs/performance.md).
+    and :func:`~cdpr_design.kernels.tension_qp.project_null`: :func:`pose_two`, :func:`pose_one`
+    (closed forms), else :func:`pose_any`.  A sweep's loop calls the one of its robot instead
+    (chosen in Python, :func:`cdpr_design.kernels.sweep.grid_block`), so that it compiles only
+    the methods it needs.
     """
     if r == 2:
-        return eval_small(W, wreq, tmin, tmax, kind, t_out, small_scratch(scr),
-                          basis_factor, null_space, facet_setup, facets_two, plane_projection)
+        return pose_two(W, wreq, tmin, tmax, combos, kind, t_out, scr)
     if r == 1:
-        return eval_small(W, wreq, tmin, tmax, kind, t_out, small_scratch(scr),
-                          basis_factor, null_space, facet_setup, facets_one, line_projection)
+        return pose_one(W, wreq, tmin, tmax, combos, kind, t_out, scr)
+    return pose_any(W, wreq, tmin, tmax, combos, kind, t_out, scr)
+
+
+@njit_inline
+def pose_two(W, wreq, tmin, tmax, combos, kind, t_out, scr):
+    """:func:`eval_general` for m - n = 2 (:func:`eval_small` with the closed forms for two)."""
+    return eval_small(W, wreq, tmin, tmax, kind, t_out, scr, facets_two, plane_projection)
+
+
+@njit_inline
+def pose_one(W, wreq, tmin, tmax, combos, kind, t_out, scr):
+    """:func:`eval_general` for m - n = 1 (:func:`eval_small` with the closed forms for one)."""
+    return eval_small(W, wreq, tmin, tmax, kind, t_out, scr, facets_one, line_projection)
+
+
+@njit_inline
+def pose_square(W, wreq, tmin, tmax, combos, kind, t_out, scr):
+    """:func:`eval_square_into` for m = n, its work arrays from the scratch: (n, n), (n,) and
+    (n, m + n = 2n); the arguments of :func:`eval_general`'s other methods."""
+    return eval_square_into(W, wreq, tmin, tmax, kind, t_out, scr.A, scr.Gt, scr.tab)
+
+
+@njit_inline
+def pose_any(W, wreq, tmin, tmax, combos, kind, t_out, scr):
+    """:func:`eval_general` by the general methods, for any m - n: the enumerated hyperplane
+    shifting (:func:`~cdpr_design.kernels.hsm.hsm_enumerate`) and the Goldfarb-Idnani QP
+    (unique tensions t = G w for m = n)."""
     n, m = W.shape
+    r = m - n
     nv = wreq.shape[0] if kind != KIND_STATIC else 1
-    if _zero_column(W) or not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+    if _zero_column(W) or not basis_factor(W, scr.tab, scr.slot, scr.nbc, scr.bcol):
         _no_tensions(m, t_out)
         return False, np.nan
     margin0, margin, closure = hsm_enumerate(W, wreq, nv, tmin, tmax, scr)
@@ -60,8 +84,8 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
         _no_tensions(m, t_out)
     elif r == 0:
         # unique tensions t = G w
-        tab = scr[0]
-        bcol = scr[20]
+        tab = scr.tab
+        bcol = scr.bcol
         qp_ok = True
         for s in range(n):
             acc = 0.0
@@ -70,55 +94,35 @@ def eval_general(W, wreq, tmin, tmax, combos, kind, t_out, scr, r):
             t_out[bcol[s]] = min(max(acc, tmin[bcol[s]]), tmax[bcol[s]])
     else:  # writes t_out, NaN where no tensions exist
         # (tension_qp's null_space_setup on the scratch's arrays, then the general QP)
-        null_space(n, m, wreq[0], scr[0], scr[8], scr[9], scr[25], scr[19], scr[20])
+        null_space(n, m, wreq[0], scr.tab, scr.N, scr.tp, scr.tb, scr.nbc, scr.bcol)
         qp_ok = goldfarb_idnani(m, r, tmin, tmax, t_out, scr)
     return _verdict(kind, closure, margin, qp_ok, r)
 
 
 @njit_inline
-def eval_small(W, wreq, tmin, tmax, kind, t_out, S, factor, null, setup, facets, project):
-    """:func:`eval_general` for m - n = 1 or 2, with the five functions it calls given: the basis
-    factorisation ``factor`` (:func:`~cdpr_design.kernels.hsm.basis_factor`), the null basis ``null``
-    (:func:`~cdpr_design.kernels.tension_qp.null_space`), the margins' ``setup`` and ``facets``
-    (:mod:`~cdpr_design.kernels.hsm_small`: :func:`facet_setup`, then ``facets_one`` or
-    ``facets_two``) and the tensions' ``project`` (``line_projection`` or ``plane_projection``),
-    each on the scratch's arrays ``S`` (:func:`small_scratch`).  ``facets`` and ``project`` take the
-    same arguments for r = 1 and 2, so this code is the same for both.
-
-    :func:`eval_general` passes the compiled functions themselves (numba calls them directly);
-    the grid sweep's loops pass pointers to them (:mod:`cdpr_design.kernels.pointers`), so that
-    a loop compiles without compiling them into it again.
-    """
+def eval_small(W, wreq, tmin, tmax, kind, t_out, S, facets, project):
+    """:func:`eval_general` for m - n = 1 or 2, on the scratch's arrays ``S`` (:func:`make_scratch`):
+    the basis factorisation (:func:`~cdpr_design.kernels.hsm.basis_factor`), the margins'
+    :func:`~cdpr_design.kernels.hsm_small.facet_setup` and ``facets`` (``facets_one`` or ``facets_two``),
+    the null basis (:func:`~cdpr_design.kernels.tension_qp.null_space`) and the tensions' ``project``
+    (``line_projection`` or ``plane_projection``).  ``facets`` and ``project`` take the same arguments
+    for r = 1 and 2, so this code is the same for both."""
     n, m = W.shape
     nv = wreq.shape[0] if kind != KIND_STATIC else 1
-    if _zero_column(W) or not factor(W, S.tab, S.slot, S.nbc, S.bcol):
+    if _zero_column(W) or not basis_factor(W, S.tab, S.slot, S.nbc, S.bcol):
         _no_tensions(m, t_out)
         return False, np.nan
     closure_wanted = kind == KIND_WRENCH_CLOSURE
-    setup(W, wreq, nv, tmin, tmax, S.tab, S.M, S.Gw, S.ranges, S.nbc, S.bcol, closure_wanted)
+    gram_of_inverse(S.tab, n, m, S.M)
+    facet_setup(W, wreq, nv, tmin, tmax, S.tab, S.M, S.Gw, S.ranges, S.nbc, S.bcol, closure_wanted)
     margin0, margin, closure = facets(W, wreq, nv, S.tab, S.M, S.Gw, S.ranges, S.minors, S.nbc, closure_wanted)
     qp_ok = False
     if not margin0 >= 0.0:
         _no_tensions(m, t_out)
     else:  # writes t_out, NaN where no tensions exist
-        null(n, m, wreq[0], S.tab, S.N, S.tp, S.tb, S.nbc, S.bcol)
+        null_space(n, m, wreq[0], S.tab, S.N, S.tp, S.tb, S.nbc, S.bcol)
         qp_ok = project(m, tmin, tmax, t_out, S.N, S.tp, S.half)
     return _verdict(kind, closure, margin, qp_ok, m - n)
-
-
-#: The arrays of the scratch (:func:`~cdpr_design.kernels.hsm.make_scratch`, its positions in brackets)
-#: that :func:`eval_small` works in: ``tab`` [0] (n, m + n), ``M`` [1], ``Gw`` [2], the null basis ``N``
-#: [8], ``tp`` [9], the basis' ``slot`` [18], ``nbc`` [19] and ``bcol`` [20], ``tb`` [25], the margins'
-#: ``ranges`` [28] and ``minors`` [29], the projection's ``half`` planes [30].  A loop given these
-#: twelve compiles faster than one given all 31 (:mod:`cdpr_design.kernels.pointers`).
-SmallScratch = namedtuple("SmallScratch", "tab M Gw N tp slot nbc bcol tb ranges minors half")
-
-
-@jitable
-def small_scratch(scr):
-    """The :class:`SmallScratch` of ``scr`` (:func:`~cdpr_design.kernels.hsm.make_scratch`): the same arrays."""
-    return SmallScratch(scr[0], scr[1], scr[2], scr[8], scr[9], scr[18], scr[19], scr[20], scr[25], scr[28],
-                        scr[29], scr[30])
 
 
 @njit_inline
@@ -191,7 +195,7 @@ def eval_square(W, wreq, tmin, tmax, kind, t_out):
     return eval_square_into(W, wreq, tmin, tmax, kind, t_out, Winv, rn, a)
 
 
-@njit_noref
+@njit
 def eval_square_into(W, wreq, tmin, tmax, kind, t_out, Winv, rn, a):
     """:func:`eval_square` with the work arrays of
     :func:`~cdpr_design.kernels.hsm.square_eval_into` given (allocates nothing)."""
@@ -214,36 +218,142 @@ def eval_square_into(W, wreq, tmin, tmax, kind, t_out, Winv, rn, a):
     return feasible, margin
 
 
-@njit_inline
-def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin, tensions, r):
-    """Row ``k`` of a sweep's outputs from the pose's structure matrix ``W`` (n, m); ``r`` = m - n
-    (a constant where the caller specialises on it, see :func:`eval_general`).
+#: The straight cables' arrays a sweep's poses share: the frame anchors ``A`` (m, 3) [m], the wrench
+#: ``rows`` (n,) int64 of the structure matrix, the tension bounds ``tmin``, ``tmax`` (m,) [N], the
+#: tension floor ``floor`` (m,) [N/m^2] (:func:`raise_floor`), the HSM's column subsets ``combos``
+#: (C(m, n-1), n-1) int64 and the ``kind`` (KIND_*).
+Statics = namedtuple("Statics", "A rows tmin tmax floor combos kind")
+#: A sweep's outputs, row k a pose: ``feasible`` (count,) uint8, ``margin`` (count,) [N], ``tensions``
+#: and ``lengths`` (count, m) [N], [m].
+Outputs = namedtuple("Outputs", "feasible margin tensions lengths")
+#: What a block of poses works in: the structure matrix ``W`` (n, m), tensions ``t`` (m,) [N], free
+#: lengths ``L`` (m,) [m], lower tension bounds ``lo`` (m,) [N], the pose's required wrenches ``w``
+#: (nv, n) [N, N m] (row 0 the nominal one) and the :func:`~cdpr_design.kernels.hsm.make_scratch`
+#: arrays ``scr``.
+Buffers = namedtuple("Buffers", "W t L lo w scr")
 
-    ``ok`` False (a zero-length cable): infeasible, margin and tensions NaN.
-    Otherwise :func:`eval_square_into` (m = n, its work arrays from ``scr``) or :func:`eval_general` with the
-    block's scratch ``scr`` and tension buffer ``t`` (m,), written to
-    ``feasible[k]`` (uint8), ``margin[k]`` (-0.0 as 0.0: one zero in the CSV,
-    whatever the engine) [N] and ``tensions[k]`` [N].
+#: What a sweep's ``place`` function (below) says of row k: a pose to evaluate, a pose with a cable
+#: of zero length (infeasible, margin and tensions NaN), or a row it wrote itself.
+ROW_POSE = 0
+ROW_EMPTY = 1
+ROW_DONE = 2
+
+
+@jitable
+def buffers(n, m, w):
+    """The :class:`Buffers` of a block of poses of ``n`` wrench rows and ``m`` cables; ``w`` (nv, n)
+    is copied (each block its own: the sweep's place may rewrite it per pose)."""
+    return Buffers(np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m), w.copy(),
+                   make_scratch(n, m, w.shape[0]))
+
+
+class PoseBlock:
+    """Rows k0..k1-1 of a sweep, a compiled ``loop(k0, k1, src, st, out, buf)`` over them: the block
+    allocates its :class:`Buffers` (``w`` the sweep's required wrenches (nv, n), copied) and calls
+    the loop.  Python, not compiled: the buffers and the call cost microseconds a block."""
+
+    def __init__(self, loop):
+        self.loop = loop
+
+    @property
+    def signatures(self) -> list:
+        """The loop's compiled signatures (:func:`~cdpr_design.kernels.parallel.run_blocks` runs the
+        first block of a loop not compiled yet on the calling thread)."""
+        return self.loop.signatures
+
+    def __call__(self, k0, k1, src, st, out, w):
+        self.loop(k0, k1, src, st, out, buffers(st.rows.shape[0], st.A.shape[0], w))
+
+
+# The loops over a block's poses, one per method (m - n = 1 or 2, m = n, any other), each inlined into
+# a compiled loop of each sweep (grid, hanging orientations, explicit positions).  ``place(k, src, st,
+# W, L, lo, w, out)`` (a compiled function of the sweep) puts row k's pose into the buffers: its
+# structure matrix ``W``, free lengths ``L`` and lengths ``out.lengths[k]``, lower bounds ``lo``
+# (:func:`raise_floor`), its required wrenches ``w`` where they vary, and returns ROW_*.  A pose calls
+# only functions that call no other compiled function with an array, so that numba counts no
+# reference per pose: an array bound in a function that calls such a function is counted at each
+# call (an atomic increment and decrement, per array, per pose).
+
+
+@njit_inline
+def rows_small(k0, k1, place, src, st, out, buf, facets, project):
+    """Rows k0..k1-1 for m - n = 1 or 2 (:func:`eval_small`; ``facets``, ``project`` its closed forms)."""
+    tmax, kind, feasible, margin, tensions = st.tmax, st.kind, out.feasible, out.margin, out.tensions
+    W, t, L, lo, w, S = buf.W, buf.t, buf.L, buf.lo, buf.w, buf.scr
+    tab, M, Gw, N, tp, slot, nbc, bcol, tb, ranges, minors, half = (S.tab, S.M, S.Gw, S.N, S.tp, S.slot, S.nbc,
+                                                                    S.bcol, S.tb, S.ranges, S.minors, S.half)
+    n, m = W.shape
+    nv = w.shape[0] if kind != KIND_STATIC else 1
+    closure_wanted = kind == KIND_WRENCH_CLOSURE
+    w0 = w[0]
+    for k in range(k0, k1):
+        status = place(k, src, st, W, L, lo, w, out)
+        if status == ROW_DONE:
+            continue
+        f, mg = False, np.nan
+        if status == ROW_EMPTY or _zero_column(W) or not basis_factor(W, tab, slot, nbc, bcol):
+            _no_tensions(m, t)
+        else:
+            gram_of_inverse(tab, n, m, M)
+            facet_setup(W, w, nv, lo, tmax, tab, M, Gw, ranges, nbc, bcol, closure_wanted)
+            margin0, mg, closure = facets(W, w, nv, tab, M, Gw, ranges, minors, nbc, closure_wanted)
+            qp_ok = False
+            if not margin0 >= 0.0:
+                _no_tensions(m, t)
+            else:  # writes t, NaN where no tensions exist
+                null_space(n, m, w0, tab, N, tp, tb, nbc, bcol)
+                qp_ok = project(m, lo, tmax, t, N, tp, half)
+            f, mg = _verdict(kind, closure, mg, qp_ok, m - n)
+        _put_row(k, f, mg, t, feasible, margin, tensions)
+
+
+@njit_inline
+def rows_square(k0, k1, place, src, st, out, buf):
+    """Rows k0..k1-1 for m = n (:func:`eval_square_into`, its work arrays from the scratch)."""
+    tmax, kind, feasible, margin, tensions = st.tmax, st.kind, out.feasible, out.margin, out.tensions
+    W, t, L, lo, w, S = buf.W, buf.t, buf.L, buf.lo, buf.w, buf.scr
+    Winv, rn, a = S.A, S.Gt, S.tab
+    for k in range(k0, k1):
+        status = place(k, src, st, W, L, lo, w, out)
+        if status == ROW_DONE:
+            continue
+        if status == ROW_EMPTY:
+            _empty_row(k, feasible, margin, tensions)
+        else:
+            f, mg = eval_square_into(W, w, lo, tmax, kind, t, Winv, rn, a)
+            _put_row(k, f, mg, t, feasible, margin, tensions)
+
+
+@njit_inline
+def rows_any(k0, k1, place, src, st, out, buf):
+    """Rows k0..k1-1 for any m - n, by the general methods (:func:`pose_any`)."""
+    tmax, kind, combos, feasible, margin, tensions = st.tmax, st.kind, st.combos, out.feasible, out.margin, out.tensions
+    W, t, L, lo, w, scr = buf.W, buf.t, buf.L, buf.lo, buf.w, buf.scr
+    for k in range(k0, k1):
+        status = place(k, src, st, W, L, lo, w, out)
+        if status == ROW_DONE:
+            continue
+        if status == ROW_EMPTY:
+            _empty_row(k, feasible, margin, tensions)
+        else:
+            f, mg = pose_any(W, w, lo, tmax, combos, kind, t, scr)
+            _put_row(k, f, mg, t, feasible, margin, tensions)
+
+
+@njit_inline
+def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin, tensions, pose):
+    """Row ``k`` of a sweep's outputs from the pose's structure matrix ``W`` (n, m), by ``pose``
+    (:func:`pose_square`, :func:`pose_one`, :func:`pose_two` or :func:`pose_any`, chosen by the
+    caller for its robot) with the block's scratch ``scr`` and tension buffer ``t`` (m,).
+
+    ``ok`` False (a zero-length cable): infeasible, margin and tensions NaN.  Written to
+    ``feasible[k]`` (uint8), ``margin[k]`` (-0.0 as 0.0: one zero in the CSV, whatever the
+    engine) [N] and ``tensions[k]`` [N].
     """
     if not ok:
         _empty_row(k, feasible, margin, tensions)
         return
-    if r == 0:  # the square case's work arrays from the scratch: (n, n), (n,) and (n, m + n = 2n)
-        f, mg = eval_square_into(W, wreq, tmin, tmax, kind, t, scr[4], scr[3], scr[0])
-    else:
-        f, mg = eval_general(W, wreq, tmin, tmax, combos, kind, t, scr, r)
-    _put_row(k, f, mg, t, feasible, margin, tensions)
-
-
-@njit_inline
-def eval_row_small(k, ok, W, wreq, tmin, tmax, kind, t, scr, feasible, margin, tensions,
-                   factor, null, setup, facets, project):
-    """:func:`eval_row` for m - n = 1 or 2 with the five functions of :func:`eval_small` given (the
-    grid sweep's pointers, :mod:`cdpr_design.kernels.pointers`)."""
-    if not ok:
-        _empty_row(k, feasible, margin, tensions)
-        return
-    f, mg = eval_small(W, wreq, tmin, tmax, kind, t, scr, factor, null, setup, facets, project)
+    f, mg = pose(W, wreq, tmin, tmax, combos, kind, t, scr)
     _put_row(k, f, mg, t, feasible, margin, tensions)
 
 
@@ -313,41 +423,3 @@ def raise_floor(tmin, floor, L, lo):
         c = floor[i]
         lo[i] = max(tmin[i], c * L[i] * L[i]) if c > 0.0 else tmin[i]
     return lo
-
-
-def pose_kernels(n: int, m: int, wreq=None, tmax=None) -> tuple[list, list]:
-    """The compiled functions a pose calls for ``n`` DOF and ``m`` cables (:func:`eval_general`), with
-    the types a sweep gives them: (tensions, margins), each a list of (dispatcher, signature); both
-    empty for m <= n (:func:`eval_square_into`: one small function).  Two independent sets, for
-    :func:`cdpr_design.kernels.warm.compile_pose`.
-
-    The types are those of the block's buffers (:func:`row_buffers`) and of the sweep's ``wreq``
-    (nv, n) [N, N m] and ``tmax`` (m,) [N] (default: new C-contiguous arrays).  For m - n = 1, 2
-    the signatures are complete, return type and all, in the order of :func:`eval_small`'s
-    arguments (tensions: ``factor``, ``null``, ``project``; margins: ``setup``, ``facets``): the C
-    signatures of the pointers to them (:mod:`cdpr_design.kernels.pointers`)."""
-    from numba import typeof, types
-
-    r = m - n
-    if r <= 0:
-        return [], []
-    W, t, _, _, scr = row_buffers(n, m, 1)
-    wreq = np.empty((1, n)) if wreq is None else wreq
-    T = {name: typeof(a) for name, a in (("W", W), ("wreq", wreq), ("w", wreq[0]), ("t", t))}
-    tx = T["t"] if tmax is None else typeof(tmax)
-    S = [typeof(a) for a in scr]
-    i64, flag, ok = typeof(m), typeof(True), types.boolean
-    facets = types.Tuple((types.float64, types.float64, types.boolean))  # (margin0, margin, closure)
-    tensions = [(basis_factor, ok(T["W"], S[0], S[18], S[19], S[20])),
-                (null_space, types.none(i64, i64, T["w"], S[0], S[8], S[9], S[25], S[19], S[20]))]
-    if r <= 2:
-        project = plane_projection if r == 2 else line_projection
-        tensions.append((project, ok(i64, T["t"], tx, T["t"], S[8], S[9], S[30])))
-        margins = [(facet_setup, types.none(T["W"], T["wreq"], i64, T["t"], tx, S[0], S[1], S[2], S[28], S[19],
-                                            S[20], flag)),
-                   (facets_two if r == 2 else facets_one, facets(T["W"], T["wreq"], i64, S[0], S[1], S[2], S[28],
-                                                                 S[29], S[19], flag))]
-    else:
-        tensions.append((goldfarb_idnani, ok(i64, i64, T["t"], tx, T["t"], typeof(scr))))
-        margins = [(hsm_enumerate, facets(T["W"], T["wreq"], i64, T["t"], tx, typeof(scr)))]
-    return tensions, margins

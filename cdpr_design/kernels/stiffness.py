@@ -29,10 +29,11 @@ whose tensions are not all finite gives NaN.
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit_inline, njit_noref
+from cdpr_design.kernels._jit import njit, njit_inline
 from cdpr_design.kernels.geometry import grid_index, next_grid_index
 from cdpr_design.kernels.parallel import run_blocks
 
@@ -301,9 +302,25 @@ def planar_figures(px, py, pz, A, Rb, t, EA, Linv):
     return lo, frequency(lo * Linv[0, 0] * Linv[0, 0])
 
 
-@njit_noref
-def _stiffness_loop(k0, k1, start, lower, step, shape, P, feasible, Rb, A, T, EA, Kg, Linv, sel, d,
-                    kmin, flow, K, S, B, v1, v2):
+#: The poses of :func:`stiffness_rows`: with ``P`` (0, 3), the grid poses ``start .. start + k - 1`` of
+#: the grid ``lower``, ``step`` (3,) [m], ``shape`` (3,) int64 (C order over x, y, z, as the sweep
+#: kernels count them); else ``P`` (k, 3) the positions [m].
+Poses = namedtuple("Poses", "start lower step shape P")
+#: The robot's arrays of :func:`stiffness_rows`: ``Rb`` (m, 3) rotated attachments R b_i [m] (one
+#: orientation for every pose); ``A`` (m, 3) outlets [m]; ``EA`` (m,) [N]; ``Kg`` (3, 3) the weight's
+#: rotational stiffness -[m g]x [R c]x [N m]; ``Linv`` (n, n) the inverse of the mass matrix's
+#: Cholesky factor; ``sel`` (n,) int64 the motion's coordinates in [x, y, z, rx, ry, rz], the first
+#: ``d`` of them translations (0 .. d-1).
+Arrays = namedtuple("Arrays", "Rb A EA Kg Linv sel d")
+#: A block's work arrays: the stiffness K, S and B (6, 6) and two 6-vectors.
+_Work = namedtuple("_Work", "K S B v1 v2")
+
+
+@njit
+def _stiffness_loop(k0, k1, poses, feasible, T, ar, kmin, flow, work):
+    start, lower, step, shape, P = poses
+    Rb, A, EA, Kg, Linv, sel, d = ar
+    K, S, B, v1, v2 = work
     grid = P.shape[0] == 0
     rot = sel.shape[0] > d
     planar = d == 2 and not rot
@@ -331,21 +348,15 @@ def _stiffness_loop(k0, k1, start, lower, step, shape, P, feasible, Rb, A, T, EA
 
 
 def _stiffness_block(k0, k1, *args):
-    """Rows k0..k1-1 of :func:`stiffness_rows`: the block's scratch, then the compiled loop."""
-    _stiffness_loop(k0, k1, *args, np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)), np.empty(6), np.empty(6))
+    """Rows k0..k1-1 of :func:`stiffness_rows`: the block's work arrays, then the compiled loop."""
+    _stiffness_loop(k0, k1, *args, _Work(np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6)), np.empty(6),
+                                         np.empty(6)))
 
 
-def stiffness_rows(start, lower, step, shape, P, feasible, Rb, A, T, EA, Kg, Linv, sel, d, kmin, flow):
+def stiffness_rows(poses, feasible, T, arrays, kmin, flow):
     """Least stiffness [N/m] and lowest natural frequency [Hz] at ``k`` poses (module notes).
 
-    The poses: with ``P`` (0, 3), the grid poses ``start .. start + k - 1`` of the grid ``lower``,
-    ``step`` (3,) [m], ``shape`` (3,) int64 (C order over x, y, z, as the sweep kernels count
-    them); else ``P`` (k, 3) the positions [m].  ``feasible`` (k,) uint8: rows where it is 0 get
-    NaN.  ``Rb`` (m, 3) rotated attachments R b_i [m] (one orientation for every pose); ``A`` (m,
-    3) outlets [m]; ``T`` (k, m) tensions [N]; ``EA`` (m,) [N]; ``Kg`` (3, 3) the weight's
-    rotational stiffness -[m g]x [R c]x [N m]; ``Linv`` (n, n) the inverse of the mass matrix's
-    Cholesky factor; ``sel`` (n,) int64 the motion's coordinates in [x, y, z, rx, ry, rz], the
-    first ``d`` of them translations (0 .. d-1).  Writes ``kmin`` and ``flow`` (k,).
+    The poses :class:`Poses`; ``feasible`` (k,) uint8: rows where it is 0 get NaN; ``T`` (k, m)
+    tensions [N]; the robot's :class:`Arrays`.  Writes ``kmin`` and ``flow`` (k,).
     """
-    run_blocks(_stiffness_block, kmin.shape[0], start, lower, step, shape, P, feasible, Rb, A, T, EA, Kg, Linv,
-               sel, d, kmin, flow)
+    run_blocks(_stiffness_block, kmin.shape[0], poses, feasible, T, arrays, kmin, flow)

@@ -4,123 +4,101 @@ per-chunk statistics."""
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_inline, njit_noref
+from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.linalg import RANK_TOL
 from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
-from cdpr_design.kernels.pointers import PointerBlock
-from cdpr_design.kernels.pose import RowBlock, eval_row, eval_row_small, raise_floor, row_buffers
+from cdpr_design.kernels.hsm_small import facets_one, facets_two
+from cdpr_design.kernels.pose import (ROW_EMPTY, ROW_POSE, PoseBlock, raise_floor, rows_any, rows_small,
+                                      rows_square)
+from cdpr_design.kernels.tension_qp import line_projection, plane_projection
 from cdpr_design.kernels.interference import interference_pose
 from cdpr_design.kernels.parallel import run_blocks
 
 
-def sweep_grid(start, count, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos,
-               kind, feasible, margin, tensions, lengths):
-    """Evaluate ``count`` grid poses from flat index ``start`` (C order over x, y, z).
+#: A grid sweep's poses: flat index ``start`` of row 0 (C order over x, y, z), the grid's ``lower``
+#: corner and ``step`` (3,) [m] and ``shape`` (3,) int64, the rotated attachments ``Rb`` (m, 3) [m].
+GridPoses = namedtuple("GridPoses", "start lower step shape Rb")
+
+
+def sweep_grid(poses, statics, wreq, out):
+    """Evaluate the grid poses ``poses`` (:class:`GridPoses`: rows 0..count-1 of ``out`` are grid
+    poses start .. start + count - 1, C order over x, y, z) of the straight cables ``statics``
+    (:class:`~cdpr_design.kernels.pose.Statics`) under the required wrenches ``wreq`` (nv, n) [N, N m]
+    (row 0 the nominal one).
 
     Cable i's lower tension bound at a pose is max(``tmin``[i], ``floor``[i] L_i^2) where
     ``floor``[i] > 0 [N/m^2] (:func:`~cdpr_design.kernels.pose.raise_floor`; zeros: ``tmin``).
 
-    Outputs are written to rows 0..count-1 of ``feasible`` (uint8), ``margin``,
-    ``tensions`` (count, m) and ``lengths`` (count, m).  The orientation is
-    fixed: ``Rb`` holds R b_i.  Work is split into blocks (:func:`grid_block`)
-    run on threads, each with its own scratch arrays, so no allocation happens per pose.
+    Outputs (:class:`~cdpr_design.kernels.pose.Outputs`, count = ``out.feasible.shape[0]``) are written
+    to rows 0..count-1 of ``feasible`` (uint8), ``margin`` [N], ``tensions`` (count, m) [N] and
+    ``lengths`` (count, m) [m].  The orientation is fixed: ``poses.Rb`` holds R b_i.  Work is split
+    into blocks (:func:`grid_block`) run on threads, each with its own buffers, so no allocation
+    happens per pose.
     """
-    run_blocks(grid_block(A.shape[0] - rows.shape[0]), count, start, lower, step, shape, Rb, A, rows, wreq,
-               tmin, tmax, floor, combos, kind, feasible, margin, tensions, lengths)
+    run_blocks(grid_block(statics.A.shape[0] - statics.rows.shape[0]), out.feasible.shape[0], poses, statics, out,
+               wreq)
 
 
 def grid_block(r: int):
-    """The block function computing rows k0..k1-1 of :func:`sweep_grid` for m - n = ``r``.
+    """The block function computing rows of :func:`sweep_grid` for m - n = ``r``,
+    ``block(k0, k1, poses, statics, rows, wreq)``.
 
-    One loop per redundancy: m = n (:func:`_grid_loop_0`), m - n = 1 or 2 (:func:`_grid_loop_small`,
-    one loop for both: it is given the pose's functions as pointers,
-    :mod:`cdpr_design.kernels.pointers`, and so compiles without them, alone, and once for every
-    such design), and any other (:func:`_grid_loop_any`).  Chosen here, in Python, so that a design
-    compiles only the loop it uses, each with only its own margin and QP method
-    (:func:`~cdpr_design.kernels.pose.eval_general`), which is also faster a pose than one kernel
-    for every r (docs/performance.md).
-
-    The block (:class:`~cdpr_design.kernels.pose.RowBlock`,
-    :class:`~cdpr_design.kernels.pointers.PointerBlock`) allocates the block's buffers
-    (:func:`~cdpr_design.kernels.pose.row_buffers`) and hands them to its loop over the poses,
-    compiled without reference counting (:data:`~cdpr_design.kernels._jit.njit_noref`): every
-    array a pose's code binds or passes on (the scratch tuple alone holds 31) otherwise costs an
-    atomic increment and decrement per pose.
+    One compiled loop per method: m = n, m - n = 1, m - n = 2 and any other (:func:`_grid_loop_0`,
+    :func:`_grid_loop_1`, :func:`_grid_loop_2`, :func:`_grid_loop_any`), chosen here, in Python,
+    so that a design compiles only the loop it uses, with only its own margin and QP method
+    (:func:`~cdpr_design.kernels.pose.rows_small`).  The block
+    (:class:`~cdpr_design.kernels.pose.PoseBlock`) allocates the block's buffers; nothing is
+    allocated per pose.
     """
-    if r in (1, 2):
-        return PointerBlock(_grid_loop_small, _grid_parts)
-    return RowBlock(_grid_loop_0 if r == 0 else _grid_loop_any, _grid_dims)
+    return PoseBlock(_GRID_LOOPS.get(r, _grid_loop_any))
 
 
-def _grid_dims(*args):
-    """(n, m, nv) of a grid block's arguments (the first three of :func:`_grid_parts`)."""
-    return _grid_parts(*args)[:3]
-
-
-def _grid_parts(start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, *rest):
-    """(n, m, nv, wreq, tmax) of a grid block's arguments."""
-    return rows.shape[0], A.shape[0], wreq.shape[0], wreq, tmax
-
-
-@njit_noref
-def _grid_loop_small(factor, null, setup, facets, project, structure, k0, k1, start, lower, step, shape, Rb, A,
-                     rows, wreq, tmin, tmax, floor, combos, kind, feasible, margin, tensions, lengths, W, t, L, lo,
-                     scr):
-    """Rows k0..k1-1 of :func:`sweep_grid` (grid poses start+k0 .. start+k1-1) for m - n = 1 or 2,
-    with the pose's six functions given (:func:`~cdpr_design.kernels.pose.eval_small`'s five and
-    the structure matrix, :mod:`~cdpr_design.kernels.pointers`) and the block's buffers
-    (:func:`~cdpr_design.kernels.pose.row_buffers`, the scratch as its
-    :func:`~cdpr_design.kernels.pose.small_scratch`)."""
-    ix, iy, iz = grid_index(start + k0, shape[1], shape[2])
-    for k in range(k0, k1):
-        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths,
-                                    structure)
-        eval_row_small(k, ok, W, wreq, lo, tmax, kind, t, scr, feasible, margin, tensions,
-                       factor, null, setup, facets, project)
-
-
-@njit_noref
-def _grid_loop_0(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
-                 feasible, margin, tensions, lengths, W, t, L, lo, scr):
-    """:func:`_grid_loop_small` for m = n."""
-    ix, iy, iz = grid_index(start + k0, shape[1], shape[2])
-    for k in range(k0, k1):
-        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths,
-                                    structure_matrix)
-        eval_row(k, ok, W, wreq, lo, tmax, combos, kind, t, scr, feasible, margin, tensions, 0)
-
-
-@njit_noref
-def _grid_loop_any(k0, k1, start, lower, step, shape, Rb, A, rows, wreq, tmin, tmax, floor, combos, kind,
-                   feasible, margin, tensions, lengths, W, t, L, lo, scr):
-    """:func:`_grid_loop_small` for any other m - n (the general margin and QP)."""
-    r = A.shape[0] - rows.shape[0]
-    ix, iy, iz = grid_index(start + k0, shape[1], shape[2])
-    for k in range(k0, k1):
-        ok, ix, iy, iz = _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths,
-                                    structure_matrix)
-        eval_row(k, ok, W, wreq, lo, tmax, combos, kind, t, scr, feasible, margin, tensions, r)
-
-
-@njit_inline
-def _grid_pose(k, ix, iy, iz, lower, step, shape, Rb, A, rows, tmin, floor, W, L, lo, lengths, structure):
-    """Row ``k``'s grid pose, at grid indices (ix, iy, iz): its structure matrix into ``W`` (by
-    ``structure``: :func:`~cdpr_design.kernels.geometry.structure_matrix` or a pointer to it), its
-    cable lengths into ``L`` and ``lengths[k]`` [m], its lower tension bounds into ``lo`` [N]
-    (:func:`~cdpr_design.kernels.pose.raise_floor`).  Returns (ok, the next pose's indices): ok
-    False for a cable of zero length.  The grid's indices are counted up, not divided per pose."""
-    px = lower[0] + ix * step[0]
-    py = lower[1] + iy * step[1]
-    pz = lower[2] + iz * step[2]
-    ix, iy, iz = next_grid_index(ix, iy, iz, shape[1], shape[2])
-    ok = structure(px, py, pz, Rb, A, rows, W, L)
-    for i in range(A.shape[0]):
+@njit
+def _place_grid(k, src, st, W, L, lo, w, out):
+    """Row ``k``'s grid pose (grid index ``src.start + k``): its structure matrix into ``W``, its
+    cable lengths into ``L`` and ``out.lengths[k]`` [m], its lower tension bounds into ``lo`` [N]
+    (:func:`~cdpr_design.kernels.pose.raise_floor`).  ROW_EMPTY for a cable of zero length."""
+    shape, lower, step = src.shape, src.lower, src.step
+    ix, iy, iz = grid_index(src.start + k, shape[1], shape[2])
+    ok = structure_matrix(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2], src.Rb,
+                          st.A, st.rows, W, L)
+    lengths = out.lengths
+    for i in range(L.shape[0]):
         lengths[k, i] = L[i]
-    raise_floor(tmin, floor, L, lo)
-    return ok, ix, iy, iz
+    raise_floor(st.tmin, st.floor, L, lo)
+    return ROW_POSE if ok else ROW_EMPTY
+
+
+@njit
+def _grid_loop_0(k0, k1, src, st, out, buf):
+    """Rows k0..k1-1 of :func:`sweep_grid` for m = n."""
+    rows_square(k0, k1, _place_grid, src, st, out, buf)
+
+
+@njit
+def _grid_loop_1(k0, k1, src, st, out, buf):
+    """Rows k0..k1-1 of :func:`sweep_grid` for m - n = 1."""
+    rows_small(k0, k1, _place_grid, src, st, out, buf, facets_one, line_projection)
+
+
+@njit
+def _grid_loop_2(k0, k1, src, st, out, buf):
+    """Rows k0..k1-1 of :func:`sweep_grid` for m - n = 2."""
+    rows_small(k0, k1, _place_grid, src, st, out, buf, facets_two, plane_projection)
+
+
+@njit
+def _grid_loop_any(k0, k1, src, st, out, buf):
+    """Rows k0..k1-1 of :func:`sweep_grid` for any other m - n (the general margin and QP)."""
+    rows_any(k0, k1, _place_grid, src, st, out, buf)
+
+
+#: the grid loop of each redundancy m - n that has its own (:func:`grid_block`)
+_GRID_LOOPS = {0: _grid_loop_0, 1: _grid_loop_1, 2: _grid_loop_2}
 
 
 def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax, floor,
@@ -141,7 +119,7 @@ def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax
                feasible, margin, tensions, lengths, grain=4096)
 
 
-@njit_noref
+@njit
 def planar2_block(k0, k1, start, lower, step, shape, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensions,
                   lengths):
     """Rows k0..k1-1 of :func:`sweep_grid_planar2`."""
@@ -212,7 +190,7 @@ def planar2_block(k0, k1, start, lower, step, shape, Rb, A, wreq, tmin, tmax, fl
         tensions[k, 1] = t1 if inb else np.nan
 
 
-@njit_noref
+@njit
 def chunk_stats(feasible, margin, tensions, count, tpeak):
     """Feasible count and margin extremes over the feasible rows 0..count-1; ``tpeak`` (m) is
     raised to each cable's largest feasible tension.  Returns (count, min, max) (-0.0 is returned as
@@ -236,67 +214,109 @@ def chunk_stats(feasible, margin, tensions, count, tpeak):
     return nf, lo + 0.0, hi + 0.0
 
 
-def compile_chunk_stats() -> None:
-    """Compile (or load from numba's cache) :func:`chunk_stats` for the types the sweeps give it
-    (C-contiguous uint8, float64 and (rows, m) float64 arrays, an int): what a first run's other
-    process compiles while this one compiles the sweep's loop (:mod:`cdpr_design.kernels.warm`)."""
-    chunk_stats(np.zeros(1, dtype=np.uint8), np.zeros(1), np.zeros((1, 1)), 1, np.zeros(1))
+#: The swivel pulleys of :func:`sweep_points`: each outlet's axis ``K`` (m, 3), reference direction
+#: ``Eref`` (m, 3) and radius ``rad`` (m,) [m] (0: a point outlet, :func:`structure_matrix_pulley`).
+Pulleys = namedtuple("Pulleys", "K Eref rad")
+#: The interference check of :func:`sweep_points` (:func:`interference_pose`): whether to ``check``,
+#: the attachments ``Bp`` (m, 3) [m] in the cables' planes, the effector box ``half`` (3,) [m], the
+#: cables' radius ``rho`` [m], the frame box ``flo``, ``fhi`` (3,) [m], the motion's ``dim``, the
+#: tolerance ``tol`` [m], ``full`` (every pair, not the first hit) and each cable's plane offset
+#: ``zoff`` (m,) [m] (planar designs; zeros otherwise).
+Interference = namedtuple("Interference", "check Bp half rho flo fhi dim tol full zoff")
 
 
-def sweep_points(P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,
-                 check, Bp, half, rho, flo, fhi, dim, tol, full, zoff,
-                 feasible, margin, tensions, lengths, cmask):
-    """Evaluate explicit positions ``P`` (count, 3) at one orientation, pulley- and interference-aware.
+def sweep_points(P, Rb, R, statics, wreq, pulleys, check, out, cmask):
+    """Evaluate explicit positions ``P`` (count, 3) [m] at one orientation (``R`` (3, 3), ``Rb`` (m, 3)
+    the rotated attachments [m]), pulley- and interference-aware.
 
-    Same outputs as :func:`sweep_grid` for rows 0..count-1 (statics only:
-    ``feasible`` does not include interference), plus ``cmask`` (uint8): the
-    :func:`interference_pose` bits when ``check`` (0 when not checked).
-    Outlets with ``rad[i]`` > 0 are swivel pulleys (:func:`structure_matrix_pulley`).  ``zoff`` (m,)
-    [m]: each cable's plane offset (planar designs; zeros otherwise) added to the z of its free
-    segment's ends for the interference check only (``Bp`` given in those planes already).
+    Same statics and outputs as :func:`sweep_grid` for rows 0..count-1 (``feasible`` does not
+    include interference), plus ``cmask`` (count,) uint8: the :func:`interference_pose` bits when
+    ``check.check`` (:class:`Interference`; 0 when not checked).  Outlets with ``pulleys.rad[i]`` > 0
+    are swivel pulleys (:class:`Pulleys`, :func:`structure_matrix_pulley`).  ``check.zoff``: each
+    cable's plane offset (planar designs; zeros otherwise) added to the z of its free segment's ends
+    for the interference check only (``check.Bp`` given in those planes already).
     """
-    run_blocks(points_block, P.shape[0], P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,
-               check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask)
+    m = statics.A.shape[0]
+    src = Points(P, Rb, R, pulleys.K, pulleys.Eref, pulleys.rad, *check, cmask,
+                 np.empty((m, 3)), np.empty((m, 3)), np.zeros((m + 2, m + 2), dtype=np.uint8), np.empty(3),
+                 np.empty(3), np.empty(3))
+    run_blocks(points_block(m - statics.rows.shape[0]), P.shape[0], src, statics, out, wreq)
+
+
+#: The poses of :func:`sweep_points` and what their interference check needs (the arguments of the same
+#: names), with the work arrays of a block (each block its own, :class:`_PointsBlock`): the cables'
+#: exit points ``C`` and free-segment starts ``S0`` (m, 3) [m], the interference ``hits`` (m + 2, m + 2)
+#: and three 3-vectors ``s0``, ``s1``, ``cp`` (:func:`~cdpr_design.kernels.interference.interference_pose`).
+Points = namedtuple("Points", "P Rb R K Eref rad check Bp half rho flo fhi dim tol full zoff cmask "
+                              "C S0 hits s0 s1 cp")
+
+
+def points_block(r: int):
+    """The block computing rows of :func:`sweep_points` for m - n = ``r``: a loop per method, as
+    :func:`grid_block`."""
+    return _PointsBlock(_POINTS_LOOPS.get(r, _points_loop_any))
+
+
+class _PointsBlock(PoseBlock):
+    """A :class:`~cdpr_design.kernels.pose.PoseBlock` whose poses get the block's own work arrays."""
+
+    def __call__(self, k0, k1, src, st, out, w):
+        own = src._replace(C=np.empty_like(src.C), S0=np.empty_like(src.S0), hits=np.zeros_like(src.hits),
+                           s0=np.empty(3), s1=np.empty(3), cp=np.empty(3))
+        super().__call__(k0, k1, own, st, out, w)
 
 
 @njit
-def points_block(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,
-                 check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask):
-    """Rows k0..k1-1 of :func:`sweep_points`: the block's buffers, then :func:`_points_loop`."""
-    m = A.shape[0]
-    W, t, L, lo, scr = row_buffers(rows.shape[0], m, wreq.shape[0])
-    _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,
-                 check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask,
-                 W, t, L, lo, scr, np.empty((m, 3)), np.empty((m, 3)), np.zeros((m + 2, m + 2), dtype=np.uint8),
-                 np.empty(3), np.empty(3), np.empty(3))
-
-
-@njit_noref
-def _points_loop(k0, k1, P, Rb, R, A, K, Eref, rad, rows, wreq, tmin, tmax, floor, combos, kind,
-                 check, Bp, half, rho, flo, fhi, dim, tol, full, zoff, feasible, margin, tensions, lengths, cmask,
-                 W, t, L, lo, scr, C, S0, hits, s0, s1, cp):
-    """The poses of :func:`points_block` with its buffers (no reference counting, see :func:`grid_block`)."""
-    n = rows.shape[0]
-    m = A.shape[0]
-    for k in range(k0, k1):
-        px, py, pz = P[k, 0], P[k, 1], P[k, 2]
-        ok = structure_matrix_pulley(px, py, pz, Rb, A, K, Eref, rad, rows, W, L, C)
+def _place_points(k, src, st, W, L, lo, w, out):
+    """Row ``k``'s pose at ``src.P[k]``: the structure matrix with swivel pulleys into ``W``, the cable
+    lengths into ``L`` and ``out.lengths[k]`` [m], the lower tension bounds into ``lo`` [N] (from the
+    free lengths, tangent point to attachment), the interference bits into ``src.cmask[k]`` (when
+    ``src.check``, else 0).  ROW_EMPTY for a cable of zero length."""
+    P, Rb, C, S0, zoff, floor = src.P, src.Rb, src.C, src.S0, src.zoff, st.floor
+    lengths = out.lengths
+    m = L.shape[0]
+    px, py, pz = P[k, 0], P[k, 1], P[k, 2]
+    ok = structure_matrix_pulley(px, py, pz, Rb, st.A, src.K, src.Eref, src.rad, st.rows, W, L, C)
+    for i in range(m):
+        lengths[k, i] = L[i]
+        if floor[i] > 0.0:  # the free length (tangent point to attachment), for raise_floor only
+            dx = px + Rb[i, 0] - C[i, 0]
+            dy = py + Rb[i, 1] - C[i, 1]
+            dz = pz + Rb[i, 2] - C[i, 2]
+            lo[i] = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if src.check:
         for i in range(m):
-            lengths[k, i] = L[i]
-            if floor[i] > 0.0:  # the free length (tangent point to attachment), for raise_floor only
-                dx = px + Rb[i, 0] - C[i, 0]
-                dy = py + Rb[i, 1] - C[i, 1]
-                dz = pz + Rb[i, 2] - C[i, 2]
-                lo[i] = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if check:
-            for i in range(m):
-                S0[i, 0] = px + Rb[i, 0]
-                S0[i, 1] = py + Rb[i, 1]
-                S0[i, 2] = pz + Rb[i, 2] + zoff[i]
-                C[i, 2] += zoff[i]  # the statics are done with C: the row's W and L hold them
-            cmask[k] = interference_pose(S0, C, Bp, R, px, py, pz, half, rho, flo, fhi, dim,
-                                         tol, full, hits, s0, s1, cp)
-        else:
-            cmask[k] = 0
-        eval_row(k, ok, W, wreq, raise_floor(tmin, floor, lo, lo), tmax, combos, kind, t, scr, feasible, margin,
-                 tensions, m - n)
+            S0[i, 0] = px + Rb[i, 0]
+            S0[i, 1] = py + Rb[i, 1]
+            S0[i, 2] = pz + Rb[i, 2] + zoff[i]
+            C[i, 2] += zoff[i]  # the statics are done with C: the row's W and L hold them
+        src.cmask[k] = interference_pose(S0, C, src.Bp, src.R, px, py, pz, src.half, src.rho, src.flo, src.fhi,
+                                         src.dim, src.tol, src.full, src.hits, src.s0, src.s1, src.cp)
+    else:
+        src.cmask[k] = 0
+    raise_floor(st.tmin, floor, lo, lo)
+    return ROW_POSE if ok else ROW_EMPTY
+
+
+@njit
+def _points_loop_0(k0, k1, src, st, out, buf):
+    rows_square(k0, k1, _place_points, src, st, out, buf)
+
+
+@njit
+def _points_loop_1(k0, k1, src, st, out, buf):
+    rows_small(k0, k1, _place_points, src, st, out, buf, facets_one, line_projection)
+
+
+@njit
+def _points_loop_2(k0, k1, src, st, out, buf):
+    rows_small(k0, k1, _place_points, src, st, out, buf, facets_two, plane_projection)
+
+
+@njit
+def _points_loop_any(k0, k1, src, st, out, buf):
+    rows_any(k0, k1, _place_points, src, st, out, buf)
+
+
+#: the points loop of each redundancy m - n that has its own (:func:`points_block`)
+_POINTS_LOOPS = {0: _points_loop_0, 1: _points_loop_1, 2: _points_loop_2}

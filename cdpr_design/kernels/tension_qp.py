@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit_noref
+from cdpr_design.kernels._jit import njit, njit_folded
 from cdpr_design.kernels.linalg import householder_qr
 from cdpr_design.kernels.hsm import basis_factor
 
@@ -15,7 +15,7 @@ from cdpr_design.kernels.hsm import basis_factor
 QP_TOL = 1e-11
 
 
-@njit_noref
+@njit
 def null_space_setup(n, m, w, scr):
     """Orthonormal null basis N (m, r) and t_p = W^+ w from the basis factorisation.
 
@@ -27,7 +27,7 @@ def null_space_setup(n, m, w, scr):
     null_space(n, m, w, scr[0], scr[8], scr[9], scr[25], scr[19], scr[20])
 
 
-@njit_noref
+@njit
 def null_space(n, m, w, tab, N, tp, tb, nbc, bcol):
     """:func:`null_space_setup` on the scratch's arrays themselves (``tab`` scr[0], ``N`` scr[8],
     ``tp`` scr[9], ``tb`` scr[25], ``nbc`` scr[19], ``bcol`` scr[20]): a compiled function that
@@ -70,7 +70,7 @@ def null_space(n, m, w, tab, N, tp, tb, nbc, bcol):
             tp[j] -= d * N[j, k]
 
 
-@njit_noref
+@njit_folded
 def qp_tolerance(m, tmin, tmax):
     """The bound tolerance of the QPs [N]: ``QP_TOL`` times the largest finite bound (at least 1 N)."""
     scale = 1.0
@@ -82,7 +82,7 @@ def qp_tolerance(m, tmin, tmax):
     return QP_TOL * scale
 
 
-@njit_noref
+@njit
 def project_null(m, r, tmin, tmax, t, scr):
     """The projection of :func:`goldfarb_idnani` (same inputs in ``scr``, same result): in closed
     form for one or two redundant cables (:func:`project_one`, :func:`project_two`), by the dual
@@ -97,7 +97,7 @@ def project_null(m, r, tmin, tmax, t, scr):
     return goldfarb_idnani(m, r, tmin, tmax, t, scr)
 
 
-@njit_noref
+@njit
 def square_projection(m, tmin, tmax, t, tp):
     """:func:`goldfarb_idnani` for r = 0 (as many cables as wrench rows): no null space, so the
     tensions are ``tp`` (scr[9], t_p = W^-1 w): clipped into the bounds when no bound is violated
@@ -114,7 +114,7 @@ def square_projection(m, tmin, tmax, t, tp):
     return True
 
 
-@njit_noref
+@njit_folded
 def _finish(m, r, tmin, tmax, t, N, tp, z0, z1, ok):
     """t = t_p + N z clipped into the bounds (``ok``), else NaN; returns ``ok``."""
     for j in range(m):
@@ -128,7 +128,7 @@ def _finish(m, r, tmin, tmax, t, N, tp, z0, z1, ok):
     return ok
 
 
-@njit_noref
+@njit
 def project_one(m, tmin, tmax, t, scr):
     """:func:`goldfarb_idnani` for r = 1: the balancing tensions are t_p + z n, z on a line.
 
@@ -142,7 +142,7 @@ def project_one(m, tmin, tmax, t, scr):
     return line_projection(m, tmin, tmax, t, scr[8], scr[9], scr[30])
 
 
-@njit_noref
+@njit
 def line_projection(m, tmin, tmax, t, N, tp, H):
     """:func:`project_one` on the scratch's null basis ``N`` (scr[8]) and ``tp`` (scr[9]) themselves
     (see :func:`null_space`).  ``H`` is not used: the arguments of :func:`plane_projection`, so that
@@ -173,7 +173,7 @@ def line_projection(m, tmin, tmax, t, N, tp, H):
     return _finish(m, 1, tmin, tmax, t, N, tp, z, 0.0, p < 0)
 
 
-@njit_noref
+@njit_folded
 def _half_plane(N, tp, tmin, tmax, m, c):
     """Bound ``c`` (c < m: t_c >= t_min; else t_(c-m) <= t_max) as g . z <= h: (g0, g1, h)."""
     if c < m:
@@ -182,7 +182,7 @@ def _half_plane(N, tp, tmin, tmax, m, c):
     return N[j, 0], N[j, 1], tmax[j] - tp[j]
 
 
-@njit_noref
+@njit_folded
 def _inside(H, k, z0, z1, tol):
     """Whether z meets the first ``k`` half-planes ``H`` (rows g0, g1, h) to ``tol``."""
     for a in range(k):
@@ -191,7 +191,7 @@ def _inside(H, k, z0, z1, tol):
     return True
 
 
-@njit_noref
+@njit
 def project_two(m, tmin, tmax, t, scr):
     """:func:`goldfarb_idnani` for r = 2: the point nearest the origin of a polygon, in closed form.
 
@@ -208,7 +208,7 @@ def project_two(m, tmin, tmax, t, scr):
     return plane_projection(m, tmin, tmax, t, scr[8], scr[9], scr[30])
 
 
-@njit_noref
+@njit
 def plane_projection(m, tmin, tmax, t, N, tp, H):
     """:func:`project_two` on the scratch's ``N`` (scr[8]), ``tp`` (scr[9]) and half-planes ``H``
     (scr[30]) themselves (see :func:`null_space`)."""
@@ -271,7 +271,7 @@ def plane_projection(m, tmin, tmax, t, N, tp, H):
     return _finish(m, 2, tmin, tmax, t, N, tp, z0, z1, p < 0)
 
 
-@njit_noref
+@njit
 def _refactor(N, m, r, active, q, J, RA, NA, VA):
     """QR of the active constraint normals N_A (r, q) = J [R; 0]."""
     for a in range(q):
@@ -283,7 +283,7 @@ def _refactor(N, m, r, active, q, J, RA, NA, VA):
     householder_qr(NA, r, q, J, RA, VA)
 
 
-@njit_noref
+@njit
 def goldfarb_idnani(m, r, tmin, tmax, t, scr):
     """Project the origin onto {z : t_min <= t_p + N z <= t_max}; t = t_p + N z.
 
@@ -404,7 +404,7 @@ def goldfarb_idnani(m, r, tmin, tmax, t, scr):
     return True
 
 
-@njit_noref
+@njit
 def min_norm_tensions(W, w, tmin, tmax, t, scr):
     """Minimum 2-norm tensions with bounds: min 1/2 |t|^2, W t = w, t_min <= t <= t_max.
 
@@ -419,14 +419,14 @@ def min_norm_tensions(W, w, tmin, tmax, t, scr):
     return _reduced(W, w, t, scr) and project_null(m, m - n, tmin, tmax, t, scr)
 
 
-@njit_noref
+@njit
 def min_norm_tensions_square(W, w, tmin, tmax, t, scr):
     """:func:`min_norm_tensions` for m = n (the same numbers), compiling only the square case
     (:func:`square_projection`) and none of the redundant methods: the tensions are unique."""
     return _reduced(W, w, t, scr) and square_projection(W.shape[1], tmin, tmax, t, scr[9])
 
 
-@njit_noref
+@njit
 def _reduced(W, w, t, scr):
     """``t`` NaN, then the null-space reduction of W t = w into ``scr`` (the basis factorisation,
     the null basis N and t_p: :func:`null_space_setup`); False when rank W < n."""

@@ -301,10 +301,11 @@ def grid_figures(arrays: SweepStiffness, grid3, start: int, tensions, feasible) 
 
 
 def _figures(a: SweepStiffness, start, lower, step, shape, P, tensions, feasible):
-    from cdpr_design.kernels.stiffness import stiffness_rows
+    from cdpr_design.kernels.stiffness import Arrays, Poses, stiffness_rows
 
     T = np.ascontiguousarray(tensions, dtype=float)
     kmin = np.empty(T.shape[0])
     flow = np.empty(T.shape[0])
-    stiffness_rows(start, lower, step, shape, P, feasible, a.Rb, a.A, T, a.EA, a.Kg, a.Linv, a.sel, a.d, kmin, flow)
+    stiffness_rows(Poses(start, lower, step, shape, P), feasible, T, Arrays(a.Rb, a.A, a.EA, a.Kg, a.Linv, a.sel, a.d),
+                   kmin, flow)
     return kmin, flow

@@ -133,16 +133,10 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
                                                                                   keep_maps)
 
 
-def warm_up(p: Plan, meanwhile: Callable[[], None] | None = None) -> None:
+def warm_up(p: Plan) -> None:
     """Sweep the plan's first pose alone, with the same robot: every numba kernel the whole
     sweep will run is loaded from numba's on-disk cache, or compiled on a machine's first run.
-    Lets a caller time numba's start-up apart from the sweep.  The straight cables' kernels
-    compile their pose's functions in two processes at once first
-    (:func:`cdpr_design.kernels.warm.compile_pose`: nothing when they are in the cache; then
-    ``meanwhile``, more for this process to compile, is called while the other finishes)."""
-    base = p.base
-    if isinstance(base, StraightSweep) and base.K is not None and not base.planar2:
-        base.K.warm.compile_pose(p.robot.n, p.robot.m, meanwhile)
+    Lets a caller time numba's start-up apart from the sweep."""
     # the frame loads' kernel too; no boundary (a one-pose grid encloses nothing)
     plan(p.robot, first_pose(p.grid), p.orientation, tilt=p.tilt, orientations=p.orientations,
          frame_loads=p.solid or p.frame_loads).run(keep_maps=False)

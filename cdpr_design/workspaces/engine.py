@@ -79,9 +79,11 @@ class StraightSweep(Base):
                                       self.wreq_used, r.tension_min, r.tension_max, r.tension_floor, feas, marg,
                                       ten, lens)
         else:
-            self.K.sweep_grid(start, cnt, self.lower, self.step, self.shape, self.Rb, r.outlet_points, r.rows,
-                              self.wreq, r.tension_min, r.tension_max, r.tension_floor, r.combos, r.kcode, feas,
-                              marg, ten, lens)
+            K = self.K
+            K.sweep_grid(K.GridPoses(start, self.lower, self.step, self.shape, self.Rb),
+                         K.Statics(r.outlet_points, r.rows, r.tension_min, r.tension_max, r.tension_floor, r.combos,
+                                   r.kcode),
+                         self.wreq, K.Outputs(feas, marg, ten, lens))
         return Rows(feas, marg, ten, lens)
 
     def feasible_at(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -231,9 +231,10 @@ def free_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
     wreq = np.ascontiguousarray(-wg[:, design.rows][:, None, :])
     feas, marg = np.empty(k, np.uint8), np.empty(k)
     ten, L = np.empty((k, m)), np.empty((k, m))
-    K.eval_rotated(np.ascontiguousarray(P, dtype=float), R, design.outlets,
-                   robot.attachments, robot.rows, wreq, robot.tension_min, robot.tension_max, robot.tension_floor,
-                   robot.combos, 0, feas, marg, ten, L)
+    K.eval_rotated(np.ascontiguousarray(P, dtype=float), R, robot.attachments,
+                   K.Statics(design.outlets, robot.rows, robot.tension_min, robot.tension_max, robot.tension_floor,
+                             robot.combos, 0),
+                   wreq, K.Outputs(feas, marg, ten, L))
     t, tol = h.tensions, 1e-9 * max(1.0, hanger.geo.weight)
     with np.errstate(invalid="ignore"):
         lower = tension_lower(robot.tension_min, robot.tension_floor, L)

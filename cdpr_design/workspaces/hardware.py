@@ -64,10 +64,12 @@ class Evaluator:
         from cdpr_design import kernels as K  # numba, on first use
 
         hw = self.hw
-        K.sweep_points(np.ascontiguousarray(P, dtype=float), Rb, R, self.A, hw.axes, hw.eref,
-                       hw.radii, self.rows, self.wrench(ori), self.tmin, self.tmax, self.floor, self.combos,
-                       self.kcode, self.interference, self.Bp_planes, hw.half, hw.rho, hw.frame_lower,
-                       hw.frame_upper, hw.dim, hw.tol, full, hw.zoff, feas, marg, ten, L, mask)
+        K.sweep_points(np.ascontiguousarray(P, dtype=float), Rb, R,
+                       K.Statics(self.A, self.rows, self.tmin, self.tmax, self.floor, self.combos, self.kcode),
+                       self.wrench(ori), K.Pulleys(hw.axes, hw.eref, hw.radii),
+                       K.Interference(self.interference, self.Bp_planes, hw.half, hw.rho, hw.frame_lower,
+                                      hw.frame_upper, hw.dim, hw.tol, full, hw.zoff),
+                       K.Outputs(feas, marg, ten, L), mask)
         return feas, marg, ten, L, mask
 
 def chunk_stats(feas, marg, ten, tpeak):
