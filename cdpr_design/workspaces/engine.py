@@ -97,12 +97,14 @@ class StraightSweep(Base):
                            r.tension_floor, feas, marg, np.empty((k, m)), np.empty((k, m)))
             return feas.astype(bool), marg
         from cdpr_design.kernels import hanging as KH
+        from cdpr_design.kernels.pose import Outputs, Statics
 
         R = np.ascontiguousarray(np.broadcast_to(kin.rotation_matrix(*self.ori), (k, 3, 3)))
         wreq = np.ascontiguousarray(np.broadcast_to(self.wreq, (k,) + self.wreq.shape))
-        KH.eval_rotated(np.ascontiguousarray(P, dtype=float), R, r.outlet_points, r.attachments, r.rows, wreq,
-                        r.tension_min, r.tension_max, r.tension_floor, r.combos, r.kcode, feas, marg,
-                        np.empty((k, m)), np.empty((k, m)))
+        KH.eval_rotated(np.ascontiguousarray(P, dtype=float), R, r.attachments,
+                        Statics(r.outlet_points, r.rows, r.tension_min, r.tension_max, r.tension_floor, r.combos,
+                                r.kcode),
+                        wreq, Outputs(feas, marg, np.empty((k, m)), np.empty((k, m))))
         return feas.astype(bool), marg
 
     def stats(self, rows: Rows, tpeak: np.ndarray) -> tuple:

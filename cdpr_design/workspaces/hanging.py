@@ -221,6 +221,7 @@ def free_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
     ``P`` (k, 3) [m] (see the module doc; the workspace's rows and ``pose --at``'s), within the
     robot's tension bounds (its per-pose floor included) and tilt limit."""
     from cdpr_design.kernels import hanging as K  # numba, on first use
+    from cdpr_design.kernels.pose import Outputs, Statics
 
     design, limit = robot.design, robot.tilt_limit
     k, m = len(P), design.m
@@ -232,9 +233,9 @@ def free_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
     feas, marg = np.empty(k, np.uint8), np.empty(k)
     ten, L = np.empty((k, m)), np.empty((k, m))
     K.eval_rotated(np.ascontiguousarray(P, dtype=float), R, robot.attachments,
-                   K.Statics(design.outlets, robot.rows, robot.tension_min, robot.tension_max, robot.tension_floor,
-                             robot.combos, 0),
-                   wreq, K.Outputs(feas, marg, ten, L))
+                   Statics(design.outlets, robot.rows, robot.tension_min, robot.tension_max, robot.tension_floor,
+                           robot.combos, 0),
+                   wreq, Outputs(feas, marg, ten, L))
     t, tol = h.tensions, 1e-9 * max(1.0, hanger.geo.weight)
     with np.errstate(invalid="ignore"):
         lower = tension_lower(robot.tension_min, robot.tension_floor, L)
