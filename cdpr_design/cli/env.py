@@ -36,6 +36,13 @@ def settle_blas_threads(environ=os.environ) -> None:
     environ.setdefault("OPENBLAS_THREAD_TIMEOUT", BLAS_THREAD_TIMEOUT)
 
 
+def user_cache(environ=os.environ) -> str:
+    """Where the kernels' cache folders go when ``NUMBA_CACHE_DIR`` is not set: the user's cache
+    folder (``XDG_CACHE_HOME``, else ``~/.cache``) / ``cdpr-design``."""
+    root = environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(root, "cdpr-design")
+
+
 def use_kernel_cache(environ=os.environ) -> str:
     """Point numba's cache (``NUMBA_CACHE_DIR``) at the kernels' folder for their current sources
     (:func:`cdpr_design.kernels.cache.folder`): under the user's ``NUMBA_CACHE_DIR`` if set, else
@@ -43,7 +50,7 @@ def use_kernel_cache(environ=os.environ) -> str:
     once); commands this one starts inherit it.  Returns the folder."""
     from cdpr_design.kernels import cache
 
-    chosen = cache.folder(environ.get("NUMBA_CACHE_DIR") or cache.default_base(environ))
+    chosen = cache.folder(environ.get("NUMBA_CACHE_DIR") or user_cache(environ))
     environ["NUMBA_CACHE_DIR"] = chosen
     return chosen
 

@@ -44,9 +44,3 @@ def folder(base: str) -> str:
     base = os.path.abspath(os.path.expanduser(base))
     return base if os.path.basename(base) == name else os.path.join(base, name)
 
-
-def default_base(environ=os.environ) -> str:
-    """Where the kernels' cache folders go when ``NUMBA_CACHE_DIR`` is not set: the user's cache
-    folder (``XDG_CACHE_HOME``, else ``~/.cache``) / ``cdpr-design``."""
-    root = environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return os.path.join(root, "cdpr-design")
