@@ -176,9 +176,9 @@ class FrameLoads(Wrapper):
         self.R = kin.rotation_matrix(*self.ori)
         self.Rb = np.ascontiguousarray(robot.attachments @ self.R.T)
         #: one compiled pass a chunk: straight cables from point outlets at one orientation, numba's engine
-        self.compiled = (robot.engine == "numba" and robot.outlets == "points" and robot.orientation != "hanging"
-                         and (robot.cables != "sagging" or robot.kind == "wrench-closure"))
-        if robot.outlets == "pulleys":
+        self.compiled = (robot.engine == "numba" and not robot.outlets.pulleys and not robot.orientation.free
+                         and not robot.cables.sags(robot.kind))
+        if robot.outlets.pulleys:
             from cdpr_design.statics.pulley import design_pulleys
 
             _, axes, radii = design_pulleys(robot.design)
@@ -217,7 +217,7 @@ class FrameLoads(Wrapper):
     def _rotations(self, r: Rows, rows: np.ndarray) -> np.ndarray:
         """Rotation matrices (k, 3, 3) of the rows where the effector hangs (its orientation in the
         rows' ``orientation_*`` columns, R = Rx Ry Rz), else the sweep's one (3, 3)."""
-        if self.robot.orientation != "hanging":
+        if not self.robot.orientation.free:
             return self.R
         angles = np.zeros((len(rows), 3))
         for j, a in enumerate(("rx", "ry", "rz")):
@@ -256,8 +256,8 @@ def outlet_forces(robot: Robot, P: np.ndarray, R: np.ndarray, t: np.ndarray, ext
     ``outlet_tension_<c>`` and ``unstretched_length_<c>``); ``pulley_axes`` (m, 3) the swivel axes
     when the robot has pulleys (zero for a point outlet)."""
     A, b = robot.outlet_points, robot.attachments
-    sagging = robot.cables == "sagging" and robot.kind != "wrench-closure"
-    if R.ndim == 2 and not sagging and robot.outlets != "pulleys":
+    sagging = robot.cables.sags(robot.kind)
+    if R.ndim == 2 and not sagging and not robot.outlets.pulleys:
         # straight cables from point outlets at one orientation: (m, 3, k) throughout
         U = P.T[None] + (b @ R.T - A)[:, :, None]
         U *= (1.0 / np.sqrt(np.einsum("mik,mik->mk", U, U)))[:, None, :]
@@ -274,7 +274,7 @@ def outlet_forces(robot: Robot, P: np.ndarray, R: np.ndarray, t: np.ndarray, ext
         F = np.ascontiguousarray(sagging_forces(A, B, t, ta, L0, robot.cable.w, robot.cable.up).transpose(1, 2, 0))
         with np.errstate(invalid="ignore", divide="ignore"):
             return F, F / ta.T[:, None, :], None, None
-    if robot.outlets == "pulleys":
+    if robot.outlets.pulleys:
         from cdpr_design.statics.pulley import design_cable_paths
 
         unit = -design_cable_paths(robot.design, B).directions - pulley_axes[None]
