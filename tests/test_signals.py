@@ -241,3 +241,63 @@ def test_an_interrupt_a_finaliser_swallowed_is_raised_again(sig):
                 time.sleep(0.01)
             ran_on.append(True)
     assert not ran_on
+
+
+#: A pool whose first worker is interrupted while the run hands it its start-up data (``size`` bytes of
+#: job): a thread of the run sends the run SIGINT as soon as the worker process exists.
+_POOL_RUN = '''
+import os, signal, sys, threading, time
+from pathlib import Path
+
+
+class Job:
+    def __init__(self, size):
+        self.payload = b"x" * size
+
+    def prepared(self):
+        return self
+
+    def run_chunk(self, items):
+        return items
+
+
+def watch(me):
+    while True:
+        for c in Path(f"/proc/{me}/task/{me}/children").read_text().split():
+            try:
+                if b"spawn_main" in Path(f"/proc/{c}/cmdline").read_bytes():
+                    os.kill(me, signal.SIGINT)
+                    return
+            except OSError:
+                pass
+        time.sleep(0.001)
+
+
+if __name__ == "__main__":
+    from job import Job
+    from cdpr_design.batch.local import pool_session
+
+    threading.Thread(target=watch, args=(os.getpid(),), daemon=True).start()
+    try:
+        with pool_session(Job(int(sys.argv[1])), 2) as run:
+            run([[1], [2]], lambda rows: None)
+            time.sleep(60)
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        sys.exit(130)
+'''
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="finds the worker through /proc")
+@pytest.mark.parametrize("size", [1_000, 100_000, 5_000_000])
+def test_a_run_interrupted_while_it_starts_a_worker_prints_one_line(tmp_path, size):
+    """The interrupt lands while the run is still handing its new worker the start-up data (or just
+    after: a worker still starting when the run exits).  The run says "interrupted" and nothing
+    comes after it: not the worker's ``EOFError`` (its data cut short), nor a ``FileNotFoundError``
+    rebuilding a semaphore the run had removed on exit."""
+    (tmp_path / "job.py").write_text(_POOL_RUN)
+    for _ in range(3):
+        r = subprocess.run([sys.executable, str(tmp_path / "job.py"), str(size)], capture_output=True, text=True,
+                           timeout=120, cwd=tmp_path, env=subprocess_env(PYTHONPATH=f"{tmp_path}{os.pathsep}"
+                                                                                    f"{subprocess_env()['PYTHONPATH']}"))
+        assert r.returncode == 130 and r.stderr == "interrupted\n", r.stderr[-3000:]  # was: EOFError, every time

@@ -292,9 +292,8 @@ def wait_closed() -> None:
 
 
 def _terminate(processes) -> None:
-    """End worker processes (an interrupted sweep must not leave them running)."""
-    for p in processes:
-        try:
-            p.terminate()
-        except Exception:  # noqa: BLE001 - already gone
-            pass
+    """End worker processes and wait for them (an interrupted sweep must not leave them running, nor
+    exit before they are gone: :func:`cdpr_design.batch.processes.end`)."""
+    from cdpr_design.batch.processes import end
+
+    end(processes)

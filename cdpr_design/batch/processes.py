@@ -21,7 +21,19 @@ handlers, not to Python's start-up.  In a worker:
   as interrupted, and later ones are ignored while that runs.
 
 The run itself (the parent) decides what an interruption means: it stops
-or ends its workers and exits 130 (:mod:`cdpr_design.cli.signals`).
+or ends its workers and exits 130 (:mod:`cdpr_design.cli.signals`).  Two
+things would still let a worker speak after the run's own ``interrupted``:
+
+- a stop signal handled in the parent while it hands a new worker its
+  start-up data (the pickled process object, down a pipe): the
+  :class:`KeyboardInterrupt` cut the data short and the worker, reading it,
+  failed with ``EOFError``.  So a worker is started with the stop signals
+  held in the parent too (:func:`~cdpr_design.io.locks.signals_held`): the
+  interrupt is raised once the worker has all its data;
+- a worker still starting when the run exits: it rebuilt the run's
+  semaphores after the run had removed them (``FileNotFoundError``).  So an
+  interrupted run ends its workers with :func:`end` -- killed (a starting
+  worker holds every catchable signal) and waited for -- before it exits.
 """
 
 from __future__ import annotations
@@ -35,6 +47,7 @@ from multiprocessing.context import ForkContext, ForkProcess, SpawnContext, Spaw
 from typing import Callable
 
 from cdpr_design.errors import STOP_SIGNALS
+from cdpr_design.io.locks import signals_held
 
 #: A worker's exit status when a stop signal ended it outside :func:`stop_raises`.
 EXIT_INTERRUPTED = 130
@@ -52,13 +65,13 @@ def _blocked():
 
 class _QuietSpawnProcess(SpawnProcess):
     def start(self):
-        with _blocked():
+        with signals_held(), _blocked():
             super().start()
 
 
 class _QuietForkProcess(ForkProcess):
     def start(self):
-        with _blocked():
+        with signals_held(), _blocked():
             super().start()
 
 
@@ -81,6 +94,19 @@ def pool(workers: int, start_method: str = "spawn", initializer: Callable | None
     ctx = _CONTEXTS[start_method]() if start_method in _CONTEXTS else mp.get_context(start_method)
     return ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_ready,
                                initargs=(initializer, initargs))
+
+
+def end(processes, timeout_s: float = 10.0) -> None:
+    """End worker ``processes`` at once (SIGKILL: a worker still starting holds every other
+    signal) and wait up to ``timeout_s`` seconds for them to be gone, so that none outlives the
+    run that stops them.  A process already gone is skipped."""
+    processes = list(processes)
+    for p in processes:
+        with contextlib.suppress(Exception):
+            p.kill()
+    for p in processes:
+        with contextlib.suppress(Exception):
+            p.join(timeout_s)
 
 
 class _Stop:
