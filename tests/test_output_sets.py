@@ -284,18 +284,21 @@ def test_workspace_and_size_motors_on_one_folder_both_end_with_a_correct_record(
     assert cli("size-motors", PLANAR2, "--out", out, "--quiet").returncode == 0
 
 
-def test_a_second_sweep_on_a_folder_a_sweep_is_writing_is_refused_naming_it(tmp_path):
+def test_a_second_sweep_on_a_folder_a_sweep_is_writing_waits_for_it_naming_it(tmp_path):
+    """Commands sharing an --out take turns: the second sweep says whom it waits for, writes nothing
+    meanwhile, and runs once the first is over."""
     from cdpr_design.io.locks import owned
 
     out = tmp_path / "o"
     out.mkdir()
     with owned(out / ".sweep.lock"):
-        r = invoke("sweep", PLANAR2, "--vary", "effector.mass=0.5,1", "--step", "0.05", "--workers", "1",
-                   "--out", out, "--quiet")
-    assert r.exit_code == 2, r.output
-    line = one_error_line(r.output)
-    assert "another sweep run" in line and f"pid {os.getpid()}" in line, line
-    assert sorted(os.listdir(out)) == [".sweep.lock"]
+        b = Started("sweep", PLANAR2, "--vary", "effector.mass=0.5,1", "--step", "0.05", "--workers", "1",
+                    "--out", out)
+        note = b.next_line()
+        assert note is not None and "waiting for" in note and f"pid {os.getpid()}" in note, (note, b.err)
+        assert sorted(os.listdir(out)) == [".sweep.lock"]  # nothing written while it waits
+    assert b.finish() == 0, "".join(b.err)
+    assert {"sweep.csv", "sweep.journal.jsonl"} <= record(out)
 
 
 # -- 8: optimize interrupted ----------------------------------------------------------------------

@@ -137,8 +137,15 @@ class OutputDir:
         is a path too long for its temporary name."""
         p = self.path / name
         check_name(p, MANIFEST)
-        self._check(name, self._ours)
+        self._check(name, self._ours if name in self._ours else self._recorded())
         return p
+
+    def _recorded(self) -> set[str]:
+        """The folder's record as it is now: another command sharing the folder may have put its
+        files in place since this one last read it (a commit renames the record before the files,
+        so a file of cdpr-design's is never seen without its name in the record)."""
+        self._ours = read_manifest(self._manifest)
+        return self._ours
 
     def _check(self, name: str, ours: set[str]) -> None:
         p = self.path / name
@@ -151,7 +158,8 @@ class OutputDir:
 
     def wrote(self, name: str) -> None:
         """Record ``name`` in the folder's record now (a file written in place as the command runs:
-        a sweep's journal, a study)."""
+        a sweep's journal, a study): call it before the file is made, so that another command
+        sharing the folder never sees the file without its name in the record."""
         self._record(add=name)
 
     def forget(self, name: str) -> None:

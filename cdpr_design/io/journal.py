@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import contextlib
 import json
+import logging
 import os
 from typing import Sequence
 
 from cdpr_design.errors import InputError, WriteError
 from cdpr_design.io.atomic import write_text_atomic
-from cdpr_design.io.files import OutputDir
+from cdpr_design.io.files import LOCK_WAIT_S, OutputDir
 from cdpr_design.io.locks import check_free, one_run
 
 
@@ -24,8 +25,9 @@ class SweepJournal:
 
     From :meth:`start` to :meth:`close` the sweep holds the folder's
     ``.sweep.lock`` (:func:`~cdpr_design.io.locks.one_run`): a second sweep
-    into the same folder is refused, naming the first, instead of writing
-    the same journal.
+    into the same folder waits for the first to end (up to
+    :data:`~cdpr_design.io.files.LOCK_WAIT_S`, saying whom for; then it is
+    refused, naming the first) instead of writing the same journal.
     """
 
     NAME = "sweep.journal.jsonl"
@@ -43,8 +45,13 @@ class SweepJournal:
         self._lock = contextlib.ExitStack()
 
     def check_free(self) -> None:
-        """Refuse at once (exit 2 naming it) when another run is writing this folder's journal."""
-        check_free(self.out.path / self.LOCK, self.COMMAND)
+        """Wait for another run writing this folder's journal to end (up to
+        :data:`~cdpr_design.io.files.LOCK_WAIT_S`; then refused, exit 2 naming it)."""
+        check_free(self.out.path / self.LOCK, self.COMMAND, LOCK_WAIT_S, self._waiting)
+
+    def _waiting(self, holder: str | None) -> None:
+        logging.getLogger("cdpr_design").warning(
+            f"waiting for {holder or 'another process'} to finish writing {self.out.path}")
 
     def read(self) -> tuple[dict | None, list[dict]]:
         """(meta, records) of the journal on disk; (None, []) when there is none."""
@@ -98,11 +105,11 @@ class SweepJournal:
         """Write the journal afresh (meta and the records kept), then keep it open for appending."""
         self.out.target(self.name)
         self.out.ensure()
-        self._lock.enter_context(one_run(self.out.path / self.LOCK, self.COMMAND))
+        self._lock.enter_context(one_run(self.out.path / self.LOCK, self.COMMAND, LOCK_WAIT_S, self._waiting))
         body = json.dumps(meta, sort_keys=True) + "\n" + "".join(
             json.dumps(r) + "\n" for r in records)
+        self.out.wrote(self.name)  # recorded first: another run checking the folder sees it is ours
         write_text_atomic(self.path, body)
-        self.out.wrote(self.name)
         try:
             self.fh = open(self.path, "a", encoding="utf-8", newline="")
         except OSError as exc:

@@ -119,20 +119,25 @@ def owned(path: str | Path, wait_s: float = 0.0, on_wait: Callable[[str | None],
 
 
 @contextlib.contextmanager
-def one_run(path: str | Path, command: str):
+def one_run(path: str | Path, command: str, wait_s: float = 0.0,
+            on_wait: Callable[[str | None], None] | None = None):
     """The :func:`owned` lock ``path`` of a command whose files change as it runs (a sweep's journal,
-    a study), held for the run: a second run of ``command`` on the folder is refused at once, an
-    :class:`InputError` naming ``--out`` and the run holding it."""
+    a study), held for the run: a second run of ``command`` on the folder waits for it up to
+    ``wait_s`` seconds (``on_wait`` as :func:`owned`'s), then is refused, an :class:`InputError`
+    naming ``--out`` and the run holding it."""
     with contextlib.ExitStack() as stack:
         try:
-            stack.enter_context(owned(path))
+            stack.enter_context(owned(path, wait_s, on_wait))
         except Busy as busy:
             raise _in_use(path, command, busy.holder) from None
         yield
 
 
-def check_free(path: str | Path, command: str) -> None:
-    """Refuse at once, as :func:`one_run` does, when the lock ``path`` is held; creates nothing."""
+def check_free(path: str | Path, command: str, wait_s: float = 0.0,
+               on_wait: Callable[[str | None], None] | None = None) -> None:
+    """Return once the lock ``path`` is free (at once when nobody holds it; else after waiting up to
+    ``wait_s`` seconds, ``on_wait(holder)`` called once when it must wait), or refuse as
+    :func:`one_run` does; creates nothing."""
     import fcntl
 
     try:
@@ -140,10 +145,21 @@ def check_free(path: str | Path, command: str) -> None:
     except OSError:
         return  # no lock file: nobody holds it
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        fcntl.flock(fd, fcntl.LOCK_UN)
-    except BlockingIOError:
-        raise _in_use(path, command, holder(path)) from None
+        end = time.monotonic() + wait_s
+        told = False
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                fcntl.flock(fd, fcntl.LOCK_UN)
+                return
+            except BlockingIOError:
+                who = holder(path)
+                if time.monotonic() >= end:
+                    raise _in_use(path, command, who) from None
+                if not told and on_wait is not None:
+                    on_wait(who)
+                    told = True
+                time.sleep(POLL_S)
     finally:
         os.close(fd)
 

@@ -13,6 +13,7 @@ from typing import Callable
 import numpy as np
 
 from cdpr_design.errors import InputError
+from cdpr_design.io.columns import file_name
 from cdpr_design.io.files import OutputDir
 from cdpr_design.io.journal import CertifyJournal, LazyJournal
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
@@ -82,7 +83,7 @@ def run_certify(design, out: OutputDir, settings: CertifySettings, pictures: Pic
     if scheduler:
         batch.check_scheduler(scheduler)
     classifier = parallel_certify.classifier(1 if workers is None and not scheduler else workers, scheduler)
-    for name in FILES + (CertifyJournal.NAME,):
+    for name in FILES + (CertifyJournal.NAME, file_name("boxes", format)):
         out.target(name)  # a foreign file of that name: refused before any work
     journal = CertifyJournal(out)
     journal.check_free()  # another certify writing this folder: refused before any work

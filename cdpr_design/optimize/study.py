@@ -48,7 +48,7 @@ from pathlib import Path
 from typing import Callable
 
 from cdpr_design.batch.local import prepare_worker
-from cdpr_design.batch.processes import end, pool, stop_raises
+from cdpr_design.batch.processes import end as end_workers, pool, stop_raises
 from cdpr_design.kernels import parallel
 from cdpr_design.errors import InputError, WriteError
 from cdpr_design.io.locks import flock, one_run, signals_held
@@ -509,4 +509,4 @@ def _stop(processes, grace_s: float = 10.0) -> None:
     end = time.time() + grace_s
     for p in processes:
         p.join(max(0.0, end - time.time()))
-    end([p for p in processes if p.is_alive()])  # killed and waited for: none outlives the run
+    end_workers([p for p in processes if p.is_alive()])  # killed and waited for: none outlives the run
