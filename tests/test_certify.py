@@ -306,3 +306,55 @@ def test_the_paving_does_not_depend_on_the_thread_count():
     for r in runs[1:]:
         assert np.array_equal(r.lower, runs[0].lower) and np.array_equal(r.upper, runs[0].upper)
         assert np.array_equal(r.status, runs[0].status)
+
+
+@pytest.mark.parametrize("upper_y", [1.3, None])
+def test_command_on_a_flat_or_single_point_box_prints_its_table(tmp_path, upper_y):
+    """A grid box flat in y (lower = upper, which the spec allows), or a single point: the table
+    gives the boundary's share of the box over the axes it has (was: ZeroDivisionError)."""
+    import json
+
+    import yaml
+
+    raw = yaml.safe_load(open("designs/planar2.yaml"))
+    raw["workspace"]["grid"] = ({"lower": [0.0, 1.3], "upper": [1.5, 1.3], "step": 0.05} if upper_y else
+                                {"lower": [0.75, 0.8], "upper": [0.75, 0.8], "step": 0.05})
+    p = tmp_path / "flat.yaml"
+    p.write_text(yaml.safe_dump(raw))
+    r = _cli("certify", str(p), "--resolution", "0.01", "--out", str(tmp_path / "o"))
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    assert "% of the box" in r.stdout
+    s = json.loads((tmp_path / "o" / "summary.json").read_text())
+    if upper_y:  # a segment: the shares are of its length
+        assert s["box_measure"] == 0 and s["inner_fraction"] + s["boundary_fraction"] <= 1 + 1e-12
+        assert 0 < s["inner_fraction"] < 1 and s["counts"]["outside"] > 0
+    else:  # the point (0.75, 0.8) is inside planar2's workspace: all of it is proven
+        assert s["counts"] == {"inside": 1, "outside": 0, "boundary": 0} and s["inner_fraction"] == 1
+
+
+def test_check_of_a_single_point_task_box_says_all_of_it_is_proven(tmp_path):
+    import json
+
+    import yaml
+
+    raw = yaml.safe_load(open("designs/planar2.yaml"))
+    raw["requirements"] = {"task_box": {"lower": [0.75, 0.8], "upper": [0.75, 0.8]}, "certified": True}
+    p = tmp_path / "point.yaml"
+    p.write_text(yaml.safe_dump(raw))
+    r = _cli("check", str(p), "--json")
+    row = [c for c in json.loads(r.stdout)["checks"] if c["requirement"] == "certified"][0]
+    assert row["passed"] and row["figure"].startswith("100 % proven (1 inside"), row  # was "0 % proven"
+
+
+def test_a_resolution_below_the_floating_point_spacing_stops_at_boxes_it_cannot_halve():
+    """A segment across planar2's workspace at --resolution 1e-300: each end of it is bisected
+    down to boxes one or two units in the last place wide, and no further (was: zero-width boxes
+    until the box cap)."""
+    import cdpr_design as cd
+
+    r = cd.certify(cd.load("designs/planar2.yaml"), resolution=1e-300, box=((0.0, 0.8), (1.5, 0.8)),
+                   max_boxes=20_000)
+    assert r.truncated is None and r.unsplit >= 2 and r.summary()["unsplit_boxes"] == r.unsplit
+    width = (r.upper - r.lower)[:, 0]
+    assert np.all(width > 0) and r.status.size < 20_000
+    assert np.all(width[r.status == 0] <= 4 * np.spacing(np.maximum(np.abs(r.lower[:, 0]), np.abs(r.upper[:, 0])))[r.status == 0])

@@ -64,11 +64,13 @@ def certify(
         [("inner measure", f"{s['inner_measure']:.6g} {s['unit']}"),
          ("outer measure", f"{s['outer_measure']:.6g} {s['unit']}"),
          ("boundary measure", f"{s['boundary_measure']:.4g} {s['unit']} "
-                              f"({100 * s['boundary_measure'] / s['box_measure']:.3g} % of the box)"),
+                              f"({100 * s['boundary_fraction']:.3g} % of the box)"),
          ("boxes", f"inside {c['inside']:,}, boundary {c['boundary']:,}, outside {c['outside']:,}"),
          ("resolution [m]", s["resolution"])]
         + ([("min margin [N]", s["min_margin"])] if s["min_margin"] else [])
         + ([("stopped early", s["truncated"])] if s["truncated"] else [])
+        + ([("too small to halve", f"{s['unsplit_boxes']:,} boundary boxes: --resolution is below the "
+                                   "floating-point spacing of the box's coordinates")] if s["unsplit_boxes"] else [])
         + [timings_row(s["timings"]), ("files", str(out_dir.path))]))
 
 

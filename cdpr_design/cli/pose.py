@@ -71,7 +71,7 @@ def pose(
         c = parse_weights(design, weights)
         result = evaluate_pose(robot, p, c)
         data = job.pose_data(design, result)
-        stiffness = job.stiffness_data(design, p, result.tensions)
+        stiffness = job.stiffness_data(design, p, result.tensions, feasible=result.feasible)
         if robot.underconstrained and robot.cables.rigid and not robot.outlets.pulleys:
             data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     data["objective"] = objective.value

@@ -189,7 +189,7 @@ def certify_task(design, kind: str = "static", resolution: float | None = None, 
     mu = mu if mu is not None and mu > 0 else None
     r = cert.certify(cert.check_certifiable(design, kind), res, (lo, hi), mu, max_boxes=max_boxes)
     counts = r.counts()
-    row = {"requirement": "certified", "figure": f"{100 * r.measure(1) / max(r.summary()['box_measure'], 1e-300):.4g} % "
+    row = {"requirement": "certified", "figure": f"{100 * r.fraction(1):.4g} % "
            f"proven ({counts['inside']} inside, {counts['boundary']} boundary, {counts['outside']} outside)",
            "limit": "whole task box" + (f", margin >= {mu:g} N" if mu else ""), "passed": counts["inside"] == r.status.size}
     if not row["passed"]:

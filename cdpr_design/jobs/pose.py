@@ -54,13 +54,22 @@ def cable_fk_data(robot, unstretched, guess=None) -> dict:
             } | free
 
 
-def stiffness_data(design, pose=None, tensions=None, reason: str | None = None) -> dict:
+#: ``stiffness_reason`` where wrench closure holds but no tensions within the bounds hold the effector
+CLOSURE_WITHOUT_TENSIONS = ("wrench closure holds here (it ignores the tension bounds), but no tensions within "
+                            "the bounds balance the effector's load: no stiffness")
+
+
+def stiffness_data(design, pose=None, tensions=None, reason: str | None = None, feasible: bool | None = None) -> dict:
     """The stiffness and vibration keys of ``pose --json`` (cli.md) at a pose held by ``tensions``
     [N] (:func:`cdpr_design.statics.stiffness.pose_stiffness`); with ``pose`` None, every value
-    null and ``reason`` the stiffness_reason."""
+    null and ``reason`` the stiffness_reason.  ``feasible``: the pose's feasibility for its kind;
+    a feasible pose without tensions (wrench closure, which drops the bounds) is said to be so,
+    not infeasible."""
     from cdpr_design.statics.stiffness import pose_stiffness
 
     names = design.cable_names
+    if pose is not None and feasible and not np.all(np.isfinite(tensions)):
+        pose, reason = None, CLOSURE_WITHOUT_TENSIONS
     if pose is None:
         return {"stiffness_matrix": None, "translational_stiffness": None, "min_stiffness": None,
                 "natural_frequencies": None, "mode_shapes": None, "cable_frequencies": dict.fromkeys(names),

@@ -34,6 +34,10 @@ def check_semantics(s: DesignSpec) -> Problems:
         b = _motion_vec(p, s, "requirements.task_box.upper", r.task_box.upper)
         if a and b:
             _check_ordered(p, "requirements.task_box", r.task_box.lower, r.task_box.upper)
+    for key in ("min_stiffness", "min_frequency"):
+        if r is not None and getattr(r, key, None) is not None and r.task_box is None:
+            p.append((f"requirements.{key}", "is checked over requirements.task_box, which the spec does not "
+                                             "give: add the task box, or remove the requirement"))
     _check_hanging_weight(p, s)
     if r is not None and r.max_tilt is not None and s.effector.orientation != "free":
         p.append(("requirements.max_tilt", "a tilt limit needs effector.orientation: free (a fixed effector is "

@@ -56,6 +56,9 @@ class CertifyResult:
     ``axes``; ``status`` (K,) int8 (:data:`STATUS`).  ``box`` is the box certified,
     ``resolution`` [m] the finest edge; ``truncated`` names the limit that stopped the
     bisection early (``max_boxes`` or ``time_limit``; the boxes left are then ``boundary``).
+    ``unsplit``: the boxes left ``boundary`` wider than ``resolution`` because their halves
+    cannot be represented in floating point (a resolution below the spacing of the box's
+    coordinates).
     """
 
     design: Design
@@ -71,6 +74,7 @@ class CertifyResult:
     elapsed_s: float
     truncated: str | None = None
     tolerance: dict = field(default_factory=dict)
+    unsplit: int = 0
     extra: dict = field(default_factory=dict)
 
     @property
@@ -81,6 +85,16 @@ class CertifyResult:
         """The total area or volume [m^2 or m^3] of the boxes of one status code."""
         sel = self.status == status
         return float(np.prod(self.upper[sel] - self.lower[sel], axis=1).sum())
+
+    def fraction(self, status: int) -> float:
+        """The share (0 to 1) of the certified box covered by the boxes of one status code,
+        measured over the axes along which the box has an extent: of its area for a box flat in
+        one axis, and for a single point 1 for the point's own code (0 for the others)."""
+        lo, hi = np.asarray(self.box[0], float), np.asarray(self.box[1], float)
+        ext = hi > lo
+        sel = self.status == status
+        part = float(np.prod((self.upper[sel] - self.lower[sel])[:, ext], axis=1).sum())
+        return part / float(np.prod((hi - lo)[ext]))
 
     def counts(self) -> dict:
         return {name: int(np.count_nonzero(self.status == code)) for code, name in STATUS.items()}
@@ -95,7 +109,8 @@ class CertifyResult:
                "inner_measure": inner, "boundary_measure": boundary, "outer_measure": inner + boundary,
                "box_measure": total, "unit": self.unit, "counts": self.counts(),
                "boxes_classified": self.classified, "truncated": self.truncated,
-               "elapsed_s": round(self.elapsed_s, 4)}
+               "inner_fraction": self.fraction(1), "boundary_fraction": self.fraction(0),
+               "unsplit_boxes": self.unsplit, "elapsed_s": round(self.elapsed_s, 4)}
         if self.tolerance:
             out["tolerance"] = self.tolerance
         out.update(self.extra)
@@ -256,9 +271,11 @@ def certify(robot: Robot, resolution: float | None = None, box=None,
                                                           max_boxes, time_limit, progress, replay, on_level)
     tol = {k: v for k, v in (("outlets", tolerance_outlets), ("attachments", tolerance_attachments))
            if v is not None and np.any(np.asarray(v) > 0)}
+    unsplit = int(np.count_nonzero((status == 0) & ((upper - lower).max(axis=1, initial=0.0) > res)
+                                   & ~halvable(lower, upper))) if truncated is None else 0
     return CertifyResult(design, kind, design.motion.position_coords, (lo0, hi0), res, mu, lower, upper, status,
                          classified, time.perf_counter() - t0, truncated,
-                         {k: np.asarray(v, float).tolist() for k, v in tol.items()})
+                         {k: np.asarray(v, float).tolist() for k, v in tol.items()}, unsplit)
 
 
 def pave(classify: Callable, lower: np.ndarray, upper: np.ndarray, resolution: float, max_boxes: int = MAX_BOXES,
@@ -272,7 +289,8 @@ def pave(classify: Callable, lower: np.ndarray, upper: np.ndarray, resolution: f
 
     ``classify(lower, upper)`` gives status codes; undecided boxes wider than ``resolution``
     are cut in two at the middle of their widest edge (the first such axis on ties), the
-    others become ``boundary`` (0).  Returns (lower, upper, status, classified, truncated):
+    others become ``boundary`` (0), and so do those whose halves cannot be represented in
+    floating point (:func:`halvable`).  Returns (lower, upper, status, classified, truncated):
     the decided boxes in a fixed order (level by level, each level in its boxes' order), so the
     result does not depend on how the classifier splits its work.
     """
@@ -305,7 +323,7 @@ def pave(classify: Callable, lower: np.ndarray, upper: np.ndarray, resolution: f
         width = upper - lower
         axis = np.argmax(width, axis=1)
         widest = width[np.arange(width.shape[0]), axis]
-        final = (st != 0) | (widest <= resolution)
+        final = (st != 0) | (widest <= resolution) | ~halvable(lower, upper)
         out_lo.append(lower[final])
         out_hi.append(upper[final])
         out_st.append(st[final])
@@ -317,6 +335,17 @@ def pave(classify: Callable, lower: np.ndarray, upper: np.ndarray, resolution: f
     return (np.concatenate(out_lo) if out_lo else np.empty((0, d)),
             np.concatenate(out_hi) if out_hi else np.empty((0, d)),
             np.concatenate(out_st) if out_st else np.empty(0, np.int8), classified, truncated)
+
+
+def halvable(lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """(K,) bool: whether each box (K, d) [m] can be cut in two across its widest edge (the first
+    on ties) into halves narrower than itself, i.e. its middle lies strictly between the edge's
+    ends in floating point (not so for an edge one or two units in the last place wide)."""
+    axis = np.argmax(upper - lower, axis=1)
+    rows = np.arange(lower.shape[0])
+    lo, hi = lower[rows, axis], upper[rows, axis]
+    mid = 0.5 * (lo + hi)
+    return (lo < mid) & (mid < hi)
 
 
 def bisect(lower: np.ndarray, upper: np.ndarray, axis: np.ndarray):
