@@ -125,28 +125,164 @@ def test_report_command_writes_the_page_with_sizing_and_checks(tmp_path):
     assert json.loads((tmp_path / "report.json").read_text())["timings"]["total_s"] > 0
 
 
+#: Chromium as a headless test browser: no sandbox (CI runs as root), nothing fetched on its own.
+BROWSER_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                "--disable-component-update", "--disable-sync", "--no-first-run"]
+#: Where a system's package manager puts Chromium (Debian: ``apt-get install chromium``).
+SYSTEM_BROWSERS = ["/usr/bin/chromium", "/usr/bin/chromium-browser", "/usr/bin/google-chrome"]
+
+
+def _browser(sync_api_module, p):
+    """A launched Chromium: playwright's own, else a system one.  None found: under ``CI=true`` the
+    test fails (CI installs one: .ci/run), elsewhere it is skipped with the reason."""
+    import os
+    import shutil
+
+    tried = []
+    for path in [None] + [b for b in SYSTEM_BROWSERS + [shutil.which("chromium")] if b and os.path.exists(b)]:
+        try:
+            return p.chromium.launch(args=BROWSER_ARGS, **({"executable_path": path} if path else {}))
+        except Exception as exc:  # noqa: BLE001 - not installed, or not startable here
+            tried.append(f"{path or 'playwright’s own'}: {str(exc).splitlines()[0] if str(exc) else exc!r}")
+    reason = "no browser can be started here: " + "; ".join(tried)
+    if os.environ.get("CI", "").lower() == "true":
+        pytest.fail(reason)
+    pytest.skip(reason)
+
+
+def _playwright():
+    import os
+
+    try:
+        from playwright import sync_api
+    except ImportError as exc:  # the test extra installs it
+        if os.environ.get("CI", "").lower() == "true":
+            pytest.fail(f"playwright is not installed: {exc}")
+        pytest.skip(f"playwright is not installed: {exc}")
+    return sync_api
+
+
+def _overlap(a, b, slack: float = 0.5) -> bool:
+    return (a["x"] + slack < b["x"] + b["width"] and b["x"] + slack < a["x"] + a["width"]
+            and a["y"] + slack < b["y"] + b["height"] and b["y"] + slack < a["y"] + a["height"])
+
+
+def _inside(a, box, slack: float = 0.5) -> bool:
+    return (a["x"] >= box["x"] - slack and a["y"] >= box["y"] - slack
+            and a["x"] + a["width"] <= box["x"] + box["width"] + slack
+            and a["y"] + a["height"] <= box["y"] + box["height"] + slack)
+
+
+#: The page's layout as the browser lays it out: the boxes of the body's blocks, and of each figure
+#: its box, its drawing's and those of its texts (titles, axis titles, tick labels, panel titles).
+_LAYOUT_JS = """() => {
+  const box = el => { const r = el.getBoundingClientRect();
+                      return {x: r.x, y: r.y + window.scrollY, width: r.width, height: r.height}; };
+  const named = (el, kind) => Object.assign(box(el), {kind: kind, text: el.textContent.trim().slice(0, 40)});
+  const blocks = [...document.body.children]  // the page's flow (not plotly's off-page measuring helpers)
+                 .filter(el => el.tagName !== 'SCRIPT' && getComputedStyle(el).position === 'static')
+                 .map(el => Object.assign(box(el), {tag: el.tagName, id: el.id}));
+  const figures = [...document.querySelectorAll('div.figure')].map(div => {
+    const svg = div.querySelector('.main-svg');
+    const texts = [];
+    for (const [sel, kind] of [['.gtitle', 'title'], ['.annotation-text', 'panel title'],
+                               ['.g-xtitle text', 'x title'], ['.g-ytitle text', 'y title'],
+                               ['.xtick text', 'tick'], ['.ytick text', 'tick'], ['.legendtext', 'legend'],
+                               ['.cbtitle text', 'colour bar title']]) {
+      for (const el of div.querySelectorAll(sel)) { if (el.textContent.trim()) texts.push(named(el, kind)); }
+    }
+    const scene = div.querySelector('.gl-container > div');
+    return {id: div.id, box: box(div), svg: svg ? box(svg) : null, texts: texts, scene: scene ? box(scene) : null};
+  });
+  return {blocks: blocks, figures: figures};
+}"""
+
+
+def _layout_problems(layout) -> list[str]:
+    """What a reader would see wrong: blocks of the page drawn over each other, a figure cut off by
+    its box or leaving a blank band in it, texts of a figure over each other or outside it."""
+    out = []
+    blocks = layout["blocks"]
+    for a, b in zip(blocks, blocks[1:]):
+        if b["y"] < a["y"] + a["height"] - 1:
+            out.append(f"{b['tag']}#{b['id']} starts {a['y'] + a['height'] - b['y']:.0f} px inside the "
+                       f"{a['tag']}#{a['id']} above it")
+    for f in layout["figures"]:
+        if f["svg"] is None:
+            out.append(f"#{f['id']} has no drawing")
+            continue
+        if abs(f["svg"]["height"] - f["box"]["height"]) > 2:
+            out.append(f"#{f['id']}: its drawing is {f['svg']['height']:.0f} px tall in a box of "
+                       f"{f['box']['height']:.0f} px (cut off, or a blank band)")
+        texts = f["texts"]
+        for t in texts:
+            if not _inside(t, f["box"]):
+                out.append(f"#{f['id']}: {t['kind']} '{t['text']}' reaches outside the figure")
+        for i, a in enumerate(texts):
+            for b in texts[i + 1:]:
+                if "tick" in (a["kind"], b["kind"]) and a["kind"] == b["kind"]:
+                    continue  # tick labels of two axes may meet at a corner
+                if _overlap(a, b):
+                    out.append(f"#{f['id']}: {a['kind']} '{a['text']}' overlaps {b['kind']} '{b['text']}'")
+    return out
+
+
+def _scene_cut_off(page, figure) -> str | None:
+    """A 3-D view drawn past the edge of its scene (WebGL: no element boxes inside it): the scene's
+    outermost pixel rows and columns must all be background."""
+    import io
+
+    from PIL import Image
+
+    s = figure["scene"]
+    if s is None:
+        return None
+    png = page.screenshot(full_page=True, clip={"x": s["x"], "y": s["y"], "width": s["width"], "height": s["height"]})
+    img = np.asarray(Image.open(io.BytesIO(png)).convert("L"), dtype=float)
+    edges = {"top": img[:3], "bottom": img[-3:], "left": img[:, :3], "right": img[:, -3:]}
+    cut = [side for side, px in edges.items() if (px < 200).mean() > 0.002]
+    return f"#{figure['id']}: the 3-D view is cut off at its {', '.join(cut)} edge" if cut else None
+
+
 @pytest.mark.slow
-def test_report_renders_in_a_real_browser_offline(tmp_path):
-    """Where playwright and a browser are installed (not in CI): the page draws its figures with
-    every network request refused and no script error."""
-    sync_api = pytest.importorskip("playwright.sync_api")
-    r = invoke("workspace", PLANAR2, "--step", "0.05", "--out", tmp_path, "--html", "--quiet")
+@pytest.mark.parametrize("command, design, args", [
+    ("workspace", "planar2", ["--step", "0.01", "--html"]),
+    ("report", "ipanema3", []),
+])
+def test_report_renders_in_a_real_browser_offline_and_nothing_overlaps(tmp_path, command, design, args):
+    """In a real Chromium, offline: the page draws its figures with every network request refused and no
+    script error, and as laid out nothing is drawn over anything else or cut off (the element boxes
+    of the page's blocks and of every text of the figures; the 3-D view's edge pixels).  Was: the
+    tension grid's panel titles over the axis titles of the row above, the tension grid spilling over
+    the motor-sizing heading, the 3-D view cut off at the bottom, a blank band under planar2's maps."""
+    sync_api = _playwright()
+    r = invoke(command, DESIGNS / f"{design}.yaml", *args, "--out", tmp_path, "--quiet")
     assert r.exit_code == 0, r.output
     with sync_api.sync_playwright() as p:
+        browser = _browser(sync_api, p)
         try:
-            browser = p.chromium.launch()
-        except Exception as exc:  # noqa: BLE001 - playwright without its browser
-            pytest.skip(f"playwright has no browser here: {exc}")
-        page = browser.new_page()
-        errors, requests = [], []
-        page.on("pageerror", errors.append)
-        page.route("**/*", lambda route: route.continue_() if route.request.url.startswith("file:")
-                   else (requests.append(route.request.url), route.abort()))
-        page.goto((tmp_path / "report.html").as_uri())
-        page.wait_for_selector("#workspace .main-svg", timeout=20_000)
-        assert page.locator("#tensions .main-svg").count() > 0
-        browser.close()
-    assert not errors and not requests
+            page = browser.new_page(viewport={"width": 1200, "height": 900})
+            errors, requests = [], []
+            page.on("pageerror", lambda exc: errors.append(exc))
+            page.route("**/*", lambda route: route.continue_() if route.request.url.startswith("file:")
+                       else (requests.append(route.request.url), route.abort()))
+            page.goto((tmp_path / "report.html").as_uri())
+            page.wait_for_selector("#workspace .main-svg", timeout=60_000)
+            page.wait_for_selector("#tensions .main-svg", timeout=60_000)
+            page.wait_for_timeout(1000)  # the WebGL scene's first frame
+            page.screenshot(path=str(tmp_path / "page.png"), full_page=True)
+            layout = page.evaluate(_LAYOUT_JS)
+            problems = _layout_problems(layout)
+            problems += [p for p in (_scene_cut_off(page, f) for f in layout["figures"]) if p]
+            text = page.inner_text("body")
+        finally:
+            browser.close()
+    assert not errors and not requests, (errors, requests)
+    assert {f["id"] for f in layout["figures"]} == {"workspace", "tensions"}
+    assert not problems, problems
+    assert "m^2" not in text and "m^3" not in text  # the page writes m² and m³, as its figures do
+    if design == "ipanema3":  # the tension maps say which slice they show
+        assert "minimum-norm cable tensions [N] in the slice z =" in text
 
 
 def test_unknown_format_is_refused():

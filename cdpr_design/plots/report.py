@@ -28,6 +28,8 @@ from cdpr_design.io.tables import timing_phases
 MAX_CELLS = 90_000
 #: Largest number of feasible poses drawn as 3-D points.
 MAX_POINTS = 40_000
+#: Height of the workspace figure [px] (the tension grid's follows from its rows).
+FIGURE_HEIGHT = 640
 #: Colour-blind-safe continuous scales (perceptually uniform).
 MARGIN_SCALE, TENSION_SCALE = "Viridis", "Cividis"
 _GREY = "rgb(217,217,217)"
@@ -39,7 +41,7 @@ table { border-collapse: collapse; font-size: 0.9em; }
 td, th { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: left; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
 .pass { color: #1a7f37; font-weight: bold; } .fail { color: #b00020; font-weight: bold; }
-.figure { width: 100%; height: 640px; } .note { color: #555; font-size: 0.85em; }
+.figure { width: 100%; } .note { color: #555; font-size: 0.85em; }
 """
 
 _BOOT = """
@@ -70,7 +72,8 @@ def report_html(result=None, sizing=None, checks=None, summary: dict | None = No
         figures = [("workspace", "Workspace", workspace_plotly(result)),
                    ("tensions", "Cable tensions", tension_plotly(result))]
         for fid, heading, (fig, note) in figures:
-            parts += [f"<h2>{heading}</h2>", f'<div id="{fid}" class="figure"></div>',
+            parts += [f"<h2>{heading}</h2>",
+                      f'<div id="{fid}" class="figure" style="height: {fig["layout"]["height"]}px"></div>',
                       f'<p class="note">{_esc(note)}</p>']
     if result is not None and getattr(result, "frame_loads", None) is not None:
         parts += ["<h2>Loads on the frame</h2>", frame_load_table(result)]
@@ -133,7 +136,7 @@ def _planar_workspace(result) -> tuple[dict, str]:
     ] + _boundary_lines(result)
     layout = {"title": {"text": _title(result)}, "xaxis": {"title": {"text": "x [m]"}},
               "yaxis": {"title": {"text": "y [m]"}, "scaleanchor": "x", "scaleratio": 1},
-              "shapes": [_frame_shape(d)], "legend": {"orientation": "h"}}
+              "shapes": [_frame_shape(d)], "legend": {"orientation": "h"}, "height": FIGURE_HEIGHT}
     note = "Grey: infeasible poses (negative margin). Hover a cell for its pose, margin and tensions."
     if k > 1:
         note += f" Every {k}th grid cell per axis is shown."
@@ -166,8 +169,11 @@ def _spatial_workspace(result) -> tuple[dict, str]:
         traces[0]["visible"] = "legendonly"
         traces.insert(0, mesh)
     scene = {"xaxis": {"title": {"text": "x [m]"}}, "yaxis": {"title": {"text": "y [m]"}},
-             "zaxis": {"title": {"text": "z [m]"}}, "aspectmode": "data"}
-    layout = {"title": {"text": _title(result)}, "scene": scene, "legend": {"orientation": "h"}}
+             "zaxis": {"title": {"text": "z [m]"}}, "aspectmode": "data",
+             # the camera far enough that the whole frame, its tick labels and titles stay in the view
+             "camera": {"eye": {"x": 1.7, "y": 1.7, "z": 1.1}}}
+    layout = {"title": {"text": _title(result)}, "scene": scene, "legend": {"orientation": "h"},
+              "height": FIGURE_HEIGHT, "margin": {"l": 10, "r": 10, "t": 60, "b": 10}}
     note = (f"{idx[0].size:,} feasible poses" + (f" (every {k}th grid cell per axis)" if k > 1 else "")
             + (", shown by clicking them in the legend, and the workspace's boundary (workspace.stl)"
                if mesh is not None else " drawn")
@@ -207,27 +213,36 @@ def tension_plotly(result) -> tuple[dict, str]:
     feas = result.feasible_map.astype(bool)
     T = np.where(feas[None], result.tension_maps, np.nan)
     note = "Blank: infeasible poses."
+    title = f"{d.name}: minimum-norm cable tensions [N]"
     if not d.motion.planar:
         iz = int(np.argmax(feas.sum(axis=(0, 1))))
         T = T[..., iz]
-        note = f"The z = {result.map_axes[2][iz]:.3g} m slice (the one with the most feasible poses). " + note
+        z = f"{result.map_axes[2][iz]:.3g}"
+        title += f" in the slice z = {z} m"
+        note = f"The z = {z} m slice (the one with the most feasible poses). " + note
     k = _stride(T.shape[1:], MAX_CELLS // max(1, d.m))
     x, y = (ax[::k] for ax in result.map_axes[:2])
     finite = T[np.isfinite(T)]
     top = float(finite.max()) if finite.size else 1.0
     ncol = min(4, d.m)
     nrow = -(-d.m // ncol)
-    traces, layout = [], {"title": {"text": f"{d.name}: minimum-norm cable tensions [N]"},
+    # heights in pixels: each row of panels, the room between rows (the upper row's tick labels and
+    # x title, then the lower row's panel titles), the margins above and below the grid
+    row_px, between_px, top_px, bottom_px = 300, 100, 90, 60
+    plot_px = nrow * row_px + (nrow - 1) * between_px
+    traces, layout = [], {"title": {"text": title},
                           "coloraxis": {"colorscale": TENSION_SCALE, "cmin": 0.0, "cmax": top,
                                         "colorbar": {"title": {"text": "tension [N]"}}},
-                          "annotations": []}
+                          "annotations": [], "margin": {"t": top_px, "b": bottom_px},
+                          "height": plot_px + top_px + bottom_px}
     gap = 0.06
     for i, c in enumerate(d.cable_names):
         r, col = divmod(i, ncol)
         n = i + 1
         xa, ya = f"x{n if n > 1 else ''}", f"y{n if n > 1 else ''}"
         dom_x = [col / ncol + gap / 2, (col + 1) / ncol - gap / 2]
-        dom_y = [1 - (r + 1) / nrow + gap, 1 - r / nrow - gap / 2]
+        upper = 1 - r * (row_px + between_px) / plot_px
+        dom_y = [max(0.0, upper - row_px / plot_px), upper]
         traces.append({"type": "heatmap", "x": x, "y": y, "z": T[i, ::k, ::k].T.astype(float), "xaxis": xa,
                        "yaxis": ya, "coloraxis": "coloraxis", "name": c,
                        "hovertemplate": f"x = %{{x:.4g}} m<br>y = %{{y:.4g}} m<br>T {c} = %{{z:.4g}} N<extra></extra>"})
@@ -237,7 +252,6 @@ def tension_plotly(result) -> tuple[dict, str]:
         layout["annotations"].append({"text": f"{c}: {d.cables[i].tension_min:g}–{d.cables[i].tension_max:g} N",
                                       "xref": "paper", "yref": "paper", "x": sum(dom_x) / 2, "y": dom_y[1],
                                       "yanchor": "bottom", "showarrow": False})
-    layout["height"] = 330 * nrow + 120
     return {"data": traces, "layout": layout}, note
 
 
@@ -291,8 +305,16 @@ _SUMMARY_ROWS = [("poses", "grid poses", ""), ("feasible", "feasible poses", "")
                  ("elapsed_s", "sweep time", "s")]
 
 
+#: Units as the page writes them (the summary's plain-text ones).
+_UNITS = {"m^2": "m²", "m^3": "m³"}
+
+
 def _summary_table(s: dict) -> str:
-    rows = [(label, _cell(s[key]) + (" " + _esc(s.get(unit, unit)) if unit and s[key] is not None else ""))
+    def unit_of(key):
+        u = s.get(key, key)
+        return _esc(_UNITS.get(u, u))
+
+    rows = [(label, _cell(s[key]) + (" " + unit_of(unit) if unit and s[key] is not None else ""))
             for key, label, unit in _SUMMARY_ROWS if key in s]
     if "grid" in s:
         g = s["grid"]
