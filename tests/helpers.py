@@ -40,6 +40,15 @@ def write_spec(tmp_path: Path, data: dict, name: str = "spec.yaml") -> Path:
     return p
 
 
+def light_spec(tmp_path: Path) -> Path:
+    """planar2 without its motor and speed requirements: quick optimize trials."""
+    raw = planar2_raw()
+    raw["winch"].pop("motor")
+    for k in ("max_speed", "max_acceleration"):
+        raw["requirements"].pop(k)
+    return write_spec(tmp_path, raw, "light.yaml")
+
+
 def invoke(*args, **kwargs):
     """Run the command line in-process (typer's CliRunner); arguments are str()-ed."""
     from typer.testing import CliRunner

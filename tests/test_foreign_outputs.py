@@ -12,16 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from .helpers import PLANAR2, invoke, planar2_raw, write_spec
-
-
-def light_spec(tmp_path: Path) -> Path:
-    """planar2 without its motor and speed requirements: quick optimize trials."""
-    raw = planar2_raw()
-    raw["winch"].pop("motor")
-    for k in ("max_speed", "max_acceleration"):
-        raw["requirements"].pop(k)
-    return write_spec(tmp_path, raw, "light.yaml")
+from .helpers import PLANAR2, invoke, light_spec
 
 
 #: command -> its arguments (the spec first: "light" is :func:`light_spec`)

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from .helpers import PLANAR2, invoke, planar2_raw, subprocess_env, write_spec
+from .helpers import PLANAR2, invoke, light_spec, subprocess_env
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX file systems and signals")
 
@@ -104,15 +104,6 @@ def test_a_file_size_limit_during_sweep_keeps_the_old_tables(tmp_path):
     for name in ("sweep.csv", "sweep_best.csv", "sweep.png"):  # the outputs: the old ones, whole
         assert after[name] == before[name], name
     assert leftovers(out) == [] and {"sweep.csv", "sweep_best.csv", "sweep.png"} <= record(out)
-
-
-def light_spec(tmp_path: Path) -> Path:
-    """planar2 without its motor and speed requirements: quick optimize trials (as tests/test_signals.py)."""
-    raw = planar2_raw()
-    raw["winch"].pop("motor")
-    for k in ("max_speed", "max_acceleration"):
-        raw["requirements"].pop(k)
-    return write_spec(tmp_path, raw, "light.yaml")
 
 
 def test_a_file_size_limit_during_optimize_leaves_no_study(tmp_path):
