@@ -32,7 +32,7 @@ from cdpr_design.workspaces.plan import Plan
 
 def straight_sweep(design, kind, g, ori, on_chunk=None, chunk=1000):
     """The plain straight-cable sweep alone: the plan's base evaluator without any wrapper."""
-    robot = ws.robot_for(design, g, kind)
+    robot = ws.robot_for(design, kind)
     return Plan(robot, g, ori, StraightSweep(robot, ori, g)).run(on_chunk, chunk=chunk)
 from tests.helpers import DESIGNS, PLANAR2, collect_chunks, invoke, planar2_raw, planar4_cables, read_csv, write_spec
 

@@ -354,7 +354,7 @@ def test_every_file_a_workspace_run_writes_is_known_before_the_sweep(tmp_path, n
 
     design = load(DESIGNS / f"{name}.yaml")
     grid = ws.make_grid(design, 0.5)
-    plan = ws.plan(ws.robot_for(design, grid), grid, solid=True)
+    plan = ws.plan(ws.robot_for(design), grid, solid=True)
     r = invoke("workspace", DESIGNS / f"{name}.yaml", "--step", "0.5", "--out", tmp_path, "--quiet")
     assert r.exit_code == 0, r.output
     written = sorted(p.name for p in tmp_path.iterdir())

@@ -42,7 +42,7 @@ def test_results_do_not_depend_on_the_thread_count(path, step):
     if "crane4" in str(path):  # its hanging search runs on the kernels' threads, in blocks
         from cdpr_design.workspaces.hanging import Hanger
 
-        robot = ws.robot_for(d, ws.make_grid(d, step), engine="numba")
+        robot = ws.robot_for(d)
         assert Hanger(robot, d.default_orientation_full()).threaded
     rows = []
     for n in (1, 2, 3, 8):

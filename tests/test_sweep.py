@@ -17,7 +17,6 @@ import pytest
 from cdpr_design.model import spec
 from cdpr_design import batch as sw
 from cdpr_design.batch import dask as bdask
-from cdpr_design.batch import sweep as bsweep
 from cdpr_design.errors import InputError, SpecError
 
 from .helpers import PLANAR2, ROOT, invoke, planar2_raw, read_csv, subprocess_env, write_spec
@@ -444,33 +443,6 @@ def test_committed_ci_baseline_matches(tmp_path):
     args = [str(ROOT / a) if a.startswith(("designs/", "tests/")) else a for a in CI_SWEEP.split()]
     r = invoke(*args, "--out", tmp_path, "--quiet", "--workers", "1", "--no-picture")
     assert r.exit_code == 0, r.output
-
-
-def test_engines_give_the_identical_sweep_csv(tmp_path, monkeypatch):
-    """Small planar2 sweeps take the numpy engine, big ones the numba kernels (sweep.kernels_worth_loading);
-    a resumed sweep may mix them, so both must write the same bytes (signed zeros included)."""
-    written = {}
-    for engine in ("numba", "numpy"):
-        monkeypatch.setenv("CDPR_DESIGN_ENGINE", engine)
-        r = invoke("sweep", PLANAR2, *RESUME_VARY, "--workers", "1", "--out", tmp_path / engine, "--quiet",
-                   "--no-picture")
-        assert r.exit_code == 0, r.output
-        written[engine] = (tmp_path / engine / "sweep.csv").read_bytes()
-    assert written["numba"] == written["numpy"]
-    assert b",-0," not in written["numpy"]
-
-
-def test_big_sweeps_load_the_kernels():
-    """Each process of a sweep loads the numba kernels first when it evaluates more grid poses
-    than the numpy engine is worth (the public decision, :data:`KERNELS_FROM_POSES`)."""
-    design_data = planar2_raw()
-    plan = sw.make_plan(spec.from_dict(design_data), [("effector.mass", sw.parse_values("0.5:2:3"))])
-    assert not bsweep.kernels_worth_loading(plan, sw.Options(), len(plan), 2)  # 3 x 22,801 poses
-    assert not bsweep.kernels_worth_loading(plan, sw.Options(), 40, 2)  # 456,000 poses a process
-    assert bsweep.kernels_worth_loading(plan, sw.Options(), 40, 1)  # 912,000 poses in one process
-    assert not bsweep.kernels_worth_loading(plan, sw.Options(), 40, 4)  # 228,000 poses a process
-    assert bsweep.kernels_worth_loading(plan, sw.Options(), 1000, 8)  # 2.85 M poses a process
-    assert bsweep.kernels_worth_loading(plan, sw.Options(step=0.001), 3, 8)  # 2.25 M poses a process (3 used)
 
 
 def _worker_settings():

@@ -18,6 +18,7 @@ from cdpr_design.errors import InputError
 from cdpr_design.model.design import Grid
 
 from .helpers import PLANAR2, collect_chunks, invoke, planar2_raw, random_planar_data
+from .reference.general_sweep import general_kernel_rows
 
 
 def numpy_reference(design, poses, wreq):
@@ -72,14 +73,14 @@ def assert_same(ref, got, design):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("engine", ["numba", "numpy"])
 @pytest.mark.parametrize("seed", range(40))
-def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
-    """Two-cable planar robots: closed-form kernel (numba or numpy engine), generic kernel and
-    a per-pose numpy reference agree."""
+def test_planar_closed_form_matches_numpy_on_random_robots(seed):
+    """Two-cable planar robots: the product's closed form, the general kernel and a per-pose
+    numpy reference agree."""
     rng = np.random.default_rng(seed)
     design = spec.from_dict(random_planar_data(rng, m=2))
-    got = sweep_all(design, engine=engine)
+    assert ws.robot_for(design).engine == "numpy"
+    got = sweep_all(design)
     poses = got[0]
     wreq = wrench_vertices(design, "static")
     ref = numpy_reference(design, poses, wreq)
@@ -90,30 +91,21 @@ def test_planar_kernels_match_numpy_on_random_robots(seed, engine):
     assert_same(tuple(r[keep] for r in ref), tuple(g[keep] for g in got), design)
     assert got[1].any(), "the random robot should have some feasible poses"
 
-    # the generic per-pose kernel gives the same numbers as the closed-form one
-    g = design.workspace.grid
-    lower, step, shape = wsg.grid3(g)
-    n = g.size
-    f2, m2, T2, L2 = np.empty(n, np.uint8), np.empty(n), np.empty((n, 2)), np.empty((n, 2))
-    K.sweep_grid(K.GridPoses(0, lower, step, shape, design.attachments.copy()),
-                 K.Statics(design.outlets, design.rows, design.tension_min, design.tension_max, design.string_floor,
-                           combinations(2, 2), K.KIND_STATIC),
-                 wreq, K.Outputs(f2, m2, T2, L2))
-    assert_same((f2, m2, T2, L2), got, design)
+    # the general kernel gives the same numbers as the closed form
+    assert_same(general_kernel_rows(design), got, design)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("engine", ["numba", "numpy"])
-def test_planar2_wrench_feasible_matches_numpy(engine):
+def test_planar2_wrench_feasible_matches_numpy():
     data = planar2_raw()
     data["workspace"]["external_wrench"] = {"lower": [-2.0, -1.0], "upper": [2.0, 1.0]}
     design = spec.from_dict(data)
-    got = sweep_all(design, kind="wrench-feasible", step=0.03, engine=engine)
+    got = sweep_all(design, kind="wrench-feasible", step=0.03)
     wreq = wrench_vertices(design, "wrench-feasible")
     assert wreq.shape == (5, 2)
     ref = numpy_reference(design, got[0], wreq)
     assert_same(ref, got, design)
-    static = sweep_all(design, kind="static", step=0.03, engine=engine)
+    static = sweep_all(design, kind="static", step=0.03)
     # resisting extra wrench can only shrink the workspace
     assert np.all(got[1] <= static[1]) and got[1].sum() < static[1].sum()
 
@@ -181,17 +173,15 @@ def test_unknown_kind_is_spec_error():
 
 
 # ----------------------------------------------------------------------------
-# Engines: the numpy closed form against the numba kernel
+# Two cables, two wrench rows: the closed form (numpy) against the general kernel
 # ----------------------------------------------------------------------------
 
 
-def _sweep_engine(design, engine, kind="static", **kw):
-    return sweep_columns(design, kind, engine=engine, **kw)
-
-
 @pytest.mark.parametrize("seed", range(25))
-def test_numpy_engine_equals_numba_kernel(seed):
-    """Same formulas in the same order: every flag identical, numbers equal to rounding."""
+def test_closed_form_equals_the_general_kernel(seed):
+    """The product's closed form of two cables against the general kernel on random robots, in
+    chunks of 1000 rows: every flag identical away from a zero margin, numbers equal to rounding,
+    the summary's figures those of the reference's rows."""
     rng = np.random.default_rng(1000 + seed)
     data = random_planar_data(rng, m=2)
     kind = "static"
@@ -199,22 +189,29 @@ def test_numpy_engine_equals_numba_kernel(seed):
         data["workspace"]["external_wrench"] = {"lower": [-1.0, -2.0], "upper": [1.5, 0.5]}
         kind = "wrench-feasible"
     design = spec.from_dict(data)
-    ra, a = _sweep_engine(design, "numba", kind, chunk=1000)
-    rb, b = _sweep_engine(design, "numpy", kind, chunk=1000)
-    np.testing.assert_array_equal(a["feasible"], b["feasible"])
-    np.testing.assert_array_equal(a["lengths"], b["lengths"])
-    for key in ("margin", "tensions"):
-        np.testing.assert_array_equal(np.isnan(a[key]), np.isnan(b[key]))
-        np.testing.assert_allclose(a[key], b[key], rtol=1e-13, atol=1e-13, equal_nan=True)
-    sa, sb = ra.summary(), rb.summary()
-    for key in ("poses", "feasible", "min_margin", "max_margin", "max_tension", "max_tension_per_cable"):
-        assert sa[key] == pytest.approx(sb[key], rel=1e-13), key
-    np.testing.assert_array_equal(ra.feasible_map, rb.feasible_map)
+    r, got = sweep_columns(design, kind, chunk=1000)
+    assert r.robot.engine == "numpy"
+    feas, marg, ten, lens = general_kernel_rows(design, kind)
+    edge = np.abs(marg) <= 1e-9 * design.tension_max.max()  # rounding decides the flag there
+    assert edge.sum() <= 2
+    np.testing.assert_array_equal(got["feasible"][~edge], feas[~edge])
+    np.testing.assert_allclose(got["lengths"], lens, rtol=1e-14)
+    for key, ref in (("margin", marg), ("tensions", ten)):
+        np.testing.assert_array_equal(np.isnan(got[key][~edge]), np.isnan(ref[~edge]))
+        np.testing.assert_allclose(got[key], ref, rtol=1e-9, atol=1e-9 * design.tension_max.max(), equal_nan=True)
+    s = r.summary()
+    ok = got["feasible"].astype(bool)
+    assert s["feasible"] == ok.sum() > 0 and abs(s["feasible"] - int(feas.sum())) <= edge.sum()
+    assert s["min_margin"] == pytest.approx(float(marg[ok].min()), rel=1e-9, abs=1e-9)
+    assert s["max_margin"] == pytest.approx(float(marg[ok].max()), rel=1e-9)
+    np.testing.assert_allclose(list(s["max_tension_per_cable"].values()), np.nanmax(np.where(ok[:, None], ten, np.nan), axis=0),
+                               rtol=1e-9)
 
 
-def test_numpy_engine_degenerate_poses():
+def test_closed_form_degenerate_poses():
     """A grid through an outlet (zero-length cable) and along the line between the outlets
-    (parallel cables, rank deficient): infeasible with NaN margin in both engines."""
+    (parallel cables, rank deficient): infeasible with NaN margin and tensions in the closed
+    form, as in the general kernel."""
     data = planar2_raw()
     data["effector"]["size"] = [0.0, 0.0]
     for c in data["cables"]:
@@ -222,57 +219,47 @@ def test_numpy_engine_degenerate_poses():
     design = spec.from_dict(data)
     top = design.outlets[0, 1]
     grid = Grid((0.0, top - 0.5), (1.5, top), (0.05, 0.05))
-    _, a = _sweep_engine(design, "numba", grid=grid)
-    _, b = _sweep_engine(design, "numpy", grid=grid)
-    on_line = np.isclose(a["poses"][:, 1], top)
+    _, b = sweep_columns(design, grid=grid)
+    feas, marg, ten, _ = general_kernel_rows(design, grid=grid)
+    on_line = np.isclose(b["poses"][:, 1], top)
     assert on_line.sum() == 31
-    for cols in (a, b):
-        assert not cols["feasible"][on_line].any()
-        assert np.isnan(cols["margin"][on_line]).all() and np.isnan(cols["tensions"][on_line]).all()
+    for f, m, t in ((b["feasible"], b["margin"], b["tensions"]), (feas, marg, ten)):
+        assert not f[on_line].any()
+        assert np.isnan(m[on_line]).all() and np.isnan(t[on_line]).all()
     assert (b["lengths"][on_line] == 0).any(axis=1).sum() == 2  # the two outlets themselves
-    np.testing.assert_array_equal(a["feasible"], b["feasible"])
-    np.testing.assert_allclose(a["margin"], b["margin"], rtol=1e-13, equal_nan=True)
-    np.testing.assert_allclose(a["tensions"], b["tensions"], rtol=1e-13, equal_nan=True)
+    np.testing.assert_array_equal(b["feasible"], feas)
+    np.testing.assert_allclose(b["margin"], marg, rtol=1e-9, equal_nan=True)
+    np.testing.assert_allclose(b["tensions"], ten, rtol=1e-9, equal_nan=True)
 
 
 def test_engine_choice():
-    """The resolved robot's engine: numpy asked for, or ``auto`` on a closed-form grid of at most
-    NUMPY_MAX_POSES poses; the kernels otherwise; an unknown engine or numpy where the closed form
-    does not apply is refused with the reason."""
-    from cdpr_design.statics.robot import NUMPY_MAX_POSES, Analysis, resolve
+    """The resolved robot's engine is the design's, not the process's or the grid's: the closed
+    form (numpy) for two cables with two wrench rows, whatever is asked; the kernels otherwise;
+    an unknown engine, or numpy where the closed form does not apply, is refused with the reason."""
+    from cdpr_design.statics.robot import Analysis, resolve
 
     design = spec.load(PLANAR2)
-    assert resolve(design, Analysis(engine="numpy", poses=10 ** 9)).engine == "numpy"
-    assert resolve(design, Analysis(engine="numba", poses=10)).engine == "numba"
-    assert resolve(design, Analysis(poses=NUMPY_MAX_POSES)).engine == "numpy"
-    assert resolve(design, Analysis(poses=NUMPY_MAX_POSES + 1)).engine == "numba"
-    assert resolve(design, Analysis(poses=10, kind="wrench-closure")).engine == "numba"
-    assert resolve(design, Analysis(poses=10, collisions=True)).engine == "numba"
+    for engine in ("auto", "numba", "numpy"):
+        assert resolve(design, Analysis(engine=engine)).engine == "numpy"
+        assert resolve(design, Analysis(engine=engine, kind="wrench-feasible")).engine == "numpy"
+    assert resolve(design, Analysis(kind="wrench-closure")).engine == "numba"
+    assert resolve(design, Analysis(collisions=True)).engine == "numba"
     with pytest.raises(InputError, match="engine: expected one of auto, numba, numpy"):
         ws.run(design, engine="fortran")
     ipanema = spec.load(PLANAR2.parent / "ipanema3.yaml")
-    assert resolve(ipanema, Analysis(poses=10)).engine == "numba"
+    assert resolve(ipanema, Analysis()).engine == "numba"
     with pytest.raises(InputError, match="engine=numpy: the numpy engine covers two cables"):
         ws.run(ipanema, step=0.5, engine="numpy")
 
 
-@pytest.mark.slow
 def test_engine_variable_is_read_by_the_command_line(tmp_path, monkeypatch):
-    """Only the command line reads CDPR_DESIGN_ENGINE: it forces the engine, and a bad value
-    is exit 2 naming the variable."""
-    engines = []
-    real = ws.robot_for
-
-    def spy(*args, **kwargs):
-        robot = real(*args, **kwargs)
-        engines.append(robot.engine)
-        return robot
-
-    monkeypatch.setattr(ws, "robot_for", spy)
-    monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numba")
-    r = invoke("workspace", PLANAR2, "--out", tmp_path / "a", "--json", "--quiet")
-    assert r.exit_code == 0, r.output
-    assert engines == ["numba"]
+    """Only the command line reads CDPR_DESIGN_ENGINE: ``numpy`` where the closed form does not
+    cover the sweep is exit 2 with the reason, and a bad value is exit 2 naming the variable."""
+    monkeypatch.setenv("CDPR_DESIGN_ENGINE", "numpy")
+    r = invoke("workspace", PLANAR2, "--kind", "wrench-closure", "--out", tmp_path / "a", "--json", "--quiet")
+    assert r.exit_code == 2
+    assert "engine=numpy: the numpy engine covers two cables" in r.output
+    assert not (tmp_path / "a").exists()
     monkeypatch.setenv("CDPR_DESIGN_ENGINE", "fortran")
     r = invoke("workspace", PLANAR2, "--out", tmp_path / "b", "--json", "--quiet")
     assert r.exit_code == 2
@@ -297,46 +284,43 @@ def _loaded(stderr: str) -> set[str]:
 @pytest.mark.slow
 def test_planar2_commands_run_without_numba(tmp_path):
     """The paper's robot on its default grid -- ``workspace``, ``size-motors``, ``report`` -- runs
-    without numba's start-up (about 0.8 s of CPU): the user's process never imports numba; and the
-    numpy engine's workspace counts the same feasible poses as the kernels'."""
+    without numba's start-up: the user's process never imports numba, even when asked for the
+    numba engine (the closed form is that robot's one implementation)."""
     import subprocess
     import sys
 
     from .helpers import subprocess_env
 
-    env = subprocess_env(CDPR_DESIGN_ENGINE="")
     found = {}
-    for cmd in ("workspace", "size-motors", "report"):
+    for cmd, engine in (("workspace", ""), ("size-motors", ""), ("report", ""), ("workspace", "numba")):
+        env = subprocess_env(CDPR_DESIGN_ENGINE=engine)
         r = subprocess.run([sys.executable, "-X", "importtime", "-m", "cdpr_design", cmd, str(PLANAR2), "--json",
-                            "--quiet", "--out", str(tmp_path / cmd)], capture_output=True, text=True, env=env,
-                           timeout=600)
+                            "--quiet", "--out", str(tmp_path / f"{cmd}{engine}")], capture_output=True, text=True,
+                           env=env, timeout=600)
         assert r.returncode == 0, r.stderr[-3000:]
         loaded = _loaded(r.stderr)
         assert "yaml" in loaded, cmd  # the lines were read (the spec's reader)
-        assert "numba" not in loaded, cmd
-        found[cmd] = json.loads(r.stdout)
-    r = subprocess.run([sys.executable, "-m", "cdpr_design", "workspace", str(PLANAR2), "--json", "--quiet",
-                        "--out", str(tmp_path / "numba")], capture_output=True, text=True, timeout=600,
-                       env=subprocess_env(CDPR_DESIGN_ENGINE="numba"))
-    assert r.returncode == 0, r.stderr[-3000:]
-    assert json.loads(r.stdout)["feasible"] == found["workspace"]["feasible"] > 0
+        assert "numba" not in loaded, (cmd, engine)
+        found[cmd + engine] = json.loads(r.stdout)
+    assert found["workspacenumba"]["feasible"] == found["workspace"]["feasible"] > 0
 
 
 @pytest.mark.slow
 def test_kernels_package_alone_is_not_the_kernels_loaded():
     """``cdpr_design.kernels`` is lazy and imported without numba (batch and optimize import its
-    ``parallel``): a small planar2 grid still resolves to numpy there, and ``load_kernels``
-    (what a worker of a big sweep does first) does load numba."""
+    ``parallel``); planar2 resolves to its closed form whether or not the process has loaded the
+    kernels, and its sweep then imports no numba."""
     import subprocess
     import sys
 
     code = ("import sys; import cdpr_design.batch.local, cdpr_design.optimize.study; "
-            "from cdpr_design.model import spec; from cdpr_design.statics.robot import Analysis, resolve; "
-            "from cdpr_design.workspaces import engine as eng; "
-            f"a = resolve(spec.load({str(PLANAR2)!r}), Analysis(poses=100)).engine; "
-            "b = 'numba' in sys.modules; eng.load_kernels(); print(a, b, 'numba' in sys.modules)")
+            "from cdpr_design.model import spec; from cdpr_design.statics.robot import resolve; "
+            "from cdpr_design import workspaces as ws; "
+            f"d = spec.load({str(PLANAR2)!r}); a = resolve(d).engine; ws.run(d, step=0.1); "
+            "b = 'numba' in sys.modules; import cdpr_design.kernels.sweep; "
+            "print(a, b, 'numba' in sys.modules, resolve(d).engine)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    assert out.stdout.split() == ["numpy", "False", "True"]
+    assert out.stdout.split() == ["numpy", "False", "True", "numpy"]
 
 
 def _chunk_stats_reference(feas, marg, ten, count, tpeak):
@@ -353,8 +337,8 @@ def _chunk_stats_reference(feas, marg, ten, count, tpeak):
 @pytest.mark.parametrize("count", [0, 1, 63, 64, 65, 1000, 4099])
 def test_chunk_stats_matches_the_obvious_reduction(count):
     """The kernel's reduction of a chunk equals the obvious one (only the first ``count`` rows
-    count; a margin of -0.0 is reported as 0.0).  The numpy engine's own reduction is checked
-    through the sweeps' summaries (test_numpy_engine_equals_numba_kernel)."""
+    count; a margin of -0.0 is reported as 0.0).  The closed form's own reduction is checked
+    through the sweeps' summaries (test_closed_form_equals_the_general_kernel)."""
     rng = np.random.default_rng(count)
     n = count + 17
     feas = (rng.random(n) < 0.6).astype(np.uint8)
@@ -379,14 +363,10 @@ def test_chunk_stats_reports_a_zero_margin_without_its_sign():
 
 
 def test_warm_up_runs_the_sweeps_first_pose_with_the_whole_grids_robot(monkeypatch):
-    """The warm-up sweeps the plan's first pose alone with the robot resolved for the whole grid
-    (its engine chosen for the whole grid's size)."""
+    """The warm-up sweeps the plan's first pose alone with the robot resolved for the whole grid."""
     design = spec.load(PLANAR2)
     big = ws.make_grid(design, 0.004)
-    p = ws.plan(ws.robot_for(design, big), big)
-    assert p.robot.engine == "numba"
+    p = ws.plan(ws.robot_for(design), big)
     one = p.on(ws.grid.first_pose(big))
     assert one.robot is p.robot and one.grid.size == 1 and tuple(one.grid.lower) == tuple(big.lower)
     assert one.columns == p.columns and one.pictures == p.pictures
-    small = ws.make_grid(design)
-    assert ws.plan(ws.robot_for(design, small), small).robot.engine == "numpy"

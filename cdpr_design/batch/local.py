@@ -53,7 +53,8 @@ class Options:
     motor: str | None = None
     trajectory: str | None = None
     catalogue: Any = None  # a model.catalogue.Catalogue; None: the shipped one
-    #: engine of every variant's grid sweeps (results are identical: not in the fingerprint)
+    #: engine of every variant's grid sweeps (:data:`~cdpr_design.statics.robot.ENGINES`; results are
+    #: identical: not in the fingerprint)
     engine: str = "auto"
     #: only the figures needed (``evaluate(figures=...)``: the workspace sweep or the sizing is
     #: skipped when neither they nor the spec's checks need it); None: every figure
@@ -73,28 +74,20 @@ class Job:
 
     plan: Plan
     options: Options
-    #: load the numba kernels in each worker before the first variant: the sweep holds more
-    #: poses than the numpy closed form is worth; its variants then run them (:meth:`engine`)
-    kernels: bool = False
 
     def prepared(self) -> "Job":
         """Set up a worker process for this job (once, in the worker); the job it then runs
         (with the shipped catalogue loaded there when none was given)."""
-        prepare_process(self)
+        prepare_worker()
         if self.options.catalogue is None:
             from cdpr_design.model import spec
 
-            return Job(self.plan, with_catalogue(self.options, spec.load_catalogue()), self.kernels)
+            return Job(self.plan, with_catalogue(self.options, spec.load_catalogue()))
         return self
 
     def run_chunk(self, items: Sequence[tuple[int, tuple]]) -> list[dict]:
         """The rows of a chunk of (index, values) variants."""
         return evaluate_chunk(self, items)
-
-    def engine(self) -> str:
-        """The engine of every variant's sweeps: the kernels where the worker loads them first
-        (``kernels``) and the options leave the choice to ``auto``, else the options' engine."""
-        return "numba" if self.kernels and self.options.engine == "auto" else self.options.engine
 
 
 def record(index: int, values: Sequence, figures: dict | None = None, error: str = "") -> dict:
@@ -118,7 +111,7 @@ def evaluate_variant(job: Job, index: int, values: Sequence) -> dict:
 
             samples = tr.sample(resolve(design, Analysis(command="motion")), opt.trajectory)
         row = ev.evaluate(design, step=opt.step, catalogue=opt.catalogue, samples=samples,
-                          safety_factor=opt.safety_factor, motor=opt.motor, engine=job.engine(),
+                          safety_factor=opt.safety_factor, motor=opt.motor, engine=opt.engine,
                           figures=opt.figures)
     except Exception as exc:  # noqa: BLE001 - a failing variant is a row, the sweep goes on
         msg = " ".join(str(exc).split())
@@ -135,18 +128,9 @@ def evaluate_chunk(job: Job, items: Sequence[tuple[int, tuple]]) -> list[dict]:
 _WORKER_JOB = None
 
 
-def prepare_process(job: Job) -> None:
-    """The kernels loaded if the sweep is big; one kernel thread (parallelism is across variants)."""
-    prepare_worker(job.kernels)
-
-
-def prepare_worker(kernels: bool) -> None:
-    """A worker process set up for evaluating designs: the numba kernels loaded first
-    (``kernels``), one kernel thread (parallelism is across processes)."""
-    if kernels:
-        from cdpr_design import workspaces as ws
-
-        ws.load_kernels()
+def prepare_worker() -> None:
+    """A worker process set up for evaluating designs: one kernel thread (parallelism is across
+    processes)."""
     parallel.set_threads(1)
 
 
@@ -212,7 +196,7 @@ class RunStats:
 
 def run_serial(job: Job, todo, emit) -> None:
     with parallel.threads_kept():
-        prepare_process(job)
+        prepare_worker()
         for i, vals in todo:
             emit([evaluate_variant(job, i, vals)])
 

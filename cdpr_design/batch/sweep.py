@@ -82,7 +82,7 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
     w = workers if workers is not None else default_workers()
     if w < 1:
         raise InputError(f"--workers: expected at least 1, got {w}")
-    job = Job(plan, options, kernels=kernels_worth_loading(plan, options, len(todo), w))
+    job = Job(plan, options)
     if scheduler:
         run_dask(job, todo, scheduler, w, chunk, emit, stats, connect_timeout)
     elif not pool and (w == 1 or len(todo) <= 1):
@@ -93,26 +93,3 @@ def run(plan: Plan, options: Options | None = None, *, workers: int | None = Non
         run_pool(job, todo, w, chunk, emit, stats, start_method)
     stats.elapsed_s = time.perf_counter() - t0
     return stats
-
-
-#: Grid poses a sweep process evaluates from which every process loads the numba kernels.  A
-#: sweep's processes run the kernels on one thread each, each pays numba's start-up, and a
-#: variant's sweep computes no tilt map and writes no rows, so numpy's closed form is cheap a
-#: pose there: the crossover measured with planar2's variants, the whole ``sweep`` command, lies
-#: between 912,000 and 1.8 M poses (docs/performance.md).  Not
-#: ``statics.robot.NUMPY_MAX_POSES`` (one ``workspace`` command, kernels on two threads).
-KERNELS_FROM_POSES = 500_000
-
-
-def kernels_worth_loading(plan: Plan, options: Options, variants: int, workers: int = 1) -> bool:
-    """Whether each of the sweep's processes (``workers``, at most one a variant) evaluates more
-    grid poses than the numpy engine is worth (:data:`KERNELS_FROM_POSES`): then every process
-    loads the numba kernels first."""
-    from cdpr_design.model import spec
-    from cdpr_design import workspaces as ws
-
-    try:
-        poses = ws.make_grid(spec.from_dict(plan.base), options.step, force=True).size
-    except Exception:  # noqa: BLE001 - a bad base shows up as the variants' errors
-        return True
-    return variants * poses / max(1, min(workers, variants)) > KERNELS_FROM_POSES

@@ -90,7 +90,7 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
 
     timings = timings if timings is not None else Timings()
     grid = ws.make_grid(design, step, force)
-    p = ws.plan(ws.robot_for(design, grid, kind, collisions, orientations, engine, max_tilt, stiffness), grid,
+    p = ws.plan(ws.robot_for(design, kind, collisions, orientations, engine, max_tilt, stiffness), grid,
                 solid=True)
     meta = table_metadata(design, "workspace", p.columns, kind=kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])

@@ -9,7 +9,6 @@ from collections import namedtuple
 import numpy as np
 
 from cdpr_design.kernels._jit import njit
-from cdpr_design.kernels.linalg import RANK_TOL
 from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
 from cdpr_design.kernels.hsm_small import facets_one, facets_two
 from cdpr_design.kernels.pose import (ROW_EMPTY, ROW_POSE, PoseBlock, raise_floor, rows_any, rows_small,
@@ -99,95 +98,6 @@ def _grid_loop_any(k0, k1, src, st, out, buf):
 
 #: the grid loop of each redundancy m - n that has its own (:func:`grid_block`)
 _GRID_LOOPS = {0: _grid_loop_0, 1: _grid_loop_1, 2: _grid_loop_2}
-
-
-def sweep_grid_planar2(start, count, lower, step, shape, Rb, A, wreq, tmin, tmax, floor,
-                       feasible, margin, tensions, lengths):
-    """:func:`sweep_grid` specialised to two cables and two wrench rows (2T, m = n = 2).
-
-    The seed paper's robot: everything inlined in closed form.  With
-    u_i the unit cable vectors, det = u1x u2y - u2x u1y,
-    t1 = (w_x u2y - w_y u2x) / det, t2 = (u1x w_y - u1y w_x) / det
-    (algorithms.md; paper eq. 6-9), and the capacity margin is
-    min_i min(t_i - t_min,i, t_max,i - t_i) / ||row_i(W^-1)||, t_min,i raised to ``floor``[i] L_i^2
-    where ``floor``[i] > 0 (as :func:`~cdpr_design.kernels.pose.raise_floor`).
-    Only the nominal wrench (row 0 of ``wreq``) is evaluated, plus the other
-    rows for the margin when there are several (wrench-feasible sweeps).
-    Same outputs as :func:`sweep_grid`.
-    """
-    run_blocks(planar2_block, count, start, lower, step, shape, Rb, A, wreq, tmin, tmax, floor,
-               feasible, margin, tensions, lengths, grain=4096)
-
-
-@njit
-def planar2_block(k0, k1, start, lower, step, shape, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensions,
-                  lengths):
-    """Rows k0..k1-1 of :func:`sweep_grid_planar2`."""
-    ny = shape[1]
-    nz = shape[2]
-    nv = wreq.shape[0]
-    a0x = A[0, 0] - Rb[0, 0]
-    a0y = A[0, 1] - Rb[0, 1]
-    a1x = A[1, 0] - Rb[1, 0]
-    a1y = A[1, 1] - Rb[1, 1]
-    # scalars hoisted out of the loop: the outputs could alias these arrays,
-    # which would otherwise force a reload per pose
-    w0 = wreq[0, 0]
-    w1 = wreq[0, 1]
-    tm0 = tmin[0]
-    tm1 = tmin[1]
-    c0 = floor[0]
-    c1 = floor[1]
-    tx0 = tmax[0]
-    tx1 = tmax[1]
-    ix, iy, iz = grid_index(start + k0, ny, nz)
-    for k in range(k0, k1):
-        px = lower[0] + ix * step[0]
-        py = lower[1] + iy * step[1]
-        ix, iy, iz = next_grid_index(ix, iy, iz, ny, nz)
-        lx0 = a0x - px
-        ly0 = a0y - py
-        lx1 = a1x - px
-        ly1 = a1y - py
-        L0 = math.sqrt(lx0 * lx0 + ly0 * ly0)
-        L1 = math.sqrt(lx1 * lx1 + ly1 * ly1)
-        lengths[k, 0] = L0
-        lengths[k, 1] = L1
-        tn0 = max(tm0, c0 * L0 * L0) if c0 > 0.0 else tm0
-        tn1 = max(tm1, c1 * L1 * L1) if c1 > 0.0 else tm1
-        u0x = u0y = u1x = u1y = det = 0.0  # a zero-length cable: no structure matrix
-        if L0 > 1e-12 and L1 > 1e-12:
-            u0x = lx0 / L0
-            u0y = ly0 / L0
-            u1x = lx1 / L1
-            u1y = ly1 / L1
-            det = u0x * u1y - u1x * u0y
-        if abs(det) <= RANK_TOL:
-            feasible[k] = 0
-            margin[k] = np.nan
-            tensions[k, 0] = np.nan
-            tensions[k, 1] = np.nan
-            continue
-        inv = 1.0 / det
-        i00 = u1y * inv
-        i01 = -u1x * inv
-        i10 = -u0y * inv
-        i11 = u0x * inv
-        r0 = math.sqrt(i00 * i00 + i01 * i01)
-        r1 = math.sqrt(i10 * i10 + i11 * i11)
-        t0 = i00 * w0 + i01 * w1
-        t1 = i10 * w0 + i11 * w1
-        s = min(min(t0 - tn0, tx0 - t0) / r0, min(t1 - tn1, tx1 - t1) / r1)
-        inb = s >= 0.0
-        if nv > 1:
-            for v in range(1, nv):
-                q0 = i00 * wreq[v, 0] + i01 * wreq[v, 1]
-                q1 = i10 * wreq[v, 0] + i11 * wreq[v, 1]
-                s = min(s, min(min(q0 - tn0, tx0 - q0) / r0, min(q1 - tn1, tx1 - q1) / r1))
-        margin[k] = s + 0.0  # -0.0 -> 0.0 (as the numpy engine)
-        feasible[k] = 1 if s >= 0.0 else 0
-        tensions[k, 0] = t0 if inb else np.nan
-        tensions[k, 1] = t1 if inb else np.nan
 
 
 @njit

@@ -63,8 +63,8 @@ class Problem:
         """The limits as the sampler sees them: the spec's checks, then ``--require`` limits."""
         return list(self.checks) + [lim.text() for lim in self.limits]
 
-    def job(self, kernels: bool = False) -> Job:
-        return Job(self.space.plan, self.options, kernels)
+    def job(self) -> Job:
+        return Job(self.space.plan, self.options)
 
     def fingerprint(self) -> str:
         """A hash of everything that decides a trial's outcome (a resumed study must be this one's)."""

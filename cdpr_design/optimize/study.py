@@ -261,7 +261,7 @@ def work(problem: Problem, folder: Path, total: int, seed: int | None, deadline:
     lock = Path(folder) / CLAIM_LOCK
     done = 0
     if single_thread:
-        prepare_worker(False)  # the kernels on one thread: parallelism is across processes
+        prepare_worker()  # the kernels on one thread: parallelism is across processes
     while deadline is None or time.time() < deadline:
         if parent is not None and os.getppid() != parent:
             break  # the run was killed: leave the rest to a resumed run

@@ -19,8 +19,8 @@ runs (its kind, its options); the :class:`Robot` it gets back holds
                    commanded orientation, the tilt it would hang with reported beside) |
                    ``hanging`` (``effector.orientation: free``: it hangs where the cables and
                    gravity put it, within ``tilt_limit``)
-  ``engine``       ``numpy`` (the closed form of two cables and two wrench rows, vectorised)
-                   | ``numba`` (the kernels)
+  ``engine``       ``numpy`` (the closed form of two cables and two wrench rows, vectorised:
+                   the one implementation of that case) | ``numba`` (the kernels: every other case)
 
 Every combination of a design and an analysis that is not computed is refused
 here, by the one table :data:`REFUSALS`, with its reason: nowhere else in the
@@ -50,16 +50,13 @@ CABLE_MODELS = tuple(c.name for c in S.CABLE_MODELS)
 OUTLETS = (S.POINTS.name, S.PULLEYS.name)
 #: How the effector's orientation is decided (see the module doc).
 ORIENTATIONS = (S.COMMANDED.name, S.HELD.name, S.HANGING.name)
-#: Engines of a grid sweep, as asked (``auto`` is decided by :func:`resolve`).
+#: Engines of a grid sweep, as asked: ``auto`` and ``numba`` sweep with the implementation the
+#: robot has (:func:`resolve`), ``numpy`` also refuses a robot the closed form does not cover.
 ENGINES = ("auto", "numba", "numpy")
 #: Kinds of workspace and their kernel codes (= ``kernels.KIND_*``; a test checks).
 KINDS = {"static": 0, "wrench-feasible": 1, "wrench-closure": 2}
 #: Commands that analyse a design (``Analysis.command``).
 COMMANDS = ("workspace", "pose", "fk", "certify", "size-motors", "motion", "check", "report", "statics")
-#: Largest closed-form grid ``auto`` gives to numpy: numpy is slower a pose than the kernels but
-#: pays no numba start-up; the crossover, measured on planar2's whole ``workspace`` command, is
-#: between 63,001 and 74,529 poses (docs/performance.md).
-NUMPY_MAX_POSES = 70_000
 #: What an analysis needs of the robot, the capabilities the rows of :data:`REFUSALS` are keyed on:
 #: ``hanging-solver`` it runs the hanging solver (a free effector's orientation found at its poses;
 #: point outlets); ``hanging-statics`` it reports a free effector's statics where it hangs (rigid
@@ -96,10 +93,9 @@ class Analysis:
     interference checks; ``orientations`` ``total`` | ``range`` (orientation workspaces) or
     None; ``max_tilt`` [deg] a tilt limit asked on the command line; ``objective`` and
     ``weights`` the tension distribution of ``pose``; ``engine`` one of :data:`ENGINES`;
-    ``poses`` the size of the grid to sweep (the engine's choice); ``stiffness`` the sweep adds
-    the least stiffness and the lowest natural frequency of every feasible pose; ``hold`` the
-    orientation is commanded at every pose, also of a free effector (one pose's statics,
-    :meth:`one_pose`).
+    ``stiffness`` the sweep adds the least stiffness and the lowest natural frequency of every
+    feasible pose; ``hold`` the orientation is commanded at every pose, also of a free effector
+    (one pose's statics, :meth:`one_pose`).
     """
 
     command: str = "workspace"
@@ -110,7 +106,6 @@ class Analysis:
     objective: str = "min-norm"
     weights: bool = False
     engine: str = "auto"
-    poses: int = 1
     stiffness: bool = False
     hold: bool = False
 
@@ -449,15 +444,9 @@ def tension_lower(tension_min, tension_floor, free_lengths) -> np.ndarray:
 
 
 def _engine(f: Facts, a: Analysis) -> str:
-    """``numpy`` where the closed form covers the analysis and is asked for, or chosen by ``auto``
-    for a grid of at most :data:`NUMPY_MAX_POSES` poses (numba's start-up would cost more than
-    the sweep; a process that has loaded the kernels for many sweeps asks for ``numba``);
-    ``numba`` otherwise."""
-    if a.engine == "numpy":
-        return "numpy"
-    if a.engine == "auto" and _numpy_covers(f, a) and a.poses <= NUMPY_MAX_POSES:
-        return "numpy"
-    return "numba"
+    """``numpy`` where the closed form of two cables covers the analysis (:func:`_numpy_covers`),
+    ``numba`` otherwise: each case has one implementation, whatever the process has loaded."""
+    return "numpy" if _numpy_covers(f, a) else "numba"
 
 
 def _tilt_limit(design: Design, f: Facts, a: Analysis) -> float | None:

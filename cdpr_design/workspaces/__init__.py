@@ -15,23 +15,23 @@ from typing import Callable
 
 from cdpr_design.model.design import Design, Grid
 from cdpr_design.statics.robot import ENGINES, KINDS, Analysis, Robot, resolve
-from cdpr_design.workspaces.engine import StraightSweep, load_kernels
+from cdpr_design.workspaces.engine import StraightSweep
 from cdpr_design.workspaces.grid import (CHUNK, MAX_POSES, Chunk, WorkspaceResult, check_grid_size, column_names,
                                          first_pose, make_grid, representative_pose)
 from cdpr_design.workspaces.plan import Plan, plan
 
 __all__ = ["CHUNK", "ENGINES", "KINDS", "MAX_POSES", "Chunk", "Plan", "WorkspaceResult", "column_names",
-           "load_kernels", "make_grid", "plan", "representative_pose", "robot_for", "run", "run_orientations",
+           "make_grid", "plan", "representative_pose", "robot_for", "run", "run_orientations",
            "warm_up"]
 
 
-def robot_for(design: Design, grid: Grid, kind: str = "static", interference: bool = False,
+def robot_for(design: Design, kind: str = "static", interference: bool = False,
               orientations: str | None = None, engine: str = "auto", max_tilt: float | None = None,
               stiffness: bool = False) -> Robot:
-    """The robot of a workspace sweep of ``design`` over ``grid`` (refused combinations raise an
+    """The robot of a workspace sweep of ``design`` (refused combinations raise an
     :class:`~cdpr_design.errors.InputError` with the reason; see :func:`~cdpr_design.statics.robot.resolve`)."""
     return resolve(design, Analysis(command="workspace", kind=kind, collisions=interference,
-                                    orientations=orientations, max_tilt=max_tilt, engine=engine, poses=grid.size,
+                                    orientations=orientations, max_tilt=max_tilt, engine=engine,
                                     stiffness=stiffness))
 
 
@@ -107,7 +107,7 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
     :func:`~cdpr_design.workspaces.plan.plan`.
     """
     g = _grid(design, step, grid, force)
-    robot = robot_for(design, g, kind, interference, None, engine, max_tilt, stiffness)
+    robot = robot_for(design, kind, interference, None, engine, max_tilt, stiffness)
     return plan(robot, g, orientation, tilt=tilt, solid=solid, frame_loads=frame_loads).run(on_chunk, progress, chunk,
                                                                                             keep_maps)
 
@@ -128,7 +128,7 @@ def run_orientations(design: Design, mode: str = "total", kind: str = "static", 
     :class:`cdpr_design.workspaces.orientation.OrientationSweep`.
     """
     g = _grid(design, step, grid, force)
-    robot = robot_for(design, g, kind, interference, mode, engine)
+    robot = robot_for(design, kind, interference, mode, engine)
     return plan(robot, g, orientation, orientations=orientations, solid=solid).run(on_chunk, progress, chunk,
                                                                                   keep_maps)
 

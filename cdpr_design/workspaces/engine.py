@@ -1,17 +1,13 @@
 """The straight-cable grid sweep: point outlets, no interference, one fixed orientation.
 
-Two engines compute the same rows:
+The robot's ``engine`` (:func:`cdpr_design.statics.robot.resolve`) says which of two
+implementations sweeps it; each case has exactly one:
 
-- ``numba``: the kernels of :mod:`cdpr_design.kernels` (any m, n, kind);
-- ``numpy``: the closed form of two cables and two wrench rows, vectorised
-  over each chunk with the same formulas in the same order (bit-identical
-  results, tested).
-
-The robot's ``engine`` (:func:`cdpr_design.statics.robot.resolve`) says which:
-``auto`` takes numpy for closed-form grids up to
-:data:`~cdpr_design.statics.robot.NUMPY_MAX_POSES` poses while the kernels are
-not loaded in the process: numba's start-up (its import and the cached
-kernels' load) would cost more than the sweep itself.
+- ``numpy``: two cables and two wrench rows (static or wrench-feasible): the
+  closed form t = W^-1 w, vectorised over each chunk (:func:`_planar2_numpy`),
+  without loading numba;
+- ``numba``: every other robot, by the kernels of :mod:`cdpr_design.kernels`
+  (any m, n, kind).
 """
 
 from __future__ import annotations
@@ -25,32 +21,22 @@ from cdpr_design.statics.robot import Robot, tension_lower
 from cdpr_design.workspaces.grid import Rows, grid3, grid_positions
 from cdpr_design.workspaces.parts import Base
 
-#: The kernel module whose import loads the sweep kernels (numba): the package
-#: :mod:`cdpr_design.kernels` itself is lazy (``kernels.parallel`` is imported without numba by
-#: the batch and optimize layers).
-LOADED = "cdpr_design.kernels.sweep"
-
 
 def kernels():
-    """The numba kernels, imported on first use (importing numba is slow): :data:`LOADED`
-    now, the rest of the (lazy) package as its names are used."""
+    """The numba kernels, imported on first use: the sweep kernels now, the rest of the (lazy)
+    package :mod:`cdpr_design.kernels` as its names are used."""
     import importlib
 
     from cdpr_design import kernels as K
 
-    importlib.import_module(LOADED)
+    importlib.import_module("cdpr_design.kernels.sweep")
     return K
-
-
-def load_kernels() -> None:
-    """Load the numba kernels now: for a process that will sweep many grids (a sweep worker),
-    where numba's start-up is repaid (it then resolves its robots with ``kernels_loaded``)."""
-    kernels()
 
 
 class StraightSweep(Base):
     """The base evaluator of straight cables from point outlets at one orientation ``ori`` (3,)
-    [rad]: the robot's engine, numpy (closed form) or the kernels; the arrays built once."""
+    [rad]: the robot's engine, numpy (the closed form of two cables) or the kernels; the arrays
+    built once."""
 
     positions = False  # the engines work from the grid's indices
 
@@ -61,8 +47,6 @@ class StraightSweep(Base):
         self.Rb = np.ascontiguousarray(robot.attachments @ R.T)
         self.wreq = wrench_vertices(design, robot.kind, ori)
         self.numpy = robot.engine == "numpy"
-        # the paper's case (two cables, two wrench rows) has a closed form
-        self.planar2 = robot.m == 2 and robot.n == 2 and robot.kind != "wrench-closure"
         self.K = None if self.numpy else kernels()
         self.wreq_used = self.wreq if robot.kind == "wrench-feasible" else self.wreq[:1].copy()
         self.lower, self.step, self.shape = grid3(g)
@@ -74,10 +58,6 @@ class StraightSweep(Base):
         if self.numpy:
             _planar2_numpy(grid_positions(self.g, start, cnt), self.Rb, r.outlet_points, self.wreq_used, r.tension_min,
                            r.tension_max, r.tension_floor, feas, marg, ten, lens)
-        elif self.planar2:
-            self.K.sweep_grid_planar2(start, cnt, self.lower, self.step, self.shape, self.Rb, r.outlet_points,
-                                      self.wreq_used, r.tension_min, r.tension_max, r.tension_floor, feas, marg,
-                                      ten, lens)
         else:
             K = self.K
             K.sweep_grid(K.GridPoses(start, self.lower, self.step, self.shape, self.Rb),
@@ -108,19 +88,23 @@ class StraightSweep(Base):
         return feas.astype(bool), marg
 
     def stats(self, rows: Rows, tpeak: np.ndarray) -> tuple:
-        if self.numpy:  # numba's start-up is what the numpy engine saves
+        if self.numpy:  # no numba in the process
             return _chunk_stats_numpy(rows.feasible, rows.margin, rows.tensions, rows.feasible.shape[0], tpeak)
         return self.K.chunk_stats(rows.feasible, rows.margin, rows.tensions, rows.feasible.shape[0], tpeak)
 
 
 def _planar2_numpy(pos, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensions, lengths):
-    """``kernels.sweep_grid_planar2`` vectorised with numpy: same formulas, same order.
+    """The rows of a robot with two cables and two wrench rows at positions ``pos`` (count, 2) [m].
 
-    Two cables, two wrench rows: t = W^-1 w in closed form, the capacity margin
+    ``Rb`` (2, 3) rotated attachments [m], ``A`` (2, 3) outlets [m], ``wreq`` (k, >=2) required
+    wrenches [N] (row 0 the static one), ``tmin``, ``tmax``, ``floor`` (2,) tension bounds [N] and
+    string floors [N/m^2].  t = W^-1 w in closed form, the capacity margin
     min_i min(t_i - t_min,i, t_max,i - t_i) / ||row_i(W^-1)||, the other rows of
     ``wreq`` (wrench-feasible) lowering the margin; t_min,i raised to ``floor``[i] L_i^2 where
-    ``floor``[i] > 0 (:func:`~cdpr_design.statics.robot.tension_lower`).  ``pos`` (count, 2) [m]
-    the positions; fills rows 0 .. count of the output buffers exactly as the kernel does.
+    ``floor``[i] > 0 (:func:`~cdpr_design.statics.robot.tension_lower`).  Fills rows 0 .. count of
+    the output buffers ``feasible`` (uint8), ``margin`` [N], ``tensions`` (NaN where a tension
+    leaves its bounds or the pose is rank deficient) and ``lengths`` [m], as the kernels fill
+    theirs for every other robot.
     """
     count = pos.shape[0]
     px, py = pos[:, 0], pos[:, 1]
@@ -154,7 +138,7 @@ def _planar2_numpy(pos, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensio
     # a zero-length cable or parallel cables: rank deficient, no margin, infeasible
     bad = (L0 <= 1e-12) | (L1 <= 1e-12) | (np.abs(det) <= _RANK_TOL)
     s[bad] = np.nan
-    s += 0.0  # -0.0 -> 0.0, as the kernel (np.minimum and min() differ on the sign of equal zeros)
+    s += 0.0  # -0.0 -> 0.0, as the kernels write it
     ok = s >= 0.0
     margin[:count] = s
     feasible[:count] = ok
@@ -162,12 +146,13 @@ def _planar2_numpy(pos, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensio
     tensions[:count, 1] = np.where(inb & ~bad, t1, np.nan)
 
 
-#: = ``kernels.RANK_TOL`` (a test checks): |det W| at or below it is rank deficient
+#: |det W| at or below it is rank deficient (= ``kernels.RANK_TOL``, the kernels' tolerance; a test checks)
 _RANK_TOL = 1e-10
 
 
 def _chunk_stats_numpy(feasible, margin, tensions, count, tpeak):
-    """``kernels.chunk_stats`` with numpy: (feasible count, min margin, max margin); raises ``tpeak``."""
+    """A chunk's (feasible count, min margin [N], max margin [N]) of its first ``count`` rows, as
+    ``kernels.chunk_stats`` gives them; raises ``tpeak`` (m,) [N] to the largest feasible tensions."""
     f = feasible[:count].astype(bool)
     nf = int(np.count_nonzero(f))
     if not nf:

@@ -1,7 +1,7 @@
 """The stiffness kernel's cost beside the sweep kernel's on the same grid.
 
 For each design, in this process on one thread: the grid sweep's kernel as the workspace sweep
-calls it (``kernels.sweep_grid``, or ``kernels.sweep_grid_planar2`` for two cables and two wrench
+calls it (``workspaces.engine.StraightSweep``: the kernels, or numpy's closed form for two cables and two wrench
 rows) over the design's grid in chunks, then the stiffness kernel
 (:func:`cdpr_design.statics.stiffness.grid_figures`: least stiffness and lowest natural frequency)
 on the same rows with the sweep's tensions and feasibility, CPU time, interleaved rounds, the
@@ -54,22 +54,17 @@ def passes(design):
     combos = combinations(design.m, design.n)
     lower, step, shape = grid3(g)
     arrays = st.sweep_arrays(design, ori)
-    planar2 = design.m == 2 and design.n == 2  # the sweep's closed form for two cables (as workspaces.engine)
+    from cdpr_design.statics.robot import resolve
+    from cdpr_design.workspaces.engine import StraightSweep
+
+    base = StraightSweep(resolve(design), ori, g)  # the closed form for two cables, else the kernels
     t_sweep = t_stiff = 0.0
     feasible = 0
     for start in range(0, g.size, CHUNK):
         cnt = min(CHUNK, g.size - start)
-        feas = np.empty(cnt, np.uint8)
-        marg = np.empty(cnt)
-        ten = np.empty((cnt, design.m))
-        lens = np.empty((cnt, design.m))
         c0 = time.process_time()
-        if planar2:
-            K.sweep_grid_planar2(start, cnt, lower, step, shape, Rb, A, wreq[:1].copy(), design.tension_min,
-                                 design.tension_max, design.string_floor, feas, marg, ten, lens)
-        else:
-            K.sweep_grid(start, cnt, lower, step, shape, Rb, A, design.rows, wreq, design.tension_min,
-                         design.tension_max, design.string_floor, combos, KINDS["static"], feas, marg, ten, lens)
+        rows = base.rows(start, cnt, None)
+        feas, ten = rows.feasible, rows.tensions
         c1 = time.process_time()
         kmin, flow = st.grid_figures(arrays, (lower, step, shape), start, ten, feas)
         c2 = time.process_time()

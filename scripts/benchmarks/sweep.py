@@ -34,7 +34,7 @@ def worker_startup() -> list[float]:
 
     ev = importlib.import_module("cdpr_design.design.evaluate")
     d, cat = spec.load(h.ROOT / "designs" / "planar2.yaml"), spec.load_catalogue()
-    ws.load_kernels()
+    import cdpr_design.kernels.sweep  # noqa: F401 - numba and the sweep kernels loaded before the clock
     parallel.set_threads(1)
     t1 = time.perf_counter()
     ev.evaluate(d, catalogue=cat)
