@@ -1,4 +1,4 @@
-"""The hanging effector (statics.hanging, kernels.hanging) against slow, independent references.
+"""The hanging effector (statics.hanging) against slow, independent references.
 
 References, none of which shares code with the implementation:
 
@@ -25,13 +25,14 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq, linprog, minimize, minimize_scalar
 
-from cdpr_design.kernels import hanging as K
 from cdpr_design.model import spec
 from cdpr_design.statics.robot import underconstrained
 from cdpr_design.statics import hanging as H
 from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.hanging import planar2, results
 from tests.conftest import DESIGNS
 from tests.helpers import NO_KERNELS
+from tests.reference import hanging_kernel as K
 from tests.reference.tilt_map import tilt_map
 
 G2 = np.array([0.0, -9.81, 0.0])
@@ -126,16 +127,28 @@ def ref_tilt(A, B, c, mass, p, n=4000):
     return best, out
 
 
+def closed_form(A, B, c, mass, g, P):
+    """The product's closed form (:mod:`cdpr_design.statics.hanging.planar2`) at positions P (k, 2)
+    [m]: (phi (k,) [rad], tensions (k, 2) [N], h (k,), status (k,), balanced orientations (k,)) of
+    the root it chooses (NaN where none)."""
+    phis, ts, hs, ok, degenerate = planar2.planar_two_cable(A, B, c, mass, g, P)
+    j, status, _, _ = planar2.choose(phis, ts, hs, ok, degenerate, mass * np.linalg.norm(g))
+    rows, good = np.arange(len(P)), status == results.OK
+    phi = np.where(good, phis[rows, j], np.nan)
+    t = np.where(good[:, None], np.maximum(ts[rows, j], 0.0), np.nan)
+    return phi, t, np.where(good, hs[rows, j], np.nan), status, ok.sum(axis=1)
+
+
 @pytest.mark.slow
-def test_kernel_against_instantaneous_centre_reference():
-    """Batched kernel = slow reference on random designs and positions (ambiguous
+def test_closed_form_against_instantaneous_centre_reference():
+    """The closed form = slow reference on random designs and positions (ambiguous
     poses - near-zero tension, near-neutral stability, ties - are skipped and counted)."""
     rng = np.random.default_rng(11)
     compared = skipped = 0
     for _ in range(12):
         A, B, c, mass, W, Hh = random_planar2(rng)
         P = np.column_stack([rng.uniform(-0.1 * W, 1.1 * W, 60), rng.uniform(0.0, Hh - 0.1, 60)])
-        phi, t, h, status, nbal = K.hanging_tilt_batch(A, B, c, mass, G2, P)
+        phi, t, h, status, nbal = closed_form(A, B, c, mass, G2, P)
         for k in range(len(P)):
             best, allb = ref_tilt(A, B, c, mass, P[k])
             wt = 9.81 * mass
@@ -148,31 +161,31 @@ def test_kernel_against_instantaneous_centre_reference():
             compared += 1
             assert nbal[k] == len(allb)
             if best is None:
-                assert status[k] != K.TILT_OK
+                assert status[k] != results.OK
                 continue
-            assert status[k] == K.TILT_OK
+            assert status[k] == results.OK
             assert phi[k] == pytest.approx(best[0], abs=1e-9)
             assert t[k] == pytest.approx(best[1], rel=1e-8, abs=1e-9 * wt)
             assert h[k] > 0
     assert compared >= 0.9 * (compared + skipped)
-    print(f"kernel vs reference: {compared} positions compared, {skipped} ambiguous skipped")
+    print(f"closed form vs reference: {compared} positions compared, {skipped} ambiguous skipped")
 
 
-def test_kernel_status_reasons():
+def test_closed_form_status_reasons():
     d = spec.load(DESIGNS / "planar2.yaml")
     A, B, c, g = d.outlets, d.attachments, np.asarray(d.effector.center_of_mass), np.asarray(d.gravity)
     P = np.array([[0.75, 0.8], [0.75, 2.5], [3.0, 1.0], [0.2, 1.45]])
-    phi, _, _, st, _ = K.hanging_tilt_batch(A, B, c, 1.0, g, P)
-    assert st[0] == K.TILT_OK and abs(phi[0]) < 1e-12
-    assert st[1] != K.TILT_OK and st[2] == K.TILT_PUSHING  # above the outlets / beyond them
+    phi, _, _, st, _ = closed_form(A, B, c, 1.0, g, P)
+    assert st[0] == results.OK and abs(phi[0]) < 1e-12
+    assert st[1] != results.OK and st[2] == results.PUSHING  # above the outlets / beyond them
     for s in st:
-        assert isinstance(K.TILT_REASONS[s], str)
+        assert isinstance(results.REASONS[s], str)
     res = [H.hanging_pose(d, p) for p in P]
-    assert [r.feasible for r in res] == [s == K.TILT_OK for s in st]
+    assert [r.feasible for r in res] == [s == results.OK for s in st]
     assert "pushing" in res[2].reason
 
 
-def test_hanging_pose_matches_kernel():
+def test_hanging_pose_matches_the_reference_kernel():
     rng = np.random.default_rng(5)
     for _ in range(4):
         A, B, c, mass, W, Hh = random_planar2(rng)
@@ -204,11 +217,11 @@ def test_instantaneous_centre():
     for _ in range(6):
         A, B, c, mass, W, Hh = random_planar2(rng)
         P = np.column_stack([rng.uniform(0.1 * W, 0.9 * W, 50), rng.uniform(0, Hh - 0.3, 50)])
-        phi, _, _, st, _ = K.hanging_tilt_batch(A, B, c, mass, G2, P)
-        for k in np.flatnonzero(st == K.TILT_OK):
+        phi, _, _, st, _ = closed_form(A, B, c, mass, G2, P)
+        for k in np.flatnonzero(st == results.OK):
             assert instant_centre_offset(A, B, c, P[k], phi[k]) < 1e-9
             n += 1
-        for k in np.flatnonzero(st == K.TILT_OK)[:5]:
+        for k in np.flatnonzero(st == results.OK)[:5]:
             rho = np.linalg.norm(A[:, :2] - P[k] - B[:, :2] @ rot2(phi[k]).T, axis=1)
             r = H.fk_arrays(A, B, c, mass, G2, rho, True)
             if not r.slack:

@@ -3,8 +3,9 @@ forward problem, against slow independent references.
 
 References (none shares code with the implementation):
 
-* the numba kernel ``kernels.hanging.hanging_tilt_batch`` for the numpy twin (and, in
-  test_hanging.py, the kernel against a brute-force instantaneous-centre scan);
+* the compiled one-position-at-a-time form of the planar two-cable method,
+  ``tests/reference/hanging_kernel.py``, for the product's vectorised closed form (and, in
+  test_hanging.py, the closed form against a brute-force instantaneous-centre scan);
 * scipy ``least_squares`` on force and moment balance from many random starts, per set of
   taut cables, with its own rotations (scipy's Rotation) and cross products; stability by
   scipy SLSQP energy minimisation started from perturbed poses under the same lengths
@@ -25,7 +26,6 @@ import pytest
 from scipy.optimize import least_squares, minimize
 from scipy.spatial.transform import Rotation
 
-from cdpr_design.kernels import hanging as K
 from cdpr_design.kernels.pose import Outputs, Statics
 from cdpr_design.model import spec
 from cdpr_design.statics import hanging as H
@@ -35,20 +35,22 @@ from cdpr_design.statics.hanging.balance import Balance
 from cdpr_design.statics import kinematics as kin
 from cdpr_design import api
 from tests.helpers import DESIGNS, NO_KERNELS, ROOT
+from tests.reference import hanging_kernel as K
 from tests.test_hanging import G2, G3, check_equilibrium, random_planar2
 
 UP3 = np.array([0.0, 0.0, 1.0])
 
 
-def test_status_codes_match_the_kernel():
+def test_status_codes_match_the_reference():
     assert (results.OK, results.PUSHING, results.UNSTABLE, results.NO_BALANCE, results.DEGENERATE) == (
         K.TILT_OK, K.TILT_PUSHING, K.TILT_UNSTABLE, K.TILT_NO_BALANCE, K.TILT_DEGENERATE)
     assert len(results.REASONS) == len(K.TILT_REASONS)
 
 
-def test_numpy_twin_equals_the_kernel():
-    """Same roots, tensions, stability and choice on random designs, positions inside and
-    outside their frames (the kernel is tested against a brute-force scan in test_hanging)."""
+def test_closed_form_equals_the_reference_kernel():
+    """The product's closed form (at a unit weight, scaled back) and the reference: the same
+    roots, tensions, stability and choice on random designs, positions inside and outside their
+    frames (the closed form is also held against a brute-force scan in test_hanging)."""
     rng = np.random.default_rng(21)
     compared = 0
     for _ in range(20):
@@ -56,21 +58,14 @@ def test_numpy_twin_equals_the_kernel():
         P = np.column_stack([rng.uniform(-0.2 * W, 1.2 * W, 300), rng.uniform(-0.2 * Hh, 1.1 * Hh, 300)])
         phi, t, h, status, nbal = K.hanging_tilt_batch(A, B, c, mass, G2, P)
         geo = hg.Geometry(A, B, c, mass, G2)
-        got = at_positions.hanging_orientations(geo, P, True, engine="numpy")
+        got = at_positions.hanging_orientations(geo, P, True)
         assert np.array_equal(got.status, status)
         ok = status == K.TILT_OK
         compared += int(ok.sum())
         np.testing.assert_allclose(got.orientation[ok], phi[ok], rtol=0, atol=1e-12)
         np.testing.assert_allclose(got.tensions[ok], t[ok], rtol=1e-10, atol=1e-10 * mass)
         np.testing.assert_allclose(got.hessian_min[ok], h[ok], rtol=1e-8)
-        # the numba engine of hang() is the kernel itself, run for a unit weight and scaled back
-        nb = at_positions.hanging_orientations(geo, P, True, engine="numba")
-        g = np.asarray(G2, float)
-        phi1, t1, h1, status1, _ = K.hanging_tilt_batch(A, B, c, 1.0, g / np.linalg.norm(g), P)
-        assert np.array_equal(nb.status, status1) and np.array_equal(status1, status)
-        np.testing.assert_allclose(nb.orientation[ok], phi1[ok], rtol=0, atol=1e-15)  # via a rotation matrix
-        np.testing.assert_array_equal(nb.tensions[ok], t1[ok] * geo.weight)
-        np.testing.assert_allclose(nb.orientation[ok], phi[ok], rtol=0, atol=1e-13)
+        assert np.isnan(got.orientation[~ok]).all() and np.isnan(got.tensions[~ok]).all()
     assert compared > 2000
 
 
@@ -438,9 +433,11 @@ def test_eval_rotated_equals_evaluate_pose(name):
     m = d.m
     feas, marg, ten, L = np.empty(k, np.uint8), np.empty(k), np.empty((k, m)), np.empty((k, m))
     R[3] = np.nan  # a pose where the effector cannot hang
-    K.eval_rotated(P, R, np.ascontiguousarray(d.attachments),
-                   Statics(d.outlets, d.rows, d.tension_min, d.tension_max, d.string_floor, combinations(m, d.n), 0),
-                   wreq, Outputs(feas, marg, ten, L))
+    from cdpr_design.kernels.hanging import eval_rotated
+
+    eval_rotated(P, R, np.ascontiguousarray(d.attachments),
+                 Statics(d.outlets, d.rows, d.tension_min, d.tension_max, d.string_floor, combinations(m, d.n), 0),
+                 wreq, Outputs(feas, marg, ten, L))
     assert feas[3] == 0 and np.isnan(marg[3]) and np.all(np.isnan(L[3]))
     n_feasible = 0
     for i in set(range(k)) - {3}:

@@ -20,7 +20,6 @@ import numpy as np
 import pytest
 
 from cdpr_design import workspaces as ws
-from cdpr_design.kernels import hanging as K
 from cdpr_design.model import spec
 from cdpr_design.statics import hanging as H
 from cdpr_design.statics import kinematics as kin
@@ -28,6 +27,7 @@ from cdpr_design import api
 from cdpr_design.statics.robot import resolve
 from cdpr_design.workspaces.engine import StraightSweep
 from cdpr_design.workspaces.plan import Plan
+from tests.reference import hanging_kernel as K
 
 
 def straight_sweep(design, kind, g, ori, on_chunk=None, chunk=1000):
@@ -223,7 +223,7 @@ def test_free_workspace_rows_are_the_hanging_pose_at_each_position(free_rows):
 
 
 def test_free_feasibility_is_the_hanging_statics(free_rows):
-    """feasible = it hangs (kernel) with both tensions within 0-20 N; tensions are the hanging ones."""
+    """feasible = it hangs (the reference kernel) with both tensions within 0-20 N; tensions are the hanging ones."""
     path, out, summary, header, rows = free_rows
     d = spec.load(path)
     a = np.array([[float(v) if v != "" else np.nan for v in r] for r in rows])

@@ -21,7 +21,7 @@ module             what
 ``codes``          the bit codes kernels return (no numba: the layers above name them freely)
 ``sweep``          grid and point sweeps, per-chunk statistics
 ``parallel``       blocks of rows on threads (every parallel kernel)
-``hanging``        hanging orientation of a planar two-cable body; statics at per-pose orientations
+``hanging``        statics at per-pose orientations (a hanging effector's)
 ``catenary``       Irvine's elastic catenary of one cable: ends from forces, forces from ends
 ``cable_shape``    one heavy elastic cable at a given tension: its shape, its least tension
 ``sagging``        statics of a pose with sagging cables; the sagging grid sweep

@@ -85,20 +85,15 @@ class Hanger:
         self.planar = planar
         self.design = design
         self.nominal = kin.rotation_matrix(*ori)
-        # the planar two-cable kernel where the robot's sweep runs the kernels (a hanging
-        # effector's statics always do)
-        two = planar and design.m == 2 and not H.is_point_mass(B)
-        numba = robot.engine == "numba"
-        self.engine = "numba" if two and numba else "numpy"
-        # the numpy search on the kernels' threads where the sweep runs the kernels anyway (their
-        # thread setting and pool are then there); the planar two-cable kernel runs on them itself
-        self.threaded = numba and self.engine == "numpy"
+        # on the kernels' threads where the sweep runs the kernels anyway (their thread setting
+        # and pool are then there; a hanging effector's statics always do)
+        self.threaded = robot.engine == "numba"
 
     def __call__(self, P3):
         if self.threaded:
             h = _hang_in_blocks(self.geo, P3, self.planar, self.nominal)
         else:
-            h = hanging_orientations(self.geo, P3, self.planar, nominal=self.nominal, engine=self.engine)
+            h = hanging_orientations(self.geo, P3, self.planar, nominal=self.nominal)
         ori = h.orientation.reshape(len(P3), -1)
         extra = {"tilt": h.tilt_deg}
         for j, name in enumerate(columns(self.design)[1:]):

@@ -1,8 +1,8 @@
-"""The hanging orientation of a planar body on two cables over a grid, straight from the numba kernel.
+"""The hanging orientation of a planar body on two cables over a grid, from the reference kernel.
 
 The tests' tilt map of a design (the published figures of planar2 in
 tests/test_hanging.py): every position of a grid over the frame through
-:func:`cdpr_design.kernels.hanging.hanging_tilt_batch`.  The product's grid of
+:func:`tests.reference.hanging_kernel.hanging_tilt_batch`.  The product's grid of
 the hanging tilt is the workspace sweep's (``tilt`` column, ``tilt_map.png``);
 this stays beside the tests as the kernel's plain wrapper.  Units: SI (m, N,
 rad); ``tilt_deg`` in degrees.
@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cdpr_design.kernels import hanging as K
 from cdpr_design.statics.hanging import design_arrays
 from cdpr_design.statics.hanging.geometry import checked_geometry
+from tests.reference import hanging_kernel as K
 
 
 @dataclass(frozen=True)
@@ -24,7 +24,7 @@ class TiltMap:
     """Hanging orientation over a grid of positions (planar body on two cables).
 
     ``axes`` the x and y samples [m]; ``phi`` [rad], ``tilt_deg`` [deg],
-    ``tensions`` [N] (..., 2) and ``status`` (``kernels.hanging.TILT_*``) on the
+    ``tensions`` [N] (..., 2) and ``status`` (``hanging_kernel.TILT_*``) on the
     grid (shape (nx, ny)); ``within_limits`` where the hanging tensions respect
     the design's limits.
     """

@@ -24,7 +24,7 @@ One module a concept (SI units throughout; ``tilt_deg`` in degrees):
 * :mod:`~cdpr_design.statics.hanging.family` - the marches along a spatial
   body's family of balanced orientations on four or five cables;
 * :mod:`~cdpr_design.statics.hanging.planar2` - the closed form of a planar
-  body on two cables with numpy (the twin of :mod:`cdpr_design.kernels.hanging`);
+  body on two cables, vectorised with numpy;
 * :mod:`~cdpr_design.statics.hanging.at_positions` - the orientation it hangs
   in at many commanded positions (the workspaces' search) and at one
   (:func:`hanging_pose_arrays`);

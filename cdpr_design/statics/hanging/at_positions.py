@@ -9,9 +9,8 @@ answers this for many positions at once, with numpy, and :func:`hanging_pose_arr
 at one position with the other balanced orientations found:
 
 * a planar rigid body on two cables: every balanced orientation is a root of a
-  degree-2 trigonometric polynomial, the method of
-  :mod:`cdpr_design.kernels.hanging` (``engine="numba"``) or its numpy form
-  :mod:`cdpr_design.statics.hanging.planar2` (the tests hold them equal);
+  degree-2 trigonometric polynomial, in closed form
+  (:mod:`cdpr_design.statics.hanging.planar2`);
 * a point mass (every attachment at one point): the orientation changes no
   cable, and the centre of mass hangs straight below the attachment point;
 * any other rigid body (a planar one on one cable, a spatial one on one to
@@ -38,7 +37,7 @@ the frame's, |phi| for planar bodies); of equally tilted ones (a level body
 that could hang at any yaw) the one nearest the nominal orientation
 (:func:`~cdpr_design.statics.hanging.geometry.tilt_rank`).  Status codes
 (:data:`~cdpr_design.statics.hanging.results.OK`, ...) say why a position has
-none; they equal the kernel's ``TILT_*`` codes (a test checks).
+none.
 
 Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging.geometry`.
 
@@ -90,14 +89,12 @@ def point_mass_many(geo: hg.Geometry, P, planar: bool, R):
 # the hanging orientation: dispatch and choice
 # ----------------------------------------------------------------------------
 
-def hanging_orientations(geo: hg.Geometry, P, planar: bool, *, nominal=None, engine: str = "numpy",
+def hanging_orientations(geo: hg.Geometry, P, planar: bool, *, nominal=None,
                          alternatives: bool = False) -> HangingOrientations:
     """The hanging orientation at positions ``P`` (k, 2|3) [m] (see the module doc).
 
     ``nominal`` (3, 3): the orientation the Newton search starts about and is
-    pulled towards (default level, R = I).  ``engine``: ``numpy``, or
-    ``numba`` for the planar two-cable kernel (same answers; the other
-    bodies are always numpy).  ``alternatives``: also list, per position, the
+    pulled towards (default level, R = I).  ``alternatives``: also list, per position, the
     other balanced orientations with tensions >= 0 (small k only).
     """
     P = np.asarray(P, float).reshape(len(P), -1)
@@ -114,7 +111,7 @@ def hanging_orientations(geo: hg.Geometry, P, planar: bool, *, nominal=None, eng
         w = geo.weight
         unit = hg.Geometry(geo.A, geo.B, geo.c, 1.0, -up)
         out = (_hang_point(unit, P3, planar, nominal, alternatives) if point
-               else _hang_planar2(unit, P3, engine, alternatives))
+               else _hang_planar2(unit, P3, alternatives))
     else:
         w = 1.0
         out = _hang_general(geo, P3, planar, nominal, alternatives)
@@ -129,14 +126,8 @@ def _statuses(found, pull, balanced):
     return np.where(found, OK, np.where(pull, UNSTABLE, np.where(balanced, PUSHING, NO_BALANCE))).astype(np.int8)
 
 
-def _hang_planar2(geo, P, engine, alternatives):
+def _hang_planar2(geo, P, alternatives):
     k = len(P)
-    if engine == "numba" and not alternatives:
-        from cdpr_design.kernels import hanging as K  # numba, on first use
-
-        phi, t, h, status, _ = K.hanging_tilt_batch(geo.A, geo.B, geo.c, geo.mass, geo.g,
-                                                    np.ascontiguousarray(P[:, :2]))
-        return hg.rot_z_many(phi), t, status.astype(np.int8), h, []
     phis, ts, hs, ok, degenerate = planar2.planar_two_cable(geo.A, geo.B, geo.c, geo.mass, geo.g, P)
     j, status, pull, stable = planar2.choose(phis, ts, hs, ok, degenerate, geo.weight)
     rows = np.arange(k)

@@ -1,19 +1,48 @@
 """The hanging orientation of a planar body on two taut cables, in closed form with numpy.
 
-Every balanced orientation phi at a commanded position is a root of the
-moment residual M(phi), a degree-2 trigonometric polynomial (the method and
-the formulas of :mod:`cdpr_design.kernels.hanging`, which holds them once
-per position in numba).  :func:`planar_two_cable` runs them vectorised over
-many positions with numpy, with the kernel's order and tolerances, and
-:func:`choose` makes the kernel's choice: of the stable roots with tensions
->= 0, the one closest to level.  The tests hold the two equal.
+A planar rigid body hangs from two cables (outlets a_1, a_2 in the frame,
+attachments b_1, b_2 in platform coordinates, centre of mass c, mass m,
+gravity g in the x-y plane).  Its orientation phi [rad] about z is not
+commanded: at a given position p of the platform origin the body turns until
+it is in equilibrium with both cables taut, which happens when the two cable
+lines and the vertical through the centre of mass meet in one point
+(Carricato & Merlet 2013).  :func:`planar_two_cable` finds every such
+orientation at many positions at once, vectorised over them, and
+:func:`choose` picks the answer.
 
-It is on the product path where numba is not loaded: a planar two-cable
-sweep that the numpy engine runs (numba's import and the cached kernels'
-load cost more than such a sweep here), and the ``pose`` command, which also lists the other balanced
-orientations (``alternatives``) that the kernel does not return.
+Equations (all in the plane, ``cr(a, b) = a_x b_y - a_y b_x``).  With
+R = R(phi), v_i = a_i - p - R b_i (cable vector), r_i = R (b_i - c)
+(attachment seen from the centre of mass) and f = -m g, force balance
+tau_1 v_1 + tau_2 v_2 = f gives the force densities (tension / length)
+
+    tau_1 = cr(f, v_2) / D,   tau_2 = cr(v_1, f) / D,   D = cr(v_1, v_2),
+
+and the moment about the centre of mass, multiplied by D, is
+
+    M(phi) = cr(f, v_2) cr(r_1, v_1) + cr(v_1, f) cr(r_2, v_2).
+
+Each factor is affine in (cos phi, sin phi), so M is a trigonometric
+polynomial of degree 2 and has at most four roots on the circle.  Its five
+coefficients come exactly from five samples (a discrete Fourier transform);
+the roots are the unit-modulus eigenvalues of the companion matrix of the
+quartic z^2 M(z) (z = e^{i phi}), polished by Newton's method on M itself.
+A root is an equilibrium when both tensions t_i = tau_i |v_i| are >= 0; it is
+stable when the Hessian of the Lagrangian U + sum t_i (|v_i| - rho_i),
+U = -m g.(p + R c), is positive on the one-dimensional tangent space of the
+two length constraints in (x, y, phi) - the reduced-Hessian test of
+Carricato & Merlet (2013).  Of the stable equilibria with non-negative
+tensions, the one closest to level (smallest |phi|) is the answer; the
+``pose`` command also lists the others (``alternatives``).
 
 Units: SI (m, N, rad); conventions of :mod:`cdpr_design.statics.hanging.geometry`.
+
+References
+----------
+M. Carricato, J.-P. Merlet, "Stability analysis of underconstrained
+cable-driven parallel robots", IEEE Trans. Robotics 29(1), 288-296, 2013.
+G. Abbasnejad, M. Carricato, "Direct geometrico-static problem of
+underconstrained cable-driven parallel robots with n cables", IEEE Trans.
+Robotics 31(2), 468-478, 2015.
 """
 
 from __future__ import annotations
@@ -41,7 +70,8 @@ def _geometry2(phi, A, B, c, px, py):
 
 
 def _moment2(phi, A, B, c, fx, fy, px, py):
-    """M(phi) of kernels.hanging.moment_residual, broadcast over arrays."""
+    """M(phi) [N^2 m^3] (module notes): D times the moment about the centre of mass of the cable
+    forces that balance the weight, zero at a balanced orientation; broadcast over arrays."""
     v1, v2, rb1, rb2, rc = _geometry2(phi, A, B, c, px, py)
     m1 = _cr(rb1[0] - rc[0], rb1[1] - rc[1], v1[0], v1[1])
     m2 = _cr(rb2[0] - rc[0], rb2[1] - rc[1], v2[0], v2[1])
@@ -50,7 +80,9 @@ def _moment2(phi, A, B, c, fx, fy, px, py):
 
 def _trig_roots(coef):
     """Roots phi (k, 4) (NaN padded) of the trigonometric polynomial with coefficients
-    ``coef`` (5, k) and a flag (k,) where M vanishes identically (kernels.hanging.trig_roots)."""
+    ``coef`` (5, k) and a flag (k,) where M vanishes identically: the unit-modulus (within 1e-3)
+    eigenvalues of the companion matrix of z^2 M(z), its degree lowered where the leading
+    coefficients vanish (relative 1e-13)."""
     k = coef.shape[1]
     scale = np.abs(coef).sum(axis=0)
     c4 = 0.5 * (coef[3] - 1j * coef[4])
@@ -79,7 +111,8 @@ def _trig_roots(coef):
 
 
 def _polish2(phi, coef, A, B, c, fx, fy, px, py):
-    """Eight Newton steps on M at most (kernels.hanging.polish_root); (phi, |M(phi)|)."""
+    """Newton's method on M (derivative from the coefficients), eight steps at most; (phi in
+    (-pi, pi], |M(phi)|)."""
     active = np.isfinite(phi)
     for _ in range(8):
         if not active.any():
@@ -97,7 +130,9 @@ def _polish2(phi, coef, A, B, c, fx, fy, px, py):
 
 
 def _equilibrium2(phi, A, B, c, mass, gx, gy, px, py):
-    """Tensions, reduced Hessian h and a geometry flag (kernels.hanging.equilibrium_at)."""
+    """Tensions t1, t2 [N] from force balance, the reduced Hessian h (the Lagrangian's second
+    derivative along the unit tangent of the two length constraints in (x, y, phi); > 0: stable)
+    and ok, False where a cable has zero length or the cables are parallel."""
     fx, fy = -mass * gx, -mass * gy
     v1, v2, rb1, rb2, rc = _geometry2(phi, A, B, c, px, py)
     L1, L2 = np.hypot(*v1), np.hypot(*v2)
@@ -128,8 +163,8 @@ def planar_two_cable(A, B, c, mass, g, P):
     ``A``, ``B`` (2, >=2) outlets and attachments [m], ``c`` centre of mass
     (platform) [m], ``mass`` [kg], ``g`` gravity [m/s^2].  Returns (phi (k, 4)
     [rad], tensions (k, 4, 2) [N], h (k, 4) reduced Hessian, ok (k, 4): a real
-    root with a proper geometry, degenerate (k,)).  Same formulas, order and
-    tolerances as :func:`cdpr_design.kernels.hanging.hanging_tilt`.
+    root with a proper geometry, degenerate (k,): M is constant -- no orientation or every
+    one balances -- or not finite).  NaN-padded where a position has fewer than four roots.
     """
     A, B, c, g, P = (np.asarray(x, float) for x in (A, B, c, g, P))
     px, py = P[:, 0], P[:, 1]
@@ -151,7 +186,7 @@ def planar_two_cable(A, B, c, mass, g, P):
 
 
 def choose(phi, t, h, ok, degenerate, weight):
-    """The kernel's choice among the roots of :func:`planar_two_cable` (phi, t, h, ok (k, 4),
+    """The answer among the roots of :func:`planar_two_cable` (phi, t, h, ok (k, 4),
     degenerate (k,); ``weight`` [N]): of the stable roots with t >= 0, the one closest to level.
     Returns (its column j (k,), status (k,) int8, pulling (k, 4), stable (k, 4))."""
     ttol = 1e-9 * weight
