@@ -263,7 +263,7 @@ def test_a_failed_write_leaves_no_file(tmp_path):
 
 
 def test_header_of_a_table_without_rows(tmp_path):
-    OutputDir(tmp_path).write_csv("e.csv", ["a", "b,c"], [])
+    OutputDir(tmp_path).write_columns("e.csv", {"a": (), "b,c": ()})
     assert (tmp_path / "e.csv").read_text() == 'a,"b,c"\n'
 
 

@@ -14,7 +14,8 @@ from cdpr_design.cli import env
 from cdpr_design.plots import worker as pw
 from cdpr_design.errors import InputError
 from cdpr_design.io.files import OutputDir
-from cdpr_design.jobs.workspace import save_workspace_pictures
+from cdpr_design.jobs.common import save_pictures
+from cdpr_design.jobs.workspace import workspace_pictures
 from cdpr_design.plots import workspace as wsplots
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
@@ -174,7 +175,7 @@ def test_worker_refuses_foreign_file_before_drawing(tmp_path, result):
     out = OutputDir(tmp_path)
     (tmp_path / "tension_map.png").write_text("mine")
     with pytest.raises(InputError, match="was not written by cdpr-design"):
-        save_workspace_pictures(out, result)
+        save_pictures(out, workspace_pictures(result))
     assert not (tmp_path / "workspace.png").exists()
     assert (tmp_path / "tension_map.png").read_text() == "mine"
 

@@ -39,6 +39,7 @@ from cdpr_design import api
 from cdpr_design.statics.interference import HIT_NAMES, check_pose
 
 from .helpers import add_pulleys, invoke, ipanema3_data, planar2_raw, planar4_cables, planar4_orient, write_spec, resolved
+from .reference.kinematics import lengths_many
 
 
 def planar2(radius=None):
@@ -182,7 +183,7 @@ def test_trajectory_radius_to_zero_is_point_outlet(make, name):
 def test_trajectory_speeds_are_derivatives_of_pulley_lengths(make, radius, name):
     d, d0 = make(radius), make(None)
     s = tr.sample(resolved(d, "motion"), name)
-    ik = kin.lengths_many(d, s.pose) if not d.motion.rotational else \
+    ik = lengths_many(d, s.pose) if not d.motion.rotational else \
         np.array([kin.inverse_kinematics(d, p) for p in s.pose[::5]])
     np.testing.assert_allclose(s.lengths[:: (1 if not d.motion.rotational else 5)], ik, rtol=0, atol=1e-10)
     t, L = s.time, s.lengths

@@ -13,7 +13,6 @@ from hypothesis import strategies as st
 
 from cdpr_design.design import envelope as ev
 from cdpr_design.design import sizing as sz
-from cdpr_design.design import winch as wn
 from cdpr_design.model import catalogue as cat
 from cdpr_design.model import spec
 from cdpr_design.errors import InputError, SpecError
@@ -88,8 +87,9 @@ def test_paper_tension_limit_from_the_motor(base, catalogue):
     res = sz.size_motors(resolved(d, "size-motors"), catalogue)
     assert all(a.implied_tension_max == pytest.approx(20.0, rel=1e-12) for a in res.axes)
     assert all(a.tension_max == 20.0 for a in res.axes)
-    assert wn.drum_radius_for(20.0, catalogue.motor("AM8112-0F21-EL7211").usable_peak_torque) == pytest.approx(0.036)
-    assert wn.drum_radius_for(20.0, catalogue.motor("AM8112-0F21").usable_peak_torque) == pytest.approx(0.066)
+    # the drum radius at which a torque holds 20 N: r = tau / t
+    assert catalogue.motor("AM8112-0F21-EL7211").usable_peak_torque / 20.0 == pytest.approx(0.036)
+    assert catalogue.motor("AM8112-0F21").usable_peak_torque / 20.0 == pytest.approx(0.066)
     # the peak tension over the task box with the acceleration requirement stays below it
     assert all(a.peak_tension < 20.0 and a.peak_torque_margin > 1.0 for a in res.axes)
 

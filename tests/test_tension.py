@@ -14,6 +14,7 @@ import cdpr_design as cd
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics import tension as T
 
+from .reference.tension import capacity_margin
 from .reference_pose import analyse_pose
 
 from .helpers import DESIGNS, invoke
@@ -122,8 +123,8 @@ def test_wrench_feasible_kind_uses_every_vertex():
     rw = analyse_pose(IPANEMA1, pose, kind="wrench-feasible")
     assert rw.wrenches.shape == (1 + 2 ** 6, 6)
     assert rw.margin <= rs.margin
-    assert rw.margin == pytest.approx(T.capacity_margin(rw.W, rw.wrenches, IPANEMA1.tension_min,
-                                                       IPANEMA1.tension_max))
+    assert rw.margin == pytest.approx(capacity_margin(rw.W, rw.wrenches, IPANEMA1.tension_min,
+                                                     IPANEMA1.tension_max))
 
 
 # ----------------------------------------------------------------------------

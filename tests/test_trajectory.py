@@ -16,6 +16,7 @@ from cdpr_design.motion import trajectory as tr
 from cdpr_design.model.design import Trajectory
 
 from .helpers import PLANAR2, csv_header, invoke, point_mass, static_tensions, write_spec, resolved
+from .reference.kinematics import length_rates
 
 REL = 1e-9
 
@@ -152,7 +153,7 @@ def rigid_1r2t():
 
 def test_rotating_path_against_per_pose_kinematics():
     """1R2T polyline that turns while it moves: vectorised lengths, speeds and inertial tensions
-    against kinematics.length_rates / inertial_wrench / structure_matrix pose by pose."""
+    against reference.kinematics.length_rates / inertial_wrench / structure_matrix pose by pose."""
     d = rigid_1r2t()
     traj = Trajectory(name="r", type="polyline", speed=0.4, acceleration=3.0,
                       waypoints=((1.2, 1.0, 0.0), (1.6, 1.2, 0.3), (1.4, 0.9, -0.2)))
@@ -161,7 +162,7 @@ def test_rotating_path_against_per_pose_kinematics():
     for k in idx:
         p, v, a = s.pose[k], s.velocity[k], s.acceleration[k]
         np.testing.assert_allclose(s.lengths[k], kin.inverse_kinematics(d, p), rtol=1e-12)
-        np.testing.assert_allclose(s.cable_speed[k], kin.length_rates(d, p, v), atol=1e-12)
+        np.testing.assert_allclose(s.cable_speed[k], length_rates(d, p, v), atol=1e-12)
         W = kin.structure_matrix(d, p)
         w_req = kin.required_wrench(d, p) - kin.inertial_wrench(
             d, p, a[:2], angular_velocity=[0, 0, v[2]], angular_acceleration=[0, 0, a[2]])
@@ -223,7 +224,7 @@ def test_feasibility_flag_tracks_tension_bounds(planar2):
 
 
 def test_spatial_3r3t_speeds_match_per_pose():
-    """3R3T: vectorised cable speeds against kinematics.length_rates (Euler rates)."""
+    """3R3T: vectorised cable speeds against reference.kinematics.length_rates (Euler rates)."""
     outs = [(-1, -1, 2), (1, -1, 2), (1, 1, 2), (-1, 1, 2), (-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
     att = [(-.1, -.1, .1), (.1, -.1, .1), (.1, .1, .1), (-.1, .1, .1),
            (-.1, -.1, -.1), (.1, -.1, -.1), (.1, .1, -.1), (-.1, .1, -.1)]
@@ -232,7 +233,7 @@ def test_spatial_3r3t_speeds_match_per_pose():
                       waypoints=((0, 0, 1, 0, 0, 0), (0.2, 0.1, 1.1, 0.1, -0.1, 0.2)))
     s = tr.sample(resolved(d, "motion"), traj)
     for k in np.linspace(0, len(s) - 1, 15).astype(int):
-        np.testing.assert_allclose(s.cable_speed[k], kin.length_rates(d, s.pose[k], s.velocity[k]),
+        np.testing.assert_allclose(s.cable_speed[k], length_rates(d, s.pose[k], s.velocity[k]),
                                    atol=1e-12)
 
 

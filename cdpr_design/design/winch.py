@@ -97,9 +97,3 @@ def implied_tension(torque: float, drum_radius: float, gear_ratio: float = 1.0,
     the motors" (Rivera et al., section 3): this is that relation, inertia left out.
     """
     return torque * gear_ratio * efficiency / drum_radius
-
-
-def drum_radius_for(tension: float, torque: float, gear_ratio: float = 1.0,
-                    efficiency: float = 1.0) -> float:
-    """The drum radius [m] at which ``torque`` [N m] holds ``tension`` [N]: r = tau i eta / t."""
-    return torque * gear_ratio * efficiency / tension

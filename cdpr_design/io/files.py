@@ -48,7 +48,7 @@ import json
 import logging
 import os
 from pathlib import Path
-from typing import Callable, Iterable, Sequence
+from typing import Callable, Sequence
 
 from cdpr_design.errors import InputError, WriteError
 from cdpr_design.io.atomic import AtomicFile, write_text_atomic
@@ -242,12 +242,6 @@ class OutputDir:
         """``data`` as indented JSON (numpy scalars and arrays as numbers and lists, NaN and
         infinities as null)."""
         return self.write_text(name, json_text(data, indent=2) + "\n")
-
-    def write_csv(self, name: str, header: Sequence[str], rows: Iterable[Sequence]) -> Path:
-        """A CSV of ``rows`` under ``header`` (cells as :func:`~cdpr_design.io.tables.fmt` writes them)."""
-        rows = [list(r) for r in rows]
-        cols = list(zip(*rows)) if rows else [()] * len(header)
-        return self.write_columns(name, dict(zip(header, cols)), names=header)
 
     def write_columns(self, name: str, columns: dict, names: Sequence[str] | None = None,
                       metadata: dict | None = None, compiled: bool | None = None) -> Path:

@@ -10,7 +10,7 @@ import numpy as np
 
 from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.solid import solid_names, write_solid
-from cdpr_design.jobs.common import Progress, output_dir, save_pictures, stage, submit_pictures
+from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
 from cdpr_design.jobs.tables import Timings, grid_metadata, table_metadata
 from cdpr_design.plots import workspace as wsplots
 from cdpr_design.plots.hanging import tilt_figure
@@ -186,8 +186,3 @@ def cable_model_picture(result) -> tuple:
                    orientation=result.orientation, force=True, interference=collisions, engine=engine,
                    tilt=False)
     return ("cable_models.png", wsplots.cable_model_figure, (result, ideal))
-
-
-def save_workspace_pictures(out: OutputDir, result, worker: PictureWorker | None = None) -> list[Path]:
-    """The PNGs of :func:`workspace_pictures` (drawn by ``worker`` if given)."""
-    return save_pictures(out, workspace_pictures(result), worker)
