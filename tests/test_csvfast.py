@@ -1,4 +1,4 @@
-"""The compiled CSV formatter (io.csvfast) against the cell-by-cell reference and the numpy path.
+"""The compiled CSV formatter (io.csvfast) against the cell-by-cell reference.
 
 Everything here also passes with NUMBA_DISABLE_JIT=1 (``.ci/run`` runs it so, with
 small arrays: the kernel is then plain Python)."""
@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 
 from cdpr_design.io.columns import ColumnWriter
 from cdpr_design.io.csvfast import numba_rows
-from cdpr_design.io.csvtext import numpy_rows
+from cdpr_design.io import columns
+from cdpr_design.io.tables import cell_rows
 
 from .test_outputs import random_columns, reference_text
 
@@ -22,10 +23,10 @@ N = 20_000 if JIT else 400  # rows of the random tables (the pure-Python kernel 
 
 
 def check(cols, **kw):
-    """numba_rows equals the reference text and the numpy path on these columns."""
+    """numba_rows equals the reference text and the writer's cell-by-cell path on these columns."""
     text = numba_rows(cols, **kw)
     assert text.decode() == reference_text(cols)
-    assert text == numpy_rows(cols)
+    assert text == cell_rows(cols)
 
 
 @pytest.mark.slow
@@ -118,19 +119,21 @@ def test_hypothesis_rows(rows):
 
 
 @pytest.mark.parametrize("fmt_", ["csv", "parquet"])
-def test_the_writer_gives_the_same_file_compiled_or_not(tmp_path, fmt_):
-    """ColumnWriter's ``compiled`` changes the speed, never the file: compiled, vectorised and
-    the default (whichever is already loaded) write the same bytes, chunk after chunk."""
+def test_the_writer_gives_the_same_file_compiled_or_not(tmp_path, fmt_, monkeypatch):
+    """ColumnWriter's ``compiled`` and the chunks' size change the speed, never the file: compiled,
+    cell by cell, and compiled from a chunk size on write the same bytes, chunk after chunk."""
     rng = np.random.default_rng(9)
     chunks = [random_columns(rng, 300) for _ in range(3)]
     files = {}
-    for compiled in (True, False, None):
-        path = tmp_path / f"{compiled}.{fmt_}"
+    for case, compiled, cells in (("compiled", True, None), ("cells", False, None), ("big", False, 1000)):
+        if cells is not None:  # every chunk here holds 300 x 19 = 5,700 cells
+            monkeypatch.setattr(columns, "COMPILED_CELLS", cells)
+        path = tmp_path / f"{case}.{fmt_}"
         with ColumnWriter(path, fmt_, compiled=compiled) as w:
             for cols in chunks:
                 w.write({f"c{j}": c for j, c in enumerate(cols)})
-        files[compiled] = path.read_bytes()
-    assert files[True] == files[False] == files[None]
+        files[case] = path.read_bytes()
+    assert files["compiled"] == files["cells"] == files["big"]
     if fmt_ == "csv":
-        body = files[True].split(b"\n", 1)[1]
+        body = files["compiled"].split(b"\n", 1)[1]
         assert body.decode() == "".join(reference_text(cols) for cols in chunks)

@@ -393,11 +393,12 @@ def test_no_minus_zero_in_the_workspace_csv(tmp_path):
 
 
 def test_the_formatters_never_write_minus_zero():
-    from cdpr_design.io.csvtext import csv_rows
-    from cdpr_design.io.tables import fmt
+    from cdpr_design.io.csvfast import csv_rows
+    from cdpr_design.io.tables import cell_rows, fmt
 
     assert fmt(-0.0) == "0" and fmt(np.float64(-0.0)) == "0" and fmt(-1e-300) == "-1e-300"
-    assert csv_rows([np.array([-0.0, 1.5]), np.array([2.0, -0.0])]) == b"0,2\n1.5,0\n"
+    for rows in (csv_rows, cell_rows):
+        assert rows([np.array([-0.0, 1.5]), np.array([2.0, -0.0])]) == b"0,2\n1.5,0\n"
 
 
 def test_json_never_holds_nan_or_infinity(tmp_path):

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from cdpr_design.io.columns import ColumnWriter, read_table, table_metadata
-from cdpr_design.io.csvfast import numba_rows
-from cdpr_design.io.csvtext import csv_rows
+from cdpr_design.io.csvfast import csv_rows, numba_rows
+from cdpr_design.io.tables import cell_rows
 from cdpr_design.io.files import OutputDir
 from cdpr_design.io.tables import fmt
 
@@ -72,6 +72,7 @@ def test_csv_cells_match_the_reference_on_random_numbers():
     rng = np.random.default_rng(18)
     cols = random_columns(rng, 20_000)
     assert csv_rows(cols).decode() == reference_text(cols)
+    assert cell_rows(cols).decode() == reference_text(cols)
 
 
 def test_csv_cells_of_every_float_kind_one_by_one():
@@ -81,10 +82,12 @@ def test_csv_cells_of_every_float_kind_one_by_one():
     for col in random_columns(rng, 3000):
         cols = [np.arange(col.size), col]
         assert csv_rows(cols).decode() == reference_text(cols)
+        assert cell_rows(cols).decode() == reference_text(cols)
 
 
 def test_negative_zero_is_written_zero_and_nonfinite_is_empty():
-    assert csv_rows([np.array([-0.0, 0.0, np.nan, -np.inf]), np.array([1, 0, -3, 7])]) == b"0,1\n0,0\n,-3\n,7\n"
+    for rows in (csv_rows, cell_rows):
+        assert rows([np.array([-0.0, 0.0, np.nan, -np.inf]), np.array([1, 0, -3, 7])]) == b"0,1\n0,0\n,-3\n,7\n"
     assert fmt(-0.0) == "0" and fmt(np.float64(-0.0)) == "0"
 
 
@@ -176,10 +179,10 @@ def test_workspace_table_of_every_design_matches_the_reference(name):
     cols = table.columns()
     assert "collision_free" in cols or not checks
     arrays = [np.asarray(v) for v in cols.values()]
-    text = csv_rows(arrays).decode()
+    text = numba_rows(arrays).decode()
     ref = reference_text(arrays)
     assert text == ref
-    assert numba_rows(arrays).decode() == ref  # and the compiled formatter
+    assert cell_rows(arrays).decode() == ref  # and the cell-by-cell path
     assert len(text.splitlines()) == table.poses.shape[0] > 0
 
 

@@ -9,11 +9,12 @@ Every table the tool writes (``workspace``, ``sweep``, motor sizing,
 
 CSV follows the command line's contract (docs/cli.md): one header row, ``\\n``
 line ends, numbers with 10 significant digits, integers and booleans as
-integers, NaN/None as empty cells (numeric columns are formatted by the
-vectorised :func:`cdpr_design.io.csvtext.csv_rows` or, when the caller says so
-(``compiled``), by the compiled :func:`cdpr_design.io.csvfast.csv_rows` --
-the same bytes; other columns cell by cell with
-:func:`~cdpr_design.io.tables.fmt` and the ``csv`` module's quoting).  Parquet keeps the types -- booleans as ``bool``, integers as
+integers, NaN/None as empty cells: every cell as :func:`~cdpr_design.io.tables.fmt`
+writes it.  Numeric columns are formatted by the compiled
+:func:`cdpr_design.io.csvfast.csv_rows` where the caller says the kernels are
+loaded (``compiled``) or a chunk has at least :data:`COMPILED_CELLS` cells,
+else cell by cell (:func:`~cdpr_design.io.tables.cell_rows`) -- the same bytes;
+other columns cell by cell with the ``csv`` module's quoting.  Parquet keeps the types -- booleans as ``bool``, integers as
 ``int64``, every other number as ``float64`` (NaN where CSV has an empty
 cell), text as strings -- writes each :meth:`ColumnWriter.write` as a row
 group (memory stays bounded whatever the table's length), and carries the
@@ -33,7 +34,6 @@ import csv
 import io
 import json
 import queue
-import sys
 import threading
 import time
 from pathlib import Path
@@ -42,14 +42,17 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from cdpr_design.errors import InputError, WriteError, quote
-from cdpr_design.io import csvtext
 from cdpr_design.io.atomic import AtomicFile
-from cdpr_design.io.tables import fmt, json_default
+from cdpr_design.io.tables import cell_rows, fmt, json_default
 
 #: Table formats: name -> file extension.
 FORMATS = {"csv": ".csv", "parquet": ".parquet"}
 #: Schema metadata key of the table's description in Parquet files.
 META_KEY = b"cdpr-design"
+#: Numeric cells of a chunk from which the compiled formatter writes its CSV even where the
+#: kernels are not loaded: numba's start-up (its import and the formatter's load from its cache)
+#: is then repaid by the per-cell cost it saves (figures in docs/architecture.md, ``io/``).
+COMPILED_CELLS = 2_000_000
 
 
 def file_name(stem: str, format: str = "csv") -> str:
@@ -122,12 +125,10 @@ class ColumnWriter:
         pictures drawn by another process) overlaps the writing.  At most two
         chunks wait (memory stays bounded); an error in the thread is raised by
         the next :meth:`write` or by :meth:`close`.
-    compiled : format CSV numbers with the compiled formatter (:mod:`~cdpr_design.io.csvfast`,
-        numba) rather than the vectorised numpy one (:mod:`~cdpr_design.io.csvtext`): the
-        same bytes; worth it where numba is loaded anyway (a sweep on the kernels) or the
-        table is large (the figures are in :mod:`~cdpr_design.io.csvtext`).  ``None``: compiled
-        exactly when numba is already loaded in this process with its JIT on (what every
-        writer did before the choice was a parameter).
+    compiled : format every chunk's CSV numbers with the compiled formatter
+        (:mod:`~cdpr_design.io.csvfast`, numba): where the caller loads the kernels anyway
+        (a sweep on them); else only chunks of at least :data:`COMPILED_CELLS` cells, the
+        others cell by cell in Python.  The same bytes either way.
 
     ``busy_s`` is the time spent formatting and writing so far [s].
     """
@@ -135,7 +136,7 @@ class ColumnWriter:
     def __init__(self, path: str | Path, format: str = "csv", metadata: Mapping | None = None,
                  names: Sequence[str] | None = None, stage: Callable[[AtomicFile], None] | None = None,
                  background: bool = False, before_open: Callable[[], object] | None = None,
-                 compiled: bool | None = None):
+                 compiled: bool = False):
         check_format(format)
         self.path = Path(path)
         self.format = format
@@ -149,7 +150,7 @@ class ColumnWriter:
         self._parquet = None
         self._header_done = False
         self.busy_s = 0.0
-        self.compiled = numba_loaded() if compiled is None else compiled
+        self.compiled = compiled
         self._queue: queue.Queue | None = None
         self._thread: threading.Thread | None = None
         self._error: BaseException | None = None
@@ -163,7 +164,7 @@ class ColumnWriter:
         """Compile (or load from numba's cache) the compiled CSV formatter now, on a table of one
         row, if this writer will use it (a caller times numba's start-up apart from the writing)."""
         if self.format == "csv" and self.compiled:
-            _formatter(True).csv_rows([np.zeros(1), np.zeros(1, dtype=np.int64)])
+            numeric_csv([np.zeros(1), np.zeros(1, dtype=np.int64)], True)
 
     @property
     def _file(self) -> AtomicFile:
@@ -240,7 +241,7 @@ class ColumnWriter:
         if not arrays or not len(arrays[0]):
             return
         if all(a.dtype.kind in "biuf" for a in arrays):
-            self._file.write(_formatter(self.compiled).csv_rows(arrays))
+            self._file.write(numeric_csv(arrays, self.compiled))
             return
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
@@ -333,18 +334,14 @@ class ColumnWriter:
         return False
 
 
-def numba_loaded() -> bool:
-    """numba is imported in this process with its JIT on: the compiled formatter costs no start-up."""
-    return "numba" in sys.modules and not sys.modules["numba"].config.DISABLE_JIT
+def numeric_csv(arrays: Sequence[np.ndarray], compiled: bool) -> bytes:
+    """CSV rows of equal-length 1-D numeric columns: by the compiled formatter when ``compiled``
+    or the chunk has at least :data:`COMPILED_CELLS` cells, else cell by cell (the same bytes)."""
+    if compiled or len(arrays) * len(arrays[0]) >= COMPILED_CELLS:
+        from cdpr_design.io import csvfast  # imports numba: only then
 
-
-def _formatter(compiled: bool):
-    """The module whose ``csv_rows`` formats numeric CSV rows: csvfast (numba) or csvtext (numpy)."""
-    if compiled:
-        from cdpr_design.io import csvfast  # imports numba: only when asked
-
-        return csvfast
-    return csvtext
+        return csvfast.numba_rows(arrays)
+    return cell_rows(arrays)
 
 
 def _parquet_writer(fh, schema):

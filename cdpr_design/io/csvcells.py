@@ -1,17 +1,14 @@
-"""What both CSV formatters share: the cell algorithm's constants and tables, the column check.
+"""The constants and tables of the compiled CSV formatter (:mod:`~cdpr_design.io.csvfast`), the column check.
 
-The two formatters of numeric columns -- :mod:`~cdpr_design.io.csvtext`
-(numpy, whole arrays) and :mod:`~cdpr_design.io.csvfast` (numba, cell by
-cell) -- write every cell as :func:`~cdpr_design.io.tables.fmt` does by one
-algorithm: a float ``v != 0`` is rounded to 10 significant digits as an
-integer ``m`` in [1e9, 1e10) and a decimal exponent ``X``
-(``|v| ~ m 10^(X-9)``) by scaling with exact powers of ten (:data:`P10`,
-``10^k`` for ``|k| <= 22``, at most twice); the ten digits come from a table of
-five-digit groups as bytes (:data:`DIGITS`, with the trailing zeros of each
-group in :data:`TZ5`); scientific notation ends with a suffix from
-:data:`SUFFIX`.  The cells this cannot format with certainty (a scaled value
-within :data:`TIE` of a half, ``|v|`` outside :data:`FLOAT_RANGE`, integers
-from :data:`INT_LIMIT` on) are formatted by :func:`~cdpr_design.io.tables.fmt`.
+The formatter writes every cell as :func:`~cdpr_design.io.tables.fmt` does: a float
+``v != 0`` is rounded to 10 significant digits as an integer ``m`` in [1e9, 1e10) and
+a decimal exponent ``X`` (``|v| ~ m 10^(X-9)``) by scaling with exact powers of ten
+(:data:`P10`, ``10^k`` for ``|k| <= 22``, at most twice); the ten digits come from a
+table of five-digit groups as bytes (:data:`DIGITS`, with the trailing zeros of each
+group in :data:`TZ5`); scientific notation ends with a suffix from :data:`SUFFIX`.
+The cells this cannot format with certainty (a scaled value within :data:`TIE` of a
+half, ``|v|`` outside :data:`FLOAT_RANGE`, integers from :data:`INT_LIMIT` on) are
+formatted by :func:`~cdpr_design.io.tables.fmt`.
 """
 
 from __future__ import annotations

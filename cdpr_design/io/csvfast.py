@@ -1,23 +1,28 @@
 """CSV text of numeric columns, compiled: the cells :func:`~cdpr_design.io.tables.fmt` writes, in numba.
 
-:func:`csv_rows` gives the bytes of :func:`cdpr_design.io.csvtext.csv_rows`
-(every cell as :func:`~cdpr_design.io.tables.fmt` writes it) by the same
-algorithm, one cell at a time in a compiled loop (``nogil``: a sweep's kernels
-run on while the background writer formats; ``cache=True``): the 10-digit
-mantissa ``m`` and exponent ``X`` from the binary exponent and at most two
-scalings by exact powers of ten, the digits from the five-digit table, the
-trailing zeros from its table, the ``e-XX`` suffixes from theirs -- the
-constants and tables of :mod:`~cdpr_design.io.csvcells`, handed to the kernel
-as arguments.  The kernel writes a block of rows into a preallocated byte
-buffer (at most :data:`CELL_MAX` bytes a cell) and lists the cells it cannot
-format with certainty (a scaled value within ``TIE`` of a half, ``|v|``
-outside ``FLOAT_RANGE``, integers of ten digits or more): Python formats
-those, as the numpy path does, and their text is spliced in where the kernel
+:func:`csv_rows` gives, byte for byte, every cell as :func:`~cdpr_design.io.tables.fmt`
+writes it (floats ``'.10g'`` with ``-0`` written ``0``, integers and booleans as
+integers, NaN and inf empty), one cell at a time in a compiled loop (``nogil``: a
+sweep's kernels run on while the background writer formats; ``cache=True``).
+
+How (the constants and tables are :mod:`~cdpr_design.io.csvcells`'): a float
+``v != 0`` is rounded to 10 significant digits as an integer ``m`` in [1e9, 1e10)
+and a decimal exponent ``X`` (``|v| ~ m 10^(X-9)``), X from the binary exponent,
+m by at most two scalings by exact powers of ten (``10^k``, ``|k| <= 22``); the
+scaled value is within 2 ulp of the exact product, so its nearest integer is the
+correctly rounded one unless its fraction lies within ``TIE`` of one half.  The
+ten digits come from a table of five-digit groups as bytes, the trailing zeros
+from its table, the ``e-XX`` suffixes from theirs; ``printf``'s ``%g`` rule
+then picks fixed or scientific notation.  The tables are module globals, which
+numba freezes into the compiled code as constants.  The kernel writes a block of
+rows into a preallocated byte buffer (at most :data:`CELL_MAX` bytes a cell) and
+lists the cells it cannot format with certainty (a near tie, ``|v|`` outside
+``FLOAT_RANGE``, integers of ten digits or more): Python formats those with
+:func:`~cdpr_design.io.tables.fmt`, and their text is spliced in where the kernel
 left room for nothing.
 
-Importing this module imports numba: a writer uses it only when the caller
-says numba is worth it (``ColumnWriter(..., compiled=True)``; see
-:mod:`~cdpr_design.io.csvtext` for the figures).
+Importing this module imports numba: a writer uses it for large blocks and where
+the kernels are loaded anyway (:class:`~cdpr_design.io.columns.ColumnWriter`).
 """
 
 from __future__ import annotations
@@ -37,43 +42,40 @@ _SUFFIX_X0 = 400  # _SUFFIX[X + 400] is the suffix of exponent X
 _TENS_X0 = -400  # tens[k + 400] ~ 10^k (inf above 10^308): the first guess of the exponent
 _TENS = np.array([float(f"1e{k}") for k in range(_TENS_X0, -_TENS_X0 + 1)])
 # the tables as int64 (every entry < 2^40): no unsigned arithmetic in the kernel
-_TABLES = (P10, _TENS, DIGITS.astype(np.int64), TZ5, SUFFIX.astype(np.int64))
+_P10, _DIGITS, _TZ5, _SUFFIX = P10, DIGITS.astype(np.int64), TZ5, SUFFIX.astype(np.int64)
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
-#: The cell helpers are inlined into the row loop (no call per cell).
+#: The cell helpers are inlined into the row loop (no call per cell); they read the tables as
+#: globals, not arguments, so that no array is handed to them (and counted) cell by cell.
 _INLINE = dict(_JIT, inline="always")
-#: The row loop allocates nothing and is compiled without reference counting, which would
-#: otherwise count every table array handed to the inlined helpers, cell by cell (as the
-#: kernels' loops, :data:`cdpr_design.kernels._jit.NOREF`).
-_NOREF = dict(_JIT, _nrt=False)
 
 
 @nb.njit(**_INLINE)
-def _scale(a, k, p10):
+def _scale(a, k):
     """a * 10^k [float64], |k| <= 44, with at most two roundings (as the numpy formatter's)."""
     k1 = min(max(k, -22), 22)
-    out = a * p10[k1] if k1 >= 0 else a / p10[-k1]
+    out = a * _P10[k1] if k1 >= 0 else a / _P10[-k1]
     k2 = k - k1
     if k2 > 0:
-        out = out * p10[k2]
+        out = out * _P10[k2]
     elif k2 < 0:
-        out = out / p10[-k2]
+        out = out / _P10[-k2]
     return out
 
 
 @nb.njit(**_INLINE)
-def _round10(a, bits, p10, tens, tie):
+def _round10(a, bits, tie):
     """(m, X, ok) of one finite a > 0 as the numpy formatter's: a ~ m 10^(X - 9), m in [1e9, 1e10).
 
     bits : the IEEE 754 bits of a (or of -a) as int64.  X starts from the binary exponent
     e2 (floor(e2 log10 2), X or X - 1), raised by one where a >= tens[X + 1 - _TENS_X0]
     (10^(X+1), cheaper than log10), and corrected as there."""
     X = (((bits >> 52) & 2047) - 1023) * 78913 >> 18  # floor(e2 log10(2)), |e2| < 1650
-    X += a >= tens[X + 1 - _TENS_X0]
+    X += a >= _TENS[X + 1 - _TENS_X0]
     near = False
     for _ in range(3):  # X one off, then the rounding up to 10^10
         if abs(9 - X) > 44:
             return 0, X, False
-        q = _scale(a, 9 - X, p10)
+        q = _scale(a, 9 - X)
         m = np.rint(q)
         if m >= 1e9 and m <= 1e10:  # a tie matters once the magnitude is right (and carries to 10^10)
             near = near or abs(q - m) >= 0.5 - tie
@@ -88,15 +90,15 @@ def _round10(a, bits, p10, tens, tie):
 
 
 @nb.njit(**_INLINE)
-def _put_cell(out, p, m, X, neg, digits, tz5, suffix):
+def _put_cell(out, p, m, X, neg):
     """The text of a nonzero cell (``%.10g`` of m 10^(X - 9), a minus sign if neg) at out[p]; the end.
 
     Writes up to 17 bytes from p whatever the cell's length (the next cell overwrites the rest):
     the ten digits with a point after digit ``point`` (none when point = 9), in one pass."""
     hi5 = m // 100_000
     lo5 = m - hi5 * 100_000
-    s = 10 - (5 + tz5[hi5] if lo5 == 0 else tz5[lo5])  # significant digits
-    d_hi, d_lo = digits[hi5], digits[lo5]
+    s = 10 - (5 + _TZ5[hi5] if lo5 == 0 else _TZ5[lo5])  # significant digits
+    d_hi, d_lo = _DIGITS[hi5], _DIGITS[lo5]
     out[p] = 45
     p += neg
     sci = X >= 10 or X < -4
@@ -118,15 +120,15 @@ def _put_cell(out, p, m, X, neg, digits, tz5, suffix):
     else:
         p += s + 1 if s > point + 1 else point + 1
     if sci:
-        w = suffix[X + _SUFFIX_X0]
+        w = _SUFFIX[X + _SUFFIX_X0]
         for k in range(5):
             out[p + k] = (w >> (8 * k)) & 255
         p += 4 if -100 < X < 100 else 5
     return p
 
 
-@nb.njit(**_NOREF)
-def format_rows(values, bits, is_int, out, slow, p10, tens, digits, tz5, suffix, lo, hi, int_limit, tie):
+@nb.njit(**_JIT)
+def format_rows(values, bits, is_int, out, slow, lo, hi, int_limit, tie):
     """CSV rows of a block into out [uint8]; returns (bytes used, cells left to Python).
 
     values : (rows, columns) float64 -- integer columns converted (exact below int_limit).
@@ -154,9 +156,9 @@ def format_rows(values, bits, is_int, out, slow, p10, tens, digits, tz5, suffix,
                 else:
                     ok = a >= lo and a < hi
                 if ok:
-                    m, X, ok = _round10(a, bits[i, j], p10, tens, tie)
+                    m, X, ok = _round10(a, bits[i, j], tie)
                 if ok:
-                    p = _put_cell(out, p, m, X, v < 0, digits, tz5, suffix)
+                    p = _put_cell(out, p, m, X, v < 0)
                 else:
                     slow[ns, 0] = i * ncol + j
                     slow[ns, 1] = p
@@ -168,7 +170,7 @@ def format_rows(values, bits, is_int, out, slow, p10, tens, digits, tz5, suffix,
 
 def csv_rows(columns: Sequence) -> bytes:
     """CSV rows (``\\n`` ends, no header) of equal-length 1-D numeric columns (float, int, bool),
-    byte-identical to :func:`cdpr_design.io.csvtext.csv_rows`."""
+    every cell as :func:`~cdpr_design.io.tables.fmt` writes it."""
     return numba_rows(numeric_columns(columns)) if columns else b""
 
 
@@ -192,7 +194,7 @@ def numba_rows(arrays: Sequence[np.ndarray], block: int = BLOCK) -> bytes:
         vals = values if k == rows else np.empty((k, ncol), dtype=np.float64)
         for j, c in enumerate(arrays):
             vals[:, j] = c[start:start + k]
-        used, ns = format_rows(vals, vals.view(np.int64), is_int, out[end:], slow, *_TABLES,
+        used, ns = format_rows(vals, vals.view(np.int64), is_int, out[end:], slow,
                                FLOAT_RANGE[0], FLOAT_RANGE[1], float(INT_LIMIT), TIE)
         prev = end
         for idx, pos in slow[:ns].tolist():  # the cells left to Python, in order

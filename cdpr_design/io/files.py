@@ -244,7 +244,7 @@ class OutputDir:
         return self.write_text(name, json_text(data, indent=2) + "\n")
 
     def write_columns(self, name: str, columns: dict, names: Sequence[str] | None = None,
-                      metadata: dict | None = None, compiled: bool | None = None) -> Path:
+                      metadata: dict | None = None, compiled: bool = False) -> Path:
         """A table of named 1-D columns in one go, CSV or Parquet by the extension of ``name``
         (:class:`~cdpr_design.io.columns.ColumnWriter`, ``compiled`` as there)."""
         stem, _, ext = name.rpartition(".")
@@ -255,7 +255,7 @@ class OutputDir:
         return w.path
 
     def table(self, stem: str, format: str = "csv", metadata: dict | None = None,
-              names: Sequence[str] | None = None, background: bool = False, compiled: bool | None = None):
+              names: Sequence[str] | None = None, background: bool = False, compiled: bool = False):
         """A :class:`~cdpr_design.io.columns.ColumnWriter` for ``stem.csv`` or ``stem.parquet``
         (refused if a foreign file has that name; staged when closed; ``compiled`` as there)."""
         name = file_name(stem, format)

@@ -65,7 +65,7 @@ def timing_phases(timings: dict) -> list[tuple[str, float]]:
 def fmt(v) -> str:
     """A CSV cell: numbers with 10 significant digits (``-0`` as ``0``), NaN/None as empty.
 
-    The reference of the vectorised :func:`cdpr_design.io.csvtext.csv_rows`."""
+    The definition the compiled :func:`cdpr_design.io.csvfast.csv_rows` follows byte for byte."""
     if v is None:
         return ""
     if isinstance(v, (bool, np.bool_)):
@@ -75,6 +75,25 @@ def fmt(v) -> str:
     if isinstance(v, (float, np.floating)):
         return "" if not math.isfinite(v) else format(float(v) + 0.0, ".10g")  # + 0.0: -0 is written 0
     return str(v)
+
+
+def cell_rows(arrays) -> bytes:
+    """CSV rows (``\\n`` ends, no header) of equal-length 1-D numeric columns (float, int,
+    bool), every cell as :func:`fmt` writes it, in Python a column at a time (about 0.3 us a cell)."""
+    return ("\n".join(map(",".join, zip(*map(column_cells, arrays)))) + "\n").encode()
+
+
+def column_cells(a: np.ndarray) -> list[str]:
+    """:func:`fmt` of every value of a 1-D numeric array, by its dtype."""
+    if a.dtype.kind == "b":
+        return ["1" if v else "0" for v in a.tolist()]
+    if a.dtype.kind in "iu":
+        return [str(v) for v in a.tolist()]
+    vals = (a.astype(np.float64) + 0.0).tolist()  # + 0.0: -0 is written 0
+    finite = np.isfinite(a)
+    if finite.all():
+        return [format(v, ".10g") for v in vals]
+    return [format(v, ".10g") if f else "" for v, f in zip(vals, finite.tolist())]
 
 
 def text_rows(rows) -> list[list[str]]:
