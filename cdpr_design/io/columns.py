@@ -51,7 +51,7 @@ FORMATS = {"csv": ".csv", "parquet": ".parquet"}
 META_KEY = b"cdpr-design"
 #: Numeric cells of a chunk from which the compiled formatter writes its CSV even where the
 #: kernels are not loaded: numba's start-up (its import and the formatter's load from its cache)
-#: is then repaid by the per-cell cost it saves (figures in docs/architecture.md, ``io/``).
+#: is then repaid by the per-cell cost it saves (docs/performance.md).
 COMPILED_CELLS = 2_000_000
 
 

@@ -79,7 +79,7 @@ def fmt(v) -> str:
 
 def cell_rows(arrays) -> bytes:
     """CSV rows (``\\n`` ends, no header) of equal-length 1-D numeric columns (float, int,
-    bool), every cell as :func:`fmt` writes it, in Python a column at a time (about 0.3 us a cell)."""
+    bool), every cell as :func:`fmt` writes it, in Python a column at a time."""
     return ("\n".join(map(",".join, zip(*map(column_cells, arrays)))) + "\n").encode()
 
 
