@@ -1,10 +1,10 @@
 """The two CSV formatters of numeric columns, each in a fresh process, in CPU time.
 
-What a command pays to write a table's numbers as CSV with the vectorised numpy formatter
-(:mod:`cdpr_design.io.csvtext`) against the compiled one (:mod:`cdpr_design.io.csvfast`), in a new
+What a command pays to write a table's numbers as CSV cell by cell with Python's format
+(Python's format a column at a time, :func:`cdpr_design.io.tables.cell_rows`) against the compiled one (:mod:`cdpr_design.io.csvfast`), in a new
 Python process each time, as a command runs:
 
-* ``numpy``: import the numpy formatter, format the table;
+* ``cells``: format the table a column at a time with Python's format;
 * ``numba, cold process``: import the compiled formatter -- numba's own start-up and the load of
   its cached machine code (the cache filled by a first run) -- then format the table: what a
   command pays that has not imported numba for anything else;
@@ -62,7 +62,7 @@ t0 = cpu()
 if path == "numba":
     from cdpr_design.io.csvfast import csv_rows
 else:
-    from cdpr_design.io.csvtext import csv_rows
+    from cdpr_design.io.tables import cell_rows as csv_rows
 t1 = cpu()
 text = csv_rows(cols)
 t2 = cpu()
@@ -89,7 +89,7 @@ def run(b: h.Bench) -> None:
             out.setdefault((path, preload), []).append(r)
             return h.Timing(r["import"] + r["format"], r["import"] + r["format"])
 
-        t = h.rounds({"numpy": lambda: variant("numpy", False), "cold": lambda: variant("numba", False),
+        t = h.rounds({"cells": lambda: variant("cells", False), "cold": lambda: variant("numba", False),
                       "loaded": lambda: variant("numba", True)}, b.rounds)
         cells = rows * ncol
         label = f"CSV of {name}'s table, {rows:,} x {ncol} ({cells / 1e6:.2g} M cells)"
@@ -98,7 +98,7 @@ def run(b: h.Bench) -> None:
             return min(r["warm"] for r in out[key]) / cells * 1e9
 
         b.row(f"{label}: numba, cold process", f"{h.spread(x.cpu for x in t['cold']).text()} CPU-s",
-              h.ratios(t["numpy"], t["cold"], "cpu"), "numpy formatter, fresh process (CPU)")
+              h.ratios(t["cells"], t["cold"], "cpu"), "Python's format, fresh process (CPU)")
         b.row(f"{label}: numba, kernels loaded", f"{h.spread(x.cpu for x in t['loaded']).text()} CPU-s, warm "
-              f"{warm(('numba', True)):.0f} ns a cell (numpy {warm(('numpy', False)):.0f})",
-              h.ratios(t["numpy"], t["loaded"], "cpu"), "numpy formatter, fresh process (CPU)")
+              f"{warm(('numba', True)):.0f} ns a cell (Python's format {warm(('cells', False)):.0f})",
+              h.ratios(t["cells"], t["loaded"], "cpu"), "Python's format, fresh process (CPU)")

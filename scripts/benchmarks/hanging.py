@@ -2,7 +2,7 @@
 
 The hanging orientation of planar2's effector (two cables, free orientation) at every position of
 a 151 x 151 grid over its 1.5 m frame (22,801 positions), with
-:func:`cdpr_design.kernels.hanging.hanging_tilt_batch` cold (a new process with an empty numba
+:func:`cdpr_design.statics.hanging.at_positions.hanging_orientations` (the closed form) cold (a new process with an empty numba
 cache: compiled) and warm, and with a plain per-position scipy solve on a random subsample in the
 same rounds, scaled per position:
 
@@ -12,7 +12,7 @@ same rounds, scaled per position:
     constant-length curve) decide; the stable one closest to level wins - the kernel's rule.
 
 The same map also through the library's two other paths, in the same rounds: the numpy
-hanging solver (``hanging_orientations(..., engine="numpy")``) and the whole ``free``
+hanging solver (``hanging_orientations``) and the whole ``free``
 workspace sweep (:func:`cdpr_design.workspaces.run`).  Prints how well the kernel and scipy
 agree (orientation and status on the subsample).
 """
@@ -102,50 +102,49 @@ def problem(com_y=None):
 
 
 def cold(com_y=None) -> float:
-    """Seconds of the kernel's first call in this process."""
+    """Seconds of the closed form's first call in this process."""
     _, (A, B, c, mass, g), P = problem(com_y)
-    from cdpr_design.kernels import hanging as K
+    from cdpr_design.statics.hanging.at_positions import hanging_orientations
+    from cdpr_design.statics.hanging.geometry import Geometry
 
-    t, _ = h.timed(K.hanging_tilt_batch, A, B, c, mass, g, P)
+    t, _ = h.timed(hanging_orientations, Geometry(A, B, c, mass, g), P, True)
     return t.wall
 
 
 def run(b: h.Bench) -> None:
     from cdpr_design import workspaces as ws
-    from cdpr_design.kernels import hanging as K
     from cdpr_design.statics.hanging.at_positions import hanging_orientations
+    from cdpr_design.statics.hanging.results import OK
     from cdpr_design.statics.hanging.geometry import Geometry
 
     t_cold = h.call_in_child("benchmarks.hanging.cold", b.opt["com_y"], cache=b.fresh_cache())
     d, (A, B, c, mass, g), P = problem(b.opt["com_y"])
     n = P.shape[0]
-    phi, _, _, status, _ = K.hanging_tilt_batch(A, B, c, mass, g, P)
     geo = Geometry(A, B, c, mass, g)
+    got = hanging_orientations(geo, P, True)
+    phi, status = got.orientation, got.status
     free = d.replace(effector=dataclasses.replace(d.effector, orientation="free", center_of_mass=tuple(c)))
     first_ws, res = h.timed(ws.run, free)
     idx = b.rng.choice(n, size=min(b.opt["n_scipy"], n), replace=False)
     ref = []
-    t = h.rounds({"kernel": lambda: K.hanging_tilt_batch(A, B, c, mass, g, P),
-                  "numpy": lambda: hanging_orientations(geo, P, True, engine="numpy"),
+    t = h.rounds({"closed form": lambda: hanging_orientations(geo, P, True),
                   "free workspace": lambda: ws.run(free),
                   "scipy": lambda: ref.__setitem__(slice(None), [scipy_tilt(A, B, c, mass, g, P[i]) for i in idx])},
                  b.rounds)
-    ok_k = status[idx] == K.TILT_OK
+    ok_k = status[idx] == OK
     ok_s = np.array([r is not None for r in ref])
     both = ok_k & ok_s
     diff = np.abs(phi[idx][both] - np.array([r for r in ref if r is not None])[both[ok_s]])
-    b.say(f"COM at y = {c[1]:+.3f} m: {n} positions, {np.count_nonzero(status == K.TILT_OK)} hang stably, max tilt "
+    b.say(f"COM at y = {c[1]:+.3f} m: {n} positions, {np.count_nonzero(status == OK)} hang stably, max tilt "
           f"{np.nanmax(np.degrees(np.abs(phi))):.2f} deg; scipy: status agrees on {np.count_nonzero(ok_k == ok_s)}/"
           f"{idx.size}, max |dphi| {diff.max() if diff.size else float('nan'):.1e} rad; free workspace "
           f"{res.feasible} feasible")
     scale = n / idx.size
     label = f"planar2 tilt map, {n:,} positions"
-    b.row(f"{label}: kernel, warm", h.per_pose(h.best(t["kernel"]), n), h.ratios(t["scipy"], t["kernel"], scale=scale),
-          "per-position scipy least_squares")
-    b.row(f"{label}: kernel, cold (empty numba cache, new process)", f"{t_cold:.2f} s",
+    b.row(f"{label}: closed form, warm", h.per_pose(h.best(t["closed form"]), n),
+          h.ratios(t["scipy"], t["closed form"], scale=scale), "per-position scipy least_squares")
+    b.row(f"{label}: closed form, first call in a new process", f"{t_cold:.2f} s",
           h.ratios([h.best(t["scipy"])], [t_cold], scale=scale), "per-position scipy (best round)")
-    b.row(f"{label}: numpy hanging solver", h.per_pose(h.best(t["numpy"]), n),
-          h.ratios(t["scipy"], t["numpy"], scale=scale), "per-position scipy least_squares")
     b.row(f"{label}: the whole free workspace sweep, warm", h.seconds(h.spread(x.wall for x in t["free workspace"])),
           h.ratios(t["scipy"], t["free workspace"], scale=scale), "per-position scipy least_squares",
           f"first call {first_ws.wall:.2f} s")

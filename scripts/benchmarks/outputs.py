@@ -167,11 +167,11 @@ def previous_format_block(columns, int_cols) -> str:
 
 
 def writer(b: h.Bench, step) -> None:
-    """The CSV formatters alone on the design's rows: the first writer and the numpy formatter
-    against the numba one (warm; and its first call in this process, numba's cache warm)."""
+    """The CSV formatters alone on the design's rows: the first writer and the writer's
+    cell-by-cell path against the compiled one (warm; and its first call in this process, numba's cache warm)."""
     from cdpr_design import workspaces as ws
     from cdpr_design.io import csvfast
-    from cdpr_design.io.csvtext import numpy_rows
+    from cdpr_design.io.tables import cell_rows
     from cdpr_design.model import spec
 
     h.python("import numpy; from cdpr_design.io.csvfast import numba_rows; numba_rows([numpy.ones(3)])")
@@ -188,14 +188,14 @@ def writer(b: h.Bench, step) -> None:
     cells = sum(len(cols(c)) * len(c.feasible) for c in chunks)
     first, _ = h.timed(lambda: [csvfast.numba_rows(cols(c)) for c in chunks])
     t = h.rounds({"previous": lambda: [previous_format_block(cols(c), [k]) for c in chunks],
-                  "numpy": lambda: [numpy_rows(cols(c)) for c in chunks],
+                  "cells": lambda: [cell_rows(cols(c)) for c in chunks],
                   "numba": lambda: [csvfast.numba_rows(cols(c)) for c in chunks]}, b.rounds)
 
     def ns(times):
         return f"{h.spread(x.wall / cells * 1e9 for x in times).text('.0f')} ns a cell"
 
     b.row(f"CSV of {b.opt['design']}'s rows ({cells:,} cells): numba formatter", ns(t["numba"]),
-          h.ratios(t["numpy"], t["numba"]), "numpy formatter", f"first call {first.wall / cells * 1e9:.0f} ns a cell")
+          h.ratios(t["cells"], t["numba"]), "Python's format a column at a time", f"first call {first.wall / cells * 1e9:.0f} ns a cell")
     b.row(f"CSV of {b.opt['design']}'s rows: numba formatter", ns(t["numba"]), h.ratios(t["previous"], t["numba"]),
           "printf per row")
 
