@@ -38,7 +38,7 @@ def workspace(design: Design, kind: str = "static", *, step: float | None = None
     Parameters
     ----------
     design : Design
-    kind : {'static', 'wrench-feasible', 'wrench-closure'}
+    kind : {'static', 'wrench-feasible', 'wrench-closure', 'dynamic'}
     step : float, optional
         Grid step [m] (default ``workspace.grid.step``).
     grid : Grid, optional

@@ -56,11 +56,14 @@ import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 DESIGNS = sorted((ROOT / "designs").glob("*.yaml"))
-KINDS = ("static", "wrench-feasible", "wrench-closure")
+KINDS = ("static", "wrench-feasible", "wrench-closure", "dynamic")
 MODELS = ("ideal", "elastic", "sagging")
 MODES = ("fixed", "free")
 OPTIONS = {"plain": [], "collisions": ["--collisions"], "orientations-total": ["--orientations", "total"],
-           "html-parquet": ["--html", "--format", "parquet"]}
+           "html-parquet": ["--html", "--format", "parquet"], "accelerations": ["--accelerations"]}
+#: The box of accelerations every variant is given (``requirements.acceleration``, for the dynamic
+#: kind): [m/s^2] on the positions, [rad/s^2] on the rotations.
+ACCELERATION, ANGULAR_ACCELERATION = 0.5, 0.1
 #: Agreement of a table row with ``pose``: relative and absolute (N, N of margin) tolerance.
 RTOL, ATOL = 1e-6, 1e-6
 #: Half-width [rad] of the orientation set about the last rotation coordinate, and its samples.
@@ -84,6 +87,9 @@ def spec_variant(folder: Path, design: Path, mode: str) -> tuple[Path, dict]:
     if mode == "fixed" and (raw.get("requirements") or {}).get("max_tilt") is not None:
         del raw["requirements"]["max_tilt"]  # the spec format allows a tilt limit only with free
     nrot = {"1R2T": 1, "3R3T": 3}.get(raw["motion"], 0)
+    dim = 2 if raw["motion"] in ("2T", "1R2T") else 3
+    box = [ACCELERATION] * dim + [ANGULAR_ACCELERATION] * nrot
+    raw.setdefault("requirements", {})["acceleration"] = {"lower": [-v for v in box], "upper": box}
     if nrot:
         nominal = [float(v) for v in (raw["workspace"].get("orientation") or [0.0] * nrot)]
         lower, upper = list(nominal), list(nominal)
@@ -243,6 +249,9 @@ def _agreement(spec: Path, raw: dict, header: list[str], rows: list[dict], kind:
                 t = None if any(v is None for v in ts) else max(ts)
                 if not _close(row[f"tension_{c}"], t):
                     problems.append(f"row {i} {pose}: tension_{c} {row[f'tension_{c}']}, pose {t}")
+        if option == "accelerations" and not _close(row["acceleration_radius"], answers[0]["acceleration_radius"]):
+            problems.append(f"row {i} {pose}: acceleration_radius {row['acceleration_radius']}, pose "
+                            f"{answers[0]['acceleration_radius']}")
         if option == "orientations-total" and row.get("orientations_feasible") is not None:
             n = sum(bool(p["feasible"]) for p in answers)
             if int(row["orientations_feasible"]) != n:

@@ -21,7 +21,10 @@ from cdpr_design.statics.robot import Analysis, resolve
 from .helpers import DESIGNS, PLANAR2
 
 
-def _with(d, *, model=None, pulleys=False, orientation=None, mass=None, cable_frequency=None):
+def _with(d, *, model=None, pulleys=False, orientation=None, mass=None, cable_frequency=None, acceleration=None):
+    if acceleration is not None:  # requirements.acceleration: a box of this half-width [m/s^2, rad/s^2]
+        box = (tuple([-acceleration] * len(d.motion.coords)), tuple([acceleration] * len(d.motion.coords)))
+        d = d.replace(requirements=dataclasses.replace(d.requirements, acceleration=box))
     if cable_frequency is not None:  # requirements.min_cable_frequency [Hz]
         d = d.replace(requirements=dataclasses.replace(d.requirements, min_cable_frequency=cable_frequency))
     if model is not None:
@@ -96,6 +99,12 @@ def _cases(planar2, ipanema3, cogiro):
          _with(cogiro, model="elastic", pulleys=True), Analysis(command="fk")),
         ("--stiffness: ideal cables without cable.axial_stiffness", ipanema3, Analysis(stiffness=True)),
         ("--stiffness: an orientation workspace's rows", cogiro, Analysis(stiffness=True, orientations="total")),
+        ("requirements.acceleration: --kind dynamic tests", planar2, Analysis(kind="dynamic")),
+        ("--accelerations: sagging cables", _with(planar2, model="sagging"), Analysis(accelerations=True)),
+        ("--accelerations: an orientation workspace's rows", cogiro, Analysis(accelerations=True,
+                                                                              orientations="total")),
+        ("--time-optimal: cable model 'sagging'", _with(planar2, model="sagging"),
+         Analysis(command="motion", time_optimal=True)),
         ("engine=numpy: the numpy engine covers two cables", ipanema3, Analysis(engine="numpy")),
         ("requirements.min_cable_frequency: cable model 'sagging'",
          _with(cogiro, model="sagging", cable_frequency=5.0), Analysis(command="pose")),
@@ -124,15 +133,15 @@ def test_every_row_of_the_table_is_reached_with_its_reason(planar2, ipanema3, co
 
 def test_an_unknown_kind_names_the_option(planar2):
     with pytest.raises(SpecError, match="--kind"):
-        resolve(planar2, Analysis(kind="dynamic"))
+        resolve(planar2, Analysis(kind="kinematic"))
 
 
 def test_what_the_table_allows_resolves(planar2, cogiro):
     """Combinations the table does not refuse resolve (the matrix test computes them)."""
     for model in R.CABLE_MODELS:
         for kind in R.KINDS:
-            resolve(_with(cogiro, model=model), Analysis(kind=kind))
-            resolve(_with(planar2, model=model), Analysis(kind=kind))
+            resolve(_with(cogiro, model=model, acceleration=1.0), Analysis(kind=kind))
+            resolve(_with(planar2, model=model, acceleration=1.0), Analysis(kind=kind))
     resolve(_with(cogiro, model="elastic"), Analysis(orientations="total", collisions=True))
     resolve(_with(planar2, orientation="free"), Analysis(command="fk"))
     resolve(_with(planar2, orientation="free", model="sagging"), Analysis(command="fk"))

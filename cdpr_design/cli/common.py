@@ -109,9 +109,11 @@ class Kind(str, Enum):
     static = "static"
     wrench_feasible = "wrench-feasible"
     wrench_closure = "wrench-closure"
+    dynamic = "dynamic"
 
 
-KindOpt = Annotated[Kind, typer.Option("--kind", help="static | wrench-feasible | wrench-closure.")]
+KindOpt = Annotated[Kind, typer.Option("--kind", help="static | wrench-feasible | wrench-closure | dynamic "
+                                                      "(every acceleration of requirements.acceleration from rest).")]
 
 
 class Format(str, Enum):

@@ -20,6 +20,11 @@ CycleOpt = Annotated[Optional[float], typer.Option(
 NameArg = Annotated[str, typer.Argument(help="Name of a path in the spec's trajectories: section.")]
 
 
+TimeOptimalOpt = Annotated[bool, typer.Option(
+    "--time-optimal", help="Time the path as fast as the robot allows (tensions, winch motor speed and peak "
+                           "torque, the path's own speed and acceleration as upper limits), rest at every corner.")]
+
+
 def tension_ranges(summary: dict, cables) -> str:
     """``c1: 5–20, c2: ...``: each cable's tension range [N]."""
     return ", ".join(f"{c}: {fmt(summary['min_tension'][c])}–{fmt(summary['max_tension'][c])}" for c in cables)
@@ -45,6 +50,15 @@ def setpoint_rows(summary: dict) -> list:
             ("samples without set-points", f"{summary['unsolved_samples']:,}")]
 
 
+def time_optimal_rows(summary: dict) -> list:
+    """Summary rows of a time-optimal timing: the profile's duration it replaces, the constraints active."""
+    t = summary.get("time_optimal")
+    if t is None:
+        return []
+    shares = ", ".join(f"{k} {100 * v:.0f} %" for k, v in t["active"].items() if v > 0)
+    return [("profiled duration [s]", t["profiled_duration"]), ("active constraints", shares)]
+
+
 def delay_text(delay: dict) -> str:
     """``x: 0.12, y: ...``: delays in [ms] (given in [s])."""
     return ", ".join(f"{k}: {fmt(None if v is None else 1e3 * v)}" for k, v in delay.items())
@@ -57,6 +71,7 @@ def trajectory_cmd(
     cycle_time: CycleOpt = None,
     check: Annotated[bool, typer.Option(
         "--check", help="Exit 1 when a sample's tensions leave the cable bounds.")] = False,
+    time_optimal: TimeOptimalOpt = False,
     out: OutOpt = None,
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
@@ -70,7 +85,7 @@ def trajectory_cmd(
 
     design = load_design(spec, cable_model)
     samples, s, out_dir = job.trajectory(design, name, cycle_time, out, overwrite, engine=env.engine(),
-                                         format=format.value)
+                                         format=format.value, time_optimal=time_optimal)
     if json_:
         emit_json(s)
     else:
@@ -81,8 +96,10 @@ def trajectory_cmd(
              ("peak acceleration [m/s²]", s["max_acceleration"]),
              ("tension range [N]", tension_ranges(s, samples.cable_names)),
              ("feasible", "yes" if s["feasible"] else f"no ({s['infeasible_samples']} samples)"),
-             *setpoint_rows(s),
+             *setpoint_rows(s), *time_optimal_rows(s),
              ("files", str(out_dir.path))]))
+        if s.get("time_optimal", {}).get("limits_note"):
+            info(quiet, f"note: {s['time_optimal']['limits_note']}")
     if check and not s["feasible"]:
         raise CheckFailed(f"trajectory {name}: {s['infeasible_samples']} samples with tensions outside the bounds")
 
@@ -110,6 +127,7 @@ def simulate(
     cycle_time: CycleOpt = None,
     cable_segments: Annotated[Optional[int], typer.Option(
         "--cable-segments", help="Segments of each sagging cable in the MuJoCo model, 2-200 (default 16).")] = None,
+    time_optimal: TimeOptimalOpt = False,
     out: OutOpt = None,
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
@@ -125,7 +143,7 @@ def simulate(
         design, name, delay=delay, servo_bandwidth=servo_bandwidth, feedforward=feedforward,
         compensate_stretch=compensate_stretch, cable_damping=cable_damping, timestep=timestep, hold=hold,
         cycle_time=cycle_time, out=out, overwrite=overwrite, progress=bars(quiet or json_, min_total=2000),
-        cable_segments=cable_segments, format=format.value)
+        cable_segments=cable_segments, format=format.value, time_optimal=time_optimal)
     if json_:
         emit_json(s)
         return

@@ -66,16 +66,19 @@ def pose(
         data = hjob.free_pose_data(robot, position)
         stiffness = job.stiffness_data(design, reason="effector.orientation: free: the hanging effector's "
                                                      "stiffness is not modelled")
+        accelerations = job.acceleration_data(robot)
     else:
         p = parse_pose(design, at)
         c = parse_weights(design, weights)
         result = evaluate_pose(robot, p, c)
         data = job.pose_data(design, result)
         stiffness = job.stiffness_data(design, p, result.tensions, feasible=result.feasible)
+        accelerations = job.acceleration_data(robot, p)
         if robot.underconstrained and robot.cables.rigid and not robot.outlets.pulleys:
             data.update(hjob.hanging_fields(design, p[: design.motion.dim]))
     data["objective"] = objective.value
     data.update(stiffness)
+    data.update(accelerations)
     if json_:
         emit_json(data)
         return
@@ -113,6 +116,11 @@ def _pose_table(design, at: str, data: dict) -> None:
         out_console.print(f"hanging: the free body would tilt by {fmt(h['tilt'])}° here"
                           + ("" if h["feasible"] else f" — it cannot hang here: {h['reason']}")
                           + " (effector.orientation: fixed holds it at the commanded orientation)")
+    if data.get("acceleration_radius") is not None:
+        axes = ", ".join(f"{c} {fmt(lo)} to {fmt(hi)}" for c, (lo, hi) in zip(design.motion.position_coords,
+                                                                              data["axis_accelerations"]))
+        out_console.print(f"acceleration from rest: {fmt(data['acceleration_radius'])} m/s² in every direction; "
+                          f"along the axes [m/s²]: {axes}")
     if data["collisions"]:
         out_console.print("collisions: " + ", ".join(" – ".join(p) for p in data["collisions"]))
 

@@ -81,6 +81,8 @@ def size_motors(
     overwrite: OverwriteOpt = False,
     cable_model: CableModelOpt = None,
     format: FormatOpt = Format.csv,
+    time_optimal: Annotated[bool, typer.Option(
+        "--time-optimal", help="Size on the --trajectory timed as fast as the design allows.")] = False,
 ):
     """Motor, gearbox and drum sizing over the task workspace: motor_sizing.csv."""
     from cdpr_design.cli import env
@@ -88,7 +90,8 @@ def size_motors(
 
     design = load_design(spec, cable_model)
     result, out_dir, summary = job.size_motors(design, catalogue, trajectory, safety_factor, motor, step, out,
-                                               overwrite, engine=env.engine(), format=format.value)
+                                               overwrite, engine=env.engine(), format=format.value,
+                                               time_optimal=time_optimal)
     if json_:
         emit_json(summary)
         return

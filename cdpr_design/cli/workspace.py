@@ -8,7 +8,7 @@ from typing import Annotated, Optional
 import typer
 
 from cdpr_design.cli.common import (CableModelOpt, ForceOpt, Format, FormatOpt, JsonOpt, Kind, KindOpt, OutOpt,
-                                    OverwriteOpt, QuietOpt, SpecArg, StepOpt, bars, command, emit_json, load_design,
+                                    OverwriteOpt, QuietOpt, SpecArg, StepOpt, bars, command, emit_json, fmt, load_design,
                                     out_console, summary_table, timings_row)
 
 
@@ -42,6 +42,10 @@ def workspace(
         "--stiffness", help="Also the least stiffness [N/m] and the lowest natural frequency [Hz] of every "
                             "feasible pose (elastic cables, or ideal ones with axial_stiffness): columns "
                             "min_stiffness and lowest_frequency, stiffness_map.png.")] = False,
+    accelerations: Annotated[bool, typer.Option(
+        "--accelerations", help="Also the acceleration radius [m/s^2] of every pose: the largest translational "
+                                "acceleration reachable from rest in every direction (column "
+                                "acceleration_radius, acceleration_map.png).")] = False,
     format: FormatOpt = Format.csv,
     html: Annotated[bool, typer.Option(
         "--html", help="Also write report.html: the interactive workspace, tension map and summary in one "
@@ -58,7 +62,7 @@ def workspace(
             design, out, overwrite, kind=kind.value, step=step, force=force, collisions=collisions,
             orientations=orientations.value if orientations is not None else None, pictures=pictures,
             engine=env.engine(), progress=bars(quiet or json_, min_total=500_000), format=format.value,
-            html=html, max_tilt=max_tilt, stiffness=stiffness)
+            html=html, max_tilt=max_tilt, stiffness=stiffness, accelerations=accelerations)
     s = result.summary()
     if json_:
         emit_json(s)
@@ -83,6 +87,9 @@ def workspace(
         + ([("cable model", s["cable_model"])] if "cable_model" in s else [])
         + ([("least stiffness [N/m]", s["min_stiffness"]), ("lowest frequency [Hz]", s["lowest_frequency"])]
            if "lowest_frequency" in s else [])
+        + ([("acceleration radius [m/s²]", f"{fmt(s['min_acceleration_radius'])} – "
+                                           f"{fmt(s['max_acceleration_radius'])} (feasible poses)")]
+           if "min_acceleration_radius" in s else [])
         + ([("cable status", ", ".join(f"{k} {v:,}" for k, v in s["cable_status"].items() if v))]
            if "cable_status" in s else [])
         + [("files", str(out_dir.path))]))

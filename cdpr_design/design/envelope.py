@@ -48,6 +48,7 @@ from cdpr_design.statics import cables as cable_models
 from cdpr_design.statics.robot import Robot, tension_lower
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.degenerate import degenerate_structure
+from cdpr_design.statics.pose import structure_many
 from cdpr_design import workspaces as workspace
 from cdpr_design.workspaces import grid as wsg
 
@@ -115,26 +116,6 @@ def task_grid(design: Design, step: float | None = None) -> Grid | None:
     return Grid(tuple(float(x) for x in box[0]), tuple(float(x) for x in box[1]), tuple(st))
 
 
-def _structure_many(robot: Robot, positions: np.ndarray, Rb: np.ndarray):
-    """Structure matrices (k, n, m), lengths, free lengths (k, m) [m] and curvatures (k, m) [1/m]
-    at positions (k, 3), fixed orientation.
-
-    With swivel pulleys (the robot's ``outlets``: ``pulleys``) the
-    lengths are arc + free segment and u_i the free segment's unit vector
-    from the tangent point (:mod:`cdpr_design.statics.pulley`), the free length from the
-    tangent point to the attachment (the total length for a point outlet).  The curvatures
-    bound the length's second derivative,
-    |v^T H_i v| <= kappa_i |v|^2: 1 / L_i for a point outlet,
-    max(1 / l_f, |kappa_t|) with a pulley (:meth:`CablePaths.max_curvature`).
-    """
-    design = robot.design
-    L, free, u, kappa = robot.outlets.envelope_paths(design, positions, Rb[None, :, :])
-    mom = np.cross(Rb[None, :, :], u)
-    full = np.concatenate([u, mom], axis=2)  # (k, m, 6)
-    W = np.transpose(full[:, :, list(design.motion.wrench_rows)], (0, 2, 1))
-    return np.ascontiguousarray(W), L, free, kappa
-
-
 def wrench_model(design: Design, orientation) -> tuple[np.ndarray, np.ndarray]:
     """w_req(a) = w0 + M a for a platform acceleration a (dim) at a fixed orientation.
 
@@ -146,13 +127,7 @@ def wrench_model(design: Design, orientation) -> tuple[np.ndarray, np.ndarray]:
     pose = np.zeros(len(design.motion.coords))
     pose[d:] = rotation_coords(design, orientation)
     w0 = kin.required_wrench(design, pose)
-    M = np.empty((design.n, d))
-    for k in range(d):
-        e = np.zeros(d)
-        e[k] = 1.0
-        # required wrench = -(gravity + inertial): the inertial part is linear in a
-        M[:, k] = -kin.inertial_wrench(design, pose, e)
-    return w0, M
+    return w0, kin.mass_matrix(design, orientation)[:, :d]
 
 
 def rotation_coords(design: Design, ori3) -> np.ndarray:
@@ -202,7 +177,7 @@ def envelope_chunk(robot: Robot, positions: np.ndarray, orientation, A: float, V
     pos3[:, :d] = positions
     R = kin.rotation_matrix(*orientation)
     Rb = design.attachments @ R.T
-    W, L, free, kappa = _structure_many(robot, pos3, Rb)
+    W, L, free, kappa = structure_many(robot, pos3, Rb)
     sag_ok, offset = None, 0.0
     if not robot.cables.straight:
         sag_ok, Ws, t_eff, t_out = cable_models.sagging_structures(robot, pos3, orientation)

@@ -28,7 +28,10 @@ Checks (``check_<name>``: True pass, False fail, None not asked for):
   ``task_min_stiffness`` / ``task_lowest_frequency`` are wanted): the least
   stiffness [N/m] and the lowest natural frequency [Hz] over the feasible poses
   of the task box (:mod:`cdpr_design.workspaces.stiffness`) are at least
-  ``requirements.min_stiffness`` / ``requirements.min_frequency``.
+  ``requirements.min_stiffness`` / ``requirements.min_frequency``;
+- ``min_acceleration`` (only when the spec asks): the least acceleration radius
+  [m/s^2] over the task box (:mod:`cdpr_design.workspaces.acceleration`; 0 when a
+  task pose is not feasible) is at least ``requirements.min_acceleration``.
 """
 
 from __future__ import annotations
@@ -102,9 +105,10 @@ def stiffness_asked(design: Design, figures: Iterable[str] | None = None) -> boo
 
 
 def task_sweep(design: Design, step: float | None = None, progress=None, engine: str = "auto",
-               stiffness: bool = False):
+               stiffness: bool = False, accelerations: bool = False):
     """Sweep the task box: (result, least margin over every task pose); ``stiffness`` adds the
-    least stiffness and the lowest natural frequency over its feasible poses to the result's summary.
+    least stiffness and the lowest natural frequency over its feasible poses to the result's summary,
+    ``accelerations`` the least and greatest acceleration radius.
 
     The least margin counts infeasible poses (negative margins) and is -inf
     when a task pose has no margin (a rank-deficient structure matrix, or a
@@ -123,7 +127,7 @@ def task_sweep(design: Design, step: float | None = None, progress=None, engine:
             least[0] = min(least[0], float(mg.min()))
 
     res = ws.run(design, kind=_task_kind(design), grid=g, on_chunk=on_chunk, progress=progress,
-                 keep_maps=False, engine=engine, tilt=False, stiffness=stiffness)
+                 keep_maps=False, engine=engine, tilt=False, stiffness=stiffness, accelerations=accelerations)
     return res, least[0]
 
 
@@ -192,7 +196,8 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catal
         wres = ws.run(design, "static", step=step, keep_maps=keep_maps, progress=progress, engine=engine,
                       tilt=False, solid=solid)
     stiffness = stiffness_asked(design, figures) and task_grid(design, step) is not None
-    task, task_least = task_sweep(design, step, engine=engine, stiffness=stiffness)
+    accelerations = design.requirements.min_acceleration is not None and task_grid(design, step) is not None
+    task, task_least = task_sweep(design, step, engine=engine, stiffness=stiffness, accelerations=accelerations)
     sizing = None
     if need_sizing:
         from cdpr_design.statics.robot import Analysis, resolve
@@ -203,7 +208,7 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catal
     row = _workspace_figures(design, wres, task, task_least)
     if sizing is not None:
         row.update(_sizing_figures(sizing))
-    row.update(_checks(design, wres, task, task_least, sizing, motor, stiffness))
+    row.update(_checks(design, wres, task, task_least, sizing, motor, stiffness, accelerations))
     # per-cable figures last (their number depends on the design)
     for a in sizing.axes if sizing is not None else ():
         row[f"peak_tension_{a.cable}"] = _f(a.peak_tension)
@@ -260,7 +265,7 @@ def _sizing_figures(sizing: sz.SizingResult) -> dict:
 
 def _checks(design: Design, wres: ws.WorkspaceResult | None, task: ws.WorkspaceResult | None,
             task_least: float | None, sizing: sz.SizingResult | None, motor: str | None,
-            stiffness: bool = False) -> dict:
+            stiffness: bool = False, accelerations: bool = False) -> dict:
     """The requirement figures and limits, ``check_<name>`` (True, False, None) and ``checks_passed``.
 
     ``wres`` and ``sizing`` may be None only where :func:`parts_needed` says the checks do not need them."""
@@ -289,6 +294,10 @@ def _checks(design: Design, wres: ws.WorkspaceResult | None, task: ws.WorkspaceR
             value, limit = _f(s.get(key)), getattr(req, req_name)
             row[figure], row[f"req_{req_name}"] = value, limit
             checks[name] = None if limit is None else (value is not None and value >= limit)
+    if accelerations:  # the least acceleration radius over the task box: 0 where a task pose is not held
+        least = task.summary().get("min_acceleration_radius") if task.feasible == task.poses else 0.0
+        row["task_min_acceleration"], row["req_min_acceleration"] = _f(least), req.min_acceleration
+        checks["min_acceleration"] = least is not None and least >= req.min_acceleration
     for name in checks:
         row[f"check_{name}"] = None if checks[name] is None else bool(checks[name])
     row["checks_passed"] = all(v is not False for v in checks.values())
@@ -341,6 +350,9 @@ def check_table(row: dict) -> list[dict]:
     if row.get("check_max_frame_load") is not None:
         out.append({"requirement": "max_frame_load", "figure": num(row["max_frame_load"], " N"),
                     "limit": f"<= {row['req_max_frame_load']:g} N", "passed": row["check_max_frame_load"]})
+    if row.get("check_min_acceleration") is not None:
+        out.append({"requirement": "min_acceleration", "figure": num(row["task_min_acceleration"], " m/s²"),
+                    "limit": f">= {row['req_min_acceleration']:g} m/s²", "passed": row["check_min_acceleration"]})
     if row["check_motors"] is not None:
         out.append({"requirement": "motors", "figure": f"{row['motor'] or 'none fits'}: torque margin "
                     f"{num(row['torque_margin'])}, speed margin {num(row['speed_margin'])}",

@@ -76,10 +76,20 @@ def _bare_poses(p: Path, text: str, coords, pos, what: str) -> np.ndarray:
 
 
 def sample_named(robot, name: str, cycle_time: float | None = None, hold_end: float = 0.0,
-                 option: str = "NAME"):
+                 option: str = "NAME", time_optimal: bool = False):
     """Sample spec trajectory ``name`` of the :class:`~cdpr_design.statics.robot.Robot` the command
     resolved (reading a csv path's poses) every ``cycle_time`` [s], holding the last set-point
-    ``hold_end`` [s]; bad names, cycles and files are :class:`InputError`."""
+    ``hold_end`` [s]; bad names, cycles and files are :class:`InputError`.  ``time_optimal``: timed
+    as fast as the robot allows (:func:`timed_named`)."""
+    return timed_named(robot, name, cycle_time, hold_end, option, time_optimal)[0]
+
+
+def timed_named(robot, name: str, cycle_time: float | None = None, hold_end: float = 0.0,
+                option: str = "NAME", time_optimal: bool = False):
+    """:func:`sample_named`'s samples and, with ``time_optimal``, the
+    :class:`~cdpr_design.motion.time_optimal.Timing` of the fastest profile the robot allows
+    (:mod:`cdpr_design.motion.time_optimal`; else None)."""
+    from cdpr_design.motion import time_optimal as to
     from cdpr_design.motion import trajectory as tr
 
     design = robot.design
@@ -93,23 +103,31 @@ def sample_named(robot, name: str, cycle_time: float | None = None, hold_end: fl
             p = Path(design.source).resolve().parent / p
         poses = read_poses(p, design, f"trajectories.{name}.file")
     try:
-        return tr.sample(robot, name, cycle_time, csv_poses=poses, hold_end=hold_end)
+        if time_optimal:
+            return to.sample(robot, name, cycle_time, csv_poses=poses, hold_end=hold_end)
+        return tr.sample(robot, name, cycle_time, csv_poses=poses, hold_end=hold_end), None
     except (KeyError, ValueError) as exc:
-        raise InputError(f"trajectories.{name}: {exc}") from None
+        msg = str(exc)
+        raise InputError(msg if msg.startswith(("trajectories.", "--")) else f"trajectories.{name}: {msg}") from None
 
 
-def motion_robot(design):
-    """The design resolved once for a motion command (``trajectory``, ``simulate``): a refused
-    combination is an :class:`InputError` with the reason (:data:`cdpr_design.statics.robot.REFUSALS`)."""
+def motion_robot(design, time_optimal: bool = False):
+    """The design resolved once for a motion command (``trajectory``, ``simulate``; ``time_optimal``:
+    the path timed as fast as the robot allows): a refused combination is an :class:`InputError` with
+    the reason (:data:`cdpr_design.statics.robot.REFUSALS`)."""
     from cdpr_design.statics.robot import Analysis, resolve
 
-    return resolve(design, Analysis(command="motion"))
+    return resolve(design, Analysis(command="motion", time_optimal=time_optimal))
 
 
-def trajectory_samples(robot, name: str | None):
+def trajectory_samples(robot, name: str | None, time_optimal: bool = False):
     """The spec trajectory ``name`` of the command's resolved robot sampled at its own cycle (None:
-    no trajectory), for ``--trajectory``."""
-    return None if name is None else sample_named(robot, name, option="--trajectory")
+    no trajectory), for ``--trajectory`` (``time_optimal``: timed as fast as the robot allows)."""
+    if name is None:
+        if time_optimal:
+            raise InputError("--time-optimal: times a trajectory; give --trajectory NAME")
+        return None
+    return sample_named(robot, name, option="--trajectory", time_optimal=time_optimal)
 
 
 def design_samples(design, name: str | None):
@@ -143,16 +161,20 @@ class TrajectoryRun(NamedTuple):
 
 
 def trajectory(design, name: str, cycle_time: float | None = None, out: str | Path | None = None,
-               overwrite: bool = False, engine: str = "auto", format: str = "csv") -> TrajectoryRun:
+               overwrite: bool = False, engine: str = "auto", format: str = "csv",
+               time_optimal: bool = False) -> TrajectoryRun:
     """The ``trajectory`` command: sample ``name`` every ``cycle_time`` [s]; write trajectory.csv
     (``format='parquet'``: ``.parquet``), trajectory.json, trajectory.png and trajectory_axes.png
-    into ``out`` (the pictures are drawn while the table is written)."""
+    into ``out`` (the pictures are drawn while the table is written).  ``time_optimal``: timed as
+    fast as the robot allows (:mod:`cdpr_design.motion.time_optimal`), the JSON's ``time_optimal``
+    object and ``time_optimal.png`` added."""
     timings = Timings()
-    robot = motion_robot(design)
+    robot = motion_robot(design, time_optimal)
     with timings.phase("sweep_s"):
-        samples = sample_named(robot, name, cycle_time)
+        samples, timing = timed_named(robot, name, cycle_time, time_optimal=time_optimal)
     out_dir = output_dir(design, out, overwrite)
-    for f in (file_name("trajectory", format), "trajectory.json", "trajectory.png", "trajectory_axes.png"):
+    files = [file_name("trajectory", format), "trajectory.json", "trajectory.png", "trajectory_axes.png"]
+    for f in files + (["time_optimal.png"] if time_optimal else []):
         out_dir.target(f)  # a foreign file (or a folder) of that name: refused before any work
     with timings.phase("pictures_s"):
         pmap = path_map(design, engine)
@@ -160,12 +182,15 @@ def trajectory(design, name: str, cycle_time: float | None = None, out: str | Pa
         pending = submit_pictures(out_dir, [
             ("trajectory.png", motion_plots.trajectory_path_figure, (design, samples, pmap)),
             ("trajectory_axes.png", motion_plots.trajectory_axes_figure, (samples,)),
-        ], timings=timings)
+        ] + ([("time_optimal.png", motion_plots.time_optimal_figure, (design, name, timing))] if time_optimal
+             else []), timings=timings)
         with timings.phase("write_s"):
             write_table(out_dir, "trajectory", samples.columns(), format, design, trajectory=name,
                         cycle_time=samples.cycle_time)
         pending.wait()
         s = samples.summary()
+        if timing is not None:
+            s["time_optimal"] = timing.summary()
         s["timings"] = timings.as_dict()
         out_dir.write_json("trajectory.json", s)
     return TrajectoryRun(samples, s, out_dir)
@@ -197,12 +222,13 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
              timestep: float = 5e-4, hold: float | None = None, cycle_time: float | None = None,
              out: str | Path | None = None, overwrite: bool = False,
              progress: Progress | None = None, cable_segments: int | None = None,
-             format: str = "csv") -> SimulationRun:
+             format: str = "csv", time_optimal: bool = False) -> SimulationRun:
     """The ``simulate`` command: run trajectory ``name`` on the MuJoCo model; write simulation.csv
     (``format='parquet'``: ``.parquet``), simulation.json and simulation.png.  ``delay``,
     ``timestep``, ``hold`` [s]; ``servo_bandwidth`` [rad/s]; ``hold`` default 0.5 s + the delay;
     ``cable_segments``: segments of each sagging cable (2 to 200).  With elastic or sagging cables a
-    sample without set-points is an InputError."""
+    sample without set-points is an InputError.  ``time_optimal``: the path timed as fast as the
+    robot allows (:mod:`cdpr_design.motion.time_optimal`)."""
     from cdpr_design.motion import simulation as sim
     from cdpr_design.motion.run import simulate
 
@@ -212,8 +238,9 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
     _check_simulation(settings, hold)
     if cable_segments is not None and not 2 <= cable_segments <= 200:
         raise InputError(f"--cable-segments: expected 2 to 200, got {cable_segments}")
-    robot = motion_robot(design)
-    samples = sample_named(robot, name, cycle_time, hold_end=(0.5 + delay) if hold is None else hold)
+    robot = motion_robot(design, time_optimal)
+    samples = sample_named(robot, name, cycle_time, hold_end=(0.5 + delay) if hold is None else hold,
+                           time_optimal=time_optimal)
     if samples.cycle_time < timestep:
         raise InputError(f"--timestep: {timestep} s is longer than the cycle time {samples.cycle_time} s")
     out_dir = output_dir(design, out, overwrite)

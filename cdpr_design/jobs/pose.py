@@ -90,3 +90,29 @@ def stiffness_data(design, pose=None, tensions=None, reason: str | None = None, 
     if s.frequency_floor is not None:
         out["cable_frequency_tensions"] = {c: float(v) for c, v in zip(names, s.frequency_floor)}
     return out
+
+
+def acceleration_data(robot, pose=None) -> dict:
+    """The acceleration keys of ``pose --json`` (cli.md) at ``pose`` (motion coordinates [m, rad]) of
+    ``robot`` (:func:`cdpr_design.statics.acceleration.capability`): ``acceleration_radius`` [m/s^2],
+    ``axis_accelerations`` ([min, max] per translational axis [m/s^2], null where unbounded or none
+    reachable), ``acceleration_direction`` (the unit direction of least reach) and
+    ``acceleration_reason`` (why they are null: the robot's
+    :func:`~cdpr_design.statics.robot.acceleration_reason`, else null)."""
+    from cdpr_design.statics.robot import acceleration_reason
+
+    reason = acceleration_reason(robot.cables, robot.orientation)
+    if reason is not None or pose is None:
+        return {"acceleration_radius": None, "axis_accelerations": None, "acceleration_direction": None,
+                "acceleration_reason": reason}
+    from cdpr_design.statics.acceleration import capability
+
+    c = capability(robot, pose)
+
+    def num(v):
+        return float(v) if np.isfinite(v) else None
+
+    return {"acceleration_radius": num(c.radius),
+            "axis_accelerations": [[num(lo), num(hi)] for lo, hi in c.axes],
+            "acceleration_direction": [num(v) for v in c.direction] if np.all(np.isfinite(c.direction)) else None,
+            "acceleration_reason": None}

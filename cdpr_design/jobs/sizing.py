@@ -43,19 +43,22 @@ class SizingRun(NamedTuple):
 
 def size_motors(design, catalogue: Path | None = None, trajectory: str | None = None, safety_factor: float | None = None,
                 motor: str | None = None, step: float | None = None, out: str | Path | None = None,
-                overwrite: bool = False, engine: str = "auto", format: str = "csv") -> SizingRun:
+                overwrite: bool = False, engine: str = "auto", format: str = "csv",
+                time_optimal: bool = False) -> SizingRun:
     """The ``size-motors`` command: size motor, gearbox and drum over the task workspace
     (grid ``step`` [m]; duty cycle of spec ``trajectory``, else a standard one) from the
     shipped catalogue extended by the YAML file ``catalogue``; write motor_sizing.csv
-    (``format='parquet'``: ``.parquet``) into ``out``."""
+    (``format='parquet'``: ``.parquet``) into ``out``.  ``time_optimal``: the trajectory timed as
+    fast as the robot allows (:mod:`cdpr_design.motion.time_optimal`)."""
     from cdpr_design.design import sizing as sz
     from cdpr_design.model import spec
     from cdpr_design.statics.robot import Analysis, resolve
 
     timings = Timings()
     cat = spec.load_catalogue(catalogue)
-    robot = resolve(design, Analysis(command="size-motors"))  # once: the trajectory's samples and the sizing take it
-    samples = trajectory_samples(robot, trajectory)
+    robot = resolve(design, Analysis(command="size-motors", time_optimal=time_optimal))  # once: the trajectory's
+    # samples and the sizing take it
+    samples = trajectory_samples(robot, trajectory, time_optimal)
     out_dir = output_dir(design, out, overwrite)
     out_dir.target(file_name("motor_sizing", format))  # a foreign file: refused before any work
     with timings.phase("sweep_s"):

@@ -15,6 +15,7 @@ from cdpr_design.jobs.tables import Timings, grid_metadata, table_metadata
 from cdpr_design.plots import workspace as wsplots
 from cdpr_design.plots.hanging import tilt_figure
 from cdpr_design.plots.solid import frame_load_figure
+from cdpr_design.plots.acceleration import acceleration_figure
 from cdpr_design.plots.stiffness import stiffness_figure
 from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
@@ -52,7 +53,8 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
                   collisions: bool = False, orientations: str | None = None,
                   pictures: PictureWorker | None = None, engine: str = "auto",
                   progress: Progress | None = None, format: str = "csv", html: bool = False,
-                  timings: Timings | None = None, max_tilt: float | None = None, stiffness: bool = False):
+                  timings: Timings | None = None, max_tilt: float | None = None, stiffness: bool = False,
+                  accelerations: bool = False):
     """Sweep, stream ``workspace.csv`` (``format='parquet'``: ``workspace.parquet``), write the
     pictures, ``summary.json`` and (``html``) ``report.html``; return the result.
 
@@ -69,11 +71,12 @@ def run_workspace(design, out: OutputDir, kind: str = "static", step: float | No
     ``effector.orientation: free`` (its sweeps add ``tilt_map.png``).  With
     sagging cables the grid is swept again with ideal cables for ``cable_models.png``.
     ``stiffness``: the columns ``min_stiffness`` [N/m] and ``lowest_frequency`` [Hz] and
-    ``stiffness_map.png`` (:mod:`cdpr_design.workspaces.stiffness`).
+    ``stiffness_map.png`` (:mod:`cdpr_design.workspaces.stiffness`).  ``accelerations``: the column
+    ``acceleration_radius`` [m/s^2] and ``acceleration_map.png`` (:mod:`cdpr_design.workspaces.acceleration`).
     """
     timings = timings or Timings()
     result, pending = start_workspace(design, out, kind, step, force, collisions, orientations, pictures, engine,
-                                      progress, format, html, timings, max_tilt, stiffness)
+                                      progress, format, html, timings, max_tilt, stiffness, accelerations)
     finish_workspace(out, result, pending, timings)
     return result
 
@@ -82,7 +85,8 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
                     collisions: bool = False, orientations: str | None = None,
                     pictures: PictureWorker | None = None, engine: str = "auto",
                     progress: Progress | None = None, format: str = "csv", html: bool = False,
-                    timings: Timings | None = None, max_tilt: float | None = None, stiffness: bool = False):
+                    timings: Timings | None = None, max_tilt: float | None = None, stiffness: bool = False,
+                    accelerations: bool = False):
     """:func:`run_workspace` up to the pictures: the table is written and the pictures are being
     drawn.  Returns (result, pending pictures); :func:`finish_workspace` waits for them, so a
     caller can do more work (``report``'s evaluation) while they are drawn."""
@@ -90,7 +94,8 @@ def start_workspace(design, out: OutputDir, kind: str = "static", step: float | 
 
     timings = timings if timings is not None else Timings()
     grid = ws.make_grid(design, step, force)
-    p = ws.plan(ws.robot_for(design, kind, collisions, orientations, engine, max_tilt, stiffness), grid,
+    p = ws.plan(ws.robot_for(design, kind, collisions, orientations, engine, max_tilt, stiffness,
+                             accelerations), grid,
                 solid=True)
     meta = table_metadata(design, "workspace", p.columns, kind=kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])
@@ -161,7 +166,8 @@ def _sweep(p, progress, writer, timings):
 #: it sweeps the grid again, :func:`cable_model_picture`).
 FIGURES = {"workspace.png": wsplots.workspace_figure, "tension_map.png": wsplots.tension_figure,
            "tilt_map.png": tilt_figure, "orientation_workspace.png": wsplots.orientation_figure,
-           "stiffness_map.png": stiffness_figure, "frame_loads.png": frame_load_figure}
+           "stiffness_map.png": stiffness_figure, "frame_loads.png": frame_load_figure,
+           "acceleration_map.png": acceleration_figure}
 
 
 def workspace_pictures(result, names: list[str] | None = None) -> list:

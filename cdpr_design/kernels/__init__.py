@@ -28,6 +28,7 @@ module             what
 ``sag_path``       sagging statics along a sampled trajectory
 ``stiffness``      the effector's least stiffness and lowest natural frequency at many poses
 ``cache``          where numba caches the kernels: a folder per version of their sources (no numba)
+``acceleration``   the accelerations an effector at rest can reach; the available wrench set's facets
 =================  ==========================================================
 """
 
@@ -53,7 +54,7 @@ _EXPORTS = {
                      "square_projection"), "tension_qp"),
 }
 
-_SUBMODULES = {"cable_shape", "catenary", "codes", "geometry", "hanging", "hsm", "hsm_small", "interference", "linalg",
+_SUBMODULES = {"acceleration", "cable_shape", "catenary", "codes", "geometry", "hanging", "hsm", "hsm_small", "interference", "linalg",
                "parallel", "pose", "sag_path", "sagging", "stiffness", "sweep", "tension_qp", "cache"}
 
 __all__ = sorted(_EXPORTS)

@@ -324,6 +324,11 @@ class Requirements:
     min_frequency: float | None = None
     #: largest force [N] a cable may put on the frame at its outlet over the feasible workspace grid
     max_frame_load: float | None = None
+    #: the box of accelerations [m/s^2, rad/s^2] (lower, upper; one per motion coordinate) reachable from rest
+    #: at every pose of a ``dynamic`` workspace
+    acceleration: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    #: least acceleration radius [m/s^2] over the task box (:mod:`cdpr_design.statics.acceleration`)
+    min_acceleration: float | None = None
 
 
 @dataclass(frozen=True)
@@ -332,8 +337,8 @@ class Trajectory:
 
     name: str
     type: str
-    speed: float
-    acceleration: float
+    speed: float | None
+    acceleration: float | None
     center: tuple[float, ...] | None = None
     side: float | None = None
     radius: float | None = None

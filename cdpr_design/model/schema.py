@@ -158,12 +158,20 @@ class RequirementsSpec(StrictModel):
     max_frame_load: PosFloat | None = Field(
         None, description="Largest force [N] a cable may put on the frame at its outlet over the feasible "
                           "workspace grid (check)")
+    acceleration: BoxSpec | None = Field(
+        None, description="Accelerations the effector must reach from rest (workspace --kind dynamic): lower and "
+                          "upper, one value per motion coordinate [m/s^2, rad/s^2]")
+    min_acceleration: NonNegFloat | None = Field(
+        None, description="Least acceleration radius [m/s^2] over the task box (check): every translational "
+                          "acceleration of this size, in any direction, reachable from rest")
 
 
 class TrajectorySpec(StrictModel):
     type: Literal["square", "polyline", "circle", "csv"]
-    speed: PosFloat = Field(description="Cruise speed [m/s]")
-    acceleration: PosFloat = Field(description="Acceleration limit [m/s^2]")
+    speed: PosFloat | None = Field(None, description="Cruise speed [m/s]; needed by the speed profile, an "
+                                                      "upper limit of --time-optimal")
+    acceleration: PosFloat | None = Field(None, description="Acceleration limit [m/s^2]; needed by the speed "
+                                                             "profile, an upper limit of --time-optimal")
     center: Vec | None = None
     side: PosFloat | None = None
     radius: PosFloat | None = None

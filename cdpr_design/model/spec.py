@@ -337,6 +337,8 @@ def _requirements(s: DesignSpec) -> Requirements:
         safety_factor=req.safety_factor if req.safety_factor is not None else 1.0, max_tilt=req.max_tilt,
         certified=bool(req.certified), min_cable_frequency=req.min_cable_frequency,
         min_stiffness=req.min_stiffness, min_frequency=req.min_frequency, max_frame_load=req.max_frame_load,
+        acceleration=(tuple(req.acceleration.lower), tuple(req.acceleration.upper)) if req.acceleration else None,
+        min_acceleration=req.min_acceleration,
     )
 
 

@@ -38,6 +38,13 @@ def check_semantics(s: DesignSpec) -> Problems:
         if r is not None and getattr(r, key, None) is not None and r.task_box is None:
             p.append((f"requirements.{key}", "is checked over requirements.task_box, which the spec does not "
                                              "give: add the task box, or remove the requirement"))
+    if r is not None and r.acceleration is not None:
+        coords = MOTIONS[s.motion].coords
+        what = f"numbers ({', '.join(coords)}) for motion {s.motion}"
+        a = _vec(p, "requirements.acceleration.lower", r.acceleration.lower, len(coords), what)
+        b = _vec(p, "requirements.acceleration.upper", r.acceleration.upper, len(coords), what)
+        if a and b:
+            _check_ordered(p, "requirements.acceleration", r.acceleration.lower, r.acceleration.upper)
     _check_hanging_weight(p, s)
     if r is not None and r.max_tilt is not None and s.effector.orientation != "free":
         p.append(("requirements.max_tilt", "a tilt limit needs effector.orientation: free (a fixed effector is "

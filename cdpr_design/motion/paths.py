@@ -111,6 +111,13 @@ def segment_length(design: Design, p0, p1) -> float:
     return L
 
 
+def _needs_profile(traj: Trajectory) -> None:
+    """A ValueError naming ``speed`` / ``acceleration`` when the path lacks the limits its profile needs."""
+    missing = [k for k in ("speed", "acceleration") if getattr(traj, k) is None]
+    if missing:
+        raise ValueError(f"{' and '.join(missing)}: needed to profile the path (or time it with --time-optimal)")
+
+
 def line_samples(design: Design, traj: Trajectory, p0, p1, dt: float):
     """Samples of the straight segment p0 -> p1 every ``dt`` [s], rest to rest, p0 excluded.
 
@@ -120,6 +127,7 @@ def line_samples(design: Design, traj: Trajectory, p0, p1, dt: float):
     D = segment_length(design, p0, p1)
     if D == 0.0:
         return None
+    _needs_profile(traj)
     s, v, a = prof.sampled(prof.for_trajectory(traj, D, traj.speed, traj.acceleration, dt), dt)
     e = (p1 - p0) / D
     pose = p0[None, :] + s[:, None] * e[None, :]
@@ -133,6 +141,7 @@ def circle_samples(design: Design, traj: Trajectory, dt: float, start_angle: flo
     Returns (pose, velocity, acceleration) arrays (N + 1, ncoords); the last
     pose is exactly on the start point.
     """
+    _needs_profile(traj)
     r = float(traj.radius)
     c = np.asarray(traj.center, float)
     ori = fixed_orientation(design, traj)

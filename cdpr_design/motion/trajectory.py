@@ -286,8 +286,9 @@ def _lookup(design: Design, trajectory: str | Trajectory) -> Trajectory:
 
 
 def _path_blocks(design: Design, traj: Trajectory, dt: float, csv_poses,
-                 hold_start: float, hold_end: float) -> _Blocks:
-    """The samples of the whole path every ``dt`` [s]: start, holds, approach, segments or arc."""
+                 hold_start: float, hold_end: float, line=paths.line_samples) -> _Blocks:
+    """The samples of the whole path every ``dt`` [s]: start, holds, approach, segments (each
+    sampled by ``line``, :func:`sample`) or arc."""
     ori = paths.fixed_orientation(design, traj)
     corners = None if traj.type == "circle" else paths.path_waypoints(design, traj, csv_poses)
     first = paths.first_pose(design, traj, corners)
@@ -297,13 +298,13 @@ def _path_blocks(design: Design, traj: Trajectory, dt: float, csv_poses,
     if hold_start > 0:
         blocks.rest(start, int(round(hold_start / dt)), 0)
     if not np.allclose(start, first):
-        blocks.move("approach", paths.line_samples(design, traj, start, first, dt), start, first)
+        blocks.move("approach", line(design, traj, start, first, dt), start, first)
     if traj.type == "circle":
         p, v, a = paths.circle_samples(design, traj, dt)
         blocks.move("arc", (p[1:], v[1:], a[1:]), first, first)
     else:
         for q in range(corners.shape[0] - 1):
-            blocks.move("line", paths.line_samples(design, traj, corners[q], corners[q + 1], dt),
+            blocks.move("line", line(design, traj, corners[q], corners[q + 1], dt),
                         corners[q], corners[q + 1])
     if hold_end > 0:
         blocks.rest(blocks.last_pose, int(round(hold_end / dt)), max(len(blocks.segments) - 1, 0))
@@ -321,7 +322,7 @@ def motor_angles(design: Design, lengths) -> np.ndarray:
 
 def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None = None, *,
            csv_poses=None, hold_start: float = 0.0, hold_end: float = 0.0,
-           external=None) -> Samples:
+           external=None, line=None) -> Samples:
     """Sample a trajectory of the robot's design at a fixed cycle time.
 
     Parameters
@@ -339,6 +340,11 @@ def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None 
         simulation settle); rounded to whole cycles.
     external : (n,) array, optional
         Constant external wrench on the effector [N, N m] (motion's rows).
+    line : callable, optional
+        ``line(design, traj, p0, p1, dt)`` -> (pose, velocity, acceleration) (N, ncoords) arrays of
+        the straight segment p0 -> p1 from rest to rest, p0 excluded (None: zero length); default
+        the path's speed profile (:func:`cdpr_design.motion.paths.line_samples`);
+        :mod:`cdpr_design.motion.time_optimal` passes its own.
 
     Returns
     -------
@@ -356,7 +362,7 @@ def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None 
     dt = float(cycle_time or traj.cycle_time or DEFAULT_CYCLE_TIME)
     if not dt > 0:
         raise ValueError(f"cycle_time must be > 0, got {dt}")
-    blocks = _path_blocks(design, traj, dt, csv_poses, hold_start, hold_end)
+    blocks = _path_blocks(design, traj, dt, csv_poses, hold_start, hold_end, line or paths.line_samples)
     pose, vel, acc, seg = blocks.stack()
     time = dt * np.arange(pose.shape[0])
     st = states(robot, pose, vel, acc, time=time, external=external)

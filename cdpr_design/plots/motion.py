@@ -108,3 +108,55 @@ def simulation_figure(result):
     fig.suptitle(f"simulation of {result.name}: delay {1000 * st.get('delay', 0):g} ms, servo bandwidth "
                  f"{st.get('servo_bandwidth', float('nan')):g} rad/s", fontsize=10)
     return fig
+
+
+#: Colours of the constraints active along a time-optimal profile (time_optimal.CONSTRAINTS order).
+_ACTIVE_COLOURS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00")
+
+
+def time_optimal_figure(design, name, timing):
+    """The time-optimal profile of trajectory ``name`` (a :class:`~cdpr_design.motion.time_optimal.Timing`):
+    path speed s' [m/s] against the position along the path s [m], with the limit curve (the
+    largest s' the constraints allow at each s) and the constraint active at each point."""
+    from cdpr_design.motion.time_optimal import CONSTRAINTS
+
+    fig, ax = pyplot().subplots(figsize=(8.0, 4.8))
+    fig.subplots_adjust(left=0.09, right=0.98, bottom=0.12, top=0.84)
+    top = max((float(g.speed.max()) for g in timing.segments), default=0.0)
+    ceiling = 1.6 * top if top > 0 else 1.0
+    above = []
+    for k, g in enumerate(timing.segments):
+        s = g.start + g.s
+        finite = np.isfinite(g.limit) & (g.limit < 1e5)
+        if finite.any() and g.limit[finite].min() > ceiling:
+            above.append((float(g.limit[finite].min()), float(g.limit[finite].max())))
+        ax.plot(s[finite], g.limit[finite], "-", color="0.35", lw=1.6, label="limit curve (max. velocity)")
+        for arr, style, lab in ((g.stoppable, ":", "stops at rest by the corner"),
+                                (g.reachable, "--", "reached from rest at the corner")):
+            if arr is not None:
+                ax.plot(s, arr, style, color="0.55", lw=1.0, label=lab)
+        ax.plot(s, g.speed, "-", color="k", lw=1.4, label="time-optimal speed")
+        for j, cname in enumerate(CONSTRAINTS):
+            on = g.active == j
+            if on.any():
+                ax.plot(s[on], g.speed[on], ".", ms=3, color=_ACTIVE_COLOURS[j],
+                        label=f"active: {cname.replace('_', ' ')}")
+        if k:
+            ax.axvline(g.start, color="0.8", lw=0.8, zorder=0)
+    handles, labels = ax.get_legend_handles_labels()
+    seen = {}
+    for h, lab in zip(handles, labels):
+        seen.setdefault(lab, h)
+    ax.legend(seen.values(), seen.keys(), fontsize=8, loc="upper right", ncol=2)
+    ax.set_ylim(0.0, ceiling)
+    ax.set_xlabel("position along the path s [m]")
+    ax.set_ylabel("path speed ds/dt [m/s]")
+    total = sum(g.duration for g in timing.segments)
+    prof = (f", profiled {timing.profiled_duration:.3f} s" if timing.profiled_duration is not None else "")
+    note = f"\n{timing.note}" if timing.note else ""
+    if above:
+        note += (f"\nlimit curve above the chart on {len(above)} segment(s): "
+                 f"{min(a for a, _ in above):.3g}–{max(b for _, b in above):.3g} m/s")
+    ax.set_title(f"{design.name}: {name} timed as fast as the robot allows — {total:.3f} s{prof}{note}",
+                 fontsize=10)
+    return fig

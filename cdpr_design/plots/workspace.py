@@ -17,7 +17,7 @@ from cdpr_design.plots._style import BLUE, VERMILLION, cmap_grey_bad, pyplot
 from cdpr_design.plots.solid import draw_boundary, draw_slice_outline
 
 _KIND_TEXT = {"static": "static-equilibrium", "wrench-feasible": "wrench-feasible",
-              "wrench-closure": "wrench-closure"}
+              "wrench-closure": "wrench-closure", "dynamic": "dynamic"}
 
 
 def _own_figure(ax, what: str) -> None:

@@ -192,6 +192,31 @@ def inertial_wrench(design: Design, pose, acceleration, angular_velocity=None,
     return full[list(design.motion.wrench_rows)]
 
 
+def mass_matrix(design: Design, orientation) -> np.ndarray:
+    """The effector's mass matrix at rest M (n, ncoords) at a full orientation (3,) [rad].
+
+    An effector at rest with acceleration a (the motion's coordinates: the reference point's
+    linear acceleration [m/s^2], then the second derivatives of the rotation coordinates
+    [rad/s^2]) needs the cables to supply M a [N, N m] besides balancing gravity and the
+    external wrench: W t + w_gravity + w_external = M a.  The columns are the opposite of
+    :func:`inertial_wrench` for each unit acceleration; at rest the angular acceleration is
+    E(angles) theta'' (:func:`euler_rates_to_omega`: the term E' theta' vanishes with the
+    velocity, as do the Coriolis and gyroscopic terms w x I w).
+    """
+    mot = design.motion
+    ori = np.asarray(orientation, float)
+    pose = pose_at(design, np.zeros(3), ori)
+    M = np.empty((design.n, len(mot.coords)))
+    for k, idx in enumerate(mot.pose_index):
+        e = np.zeros(3)
+        e[idx % 3] = 1.0
+        if idx < 3:
+            M[:, k] = -inertial_wrench(design, pose, e)
+        else:
+            M[:, k] = -inertial_wrench(design, pose, np.zeros(3), angular_acceleration=euler_rates_to_omega(ori, e))
+    return M
+
+
 def required_wrench(design: Design, pose, external=None) -> np.ndarray:
     """w_req = -(w_gravity + w_external): what the cables must supply, W t = w_req."""
     w = gravity_wrench(design, pose)

@@ -4,7 +4,7 @@ A pose's feasibility, capacity margin, tensions, lengths and cable state are the
 one-pose case of the sweep's batched evaluation
 (:func:`cdpr_design.workspaces.pose.evaluate_pose`: the sweep plan run on a one-pose
 grid).  This module holds its result (:class:`PoseResult`) and the structure matrix
-at one pose (:func:`structure`); the tensions of another objective are
+at one pose (:func:`structure`; at many positions of one orientation, :func:`structure_many`); the tensions of another objective are
 :func:`cdpr_design.statics.tension.tensions_for_objective`, the colliding pairs
 :func:`cdpr_design.statics.interference.collisions`.
 
@@ -63,3 +63,23 @@ def structure(robot: Robot, full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     outlet, to the attachment), swivel pulleys honoured (the sweep kernels' geometry: true
     outlet points); W's columns are unspecified where a cable has zero length."""
     return robot.outlets.structure(robot, full)
+
+
+def structure_many(robot: Robot, positions: np.ndarray, Rb: np.ndarray):
+    """Structure matrices (k, n, m), lengths, free lengths (k, m) [m] and curvatures (k, m) [1/m]
+    at positions (k, 3), fixed orientation.
+
+    With swivel pulleys (the robot's ``outlets``: ``pulleys``) the
+    lengths are arc + free segment and u_i the free segment's unit vector
+    from the tangent point (:mod:`cdpr_design.statics.pulley`), the free length from the
+    tangent point to the attachment (the total length for a point outlet).  The curvatures
+    bound the length's second derivative,
+    |v^T H_i v| <= kappa_i |v|^2: 1 / L_i for a point outlet,
+    max(1 / l_f, |kappa_t|) with a pulley (:meth:`CablePaths.max_curvature`).
+    """
+    design = robot.design
+    L, free, u, kappa = robot.outlets.envelope_paths(design, positions, Rb[None, :, :])
+    mom = np.cross(Rb[None, :, :], u)
+    full = np.concatenate([u, mom], axis=2)  # (k, m, 6)
+    W = np.transpose(full[:, :, list(design.motion.wrench_rows)], (0, 2, 1))
+    return np.ascontiguousarray(W), L, free, kappa

@@ -53,8 +53,11 @@ ORIENTATIONS = (S.COMMANDED.name, S.HELD.name, S.HANGING.name)
 #: Engines of a grid sweep, as asked: ``auto`` and ``numba`` sweep with the implementation the
 #: robot has (:func:`resolve`), ``numpy`` also refuses a robot the closed form does not cover.
 ENGINES = ("auto", "numba", "numpy")
-#: Kinds of workspace and their kernel codes (= ``kernels.KIND_*``; a test checks).
-KINDS = {"static": 0, "wrench-feasible": 1, "wrench-closure": 2}
+#: Kinds of workspace and their kernel codes (= ``kernels.KIND_*``; a test checks).  ``dynamic`` is
+#: tested as ``wrench-feasible`` is, on a larger set of required wrenches: every vertex of the external
+#: wrench box plus every vertex of the inertial wrenches of ``requirements.acceleration``
+#: (:func:`cdpr_design.statics.wrenches.wrench_vertices`).
+KINDS = {"static": 0, "wrench-feasible": 1, "wrench-closure": 2, "dynamic": 1}
 #: Commands that analyse a design (``Analysis.command``).
 COMMANDS = ("workspace", "pose", "fk", "certify", "size-motors", "motion", "check", "report", "statics")
 #: What an analysis needs of the robot, the capabilities the rows of :data:`REFUSALS` are keyed on:
@@ -94,7 +97,9 @@ class Analysis:
     None; ``max_tilt`` [deg] a tilt limit asked on the command line; ``objective`` and
     ``weights`` the tension distribution of ``pose``; ``engine`` one of :data:`ENGINES`;
     ``stiffness`` the sweep adds the least stiffness and the lowest natural frequency of every
-    feasible pose; ``hold`` the orientation is commanded at every pose, also of a free effector
+    feasible pose; ``accelerations`` the sweep adds the acceleration radius of every pose
+    (:mod:`cdpr_design.statics.acceleration`); ``time_optimal`` a path is timed as fast as the robot
+    allows (:mod:`cdpr_design.motion.time_optimal`); ``hold`` the orientation is commanded at every pose, also of a free effector
     (one pose's statics, :meth:`one_pose`).
     """
 
@@ -108,6 +113,8 @@ class Analysis:
     engine: str = "auto"
     stiffness: bool = False
     hold: bool = False
+    accelerations: bool = False
+    time_optimal: bool = False
 
     @property
     def needs(self) -> frozenset[str]:
@@ -119,7 +126,7 @@ class Analysis:
         orientation a free effector would find; no interference mask, orientation set, tilt
         limit or stiffness columns)."""
         return dataclasses.replace(self, collisions=False, orientations=None, max_tilt=None, stiffness=False,
-                                   hold=True, engine=engine)
+                                   accelerations=False, hold=True, engine=engine)
 
 
 @dataclass(frozen=True)
@@ -139,6 +146,10 @@ class Facts:
     stiffness: str | None = None
     #: ``requirements.min_cable_frequency`` bounds a cable with a mass per length from below
     string_floor: bool = False
+    #: the spec gives ``requirements.acceleration`` (the box of a ``dynamic`` workspace)
+    acceleration_box: bool = False
+    #: why the acceleration capability is not computed (None: it is; :func:`acceleration_reason`)
+    acceleration: str | None = None
 
 
 @dataclass(frozen=True)
@@ -219,6 +230,19 @@ REFUSALS: tuple[Refusal, ...] = (
                            "the cables hold: the stiffness is reported at one orientation (leave out "
                            "--orientations)",
             lambda f, a: a.stiffness and a.orientations is not None),
+    Refusal("requirements.acceleration", "--kind dynamic tests the accelerations of this box from rest at every "
+                                         "pose: give lower and upper, one value per motion coordinate "
+                                         "[m/s^2, rad/s^2]",
+            lambda f, a: a.kind == "dynamic" and not f.acceleration_box),
+    Refusal("--accelerations", "{f.acceleration}",
+            lambda f, a: a.accelerations and f.acceleration is not None),
+    Refusal("--accelerations", "an orientation workspace's rows stand for a set of orientations: the "
+                               "acceleration radius is reported at one orientation (leave out --orientations)",
+            lambda f, a: a.accelerations and a.orientations is not None),
+    Refusal("--time-optimal", "cable model 'sagging': the time-optimal constraints take the tensions of straight "
+                              "cables (a catenary's wrench is not linear in its tension); use --cable-model "
+                              "elastic or ideal",
+            lambda f, a: a.time_optimal and not f.cables.straight),
     Refusal("engine=numpy", "the numpy engine covers two cables with two wrench rows (static or wrench-feasible) "
                             "from point outlets, at the workspace's orientation; use auto or numba for this design",
             lambda f, a: a.engine == "numpy" and not _numpy_covers(f, a)),
@@ -322,6 +346,12 @@ class Robot:
         return KINDS[self.analysis.kind]
 
     @property
+    def every_vertex(self) -> bool:
+        """Whether every vertex of the required wrench set must be feasible (``wrench-feasible``,
+        ``dynamic``), not only the first (``static``) or none (``wrench-closure``)."""
+        return self.kcode == KINDS["wrench-feasible"]
+
+    @property
     def planar(self) -> bool:
         return self.design.motion.planar
 
@@ -387,7 +417,19 @@ def facts(design: Design, hold: bool = False) -> Facts:
         orientation = S.COMMANDED
     return Facts(cables, outlets, orientation, under, weight, design.motion.rotational,
                  design.m == 2 and design.n == 2, design.motion.name,
-                 stiffness_reason(design, cables, outlets, orientation), bool(np.any(design.string_floor > 0)))
+                 stiffness_reason(design, cables, outlets, orientation), bool(np.any(design.string_floor > 0)),
+                 design.requirements.acceleration is not None, acceleration_reason(cables, orientation))
+
+
+def acceleration_reason(cables: CableModel, orientation: Orientation) -> str | None:
+    """Why the acceleration capability of a design's effector (:mod:`cdpr_design.statics.acceleration`)
+    is not computed, or None (it is: straight cables, the orientation commanded or held)."""
+    if not cables.straight:
+        return ("sagging cables: the wrench of a catenary is not linear in its tension, so the accelerations "
+                "it allows are not modelled (use --cable-model elastic or ideal)")
+    if orientation.free:
+        return "effector.orientation: free: the hanging effector's accelerations are not modelled"
+    return None
 
 
 def stiffness_reason(design: Design, cables: CableModel, outlets: Outlets, orientation: Orientation) -> str | None:

@@ -5,7 +5,10 @@ Kinds (:data:`cdpr_design.statics.robot.KINDS`, the kernels' ``KIND_*`` codes):
 - ``static``: gravity only;
 - ``wrench-feasible``: gravity plus every vertex of ``workspace.external_wrench``;
 - ``wrench-closure``: tension bounds ignored; the cables positively span the
-  wrench space (rank n).
+  wrench space (rank n);
+- ``dynamic``: as ``wrench-feasible``, with the inertial wrench M a of every vertex a
+  of ``requirements.acceleration`` added to every one of its wrenches (the Minkowski
+  sum of the two sets): every acceleration of the box reachable from rest.
 
 :func:`wrench_vertices` gives the wrenches a kind requires at an orientation:
 what the pose evaluation
@@ -28,15 +31,28 @@ def wrench_vertices(design: Design, kind: str, orientation=None) -> np.ndarray:
 
     Row 0 is the nominal wrench -gravity (the one whose tensions are
     reported).  For ``wrench-feasible`` every vertex of the external wrench
-    box is added to gravity (dimensions where lower = upper contribute one value).
+    box is added to gravity (dimensions where lower = upper contribute one value);
+    for ``dynamic`` also, and to each of those wrenches the inertial wrench M a
+    (:func:`~cdpr_design.statics.kinematics.mass_matrix`) of every vertex a of
+    ``requirements.acceleration`` is added.
     """
     ori = design.default_orientation_full() if orientation is None else np.asarray(orientation, float)
     g = kin.gravity_wrench(design, kin.pose_at(design, np.zeros(3), ori))
     rows = [-g]
     box = design.workspace.external_wrench
-    if kind == "wrench-feasible" and box is not None:
-        lo, hi = np.asarray(box.lower), np.asarray(box.upper)
-        choices = [(lo[i],) if lo[i] == hi[i] else (lo[i], hi[i]) for i in range(lo.size)]
-        for v in itertools.product(*choices):
-            rows.append(-(g + np.asarray(v)))
+    if kind in ("wrench-feasible", "dynamic") and box is not None:
+        for v in box_vertices(box.lower, box.upper):
+            rows.append(-(g + v))
+    if kind == "dynamic" and design.requirements.acceleration is not None:
+        M = kin.mass_matrix(design, ori)
+        inertial = [M @ a for a in box_vertices(*design.requirements.acceleration)]
+        rows = rows[:1] + [r + f for r in rows for f in inertial]
     return np.ascontiguousarray(np.array(rows, dtype=float))
+
+
+def box_vertices(lower, upper) -> list[np.ndarray]:
+    """The vertices of the box ``lower`` .. ``upper`` (one value a dimension, any unit); a dimension
+    whose two ends are equal gives one value, so a flat box has fewer than 2^d vertices."""
+    lo, hi = np.asarray(lower, float), np.asarray(upper, float)
+    choices = [(lo[i],) if lo[i] == hi[i] else (lo[i], hi[i]) for i in range(lo.size)]
+    return [np.asarray(v) for v in itertools.product(*choices)]

@@ -27,12 +27,12 @@ __all__ = ["CHUNK", "ENGINES", "KINDS", "MAX_POSES", "Chunk", "Plan", "Workspace
 
 def robot_for(design: Design, kind: str = "static", interference: bool = False,
               orientations: str | None = None, engine: str = "auto", max_tilt: float | None = None,
-              stiffness: bool = False) -> Robot:
+              stiffness: bool = False, accelerations: bool = False) -> Robot:
     """The robot of a workspace sweep of ``design`` (refused combinations raise an
     :class:`~cdpr_design.errors.InputError` with the reason; see :func:`~cdpr_design.statics.robot.resolve`)."""
     return resolve(design, Analysis(command="workspace", kind=kind, collisions=interference,
                                     orientations=orientations, max_tilt=max_tilt, engine=engine,
-                                    stiffness=stiffness))
+                                    stiffness=stiffness, accelerations=accelerations))
 
 
 def _grid(design: Design, step, grid: Grid | None, force: bool) -> Grid:
@@ -48,16 +48,19 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         progress: Callable[[int, int], None] | None = None, force: bool = False,
         chunk: int = CHUNK, keep_maps: bool = True, interference: bool = False,
         engine: str = "auto", max_tilt: float | None = None, tilt: bool = True,
-        stiffness: bool = False, solid: bool = False, frame_loads: bool = False) -> WorkspaceResult:
+        stiffness: bool = False, solid: bool = False, frame_loads: bool = False,
+        accelerations: bool = False) -> WorkspaceResult:
     """Sweep the workspace grid and return the summary and maps.
 
     Parameters
     ----------
     design : Design
-    kind : {'static', 'wrench-feasible', 'wrench-closure'}
+    kind : {'static', 'wrench-feasible', 'wrench-closure', 'dynamic'}
         ``static``: gravity only; ``wrench-feasible``: gravity plus every vertex
         of ``workspace.external_wrench``; ``wrench-closure``: tension bounds
-        ignored, the cables positively span the wrench space.
+        ignored, the cables positively span the wrench space; ``dynamic``: as
+        ``wrench-feasible``, and every acceleration of ``requirements.acceleration``
+        reachable from rest (:mod:`cdpr_design.statics.wrenches`).
     step : float, optional
         Grid step [m] overriding ``workspace.grid.step``.
     grid : Grid, optional
@@ -101,13 +104,16 @@ def run(design: Design, kind: str = "static", step: float | None = None, grid: G
         :mod:`~cdpr_design.workspaces.frame_loads`).
     frame_loads : bool
         The loads on the frame alone (``result.frame_loads``, summary key ``frame_loads``).
+    accelerations : bool
+        Also the acceleration radius [m/s^2] of every pose (:mod:`~cdpr_design.workspaces.acceleration`):
+        the column ``acceleration_radius``, its map and summary keys.
 
     What is computed (cable model, outlets, how the orientation is decided, engine) is the
     resolved robot's (:func:`~cdpr_design.statics.robot.resolve`); the sweep is its
     :func:`~cdpr_design.workspaces.plan.plan`.
     """
     g = _grid(design, step, grid, force)
-    robot = robot_for(design, kind, interference, None, engine, max_tilt, stiffness)
+    robot = robot_for(design, kind, interference, None, engine, max_tilt, stiffness, accelerations)
     return plan(robot, g, orientation, tilt=tilt, solid=solid, frame_loads=frame_loads).run(on_chunk, progress, chunk,
                                                                                             keep_maps)
 

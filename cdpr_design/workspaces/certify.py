@@ -36,7 +36,7 @@ from cdpr_design.statics.wrenches import wrench_vertices
 #: status codes of the kernels and their names in the outputs
 STATUS = {1: "inside", -1: "outside", 0: "boundary"}
 #: kinds of workspace certified
-KINDS = ("static", "wrench-feasible")
+KINDS = ("static", "wrench-feasible", "dynamic")
 #: Largest number of boxes classified by default (bounded memory: a box is 6 floats and a code).
 MAX_BOXES = 5_000_000
 
@@ -174,7 +174,7 @@ class Classifier:
         self.dim = design.motion.dim
         self.geometry = geometry_boxes(design, tolerance_outlets, tolerance_attachments)
         wv = wrench_vertices(design, robot.kind, design.default_orientation_full())
-        self.wv = np.ascontiguousarray(wv if robot.kind == "wrench-feasible" else wv[:1])
+        self.wv = np.ascontiguousarray(wv if robot.every_vertex else wv[:1])
         self.rows = robot.rows
         self.tmin, self.tmax = robot.tension_min, robot.tension_max
         self.mu = float(min_margin)

@@ -48,7 +48,7 @@ class StraightSweep(Base):
         self.wreq = wrench_vertices(design, robot.kind, ori)
         self.numpy = robot.engine == "numpy"
         self.K = None if self.numpy else kernels()
-        self.wreq_used = self.wreq if robot.kind == "wrench-feasible" else self.wreq[:1].copy()
+        self.wreq_used = self.wreq if robot.every_vertex else self.wreq[:1].copy()
         self.lower, self.step, self.shape = grid3(g)
 
     def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:

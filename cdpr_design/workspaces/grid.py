@@ -118,6 +118,8 @@ class WorkspaceResult:
     robot: object = None
     #: ``--stiffness`` only: the maps ``min_stiffness`` [N/m] and ``lowest_frequency`` [Hz]
     stiffness: dict | None = None
+    #: ``--accelerations`` only: the map of the acceleration radius [m/s^2]
+    acceleration: np.ndarray | None = None
     #: the picture files the sweep's plan declared (:attr:`~cdpr_design.workspaces.plan.Plan.pictures`)
     pictures: list = field(default_factory=list)
     #: the boundary between the grid points (a :class:`~cdpr_design.workspaces.boundary.Boundary`;

@@ -11,7 +11,7 @@
   (:mod:`~cdpr_design.workspaces.orientation`);
 - **wrappers**, which add columns to those rows: the elastic cables' unstretched
   lengths, the chords of sagging cables under wrench closure, the tilt a held
-  under-constrained effector would hang with.
+  under-constrained effector would hang with, the stiffness, the acceleration radius.
 
 Each part declares its table columns, its maps, its pictures and its summary keys;
 :attr:`Plan.columns` and :attr:`Plan.pictures` are what the jobs write, known before
@@ -197,4 +197,8 @@ def _plan(robot: Robot, grid: Grid, orientation, tilt: bool, orientations) -> Pl
         from cdpr_design.workspaces.stiffness import StiffnessColumns  # the kernels, on first use
 
         wrappers.append(StiffnessColumns(robot, ori, grid))
+    if a.accelerations:
+        from cdpr_design.workspaces.acceleration import AccelerationColumns  # the kernels, on first use
+
+        wrappers.append(AccelerationColumns(robot, ori))
     return Plan(robot, grid, ori, base, tuple(wrappers), tilt, orientations)
