@@ -37,6 +37,7 @@ BENCHMARKS = {
     "pictures": "the workspace pictures' CPU, against another checkout's",
     "stiffness": "the stiffness kernel's cost beside the sweep's",
     "boundary": "IPAnema 3's sweep with the workspace's boundary and the frame loads against without",
+    "accelerations": "workspace --accelerations against the plain sweep; the acceleration kernel a pose",
     "interference": "IPAnema 3's sweep with interference checks against without",
     "hanging": "planar2's tilt map, kernel against per-pose scipy",
     "hanging_spatial": "crane4's hanging orientations against per-position scipy",
