@@ -131,11 +131,13 @@ def test_ideal_pose_json_is_unchanged():
     r = invoke("pose", PLANAR2, "--at", "0.3,0.9", "--json")
     data = json.loads(r.output)
     # planar2 is under-constrained: the tilt its free body would hang with comes beside (issue 16);
-    # the stiffness keys (issue 39) come with every design, null with a reason where undefined
+    # the stiffness keys (issue 39) and the acceleration keys come with every design, null with a reason
+    # where undefined
     assert set(data) == {"pose", "lengths", "tensions", "feasible", "margin", "structure_matrix",
                          "collisions", "objective", "tilt", "hanging", "stiffness_matrix",
                          "translational_stiffness", "min_stiffness", "natural_frequencies", "mode_shapes",
-                         "cable_frequencies", "stiffness_reason"}
+                         "cable_frequencies", "stiffness_reason", "acceleration_radius", "axis_accelerations",
+                         "acceleration_direction", "acceleration_reason"}
 
 
 def test_elastic_pose_is_the_ideal_one_with_stretch(planar2):
