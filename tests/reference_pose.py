@@ -128,19 +128,18 @@ def sagging_pose(design: Design, full: np.ndarray, wreq: np.ndarray, combos: np.
     The margin is NaN unless the shapes converged.
     """
     from cdpr_design.kernels import sagging as KS
-    from cdpr_design.statics.cables import MAX_ITERATIONS, STATUS, CableState
+    from cdpr_design.kernels.sag_fixed import make_sag_scratch
+    from cdpr_design.statics.cables import MAX_ITERATIONS, STATUS, CableState, sag_cables
     from cdpr_design.statics.robot import cable_arrays
 
     arr = cable_arrays(design)
     m, n = design.m, design.n
     R = kin.rotation_matrix(*full[3:])
     Rb = np.ascontiguousarray(design.attachments @ R.T)
-    W, cw, lo, hi, inf_hi, tq, scr, work = KS.make_sag_scratch(n, m, wreq.shape[0])
-    t, ta, l0, sg, L = KS.make_pose_outputs(m)
-    st, feas, margin, _ = KS.sag_pose(full[0], full[1], full[2], Rb, np.ascontiguousarray(design.outlets),
-                                      design.rows, arr.up, arr.w, arr.EA, wreq, design.tension_min,
-                                      design.tension_max, combos, kcode, MAX_ITERATIONS,
-                                      t, ta, l0, sg, L, W, cw, lo, hi, inf_hi, tq, scr, work, KS.redundancy(n, m),
-                                      KS.fixed_point(arr.up, arr.w, arr.EA, design.tension_min, design.tension_max,
-                                                     design.rows, MAX_ITERATIONS, KS.redundancy(n, m)))
+    sc = make_sag_scratch(n, m, wreq.shape[0])
+    out = KS.make_pose_outputs(m)
+    robot = KS.sag_robot(design.outlets, sag_cables(arr, design.rows, design.tension_min, design.tension_max), wreq,
+                         combos, kcode, MAX_ITERATIONS)
+    st, feas, margin = KS.sag_pose(full[0], full[1], full[2], Rb, robot, out, sc, KS.redundancy(n, m))
+    t, ta, l0, sg, L, W = out.t, out.outlet, out.L0, out.sag, out.lengths, sc.W
     return bool(feas), float(margin), t, L, W, CableState(ta, l0, sg, STATUS[st])

@@ -27,6 +27,7 @@ from scipy.linalg import solveh_banded
 from scipy.optimize import brentq
 
 from cdpr_design.kernels import catenary as C
+from cdpr_design.kernels import catenary_inv as CS
 
 NAN = math.nan
 EPS = np.finfo(float).eps
@@ -228,8 +229,8 @@ def test_chain_matches_catenary(case):
     """
     H, VB, L0, w, EA = case
     X, Z = C.catenary_ends(H, VB, L0, w, EA)
-    h, v, status, _ = C.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
-    assert status == C.CAT_CONVERGED
+    h, v, status, _ = CS.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
+    assert status == CS.CAT_CONVERGED
     F = force_scale(h, v, L0, w)
     ref = forces_from(h, v, L0, w)
     # the forward map was fed the generating forces: the inverse must give them back
@@ -271,8 +272,8 @@ def test_chain_vertical(Z):
     constant); a folded cable (VB < 0 < VA) only at first order, since the
     chain's fold sits on a node: the error is at most half a node weight."""
     L0, w, EA = 5.0, 2.0, 1e4
-    h, v, status, _ = C.catenary_inverse(0.0, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
-    assert status == C.CAT_CONVERGED and h == 0.0
+    h, v, status, _ = CS.catenary_inverse(0.0, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
+    assert status == CS.CAT_CONVERGED and h == 0.0
     for N in (200, 400):
         Hc, VBc, VAc, _, P, info = chain_solve(0.0, Z, L0, w, EA, N)
         assert info["gnorm"] <= info["gfloor"]
@@ -307,8 +308,8 @@ def test_moorpy_agreement():
         T = max(math.hypot(H, VB), math.hypot(H, VB + w * L0))
         EA = T / 10 ** rng.uniform(-5, -1.5)
         X, Z = C.catenary_ends(H, VB, L0, w, EA)
-        h, v, status, _ = C.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
-        assert status == C.CAT_CONVERGED
+        h, v, status, _ = CS.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
+        assert status == CS.CAT_CONVERGED
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             fAH, fAV, fBH, fBV, info = moorpy_catenary(X, Z, L0, EA, w, CB=-1e3 * (L0 + 1.0),
@@ -354,15 +355,15 @@ def test_weightless_is_the_straight_elastic_cable(f):
         X, Z = C.catenary_ends(H, VB, L0, w, EA)
         assert math.hypot(X - X0, Z - Z0) <= 1.0 * (w * L0 / T) * L + 4 * EPS * L
     # and the inverse of a weightless cable is T = EA (L/L0 - 1) along the chord
-    h, v, status, _ = C.catenary_inverse(X0, Z0, L0, 0.0, EA, NAN, NAN, 1e-13, 100)
-    assert status == C.CAT_CONVERGED
+    h, v, status, _ = CS.catenary_inverse(X0, Z0, L0, 0.0, EA, NAN, NAN, 1e-13, 100)
+    assert status == CS.CAT_CONVERGED
     assert h == pytest.approx(H, rel=1e-9, abs=1e-9 * T)
     assert v == pytest.approx(VB, rel=1e-9, abs=1e-9 * T)
     # a light cable on the same chord: end force along the chord, to first order in w
     for w_rel in (1e-6, 1e-9, 1e-12):
         w = w_rel * T / L0
-        h, v, status, _ = C.catenary_inverse(X0, Z0, L0, w, EA, NAN, NAN, 1e-13, 100)
-        assert status == C.CAT_CONVERGED
+        h, v, status, _ = CS.catenary_inverse(X0, Z0, L0, w, EA, NAN, NAN, 1e-13, 100)
+        assert status == CS.CAT_CONVERGED
         tol = 1e-9 * T + 2.0 * w * L0
         assert abs(h - H) <= tol and abs(v - VB) <= tol
 
@@ -375,8 +376,8 @@ def test_light_cable_inverse_converges_linearly_to_the_spring():
     prev = None
     for k in range(3, 12):
         w = 10.0 ** -k * T / L0
-        h, v, status, _ = C.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
-        assert status == C.CAT_CONVERGED
+        h, v, status, _ = CS.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
+        assert status == CS.CAT_CONVERGED
         dev = math.hypot(h - T * X / c, v - T * Z / c)
         assert dev <= w * L0
         if prev is not None and dev > 1e-7 * T:
@@ -412,8 +413,8 @@ def test_inextensible_limit(ang, ld, ll, lw):
         assert math.hypot(Xe - X, Ze - Z) <= 1.01 * L0 * T / EA + 1e-12 * scale
     # the inverse of the inextensible cable satisfies the textbook identity
     # sqrt(L0^2 - Z^2) = 2 a sinh(X / 2a) and closes the cosh form
-    h, v, status, _ = C.catenary_inverse(X, Z, L0, w, math.inf, NAN, NAN, 1e-13, 100)
-    assert status == C.CAT_CONVERGED
+    h, v, status, _ = CS.catenary_inverse(X, Z, L0, w, math.inf, NAN, NAN, 1e-13, 100)
+    assert status == CS.CAT_CONVERGED
     a = h / w
     assert math.sqrt(L0 * L0 - Z * Z) == pytest.approx(2 * a * math.sinh(X / (2 * a)), rel=1e-9)
     Xc, Zc = inextensible_closed_form(h, v, L0, w)
@@ -440,8 +441,8 @@ def test_vertical_cable():
     # inverse
     for VB in (5.0, -10.0, -2.0, 0.0, -w * L0):
         X, Z = C.catenary_ends(0.0, VB, L0, w, EA)
-        h, v, status, _ = C.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
-        assert status == C.CAT_CONVERGED and h == 0.0
+        h, v, status, _ = CS.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
+        assert status == CS.CAT_CONVERGED and h == 0.0
         assert v == pytest.approx(VB, abs=1e-9 * (abs(VB) + w * L0))
     # the limit H -> 0 of the general closure
     for VB in (5.0, -10.0, -2.0):
@@ -529,8 +530,8 @@ def test_inverse_round_trip_batch(inextensible):
     H, VB, L0, w, EA = random_forces(rng, n, inextensible)
     X, Z = C.catenary_ends_batch(H, VB, L0, w, EA)
     nan = np.full(n, np.nan)
-    h, v, status, iters = C.catenary_inverse_batch(X, Z, L0, w, EA, nan, nan, 1e-13, 100)
-    assert np.all(status == C.CAT_CONVERGED)
+    h, v, status, iters = CS.catenary_inverse_batch(X, Z, L0, w, EA, nan, nan, 1e-13, 100)
+    assert np.all(status == CS.CAT_CONVERGED)
     F = np.maximum.reduce([H, np.abs(VB), np.abs(VB + w * L0)])
     err = np.maximum(np.abs(h - H), np.abs(v - VB)) / F
     kap = condition_numbers(H, VB, L0, w, EA, X, Z)
@@ -541,7 +542,7 @@ def test_inverse_round_trip_batch(inextensible):
     assert np.max(iters) <= 60
     # the batch is the scalar kernel, case by case
     for i in range(0, n, 97):
-        assert C.catenary_inverse(X[i], Z[i], L0[i], w[i], EA[i], NAN, NAN, 1e-13, 100) == \
+        assert CS.catenary_inverse(X[i], Z[i], L0[i], w[i], EA[i], NAN, NAN, 1e-13, 100) == \
             (h[i], v[i], status[i], iters[i])
         assert C.catenary_ends(H[i], VB[i], L0[i], w[i], EA[i]) == (X[i], Z[i])
 
@@ -555,13 +556,13 @@ def test_inverse_round_trip(f, ld):
     w = 10 ** ld * H / L0
     EA = T / 10 ** ls
     X, Z = C.catenary_ends(H, VB, L0, w, EA)
-    h, v, status, _ = C.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
-    assert status == C.CAT_CONVERGED
+    h, v, status, _ = CS.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
+    assert status == CS.CAT_CONVERGED
     F = force_scale(H, VB, L0, w)
     assert abs(h - H) <= 1e-9 * F and abs(v - VB) <= 1e-9 * F
     # warm start from a nearby pose converges to the same forces
-    h2, v2, status, _ = C.catenary_inverse(X, Z, L0, w, EA, 1.1 * H, VB + 0.1 * F, 1e-13, 100)
-    assert status == C.CAT_CONVERGED
+    h2, v2, status, _ = CS.catenary_inverse(X, Z, L0, w, EA, 1.1 * H, VB + 0.1 * F, 1e-13, 100)
+    assert status == CS.CAT_CONVERGED
     assert abs(h2 - H) <= 1e-9 * F and abs(v2 - VB) <= 1e-9 * F
 
 
@@ -589,10 +590,10 @@ def test_every_geometry_with_a_solution_is_solved():
     n = 4000
     X, Z, L0, w, EA, c = random_geometry(rng, n)
     nan = np.full(n, np.nan)
-    h, v, status, _ = C.catenary_inverse_batch(X, Z, L0, w, EA, nan, nan, 1e-13, 100)
+    h, v, status, _ = CS.catenary_inverse_batch(X, Z, L0, w, EA, nan, nan, 1e-13, 100)
     solvable = np.isfinite(EA) | (c < L0)
-    assert np.all(status[solvable] == C.CAT_CONVERGED)
-    assert np.all(status[~solvable] == C.CAT_NO_SOLUTION)
+    assert np.all(status[solvable] == CS.CAT_CONVERGED)
+    assert np.all(status[~solvable] == CS.CAT_NO_SOLUTION)
     assert np.all(np.isnan(h[~solvable])) and np.all(np.isnan(v[~solvable]))
     assert np.all(h[solvable] >= 0.0)
     Xc, Zc = C.catenary_ends_batch(h[solvable], v[solvable], L0[solvable], w[solvable], EA[solvable])
@@ -608,14 +609,14 @@ def test_unconverged_is_never_reported_as_converged():
     X, Z, L0, w, EA, c = random_geometry(rng, n)
     EA[:] = 10 ** rng.uniform(2, 9, n)
     nan = np.full(n, np.nan)
-    h_ref, v_ref, st_ref, _ = C.catenary_inverse_batch(X, Z, L0, w, EA, nan, nan, 1e-13, 100)
-    assert np.all(st_ref == C.CAT_CONVERGED)
+    h_ref, v_ref, st_ref, _ = CS.catenary_inverse_batch(X, Z, L0, w, EA, nan, nan, 1e-13, 100)
+    assert np.all(st_ref == CS.CAT_CONVERGED)
     F = np.maximum.reduce([h_ref, np.abs(v_ref), np.abs(v_ref + w * L0)])
     starved = 0
     for maxit in (0, 1, 2, 3, 5):
-        h, v, status, _ = C.catenary_inverse_batch(X, Z, L0, w, EA, nan, nan, 1e-13, maxit)
-        ok = status == C.CAT_CONVERGED
-        assert np.all(np.isin(status, [C.CAT_CONVERGED, C.CAT_NOT_CONVERGED]))
+        h, v, status, _ = CS.catenary_inverse_batch(X, Z, L0, w, EA, nan, nan, 1e-13, maxit)
+        ok = status == CS.CAT_CONVERGED
+        assert np.all(np.isin(status, [CS.CAT_CONVERGED, CS.CAT_NOT_CONVERGED]))
         assert np.all(np.isnan(h[~ok])) and np.all(np.isnan(v[~ok]))
         err = np.maximum(np.abs(h - h_ref), np.abs(v - v_ref))[ok] / F[ok]
         assert np.all(err <= 1e-8)
@@ -634,36 +635,36 @@ def test_fallback_alone():
         F = force_scale(H[i], VB[i], L0[i], w[i])
         h0 = H[i] * 10 ** rng.uniform(-3, 3)
         v0 = rng.uniform(-3, 3) * F
-        h, v, ok, _ = C._fallback(X, Z, L0[i], w[i], EA[i], h0, v0, w[i] * L0[i] + h0 + abs(v0),
+        h, v, ok, _ = CS._fallback(X, Z, L0[i], w[i], EA[i], h0, v0, w[i] * L0[i] + h0 + abs(v0),
                                   16 * EPS * (math.hypot(X, Z) + L0[i]), 300)
         assert ok
         assert abs(h - H[i]) <= 1e-8 * F and abs(v - VB[i]) <= 1e-8 * F
 
 
 @pytest.mark.parametrize("args, expected", [
-    ((1.0, 1.0, -1.0, 1.0, 1e3), C.CAT_NO_SOLUTION),     # L0 <= 0
-    ((1.0, 1.0, 0.0, 1.0, 1e3), C.CAT_NO_SOLUTION),
-    ((1.0, 1.0, 2.0, -1.0, 1e3), C.CAT_NO_SOLUTION),     # w < 0
-    ((1.0, 1.0, 2.0, 1.0, 0.0), C.CAT_NO_SOLUTION),      # EA <= 0
-    ((1.0, 1.0, 2.0, 1.0, -5.0), C.CAT_NO_SOLUTION),
-    ((-1.0, 1.0, 2.0, 1.0, 1e3), C.CAT_NO_SOLUTION),     # X < 0
-    ((NAN, 1.0, 2.0, 1.0, 1e3), C.CAT_NO_SOLUTION),
-    ((1.0, NAN, 2.0, 1.0, 1e3), C.CAT_NO_SOLUTION),
-    ((1.0, 1.0, NAN, 1.0, 1e3), C.CAT_NO_SOLUTION),
-    ((1.0, 1.0, 2.0, NAN, 1e3), C.CAT_NO_SOLUTION),
-    ((1.0, 1.0, 2.0, 1.0, NAN), C.CAT_NO_SOLUTION),
-    ((math.inf, 1.0, 2.0, 1.0, 1e3), C.CAT_NO_SOLUTION),
-    ((3.0, 4.0, 5.0, 1.0, math.inf), C.CAT_NO_SOLUTION),  # inextensible, chord = L0
-    ((3.0, 4.0, 4.9, 1.0, math.inf), C.CAT_NO_SOLUTION),  # inextensible, chord > L0
-    ((0.0, 5.0, 5.0, 1.0, math.inf), C.CAT_NO_SOLUTION),  # taut vertical inextensible: tension indeterminate
-    ((3.0, 4.0, 4.0, 0.0, math.inf), C.CAT_NO_SOLUTION),  # weightless inextensible, too short
-    ((3.0, 4.0, 6.0, 0.0, 1e3), C.CAT_SLACK),             # weightless, slack: zero forces
-    ((0.0, 0.0, 1.0, 0.0, 1e3), C.CAT_SLACK),
+    ((1.0, 1.0, -1.0, 1.0, 1e3), CS.CAT_NO_SOLUTION),     # L0 <= 0
+    ((1.0, 1.0, 0.0, 1.0, 1e3), CS.CAT_NO_SOLUTION),
+    ((1.0, 1.0, 2.0, -1.0, 1e3), CS.CAT_NO_SOLUTION),     # w < 0
+    ((1.0, 1.0, 2.0, 1.0, 0.0), CS.CAT_NO_SOLUTION),      # EA <= 0
+    ((1.0, 1.0, 2.0, 1.0, -5.0), CS.CAT_NO_SOLUTION),
+    ((-1.0, 1.0, 2.0, 1.0, 1e3), CS.CAT_NO_SOLUTION),     # X < 0
+    ((NAN, 1.0, 2.0, 1.0, 1e3), CS.CAT_NO_SOLUTION),
+    ((1.0, NAN, 2.0, 1.0, 1e3), CS.CAT_NO_SOLUTION),
+    ((1.0, 1.0, NAN, 1.0, 1e3), CS.CAT_NO_SOLUTION),
+    ((1.0, 1.0, 2.0, NAN, 1e3), CS.CAT_NO_SOLUTION),
+    ((1.0, 1.0, 2.0, 1.0, NAN), CS.CAT_NO_SOLUTION),
+    ((math.inf, 1.0, 2.0, 1.0, 1e3), CS.CAT_NO_SOLUTION),
+    ((3.0, 4.0, 5.0, 1.0, math.inf), CS.CAT_NO_SOLUTION),  # inextensible, chord = L0
+    ((3.0, 4.0, 4.9, 1.0, math.inf), CS.CAT_NO_SOLUTION),  # inextensible, chord > L0
+    ((0.0, 5.0, 5.0, 1.0, math.inf), CS.CAT_NO_SOLUTION),  # taut vertical inextensible: tension indeterminate
+    ((3.0, 4.0, 4.0, 0.0, math.inf), CS.CAT_NO_SOLUTION),  # weightless inextensible, too short
+    ((3.0, 4.0, 6.0, 0.0, 1e3), CS.CAT_SLACK),             # weightless, slack: zero forces
+    ((0.0, 0.0, 1.0, 0.0, 1e3), CS.CAT_SLACK),
 ])
 def test_flags(args, expected):
-    h, v, status, _ = C.catenary_inverse(*args, NAN, NAN, 1e-12, 100)
+    h, v, status, _ = CS.catenary_inverse(*args, NAN, NAN, 1e-12, 100)
     assert status == expected
-    if expected == C.CAT_SLACK:
+    if expected == CS.CAT_SLACK:
         assert h == 0.0 and v == 0.0
     else:
         assert math.isnan(h) and math.isnan(v)
@@ -675,12 +676,12 @@ def test_very_slack_and_very_taut():
     for X, Z, L0, w, EA in [(0.6, 0.8, 1e4, 1.0, math.inf), (0.6, 0.8, 1e4, 1.0, 1e3),
                             (0.6, -0.8, 1.0 + 1e-12, 1.0, math.inf), (3.0, 4.0, 2.5, 1.0, 1e6),
                             (1e-9, 0.8, 100.0, 1.0, 1e6), (1e-300, 0.3, 1.0, 1.0, 1e6)]:
-        h, v, status, _ = C.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
-        assert status == C.CAT_CONVERGED
+        h, v, status, _ = CS.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
+        assert status == CS.CAT_CONVERGED
         Xc, Zc = C.catenary_ends(h, v, L0, w, EA)
         assert math.hypot(Xc - X, Zc - Z) <= 1e-13 * (L0 + math.hypot(X, Z))
     # L0 half the chord: T = EA (c/L0 - 1) = EA, the weight barely matters
-    h, v, status, _ = C.catenary_inverse(3.0, 4.0, 2.5, 1.0, 1e6, NAN, NAN, 1e-13, 100)
+    h, v, status, _ = CS.catenary_inverse(3.0, 4.0, 2.5, 1.0, 1e6, NAN, NAN, 1e-13, 100)
     assert math.hypot(h, v) == pytest.approx(1e6, rel=1e-5)
 
 
@@ -749,8 +750,8 @@ def test_effector_force_is_not_along_the_chord():
     which is below the chord by an angle ~ w L0 / (2 T) for a light cable."""
     L0, w, EA = 5.0, 2.0, 1e6
     X, Z = 3.0, 4.01  # chord 1.2 per mille longer than L0: taut, T ~ 1.2 kN >> w L0 = 10 N
-    h, v, status, _ = C.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
-    assert status == C.CAT_CONVERGED
+    h, v, status, _ = CS.catenary_inverse(X, Z, L0, w, EA, NAN, NAN, 1e-13, 100)
+    assert status == CS.CAT_CONVERGED
     chord = math.atan2(Z, X)
     tangent_B = math.atan2(v, h)
     tangent_A = math.atan2(v + w * L0, h)

@@ -546,7 +546,7 @@ def test_least_tension_matches_scipy():
     """The kernel's least tension and its length against a bounded Brent search with scipy, on
     random cables: spans 0.5-20 m, slopes -80..80 degrees, strains of the least-tension
     shape from 1e-6 to 1e-2, inextensible ones; and the kernel's shape closes."""
-    from cdpr_design.kernels.sagging import least_tension
+    from cdpr_design.kernels.cable_shape import least_tension
 
     rng = np.random.default_rng(5)
     for k in range(12):

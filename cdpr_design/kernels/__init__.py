@@ -22,8 +22,11 @@ module             what
 ``sweep``          grid and point sweeps, per-chunk statistics
 ``parallel``       blocks of rows on threads (every parallel kernel)
 ``hanging``        statics at per-pose orientations (a hanging effector's)
-``catenary``       Irvine's elastic catenary of one cable: ends from forces, forces from ends
+``catenary``       Irvine's elastic catenary of one cable: its ends, flexibility and shape from its forces
+``catenary_inv``   the catenary's forces from its ends (the inverse problem)
 ``cable_shape``    one heavy elastic cable at a given tension: its shape, its least tension
+``sag_shapes``     sagging cables' shapes and structure matrix at given tensions
+``sag_fixed``      the sagging cables' fixed point (tensions = minimum-norm tensions of their shapes)
 ``sagging``        statics of a pose with sagging cables; the sagging grid sweep
 ``sag_path``       sagging statics along a sampled trajectory
 ``stiffness``      the effector's least stiffness and lowest natural frequency at many poses
@@ -54,8 +57,9 @@ _EXPORTS = {
                      "square_projection"), "tension_qp"),
 }
 
-_SUBMODULES = {"acceleration", "cable_shape", "catenary", "codes", "geometry", "hanging", "hsm", "hsm_small", "interference", "linalg",
-               "parallel", "pose", "sag_path", "sagging", "stiffness", "sweep", "tension_qp", "cache"}
+_SUBMODULES = {"acceleration", "cable_shape", "cache", "catenary", "catenary_inv", "codes", "geometry", "hanging", "hsm",
+               "hsm_small", "interference", "linalg", "parallel", "pose", "sag_fixed", "sag_path", "sag_shapes",
+               "sagging", "stiffness", "sweep", "tension_qp"}
 
 __all__ = sorted(_EXPORTS)
 

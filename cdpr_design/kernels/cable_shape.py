@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import math
 
-from cdpr_design.kernels._jit import njit
-from cdpr_design.kernels.catenary import CAT_CONVERGED, _closure_jac, catenary_inverse
+from cdpr_design.kernels._jit import njit, njit_folded
+from cdpr_design.kernels.catenary import closure_jac
+from cdpr_design.kernels.catenary_inv import CAT_CONVERGED, catenary_inverse
 
 
-@njit
+@njit_folded
 def _vertical_length(Z, tau, w, EA):
     """Unstretched length [m] of a vertical cable of height Z (A above B if > 0) whose
     effector-end tension is tau; NaN when none (a cable below B heavier than tau)."""
@@ -45,7 +46,7 @@ def _fold_slope(X, Z, L0, w, EA, H0, VB0):
     H, VB, st, _ = catenary_inverse(X, Z, L0, w, EA, H0, VB0, 1e-15, 100)
     if st != CAT_CONVERGED or not (H > 0.0):
         return math.nan, math.nan, math.nan
-    a, b, c, d = _closure_jac(H, VB, L0, w, EA)[2:]
+    a, b, c, d = closure_jac(H, VB, L0, w, EA)[2:]
     VA = VB + w * L0
     det = a * d - b * c
     return (H * (d * H - b * VA) + VB * (a * VA - c * H)) / det, H, VB
@@ -153,7 +154,7 @@ def cable_for_tension(X, Z, tau, w, EA, th0, L00, maxit):
     floor = (64.0 * 2.220446049250313e-16 * c) ** 2
     phi = math.inf
     # the closure and its Jacobian at (th, L0): the accepted trial point's, or evaluated here
-    cj = _closure_jac(tau * math.cos(th), tau * math.sin(th), L0, w, EA)
+    cj = closure_jac(tau * math.cos(th), tau * math.sin(th), L0, w, EA)
     for _ in range(maxit):
         H = tau * math.cos(th)
         VB = tau * math.sin(th)
@@ -184,7 +185,7 @@ def cable_for_tension(X, Z, tau, w, EA, th0, L00, maxit):
         for _ in range(40):
             th1 = th + step * dth
             L1 = L0 + step * dL
-            cj1 = _closure_jac(tau * math.cos(th1), tau * math.sin(th1), L1, w, EA)
+            cj1 = closure_jac(tau * math.cos(th1), tau * math.sin(th1), L1, w, EA)
             p1 = (cj1[0] - X) ** 2 + (cj1[1] - Z) ** 2
             if p1 < phi or p1 <= floor:
                 th, L0, cj = th1, L1, cj1
@@ -196,13 +197,13 @@ def cable_for_tension(X, Z, tau, w, EA, th0, L00, maxit):
         if abs(step * dth) <= 1e-15 and abs(step * dL) <= 1e-15 * L0:
             H = tau * math.cos(th)
             VB = tau * math.sin(th)
-            Xc, Zc = _closure_jac(H, VB, L0, w, EA)[:2]
+            Xc, Zc = closure_jac(H, VB, L0, w, EA)[:2]
             if math.hypot(Xc - X, Zc - Z) <= 1e-11 * c:
                 return H, VB, L0, True
             break
     H = tau * math.cos(th)
     VB = tau * math.sin(th)
-    Xc, Zc = _closure_jac(H, VB, L0, w, EA)[:2]
+    Xc, Zc = closure_jac(H, VB, L0, w, EA)[:2]
     if math.hypot(Xc - X, Zc - Z) <= 1e-11 * c:
         return H, VB, L0, True
     return nan, nan, nan, False

@@ -6,19 +6,20 @@ Conventions in :mod:`cdpr_design.statics.interference`.
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit_noref
+from cdpr_design.kernels._jit import jitable, njit, njit_folded
 from cdpr_design.kernels.codes import HIT_CABLE_CABLE, HIT_CABLE_EFFECTOR, HIT_CABLE_FRAME, HIT_EFFECTOR_FRAME
 
 
-@njit_noref
+@njit_folded
 def _clamp01(v):
     return 0.0 if v < 0.0 else (1.0 if v > 1.0 else v)
 
 
-@njit_noref
+@njit
 def seg_seg_dist2(p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z):
     """Squared minimum distance [m^2] between segments [p0, p1] and [q0, q1].
 
@@ -60,12 +61,12 @@ def seg_seg_dist2(p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z):
     return dx * dx + dy * dy + dz * dz
 
 
-@njit_noref
+@njit_folded
 def _pt_seg_dist2(x, y, z, ax, ay, az, bx, by, bz):
     return seg_seg_dist2(x, y, z, x, y, z, ax, ay, az, bx, by, bz)
 
 
-@njit_noref
+@njit
 def cable_cable_dist(S0, S1, i, j, tol, dim):
     """Distance [m] between the free segments of cables i and j (S0 attachments, S1 exits).
 
@@ -93,7 +94,7 @@ def cable_cable_dist(S0, S1, i, j, tol, dim):
                                    S0[j, 0], S0[j, 1], S0[j, 2], S1[j, 0], S1[j, 1], S1[j, 2]))
 
 
-@njit_noref
+@njit
 def segment_box_chord(s0, s1, half, dim, shrink):
     """Length [m] of the part of segment [s0, s1] inside the open box |x_k| < half_k - shrink.
 
@@ -130,7 +131,7 @@ def segment_box_chord(s0, s1, half, dim, shrink):
     return (t1 - t0) * math.sqrt(seg2)
 
 
-@njit_noref
+@njit
 def cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1):
     """Length [m] of cable i's free segment inside the effector box, its own attachment excepted.
 
@@ -158,26 +159,35 @@ def cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1):
     return segment_box_chord(s0, s1, half, dim, tol)
 
 
-@njit_noref
-def interference_pose(S0, S1, Bp, R, px, py, pz, half, rho, flo, fhi, dim, tol, full, hits,
-                      s0, s1, cp):
+#: What the interference checks need of a robot besides its pose: ``Bp`` (m, 3) the attachments
+#: in platform coordinates [m], ``half`` (3,) the half extents of the effector box [m] (centred on
+#: the platform origin), ``rho`` (m,) the cable radii (diameter / 2) [m], ``flo``, ``fhi`` (3,)
+#: the frame box [m], ``dim`` 2 (planar: only x, y are checked) or 3, ``tol`` the geometric
+#: tolerance [m], ``full``: every colliding pair (else stop at the first collision found).
+Clearance = namedtuple("Clearance", "Bp half rho flo fhi dim tol full")
+#: Work arrays of :func:`interference_pose`: ``hits`` (m + 2, m + 2) uint8 (the colliding pairs,
+#: index m = effector, m + 1 = frame), ``s0``, ``s1``, ``cp`` (3,).
+ClearanceScratch = namedtuple("ClearanceScratch", "hits s0 s1 cp")
+
+
+@jitable
+def clearance_scratch(m):
+    """A :data:`ClearanceScratch` for ``m`` cables, ``hits`` zero."""
+    return ClearanceScratch(np.zeros((m + 2, m + 2), dtype=np.uint8), np.empty(3), np.empty(3), np.empty(3))
+
+
+@njit
+def interference_pose(S0, S1, R, px, py, pz, cl, scr):
     """Interference at one pose; returns a bit mask (0: collision free).
 
     Parameters
     ----------
     S0 : (m, 3) attachment points p + R b_i in the frame [m].
     S1 : (m, 3) true outlet points (pulley tangent points or a_i) [m].
-    Bp : (m, 3) attachments b_i in platform coordinates [m].
     R : (3, 3) platform rotation; (px, py, pz) platform origin [m].
-    half : (3,) half extents of the effector box [m] (centred on the origin).
-    rho : (m,) cable radii (diameter / 2) [m].
-    flo, fhi : (3,) frame box [m].
-    dim : 2 (planar: only x, y are checked) or 3.
-    tol : geometric tolerance [m].
-    full : when False, return at the first collision found.
-    hits : (m + 2, m + 2) uint8, set to 1 for each colliding pair when
-        ``full`` (index m = effector, m + 1 = frame); untouched otherwise.
-    s0, s1, cp : (3,) scratch.
+    cl : :data:`Clearance`, the effector box, cable radii and frame box.
+    scr : :data:`ClearanceScratch`; when ``cl.full``, ``scr.hits`` is set to 1 for each
+        colliding pair (untouched otherwise).
 
     Bits: HIT_CABLE_CABLE (free segments closer than the sum of the cable
     radii, touching included), HIT_CABLE_EFFECTOR (a free segment through
@@ -185,6 +195,8 @@ def interference_pose(S0, S1, Bp, R, px, py, pz, half, rho, flo, fhi, dim, tol, 
     (an effector box corner outside the frame box), HIT_CABLE_FRAME (an
     attachment point outside the frame box: the free cable leaves the frame).
     """
+    Bp, half, rho, flo, fhi, dim, tol, full = cl
+    hits, s0, s1, cp = scr
     m = S0.shape[0]
     mask = 0
     # effector - frame: every box corner inside the frame box

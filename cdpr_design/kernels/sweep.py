@@ -14,7 +14,7 @@ from cdpr_design.kernels.hsm_small import facets_one, facets_two
 from cdpr_design.kernels.pose import (ROW_EMPTY, ROW_POSE, PoseBlock, raise_floor, rows_any, rows_small,
                                       rows_square)
 from cdpr_design.kernels.tension_qp import line_projection, plane_projection
-from cdpr_design.kernels.interference import interference_pose
+from cdpr_design.kernels.interference import Clearance, ClearanceScratch, interference_pose
 from cdpr_design.kernels.parallel import run_blocks
 
 
@@ -200,8 +200,10 @@ def _place_points(k, src, st, W, L, lo, w, out):
             S0[i, 1] = py + Rb[i, 1]
             S0[i, 2] = pz + Rb[i, 2] + zoff[i]
             C[i, 2] += zoff[i]  # the statics are done with C: the row's W and L hold them
-        src.cmask[k] = interference_pose(S0, C, src.Bp, src.R, px, py, pz, src.half, src.rho, src.flo, src.fhi,
-                                         src.dim, src.tol, src.full, src.hits, src.s0, src.s1, src.cp)
+        src.cmask[k] = interference_pose(S0, C, src.R, px, py, pz,
+                                         Clearance(src.Bp, src.half, src.rho, src.flo, src.fhi, src.dim, src.tol,
+                                                   src.full),
+                                         ClearanceScratch(src.hits, src.s0, src.s1, src.cp))
     else:
         src.cmask[k] = 0
     raise_floor(st.tmin, floor, lo, lo)

@@ -63,6 +63,26 @@ def straight_state(robot: Robot, lengths: np.ndarray, tensions: np.ndarray) -> C
     return CableState(t.copy(), elastic_unstretched(lengths, t, robot.cable.EA), sag)
 
 
+def sag_cables(arr, rows, tension_min, tension_max):
+    """The kernels' :data:`~cdpr_design.kernels.sag_shapes.SagCables` of the cable arrays ``arr``
+    (:class:`~cdpr_design.statics.robot.CableArrays`), wrench ``rows`` and tension bounds [N]."""
+    from cdpr_design.kernels.sag_shapes import SagCables
+
+    c = np.ascontiguousarray
+    return SagCables(c(rows, dtype=np.int64), c(arr.up, dtype=float), c(arr.w, dtype=float), c(arr.EA, dtype=float),
+                     c(tension_min, dtype=float), c(tension_max, dtype=float))
+
+
+def sag_robot(robot: Robot, wreq: np.ndarray, kind: int):
+    """The sagging kernels' :data:`~cdpr_design.kernels.sagging.SagRobot` of ``robot`` for the
+    required wrenches ``wreq`` (nv, n) [N, N m] (one row a sample on a path) and the kernels'
+    ``kind`` code, with :data:`MAX_ITERATIONS`."""
+    from cdpr_design.kernels import sagging as KS
+
+    cab = sag_cables(robot.cable, robot.rows, robot.tension_min, robot.tension_max)
+    return KS.sag_robot(robot.outlet_points, cab, wreq, robot.combos, kind, MAX_ITERATIONS)
+
+
 def sagging_structure(robot: Robot, full: np.ndarray) -> np.ndarray:
     """The structure matrix W (n, m) of ``robot``'s sagging cables at one pose (full [x, y, z,
     rx, ry, rz] [m, rad]): the end-force directions of the converged catenaries of the sweep's
@@ -75,12 +95,10 @@ def sagging_structure(robot: Robot, full: np.ndarray) -> np.ndarray:
     m, n = robot.m, robot.n
     Rb = np.ascontiguousarray(robot.attachments @ kin.rotation_matrix(*full[3:]).T)
     wreq = wrench_vertices(robot.design, robot.kind, full[3:])
-    c = robot.cable
     Ws = np.full((1, n, m), np.nan)
-    KS.sag_points(np.ascontiguousarray(full[None, :3], dtype=float), Rb, robot.outlet_points, robot.rows, c.up, c.w,
-                  c.EA, wreq, robot.tension_min, robot.tension_max, robot.combos, robot.kcode, MAX_ITERATIONS,
-                  np.zeros(1, dtype=np.uint8), Ws, np.full((1, m), np.nan), np.full((1, m), np.nan),
-                  np.zeros(1, dtype=np.int8))
+    out = KS.PointOutputs(np.zeros(1, dtype=np.uint8), Ws, np.full((1, m), np.nan), np.full((1, m), np.nan),
+                          np.zeros(1, dtype=np.int8))
+    KS.sag_points(np.ascontiguousarray(full[None, :3], dtype=float), Rb, sag_robot(robot, wreq, robot.kcode), out)
     return Ws[0]
 
 
@@ -94,19 +112,17 @@ def sagging_structures(robot: Robot, positions3: np.ndarray, orientation) -> tup
     """
     from cdpr_design.kernels import sagging as KS
     from cdpr_design.statics import kinematics as kin
-    from cdpr_design.statics.robot import KINDS, combinations
+    from cdpr_design.statics.robot import KINDS
     from cdpr_design.statics.wrenches import wrench_vertices
 
-    design, arr = robot.design, robot.cable
+    design = robot.design
     k, m, n = positions3.shape[0], design.m, design.n
     Rb = np.ascontiguousarray(design.attachments @ kin.rotation_matrix(*orientation).T)
     wreq = wrench_vertices(design, "static", orientation)
-    feas, status = np.zeros(k, dtype=np.uint8), np.zeros(k, dtype=np.int8)
-    W, t, ta = np.full((k, n, m), np.nan), np.full((k, m), np.nan), np.full((k, m), np.nan)
-    KS.sag_points(np.ascontiguousarray(positions3, dtype=float), Rb, np.ascontiguousarray(design.outlets),
-                  design.rows, arr.up, arr.w, arr.EA, wreq, design.tension_min, design.tension_max,
-                  combinations(m, n), KINDS["static"], MAX_ITERATIONS, feas, W, t, ta, status)
-    return feas.astype(bool), W, t, ta
+    out = KS.PointOutputs(np.zeros(k, dtype=np.uint8), np.full((k, n, m), np.nan), np.full((k, m), np.nan),
+                          np.full((k, m), np.nan), np.zeros(k, dtype=np.int8))
+    KS.sag_points(np.ascontiguousarray(positions3, dtype=float), Rb, sag_robot(robot, wreq, KINDS["static"]), out)
+    return out.feasible.astype(bool), out.Ws, out.tensions, out.outlet
 
 
 def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, objective: str, weights,
@@ -117,11 +133,12 @@ def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, o
     (:func:`cdpr_design.statics.tension.tensions_for_objective`) in place of
     the minimum-norm one, started from the shapes of the effector-end tensions
     ``start`` (m,) [N] (the converged minimum-norm ones: the straight tensions can
-    be too far, see :func:`cdpr_design.kernels.sagging._continued`), else from the
+    be too far, see :func:`cdpr_design.kernels.sag_fixed.solve`), else from the
     straight cables.  Returns (tensions or None, W, CableState); W is NaN unless
     the tensions converged.
     """
-    from cdpr_design.kernels import sagging as KS
+    from cdpr_design.kernels import sag_shapes as S
+    from cdpr_design.kernels.catenary import catenary_sag
     from cdpr_design.statics import kinematics as kin
     from cdpr_design.statics.tension import tensions_for_objective
 
@@ -130,31 +147,30 @@ def sagging_for_objective(design: Design, full: np.ndarray, wreq0: np.ndarray, o
     R = kin.rotation_matrix(*full[3:])
     Rb = np.ascontiguousarray(design.attachments @ R.T)
     A = np.ascontiguousarray(design.outlets)
-    W, cw = np.full((n, m), np.nan), np.empty((m, KS.NCW))  # cw: every column _span reads is written there
+    W, cw = np.full((n, m), np.nan), np.empty((m, S.NCW))  # cw: every column span() reads is written there
     L = np.empty(m)
     nan = np.full(m, np.nan)
-    if not KS._span(full[0], full[1], full[2], Rb, A, arr.up, cw, L):
+    if not S.span(full[0], full[1], full[2], Rb, A, arr.up, cw, L):
         return None, W, CableState(nan, nan.copy(), nan.copy(), "singular")
+    cab = sag_cables(arr, design.rows, design.tension_min, design.tension_max)
     lo, hi = design.tension_min, design.tension_max
-    if start is not None and KS.shapes_for(np.array(start, float), Rb, arr.up, arr.w, arr.EA, lo, hi,
-                                           design.rows, cw, W, 60):
-        lo, hi = cw[:, KS._LO].copy(), cw[:, KS._HI].copy()
+    if start is not None and S.shapes_for(np.array(start, float), Rb, cab, cw, W, 60):
+        lo, hi = cw[:, S.CW_LO].copy(), cw[:, S.CW_HI].copy()
     else:
-        KS._straight_columns(Rb, A, full[0], full[1], full[2], design.rows, W)
+        S.straight_columns(Rb, A, full[0], full[1], full[2], design.rows, W)
     t = tensions_for_objective(W.copy(), wreq0, lo, hi, objective, weights)
     unknown = np.full((n, m), np.nan)
     for _ in range(MAX_ITERATIONS):
         if t is None:
             return None, unknown, CableState(nan, nan.copy(), nan.copy(), "no-tensions")
-        if not KS.shapes_for(t, Rb, arr.up, arr.w, arr.EA, design.tension_min, design.tension_max,
-                             design.rows, cw, W, 60):
+        if not S.shapes_for(t, Rb, cab, cw, W, 60):
             return None, unknown, CableState(nan, nan.copy(), nan.copy(), "no-catenary")
-        lo, hi = cw[:, KS._LO].copy(), cw[:, KS._HI].copy()
+        lo, hi = cw[:, S.CW_LO].copy(), cw[:, S.CW_HI].copy()
         t2 = tensions_for_objective(W.copy(), wreq0, lo, hi, objective, weights)
         if t2 is not None and np.max(np.abs(t2 - t)) <= 1e-9 * max(1.0, np.max(np.abs(t))):
-            sag = np.array([KS.catenary_sag(cw[i, KS._H], cw[i, KS._VB], cw[i, KS._L0], arr.w[i], arr.EA[i])[0]
+            sag = np.array([catenary_sag(cw[i, S.CW_H], cw[i, S.CW_VB], cw[i, S.CW_L0], arr.w[i], arr.EA[i])[0]
                             for i in range(m)])
-            return t, W, CableState(cw[:, KS._TA].copy(), cw[:, KS._L0].copy(), sag)
+            return t, W, CableState(cw[:, S.CW_TA].copy(), cw[:, S.CW_L0].copy(), sag)
         t = t2
     return None, unknown, CableState(nan, nan.copy(), nan.copy(), "not-converged")
 
@@ -190,29 +206,27 @@ def sagging_samples(robot: Robot, positions: np.ndarray, Rb: np.ndarray, wreq: n
     numbers of the same pose under [0, inf) and is flagged infeasible; one
     whose shapes do not exist or do not converge has NaN and its status.
     """
-    from cdpr_design.kernels.sag_path import sag_samples
-    from cdpr_design.statics.robot import combinations
+    from cdpr_design.kernels.sag_path import SampleOutputs, sag_samples
+    from cdpr_design.statics.robot import KINDS
 
-    design, arr = robot.design, robot.cable
+    design = robot.design
     P = np.ascontiguousarray(positions, dtype=float)
     k, m = P.shape[0], design.m
-    out = [np.full((k, m), np.nan) for _ in range(5)]
-    status = np.zeros(k, dtype=np.int8)
-    feasible = np.zeros(k, dtype=np.uint8)
-    sag_samples(P, np.ascontiguousarray(Rb, dtype=float), np.ascontiguousarray(design.outlets), design.rows,
-                arr.up, arr.w, arr.EA, np.ascontiguousarray(wreq, dtype=float), design.tension_min,
-                design.tension_max, combinations(m, design.n), MAX_ITERATIONS, *out, status, feasible)
-    return SampleStates(*out, status, feasible.astype(bool))
+    out = SampleOutputs(*(np.full((k, m), np.nan) for _ in range(5)), np.zeros(k, dtype=np.int8),
+                        np.zeros(k, dtype=np.uint8))
+    sag_samples(P, np.ascontiguousarray(Rb, dtype=float), sag_robot(robot, wreq, KINDS["static"]), out)
+    return SampleStates(out.tensions, out.outlet, out.L0, out.sag, out.lengths, out.status, out.feasible.astype(bool))
 
 
 def cable_shape(outlet, attachment, L0: float, w: float, EA: float, up, count: int):
     """Points (count + 1, 3) [m] of a sagging cable from its outlet to its attachment, at equal
     unstretched arc lengths, and its end forces (H, VB) [N]; None when the catenary has no
-    solution (:func:`cdpr_design.kernels.catenary.catenary_inverse`).
+    solution (:func:`cdpr_design.kernels.catenary_inv.catenary_inverse`).
 
     ``outlet``, ``attachment`` (3,) [m], ``L0`` [m], ``w`` [N/m], ``EA`` [N], ``up`` (3,) unit.
     """
-    from cdpr_design.kernels import catenary as C
+    from cdpr_design.kernels.catenary import catenary_profile
+    from cdpr_design.kernels.catenary_inv import CAT_CONVERGED, catenary_inverse
 
     A, B, up = (np.asarray(v, float) for v in (outlet, attachment, up))
     d = A - B
@@ -220,9 +234,9 @@ def cable_shape(outlet, attachment, L0: float, w: float, EA: float, up, count: i
     h = d - Z * up
     X = float(np.linalg.norm(h))
     u = h / X if X > 1e-14 * np.linalg.norm(d) else np.zeros(3)
-    H, VB, status, _ = C.catenary_inverse(X if u.any() else 0.0, Z, L0, w, EA, np.nan, np.nan, 1e-13, 100)
-    if status != C.CAT_CONVERGED:
+    H, VB, status, _ = catenary_inverse(X if u.any() else 0.0, Z, L0, w, EA, np.nan, np.nan, 1e-13, 100)
+    if status != CAT_CONVERGED:
         return None
     s = np.ascontiguousarray(L0 * np.linspace(1.0, 0.0, count + 1))
-    x, z = C.catenary_profile(H, VB, L0, w, EA, s)
+    x, z = catenary_profile(H, VB, L0, w, EA, s)
     return B[None, :] + x[:, None] * u[None, :] + z[:, None] * up[None, :], (H, VB)

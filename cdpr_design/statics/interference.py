@@ -136,6 +136,8 @@ def check_pose(design: Design, pose) -> Interference:
     ``pose`` in the motion's coordinates.  Swivel pulleys are honoured: the
     free segments end at the pulleys' tangent points.
     """
+    from cdpr_design.kernels import interference as KI
+
     hw = hardware_arrays(design)
     full = design.full_pose(pose)
     R = kin.rotation_matrix(*full[3:])
@@ -144,11 +146,10 @@ def check_pose(design: Design, pose) -> Interference:
     S1 = np.ascontiguousarray(in_cable_planes(g.exits, hw.zoff))
     Bp = np.ascontiguousarray(in_cable_planes(design.attachments, hw.zoff))
     m = design.m
-    hits = np.zeros((m + 2, m + 2), dtype=np.uint8)
-    s0, s1, cp = np.empty(3), np.empty(3), np.empty(3)
-    mask = int(K.interference_pose(S0, S1, Bp, np.ascontiguousarray(R), full[0], full[1], full[2],
-                                   hw.half, hw.rho, hw.frame_lower, hw.frame_upper, hw.dim, hw.tol,
-                                   True, hits, s0, s1, cp))
+    scr = KI.clearance_scratch(m)
+    hits, s0, s1 = scr.hits, scr.s0, scr.s1
+    cl = KI.Clearance(Bp, hw.half, hw.rho, hw.frame_lower, hw.frame_upper, hw.dim, hw.tol, True)
+    mask = int(K.interference_pose(S0, S1, np.ascontiguousarray(R), full[0], full[1], full[2], cl, scr))
     dist = np.zeros((m, m))
     for i in range(m):
         for j in range(i + 1, m):

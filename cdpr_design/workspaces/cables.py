@@ -132,13 +132,14 @@ class SaggingSweep(Base):
     positions = False  # the kernel works from the grid's indices
 
     def __init__(self, robot: Robot, ori: np.ndarray, g: Grid):
-        from cdpr_design.kernels.sagging import sweep_grid_sagging
+        from cdpr_design.kernels import sagging as KS
 
-        self.robot, self.kind, self.kernel = robot, robot.kind, sweep_grid_sagging
+        self.robot, self.kind, self.kernel, self.outputs = robot, robot.kind, KS.sweep_grid_sagging, KS.GridOutputs
         self.columns = tuple(cable_columns(robot))
         self.Rb = np.ascontiguousarray(robot.attachments @ kin.rotation_matrix(*ori).T)
         self.wreq = wrench_vertices(robot.design, robot.kind, ori)
-        self.lower, self.step, self.shape = grid3(g)
+        self.grid = KS.SagGrid(*grid3(g))
+        self.sag_robot = cables.sag_robot(robot, self.wreq, robot.kcode)
         self.counts = np.zeros(len(cables.STATUS), dtype=np.int64)
         self.opeak = np.full(robot.m, -np.inf)
 
@@ -147,10 +148,8 @@ class SaggingSweep(Base):
         feas, marg = np.empty(cnt, dtype=np.uint8), np.empty(cnt)
         ten, lens, outlet, L0, sag = (np.empty((cnt, m)) for _ in range(5))
         status = np.empty(cnt, dtype=np.int8)
-        c = r.cable
-        self.kernel(start, cnt, self.lower, self.step, self.shape, self.Rb, r.outlet_points, r.rows, c.up, c.w, c.EA,
-                    self.wreq, r.tension_min, r.tension_max, r.combos, r.kcode, cables.MAX_ITERATIONS,
-                    feas, marg, ten, lens, outlet, L0, sag, status)
+        self.kernel(start, cnt, self.grid, self.Rb, self.sag_robot,
+                    self.outputs(feas, marg, ten, lens, outlet, L0, sag, status))
         self.counts += np.bincount(status, minlength=len(cables.STATUS))
         f = feas.astype(bool)
         if f.any():
@@ -160,14 +159,13 @@ class SaggingSweep(Base):
     def feasible_at(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Feasibility (k,) bool at positions ``P`` (k, 3) [m]: the same pose solve at explicit
         positions (:func:`cdpr_design.kernels.sagging.sag_points`); no margins (NaN)."""
-        from cdpr_design.kernels.sagging import sag_points
+        from cdpr_design.kernels.sagging import PointOutputs, sag_points
 
-        r, k, m, c = self.robot, P.shape[0], self.robot.m, self.robot.cable
-        feas, status = np.empty(k, dtype=np.uint8), np.empty(k, dtype=np.int8)
-        sag_points(np.ascontiguousarray(P, dtype=float), self.Rb, r.outlet_points, r.rows, c.up, c.w, c.EA, self.wreq,
-                   r.tension_min, r.tension_max, r.combos, r.kcode, cables.MAX_ITERATIONS, feas,
-                   np.empty((k, r.n, m)), np.empty((k, m)), np.empty((k, m)), status)
-        return feas.astype(bool), np.full(k, np.nan)
+        r, k, m = self.robot, P.shape[0], self.robot.m
+        out = PointOutputs(np.empty(k, dtype=np.uint8), np.empty((k, r.n, m)), np.empty((k, m)), np.empty((k, m)),
+                           np.empty(k, dtype=np.int8))
+        sag_points(np.ascontiguousarray(P, dtype=float), self.Rb, self.sag_robot, out)
+        return out.feasible.astype(bool), np.full(k, np.nan)
 
     def summary(self, maps) -> dict:
         opeak = self.opeak.copy()

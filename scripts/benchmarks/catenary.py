@@ -1,7 +1,7 @@
 """The batched elastic-catenary inverse against a per-cable scipy solve.
 
 The inverse problem (span X, height Z, unstretched length L0 -> end forces H, VB) for random
-cables from slack to taut with :func:`cdpr_design.kernels.catenary.catenary_inverse_batch` (numba,
+cables from slack to taut with :func:`cdpr_design.kernels.catenary_inv.catenary_inverse_batch` (numba,
 parallel over cables), cold (a new process with an empty numba cache: compiled) and warm, against
 ``scipy.optimize.fsolve`` on Irvine's closure equations with their analytic Jacobian (from the
 same kind of start as the kernel, ``least_squares`` if fsolve gives up), on a subsample in the
@@ -89,7 +89,7 @@ def problem(n: int, seed: int):
 
 
 def inverse(X, Z, L0, w, EA):
-    from cdpr_design.kernels import catenary as C
+    from cdpr_design.kernels import catenary_inv as C
 
     nan = np.full(len(X), np.nan)
     return C.catenary_inverse_batch(X, Z, L0, w, EA, nan, nan, 1e-12, 100)
@@ -103,7 +103,7 @@ def cold(n: int, seed: int) -> float:
 
 
 def run(b: h.Bench) -> None:
-    from cdpr_design.kernels import catenary as C
+    from cdpr_design.kernels import catenary_inv as C
 
     n, seed = b.opt["n"], b.opt["seed"]
     t_cold = h.call_in_child("benchmarks.catenary.cold", n, seed, cache=b.fresh_cache())
