@@ -28,10 +28,6 @@ njit_inline = nb.njit(fastmath=FAST, inline="always", **JIT)
 #: module of every function that calls it, so each level of a chain of calls costs its whole
 #: depth again (the sagging cables' fixed point).
 njit_folded = nb.njit(inline="always", **JIT)
-#: The same as :data:`njit` (a name some kernel modules still import; use :data:`njit`).
-njit_noref = njit
-#: The same as :data:`njit_fast` (a name some kernel modules still import; use :data:`njit_fast`).
-njit_fast_noref = njit_fast
 
 
 def jitable(func):
@@ -43,23 +39,3 @@ def jitable(func):
     """
     return register_jitable(func)
 
-
-def pointer_for(dispatcher, args):
-    """A C function pointer to ``dispatcher`` compiled for the numba types of ``args``, made once per
-    process and types; under ``NUMBA_DISABLE_JIT``, ``dispatcher`` itself.  Still used by the sagging
-    cables' blocks, through numba's wrapper-address protocol (not its documented API): to go with them."""
-    if nb.config.DISABLE_JIT:
-        return dispatcher
-    from numba.core.types.function_type import CompileResultWAP
-
-    types = tuple(nb.typeof(a) for a in args)
-    key = (dispatcher, types)
-    made = _pointers.get(key)
-    if made is None:
-        dispatcher.compile(types)
-        made = _pointers[key] = CompileResultWAP(dispatcher.overloads[types])
-    return made
-
-
-#: the pointers :func:`pointer_for` made in this process, by (dispatcher, argument types)
-_pointers: dict = {}

@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_noref
+from cdpr_design.kernels._jit import njit
 from cdpr_design.kernels.geometry import structure_matrix
 from cdpr_design.kernels.hsm import facet_normal
 from cdpr_design.kernels.interval import down, iabs, iadd, idiv, imul, iscale, isqr, isqrt, isub, unit_component, up
@@ -68,7 +68,7 @@ UNDECIDED = 0
 KRAWCZYK_STEPS = 2
 
 
-@njit_noref
+@njit
 def interval_units(plo, phi, Alo, Ahi, Blo, Bhi, U, L):
     """Enclose the cables' unit vectors u_i over the position box [plo, phi] (3,) [m], outlets
     in [Alo, Ahi] and rotated attachments in [Blo, Bhi] (m, 3) [m]: ``U`` (m, 3, 2) (lower,
@@ -101,7 +101,7 @@ def interval_units(plo, phi, Alo, Ahi, Blo, Bhi, U, L):
     return ok
 
 
-@njit_noref
+@njit
 def column_rows(V, i, Blo, Bhi, rows, Wl, Wh):
     """Column i of [Wl, Wh] (n, m): [v ; (R b_i) x v] restricted to ``rows``, for the interval
     3-vector ``V`` (3, 2) and cable i's rotated attachment box (the structure matrix's column
@@ -132,7 +132,7 @@ def column_rows(V, i, Blo, Bhi, rows, Wl, Wh):
         Wh[k, i] = hi
 
 
-@njit_noref
+@njit
 def interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh, U, L):
     """Enclose the structure matrix over the box (:func:`interval_units`): ``Wl``, ``Wh``
     (n, m); ``U``, ``L`` receive the unit vectors and lengths.  Returns :func:`interval_units`'s flag."""
@@ -142,7 +142,7 @@ def interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh, U, L):
     return ok
 
 
-@njit_noref
+@njit
 def structure_derivative(axis, U, L, Blo, Bhi, rows, Dl, Dh, V):
     """Enclose dW/dp_axis over the box into [Dl, Dh] (n, m): du_i/dp_k = -(e_k - u_i u_ik) / L_i
     (u_i = (A_i - R b_i - p) / L_i), through :func:`column_rows`; ``V`` (3, 2) is scratch."""
@@ -158,7 +158,7 @@ def structure_derivative(axis, U, L, Blo, Bhi, rows, Dl, Dh, V):
         column_rows(V, i, Blo, Bhi, rows, Dl, Dh)
 
 
-@njit_noref
+@njit
 def half_ranges(tmin, tmax, tmid, rho):
     """``tmid`` = the bounds' midpoints (floats) and ``rho`` >= max |t - tmid| over the bounds, rounded up."""
     for j in range(tmin.shape[0]):
@@ -168,7 +168,7 @@ def half_ranges(tmin, tmax, tmid, rho):
         rho[j] = max(a, b)
 
 
-@njit_noref
+@njit
 def support_gap(nu, Wl, Wh, tmid, rho, w):
     """The interval of s = sum_j rho_j |nu . w_j| - |nu . (W t_mid - w)| over the interval
     structure matrix [Wl, Wh] (n, m), for the float direction ``nu`` (n,) and wrench ``w`` (n,)."""
@@ -195,7 +195,7 @@ def support_gap(nu, Wl, Wh, tmid, rho, w):
     return isub(sl, sh, al, ah)
 
 
-@njit_noref
+@njit
 def krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work):
     """Enclose the solutions of A x = b for every A in [Al, Ah] (n, n) and b in [bl, bh] (n,)
     into [Xl, Xh] (n,).  Returns False when regularity is not proven (then X is meaningless).
@@ -497,7 +497,7 @@ def basis_enclosure(Wl, Wh, bases, basis, t, tmin, tmax, w, mu, Al, Ah, bl, bh, 
     return krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work)
 
 
-@njit_noref
+@njit
 def in_basis(bases, basis, j):
     """The slot of cable j in ``bases[basis]`` (-1 if it is not there)."""
     for q in range(bases.shape[1]):

@@ -25,34 +25,34 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit_noref
+from cdpr_design.kernels._jit import njit
 
 
-@njit_noref
+@njit
 def down(x):
     """The next float below ``x`` (a lower bound of any real that rounds to ``x``)."""
     return np.nextafter(x, -np.inf)
 
 
-@njit_noref
+@njit
 def up(x):
     """The next float above ``x``."""
     return np.nextafter(x, np.inf)
 
 
-@njit_noref
+@njit
 def iadd(al, ah, bl, bh):
     """[a] + [b]."""
     return down(al + bl), up(ah + bh)
 
 
-@njit_noref
+@njit
 def isub(al, ah, bl, bh):
     """[a] - [b]."""
     return down(al - bh), up(ah - bl)
 
 
-@njit_noref
+@njit
 def imul(al, ah, bl, bh):
     """[a] * [b] (the extreme products of the bounds; ``(-inf, inf)`` if one is NaN, as 0 * inf)."""
     p1 = al * bl
@@ -64,13 +64,13 @@ def imul(al, ah, bl, bh):
     return down(min(min(p1, p2), min(p3, p4))), up(max(max(p1, p2), max(p3, p4)))
 
 
-@njit_noref
+@njit
 def iscale(c, bl, bh):
     """The float ``c`` times [b]."""
     return imul(c, c, bl, bh)
 
 
-@njit_noref
+@njit
 def idiv(al, ah, bl, bh):
     """[a] / [b]; ``(-inf, inf)`` when [b] holds 0."""
     if not (bl > 0.0 or bh < 0.0):
@@ -84,7 +84,7 @@ def idiv(al, ah, bl, bh):
     return down(min(min(q1, q2), min(q3, q4))), up(max(max(q1, q2), max(q3, q4)))
 
 
-@njit_noref
+@njit
 def isqr(al, ah):
     """[a]^2, the range of x^2 (not [a] * [a], which would be wider when [a] holds 0)."""
     if al >= 0.0:
@@ -94,7 +94,7 @@ def isqr(al, ah):
     return 0.0, up(max(al * al, ah * ah))
 
 
-@njit_noref
+@njit
 def isqrt(al, ah):
     """sqrt([a]) over its non-negative part (NaN bounds when [a] is wholly negative)."""
     if ah < 0.0:
@@ -102,7 +102,7 @@ def isqrt(al, ah):
     return max(0.0, down(math.sqrt(max(al, 0.0)))), up(math.sqrt(ah))
 
 
-@njit_noref
+@njit
 def iabs(al, ah):
     """|[a]|."""
     if al >= 0.0:
@@ -112,7 +112,7 @@ def iabs(al, ah):
     return 0.0, max(-al, ah)
 
 
-@njit_noref
+@njit
 def idot(al, ah, bl, bh):
     """The dot product of the interval vectors [a] and [b] (1-D arrays of bounds)."""
     sl = 0.0
@@ -123,7 +123,7 @@ def idot(al, ah, bl, bh):
     return sl, sh
 
 
-@njit_noref
+@njit
 def unit_at(x, r):
     """x / sqrt(x^2 + r) for the floats x and r >= 0, as an interval ([-1, 1] when the
     denominator may be 0)."""
@@ -135,7 +135,7 @@ def unit_at(x, r):
     return idiv(x, x, dl, dh)
 
 
-@njit_noref
+@njit
 def unit_component(xl, xh, rl, rh):
     """The range of x / sqrt(x^2 + r) for x in [xl, xh] and r in [rl, rh] (r >= 0): one component
     of a unit vector whose other squared components sum to r.
