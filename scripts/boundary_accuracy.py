@@ -21,7 +21,7 @@ from tests.test_boundary import box_top, planar2_exact, pod_data, twocable_data
 
 def run(design, step):
     g = ws.make_grid(design, step)
-    p = ws.plan(ws.robot_for(design, g), g, solid=True)
+    p = ws.plan(ws.robot_for(design), g, solid=True)
     c0 = time.process_time()
     r = p.run()
     return r, time.process_time() - c0

@@ -22,7 +22,7 @@ from .reference_boundary import planar_area, spatial_volume
 
 def solid(design, step=None, **kw):
     g = ws.make_grid(design, step)
-    return ws.plan(ws.robot_for(design, g, **kw), g, solid=True).run()
+    return ws.plan(ws.robot_for(design, **kw), g, solid=True).run()
 
 
 def planar2_exact(design, grid: Grid) -> float:
@@ -95,7 +95,7 @@ def test_refined_vertices_lie_on_the_boundary(planar2):
     """Every loop vertex off the box lies where feasibility changes: within the bisection's
     tolerance along its grid edge, one side feasible and the other not."""
     r = solid(planar2, 0.05)
-    test = ws.plan(ws.robot_for(planar2, r.grid), r.grid).point_test()
+    test = ws.plan(ws.robot_for(planar2), r.grid).point_test()
     xy = np.concatenate(r.boundary.loops)
     g = r.grid
     top = np.array([box_top(g, 0), box_top(g, 1)])
@@ -246,7 +246,7 @@ def test_frame_carries_the_weight_with_sagging_cables(tmp_path):
     shapes: the total force is -(m + sum mu_i L0_i) g at every feasible pose."""
     d = spec.load(DESIGNS / "sagging40.yaml")
     g = ws.make_grid(d, 1.0)
-    rob = ws.robot_for(d, g)
+    rob = ws.robot_for(d)
     chunks = []
     r = ws.plan(rob, g, solid=True).run(on_chunk=chunks.append)
     assert r.feasible > 0
@@ -284,14 +284,16 @@ def test_compiled_frame_loads_equal_numpy_ones():
     designs += [spec.from_dict(random_planar_data(rng, m)) for m in (2, 3, 4)]
     for d in designs:
         g = ws.make_grid(d, None)
-        robot = ws.robot_for(d, g, engine="numba")
+        robot = ws.robot_for(d, engine="numba")
         p = ws.plan(robot, g)
         n = min(g.size, 20000)
         P = ws.grid.positions3(g, 0, n)
         r = p.rows(0, n, P)
         a, b = FrameLoads(robot, p.orientation), FrameLoads(robot, p.orientation)
-        assert a.compiled
-        b.compiled = False
+        # the kernels' robots take the compiled pass; a two-cable planar robot's engine is the closed
+        # form (numpy), and the pass is asked for there so that it is compared on two cables as well
+        assert a.compiled == (robot.engine == "numba")
+        a.compiled, b.compiled = True, False
         a.add(r, 0, P)
         b.add(r, 0, P)
         names = d.cable_names
@@ -367,7 +369,7 @@ def test_a_hanging_effector_puts_its_weight_on_the_frame():
     the load's weight, straight down, whatever orientation it hangs in."""
     d = spec.load(DESIGNS / "crane4.yaml")
     g = ws.make_grid(d, 0.5)
-    robot = ws.robot_for(d, g)
+    robot = ws.robot_for(d)
     assert robot.orientation.free
     r = ws.plan(robot, g, solid=True).run()
     s = r.summary()["frame_loads"]

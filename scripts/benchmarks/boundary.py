@@ -25,7 +25,7 @@ def run(b: h.Bench) -> None:
         d = spec.load(h.ROOT / "designs" / f"{name}.yaml")
         g0 = d.workspace.grid
         g = Grid(g0.lower, g0.upper, tuple(float(s) for s in b.opt["steps"])[:len(g0.lower)])
-        robot = ws.robot_for(d, g)
+        robot = ws.robot_for(d)
         ws.plan(robot, Grid(g.lower, g.upper, tuple(4 * s for s in g.step)), solid=True).run()  # kernels, imports
         results = {}
 
