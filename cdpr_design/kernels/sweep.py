@@ -19,8 +19,12 @@ from cdpr_design.kernels.parallel import run_blocks
 
 
 #: A grid sweep's poses: flat index ``start`` of row 0 (C order over x, y, z), the grid's ``lower``
-#: corner and ``step`` (3,) [m] and ``shape`` (3,) int64, the rotated attachments ``Rb`` (m, 3) [m].
-GridPoses = namedtuple("GridPoses", "start lower step shape Rb")
+#: corner and ``step`` (3,) [m] and ``shape`` (3,) int64, the rotated attachments ``Rb`` (m, 3) [m];
+#: ``P`` (k, 3) [m]: explicit positions at the same orientation instead of the grid's (row j is
+#: ``P[j]``; ``start``, ``lower``, ``step`` and ``shape`` unused), or (0, 3), the default, for the
+#: grid.  One compiled loop serves both: the grid sweep and the evaluation of points between grid
+#: points (the workspace's boundary).
+GridPoses = namedtuple("GridPoses", "start lower step shape Rb P", defaults=(np.empty((0, 3)),))
 
 
 def sweep_grid(poses, statics, wreq, out):
@@ -58,13 +62,18 @@ def grid_block(r: int):
 
 @njit
 def _place_grid(k, src, st, W, L, lo, w, out):
-    """Row ``k``'s grid pose (grid index ``src.start + k``): its structure matrix into ``W``, its
-    cable lengths into ``L`` and ``out.lengths[k]`` [m], its lower tension bounds into ``lo`` [N]
-    (:func:`~cdpr_design.kernels.pose.raise_floor`).  ROW_EMPTY for a cable of zero length."""
-    shape, lower, step = src.shape, src.lower, src.step
-    ix, iy, iz = grid_index(src.start + k, shape[1], shape[2])
-    ok = structure_matrix(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2], src.Rb,
-                          st.A, st.rows, W, L)
+    """Row ``k``'s pose (grid index ``src.start + k``, or ``src.P[k]`` where ``src.P`` has rows): its
+    structure matrix into ``W``, its cable lengths into ``L`` and ``out.lengths[k]`` [m], its lower
+    tension bounds into ``lo`` [N] (:func:`~cdpr_design.kernels.pose.raise_floor`).  ROW_EMPTY for a
+    cable of zero length."""
+    P = src.P
+    if P.shape[0] > 0:
+        x, y, z = P[k, 0], P[k, 1], P[k, 2]
+    else:
+        shape, lower, step = src.shape, src.lower, src.step
+        ix, iy, iz = grid_index(src.start + k, shape[1], shape[2])
+        x, y, z = lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2]
+    ok = structure_matrix(x, y, z, src.Rb, st.A, st.rows, W, L)
     lengths = out.lengths
     for i in range(L.shape[0]):
         lengths[k, i] = L[i]

@@ -59,32 +59,30 @@ class StraightSweep(Base):
             _planar2_numpy(grid_positions(self.g, start, cnt), self.Rb, r.outlet_points, self.wreq_used, r.tension_min,
                            r.tension_max, r.tension_floor, feas, marg, ten, lens)
         else:
-            K = self.K
-            K.sweep_grid(K.GridPoses(start, self.lower, self.step, self.shape, self.Rb),
-                         K.Statics(r.outlet_points, r.rows, r.tension_min, r.tension_max, r.tension_floor, r.combos,
-                                   r.kcode),
-                         self.wreq, K.Outputs(feas, marg, ten, lens))
+            self._sweep(self.K.GridPoses(start, self.lower, self.step, self.shape, self.Rb), Rows(feas, marg, ten, lens))
         return Rows(feas, marg, ten, lens)
 
+    def _sweep(self, poses, rows: Rows) -> None:
+        """The kernels' grid sweep of ``poses`` (:class:`~cdpr_design.kernels.sweep.GridPoses`) into ``rows``."""
+        K, r = self.K, self.robot
+        K.sweep_grid(poses, K.Statics(r.outlet_points, r.rows, r.tension_min, r.tension_max, r.tension_floor, r.combos,
+                                      r.kcode),
+                     self.wreq, K.Outputs(rows.feasible, rows.margin, rows.tensions, rows.lengths))
+
     def feasible_at(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Feasibility (k,) bool and capacity margin (k,) [N] at positions ``P`` (k, 3) [m]: numpy's
-        closed form, or the kernels' statics at explicit positions
-        (:func:`cdpr_design.kernels.hanging.eval_rotated`, every pose at the sweep's orientation)."""
+        """Feasibility (k,) bool and capacity margin (k,) [N] at positions ``P`` (k, 3) [m], at the
+        sweep's orientation: numpy's closed form, or the grid sweep's own compiled loop given the
+        positions (:class:`~cdpr_design.kernels.sweep.GridPoses` ``P``)."""
         r, k, m = self.robot, P.shape[0], self.robot.m
         feas, marg = np.empty(k, dtype=np.uint8), np.empty(k)
         if self.numpy:
             _planar2_numpy(P[:, :2], self.Rb, r.outlet_points, self.wreq_used, r.tension_min, r.tension_max,
                            r.tension_floor, feas, marg, np.empty((k, m)), np.empty((k, m)))
             return feas.astype(bool), marg
-        from cdpr_design.kernels import hanging as KH
-        from cdpr_design.kernels.pose import Outputs, Statics
-
-        R = np.ascontiguousarray(np.broadcast_to(kin.rotation_matrix(*self.ori), (k, 3, 3)))
-        wreq = np.ascontiguousarray(np.broadcast_to(self.wreq, (k,) + self.wreq.shape))
-        KH.eval_rotated(np.ascontiguousarray(P, dtype=float), R, r.attachments,
-                        Statics(r.outlet_points, r.rows, r.tension_min, r.tension_max, r.tension_floor, r.combos,
-                                r.kcode),
-                        wreq, Outputs(feas, marg, np.empty((k, m)), np.empty((k, m))))
+        if k:
+            self._sweep(self.K.GridPoses(0, self.lower, self.step, self.shape, self.Rb,
+                                         np.ascontiguousarray(P, dtype=float)),
+                        Rows(feas, marg, np.empty((k, m)), np.empty((k, m))))
         return feas.astype(bool), marg
 
     def stats(self, rows: Rows, tpeak: np.ndarray) -> tuple:
