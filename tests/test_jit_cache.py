@@ -34,12 +34,11 @@ print(repr(t.tolist()))
 """
 
 
-# chunk_stats (sweep.py) calls no other kernel: print its answer and whether it came from the cache
+# det_small (linalg.py), a small kernel outside hsm.py: print its answer
 PROBE_ALONE = START + """
 import numpy as np
 from cdpr_design import kernels as K
-got = K.chunk_stats(np.ones(2, np.uint8), np.array([1.0, 2.0]), np.ones((2, 1)), 2, np.zeros(1))
-print(repr(list(got)))
+print(repr([K.det_small(np.array([[2.0, 1.0], [1.0, 3.0]]), 2)]))
 """
 
 
@@ -70,16 +69,16 @@ def test_an_edit_to_any_kernel_module_starts_a_new_cache_folder(tmp_path):
     user's NUMBA_CACHE_DIR."""
     kernels = _copy_package(tmp_path)
     got, first = _probe(tmp_path, PROBE_ALONE)
-    assert got == [2, 1.0, 2.0]
+    assert got == [5.0]
     assert first.parent == tmp_path / "numba-cache" and first.name.startswith("cdpr-design-kernels-")
     files = _cached(first)
-    assert any(name.startswith("sweep.chunk_stats") for name in files), files
-    assert _probe(tmp_path, PROBE_ALONE) == ([2, 1.0, 2.0], first)
+    assert any(name.startswith("linalg.det_small") for name in files), files
+    assert _probe(tmp_path, PROBE_ALONE) == ([5.0], first)
     assert _cached(first) == files  # loaded, nothing written
     hsm = kernels / "hsm.py"
     hsm.write_text(hsm.read_text() + "\n# edited by the test\n")
     got, second = _probe(tmp_path, PROBE_ALONE)
-    assert got == [2, 1.0, 2.0] and second.parent == first.parent and second != first
+    assert got == [5.0] and second.parent == first.parent and second != first
     assert _cached(second) and _cached(first) == files
 
 

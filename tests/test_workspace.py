@@ -12,6 +12,7 @@ from cdpr_design.statics import kinematics as kin
 from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
 from cdpr_design.workspaces import grid as wsg
+from cdpr_design.workspaces.grid import Rows, chunk_stats
 from cdpr_design.statics.robot import combinations
 from cdpr_design.statics.wrenches import wrench_vertices
 from cdpr_design.errors import InputError
@@ -328,7 +329,9 @@ def _chunk_stats_reference(feas, marg, ten, count, tpeak):
     margin (a zero without its sign) and, per cable, the largest tension into ``tpeak``."""
     rows = [k for k in range(count) if feas[k]]
     for k in rows:
-        tpeak[:] = np.maximum(tpeak, ten[k])
+        for i in range(ten.shape[1]):
+            if ten[k, i] > tpeak[i]:
+                tpeak[i] = ten[k, i]
     if not rows:
         return 0, np.inf, -np.inf
     return len(rows), min(float(marg[k]) for k in rows) + 0.0, max(float(marg[k]) for k in rows) + 0.0
@@ -336,17 +339,17 @@ def _chunk_stats_reference(feas, marg, ten, count, tpeak):
 
 @pytest.mark.parametrize("count", [0, 1, 63, 64, 65, 1000, 4099])
 def test_chunk_stats_matches_the_obvious_reduction(count):
-    """The kernel's reduction of a chunk equals the obvious one (only the first ``count`` rows
-    count; a margin of -0.0 is reported as 0.0).  The closed form's own reduction is checked
-    through the sweeps' summaries (test_closed_form_equals_the_general_kernel)."""
+    """A chunk's reduction equals the obvious one (a margin of -0.0 is reported as 0.0; a feasible
+    row without tensions, NaN, raises no peak)."""
     rng = np.random.default_rng(count)
     n = count + 17
     feas = (rng.random(n) < 0.6).astype(np.uint8)
     marg = rng.normal(size=n)
     marg[rng.random(n) < 0.1] = -0.0
     ten = rng.uniform(0, 20, size=(n, 3))
+    ten[rng.random(n) < 0.05] = np.nan
     tp_k, tp_r = np.full(3, -np.inf), np.full(3, -np.inf)
-    got = K.chunk_stats(feas, marg, ten, count, tp_k)
+    got = chunk_stats(Rows(feas[:count], marg[:count], ten[:count], None), tp_k)
     ref = _chunk_stats_reference(feas, marg, ten, count, tp_r)
     assert got == ref and got[0] == int(feas[:count].sum())
     assert not np.signbit(got[1]) or got[1] < 0
@@ -356,9 +359,9 @@ def test_chunk_stats_matches_the_obvious_reduction(count):
 def test_chunk_stats_reports_a_zero_margin_without_its_sign():
     feas = np.ones(3, np.uint8)
     ten = np.ones((3, 2))
-    got = K.chunk_stats(feas, np.array([-0.0, 1.0, -0.0]), ten, 3, np.full(2, -np.inf))
+    got = chunk_stats(Rows(feas, np.array([-0.0, 1.0, -0.0]), ten, None), np.full(2, -np.inf))
     assert got == (3, 0.0, 1.0) and not np.signbit(got[1])
-    got = K.chunk_stats(feas, np.full(3, -0.0), ten, 3, np.full(2, -np.inf))
+    got = chunk_stats(Rows(feas, np.full(3, -0.0), ten, None), np.full(2, -np.inf))
     assert got == (3, 0.0, 0.0) and not np.signbit(got[1]) and not np.signbit(got[2])
 
 

@@ -50,7 +50,7 @@ _EXPORTS = {
     **dict.fromkeys(("RANK_TOL", "det_small", "householder_qr", "inverse_small"), "linalg"),
     **dict.fromkeys(("KIND_STATIC", "KIND_WRENCH_CLOSURE", "KIND_WRENCH_FEASIBLE", "Outputs", "Statics", "eval_general",
                      "eval_pose", "eval_square"), "pose"),
-    **dict.fromkeys(("GridPoses", "Interference", "Pulleys", "chunk_stats", "sweep_grid", "sweep_points"),
+    **dict.fromkeys(("GridPoses", "Interference", "Pulleys", "sweep_grid", "sweep_points"),
                     "sweep"),
     **dict.fromkeys(("QP_TOL", "goldfarb_idnani", "min_norm_tensions", "min_norm_tensions_square",
                      "null_space_setup", "project_null", "project_one", "project_two", "qp_tolerance",

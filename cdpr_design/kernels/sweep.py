@@ -1,5 +1,4 @@
-"""Grid and point sweeps (blocks of poses on threads, :mod:`cdpr_design.kernels.parallel`) and
-per-chunk statistics."""
+"""Grid and point sweeps (blocks of poses on threads, :mod:`cdpr_design.kernels.parallel`)."""
 
 from __future__ import annotations
 
@@ -107,30 +106,6 @@ def _grid_loop_any(k0, k1, src, st, out, buf):
 
 #: the grid loop of each redundancy m - n that has its own (:func:`grid_block`)
 _GRID_LOOPS = {0: _grid_loop_0, 1: _grid_loop_1, 2: _grid_loop_2}
-
-
-@njit
-def chunk_stats(feasible, margin, tensions, count, tpeak):
-    """Feasible count and margin extremes over the feasible rows 0..count-1; ``tpeak`` (m) is
-    raised to each cable's largest feasible tension.  Returns (count, min, max) (-0.0 is returned as
-    0.0).  One pass on one thread: a millisecond for 150,000 rows, against the sweep's tenths of a second."""
-    m = tensions.shape[1]
-    nf = 0
-    lo = np.inf
-    hi = -np.inf
-    for k in range(count):
-        if feasible[k]:
-            nf += 1
-            v = margin[k]
-            if v < lo:
-                lo = v
-            if v > hi:
-                hi = v
-            for i in range(m):
-                t = tensions[k, i]
-                if t > tpeak[i]:
-                    tpeak[i] = t
-    return nf, lo + 0.0, hi + 0.0
 
 
 #: The swivel pulleys of :func:`sweep_points`: each outlet's axis ``K`` (m, 3), reference direction

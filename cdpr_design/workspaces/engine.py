@@ -85,11 +85,6 @@ class StraightSweep(Base):
                         Rows(feas, marg, np.empty((k, m)), np.empty((k, m))))
         return feas.astype(bool), marg
 
-    def stats(self, rows: Rows, tpeak: np.ndarray) -> tuple:
-        if self.numpy:  # no numba in the process
-            return _chunk_stats_numpy(rows.feasible, rows.margin, rows.tensions, rows.feasible.shape[0], tpeak)
-        return self.K.chunk_stats(rows.feasible, rows.margin, rows.tensions, rows.feasible.shape[0], tpeak)
-
 
 def _planar2_numpy(pos, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensions, lengths):
     """The rows of a robot with two cables and two wrench rows at positions ``pos`` (count, 2) [m].
@@ -146,15 +141,3 @@ def _planar2_numpy(pos, Rb, A, wreq, tmin, tmax, floor, feasible, margin, tensio
 
 #: |det W| at or below it is rank deficient (= ``kernels.RANK_TOL``, the kernels' tolerance; a test checks)
 _RANK_TOL = 1e-10
-
-
-def _chunk_stats_numpy(feasible, margin, tensions, count, tpeak):
-    """A chunk's (feasible count, min margin [N], max margin [N]) of its first ``count`` rows, as
-    ``kernels.chunk_stats`` gives them; raises ``tpeak`` (m,) [N] to the largest feasible tensions."""
-    f = feasible[:count].astype(bool)
-    nf = int(np.count_nonzero(f))
-    if not nf:
-        return 0, np.inf, -np.inf
-    mm = margin[:count][f]
-    np.maximum(tpeak, tensions[:count][f].max(axis=0), out=tpeak)
-    return nf, float(mm.min()) + 0.0, float(mm.max()) + 0.0

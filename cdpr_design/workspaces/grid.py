@@ -72,6 +72,20 @@ class Rows:
     poses: np.ndarray | None = None
 
 
+def chunk_stats(r: Rows, tpeak: np.ndarray) -> tuple[int, float, float]:
+    """(feasible count, least margin [N], largest margin [N]) over the feasible rows of ``r`` (a
+    margin of -0.0 reported as 0.0; (0, inf, -inf) when none is feasible); raises ``tpeak`` (m,)
+    [N] in place to each cable's largest feasible tension.  NaN margins and tensions (a feasible
+    pose without tensions) are passed over."""
+    f = np.asarray(r.feasible).astype(bool)
+    nf = int(np.count_nonzero(f))
+    if not nf:
+        return 0, np.inf, -np.inf
+    mm = np.asarray(r.margin)[f]
+    np.fmax(tpeak, np.fmax.reduce(np.asarray(r.tensions)[f], axis=0), out=tpeak)
+    return nf, float(np.fmin.reduce(mm, initial=np.inf)) + 0.0, float(np.fmax.reduce(mm, initial=-np.inf)) + 0.0
+
+
 @dataclass
 class WorkspaceResult:
     """Result of a workspace sweep. Infeasible poses are flags and NaNs, never errors.

@@ -72,14 +72,6 @@ class Evaluator:
                        K.Outputs(feas, marg, ten, L), mask)
         return feas, marg, ten, L, mask
 
-def chunk_stats(feas, marg, ten, tpeak):
-    """(feasible count, min margin [N], max margin [N]) of a chunk; raises ``tpeak`` [N] in place."""
-    from cdpr_design import kernels as K
-
-    return K.chunk_stats(np.ascontiguousarray(feas), np.ascontiguousarray(marg),
-                         np.ascontiguousarray(ten), feas.shape[0], tpeak)
-
-
 def kind_counts(mask: np.ndarray, counts: dict) -> None:
     for bit, name in HIT_NAMES.items():
         counts[name] += int(np.count_nonzero(mask & bit))

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cdpr_design.workspaces.grid import Maps, Rows, WorkspaceResult
+from cdpr_design.workspaces.grid import Maps, Rows, WorkspaceResult, chunk_stats
 
 
 class Part:
@@ -49,11 +49,9 @@ class Base(Part):
         return r.feasible.astype(bool), np.asarray(r.margin, float)
 
     def stats(self, r: Rows, tpeak: np.ndarray) -> tuple:
-        """(feasible count, least margin [N], largest margin [N]) of ``r``; raises ``tpeak`` [N]."""
-        from cdpr_design import kernels as K
-
-        return K.chunk_stats(np.ascontiguousarray(r.feasible), np.ascontiguousarray(r.margin),
-                             np.ascontiguousarray(r.tensions), r.feasible.shape[0], tpeak)
+        """(feasible count, least margin [N], largest margin [N]) of ``r``; raises ``tpeak`` [N]
+        (:func:`~cdpr_design.workspaces.grid.chunk_stats`)."""
+        return chunk_stats(r, tpeak)
 
 
 class Wrapper(Part):
