@@ -240,6 +240,98 @@ def test_frame_loads_match_workspace_csv(tmp_path, name, step):
     assert s["max_force"] == pytest.approx(max(w["max_force"] for w in want.values()), rel=1e-6)
 
 
+def _axle_forces(design, P, t, axes, radii):
+    """Forces (k, m, 3) [N] on the axles of swivel pulleys at effector positions ``P`` (k, 3) [m]
+    (orientation 0) with tensions ``t`` (k, m) [N]: the cable arrives at the swivel point A along the
+    unit axis k, wraps the pulley (radius rho, centre A + rho e in the plane of k and the attachment
+    B, e the unit vector across k towards B) and leaves it at the tangent point T towards B, so the
+    axle carries t (d - k), d = (B - T) / |B - T|.  Plane coordinates (along e, along k): the centre
+    (rho, 0); of the two tangent points from B the one where the cable, running on round the pulley
+    from A, leaves it towards B: the circle's direction of travel (sin beta, cos beta) at
+    T = (rho - rho cos beta, rho sin beta), beta the wrap angle, points at B."""
+    A = design.outlets
+    B = P[:, None, :] + design.attachments[None]
+    out = np.empty(B.shape)
+    for i in range(design.m):
+        k, rho = axes[i] / np.linalg.norm(axes[i]), radii[i]
+        D = B[:, i] - A[i]
+        across = D - np.outer(D @ k, k)
+        e = across / np.linalg.norm(across, axis=1, keepdims=True)
+        bx, by = np.einsum("kj,kj->k", D, e), D @ k
+        cx = bx - rho
+        dist = np.hypot(cx, by)
+        phi, gap = np.arctan2(by, cx), np.arccos(rho / dist)
+        best = np.full((len(P), 3), np.nan)
+        for sign in (1.0, -1.0):
+            ang = phi + sign * gap  # the tangent point's angle about the centre
+            beta = np.pi - ang
+            tx, ty = rho - rho * np.cos(beta), rho * np.sin(beta)
+            travel = np.stack([np.sin(beta), np.cos(beta)], axis=1)
+            to_b = np.stack([bx - tx, by - ty], axis=1)
+            pick = np.einsum("kj,kj->k", travel, to_b) > 0  # at the other one it points away from B
+            d = travel[:, :1] * e + travel[:, 1:] * k
+            best[pick] = d[pick]
+        out[:, i] = t[:, i:i + 1] * (best - k)
+    return out
+
+
+@pytest.mark.parametrize("name", ["planar", "spatial"])
+def test_swivel_pulley_frame_loads_match_the_axle_forces_from_workspace_csv(tmp_path, name):
+    """frame_loads.csv of a design with swivel pulleys: the force on each pulley's axle, the
+    resultant of the cable run from the winch (along -k) and of the free run towards the
+    attachment, recomputed from workspace.csv's tensions with the pulley geometry above; the
+    limit_ columns the same at the upper tension bound."""
+    from .helpers import add_pulleys, ipanema3_data
+
+    if name == "planar":
+        raw = planar2_raw()
+        add_pulleys(raw["cables"], 0.05, [[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+        step = 0.05
+    else:
+        raw = ipanema3_data("pulleys3", radius=0.2, workspace={
+            "grid": {"lower": [-6.0, -3.5, 0.0], "upper": [6.0, 3.5, 2.5], "step": 0.5}})
+        step = 0.5
+    d = spec.from_dict(raw)
+    out = tmp_path / "o"
+    res = invoke("workspace", write_spec(tmp_path, raw), "--out", out, "--step", step, "--json", "--quiet")
+    assert res.exit_code == 0, res.output
+    header, rows = read_csv(out / "workspace.csv")
+    col = {n: i for i, n in enumerate(header)}
+    feas = [r for r in rows if r[col["feasible"]] == "1"]
+    assert len(feas) > 50
+    dim = d.motion.dim
+    P = np.zeros((len(feas), 3))
+    P[:, :dim] = [[float(r[col[c]]) for c in "xyz"[:dim]] for r in feas]
+    t = np.array([[float(r[col[f"tension_{c}"]]) for c in d.cable_names] for r in feas])
+    axes = np.array([c["pulley"]["axis"] for c in raw["cables"]], float)
+    radii = np.array([c["pulley"]["radius"] for c in raw["cables"]], float)
+    F = _axle_forces(d, P, t, axes, radii)
+    U = _axle_forces(d, P, np.ones_like(t), axes, radii)
+    assert np.isfinite(F).all()
+    # the axle force is not the straight cable's: the run from the winch adds -t k
+    assert np.abs(np.linalg.norm(F, axis=2) - t).max() > 0.1 * t.max()
+    header_f, rows_f = read_csv(out / "frame_loads.csv")
+    assert [r[0] for r in rows_f] == list(d.cable_names)
+    for i, r in enumerate(rows_f):
+        got = dict(zip(header_f[1:], map(float, r[1:])))
+        want = {"max_force": np.linalg.norm(F[:, i], axis=1).max(),
+                "limit_max_force": d.tension_max[i] * np.linalg.norm(U[:, i], axis=1).max()}
+        for j, a in enumerate("xyz"[:dim]):
+            want[f"min_f{a}"], want[f"max_f{a}"] = F[:, i, j].min(), F[:, i, j].max()
+            want[f"limit_min_f{a}"] = d.tension_max[i] * U[:, i, j].min()
+            want[f"limit_max_f{a}"] = d.tension_max[i] * U[:, i, j].max()
+        assert set(got) == set(want)
+        for key, v in want.items():
+            assert got[key] == pytest.approx(v, rel=1e-6, abs=1e-6 * d.tension_max[i]), (r[0], key)
+    s = json.loads(res.stdout)["frame_loads"]
+    total = F.sum(axis=1)
+    moment = np.cross(d.outlets[None], F).sum(axis=1)
+    assert s["poses"] == len(feas)
+    assert s["total_force"]["max_magnitude"] == pytest.approx(np.linalg.norm(total[:, :dim], axis=1).max(), rel=1e-6)
+    mom = moment[:, 2:] if dim == 2 else moment
+    assert s["total_moment"]["max_magnitude"] == pytest.approx(np.linalg.norm(mom, axis=1).max(), rel=1e-6)
+
+
 @pytest.mark.slow
 def test_frame_carries_the_weight_with_sagging_cables(tmp_path):
     """Statics: the frame carries the effector's and the cables' weight, whatever the cables'
@@ -378,3 +470,44 @@ def test_a_hanging_effector_puts_its_weight_on_the_frame():
     assert s["total_force"]["min"]["z"] == pytest.approx(-w, rel=1e-6)
     assert s["total_force"]["max"]["z"] == pytest.approx(-w, rel=1e-6)
     assert max(abs(s["total_force"][m][a]) for m in ("min", "max") for a in "xy") < 1e-6 * w
+
+
+# ---------------------------------------------------------------- pictures
+
+
+def test_a_slice_through_a_mesh_with_level_edges_warns_nothing():
+    """The unit cube (12 triangles) cut at its faces' heights and between them: the outline is the
+    square, and edges level with the plane (or not reaching it) form no 0 / 0."""
+    import warnings
+
+    from cdpr_design.plots.solid import slice_segments
+
+    v = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 1.0) for z in (0.0, 1.0)])
+    f = np.array([[0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for z in (0.0, 0.25, 0.5, 1.0):
+            segs = slice_segments(v, f, z)
+            if z == 1.0:  # nothing above the top face
+                assert len(segs) == 0
+                continue
+            assert len(segs) == 8 and np.all(np.isfinite(segs))
+            length = np.linalg.norm(segs[:, 1] - segs[:, 0], axis=1).sum()
+            assert length == pytest.approx(4.0)
+            assert np.all(np.isclose(np.abs(segs - 0.5), 0.5).any(axis=2))  # on the square's sides
+
+
+def test_frame_loads_picture_keeps_its_title_above_the_panels(planar2):
+    """frame_loads.png: the figure's title does not run into the two panels' (two-line) titles."""
+    from cdpr_design.plots.solid import frame_load_figure
+
+    fig = frame_load_figure(solid(planar2, 0.05))
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    sup = [t for t in fig.texts if t.get_text().startswith(planar2.name)]
+    assert len(sup) == 1
+    top = sup[0].get_window_extent(renderer)
+    for ax in fig.axes:
+        box = ax.title.get_window_extent(renderer)
+        assert ax.title.get_text() and box.y1 < top.y0, (ax.title.get_text(), box, top)

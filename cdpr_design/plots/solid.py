@@ -41,8 +41,10 @@ def slice_segments(vertices: np.ndarray, faces: np.ndarray, z: float) -> np.ndar
     for a, b in ((0, 1), (1, 2), (2, 0)):
         crosses = above[:, a] != above[:, b]
         pa, pb = tri[:, a], tri[:, b]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            t = (z - pa[:, 2]) / (pb[:, 2] - pa[:, 2])
+        # only an edge that crosses has ends at two heights: t of the others (0 / 0 or x / 0 on an
+        # edge level with the plane or not reaching it) is never formed
+        dz = pb[:, 2] - pa[:, 2]
+        t = np.divide(z - pa[:, 2], dz, out=np.zeros_like(dz), where=crosses)
         p = pa[:, :2] + t[:, None] * (pb[:, :2] - pa[:, :2])
         segs.append(np.where(crosses[:, None], p, np.nan))
     pts = np.stack(segs, axis=1)  # (F', 3, 2): two of the three edges cross
@@ -75,9 +77,10 @@ def frame_load_figure(result):
     table = result.frame_loads
     names = d.cable_names
     cols = table.rows(names)
-    fig = pyplot().figure(figsize=(10.5, 4.6))
-    ax = fig.add_axes([0.06, 0.12, 0.5, 0.76])
-    bx = fig.add_axes([0.66, 0.12, 0.31, 0.76])
+    fig = pyplot().figure(figsize=(10.5, 4.9))
+    # the panels' two-line titles end below the figure's title (top 0.83 + two lines of 9 pt)
+    ax = fig.add_axes([0.06, 0.11, 0.5, 0.72])
+    bx = fig.add_axes([0.66, 0.11, 0.31, 0.72])
     frame_rect(ax, d)
     A = d.outlets
     ax.plot(A[:, 0], A[:, 1], "v", ms=8, mfc=VERMILLION, mec="k", zorder=6, label="outlets")
@@ -121,5 +124,5 @@ def frame_load_figure(result):
     tm = total["total_moment"]["max_magnitude"]
     bx.set_title("per cable, over the feasible poses" + (f"\ntotal ≤ {tf:.3g} N, moment ≤ {tm:.3g} N m"
                                                           if tf is not None else ""), fontsize=9)
-    fig.suptitle(f"{d.name}: loads on the frame ({total['poses']:,} feasible poses)", fontsize=10)
+    fig.suptitle(f"{d.name}: loads on the frame ({total['poses']:,} feasible poses)", fontsize=10, y=0.985)
     return fig
