@@ -86,7 +86,7 @@ def test_sagging_samples_match_the_per_pose_statics():
     the same required wrench, sample by sample: same tensions, outlet tensions, lengths and sag."""
     d = planar2_as("sagging")
     s = tr.sample(resolved(d, "motion"), "square_fast", cycle_time=0.01)
-    st = tr.states(resolved(d, "motion"), s.pose, s.velocity, s.acceleration, time=s.time)
+    st = tr.states(resolved(d, "motion"), s.pose, s.velocity, s.acceleration)
     assert len(s) > 100 and np.all(s.cables.status == 0) and s.all_feasible
     combos = combinations(d.m, d.n)
     for j in range(0, len(s), 7):

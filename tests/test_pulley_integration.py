@@ -208,7 +208,7 @@ def test_trajectory_speeds_are_derivatives_of_pulley_lengths(make, radius, name)
     assert err2.max() < 1e-3 * max(1.0, np.abs(acc).max())
     assert np.abs(s0.cable_accel[1:-1][smooth] - fd2).max() > 5 * err2.max()
     # the structure matrix the tensions solve uses the pulley's tangent point
-    st = tr.states(resolved(d, "motion"), s.pose[::50], s.velocity[::50], s.acceleration[::50], time=s.time[::50])
+    st = tr.states(resolved(d, "motion"), s.pose[::50], s.velocity[::50], s.acceleration[::50])
     for j, p in enumerate(s.pose[::50]):
         np.testing.assert_allclose(st["structure"][j], kin.structure_matrix(d, p), atol=1e-12)
 

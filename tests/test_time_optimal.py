@@ -7,13 +7,14 @@ import json
 
 import numpy as np
 import pytest
+import yaml
 
 from cdpr_design.model import spec
 from cdpr_design.motion import time_optimal as to
 from cdpr_design.motion import trajectory as tr
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.robot import Analysis, resolve
-from tests.helpers import invoke, planar2_raw, write_spec
+from tests.helpers import DESIGNS, invoke, planar2_raw, write_spec
 
 
 def _free_square(raw: dict) -> dict:
@@ -134,14 +135,111 @@ def test_a_path_through_an_infeasible_pose_is_exit_2_naming_it(tmp_path):
 
 @pytest.mark.parametrize("args,names", [
     (["square_free"], "trajectories.square_free: speed and acceleration: needed"),
-    (["circle", "--time-optimal"], "--time-optimal"),
+    (["circle_free"], "trajectories.circle_free: speed and acceleration: needed"),
 ])
 def test_bad_uses_are_exit_2(tmp_path, args, names):
-    raw = _free_square(planar2_raw())
+    r = invoke("trajectory", write_spec(tmp_path, _circles(_free_square(planar2_raw()))), *args, "--out", tmp_path / "o")
+    assert r.exit_code == 2 and names in r.stderr and "Traceback" not in r.stderr, r.stderr
+
+
+# ---------------------------------------------------------------- circles and turning segments
+
+
+def _circles(raw: dict) -> dict:
+    """planar2 with a circle of 0.1 m about the middle of the paper's square, profiled at 0.5 m/s and
+    2 m/s^2 (``circle``) and without limits of its own (``circle_free``)."""
     raw["trajectories"]["circle"] = {"type": "circle", "center": [0.75, 0.85], "radius": 0.1, "speed": 0.5,
                                      "acceleration": 2.0}
-    r = invoke("trajectory", write_spec(tmp_path, raw), *args, "--out", tmp_path / "o")
-    assert r.exit_code == 2 and names in r.stderr and "Traceback" not in r.stderr, r.stderr
+    raw["trajectories"]["circle_free"] = {"type": "circle", "center": [0.75, 0.85], "radius": 0.1}
+    return raw
+
+
+def test_a_circle_is_timed_within_the_bounds_tight_and_faster(tmp_path):
+    d = spec.from_dict(_circles(planar2_raw()))
+    samples, timing = to.sample(_robot(d), "circle_free")
+    # on the circle, at rest at its start and end, one whole lap
+    r = np.linalg.norm(samples.pose - [0.75, 0.85], axis=1)
+    np.testing.assert_allclose(r[1:], 0.1, rtol=1e-12)
+    assert np.allclose(samples.pose[-1], [0.85, 0.85]) and np.allclose(samples.velocity[[0, -1]], 0.0)
+    assert len(timing.segments) == 1 and timing.segments[0].s[-1] == pytest.approx(2 * np.pi * 0.1)
+    # the velocity and acceleration are the pose's own: its differences, centripetal part included
+    dt = samples.cycle_time
+    vel = np.gradient(samples.pose, dt, axis=0)
+    inner = slice(2, -2)
+    assert np.abs(vel[inner] - samples.velocity[inner]).max() < 0.02 * np.abs(samples.velocity).max()
+    # every sample within the tension bounds by plain inverse dynamics, the bounds reached
+    t = _inverse_dynamics(d, samples)
+    assert np.all(t >= d.tension_min - 1e-9) and np.all(t <= d.tension_max + 1e-9)
+    np.testing.assert_allclose(t, samples.tensions, rtol=1e-9, atol=1e-9)
+    assert samples.all_feasible and timing.torque_exceeded == 0
+    assert t.min() < 0.05 and t.max() > 19.5
+    # tight: a constraint active along most of the arc
+    shares = timing.active_shares()
+    assert shares["none"] < 0.02 and max(v for k, v in shares.items() if k != "none") > 0.5
+    # faster than the path's own profile, and that profile's limits bind it when given
+    profiled = tr.sample(_robot(d), "circle")
+    assert samples.duration < 0.5 * profiled.duration
+    limited, lt = to.sample(_robot(d), "circle")
+    assert lt.profiled_duration == pytest.approx(profiled.duration)
+    assert limited.duration <= profiled.duration + 2 * dt
+    assert np.linalg.norm(limited.acceleration, axis=1).max() <= 2.0 * (1 + 1e-9)
+    assert lt.active_shares()["path_acceleration"] > 0.9
+
+
+def _angular_motion(angles, rates, accels, h=1e-4):
+    """Angular velocity and acceleration [rad/s, rad/s^2] of R = Rx Ry Rz along the angles' Taylor
+    path angles + rates t + accels t^2 / 2, by central differences of the rotation matrices."""
+    def R(t):
+        return kin.rotation_matrix(*(angles + rates * t + 0.5 * accels * t * t))
+
+    def omega(t):
+        S = (R(t + h) - R(t - h)) / (2 * h) @ R(t).T
+        return np.array([S[2, 1], S[0, 2], S[1, 0]])
+
+    return omega(0.0), (omega(h) - omega(-h)) / (2 * h)
+
+
+def _spatial_wrenches(design, samples):
+    """What the cables must supply at each sample of a 3R3T path, -(gravity + inertia), with the
+    angular velocity and acceleration from the rotation matrices (:func:`_angular_motion`)."""
+    out = np.empty((len(samples), design.n))
+    for k in range(len(samples)):
+        p, v, a = samples.pose[k], samples.velocity[k], samples.acceleration[k]
+        w, al = _angular_motion(p[3:], v[3:], a[3:])
+        out[k] = -(kin.gravity_wrench(design, p)
+                   + kin.inertial_wrench(design, p, a[:3], angular_velocity=w, angular_acceleration=al))
+    return out
+
+
+@pytest.mark.slow
+def test_a_turning_3r3t_segment_and_a_spatial_circle_are_timed_within_the_bounds():
+    """IPAnema 3 (8 cables): a segment that turns the effector while it moves, and a circle of 1 m; every
+    sample's wrench (angular motion from the rotation matrices) is held by tensions within the bounds
+    (an LP, scipy HiGHS), the samples' own tensions balance it, and a tension bound is active."""
+    from scipy.optimize import linprog
+
+    raw = yaml.safe_load((DESIGNS / "ipanema3.yaml").read_text())
+    raw["trajectories"] = {
+        "turn": {"type": "polyline", "waypoints": [[0, 0, 1.0, 0, 0, 0], [1.0, 0.5, 1.2, 0.2, -0.1, 0.4]]},
+        "ring": {"type": "circle", "center": [0.0, 0.0, 1.0], "radius": 1.0}}
+    d = spec.from_dict(raw)
+    for name in ("turn", "ring"):
+        samples, timing = to.sample(_robot(d), name)
+        assert samples.all_feasible and timing.note and timing.limits == ("tension",)
+        wreq = _spatial_wrenches(d, samples)
+        W = np.stack([kin.structure_matrix(d, p) for p in samples.pose])
+        resid = np.einsum("kij,kj->ki", W, samples.tensions) - wreq
+        assert np.abs(resid).max() < 1e-5 * np.abs(wreq).max(), name
+        for k in range(0, len(samples), 3):
+            lp = linprog(np.zeros(d.m), A_eq=W[k], b_eq=wreq[k], bounds=list(zip(d.tension_min, d.tension_max)),
+                         method="highs")
+            assert lp.status == 0, (name, k)
+        shares = timing.active_shares()
+        assert shares["tension"] > 0.9 and shares["none"] < 0.02, (name, shares)
+        assert samples.tensions.max() > 0.99 * d.tension_max.max()
+        if name == "turn":
+            assert np.allclose(samples.pose[-1], [1.0, 0.5, 1.2, 0.2, -0.1, 0.4])
+            assert np.abs(samples.velocity[:, 3:]).max() > 0.1  # it turns while it moves
 
 
 def test_size_motors_on_the_fastest_cycle(tmp_path):

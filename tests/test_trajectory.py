@@ -309,7 +309,7 @@ def test_redundant_robot_min_norm_tensions_against_cvxpy():
     traj = Trajectory(name="r", type="polyline", speed=0.5, acceleration=4.0,
                       waypoints=((0.8, 0.6, 0.0), (1.2, 0.9, 0.2)))
     s = tr.sample(resolved(d, "motion"), traj, cycle_time=0.01)
-    st_ = tr.states(resolved(d, "motion"), s.pose, s.velocity, s.acceleration, time=s.time)
+    st_ = tr.states(resolved(d, "motion"), s.pose, s.velocity, s.acceleration)
     assert s.all_feasible
     for k in np.linspace(0, len(s) - 1, 12).astype(int):
         W = st_["structure"][k]

@@ -18,9 +18,15 @@ Conventions
 
 Poses are in the motion's coordinates [m, rad]; the samples of a straight
 segment or an arc are (pose, velocity, acceleration) arrays, one row per cycle.
+A segment or a whole circle is a :class:`Curve`: its poses q(s) by the position s
+along it and their derivatives q'(s), q''(s), which a speed profile s(t) turns
+into samples (:meth:`Curve.motion`).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -111,6 +117,75 @@ def segment_length(design: Design, p0, p1) -> float:
     return L
 
 
+@dataclass(frozen=True)
+class Curve:
+    """A geometric path by the position s along it, s in [0, ``length``]: ``length`` [m] (rad for a
+    pure rotation), ``end`` the pose it ends at exactly (motion coordinates), ``at(s)`` the poses
+    q(s), their first and second derivatives q'(s) and q''(s) at positions s (k,): three
+    (k, ncoords) arrays [m, rad; per m; per m^2]; ``curved`` whether q'' is not zero (an arc)."""
+
+    length: float
+    end: np.ndarray
+    at: Callable[[np.ndarray], tuple]
+    curved: bool = False
+
+    def motion(self, s, speed, accel):
+        """(pose, velocity, acceleration) (k, ncoords) at positions ``s`` (k,) [m] run at path speed
+        ``speed`` s' (k,) [m/s] and path acceleration ``accel`` s'' (k,) [m/s^2]: q(s), q' s' and
+        q' s'' + q'' s'^2."""
+        q, dq, ddq = self.at(np.asarray(s, float))
+        v, a = np.asarray(speed, float)[:, None], np.asarray(accel, float)[:, None]
+        return q, dq * v, dq * a + ddq * (v * v)
+
+
+def line_curve(design: Design, p0, p1) -> Curve | None:
+    """The straight segment p0 -> p1 (poses, motion coordinates) as a :class:`Curve` of its
+    :func:`segment_length`, q(s) = p0 + s e; None for a segment of zero length.  The orientation
+    of a rotational motion is interpolated along s with the position."""
+    p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
+    D = segment_length(design, p0, p1)
+    if D == 0.0:
+        return None
+    e = (p1 - p0) / D
+
+    def at(s):
+        q = p0[None, :] + s[:, None] * e[None, :]
+        return q, np.broadcast_to(e, q.shape), np.zeros_like(q)
+
+    return Curve(D, p1, at)
+
+
+def circle_curve(design: Design, traj: Trajectory, start_angle: float = 0.0) -> Curve:
+    """The circle path ``traj`` (all its laps, counter-clockwise from ``start_angle`` [rad]) as a
+    :class:`Curve` of its arc length, ending exactly where it starts; the height of a spatial
+    design and the orientation held (:func:`fixed_orientation`)."""
+    r = float(traj.radius)
+    c = np.asarray(traj.center, float)
+    ori = fixed_orientation(design, traj)
+    nc, dim = len(design.motion.coords), design.motion.dim
+    start = np.zeros(nc)
+    start[:2] = c[:2] + r * np.array([np.cos(start_angle), np.sin(start_angle)])
+    if dim == 3:
+        start[2] = c[2]
+    start[dim:] = ori
+
+    def at(s):
+        th = start_angle + s / r
+        cos, sin = np.cos(th), np.sin(th)
+        q = np.zeros((th.size, nc))
+        dq, ddq = np.zeros_like(q), np.zeros_like(q)
+        q[:, 0] = c[0] + r * cos
+        q[:, 1] = c[1] + r * sin
+        if dim == 3:
+            q[:, 2] = c[2]
+        q[:, dim:] = ori
+        dq[:, 0], dq[:, 1] = -sin, cos
+        ddq[:, 0], ddq[:, 1] = -cos / r, -sin / r
+        return q, dq, ddq
+
+    return Curve(2 * np.pi * r * traj.laps, start, at, curved=True)
+
+
 def _needs_profile(traj: Trajectory) -> None:
     """A ValueError naming ``speed`` / ``acceleration`` when the path lacks the limits its profile needs."""
     missing = [k for k in ("speed", "acceleration") if getattr(traj, k) is None]
@@ -124,15 +199,14 @@ def line_samples(design: Design, traj: Trajectory, p0, p1, dt: float):
     Returns (pose, velocity, acceleration) arrays (N, ncoords), the last pose
     exactly p1; None for a segment of zero length.
     """
-    D = segment_length(design, p0, p1)
-    if D == 0.0:
+    curve = line_curve(design, p0, p1)
+    if curve is None:
         return None
     _needs_profile(traj)
-    s, v, a = prof.sampled(prof.for_trajectory(traj, D, traj.speed, traj.acceleration, dt), dt)
-    e = (p1 - p0) / D
-    pose = p0[None, :] + s[:, None] * e[None, :]
-    pose[-1] = p1  # exactly on the waypoint
-    return pose, v[:, None] * e[None, :], a[:, None] * e[None, :]
+    s, v, a = prof.sampled(prof.for_trajectory(traj, curve.length, traj.speed, traj.acceleration, dt), dt)
+    pose, vel, acc = curve.motion(s, v, a)
+    pose[-1] = curve.end  # exactly on the waypoint
+    return pose, vel, acc
 
 
 def circle_samples(design: Design, traj: Trajectory, dt: float, start_angle: float = 0.0):
@@ -142,30 +216,14 @@ def circle_samples(design: Design, traj: Trajectory, dt: float, start_angle: flo
     pose is exactly on the start point.
     """
     _needs_profile(traj)
-    r = float(traj.radius)
-    c = np.asarray(traj.center, float)
-    ori = fixed_orientation(design, traj)
+    curve = circle_curve(design, traj, start_angle)
     at = traj.acceleration / np.sqrt(2.0)
-    vc = min(traj.speed, np.sqrt(traj.acceleration * r / np.sqrt(2.0)))
-    D = 2 * np.pi * r * traj.laps
-    s, v, a = prof.sampled(prof.for_trajectory(traj, D, vc, at, dt), dt, include_start=True)
-    th = start_angle + s / r
-    nc = len(design.motion.coords)
-    pose = np.zeros((th.size, nc))
-    vel = np.zeros_like(pose)
-    acc = np.zeros_like(pose)
-    cos, sin = np.cos(th), np.sin(th)
-    pose[:, 0] = c[0] + r * cos
-    pose[:, 1] = c[1] + r * sin
-    if design.motion.dim == 3:
-        pose[:, 2] = c[2]
-    pose[:, design.motion.dim:] = ori
-    vel[:, 0], vel[:, 1] = -v * sin, v * cos
-    acc[:, 0] = -a * sin - v * v / r * cos
-    acc[:, 1] = a * cos - v * v / r * sin
-    pose[-1, :2] = c[:2] + r * np.array([np.cos(start_angle), np.sin(start_angle)])
+    vc = min(traj.speed, np.sqrt(traj.acceleration * float(traj.radius) / np.sqrt(2.0)))
+    s, v, a = prof.sampled(prof.for_trajectory(traj, curve.length, vc, at, dt), dt, include_start=True)
+    pose, vel, acc = curve.motion(s, v, a)
+    pose[-1] = curve.end
     return pose, vel, acc
 
 
-__all__ = ["as_pose", "circle_samples", "first_pose", "fixed_orientation", "line_samples",
-           "path_waypoints", "segment_length"]
+__all__ = ["Curve", "as_pose", "circle_curve", "circle_samples", "first_pose", "fixed_orientation", "line_curve",
+           "line_samples", "path_waypoints", "segment_length"]

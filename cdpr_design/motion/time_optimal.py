@@ -1,12 +1,17 @@
 """Time-optimal timing of a path: as fast as the robot allows, rest to rest on every segment.
 
-Each straight segment p0 -> p1 of a path (a square's sides, a polyline's legs, the approach from
-``start``) is the path q(s) = p0 + s e, s in [0, D], e = (p1 - p0) / D, run from rest to rest.
-Along it the effector's dynamics are affine in the path acceleration u = s'' and the squared path
-speed x = s'^2: the wrench the cables must supply is w = A(s) u + B(s) x + C(s) (A from the mass
-matrix, B from the velocity terms of a rotating effector, C gravity), the cable accelerations
-L'' = L_s u + L_ss x and the cable speeds L' = L_s s'.  The constraints, at every point of a grid
-along s:
+Every segment of a path is a curve q(s) by its position s in [0, D] along it
+(:class:`cdpr_design.motion.paths.Curve`) run from rest to rest: a straight segment (a square's
+sides, a polyline's or csv path's legs, the approach from ``start``) q(s) = p0 + s e,
+e = (p1 - p0) / D, its orientation (3R3T, 1R2T) interpolated with the position; a circle one curve
+over all its laps, s the arc length.  With the path speed s' and acceleration u = s'' the pose
+moves at q' s' and accelerates at q' u + q'' x, x = s'^2, and the angular velocity and
+acceleration follow exactly from the rotation coordinates' derivatives
+(:func:`cdpr_design.statics.kinematics.euler_motion`).  Along the curve the effector's dynamics are
+therefore affine in u and x: the wrench the cables must supply is w = A(s) u + B(s) x + C(s) (A
+from the mass matrix along q', B from q'' and the velocity terms of a rotating effector, the
+centripetal and gyroscopic ones, C gravity), the cable accelerations L'' = L_s u + L_ss x and the
+cable speeds L' = L_s s'.  The constraints, at every point of a grid along s:
 
 - **tensions** within their bounds: w in the available wrench set, whose facets (hyperplane
   shifting, :mod:`cdpr_design.kernels.acceleration`) are linear inequalities in (u, x);
@@ -18,7 +23,8 @@ along s:
   the tensions are not unique and the motor's static part bounds the tension (T <= tau_peak i eta
   / r), the inertia's part checked on the samples afterwards (:attr:`Timing.torque_exceeded`);
 - the path's own ``speed`` and ``acceleration`` (where the spec gives them) as upper limits on
-  s' and |s''|.
+  s' and |s''| (on an arc a/sqrt(2) for |s''| and for the centripetal x |q''|, so that the total
+  stays within a, as the path's own profile keeps it).
 
 A design without motor data is timed on the tensions (and the path's limits) alone, and says so
 (:attr:`Timing.limits`).  The time-optimal (u, x) along s is found by reachability analysis
@@ -167,7 +173,10 @@ class PathConstraint:
         self.kinds, self.xkinds = kinds, xkinds
 
     def toppra(self):
-        """This constraint as a ``toppra.constraint.LinearConstraint`` (its documented extension point)."""
+        """This constraint as a ``toppra.constraint.LinearConstraint`` (its documented extension point),
+        discretised by interpolation: each interval's (u_i, x) is held to the rows at both its ends
+        (x_i at its start, x_i + 2 ds u_i at its end), so that the samples between two grid
+        points keep the constraints but for the rows' own change along the interval."""
         import toppra.constraint as tc
 
         rows = self
@@ -176,26 +185,31 @@ class PathConstraint:
             def __init__(self):
                 super().__init__()
                 self.identical = True  # F v <= g with one F and g: v = a u + b x + c, F = I, g = 0
+                self.set_discretization_type(tc.DiscretizationType.Interpolation)
 
             def compute_constraint_params(self, path, gridpoints, *args, **kwargs):
                 k = rows.a.shape[1]
-                return (rows.a, rows.b, rows.c, np.eye(k), np.zeros(k), rows.ubound, rows.xbound)
+                a, b, c, F, g, _, _ = tc.canlinear_colloc_to_interpolate(
+                    rows.a, rows.b, rows.c, np.eye(k), np.zeros(k), None, None, np.asarray(gridpoints),
+                    identical=True)
+                return a, b, c, F, g, rows.ubound, rows.xbound
 
         return _Linear()
 
 
-def _segment_constraint(robot: Robot, p0, e, s, limits: WinchLimits, speed: float | None,
+def _segment_constraint(robot: Robot, curve: paths.Curve, s, limits: WinchLimits, speed: float | None,
                         accel: float | None) -> tuple[PathConstraint, np.ndarray]:
-    """The :class:`PathConstraint` of the segment q(s) = p0 + s e at the grid ``s`` (N+1,), and
-    each point's static slack (N+1,) [N] (negative: the pose is not held at rest)."""
+    """The :class:`PathConstraint` of the path ``curve`` at the grid ``s`` (N+1,), and each point's
+    static slack (N+1,) [N] (negative: the pose is not held at rest).  ``accel`` [m/s^2]: the path's
+    tangential acceleration limit (:func:`_path_accelerations`)."""
     from cdpr_design.kernels import acceleration as KA  # numba, on first use
 
     k = s.size
-    q = p0[None, :] + s[:, None] * e[None, :]
+    q, dq, ddq = curve.at(s)
     zero = np.zeros_like(q)
     rest = tr.states(robot, q, zero, zero)
-    push = tr.states(robot, q, zero, np.broadcast_to(e, q.shape))  # u = 1
-    move = tr.states(robot, q, np.broadcast_to(e, q.shape), zero)  # x = 1 (s' = 1)
+    push = tr.states(robot, q, zero, dq)  # u = 1: q'' = q'(s)
+    move = tr.states(robot, q, dq, ddq)  # x = 1 (s' = 1): q' = q'(s), q'' = q''(s)
     W = rest["structure"]
     C = rest["wrench"]
     A = push["wrench"] - C
@@ -245,6 +259,13 @@ def _segment_constraint(robot: Robot, p0, e, s, limits: WinchLimits, speed: floa
     lower_cable = cable_x < xmax
     xmax[lower_cable] = cable_x[lower_cable]
     xkind[lower_cable] = 2
+    if accel is not None and curve.curved:  # the centripetal acceleration x |q''| within the path's limit
+        kappa = np.linalg.norm(ddq[:, :robot.design.motion.dim], axis=1)
+        with np.errstate(divide="ignore"):
+            turn_x = np.where(kappa > 0, accel / kappa, np.inf)
+        lower_turn = turn_x < xmax
+        xmax[lower_turn] = turn_x[lower_turn]
+        xkind[lower_turn] = 4
     ub = _UNBOUNDED if accel is None else float(accel)
     ubound = np.tile([-ub, ub], (k, 1))
     xbound = np.column_stack([np.zeros(k), xmax])
@@ -253,57 +274,69 @@ def _segment_constraint(robot: Robot, p0, e, s, limits: WinchLimits, speed: floa
 
 def _active(pc: PathConstraint, u, x, accel: float | None) -> np.ndarray:
     """The constraint active at each grid point (index in :data:`CONSTRAINTS`, -1 none): the row of
-    least slack, relative to its scale, when within :data:`ACTIVE_TOL`."""
+    least slack, relative to its scale, when within :data:`ACTIVE_TOL`, with the path acceleration
+    of either interval the point ends or starts (``u`` (N,), ``x`` (N+1,))."""
     k = x.size
-    out = np.full(k, -1)
-    uu = np.append(u, u[-1] if u.size else 0.0)
-    for j in range(k):
-        rows = pc.a[j] * uu[j] + pc.b[j] * x[j] + pc.c[j]
-        scale = np.abs(pc.a[j] * uu[j]) + np.abs(pc.b[j] * x[j]) + np.abs(pc.c[j]) + 1e-12
+    if u.size == 0:
+        return np.full(k, -1)
+    best, kind = np.full(k, np.inf), np.full(k, -1)
+    after, before = np.append(u, u[-1]), np.concatenate([u[:1], u])
+    for uu in (after, before):
+        rows = pc.a * uu[:, None] + pc.b * x[:, None] + pc.c
+        scale = np.abs(pc.a * uu[:, None]) + np.abs(pc.b * x[:, None]) + np.abs(pc.c) + 1e-12
         rel = -rows / scale
-        best, kind = np.inf, -1
-        if rel.size:
-            i = int(np.argmin(rel))
-            best, kind = rel[i], int(pc.kinds[i])
-        xs = (pc.xbound[j, 1] - x[j]) / max(pc.xbound[j, 1], 1e-12)
-        if pc.xkinds[j] >= 0 and xs < best:
-            best, kind = xs, int(pc.xkinds[j])
-        if accel is not None and j < u.size and (accel - abs(u[j])) / accel < best:
-            best, kind = (accel - abs(u[j])) / accel, 4
-        if best <= ACTIVE_TOL:
-            out[j] = kind
-    return out
+        if rel.shape[1]:
+            i = np.argmin(rel, axis=1)
+            r = rel[np.arange(k), i]
+            better = r < best
+            best[better], kind[better] = r[better], pc.kinds[i[better]]
+    xs = (pc.xbound[:, 1] - x) / np.maximum(pc.xbound[:, 1], 1e-12)
+    better = (pc.xkinds >= 0) & (xs < best)
+    best[better], kind[better] = xs[better], pc.xkinds[better]
+    if accel is not None:
+        us = (accel - np.maximum(np.abs(after), np.abs(before))) / accel
+        better = us < best
+        best[better], kind[better] = us[better], 4
+    return np.where(best <= ACTIVE_TOL, kind, -1)
 
 
-def time_segment(robot: Robot, p0, p1, dt: float, limits: WinchLimits, speed: float | None,
+def _path_accelerations(curve: paths.Curve, accel: float | None) -> float | None:
+    """The limit [m/s^2] of the path acceleration s'' (and of a curve's centripetal acceleration
+    s'^2 |q''|) from the path's ``acceleration``: all of it along a straight segment, 1/sqrt(2) of
+    it on an arc, so that the total never exceeds it (as the path's own profile,
+    :func:`cdpr_design.motion.paths.circle_samples`)."""
+    if accel is None:
+        return None
+    return float(accel) / math.sqrt(2.0) if curve.curved else float(accel)
+
+
+def time_segment(robot: Robot, curve: paths.Curve | None, dt: float, limits: WinchLimits, speed: float | None,
                  accel: float | None, where: str):
-    """The time-optimal samples of the segment p0 -> p1 (rest to rest, p0 excluded) every ``dt`` [s]:
-    ((pose, velocity, acceleration) (N, ncoords) arrays, :class:`SegmentTiming`), or None for a
-    segment of zero length.  ``where`` names the segment in the errors.
+    """The time-optimal samples of the path ``curve`` (a straight segment or a whole circle, rest to
+    rest, its start excluded) every ``dt`` [s]: ((pose, velocity, acceleration) (N, ncoords) arrays,
+    :class:`SegmentTiming`), or None for a segment of zero length (``curve`` None).  ``speed``
+    [m/s] and ``accel`` [m/s^2]: the path's own limits (None: none); ``where`` names the segment
+    in the errors.
 
     Raises
     ------
     ValueError
-        A grid point of the segment is not held at rest (the message names the first), or the
+        A grid point of the path is not held at rest (the message names the first), or the
         solver finds no profile.
     """
     import toppra
 
-    design = robot.design
-    D = paths.segment_length(design, p0, p1)
-    if D == 0.0:
+    if curve is None:
         return None
-    e = (p1 - p0) / D
-    if design.motion.name == "3R3T" and np.any(e[3:] != 0):
-        raise ValueError(f"{where}: a segment that turns a 3R3T effector is not timed (its orientation must stay "
-                         "fixed along the path)")
+    D = curve.length
+    a_t = _path_accelerations(curve, accel)
     n = int(min(GRID_MAX, max(GRID_MIN, math.ceil(D / GRID_STEP))))
     s = np.linspace(0.0, D, n + 1)
-    pc, static = _segment_constraint(robot, p0, e, s, limits, speed, accel)
+    pc, static = _segment_constraint(robot, curve, s, limits, speed, a_t)
     bad = np.flatnonzero(~(static >= 0.0))
     if bad.size:
         j = int(bad[0])
-        pose = p0 + s[j] * e
+        pose = curve.at(s[j:j + 1])[0][0]
         raise ValueError(f"{where}: the path is not statically feasible at s = {s[j]:.6g} along it, pose "
                          f"({', '.join(f'{v:.6g}' for v in pose)}): no tensions within the bounds hold the effector "
                          "at rest there, so the path cannot be timed")
@@ -319,7 +352,7 @@ def time_segment(robot: Robot, p0, p1, dt: float, limits: WinchLimits, speed: fl
     limit = np.sqrt(np.maximum(np.nan_to_num(feasible[:, 1]), 0.0))
     stoppable = np.sqrt(np.maximum(np.nan_to_num(algo.compute_controllable_sets(0.0, 0.0)[:, 1]), 0.0))
     reachable = np.sqrt(np.maximum(np.nan_to_num(algo.compute_reachable_sets(0.0, 0.0)[:, 1]), 0.0))
-    active = _active(pc, u, x, accel)
+    active = _active(pc, u, x, a_t)
     # time of each interval at constant s'' (the parameterisation's own interpolation)
     ds = np.diff(s)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -335,11 +368,11 @@ def time_segment(robot: Robot, p0, p1, dt: float, limits: WinchLimits, speed: fl
     pos = np.minimum(s[i] + sd[i] * tau + 0.5 * sdd_i * tau * tau, D)
     vel = np.maximum(sd[i] + sdd_i * tau, 0.0) / lam
     acc = sdd_i / (lam * lam)
-    pos[-1], vel[-1], acc[-1] = D, 0.0, acc[-1]
-    pose = p0[None, :] + pos[:, None] * e[None, :]
-    pose[-1] = p1
+    pos[-1], vel[-1] = D, 0.0
+    pose, velocity, acceleration = curve.motion(pos, vel, acc)
+    pose[-1] = curve.end
     timing = SegmentTiming(s, sd / lam, limit, active, cycles * dt, stoppable=stoppable, reachable=reachable)
-    return (pose, vel[:, None] * e[None, :], acc[:, None] * e[None, :]), timing
+    return (pose, velocity, acceleration), timing
 
 
 def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None = None, *,
@@ -356,16 +389,13 @@ def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None 
     KeyError
         Unknown trajectory name.
     ValueError
-        A circle (one profile over a curved path, not timed here), a pose of the path not held at
-        rest (the message names the first), no profile found, or bad poses.
+        A pose of the path not held at rest (the message names the first), no profile found, or
+        bad poses.
     """
     design = robot.design
     traj = trajectory if not isinstance(trajectory, str) else design.trajectories.get(trajectory)
     if traj is None:
         raise KeyError(f"no trajectory named {trajectory!r}")
-    if traj.type == "circle":
-        raise ValueError("--time-optimal times straight segments (square, polyline, csv paths); a circle is "
-                         "profiled over its whole arc")
     limits = winch_limits(design, catalogue)
     timing = Timing()
     timing.limits = tuple(n for n, on in (("tension", True), ("motor_torque", limits.motors),
@@ -375,10 +405,9 @@ def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None 
         timing.note = "no winch motor in the spec (winch.motor): timed on the tensions alone"
     done = [0.0]
 
-    def line(_design, _traj, p0, p1, dt):
+    def timed(curve, dt):
         where = f"trajectories.{traj.name}: segment {len(timing.segments) + 1}"
-        got = time_segment(robot, np.asarray(p0, float), np.asarray(p1, float), dt, limits, traj.speed,
-                           traj.acceleration, where)
+        got = time_segment(robot, curve, dt, limits, traj.speed, traj.acceleration, where)
         if got is None:
             return None
         block, seg = got
@@ -387,7 +416,13 @@ def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None 
         timing.segments.append(seg)
         return block
 
-    samples = tr.sample(robot, traj, cycle_time, csv_poses=csv_poses, hold_end=hold_end, line=line)
+    def line(_design, _traj, p0, p1, dt):
+        return timed(paths.line_curve(design, p0, p1), dt)
+
+    def arc(_design, _traj, dt):
+        return timed(paths.circle_curve(design, traj), dt)
+
+    samples = tr.sample(robot, traj, cycle_time, csv_poses=csv_poses, hold_end=hold_end, line=line, arc=arc)
     if traj.speed is not None and traj.acceleration is not None:
         timing.profiled_duration = tr.sample(robot, traj, cycle_time, csv_poses=csv_poses,
                                              hold_end=hold_end).duration

@@ -286,9 +286,9 @@ def _lookup(design: Design, trajectory: str | Trajectory) -> Trajectory:
 
 
 def _path_blocks(design: Design, traj: Trajectory, dt: float, csv_poses,
-                 hold_start: float, hold_end: float, line=paths.line_samples) -> _Blocks:
+                 hold_start: float, hold_end: float, line=paths.line_samples, arc=None) -> _Blocks:
     """The samples of the whole path every ``dt`` [s]: start, holds, approach, segments (each
-    sampled by ``line``, :func:`sample`) or arc."""
+    sampled by ``line``) or arc (sampled by ``arc``; :func:`sample`)."""
     ori = paths.fixed_orientation(design, traj)
     corners = None if traj.type == "circle" else paths.path_waypoints(design, traj, csv_poses)
     first = paths.first_pose(design, traj, corners)
@@ -300,8 +300,7 @@ def _path_blocks(design: Design, traj: Trajectory, dt: float, csv_poses,
     if not np.allclose(start, first):
         blocks.move("approach", line(design, traj, start, first, dt), start, first)
     if traj.type == "circle":
-        p, v, a = paths.circle_samples(design, traj, dt)
-        blocks.move("arc", (p[1:], v[1:], a[1:]), first, first)
+        blocks.move("arc", (arc or _profiled_arc)(design, traj, dt), first, first)
     else:
         for q in range(corners.shape[0] - 1):
             blocks.move("line", line(design, traj, corners[q], corners[q + 1], dt),
@@ -309,6 +308,12 @@ def _path_blocks(design: Design, traj: Trajectory, dt: float, csv_poses,
     if hold_end > 0:
         blocks.rest(blocks.last_pose, int(round(hold_end / dt)), max(len(blocks.segments) - 1, 0))
     return blocks
+
+
+def _profiled_arc(design: Design, traj: Trajectory, dt: float):
+    """The circle's samples along its own profile, its start excluded (:func:`sample`'s ``arc``)."""
+    p, v, a = paths.circle_samples(design, traj, dt)
+    return p[1:], v[1:], a[1:]
 
 
 def motor_angles(design: Design, lengths) -> np.ndarray:
@@ -322,7 +327,7 @@ def motor_angles(design: Design, lengths) -> np.ndarray:
 
 def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None = None, *,
            csv_poses=None, hold_start: float = 0.0, hold_end: float = 0.0,
-           external=None, line=None) -> Samples:
+           external=None, line=None, arc=None) -> Samples:
     """Sample a trajectory of the robot's design at a fixed cycle time.
 
     Parameters
@@ -345,6 +350,11 @@ def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None 
         the straight segment p0 -> p1 from rest to rest, p0 excluded (None: zero length); default
         the path's speed profile (:func:`cdpr_design.motion.paths.line_samples`);
         :mod:`cdpr_design.motion.time_optimal` passes its own.
+    arc : callable, optional
+        ``arc(design, traj, dt)`` -> (pose, velocity, acceleration) (N, ncoords) arrays of a circle
+        path, all its laps from rest to rest, its start excluded; default the path's speed profile
+        (:func:`cdpr_design.motion.paths.circle_samples`); :mod:`cdpr_design.motion.time_optimal`
+        passes its own.
 
     Returns
     -------
@@ -362,10 +372,10 @@ def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None 
     dt = float(cycle_time or traj.cycle_time or DEFAULT_CYCLE_TIME)
     if not dt > 0:
         raise ValueError(f"cycle_time must be > 0, got {dt}")
-    blocks = _path_blocks(design, traj, dt, csv_poses, hold_start, hold_end, line or paths.line_samples)
+    blocks = _path_blocks(design, traj, dt, csv_poses, hold_start, hold_end, line or paths.line_samples, arc)
     pose, vel, acc, seg = blocks.stack()
     time = dt * np.arange(pose.shape[0])
-    st = states(robot, pose, vel, acc, time=time, external=external)
+    st = states(robot, pose, vel, acc, external=external)
     cs, tensions, feasible = setpoints.cable_samples(robot, st["positions"], st["attachments"], st["wrench"],
                                                      st["lengths"], st["tensions"], st["feasible"])
     return Samples(
@@ -411,24 +421,15 @@ def _rotations(angles: np.ndarray) -> np.ndarray:
     return R
 
 
-def _body_rotation(design: Design, P, V, Acc, time):
-    """Rotation matrices (k, 3, 3), angular velocities and accelerations (k, 3) [rad/s, rad/s^2].
-
-    omega pose by pose from :func:`cdpr_design.statics.kinematics.euler_rates_to_omega`;
-    the angular acceleration is phi'' for 1R2T, else the finite difference of
-    omega over ``time`` [s] (zero without times or with a single sample).
-    """
+def _body_rotation(design: Design, P, V, Acc):
+    """Rotation matrices (k, 3, 3), angular velocities and accelerations (k, 3) [rad/s, rad/s^2]
+    of the poses ``P``, their rates ``V`` and second derivatives ``Acc`` (k, 6): exact, from the
+    Euler angles' derivatives (:func:`cdpr_design.statics.kinematics.euler_motion`)."""
     k = P.shape[0]
     if not design.motion.rotational:
         return np.broadcast_to(np.eye(3), (k, 3, 3)), np.zeros((k, 3)), np.zeros((k, 3))
-    R = _rotations(P[:, 3:])
-    w = np.array([kin.euler_rates_to_omega(ang, rate) for ang, rate in zip(P[:, 3:], V[:, 3:])])
-    al = np.zeros((k, 3))
-    if design.motion.name == "1R2T":
-        al[:, 2] = Acc[:, 5]  # rotation about z only: alpha = phi''
-    elif time is not None and k > 1:
-        al = np.gradient(w, np.asarray(time, float), axis=0)
-    return R, w, al
+    w, al = kin.euler_motion(P[:, 3:], V[:, 3:], Acc[:, 3:])
+    return _rotations(P[:, 3:]), w, al
 
 
 def _cable_motion(robot: Robot, P, Rb, vB, aB):
@@ -532,7 +533,7 @@ def _min_norm_tensions(W: np.ndarray, wreq: np.ndarray, tmin, tmax) -> np.ndarra
     return t
 
 
-def states(robot: Robot, pose, velocity, acceleration, *, time=None, external=None) -> dict:
+def states(robot: Robot, pose, velocity, acceleration, *, external=None) -> dict:
     """Cable lengths, speeds, accelerations and inertial tensions along a path.
 
     Parameters
@@ -541,9 +542,6 @@ def states(robot: Robot, pose, velocity, acceleration, *, time=None, external=No
         The design resolved for ``motion`` (:func:`~cdpr_design.statics.robot.resolve`).
     pose, velocity, acceleration : (k, ncoords) arrays
         Pose [m, rad] and its time derivatives (angle rates for rotations).
-    time : (k,) array, optional
-        Sample times [s]; needed for the angular acceleration of rotational
-        motions (finite difference of the angular velocity).
     external : (n,) array, optional
         External wrench [N, N m], motion's rows.
 
@@ -558,7 +556,8 @@ def states(robot: Robot, pose, velocity, acceleration, *, time=None, external=No
     -----
     l_i = a_i - (p + R b_i) (paper eq. 1), L_i = |l_i|, u_i = l_i / L_i;
     with the attachment point's velocity v_B = v + w x R b_i and acceleration
-    a_B = a + alpha x R b_i + w x (w x R b_i):
+    a_B = a + alpha x R b_i + w x (w x R b_i) (w and alpha exact from the rotation
+    coordinates' derivatives, :func:`cdpr_design.statics.kinematics.euler_motion`):
     dL/dt = -u . v_B and d2L/dt2 = (|v_B|^2 - (dL/dt)^2) / L - u . a_B.
     Tensions solve W t = -(w_gravity + w_inertial + w_external) with the
     d'Alembert wrench w_inertial = -(m a_c, I alpha + w x I w) (paper eq. 6-9
@@ -575,7 +574,7 @@ def states(robot: Robot, pose, velocity, acceleration, *, time=None, external=No
     design = robot.design
     x, xd, xdd = (np.atleast_2d(np.asarray(a, float)) for a in (pose, velocity, acceleration))
     P, V, Acc = _full(design, x), _full(design, xd), _full(design, xdd)
-    R, w, al = _body_rotation(design, P, V, Acc, time)
+    R, w, al = _body_rotation(design, P, V, Acc)
     Rb = np.einsum("kij,mj->kmi", R, design.attachments)  # (k, m, 3)
     vB = V[:, None, :3] + np.cross(w[:, None, :], Rb)
     aB = Acc[:, None, :3] + np.cross(al[:, None, :], Rb) + np.cross(w[:, None, :], np.cross(w[:, None, :], Rb))

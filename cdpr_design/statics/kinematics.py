@@ -227,13 +227,35 @@ def required_wrench(design: Design, pose, external=None) -> np.ndarray:
 
 
 def euler_rates_to_omega(angles, rates) -> np.ndarray:
-    """Angular velocity (frame) of R = Rx(a) Ry(b) Rz(c) for angle rates."""
-    a, b, _ = angles
-    da, db, dc = rates
-    ex = np.array([1.0, 0.0, 0.0])
-    ey = rotation_matrix(a, 0, 0) @ np.array([0.0, 1.0, 0.0])
-    ez = rotation_matrix(a, b, 0) @ np.array([0.0, 0.0, 1.0])
-    return da * ex + db * ey + dc * ez
+    """Angular velocity (frame) [rad/s] of R = Rx(a) Ry(b) Rz(c) for angle rates (3,) [rad/s]."""
+    return euler_motion(np.asarray(angles, float)[None], np.asarray(rates, float)[None])[0][0]
+
+
+def euler_motion(angles, rates, accels=None) -> tuple[np.ndarray, np.ndarray]:
+    """Angular velocity w [rad/s] and acceleration alpha [rad/s^2] (k, 3), in the frame, of
+    R = Rx(a) Ry(b) Rz(c) moving with xyz Euler angles ``angles`` (k, 3) [rad], their rates
+    ``rates`` (k, 3) [rad/s] and second derivatives ``accels`` (k, 3) [rad/s^2] (default 0).
+
+    w = E theta' with the columns of E the axes of the three turns, e_x, Rx(a) e_y and
+    Rx(a) Ry(b) e_z; alpha = E theta'' + E' theta' (exact: E' from a' and b')."""
+    ang = np.atleast_2d(np.asarray(angles, float))
+    rt = np.atleast_2d(np.asarray(rates, float))
+    a, b = ang[:, 0], ang[:, 1]
+    da, db, dc = rt[:, 0], rt[:, 1], rt[:, 2]
+    ca, sa, cb, sb = np.cos(a), np.sin(a), np.cos(b), np.sin(b)
+    zero, one = np.zeros_like(a), np.ones_like(a)
+    ex = np.stack([one, zero, zero], axis=1)
+    ey = np.stack([zero, ca, sa], axis=1)
+    ez = np.stack([sb, -sa * cb, ca * cb], axis=1)
+    w = da[:, None] * ex + db[:, None] * ey + dc[:, None] * ez
+    dey = da[:, None] * np.stack([zero, -sa, ca], axis=1)  # d(ey)/dt
+    dez = (da[:, None] * np.stack([zero, -ca * cb, -sa * cb], axis=1)
+           + db[:, None] * np.stack([cb, sa * sb, -ca * sb], axis=1))  # d(ez)/dt
+    al = db[:, None] * dey + dc[:, None] * dez
+    if accels is not None:
+        acc = np.atleast_2d(np.asarray(accels, float))
+        al = al + acc[:, 0:1] * ex + acc[:, 1:2] * ey + acc[:, 2:3] * ez
+    return w, al
 
 
 # ----------------------------------------------------------------------------

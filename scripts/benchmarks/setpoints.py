@@ -30,7 +30,7 @@ def per_pose_loop(design, samples):
     from cdpr_design.statics.robot import Analysis, combinations, resolve
     from tests.reference_pose import sagging_pose
 
-    st = trajectory.states(resolve(design, Analysis(command="motion")), samples.pose, samples.velocity, samples.acceleration, time=samples.time)
+    st = trajectory.states(resolve(design, Analysis(command="motion")), samples.pose, samples.velocity, samples.acceleration)
     combos = combinations(design.m, design.n)
     out = np.empty((len(samples), design.m))
     for j in range(len(samples)):
