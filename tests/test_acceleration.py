@@ -44,6 +44,12 @@ def _spatial_data(rng, m: int, motion: str) -> dict:
 
 def random_robot(seed: int):
     """A random planar (2T, 1R2T) or spatial (3T, 3R3T) robot, an external wrench box on half of them."""
+    data, rng = random_data(seed)
+    return spec.from_dict(data), rng
+
+
+def random_data(seed: int):
+    """The spec data of :func:`random_robot` and its random generator."""
     rng = np.random.default_rng(seed)
     motion = ("2T", "1R2T", "3T", "3R3T")[seed % 4]
     if motion in ("2T", "1R2T"):
@@ -58,7 +64,7 @@ def random_robot(seed: int):
         n = {"2T": 2, "1R2T": 3, "3T": 3, "3R3T": 6}[motion]
         data["workspace"]["external_wrench"] = {"lower": [float(-v) for v in rng.uniform(0, 1, n)],
                                                 "upper": [float(v) for v in rng.uniform(0, 1, n)]}
-    return spec.from_dict(data), rng
+    return data, rng
 
 
 def _random_pose(design, rng):
@@ -230,6 +236,36 @@ def test_dynamic_workspace_matches_the_lp_at_every_vertex(seed):
         agree += 1
     assert res.poses == poses.shape[0] and near <= poses.shape[0] // 50
     assert 0 < feas.sum() < feas.size, "the grid crosses the dynamic workspace's boundary"
+
+
+@pytest.mark.parametrize("seed", [2, 3, 6, 7])
+@pytest.mark.parametrize("kind,box", [("static", "around zero"), ("wrench-feasible", "around zero"),
+                                      ("static", "off zero"), ("wrench-feasible", "off zero")])
+def test_the_sweeps_radius_is_every_poses_capability(seed, kind, box):
+    """workspace --accelerations: the column is the capability at each grid pose (its kernel, pose by
+    pose), the poses the sweep's margin finds not held included (0 there: a box about the zero
+    wrench, or the nominal wrench alone, is held at none of its wrenches) and a box that leaves the
+    zero wrench out (the sweep's margin then decides nothing)."""
+    from cdpr_design import workspaces as ws
+    from cdpr_design.statics import acceleration as acc
+
+    data, rng = random_data(seed)
+    n = {"2T": 2, "1R2T": 3, "3T": 3, "3R3T": 6}[data["motion"]]
+    lower = rng.uniform(-0.3, 0.0, n) + (0.0 if box == "around zero" else 0.4)
+    data["workspace"]["external_wrench"] = {"lower": [float(v) for v in lower],
+                                            "upper": [float(v) for v in lower + rng.uniform(0.3, 0.6, n)]}
+    design = spec.from_dict(data)
+    dim = design.motion.dim
+    chunks = []
+    ws.run(design, kind=kind, accelerations=True, tilt=False, on_chunk=chunks.append)
+    radius = np.concatenate([c.extra["acceleration_radius"] for c in chunks])
+    margin = np.concatenate([c.margin for c in chunks])
+    poses = np.vstack([c.poses for c in chunks])
+    robot = resolve(design, Analysis(accelerations=True))
+    want = acc.at_positions(robot, acc.loads(robot, design.default_orientation_full()),
+                            np.pad(poses[:, :dim], ((0, 0), (0, 3 - dim))))[0]
+    np.testing.assert_array_equal(radius, want)
+    assert (margin < 0).any() and (want > 0).any()
 
 
 # ----------------------------------------------------------------------------

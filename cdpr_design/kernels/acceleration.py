@@ -19,10 +19,14 @@ Arrays in SI units, float64, C-contiguous.
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import jitable, njit
+from cdpr_design.kernels.hsm import basis_factor, next_comb, null_vector
+from cdpr_design.kernels.linalg import gram_of_inverse
+from cdpr_design.kernels.parallel import run_blocks
 
 #: Relative tolerance of the rank test of a facet's n - 1 columns.
 RANK_TOL = 1e-10
@@ -128,6 +132,27 @@ def facets_many(W, lo, hi, combos, normals, bp, bm):
                 bm[p, f] = 0.0
 
 
+#: Relative gap [-] below which an axis' least acceleration above its greatest is a single point
+#: reached both ways (rounding), not an empty range.
+TOUCH_TOL = 1e-9
+
+
+@njit
+def close_axes(axes, empty):
+    """The axis ranges ``axes`` (d, 2) [m/s^2] made final: NaN both where none is reachable (``empty``,
+    or the least above the greatest by more than :data:`TOUCH_TOL` of their size); a range whose
+    ends crossed by less is the one point between them (the axis touches the polytope at a vertex,
+    as it does at a pose where only gravity is left)."""
+    for k in range(axes.shape[0]):
+        lo, hi = axes[k, 0], axes[k, 1]
+        if empty or lo > hi + TOUCH_TOL * max(1.0, max(abs(lo), abs(hi))):
+            axes[k, 0] = np.nan
+            axes[k, 1] = np.nan
+        elif lo > hi:
+            axes[k, 0] = 0.5 * (lo + hi)
+            axes[k, 1] = axes[k, 0]
+
+
 @njit
 def pose_capability(W, lo, hi, wnom, elo, ehi, Mt, combos, Q, c, axes, worst):
     """The acceleration capability at one pose; returns the radius [m/s^2].
@@ -212,22 +237,182 @@ def pose_capability(W, lo, hi, wnom, elo, ehi, Mt, combos, Q, c, axes, worst):
             axes[k, 1] = np.nan
             worst[k] = np.nan
         return np.nan
+    close_axes(axes, empty)
+    if not held:
+        return 0.0
+    return radius
+
+
+#: The work arrays of :func:`pose_capability_factored` for n wrench rows, m cables and d
+#: translational axes (:func:`make_work`): the tableau ``tab`` (n, m + n) = [G W | G], G = W_B^-1
+#: (:func:`~cdpr_design.kernels.hsm.basis_factor`), its ``slot`` (m,), ``nbc`` (max(m - n, 1),) and
+#: ``bcol`` (n,) int64, ``M`` = G G^T (n, n), ``Gw`` = G w_nom (n,), ``GM`` = G M_t (n, d), the
+#: null-vector system ``A`` and ``minor`` (n, n) and ``mu`` (n + 1,), the subsets ``Fr`` (n,) and
+#: ``Kc`` (max(m - n, 1),) int64, ``h`` (d,), and ``Q`` (n, n - 1), ``c`` (n,) of :func:`pose_capability`.
+Work = namedtuple("Work", "tab slot nbc bcol M Gw GM A minor mu Fr Kc h Q c")
+
+
+@jitable
+def make_work(n, m, d):
+    """The :class:`Work` arrays of one thread (allocate once per block of poses)."""
+    r = max(m - n, 1)
+    return Work(np.empty((n, m + n)), np.empty(m, dtype=np.int64), np.empty(r, dtype=np.int64),
+                np.empty(n, dtype=np.int64), np.empty((n, n)), np.empty(n), np.empty((n, d)), np.empty((n, n)),
+                np.empty((n, n)), np.empty(n + 1), np.empty(n, dtype=np.int64), np.empty(r, dtype=np.int64),
+                np.empty(d), np.empty((n, max(n - 1, 1))), np.empty(n))
+
+
+@njit
+def pose_capability_factored(W, lo, hi, wnom, elo, ehi, Mt, combos, axes, worst, S):
+    """:func:`pose_capability` (same arguments, results and conventions) with the facet normals of
+    the basis factorisation W P = W_B [I F] instead of a Gram-Schmidt per facet: every subset of
+    n - 1 columns is a set K of k non-basic columns and the basis columns outside k + 1 free slots
+    Fr, its normal nu = G^T mu with mu (on Fr) the null vector of F's rows Fr on K
+    (:func:`~cdpr_design.kernels.hsm.hsm_enumerate`'s enumeration).  Then c . W_j = mu . (G W)_j
+    (mu_f on the free slots' basis columns, zero on the subset's), c . w_nom = mu . G w_nom,
+    M_t^T c = (G M_t)^T mu, each up to the common factor 1 / |nu|, |nu|^2 = mu^T (G G^T) mu, which
+    every slack / |M_t^T c| and axis bound leaves out.  ``S`` the thread's :class:`Work`.  A pose
+    whose W is not finite or has rank < n (no basis) is :func:`pose_capability`'s."""
+    n, m = W.shape
+    d = Mt.shape[1]
+    finite = True
+    for i in range(n):
+        for j in range(m):
+            if not math.isfinite(W[i, j]):
+                finite = False
+    if not finite or m < n or not basis_factor(W, S.tab, S.slot, S.nbc, S.bcol):
+        return pose_capability(W, lo, hi, wnom, elo, ehi, Mt, combos, S.Q, S.c, axes, worst)
+    tab, M, Gw, GM, A, minor, mu, Fr, Kc, h = S.tab, S.M, S.Gw, S.GM, S.A, S.minor, S.mu, S.Fr, S.Kc, S.h
+    nbc, bcol = S.nbc, S.bcol
+    r = m - n
+    gram_of_inverse(tab, n, m, M)
+    mscale = 0.0
+    box = False
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            s += tab[i, m + j] * wnom[j]
+        Gw[i] = s
+        for k in range(d):
+            s = 0.0
+            for j in range(n):
+                s += tab[i, m + j] * Mt[j, k]
+            GM[i, k] = s
+            mscale = max(mscale, abs(Mt[i, k]))
+        if elo[i] != 0.0 or ehi[i] != 0.0:
+            box = True
     for k in range(d):
-        if empty or axes[k, 0] > axes[k, 1]:
-            axes[k, 0] = np.nan
-            axes[k, 1] = np.nan
+        axes[k, 0] = -np.inf
+        axes[k, 1] = np.inf
+        worst[k] = np.nan
+    radius = np.inf
+    held = True
+    empty = False
+    for kk in range(min(r, n - 1) + 1):
+        nf = kk + 1
+        for e in range(kk):
+            Kc[e] = e
+        more_k = True
+        while more_k:
+            for f in range(nf):
+                Fr[f] = f
+            more_f = True
+            while more_f:
+                for e in range(kk):
+                    col = nbc[Kc[e]]
+                    for f in range(nf):
+                        A[e, f] = tab[Fr[f], col]
+                if null_vector(A, kk, mu, minor):
+                    nrm2 = 0.0
+                    for f in range(nf):
+                        acc = 0.0
+                        for g in range(nf):
+                            acc += mu[g] * M[Fr[f], Fr[g]]
+                        nrm2 += mu[f] * acc
+                    if nrm2 > 0.0:
+                        tol = 1e-12 * mscale * math.sqrt(nrm2)  # pose_capability's, for a normal of |nu|
+                        bp = 0.0
+                        bm = 0.0
+                        for f in range(nf):  # the free slots' basis columns: l = mu_f
+                            j = bcol[Fr[f]]
+                            bp += max(mu[f] * lo[j], mu[f] * hi[j])
+                            bm += min(mu[f] * lo[j], mu[f] * hi[j])
+                        e = 0
+                        for q in range(r):  # the non-basic columns outside K (Kc is sorted)
+                            if e < kk and Kc[e] == q:
+                                e += 1
+                                continue
+                            j = nbc[q]
+                            lj = 0.0
+                            for f in range(nf):
+                                lj += mu[f] * tab[Fr[f], j]
+                            bp += max(lj * lo[j], lj * hi[j])
+                            bm += min(lj * lo[j], lj * hi[j])
+                        cw = 0.0
+                        for f in range(nf):
+                            cw += mu[f] * Gw[Fr[f]]
+                        up = 0.0
+                        down = 0.0
+                        if box:
+                            for i in range(n):
+                                nui = 0.0
+                                for f in range(nf):
+                                    nui += mu[f] * tab[Fr[f], m + i]
+                                up += max(-nui * elo[i], -nui * ehi[i])
+                                down += min(-nui * elo[i], -nui * ehi[i])
+                        hn = 0.0
+                        for k in range(d):
+                            sk = 0.0
+                            for f in range(nf):
+                                sk += mu[f] * GM[Fr[f], k]
+                            h[k] = sk
+                            hn += sk * sk
+                        hn = math.sqrt(hn)
+                        for side in range(2):
+                            sign = 1.0 if side == 0 else -1.0
+                            slack = (bp - cw - up) if side == 0 else (cw + down - bm)
+                            if slack < 0.0:
+                                held = False
+                            if hn > tol:
+                                if slack / hn < radius:
+                                    radius = slack / hn
+                                    for k in range(d):
+                                        worst[k] = sign * h[k] / hn
+                            elif slack < 0.0:
+                                empty = True
+                            for k in range(d):
+                                hk = sign * h[k]
+                                if abs(hk) > tol:
+                                    if hk > 0.0:
+                                        axes[k, 1] = min(axes[k, 1], slack / hk)
+                                    else:
+                                        axes[k, 0] = max(axes[k, 0], slack / hk)
+                                elif slack < 0.0:
+                                    axes[k, 0] = np.nan
+                                    axes[k, 1] = np.nan
+                more_f = next_comb(Fr, nf, n)
+            more_k = next_comb(Kc, kk, r)
+    close_axes(axes, empty)
     if not held:
         return 0.0
     return radius
 
 
 @njit
+def _capability_loop(k0, k1, W, lo, hi, wnom, elo, ehi, Mt, combos, radius, axes, worst, S):
+    for p in range(k0, k1):
+        radius[p] = pose_capability_factored(W[p], lo[p], hi, wnom, elo, ehi, Mt, combos, axes[p], worst[p], S)
+
+
+def _capability_block(k0, k1, W, *args):
+    """Rows k0..k1-1 of :func:`capability_many`: the block's work arrays, then the compiled loop."""
+    n, m = W.shape[1], W.shape[2]
+    _capability_loop(k0, k1, W, *args, make_work(n, m, args[5].shape[1]))
+
+
 def capability_many(W, lo, hi, wnom, elo, ehi, Mt, combos, radius, axes, worst):
-    """:func:`pose_capability` at k poses: ``W`` (k, n, m), ``lo`` (k, m) each pose's lower tension
-    bounds [N], the rest as there; fills ``radius`` (k,) [m/s^2], ``axes`` (k, d, 2) [m/s^2] and
-    ``worst`` (k, d)."""
-    n = W.shape[1]
-    Q = np.empty((n, max(n - 1, 1)))
-    c = np.empty(n)
-    for p in range(W.shape[0]):
-        radius[p] = pose_capability(W[p], lo[p], hi, wnom, elo, ehi, Mt, combos, Q, c, axes[p], worst[p])
+    """:func:`pose_capability_factored` at k poses, in blocks on threads
+    (:func:`~cdpr_design.kernels.parallel.run_blocks`): ``W`` (k, n, m), ``lo`` (k, m) each pose's
+    lower tension bounds [N], the rest as there; fills ``radius`` (k,) [m/s^2], ``axes`` (k, d, 2)
+    [m/s^2] and ``worst`` (k, d)."""
+    run_blocks(_capability_block, radius.shape[0], W, lo, hi, wnom, elo, ehi, Mt, combos, radius, axes, worst)

@@ -318,7 +318,7 @@ def basis_factor(W, tab, slot, nbc, bcol):
 
 
 @njit
-def _null_vector(A, k, mu, minor):
+def null_vector(A, k, mu, minor):
     """Null vector mu (k+1) of A (k, k+1) by the generalised cross product.
 
     mu_f = (-1)^f det(A without column f).  Returns False when A has rank < k
@@ -362,7 +362,7 @@ def _null_vector(A, k, mu, minor):
 
 
 @njit
-def _next_comb(idx, k, nn):
+def next_comb(idx, k, nn):
     """Advance idx[:k] to the next k-subset of range(nn) (lexicographic); False at the end."""
     i = k - 1
     while i >= 0 and idx[i] == nn - k + i:
@@ -456,7 +456,7 @@ def hsm_enumerate(W, wreq, nv, tmin, tmax, scr):
                     c = nbc[Kc[e]]
                     for f in range(nf):
                         A[e, f] = tab[Fr[f], c]
-                if _null_vector(A, k, mu, minor):
+                if null_vector(A, k, mu, minor):
                     nrm2 = 0.0
                     for f in range(nf):
                         sf = Fr[f]
@@ -505,6 +505,6 @@ def hsm_enumerate(W, wreq, nv, tmin, tmax, scr):
                                 margin0 = s
                             if s < margin:
                                 margin = s
-                more_f = _next_comb(Fr, nf, n)
-            more_k = _next_comb(Kc, k, r)
+                more_f = next_comb(Fr, nf, n)
+            more_k = next_comb(Kc, k, r)
     return margin0, margin, closure

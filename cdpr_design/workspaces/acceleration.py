@@ -33,9 +33,22 @@ class AccelerationColumns(Wrapper):
         super().__init__(robot)
         self.loads = loads(robot, ori)
         self.least, self.greatest = math.inf, -math.inf
+        box = robot.design.workspace.external_wrench
+        #: whether a negative capacity margin of the sweep's rows means the pose is not held at rest for
+        #: every external wrench (radius 0): the margin of the nominal wrench alone (static) or of it
+        #: and the external box's vertices (wrench-feasible), and a box holding the zero wrench (the
+        #: wrench set is convex: not held at zero, not held at some vertex)
+        self.margin_decides = robot.kind in ("static", "wrench-feasible") and (
+            box is None or bool(np.all((np.asarray(box.lower) <= 0.0) & (np.asarray(box.upper) >= 0.0))))
 
     def add(self, r: Rows, start: int, P: np.ndarray) -> None:
-        radius = at_positions(self.robot, self.loads, P)[0]
+        if self.margin_decides:
+            radius = np.zeros(len(r.margin))
+            held = ~(r.margin < 0.0)  # NaN (no margin): computed
+            if held.any():
+                radius[held] = at_positions(self.robot, self.loads, P[held])[0]
+        else:
+            radius = at_positions(self.robot, self.loads, P)[0]
         r.extra["acceleration_radius"] = radius
         r.maps["acceleration_radius"] = radius
         feasible = radius[r.feasible.astype(bool) & ~np.isnan(radius)]
