@@ -41,6 +41,7 @@ BENCHMARKS = {
     "interference": "IPAnema 3's sweep with interference checks against without",
     "hanging": "planar2's tilt map, kernel against per-pose scipy",
     "hanging_spatial": "crane4's hanging orientations against per-position scipy",
+    "hanging_cables": "a hanging effector's sweep on elastic cables, with --stiffness and --collisions, against ideal",
     "catenary": "the batched catenary inverse against per-cable scipy",
     "sagging": "sagging-cable workspaces against the ideal model and per-pose scipy",
     "setpoints": "real-cable set-points along a path against a per-pose loop; the simulation",

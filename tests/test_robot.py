@@ -85,12 +85,12 @@ def _cases(planar2, ipanema3, cogiro):
         ("--collisions: cable model 'sagging'", _with(planar2, model="sagging"), Analysis(collisions=True)),
         ("--orientations: cable model 'sagging'", _with(cogiro, model="sagging"), Analysis(orientations="total")),
         ("effector.orientation: free: the hanging solver models point outlets", _with(free, pulleys=True), Analysis()),
-        ("--cable-model: an effector with effector.orientation: free", _with(free, model="elastic"), Analysis()),
+        ("--cable-model: cable model 'sagging': an effector with effector.orientation: free",
+         _with(free, model="sagging"), Analysis()),
         ("--orientations: an under-constrained design with effector.orientation: free", free,
          Analysis(orientations="total")),
         ("--orientations: this motion has a fixed orientation", planar2, Analysis(orientations="range")),
         ("--kind wrench-feasible: an under-constrained design", free, Analysis(kind="wrench-feasible")),
-        ("--collisions: an under-constrained design", free, Analysis(collisions=True)),
         ("--max-tilt: a tilt limit applies", planar2, Analysis(max_tilt=5.0)),
         ("--max-tilt: expected an angle", free, Analysis(max_tilt=200.0)),
         ("--weights: a hanging effector's tensions are unique", free, Analysis(command="pose", weights=True)),
@@ -145,6 +145,11 @@ def test_what_the_table_allows_resolves(planar2, cogiro):
     resolve(_with(cogiro, model="elastic"), Analysis(orientations="total", collisions=True))
     resolve(_with(planar2, orientation="free"), Analysis(command="fk"))
     resolve(_with(planar2, orientation="free", model="sagging"), Analysis(command="fk"))
+    # a hanging effector on straight cables: its workspace with interference at the hanging pose and its
+    # stiffness (on rigid cables too: it swings on them)
+    for model in ("ideal", "elastic"):
+        resolve(_with(planar2, orientation="free", model=model), Analysis(collisions=True, stiffness=True))
+        resolve(_with(planar2, orientation="free", model=model), Analysis(command="pose"))
     # the cable-frequency floor: straight cables compute it, fk does not use tension bounds
     r = resolve(_with(cogiro, cable_frequency=5.0), Analysis(kind="wrench-feasible", collisions=True))
     np.testing.assert_allclose(r.tension_floor, 4 * 5.0**2 * 0.061)  # 4 f^2 mu [N/m^2]

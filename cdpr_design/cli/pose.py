@@ -63,9 +63,8 @@ def pose(
         coords = design.motion.position_coords
         position = parse_numbers(at, "--at", len(coords), f"numbers ({','.join(coords)}): effector.orientation "
                                  "is free, so the position alone is commanded and the orientation hangs")
-        data = hjob.free_pose_data(robot, position)
-        stiffness = job.stiffness_data(design, reason="effector.orientation: free: the hanging effector's "
-                                                     "stiffness is not modelled")
+        data = hjob.free_pose_data(robot, position)  # with its stiffness keys
+        stiffness = {}
         accelerations = job.acceleration_data(robot)
     else:
         p = parse_pose(design, at)

@@ -137,6 +137,84 @@ def free_pose_data(robot, position) -> dict:
         "pose": pose,
         "orientation": ori, "tilt": _num(h.tilt_deg[0]), "lengths": _by_cable(design, r.lengths[0]),
         "tensions": _by_cable(design, r.tensions[0]), "feasible": bool(r.feasible[0]), "reason": reason,
-        "stable": bool(ok), "margin": _num(r.margin[0]), "structure_matrix": W, "collisions": None,
+        "stable": bool(ok), "margin": _num(r.margin[0]), "structure_matrix": W,
+        "collisions": _collisions(design, position, h.rotation[0]) if ok else None,
         "effector_orientation": "free", "hanging_tensions": _by_cable(design, h.tensions[0]),
-    }
+    } | _cable_model_data(robot, r) | free_stiffness_data(robot, position, r)
+
+
+def _collisions(design, position, R) -> list:
+    """The colliding pairs at the hanging pose (cli.md names)."""
+    from cdpr_design.statics.interference import check_at
+
+    p = np.zeros(3)
+    p[: len(position)] = position
+    return [list(pair) for pair in check_at(design, p, R).pairs]
+
+
+def _cable_model_data(robot, r) -> dict:
+    """The keys elastic cables add to a hanging robot's ``pose --json`` (as :func:`cdpr_design.jobs.pose.cable_model_data`):
+    the outlet tensions, the unstretched lengths that hold it there and the sag (0); none for ideal cables."""
+    from cdpr_design.statics.cables import straight_state
+
+    if robot.cables.rigid:
+        return {}
+    s = straight_state(robot, r.lengths, r.tensions)
+    design = robot.design
+    return {"cable_model": robot.cables.name, "outlet_tensions": _by_cable(design, s.outlet_tensions[0]),
+            "unstretched_lengths": _by_cable(design, s.unstretched_lengths[0]), "sag": _by_cable(design, s.sag[0]),
+            "cable_status": "ok"}
+
+
+#: The names of the hanging stiffness's coordinates, by degrees of freedom (statics.hanging.geometry).
+_DOF_NAMES = ("x", "y", "z", "wx", "wy", "wz")
+
+
+def free_stiffness_data(robot, position, r) -> dict:
+    """The stiffness keys of a hanging robot's ``pose --json`` (cli.md) from its
+    :class:`~cdpr_design.workspaces.hanging.FreeRows` of one ``position`` [m]: the stiffness and compliance of
+    the hanging pose on the robot's cables (:mod:`cdpr_design.statics.hanging.compliance`), over the
+    coordinates ``stiffness_coordinates`` (translations [m], then small rotations [rad] about the
+    frame's axes through the platform origin)."""
+    from cdpr_design.statics.hanging.compliance import translations
+    from cdpr_design.statics.stiffness import string_frequencies
+    from cdpr_design.workspaces.hanging import hanging_dofs, pose_stiffness, Hanger
+
+    design = robot.design
+    mu = np.array([c.props.mass_per_length or 0.0 for c in design.cables])
+    strings = string_frequencies(r.lengths[0], r.hanging.tensions[0], mu)
+    hanger = Hanger(robot, design.default_orientation_full())
+    dofs = hanging_dofs(hanger.geo, hanger.planar)
+    names = [_DOF_NAMES[j] for j in dofs]
+    P = np.zeros((1, 3))
+    P[0, : len(position)] = position
+    out = {"stiffness_coordinates": names, "cable_frequencies": _by_cable(design, strings)}
+    h = r.hanging
+    if h.status[0] != 0:
+        return out | dict.fromkeys(("stiffness_matrix", "compliance_matrix", "translational_stiffness",
+                                    "min_stiffness", "min_rotational_stiffness", "natural_frequencies",
+                                    "mode_shapes")) | {"stiffness_reason": "the effector cannot hang here"}
+    s = r.stiffness
+    if s is None:
+        s = pose_stiffness(robot, hanger, P, h)
+    nt = translations(dofs)
+    C = s.compliance[0]
+    rigid = bool(np.all(~np.isfinite(robot.cable.EA)))
+
+    def mat(a):
+        return None if a is None else [[_num(x) for x in row] for row in a]
+
+    try:
+        Ktt = np.linalg.inv(C[:nt, :nt])
+    except np.linalg.LinAlgError:
+        Ktt = None
+    if Ktt is not None and not np.all(np.isfinite(Ktt)):
+        Ktt = None
+    freqs = s.frequencies[0]
+    return out | {
+        "stiffness_matrix": None if rigid else mat(s.matrix[0]), "compliance_matrix": mat(C),
+        "translational_stiffness": None if rigid else mat(Ktt), "min_stiffness": _num(s.min_stiffness[0]),
+        "min_rotational_stiffness": _num(s.min_rotational_stiffness[0]),
+        "natural_frequencies": [_num(v) for v in freqs[np.isfinite(freqs)]] or None, "mode_shapes": None,
+        "stiffness_reason": ("rigid cables (ideal): infinitely stiff along the taut cables; the stiffness is that "
+                             "of the swinging effector (compliance_matrix)") if rigid else None}

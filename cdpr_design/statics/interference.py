@@ -136,14 +136,45 @@ def check_pose(design: Design, pose) -> Interference:
     ``pose`` in the motion's coordinates.  Swivel pulleys are honoured: the
     free segments end at the pulleys' tangent points.
     """
+    full = design.full_pose(pose)
+    g = kin.cable_geometry(design, pose)
+    return _check(design, full[:3], kin.rotation_matrix(*full[3:]), g.anchors, g.exits)
+
+
+def check_at(design: Design, position, R) -> Interference:
+    """:func:`check_pose` at the platform origin ``position`` (3,) [m] and rotation ``R`` (3, 3),
+    whatever the motion commands (a hanging effector's orientation); point outlets."""
+    p = np.asarray(position, float).reshape(3)
+    R = np.asarray(R, float)
+    return _check(design, p, R, p + design.attachments @ R.T, design.outlets)
+
+
+def interference_masks(design: Design, P, R) -> np.ndarray:
+    """The interference bits (k,) uint8 (:data:`HIT_NAMES`; 0: collision free) at platform origins
+    ``P`` (k, 3) [m] each with its own rotation ``R`` (k, 3, 3) (a hanging effector's), point
+    outlets; 0 where the rotation is NaN (no pose).  The kernel of :func:`check_pose`, one call a pose."""
+    hw = hardware_arrays(design)
+    S1 = np.ascontiguousarray(in_cable_planes(design.outlets, hw.zoff))
+    Bp = np.ascontiguousarray(in_cable_planes(design.attachments, hw.zoff))
+    from cdpr_design.kernels import interference as KI
+
+    scr = KI.clearance_scratch(design.m)
+    cl = KI.Clearance(Bp, hw.half, hw.rho, hw.frame_lower, hw.frame_upper, hw.dim, hw.tol, False)
+    out = np.zeros(len(P), np.uint8)
+    for k in np.flatnonzero(np.isfinite(np.asarray(R)).all(axis=(1, 2))):
+        Rk = np.ascontiguousarray(R[k])
+        S0 = np.ascontiguousarray(in_cable_planes(P[k] + design.attachments @ Rk.T, hw.zoff))
+        out[k] = K.interference_pose(S0, S1, Rk, float(P[k, 0]), float(P[k, 1]), float(P[k, 2]), cl, scr)
+    return out
+
+
+def _check(design: Design, p, R, anchors, exits) -> Interference:
     from cdpr_design.kernels import interference as KI
 
     hw = hardware_arrays(design)
-    full = design.full_pose(pose)
-    R = kin.rotation_matrix(*full[3:])
-    g = kin.cable_geometry(design, pose)
-    S0 = np.ascontiguousarray(in_cable_planes(g.anchors, hw.zoff))
-    S1 = np.ascontiguousarray(in_cable_planes(g.exits, hw.zoff))
+    full = np.concatenate([p, np.zeros(3)])
+    S0 = np.ascontiguousarray(in_cable_planes(anchors, hw.zoff))
+    S1 = np.ascontiguousarray(in_cable_planes(exits, hw.zoff))
     Bp = np.ascontiguousarray(in_cable_planes(design.attachments, hw.zoff))
     m = design.m
     scr = KI.clearance_scratch(m)

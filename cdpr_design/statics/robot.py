@@ -195,9 +195,9 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal("effector.orientation", "free: the hanging solver models point outlets, and this design has swivel "
                                     "pulleys (cables[].pulley)",
             lambda f, a: _free(f) and f.outlets.pulleys and "hanging-solver" in a.needs),
-    Refusal("--cable-model", "an effector with effector.orientation: free hangs on ideal cables (the hanging "
-                             "solver models rigid, weightless cables); use --cable-model ideal",
-            lambda f, a: _free(f) and not f.cables.rigid and "hanging-statics" in a.needs),
+    Refusal("--cable-model", "cable model 'sagging': an effector with effector.orientation: free hangs on "
+                             "straight cables (ideal or elastic) in this analysis; use --cable-model elastic",
+            lambda f, a: _free(f) and not f.cables.straight and "hanging-statics" in a.needs),
     Refusal("--orientations", "an under-constrained design with effector.orientation: free does not command "
                               "its orientation (it hangs); use effector.orientation: fixed to sweep commanded "
                               "orientations",
@@ -208,9 +208,6 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal("--kind {a.kind}", "an under-constrained design with effector.orientation: free hangs under gravity alone "
                       "(static only)",
             lambda f, a: _free(f) and a.kind != "static" and "hanging-statics" in a.needs),
-    Refusal("--collisions", "an under-constrained design with effector.orientation: free is swept without "
-                            "interference checks (interference at the hanging pose is not modelled)",
-            lambda f, a: _free(f) and a.collisions),
     Refusal("--max-tilt", "a tilt limit applies to an under-constrained design with effector.orientation: free "
                           "(this one's orientation is commanded or held)",
             lambda f, a: a.max_tilt is not None and not _free(f)),
@@ -435,13 +432,14 @@ def acceleration_reason(cables: CableModel, orientation: Orientation) -> str | N
 def stiffness_reason(design: Design, cables: CableModel, outlets: Outlets, orientation: Orientation) -> str | None:
     """Why the stiffness of the design's effector on its cables is not defined, or None (it is:
     straight cables from point outlets, each with an axial stiffness, the orientation commanded
-    or held; :mod:`cdpr_design.statics.stiffness`)."""
+    or held, :mod:`cdpr_design.statics.stiffness`; or a hanging effector on straight cables, rigid
+    or elastic, :mod:`cdpr_design.statics.hanging.compliance`)."""
     if not cables.straight:
         return "sagging cables: the elastic catenary's stiffness is not modelled (use --cable-model elastic)"
     if outlets.pulleys:
         return "swivel pulleys: the stiffness of a cable over a pulley is not modelled"
-    if orientation.free:
-        return "effector.orientation: free: the hanging effector's stiffness is not modelled"
+    if orientation.free:  # on rigid cables too: it swings on them (cdpr_design.statics.hanging.compliance)
+        return None
     missing = [c.name for c in design.cables if not c.props.axial_stiffness]
     if missing:
         return ("ideal cables without cable.axial_stiffness are inextensible, so the robot is rigid along "

@@ -38,9 +38,11 @@ import numpy as np
 
 from cdpr_design.model.design import Design
 from cdpr_design.statics import hanging as H
+from cdpr_design.statics.hanging import geometry as hg
 from cdpr_design.statics.hanging.at_positions import hanging_orientations
+from cdpr_design.statics.hanging.compliance import HangingStiffness, hanging_stiffness
 from cdpr_design.statics.hanging.geometry import Geometry
-from cdpr_design.statics.hanging.results import HangingOrientations
+from cdpr_design.statics.hanging.results import UNSTABLE, HangingOrientations
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.robot import Robot, tension_lower
 from cdpr_design.workspaces.grid import Rows, chunk_poses
@@ -94,11 +96,17 @@ class Hanger:
             h = _hang_in_blocks(self.geo, P3, self.planar, self.nominal)
         else:
             h = hanging_orientations(self.geo, P3, self.planar, nominal=self.nominal)
-        ori = h.orientation.reshape(len(P3), -1)
-        extra = {"tilt": h.tilt_deg}
-        for j, name in enumerate(columns(self.design)[1:]):
-            extra[name] = ori[:, j]
-        return h, extra
+        return h, tilt_columns(self.design, h)
+
+
+def tilt_columns(design: Design, h: HangingOrientations) -> dict:
+    """The :func:`columns` of hanging orientations ``h`` (name -> (k,)): ``tilt`` [deg] and the
+    orientation per rotation axis [rad], NaN where the effector cannot hang."""
+    ori = h.orientation.reshape(len(h.status), -1)
+    extra = {"tilt": h.tilt_deg}
+    for j, name in enumerate(columns(design)[1:]):
+        extra[name] = ori[:, j]
+    return extra
 
 
 #: Fewest positions in a block of :func:`_hang_in_blocks` (a call costs milliseconds of Python).
@@ -199,7 +207,12 @@ class FreeRows:
     ``hanging`` the :class:`~cdpr_design.statics.hanging.results.HangingOrientations`; ``extra`` the
     :func:`columns` (name -> (k,)); ``feasible`` uint8, ``margin`` [N], ``tensions``
     (k, m) [N] (NaN where infeasible), ``lengths`` (k, m) [m] (NaN where it cannot hang);
-    ``within`` where it hangs within the tension bounds (before the tilt limit).
+    ``within`` where it hangs within the tension bounds (before the tilt limit and the
+    interference checks); ``stiffness`` the
+    :class:`~cdpr_design.statics.hanging.compliance.HangingStiffness` of the hanging poses on the
+    robot's cables (None unless the cables stretch or the analysis asks for the stiffness);
+    ``collisions`` (k,) uint8 the interference bits at the hanging pose (None unless the analysis
+    checks interference; 0 where it cannot hang).
     """
 
     hanging: HangingOrientations
@@ -209,18 +222,47 @@ class FreeRows:
     tensions: np.ndarray
     lengths: np.ndarray
     within: np.ndarray
+    stiffness: HangingStiffness | None = None
+    collisions: np.ndarray | None = None
+
+
+def hanging_dofs(geo: Geometry, planar: bool) -> tuple[int, ...]:
+    """The degrees of freedom of a hanging effector (:mod:`cdpr_design.statics.hanging.geometry`)."""
+    if H.is_point_mass(geo.B):
+        return hg.DOFS_POINT2 if planar else hg.DOFS_POINT3
+    return hg.DOFS_PLANAR if planar else hg.DOFS_SPATIAL
+
+
+def pose_stiffness(robot: Robot, hanger: Hanger, P, h: HangingOrientations) -> HangingStiffness:
+    """The stiffness of the hanging poses ``h`` at positions ``P`` (k, 3) [m] on the robot's cables
+    (:func:`~cdpr_design.statics.hanging.compliance.hanging_stiffness`: rigid for ideal cables,
+    their axial stiffness for elastic ones)."""
+    return hanging_stiffness(hanger.geo, P, h.rotation, h.tensions, hanging_dofs(hanger.geo, hanger.planar),
+                             robot.cable.EA, robot.design.effector.inertia_matrix)
 
 
 def free_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
     """Hanging orientation, then feasibility, margin, tensions and lengths there, at positions
     ``P`` (k, 3) [m] (see the module doc; the workspace's rows and ``pose --at``'s), within the
-    robot's tension bounds (its per-pose floor included) and tilt limit."""
+    robot's tension bounds (its per-pose floor included) and tilt limit.  On elastic cables a
+    hanging pose must also be stable with the cables' stretch (:func:`pose_stiffness`): one that
+    is not is reported unable to hang there (``UNSTABLE``), never as a result.  With the
+    analysis's ``collisions``, a pose that interferes is infeasible and its tensions empty."""
     from cdpr_design.kernels import hanging as K  # numba, on first use
     from cdpr_design.kernels.pose import Outputs, Statics
 
     design, limit = robot.design, robot.tilt_limit
     k, m = len(P), design.m
     h, extra = hanger(P)
+    stiff = None
+    if not robot.cables.rigid or robot.analysis.stiffness:
+        stiff = pose_stiffness(robot, hanger, P, h)
+        unstable = h.feasible & ~stiff.stable
+        if unstable.any():  # stable on rigid cables, not with their stretch
+            h.status[unstable] = UNSTABLE
+            h.rotation[unstable], h.tensions[unstable] = np.nan, np.nan
+            extra = tilt_columns(design, h)
+        h.hessian_min[h.feasible] = stiff.hessian_min[h.feasible]
     R = np.ascontiguousarray(h.rotation)
     f = design.effector.mass * np.asarray(design.gravity, float)
     wg = np.concatenate([np.broadcast_to(f, (k, 3)), np.cross(R @ design.effector.center_of_mass, f)], axis=1)
@@ -242,7 +284,14 @@ def free_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
         # an infeasible pose's margin says so: its own negative verdict, else empty (it is rejected
         # for its tilt or its hanging tensions, which the capacity margin does not measure)
         marg = np.where(upright | (marg < 0), marg, np.nan)
-    return FreeRows(h, extra, upright.astype(np.uint8), marg, np.where(upright[:, None], t, np.nan), L, within)
+    hits = None
+    if robot.analysis.collisions:
+        from cdpr_design.statics.interference import interference_masks  # the kernels, on first use
+
+        hits = interference_masks(design, P, h.rotation)
+        upright = upright & (hits == 0)
+    return FreeRows(h, extra, upright.astype(np.uint8), marg, np.where(upright[:, None], t, np.nan), L, within,
+                    stiff, hits)
 
 
 #: Tolerance [deg] of the tilt limit: a pose tilted by at most ``max_tilt + TILT_TOL_DEG`` is
@@ -257,33 +306,82 @@ def within_tilt(tilt, limit: float):
 
 class FreeSweep(Base):
     """The base evaluator of a hanging effector (``effector.orientation: free``): the grid at the
-    hanging orientations (see the module doc), the tilt limit ``robot.tilt_limit``."""
+    hanging orientations (see the module doc), the tilt limit ``robot.tilt_limit``.
 
-    maps = ("tilt",)
-    pictures = ("tilt_map.png",)
+    With the analysis's ``stiffness``, the columns and maps ``min_stiffness`` [N/m] and
+    ``lowest_frequency`` [Hz] and the column ``min_rotational_stiffness`` [N m/rad] of the hanging
+    pose (:mod:`cdpr_design.statics.hanging.compliance`; empty where infeasible), drawn as
+    ``stiffness_map.png``, the least of each a summary key.  With ``collisions``, the column
+    ``collision_free`` and the summary keys of :class:`~cdpr_design.workspaces.hardware.HardwareSweep`
+    (``interference``, ``collision_free``, ``feasible_statics``, ``collisions_by_kind``): the
+    interference checks at the hanging orientation.
+    """
+
+    STIFFNESS = ("min_stiffness", "lowest_frequency", "min_rotational_stiffness")
 
     def __init__(self, robot: Robot, ori, g):
         self.robot, self.ori, self.kind = robot, ori, "static"
         self.hanger = Hanger(robot, ori)
-        self.columns = tuple(columns(robot.design))
+        a = robot.analysis
+        self.columns = tuple(columns(robot.design)) + (("collision_free",) if a.collisions else ()) \
+            + (self.STIFFNESS if a.stiffness else ())
+        self.maps = ("tilt",) + (self.STIFFNESS[:2] if a.stiffness else ())
+        self.pictures = ("tilt_map.png",) + (("stiffness_map.png",) if a.stiffness else ())
         self.tally = _Stats()
+        self.least = dict.fromkeys(self.STIFFNESS, math.inf)
+        self.n_free = self.n_stat = 0
+        self.counts: dict = {}
 
     def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
         design, cnt = self.robot.design, P.shape[0]
         r = free_rows(self.robot, P, self.hanger)
-        self.tally.limited += int(np.count_nonzero(r.within & (r.feasible == 0)))
+        limit = self.robot.tilt_limit
+        if limit is not None:
+            self.tally.limited += int(np.count_nonzero(r.within & ~within_tilt(r.extra["tilt"], limit)))
         self.tally.add(r.extra["tilt"], r.feasible)
         poses = chunk_poses(design, P, self.ori)
         if design.motion.rotational:  # the orientation columns hold the hanging orientation
             poses[:, design.motion.dim:] = r.hanging.orientation.reshape(cnt, -1)
-        return Rows(r.feasible, r.margin, r.tensions, r.lengths, r.extra, {"tilt": r.extra["tilt"]}, poses)
+        extra, maps = dict(r.extra), {"tilt": r.extra["tilt"]}
+        if r.collisions is not None:
+            self._count_collisions(r)
+            extra["collision_free"] = (r.collisions == 0).astype(np.uint8)
+        if self.robot.analysis.stiffness:
+            ok = r.feasible.astype(bool)
+            for name in self.STIFFNESS:
+                v = np.where(ok, getattr(r.stiffness, name), np.nan)
+                extra[name] = v
+                self.least[name] = min(self.least[name], float(np.fmin.reduce(v, initial=math.inf)))
+            maps.update({name: extra[name] for name in self.STIFFNESS[:2]})
+        return Rows(r.feasible, r.margin, r.tensions, r.lengths, extra, maps, poses)
+
+    def _count_collisions(self, r: FreeRows) -> None:
+        from cdpr_design.statics.interference import HIT_NAMES
+
+        upright = r.within if self.robot.tilt_limit is None else \
+            r.within & within_tilt(r.extra["tilt"], self.robot.tilt_limit)
+        self.n_stat += int(np.count_nonzero(upright))
+        self.n_free += int(np.count_nonzero(r.collisions == 0))
+        for bit, name in HIT_NAMES.items():
+            self.counts[name] = self.counts.get(name, 0) + int(np.count_nonzero(r.collisions & bit))
 
     def summary(self, maps) -> dict:
-        return self.tally.summary(self.robot, self.robot.tilt_limit)
+        out = self.tally.summary(self.robot, self.robot.tilt_limit)
+        a = self.robot.analysis
+        if a.collisions:
+            from cdpr_design.statics.interference import HIT_NAMES
+
+            out.update(interference=True, collision_free=self.n_free, feasible_statics=self.n_stat,
+                       collisions_by_kind={name: self.counts.get(name, 0) for name in HIT_NAMES.values()})
+        if a.stiffness:
+            out.update({k: (v if math.isfinite(v) else None) for k, v in self.least.items()})
+        return out
 
     def finish(self, result, maps) -> None:
         result.hanging = HangingMaps(maps.xmaps["tilt"], self.robot.design.effector.orientation,
                                      self.robot.tilt_limit)
+        if self.robot.analysis.stiffness:
+            result.stiffness = {name: maps.xmaps[name] for name in self.STIFFNESS[:2]}
 
 
 def free_pose(robot: Robot, position) -> FreeRows:

@@ -175,8 +175,9 @@ def _plan(robot: Robot, grid: Grid, orientation, tilt: bool, orientations) -> Pl
         if not robot.cables.rigid:  # elastic: straight, so the same statics
             wrappers.append(cables.CableSummary(robot))
         return Plan(robot, grid, ori, base, tuple(wrappers), tilt, orientations)
-    if robot.orientation.free:
-        return Plan(robot, grid, ori, hanging.FreeSweep(robot, ori, grid), (), tilt, orientations)
+    if robot.orientation.free:  # elastic cables: the unstretched lengths that hold it there
+        wrappers = [cables.ElasticColumns(robot)] if robot.cables.stretches else []
+        return Plan(robot, grid, ori, hanging.FreeSweep(robot, ori, grid), tuple(wrappers), tilt, orientations)
     if robot.cables.sags(a.kind):
         base = cables.SaggingSweep(robot, ori, grid)
     elif a.collisions or robot.outlets.pulleys:
