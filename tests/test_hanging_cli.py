@@ -267,7 +267,6 @@ def test_max_tilt_makes_larger_tilts_infeasible(free_rows, tmp_path):
     (["--max-tilt", "-1"], r"'--max-tilt'.*(greater than or equal to 0\b|\b0<=x)"),
     (["--max-tilt", "200"], r"'--max-tilt'.*(less than or equal to 180|x<=180)"),
     (["--kind", "wrench-feasible"], "--kind wrench-feasible"),
-    (["--collisions"], "--collisions"),
     (["--orientations", "total"], "--orientations: an under-constrained design with effector.orientation: free"),
 ])
 def test_free_workspace_bad_options_exit_2(tmp_path, args, message):
@@ -398,13 +397,13 @@ def test_pose_table_shows_the_tensions_an_infeasible_load_hangs_with():
 
 
 @pytest.mark.slow
-def test_free_needs_ideal_cables(tmp_path):
-    """The hanging solvers model rigid weightless cables: a free design with another cable model is
+def test_free_needs_straight_cables(tmp_path):
+    """A free design hangs on ideal or elastic cables (tests/test_hanging_cables.py); sagging cables are
     refused; under fixed the other models' outputs come without the tilt."""
     path = free_planar2(tmp_path)
-    res = invoke("workspace", path, "--step", "0.1", "--out", tmp_path / "o", "--cable-model", "elastic")
-    assert res.exit_code == 2 and "ideal cables" in res.output
-    res = invoke("pose", path, "--at", "0.3,0.5", "--cable-model", "elastic")
+    res = invoke("workspace", path, "--step", "0.1", "--out", tmp_path / "o", "--cable-model", "sagging")
+    assert res.exit_code == 2 and "straight cables" in res.output
+    res = invoke("pose", path, "--at", "0.3,0.5", "--cable-model", "sagging")
     assert res.exit_code == 2 and "--cable-model" in res.output
     res = invoke("workspace", PLANAR2, "--step", "0.1", "--out", tmp_path / "e", "--cable-model", "elastic")
     assert res.exit_code == 0 and "tilt" not in read_csv(tmp_path / "e" / "workspace.csv")[0]
