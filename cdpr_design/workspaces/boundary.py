@@ -13,8 +13,8 @@ the rows themselves are not kept).  After the sweep:
    differ in feasibility, and the topology between them is decided by the margins;
 2. each vertex is moved along its edge to the feasible set's boundary with the sweep's own
    feasibility test at positions on it (:func:`crossings`: regula falsi on the capacity margin
-   where it has one, bisection otherwise; within step / 2^BISECTIONS of a change of
-   feasibility); a vertex on an edge leaving the box is put on the box's face,
+   where it has one, then a Newton step on the margin's local slope, bisection otherwise; within
+   step / 2^BISECTIONS of a change of feasibility); a vertex on an edge leaving the box is put on the box's face,
    so the boundary is clipped by the grid's box and encloses a closed region or solid;
 3. the measure is the region's area (the loops' shoelace sums; a hole's loop runs the other
    way) or the solid's volume (the divergence theorem over the triangles), the surface its
@@ -264,11 +264,11 @@ class Slabs:
                                           -_unscaled(np.where(lo_in, f_hi, f_lo), self.scale)], axis=1))
         lower[:, 0] += i  # padded plane index of the slab's first plane
         key = np.ravel_multi_index(tuple(lower.T), self.pshape).astype(np.int64) * self.dim + axis
+        self.pieces.append(faces + sum(len(k) for k in self.keys))  # into the vertices of every slab so far
         self.keys.append(key)
         self.lower.append(lower)
         self.axis.append(axis)
         self.lo_in.append(lo_in)
-        self.pieces.append(key[faces])
 
     def boundary(self, evaluator) -> Boundary:
         """The :class:`Boundary`, once every row has arrived; ``evaluator()`` gives the feasibility
@@ -299,16 +299,15 @@ class Slabs:
         lo_in = np.concatenate(self.lo_in)[first]
         ends = np.concatenate(self.ends_margin)[first]
         pts, snapped = _positions(lower, axis, lo_in, ends, self.grid, evaluator)
-        faces = np.searchsorted(keys, np.concatenate(self.pieces))
+        faces = inverse.reshape(-1)[np.concatenate(self.pieces)]
         if dim == 2:
             loops = _loops(faces, pts, snapped, lower, axis, lo_in, self.grid)
             area = sum(_shoelace(lp) for lp in loops)
             perimeter = sum(float(np.linalg.norm(np.diff(np.vstack([lp, lp[:1]]), axis=0), axis=1).sum())
                             for lp in loops)
             return Boundary(2, float(area), perimeter, loops=loops, warning=warning)
-        verts, faces = _weld(pts, faces)
-        return Boundary(3, mesh_volume(verts, faces), mesh_area(verts, faces), vertices=verts, faces=faces,
-                        warning=warning)
+        verts, faces, volume = _weld(pts, snapped, faces)
+        return Boundary(3, volume, mesh_area(verts, faces), vertices=verts, faces=faces, warning=warning)
 
 
 def _scaled(v: np.ndarray, scale: float) -> np.ndarray:
@@ -367,41 +366,55 @@ def crossings(a: np.ndarray, b: np.ndarray, m_a: np.ndarray, m_b: np.ndarray, te
     ``test(P)`` gives feasibility and margins at positions (k, 3) [m].  Where the bracket's two
     margins are known and agree with feasibility, the next guess is their secant (regula falsi,
     the margin being a continuous function that changes sign with feasibility) and the test is
-    made just either side of it, which usually closes the bracket at once; elsewhere, and after a
-    round that did not halve the bracket, it is bisected."""
+    made just either side of it, which closes the bracket when the guess is within half the
+    tolerance.  When both tests land on one side, their two margins, a tolerance apart, give the
+    margin's slope there, and the next guess is the root of that line (a Newton step), tested the
+    same way; after a round that did not halve the bracket without such a guess, it is bisected."""
     n, d = a.shape
     tol = 2.0 ** -BISECTIONS
+    eps = 0.5 * tol
     lo, hi = np.zeros(n), np.ones(n)
     mlo = np.where(m_a > 0, m_a, np.nan)
     mhi = np.where(m_b < 0, m_b, np.nan)
     halve = np.zeros(n, dtype=bool)
+    step = np.full(n, np.nan)  # the next guess of a Newton step (NaN: none)
     for _ in range(3 * BISECTIONS):
         act = np.flatnonzero(hi - lo > tol)
         if act.size == 0:
             break
         l, h = lo[act], hi[act]
-        secant = np.isfinite(mlo[act]) & np.isfinite(mhi[act]) & ~halve[act]
+        newton = (step[act] > l) & (step[act] < h)
+        secant = ~newton & np.isfinite(mlo[act]) & np.isfinite(mhi[act]) & ~halve[act]
+        two = newton | secant
         with np.errstate(invalid="ignore", divide="ignore"):
-            guess = np.where(secant, l + (h - l) * mlo[act] / (mlo[act] - mhi[act]), 0.5 * (l + h))
-        eps = 0.5 * tol
-        t1 = np.where(secant, np.clip(guess - eps, l + 0.25 * eps, h - 0.25 * eps), guess)
+            guess = np.where(newton, step[act],
+                             np.where(secant, l + (h - l) * mlo[act] / (mlo[act] - mhi[act]), 0.5 * (l + h)))
+        t1 = np.where(two, np.clip(guess - eps, l + 0.25 * eps, h - 0.25 * eps), guess)
         t2 = np.clip(guess + eps, l + 0.25 * eps, h - 0.25 * eps)
-        idx = np.concatenate([act, act[secant]])
-        ts = np.concatenate([t1, t2[secant]])
+        idx = np.concatenate([act, act[two]])
+        ts = np.concatenate([t1, t2[two]])
         P = np.zeros((len(ts), 3))
         P[:, :d] = a[idx] + ts[:, None] * (b[idx] - a[idx])
         ok, marg = np.empty(len(ts), dtype=bool), np.empty(len(ts))
         for k in range(0, len(ts), BATCH):
             f, mg = test(np.ascontiguousarray(P[k:k + BATCH]))
             ok[k:k + BATCH], marg[k:k + BATCH] = f, mg
+        # a secant's two tests on one side, their margins of feasibility's sign: the line through them
+        n1 = len(act)
+        f1, m1, f2, m2 = ok[:n1][two], marg[:n1][two], ok[n1:], marg[n1:]
+        line = secant[two] & (f1 == f2) & ((m1 > 0) == f1) & ((m2 > 0) == f2) & (m1 != m2)
+        step[act] = np.nan
+        with np.errstate(invalid="ignore", divide="ignore"):
+            root = t2[two] - m2 * (t2[two] - t1[two]) / (m2 - m1)
+        step[act[two][line]] = root[line]
         width = hi[act] - lo[act]
-        for sel in (slice(0, len(act)), slice(len(act), None)):  # the lower points first, then the upper
+        for sel in (slice(0, n1), slice(n1, None)):  # the lower points first, then the upper
             i, t, f, mg = idx[sel], ts[sel], ok[sel], marg[sel]
             up = f & (t > lo[i])
             lo[i[up]], mlo[i[up]] = t[up], np.where(mg[up] > 0, mg[up], np.nan)
             down = ~f & (t < hi[i])
             hi[i[down]], mhi[i[down]] = t[down], np.where(mg[down] < 0, mg[down], np.nan)
-        halve[act] = (hi[act] - lo[act]) > 0.5 * width
+        halve[act] = ((hi[act] - lo[act]) > 0.5 * width) & ~np.isfinite(step[act])
     return 0.5 * (lo + hi)
 
 
@@ -449,21 +462,29 @@ def _loops(segments, pts, snapped, lower, axis, lo_in, grid: Grid) -> list:
     return loops
 
 
-def _weld(pts, faces):
-    """The mesh with the vertices at one position merged (those put on a box edge or corner), its
-    degenerate triangles dropped, checked closed (:func:`check_closed`), normals outwards."""
-    uniq, inv = np.unique(pts, axis=0, return_inverse=True)
-    faces = inv.reshape(-1)[faces]
+def _weld(pts, snapped, faces):
+    """(vertices, faces, volume [m^3]): the mesh with the vertices at one position merged, its
+    degenerate triangles dropped, checked closed (:func:`check_closed`), normals outwards.  Only
+    vertices put on the box (``snapped``: a box edge or corner takes several) can share a position:
+    the others lie strictly inside distinct grid edges."""
+    ids = np.arange(len(pts))
+    on_box = np.flatnonzero(snapped)
+    if on_box.size:
+        _, first, inv = np.unique(pts[on_box], axis=0, return_index=True, return_inverse=True)
+        ids[on_box] = on_box[first][inv.reshape(-1)]  # each to the first vertex at its position
+    faces = ids[faces]
     good = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
     faces = faces[good].astype(np.int64)
-    used = np.unique(faces)
-    remap = np.full(len(uniq), -1, dtype=np.int64)
-    remap[used] = np.arange(len(used))
-    verts, faces = uniq[used], remap[faces]
+    used = np.zeros(len(pts), dtype=bool)
+    used[faces.reshape(-1)] = True
+    remap = np.cumsum(used) - 1
+    verts, faces = pts[used], remap[faces]
     check_closed(verts, faces)
-    if mesh_volume(verts, faces) < 0:
+    volume = mesh_volume(verts, faces)
+    if volume < 0:
         faces = faces[:, ::-1].copy()
-    return verts, faces
+        volume = mesh_volume(verts, faces)
+    return verts, faces, volume
 
 
 def _shoelace(loop: np.ndarray) -> float:
