@@ -278,6 +278,34 @@ def test_tolerances_shrink_the_inner_measure_and_hold_for_every_geometry_within_
         assert lp_feasible(built, x, required_wrenches(built, "static")), (x, raw["cables"])
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("motion,m", [("1R2T", 4), ("3R3T", 8)])
+def test_tolerances_of_rotational_robots_hold_for_every_geometry_within_them(motion, m):
+    """Robots whose attachments carry moments: at random points of the boxes proven inside (outside)
+    with tolerances, random geometries within them are feasible (infeasible) by the LP."""
+    seed = zlib.crc32(f"tolerance {motion} {m}".encode())
+    robots, rng = np.random.default_rng(seed), np.random.default_rng(seed + 1)
+    tol = 0.003
+    seen = {1: 0, -1: 0}
+    for _ in range(3):
+        d = random_robot(robots, motion, m)
+        r = certify(d, resolution=0.05 if d.motion.planar else 0.1, tolerance_outlets=tol,
+                    tolerance_attachments=tol, max_boxes=20_000)
+        dim = d.motion.dim
+        for code, expect in ((1, True), (-1, False)):
+            idx = np.flatnonzero(r.status == code)
+            for k in rng.choice(idx, min(idx.size, 40), replace=False) if idx.size else []:
+                raw = {**d.raw, "cables": [dict(c) for c in d.raw["cables"]]}
+                for c in raw["cables"]:  # a geometry within the tolerance (orientation zero: R = I)
+                    c["outlet"] = (np.asarray(c["outlet"]) + rng.uniform(-tol, tol, dim)).tolist()
+                    c["attachment"] = (np.asarray(c["attachment"]) + rng.uniform(-tol, tol, dim)).tolist()
+                built = spec.from_dict(raw)
+                x = rng.uniform(r.lower[k], r.upper[k])
+                assert lp_feasible(built, x, required_wrenches(built, "static")) == expect, (code, x)
+                seen[code] += 1
+    assert seen[1] > 0 and seen[-1] > 0, seen
+
+
 def test_spec_tolerance_is_taken_and_checked(tmp_path):
     from cdpr_design.errors import SpecError
 

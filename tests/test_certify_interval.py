@@ -186,6 +186,139 @@ def test_structure_matrix_and_its_derivative_enclose_every_point_of_the_box():
                             assert _holds(D[k][0][i, j], D[k][1][i, j], derivs[k][i])
 
 
+def _arb_matrix(A, B, p, rows):
+    """The structure matrix (len(rows), m) in arb at the position ``p`` (3,) for the outlets ``A`` and
+    rotated attachments ``B`` (m, 3)."""
+    cols = [_arb_column(A[j], B[j], p, rows)[0] for j in range(A.shape[0])]
+    return [[cols[j][i] for j in range(A.shape[0])] for i in range(len(rows))]
+
+
+def _random_case(rng, rows):
+    """A box of positions and a geometry with random tolerances, about an IPAnema-like 8-cable layout
+    (or a planar one for 3 rows), as the kernels take them (:class:`KC.Box`, :class:`KC.Geometry`)."""
+    m = int(rng.integers(len(rows), 9))
+    if len(rows) == 6:
+        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
+        pick = rng.permutation(8)[:m]
+        Ac = corners[pick] * [2.0, 1.5, 1.0] + [0, 0, 1.0] + rng.normal(0, 0.1, (m, 3))
+        Bc = corners[pick][:, [1, 0, 2]] * [0.6, 0.15, 0.3] + rng.normal(0, 0.03, (m, 3))
+        c = rng.uniform([-0.5, -0.4, 0.7], [0.5, 0.4, 1.3])
+        plane = 3
+    else:  # planar: z = 0 everywhere
+        ang = np.sort(rng.uniform(0, 2 * np.pi, m))
+        Ac = np.stack([2 * np.cos(ang), 1.5 * np.sin(ang), np.zeros(m)], axis=1)
+        Bc = np.stack([0.15 * np.cos(ang + rng.normal(0, 0.5, m)), 0.1 * np.sin(ang), np.zeros(m)], axis=1)
+        c = np.array([*rng.uniform(-0.4, 0.4, 2), 0.0])
+        plane = 2
+    half = np.zeros(3)
+    half[:plane] = 10.0 ** rng.uniform(-3.5, -1.3, plane)
+    mask = np.array([1.0, 1.0, 1.0 if plane == 3 else 0.0])
+    ta = 10.0 ** rng.uniform(-4, -2, (m, 1)) * (rng.random((m, 1)) < 0.8) * mask
+    tb = 10.0 ** rng.uniform(-4, -2, m) * (rng.random(m) < 0.8)
+    if plane == 3:  # a random rotation of the attachments' errors (effector coordinates)
+        Re = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    else:
+        a = rng.uniform(-np.pi, np.pi)
+        Re = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 0.0]])
+    rb = np.nextafter((np.abs(Re) @ mask)[None, :] * tb[:, None] * (1 + 1e-12), np.inf)
+    P = KC.Box(c - half, c + half, c.copy())
+    G = KC.Geometry(Ac - ta, Ac + ta, Bc - rb, Bc + rb, Ac, Bc, np.asarray(rows, dtype=np.int64), Re, tb)
+    return P, G
+
+
+def _sample(rng, lo, hi):
+    """A random point of the box [lo, hi], or (one time in four) a random corner of it."""
+    return np.where(rng.random(lo.shape) < 0.5, lo, hi) if rng.random() < 0.25 else rng.uniform(lo, hi)
+
+
+def _attachments(rng, G):
+    """Rotated attachments within the tolerance: B_j = Bc_j + Re e, e in [-tb_j, tb_j]^3 (a random
+    point, or one time in four a corner, of each cable's cube)."""
+    e = _sample(rng, -np.repeat(G.tb[:, None], 3, 1), np.repeat(G.tb[:, None], 3, 1))
+    return G.Bc + e @ G.Re.T
+
+
+@pytest.mark.parametrize("rows", [(0, 1, 2, 3, 4, 5), (0, 1, 5)])
+def test_mean_value_form_encloses_the_basis_tensions_at_every_pose_and_geometry(rows):
+    """The centred form in the position and in every outlet and attachment coordinate
+    (kernels/certify.py's mean_value): at random poses of random boxes, with random geometries
+    within random tolerances and random wrenches within the margin, the exact basis tensions (arb)
+    lie in the refined enclosure; and it is never wider than the first-order one it refines."""
+    import itertools
+
+    rng = np.random.default_rng(7 + len(rows))
+    n = len(rows)
+    refined = checked = 0
+    for _ in range(120):
+        P, G = _random_case(rng, rows)
+        m = G.Ac.shape[0]
+        bases = np.array(list(itertools.combinations(range(m), n)), dtype=np.int64)
+        facets = np.array(list(itertools.combinations(range(m), n - 1)), dtype=np.int64)
+        T = KC.Task(rng.normal(0, 50, (1, n)), np.zeros(m), np.full(m, 1e3), float(rng.choice([0.0, 2.0])),
+                    facets, bases)
+        basis = int(rng.integers(bases.shape[0]))
+        t = rng.uniform(0, 400, m)
+        scr = KC.make_scratch(n, m)
+        E = scr.box
+        KC.interval_structure(P.lo, P.hi, G.Alo, G.Ahi, G.Blo, G.Bhi, G.rows, E.Wl, E.Wh, E.U, E.L)
+        if not KC.basis_enclosure(E.Wl, E.Wh, T, basis, t, T.wv[0], E.Al, E.Ah, E.bl, E.bh, scr.kr, E.Xl, E.Xh):
+            continue
+        first = (E.Xl.copy(), E.Xh.copy())
+        if not KC.mean_value(P, G, T, basis, t, T.wv[0], scr):
+            continue
+        refined += 1
+        assert np.all(E.Xl >= first[0]) and np.all(E.Xh <= first[1])
+        b = list(bases[basis])
+        fixed = [j for j in range(m) if j not in b]
+        for _ in range(4):
+            p = _sample(rng, P.lo, P.hi)
+            A = _sample(rng, G.Alo, G.Ahi)
+            B = _attachments(rng, G)
+            e = rng.uniform(-T.mu, T.mu, n)
+            W = _arb_matrix(A, B, p, rows)
+            rhs = [arb(float(T.wv[0, i])) + arb(float(e[i]))
+                   - sum((W[i][j] * arb(float(min(max(t[j], 0.0), 1e3))) for j in fixed), arb(0))
+                   for i in range(n)]
+            x = flint.arb_mat([[W[i][j] for j in b] for i in range(n)]).solve(flint.arb_mat([[v] for v in rhs]))
+            for q in range(n):
+                assert _holds(E.Xl[q], E.Xh[q], x[q, 0]), (q, E.Xl[q], E.Xh[q], x[q, 0])
+            checked += 1
+    assert refined > 40 and checked > 160
+
+
+@pytest.mark.parametrize("rows", [(0, 1, 2, 3, 4, 5), (0, 1, 5)])
+def test_centred_gap_bounds_the_support_gap_at_every_pose_and_geometry(rows):
+    """The centred form of the outside test's support gap (kernels/certify.py's centred_gap), in the
+    position and in every outlet and attachment coordinate: an upper bound of the exact gap (arb)
+    at random poses of random boxes with random geometries within random tolerances."""
+    rng = np.random.default_rng(17 + len(rows))
+    n = len(rows)
+    bounded = 0
+    for _ in range(150):
+        P, G = _random_case(rng, rows)
+        m = G.Ac.shape[0]
+        scr = KC.make_scratch(n, m)
+        E = scr.box
+        KC.interval_structure(P.lo, P.hi, G.Alo, G.Ahi, G.Blo, G.Bhi, G.rows, E.Wl, E.Wh, E.U, E.L)
+        nu = rng.normal(size=n)
+        nu /= np.linalg.norm(nu)
+        tmid = rng.uniform(50, 500, m)
+        rho = tmid * rng.uniform(0.2, 1.0, m)
+        w = rng.normal(0, 300, n)
+        bound = KC.centred_gap(P, G, nu, tmid, rho, w, E)
+        if not np.isfinite(bound):
+            continue
+        bounded += 1
+        for _ in range(4):
+            W = _arb_matrix(_sample(rng, G.Alo, G.Ahi), _attachments(rng, G), _sample(rng, P.lo, P.hi), rows)
+            lj = [sum((arb(float(nu[i])) * W[i][j] for i in range(n)), arb(0)) for j in range(m)]
+            gap = sum((arb(float(tmid[j])) * lj[j] for j in range(m)), arb(0)) \
+                - sum((arb(float(nu[i])) * arb(float(w[i])) for i in range(n)), arb(0))
+            s = sum((arb(float(rho[j])) * abs(lj[j]) for j in range(m)), arb(0)) - abs(gap)
+            assert bool(s <= arb(bound)), (s, bound)
+    assert bounded > 60
+
+
 def test_python_flint_is_a_test_dependency_only():
     """The interval kernels' reference is needed by the tests alone: a user's install does not pull
     it in (was a runtime dependency), and certifying works without it."""

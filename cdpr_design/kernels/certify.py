@@ -45,13 +45,30 @@ C = I - Y [A] and z = Y([b] - [A] x~), ||C||_inf <= beta < 1 proves every
 A in [A] regular and puts every solution within
 r = ||z||_inf / (1 - beta) of x~, and x~ + z + C (X0 - x~) refines that box.
 For m = n this is the enclosure of t = W^-1 w of the square case.
+
+Centred forms.  Where the first-order enclosures are too wide, both tests are
+refined by the mean-value form about the box's centre *and the nominal
+geometry*, in every variable v: the three position coordinates and, for each
+cable j, the three coordinates of its outlet and the three of its
+attachment's error e_j in effector coordinates (rotated attachment
+B_j = R b_j + R e_j), each within its tolerance.  A function f of them lies in
+f(c) + sum_v df/dv (over the whole box) (v - v_c) (the mean-value theorem along
+the segment from the centre; the integral of values in a convex set lies in
+it).  Column j of W depends only on p and cable j's own points:
+dw_j/dA_jk = -dw_j/dp_k, and dw_j/de_jk = sum_i R_ik (dw_j/dp_i + [0 ; e_i x u_j])
+(d_j = A_j - B_j - p).  So f(c) is taken at one geometry (a point, no width),
+and each tolerance adds its own first-order term with its own sign, instead of
+the whole tolerance box entering every column of W at once (which loses every
+cancellation through W^-1 on robots whose moment rows are ill-conditioned).
 """
 
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import jitable, njit
 from cdpr_design.kernels.geometry import structure_matrix
 from cdpr_design.kernels.hsm import facet_normal
 from cdpr_design.kernels.interval import down, iabs, iadd, idiv, imul, iscale, isqr, isqrt, isub, unit_component, up
@@ -66,6 +83,43 @@ UNDECIDED = 0
 
 #: Krawczyk refinements after the first enclosure
 KRAWCZYK_STEPS = 2
+#: Passes of the centred form at most (:func:`centred`), and the narrowing of the enclosure's
+#: total width below which another pass is tried
+MEAN_VALUE_PASSES = 4
+PASS_GAIN = 0.95
+
+#: A box of positions: lower and upper corners ``lo``, ``hi`` and centre ``c`` (3,) [m] (``c`` a float
+#: point within the box).
+Box = namedtuple("Box", "lo hi c")
+#: The robot's geometry: outlets in [Alo, Ahi] and rotated attachments in [Blo, Bhi] (m, 3) [m] (boxes
+#: of half-width the tolerances), their nominal values ``Ac``, ``Bc`` (m, 3) [m] (within the boxes), and
+#: the balanced wrench rows ``rows`` (n,) int64.  An attachment's error is e in [-tb_j, tb_j]^3 in
+#: effector coordinates (``tb`` (m,) [m]), rotated: R b_j + ``Re`` e with ``Re`` (3, 3) the rotation,
+#: its columns of the axes that carry no error (z of a planar design) zero; [Blo, Bhi] encloses it.
+Geometry = namedtuple("Geometry", "Alo Ahi Blo Bhi Ac Bc rows Re tb")
+#: What a box is tested for: the required-wrench vertices ``wv`` (nv, n) [N, N m], the tension bounds
+#: ``tmin``, ``tmax`` (m,) [N], the capacity margin ``mu`` [N] (0: feasibility), and the cable subsets
+#: ``facets`` (C(m, n-1), n-1) and ``bases`` (C(m, n), n) int64.
+Task = namedtuple("Task", "wv tmin tmax mu facets bases")
+#: Floats at the box's centre (:func:`classify_box`): the structure matrix ``Wc`` (n, m) and lengths
+#: ``L``, the tension midpoints ``tmid`` and half-ranges ``rho``, facet normals ``nu``, ``best_nu``,
+#: the centre's tensions ``t`` with the QP's bounds ``lo``, ``hi``, step ``s``, right-hand side ``rhs``,
+#: each cable's ``slack`` and the QP's scratch ``qp``.
+Centre = namedtuple("Centre", "Wc L tmid rho nu best_nu t lo hi s rhs slack qp")
+#: Interval enclosures (lower, upper pairs) of a box: the structure matrix ``Wl``, ``Wh`` (n, m) with
+#: unit vectors ``U`` (m, 3, 2) and lengths ``L`` (m, 2) over the box; the same at the centre and the
+#: nominal geometry (``Wcl``, ``Wch``, ``Uc``, ``Lc``); the derivatives dW/dp_k ``Dl``, ``Dh`` (3, n, m)
+#: and their scratch ``V`` (3, 2); the basis columns over the box ``Al``, ``Ah`` and at the centre ``Acl``,
+#: ``Ach`` (n, n); right-hand sides ``bl``, ``bh``; the basis tensions over the box ``Xl``, ``Xh`` and
+#: at the centre ``Tl``, ``Th``; a derivative's right-hand side ``gl``, ``gh``, one cable's ``cl``,
+#: ``ch``, their preconditioned sum ``hl``, ``hh`` and its solution ``yl``, ``yh`` (n,).
+Enclosures = namedtuple("Enclosures", "Wl Wh U L Wcl Wch Uc Lc Dl Dh V Al Ah Acl Ach bl bh Xl Xh Tl Th "
+                                      "gl gh cl ch hl hh yl yh")
+#: The Krawczyk step's scratch (:func:`krawczyk`): the midpoint ``Am`` and its inverse ``Y``, ``C`` =
+#: I - Y [A] in ``Cl``, ``Ch`` (n, n), ``xt``, ``zl``, ``zh`` (n,) and ``work`` (n, >= 2n).
+KrawczykScratch = namedtuple("KrawczykScratch", "Am Y xt Cl Ch zl zh work")
+#: The work arrays of :func:`classify_box` (:func:`make_scratch`).
+Scratch = namedtuple("Scratch", "centre box kr")
 
 
 @njit
@@ -196,36 +250,16 @@ def support_gap(nu, Wl, Wh, tmid, rho, w):
 
 
 @njit
-def krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work):
-    """Enclose the solutions of A x = b for every A in [Al, Ah] (n, n) and b in [bl, bh] (n,)
-    into [Xl, Xh] (n,).  Returns False when regularity is not proven (then X is meaningless).
-
-    ``Am``, ``Y``, ``Cl``, ``Ch`` (n, n), ``xt``, ``zl``, ``zh`` (n,) and ``work`` (n, >= 2n)
-    are scratch."""
+def preconditioner(Al, Ah, Am, Y, Cl, Ch, work):
+    """The midpoint inverse ``Y`` of [Al, Ah] (n, n) (midpoint into ``Am``), C = I - Y [A] into
+    [Cl, Ch] (n, n), and beta >= ||C||_inf rounded up (returned; inf when the midpoint is
+    singular).  ``work`` (n, >= 2n) is scratch."""
     n = Al.shape[0]
     for i in range(n):
         for j in range(n):
             Am[i, j] = 0.5 * (Al[i, j] + Ah[i, j])
     if not inverse_into(Am, Y, work):
-        return False
-    for i in range(n):
-        s = 0.0
-        for j in range(n):
-            s += Y[i, j] * 0.5 * (bl[j] + bh[j])
-        xt[i] = s
-    # z = Y (b - A xt)
-    for i in range(n):
-        zl[i] = 0.0
-        zh[i] = 0.0
-    for k in range(n):
-        rl, rh = bl[k], bh[k]
-        for j in range(n):
-            pl, ph = iscale(xt[j], Al[k, j], Ah[k, j])
-            rl, rh = isub(rl, rh, pl, ph)
-        for i in range(n):
-            pl, ph = iscale(Y[i, k], rl, rh)
-            zl[i], zh[i] = iadd(zl[i], zh[i], pl, ph)
-    # C = I - Y A and beta = ||C||_inf (rounded up)
+        return np.inf
     beta = 0.0
     for i in range(n):
         row = 0.0
@@ -239,6 +273,16 @@ def krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work):
             Ch[i, j] = ch
             row = up(row + max(-cl, ch))
         beta = max(beta, row)
+    return beta
+
+
+@njit
+def krawczyk_box(xt, zl, zh, Cl, Ch, beta, Xl, Xh, work):
+    """Enclose into [Xl, Xh] (n,) every x with x = xt + z + C (x - xt) for some z in [zl, zh] and C
+    in [Cl, Ch] (n, n), ||C||_inf <= ``beta``: within r = ||z||_inf / (1 - beta) of the float point
+    ``xt`` (n,), refined :data:`KRAWCZYK_STEPS` times by xt + z + C (X - xt).  False when beta is
+    not below 1.  ``work`` (n, >= 2) is scratch."""
+    n = xt.shape[0]
     if not (beta < 1.0):
         return False
     delta = 0.0
@@ -261,6 +305,38 @@ def krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work):
             Xl[i] = work[i, 0]
             Xh[i] = work[i, 1]
     return True
+
+
+@njit
+def krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work):
+    """Enclose the solutions of A x = b for every A in [Al, Ah] (n, n) and b in [bl, bh] (n,)
+    into [Xl, Xh] (n,).  Returns False when regularity is not proven (then X is meaningless).
+
+    ``Am``, ``Y``, ``Cl``, ``Ch`` (n, n), ``xt``, ``zl``, ``zh`` (n,) and ``work`` (n, >= 2n)
+    are scratch (:func:`preconditioner`, then :func:`krawczyk_box` with z = Y ([b] - [A] xt),
+    xt = Y mid(b))."""
+    n = Al.shape[0]
+    beta = preconditioner(Al, Ah, Am, Y, Cl, Ch, work)
+    if not (beta < 1.0):
+        return False
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            s += Y[i, j] * 0.5 * (bl[j] + bh[j])
+        xt[i] = s
+    # z = Y (b - A xt)
+    for i in range(n):
+        zl[i] = 0.0
+        zh[i] = 0.0
+    for k in range(n):
+        rl, rh = bl[k], bh[k]
+        for j in range(n):
+            pl, ph = iscale(xt[j], Al[k, j], Ah[k, j])
+            rl, rh = isub(rl, rh, pl, ph)
+        for i in range(n):
+            pl, ph = iscale(Y[i, k], rl, rh)
+            zl[i], zh[i] = iadd(zl[i], zh[i], pl, ph)
+    return krawczyk_box(xt, zl, zh, Cl, Ch, beta, Xl, Xh, work)
 
 
 @njit
@@ -343,62 +419,109 @@ def centre_tensions(Wc, w, tmin, tmax, tmid, t, lo, hi, rhs, s, scr):
 
 
 @njit
-def outside_test(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, Wc, wv, tmid, rho, mu, facets, nu, best_nu, box):
-    """Whether the box is proven outside: for some wrench vertex, the facet most violated at
-    the centre has its support gap below ``mu`` |nu| over the whole box (natural interval
-    extension, then the centred form of :func:`centred_gap`)."""
-    n, m = Wc.shape
-    Wl, Wh = box[0], box[1]
-    for k in range(wv.shape[0]):
+def outside_test(P, G, T, C, E):
+    """Whether the box ``P`` (:class:`Box`) is proven outside: for some wrench vertex, the facet
+    most violated at the centre has its support gap below mu |nu| over the whole box (natural
+    interval extension, then the centred form of :func:`centred_gap`).  ``C``: the centre's floats
+    (:class:`Centre`: ``Wc``, ``tmid``, ``rho``; ``nu``, ``best_nu`` scratch); ``E``: the box's
+    enclosures (:class:`Enclosures`, ``Wl``, ``Wh``, ``U``, ``L`` filled)."""
+    n, m = C.Wc.shape
+    for k in range(T.wv.shape[0]):
         worst = np.inf
-        for c in range(facets.shape[0]):
-            if not facet_normal(Wc, facets[c], nu):
+        for c in range(T.facets.shape[0]):
+            if not facet_normal(C.Wc, T.facets[c], C.nu):
                 continue
             half = 0.0
             gap = 0.0
             for j in range(m):
                 lj = 0.0
                 for i in range(n):
-                    lj += nu[i] * Wc[i, j]
-                half += abs(lj) * rho[j]
-                gap += lj * tmid[j]
+                    lj += C.nu[i] * C.Wc[i, j]
+                half += abs(lj) * C.rho[j]
+                gap += lj * C.tmid[j]
             for i in range(n):
-                gap -= nu[i] * wv[k, i]
+                gap -= C.nu[i] * T.wv[k, i]
             s = half - abs(gap)
             if s < worst:
                 worst = s
                 for i in range(n):
-                    best_nu[i] = nu[i]
-        if not (worst < mu):
+                    C.best_nu[i] = C.nu[i]
+        if not (worst < T.mu):
             continue
         ql, qh = 0.0, 0.0
         for i in range(n):
-            pl, ph = isqr(best_nu[i], best_nu[i])
+            pl, ph = isqr(C.best_nu[i], C.best_nu[i])
             ql, qh = iadd(ql, qh, pl, ph)
         nl, nh = isqrt(ql, qh)
-        ml, mh = iscale(mu, nl, nh)
-        sl, sh = support_gap(best_nu, Wl, Wh, tmid, rho, wv[k])
+        ml, mh = iscale(T.mu, nl, nh)
+        sl, sh = support_gap(C.best_nu, E.Wl, E.Wh, C.tmid, C.rho, T.wv[k])
         if sh < ml:
             return True
-        sh = centred_gap(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, best_nu, tmid, rho, wv[k], box)
+        sh = centred_gap(P, G, C.best_nu, C.tmid, C.rho, T.wv[k], E)
         if sh < ml:
             return True
     return False
 
 
 @njit
-def centred_gap(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, nu, tmid, rho, w, box):
-    """An upper bound over the box of the support gap s (:func:`support_gap`) by centred forms.
+def derivatives(G, E):
+    """Enclose dW/dp_k over the box (``E.U``, ``E.L`` filled) into ``E.Dl[k]``, ``E.Dh[k]`` (n, m),
+    k = 0, 1, 2 (:func:`structure_derivative`)."""
+    for axis in range(3):
+        structure_derivative(axis, E.U, E.L, G.Blo, G.Bhi, G.rows, E.Dl[axis], E.Dh[axis], E.V)
+
+
+@njit
+def cable_term(G, E, j, kind, axis):
+    """One geometric variable of cable j, ``kind`` 0: coordinate ``axis`` of its outlet, 1: the
+    error along effector axis ``axis`` of its attachment.  Writes into [E.cl, E.ch] (n,) the
+    derivative of column j of W over the box with respect to it (dw_j/da_k = -dw_j/dp_k;
+    dw_j/de_k = sum_i Re_ik (dw_j/dp_i + [0 ; e_i x u_j]), d_j = a_j - R b_j - Re e - p), from
+    ``E.Dl``, ``E.Dh`` (:func:`derivatives`) and the unit vectors ``E.U`` over the box, and returns
+    the interval of the variable minus its nominal value ((0, 0) when it has no extent: skip it)."""
+    rows = G.rows
+    n = rows.shape[0]
+    if kind == 0:
+        if not (G.Ahi[j, axis] > G.Alo[j, axis]):
+            return 0.0, 0.0
+        for k in range(n):
+            E.cl[k], E.ch[k] = -E.Dh[axis, k, j], -E.Dl[axis, k, j]
+        return isub(G.Alo[j, axis], G.Ahi[j, axis], G.Ac[j, axis], G.Ac[j, axis])
+    if not (G.tb[j] > 0.0) or (G.Re[0, axis] == 0.0 and G.Re[1, axis] == 0.0 and G.Re[2, axis] == 0.0):
+        return 0.0, 0.0
+    for k in range(n):
+        r = rows[k]
+        sl, sh = 0.0, 0.0
+        for i in range(3):
+            dl, dh = E.Dl[i, k, j], E.Dh[i, k, j]
+            if r >= 3:  # moment row c: (e_i x u)_c = -u_(i+2) for c = i+1, u_(i+1) for c = i+2
+                c = r - 3
+                if c == (i + 1) % 3:
+                    q = (i + 2) % 3
+                    dl, dh = isub(dl, dh, E.U[j, q, 0], E.U[j, q, 1])
+                elif c == (i + 2) % 3:
+                    q = (i + 1) % 3
+                    dl, dh = iadd(dl, dh, E.U[j, q, 0], E.U[j, q, 1])
+            pl, ph = iscale(G.Re[i, axis], dl, dh)
+            sl, sh = iadd(sl, sh, pl, ph)
+        E.cl[k], E.ch[k] = sl, sh
+    return -G.tb[j], G.tb[j]
+
+
+@njit
+def centred_gap(P, G, nu, tmid, rho, w, E):
+    """An upper bound over the box ``P`` and the geometry ``G`` of the support gap s
+    (:func:`support_gap`) by centred forms about the box's centre and the nominal geometry.
 
     Where the sign sigma_j of l_j = nu . w_j is proven constant over the box (natural
     extension), and the sign sigma_g of the gap g = nu . (W t_mid - w) is, the part
     F = sum_j rho_j sigma_j l_j - sigma_g g of s is smooth and lies in
-    F(c) + sum_k dF/dp_k (X) (X_k - c_k), dF/dp_k = sum_j (rho_j sigma_j - sigma_g t_mid,j)
-    nu . dw_j/dp_k; each l_j of unknown sign (the facet's own cables, 0 at the centre) adds
-    rho_j max |l_j(c) + sum_k nu . dw_j/dp_k (X) (X_k - c_k)|.  ``inf`` when the gap's sign is
-    not proven."""
-    (Wl, Wh, U, L, Wcl, Wch, Uc, Lc, Dl, Dh, V, Al, Ah, Acl, Ach, bl, bh, Xl, Xh, Tl, Th, gl, gh, yl, yh) = box
-    n, m = Wl.shape
+    F(c) + sum_v dF/dv (box) (v - v_c), dF/dv = sum_j (rho_j sigma_j - sigma_g t_mid,j)
+    nu . dw_j/dv over the position coordinates and each cable's outlet and attachment
+    coordinates (module docstring); each l_j of unknown sign (the facet's own cables, 0 at the
+    centre) adds rho_j max |l_j(c) + sum_v nu . dw_j/dv (box) (v - v_c)|.  ``inf`` when the
+    gap's sign is not proven.  ``E``: :class:`Enclosures` with the box's filled."""
+    n, m = E.Wl.shape
     sig = np.empty(m)
     El = np.empty(m)
     Eh = np.empty(m)
@@ -406,7 +529,7 @@ def centred_gap(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, nu, tmid, rho, w, box):
     for j in range(m):
         ll, lh = 0.0, 0.0
         for i in range(n):
-            pl, ph = iscale(nu[i], Wl[i, j], Wh[i, j])
+            pl, ph = iscale(nu[i], E.Wl[i, j], E.Wh[i, j])
             ll, lh = iadd(ll, lh, pl, ph)
         sig[j] = 1.0 if ll > 0.0 else (-1.0 if lh < 0.0 else 0.0)
         pl, ph = iscale(tmid[j], ll, lh)
@@ -420,37 +543,45 @@ def centred_gap(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, nu, tmid, rho, w, box):
         sg = -1.0
     else:
         return np.inf
-    # F(c) and the l_j(c), from the structure matrix enclosed at the centre point
-    interval_structure(pc, pc, Alo, Ahi, Blo, Bhi, rows, Wcl, Wch, Uc, Lc)
-    fl, fh = iscale(sg, 0.0, 0.0)
+    # F(c) and the l_j(c), from the structure matrix at the centre and the nominal geometry
+    interval_structure(P.c, P.c, G.Ac, G.Ac, G.Bc, G.Bc, G.rows, E.Wcl, E.Wch, E.Uc, E.Lc)
+    fl, fh = 0.0, 0.0
     for i in range(n):
         pl, ph = iscale(sg * nu[i], w[i], w[i])
         fl, fh = iadd(fl, fh, pl, ph)
     for j in range(m):
         ll, lh = 0.0, 0.0
         for i in range(n):
-            pl, ph = iscale(nu[i], Wcl[i, j], Wch[i, j])
+            pl, ph = iscale(nu[i], E.Wcl[i, j], E.Wch[i, j])
             ll, lh = iadd(ll, lh, pl, ph)
         El[j], Eh[j] = ll, lh
         kl, kh = isub(rho[j] * sig[j], rho[j] * sig[j], sg * tmid[j], sg * tmid[j])
         pl, ph = imul(kl, kh, ll, lh)
         fl, fh = iadd(fl, fh, pl, ph)
-    for axis in range(3):
-        if not (phi[axis] > plo[axis]):
-            continue
-        structure_derivative(axis, U, L, Blo, Bhi, rows, Dl, Dh, V)
-        xl, xh = isub(plo[axis], phi[axis], pc[axis], pc[axis])
-        for j in range(m):
-            dl, dh = 0.0, 0.0
+    derivatives(G, E)
+    for j in range(m):
+        kl, kh = isub(rho[j] * sig[j], rho[j] * sig[j], sg * tmid[j], sg * tmid[j])
+        for v in range(9):  # the position's coordinates, then cable j's outlet's, then its attachment's
+            axis = v % 3
+            if v < 3:
+                if not (P.hi[axis] > P.lo[axis]):
+                    continue
+                for i in range(n):
+                    E.cl[i], E.ch[i] = E.Dl[axis, i, j], E.Dh[axis, i, j]
+                dl, dh = isub(P.lo[axis], P.hi[axis], P.c[axis], P.c[axis])
+            else:
+                dl, dh = cable_term(G, E, j, v // 3 - 1, axis)
+                if dl == 0.0 and dh == 0.0:
+                    continue
+            al, ah = 0.0, 0.0
             for i in range(n):
-                pl, ph = iscale(nu[i], Dl[i, j], Dh[i, j])
-                dl, dh = iadd(dl, dh, pl, ph)
-            dl, dh = imul(dl, dh, xl, xh)
-            kl, kh = isub(rho[j] * sig[j], rho[j] * sig[j], sg * tmid[j], sg * tmid[j])
-            pl, ph = imul(kl, kh, dl, dh)
+                pl, ph = iscale(nu[i], E.cl[i], E.ch[i])
+                al, ah = iadd(al, ah, pl, ph)
+            al, ah = imul(al, ah, dl, dh)
+            pl, ph = imul(kl, kh, al, ah)
             fl, fh = iadd(fl, fh, pl, ph)
             if sig[j] == 0.0:
-                El[j], Eh[j] = iadd(El[j], Eh[j], dl, dh)
+                El[j], Eh[j] = iadd(El[j], Eh[j], al, ah)
     for j in range(m):
         if sig[j] == 0.0:
             pl, ph = iscale(rho[j], 0.0, max(-El[j], Eh[j]))
@@ -458,43 +589,46 @@ def centred_gap(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, nu, tmid, rho, w, box):
     return fh
 
 
-@njit
+@jitable
 def make_scratch(n, m):
-    """The work arrays of :func:`classify_box` (one set per block of boxes): a tuple of the
-    centre's floats, one of the box's enclosures and one of the Krawczyk steps."""
-    centre = (np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(n), np.empty(m),
-              np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(m), make_qp_scratch(n, m, 1))
-    box = (np.empty((n, m)), np.empty((n, m)), np.empty((m, 3, 2)), np.empty((m, 2)), np.empty((n, m)),
-           np.empty((n, m)), np.empty((m, 3, 2)), np.empty((m, 2)), np.empty((n, m)), np.empty((n, m)),
-           np.empty((3, 2)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty((n, n)), np.empty(n),
-           np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-           np.empty(n), np.empty(n))
-    kr = (np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)), np.empty((n, n)), np.empty(n),
-          np.empty(n), np.empty((n, max(2 * n, 2))))
-    return centre, box, kr
+    """The work arrays of :func:`classify_box` for ``n`` DOF and ``m`` cables (one set per block of
+    boxes): a :class:`Scratch` of the centre's floats (:class:`Centre`), the box's enclosures
+    (:class:`Enclosures`) and the Krawczyk step's scratch (:class:`KrawczykScratch`)."""
+    centre = Centre(np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(n),
+                    np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(n), np.empty(m),
+                    make_qp_scratch(n, m, 1))
+    box = Enclosures(np.empty((n, m)), np.empty((n, m)), np.empty((m, 3, 2)), np.empty((m, 2)),
+                     np.empty((n, m)), np.empty((n, m)), np.empty((m, 3, 2)), np.empty((m, 2)),
+                     np.empty((3, n, m)), np.empty((3, n, m)), np.empty((3, 2)), np.empty((n, n)), np.empty((n, n)),
+                     np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+                     np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+                     np.empty(n), np.empty(n), np.empty(n))
+    kr = KrawczykScratch(np.empty((n, n)), np.empty((n, n)), np.empty(n), np.empty((n, n)), np.empty((n, n)),
+                         np.empty(n), np.empty(n), np.empty((n, max(2 * n, 2))))
+    return Scratch(centre, box, kr)
 
 
 @njit
-def basis_enclosure(Wl, Wh, bases, basis, t, tmin, tmax, w, mu, Al, Ah, bl, bh, kr, Xl, Xh):
-    """Enclose into [Xl, Xh] (n,) the tensions of the basis cables ``bases[basis]`` that balance
-    every wrench of w + [-mu, mu]^n (n,) for every structure matrix in [Wl, Wh] (n, m), the other
-    cables held at ``t`` clipped to their bounds.  ``Al``, ``Ah`` receive the basis columns;
-    ``kr``: the Krawczyk scratch.  False when regularity is not proven."""
+def basis_enclosure(Wl, Wh, T, basis, t, w, Al, Ah, bl, bh, kr, Xl, Xh):
+    """Enclose into [Xl, Xh] (n,) the tensions of the basis cables ``T.bases[basis]`` that balance
+    every wrench of w + [-mu, mu]^n (n,) (mu = ``T.mu``) for every structure matrix in [Wl, Wh]
+    (n, m), the other cables held at ``t`` clipped to their bounds.  ``Al``, ``Ah`` receive the
+    basis columns; ``kr``: :class:`KrawczykScratch`.  False when regularity is not proven."""
     n, m = Wl.shape
+    bases = T.bases
     for i in range(n):
         for j in range(n):
             Al[i, j] = Wl[i, bases[basis, j]]
             Ah[i, j] = Wh[i, bases[basis, j]]
-        bl[i], bh[i] = iadd(w[i], w[i], -mu, mu)
+        bl[i], bh[i] = iadd(w[i], w[i], -T.mu, T.mu)
     for j in range(m):
         if in_basis(bases, basis, j) >= 0:
             continue
-        tj = min(max(t[j], tmin[j]), tmax[j])
+        tj = min(max(t[j], T.tmin[j]), T.tmax[j])
         for i in range(n):
             pl, ph = iscale(tj, Wl[i, j], Wh[i, j])
             bl[i], bh[i] = isub(bl[i], bh[i], pl, ph)
-    Am, Y, xt, Cl, Ch, zl, zh, work = kr
-    return krawczyk(Al, Ah, bl, bh, Am, Y, xt, Cl, Ch, zl, zh, Xl, Xh, work)
+    return krawczyk(Al, Ah, bl, bh, kr.Am, kr.Y, kr.xt, kr.Cl, kr.Ch, kr.zl, kr.zh, Xl, Xh, kr.work)
 
 
 @njit
@@ -517,54 +651,102 @@ def within(bases, basis, Xl, Xh, tmin, tmax):
 
 
 @njit
-def mean_value(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases, basis, t, tmin, tmax, w, mu, box, kr):
-    """Refine the first-order enclosure of the basis tensions (``box`` [15], [16]) by the centred
-    (mean-value) form t_B(X) in t_B(c) + sum_k dt_B/dp_k (X) (X_k - c_k), with
-    dt_B/dp_k = -W_B^-1 sum_j (dW_j/dp_k) t_j enclosed by Krawczyk over the box; the result
-    is intersected into ``box`` [15], [16].  False when a step is not proven."""
-    (Wl, Wh, U, L, Wcl, Wch, Uc, Lc, Dl, Dh, V, Al, Ah, Acl, Ach, bl, bh, Xl, Xh, Tl, Th, gl, gh, yl, yh) = box
-    n = rows.shape[0]
-    interval_structure(pc, pc, Alo, Ahi, Blo, Bhi, rows, Wcl, Wch, Uc, Lc)
-    if not basis_enclosure(Wcl, Wch, bases, basis, t, tmin, tmax, w, mu, Acl, Ach, bl, bh, kr, Tl, Th):
+def basis_tension(T, basis, t, E, j):
+    """Cable j's tension over the box: its enclosure [E.Xl, E.Xh] in the basis ``T.bases[basis]``,
+    else ``t[j]`` clipped to its bounds (held fixed)."""
+    q = in_basis(T.bases, basis, j)
+    if q >= 0:
+        return E.Xl[q], E.Xh[q]
+    tj = min(max(t[j], T.tmin[j]), T.tmax[j])
+    return tj, tj
+
+
+@njit
+def add_preconditioned(Y, cl, ch, dl, dh, hl, hh):
+    """[h] += (Y [c]) [d] into [hl, hh] (n,), for the float matrix ``Y`` (n, n), the interval
+    vector [cl, ch] (n,) and the interval [dl, dh]."""
+    n = Y.shape[0]
+    for i in range(n):
+        sl, sh = 0.0, 0.0
+        for k in range(n):
+            pl, ph = iscale(Y[i, k], cl[k], ch[k])
+            sl, sh = iadd(sl, sh, pl, ph)
+        pl, ph = imul(sl, sh, dl, dh)
+        hl[i], hh[i] = iadd(hl[i], hh[i], pl, ph)
+
+
+@njit
+def mean_value(P, G, T, basis, t, w, scr):
+    """Refine the first-order enclosure of the basis tensions (``scr.box.Xl``, ``Xh``, with the
+    basis columns over the box in ``Al``, ``Ah``) by the centred (mean-value) form about the
+    box's centre and the nominal geometry (module docstring):
+
+        t_B(v) in t_B(v_c) - y,   y = [W_B]^-1 sum_v g_v (v - v_c),   g_v = sum_j (dw_j/dv) t_j
+
+    over v = the position coordinates and each cable's outlet and attachment coordinates, with
+    dw_j/dv and t_B (in [X]) enclosed over the whole box and the other cables at ``t`` clipped
+    to their bounds.  t_B(v_c) is the enclosure at one point (:func:`basis_enclosure`); y is
+    enclosed by :func:`krawczyk_box` about 0, its right-hand side sum_v (Y g_v)(v - v_c)
+    preconditioned term by term with the midpoint inverse Y of [W_B] (so each variable keeps its
+    own signs through Y).  The result is intersected into [Xl, Xh].  False when a step is not
+    proven."""
+    E, kr = scr.box, scr.kr
+    n = G.rows.shape[0]
+    m = G.Alo.shape[0]
+    interval_structure(P.c, P.c, G.Ac, G.Ac, G.Bc, G.Bc, G.rows, E.Wcl, E.Wch, E.Uc, E.Lc)
+    if not basis_enclosure(E.Wcl, E.Wch, T, basis, t, w, E.Acl, E.Ach, E.bl, E.bh, kr, E.Tl, E.Th):
         return False
-    Am, Y, xt, Cl, Ch, zl, zh, work = kr
-    for axis in range(3):
-        if not (phi[axis] > plo[axis]):
+    beta = preconditioner(E.Al, E.Ah, kr.Am, kr.Y, kr.Cl, kr.Ch, kr.work)
+    if not (beta < 1.0):
+        return False
+    for i in range(n):
+        E.hl[i] = 0.0
+        E.hh[i] = 0.0
+    derivatives(G, E)
+    for axis in range(3):  # the position: g_k = sum_j dw_j/dp_k t_j
+        if not (P.hi[axis] > P.lo[axis]):
             continue
-        structure_derivative(axis, U, L, Blo, Bhi, rows, Dl, Dh, V)
         for i in range(n):
-            gl[i] = 0.0
-            gh[i] = 0.0
-            for j in range(Wl.shape[1]):
-                q = in_basis(bases, basis, j)
-                if q >= 0:
-                    pl, ph = imul(Dl[i, j], Dh[i, j], Xl[q], Xh[q])
-                else:
-                    pl, ph = iscale(min(max(t[j], tmin[j]), tmax[j]), Dl[i, j], Dh[i, j])
-                gl[i], gh[i] = iadd(gl[i], gh[i], pl, ph)
-        if not krawczyk(Al, Ah, gl, gh, Am, Y, xt, Cl, Ch, zl, zh, yl, yh, work):
-            return False
-        dl, dh = isub(plo[axis], phi[axis], pc[axis], pc[axis])
-        for q in range(n):
-            pl, ph = imul(-yh[q], -yl[q], dl, dh)
-            Tl[q], Th[q] = iadd(Tl[q], Th[q], pl, ph)
+            E.gl[i] = 0.0
+            E.gh[i] = 0.0
+        for j in range(m):
+            tl, th = basis_tension(T, basis, t, E, j)
+            for i in range(n):
+                pl, ph = imul(E.Dl[axis, i, j], E.Dh[axis, i, j], tl, th)
+                E.gl[i], E.gh[i] = iadd(E.gl[i], E.gh[i], pl, ph)
+        dl, dh = isub(P.lo[axis], P.hi[axis], P.c[axis], P.c[axis])
+        add_preconditioned(kr.Y, E.gl, E.gh, dl, dh, E.hl, E.hh)
+    for j in range(m):  # each cable's outlet and attachment: g_v = dw_j/dv t_j
+        tl, th = basis_tension(T, basis, t, E, j)
+        for v in range(6):
+            dl, dh = cable_term(G, E, j, v // 3, v % 3)
+            if dl == 0.0 and dh == 0.0:
+                continue
+            for i in range(n):
+                E.cl[i], E.ch[i] = imul(E.cl[i], E.ch[i], tl, th)
+            add_preconditioned(kr.Y, E.cl, E.ch, dl, dh, E.hl, E.hh)
+    for i in range(n):
+        kr.xt[i] = 0.0
+    if not krawczyk_box(kr.xt, E.hl, E.hh, kr.Cl, kr.Ch, beta, E.yl, E.yh, kr.work):
+        return False
     for q in range(n):
-        Xl[q] = max(Xl[q], Tl[q])
-        Xh[q] = min(Xh[q], Th[q])
+        lo_q, hi_q = isub(E.Tl[q], E.Th[q], E.yl[q], E.yh[q])
+        E.Xl[q] = max(E.Xl[q], lo_q)
+        E.Xh[q] = min(E.Xh[q], hi_q)
     return True
 
 
 @njit
-def square_outside(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases, t, tmin, tmax, w, box, kr):
-    """Square case (m = n): whether the unique tensions t = W^-1 w, enclosed over the box by
-    Krawczyk (first order, then the centred form), have a component wholly outside its bounds
-    at every pose of the box (which also proves W regular there)."""
-    Wl, Wh, Al, Ah, bl, bh, Xl, Xh = box[0], box[1], box[11], box[12], box[15], box[16], box[17], box[18]
-    if not basis_enclosure(Wl, Wh, bases, 0, t, tmin, tmax, w, 0.0, Al, Ah, bl, bh, kr, Xl, Xh):
+def square_outside(P, G, T, t, w, scr):
+    """Square case (m = n, ``T.mu`` = 0): whether the unique tensions t = W^-1 w, enclosed over the
+    box by Krawczyk (first order, then the centred form), have a component wholly outside its
+    bounds at every pose of the box and geometry (which also proves W regular there)."""
+    E = scr.box
+    if not basis_enclosure(E.Wl, E.Wh, T, 0, t, w, E.Al, E.Ah, E.bl, E.bh, scr.kr, E.Xl, E.Xh):
         return False
-    if not beyond(bases, Xl, Xh, tmin, tmax):
-        mean_value(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases, 0, t, tmin, tmax, w, 0.0, box, kr)
-    return beyond(bases, Xl, Xh, tmin, tmax)
+    if not beyond(T.bases, E.Xl, E.Xh, T.tmin, T.tmax):
+        mean_value(P, G, T, 0, t, w, scr)
+    return beyond(T.bases, E.Xl, E.Xh, T.tmin, T.tmax)
 
 
 @njit
@@ -579,62 +761,76 @@ def beyond(bases, Xl, Xh, tmin, tmax):
 
 
 @njit
-def classify_box(plo, phi, pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu, facets, bases, scr):
-    """The status of one box of positions [plo, phi] (3,) [m] with centre ``pc``: INSIDE,
-    OUTSIDE or UNDECIDED (module docstring).  ``Ac``, ``Bc`` (m, 3): the nominal outlets and
-    rotated attachments; ``wv`` (nv, n): the required-wrench vertices; ``mu`` [N]: the capacity
-    margin asked (0 for feasibility); ``facets`` (C(m, n-1), n-1) and ``bases`` (C(m, n), n):
-    the cable subsets; ``scr`` from :func:`make_scratch`."""
-    m = Alo.shape[0]
-    n = rows.shape[0]
-    centre, box, kr = scr
-    (Wc, L, tmid, rho, nu, best_nu, t, lo, hi, s, rhs, slack, qp) = centre
-    (Wl, Wh, U, Lx, Wcl, Wch, Uc, Lc, Dl, Dh, V, Al, Ah, Acl, Ach, bl, bh, Xl, Xh, Tl, Th, gl, gh, yl, yh) = box
-    work = kr[7]
-    lengths_ok = interval_structure(plo, phi, Alo, Ahi, Blo, Bhi, rows, Wl, Wh, U, Lx)
-    if not structure_matrix(pc[0], pc[1], pc[2], Bc, Ac, rows, Wc, L):
+def classify_box(P, G, T, scr):
+    """The status of one box of positions ``P`` (:class:`Box`) for the geometry ``G``
+    (:class:`Geometry`) and the task ``T`` (:class:`Task`): INSIDE, OUTSIDE or UNDECIDED (module
+    docstring).  ``scr`` from :func:`make_scratch`."""
+    m = G.Alo.shape[0]
+    n = G.rows.shape[0]
+    C, E, kr = scr.centre, scr.box, scr.kr
+    lengths_ok = interval_structure(P.lo, P.hi, G.Alo, G.Ahi, G.Blo, G.Bhi, G.rows, E.Wl, E.Wh, E.U, E.L)
+    if not structure_matrix(P.c[0], P.c[1], P.c[2], G.Bc, G.Ac, G.rows, C.Wc, C.L):
         return UNDECIDED
-    half_ranges(tmin, tmax, tmid, rho)
+    half_ranges(T.tmin, T.tmax, C.tmid, C.rho)
     # the centre decides which proof to try: inside if it is feasible (with the margin asked)
     basis = -1
-    for k in range(wv.shape[0]):
-        if not centre_tensions(Wc, wv[k], tmin, tmax, tmid, t, lo, hi, rhs, s, qp):
-            if mu == 0.0 and m == n and lengths_ok and square_outside(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases,
-                                                                      t, tmin, tmax, wv[k], box, kr):
+    for k in range(T.wv.shape[0]):
+        if not centre_tensions(C.Wc, T.wv[k], T.tmin, T.tmax, C.tmid, C.t, C.lo, C.hi, C.rhs, C.s, C.qp):
+            if T.mu == 0.0 and m == n and lengths_ok and square_outside(P, G, T, C.t, T.wv[k], scr):
                 return OUTSIDE
-            if outside_test(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, Wc, wv, tmid, rho, mu, facets, nu, best_nu, box):
+            if outside_test(P, G, T, C, E):
                 return OUTSIDE
             return UNDECIDED
         if k == 0:
             for j in range(m):
-                slack[j] = min(t[j] - tmin[j], tmax[j] - t[j]) / max(tmax[j] - tmin[j], 1e-300)
-            basis = best_basis(Wc, bases, slack, work)
-    if mu > 0.0 and outside_test(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, Wc, wv, tmid, rho, mu, facets, nu, best_nu, box):
+                C.slack[j] = min(C.t[j] - T.tmin[j], T.tmax[j] - C.t[j]) / max(T.tmax[j] - T.tmin[j], 1e-300)
+            basis = best_basis(C.Wc, T.bases, C.slack, kr.work)
+    if T.mu > 0.0 and outside_test(P, G, T, C, E):
         return OUTSIDE
     if not lengths_ok or basis < 0:
         return UNDECIDED
     # inside: enclose the basis tensions over the box, the other cables' tensions fixed
-    for k in range(wv.shape[0]):
-        if not centre_tensions(Wc, wv[k], tmin, tmax, tmid, t, lo, hi, rhs, s, qp):
+    for k in range(T.wv.shape[0]):
+        if not centre_tensions(C.Wc, T.wv[k], T.tmin, T.tmax, C.tmid, C.t, C.lo, C.hi, C.rhs, C.s, C.qp):
             return UNDECIDED
-        if not basis_enclosure(Wl, Wh, bases, basis, t, tmin, tmax, wv[k], mu, Al, Ah, bl, bh, kr, Xl, Xh):
+        if not basis_enclosure(E.Wl, E.Wh, T, basis, C.t, T.wv[k], E.Al, E.Ah, E.bl, E.bh, kr, E.Xl, E.Xh):
             return UNDECIDED
-        if within(bases, basis, Xl, Xh, tmin, tmax):
+        if within(T.bases, basis, E.Xl, E.Xh, T.tmin, T.tmax):
             continue
-        if not mean_value(plo, phi, pc, Alo, Ahi, Blo, Bhi, rows, bases, basis, t, tmin, tmax, wv[k], mu, box, kr):
-            return UNDECIDED
-        if not within(bases, basis, Xl, Xh, tmin, tmax):
+        if not centred(P, G, T, basis, C.t, T.wv[k], scr):
             return UNDECIDED
     return INSIDE
 
 
 @njit
-def classify_block(k0, k1, lo, hi, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu, facets, bases, status):
-    """:func:`classify_box` for boxes k0 .. k1 of ``lo``, ``hi`` (K, 3) [m] into ``status`` (K,) int8."""
+def centred(P, G, T, basis, t, w, scr):
+    """Whether the basis tensions are proven within their bounds by :func:`mean_value`, applied up
+    to :data:`MEAN_VALUE_PASSES` times: each pass encloses the derivatives with the basis tensions
+    of the last (so a pass that narrowed them narrows the next one's terms)."""
+    E = scr.box
+    for _ in range(MEAN_VALUE_PASSES):
+        before = 0.0
+        for q in range(E.Xl.shape[0]):
+            before += E.Xh[q] - E.Xl[q]
+        if not mean_value(P, G, T, basis, t, w, scr):
+            return False
+        if within(T.bases, basis, E.Xl, E.Xh, T.tmin, T.tmax):
+            return True
+        after = 0.0
+        for q in range(E.Xl.shape[0]):
+            after += E.Xh[q] - E.Xl[q]
+        if not (after < PASS_GAIN * before):
+            return False
+    return False
+
+
+@njit
+def classify_block(k0, k1, lo, hi, G, T, status):
+    """:func:`classify_box` for boxes k0 .. k1 of ``lo``, ``hi`` (K, 3) [m] into ``status`` (K,) int8,
+    for the geometry ``G`` (:class:`Geometry`) and the task ``T`` (:class:`Task`)."""
     pc = np.empty(3)
-    scr = make_scratch(rows.shape[0], Alo.shape[0])
+    scr = make_scratch(G.rows.shape[0], G.Alo.shape[0])
     for k in range(k0, k1):
         for a in range(3):
             pc[a] = 0.5 * (lo[k, a] + hi[k, a])
-        status[k] = classify_box(lo[k], hi[k], pc, Alo, Ahi, Blo, Bhi, Ac, Bc, rows, wv, tmin, tmax, mu,
-                                 facets, bases, scr)
+        status[k] = classify_box(Box(lo[k], hi[k], pc), G, T, scr)

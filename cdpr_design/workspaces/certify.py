@@ -138,9 +138,11 @@ def spec_tolerances(design: Design) -> tuple:
 
 
 def geometry_boxes(design: Design, tolerance_outlets=None, tolerance_attachments=None):
-    """(Alo, Ahi, Blo, Bhi, A, Rb): the outlets and rotated attachments (m, 3) [m] as boxes of
-    half-width the tolerances (scalars or (m,) [m], default 0) at the fixed orientation, and
-    their nominal values.  Planar designs keep z = 0 (tolerances act in the plane)."""
+    """(Alo, Ahi, Blo, Bhi, A, Rb, Re, tb): the outlets and rotated attachments (m, 3) [m] as boxes
+    of half-width the tolerances (scalars or (m,) [m], default 0) at the fixed orientation, and
+    their nominal values; the rotated attachment j is R b_j + Re e with e in [-tb_j, tb_j]^3
+    (effector coordinates), ``Re`` (3, 3) the rotation with the columns of the axes that carry no
+    tolerance zeroed, ``tb`` (m,) [m].  Planar designs keep z = 0 (tolerances act in the plane)."""
     m, dim = design.m, design.motion.dim
     R = kin.rotation_matrix(*design.default_orientation_full())
     A = np.ascontiguousarray(design.outlets)
@@ -150,16 +152,20 @@ def geometry_boxes(design: Design, tolerance_outlets=None, tolerance_attachments
     mask = np.zeros(3)
     mask[:dim] = 1.0
     ra = ta[:, None] * mask  # outlet box half-widths
-    # R (b + e), |e_k| <= tb: half-width sum_k |R_ik| tb (rounded up), about R b
-    rb = np.nextafter((np.abs(R) @ (np.ones(3) * mask))[None, :] * tb[:, None], np.inf) * mask
+    # R (b + e), |e_k| <= tb: half-width sum_k |R_ik| tb (rounded up, with room for the rounding of
+    # the sum), about R b
+    rb = np.nextafter((np.abs(R) @ mask)[None, :] * tb[:, None] * (1.0 + 1e-12), np.inf) * mask
     if design.motion.planar:
         rb[:, 2] = 0.0
     Alo = np.where(ra > 0, np.nextafter(A - ra, -np.inf), A)
     Ahi = np.where(ra > 0, np.nextafter(A + ra, np.inf), A)
     Blo = np.where(rb > 0, np.nextafter(Rb - rb, -np.inf), Rb)
     Bhi = np.where(rb > 0, np.nextafter(Rb + rb, np.inf), Rb)
+    Re = R * mask[None, :]
+    if design.motion.planar:
+        Re[2, :] = 0.0
     return (np.ascontiguousarray(Alo), np.ascontiguousarray(Ahi), np.ascontiguousarray(Blo),
-            np.ascontiguousarray(Bhi), A, Rb)
+            np.ascontiguousarray(Bhi), A, Rb, np.ascontiguousarray(Re), np.ascontiguousarray(tb, dtype=float))
 
 
 class Classifier:
@@ -172,15 +178,17 @@ class Classifier:
         self.K = KC
         design = robot.design
         self.dim = design.motion.dim
-        self.geometry = geometry_boxes(design, tolerance_outlets, tolerance_attachments)
+        Alo, Ahi, Blo, Bhi, A, Rb, Re, tb = geometry_boxes(design, tolerance_outlets, tolerance_attachments)
+        f64 = [np.ascontiguousarray(a, dtype=float) for a in (Alo, Ahi, Blo, Bhi, A, Rb)]
+        self.geometry = KC.Geometry(*f64, np.ascontiguousarray(robot.rows, dtype=np.int64),
+                                    np.ascontiguousarray(Re, dtype=float), np.ascontiguousarray(tb, dtype=float))
         wv = wrench_vertices(design, robot.kind, design.default_orientation_full())
-        self.wv = np.ascontiguousarray(wv if robot.every_vertex else wv[:1])
-        self.rows = robot.rows
-        self.tmin, self.tmax = robot.tension_min, robot.tension_max
-        self.mu = float(min_margin)
-        self.facets = robot.combos
-        self.bases = np.array(list(itertools.combinations(range(design.m), design.n)),
-                              dtype=np.int64).reshape(-1, design.n)
+        bases = np.array(list(itertools.combinations(range(design.m), design.n)),
+                         dtype=np.int64).reshape(-1, design.n)
+        self.task = KC.Task(np.ascontiguousarray(wv if robot.every_vertex else wv[:1], dtype=float),
+                            np.ascontiguousarray(robot.tension_min, dtype=float),
+                            np.ascontiguousarray(robot.tension_max, dtype=float), float(min_margin),
+                            np.ascontiguousarray(robot.combos, dtype=np.int64), bases)
 
     def __call__(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
         """Status codes (K,) int8 of the boxes ``lower``, ``upper`` (K, d) [m]."""
@@ -192,9 +200,7 @@ class Classifier:
         lo[:, :self.dim] = lower
         hi[:, :self.dim] = upper
         status = np.zeros(k, dtype=np.int8)
-        Alo, Ahi, Blo, Bhi, A, Rb = self.geometry
-        run_blocks(self.K.classify_block, k, lo, hi, Alo, Ahi, Blo, Bhi, A, Rb, self.rows, self.wv,
-                   self.tmin, self.tmax, self.mu, self.facets, self.bases, status, grain=64)
+        run_blocks(self.K.classify_block, k, lo, hi, self.geometry, self.task, status, grain=64)
         return status
 
 
