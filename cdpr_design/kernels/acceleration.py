@@ -18,13 +18,15 @@ Arrays in SI units, float64, C-contiguous.
 
 from __future__ import annotations
 
+import functools
+import itertools
 import math
 from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import jitable, njit
-from cdpr_design.kernels.hsm import basis_factor, next_comb, null_vector
+from cdpr_design.kernels._jit import jitable, njit, njit_inline
+from cdpr_design.kernels.hsm import basis_factor, null_vector
 from cdpr_design.kernels.linalg import gram_of_inverse
 from cdpr_design.kernels.parallel import run_blocks
 
@@ -153,6 +155,52 @@ def close_axes(axes, empty):
             axes[k, 1] = axes[k, 0]
 
 
+@njit_inline
+def box_support(c, elo, ehi):
+    """(up, down): the largest and least -c . w_e [N] over the external wrench box ``elo`` ..
+    ``ehi`` (n,) for the normal ``c`` (n,) (the box's support function, no vertex enumerated)."""
+    up = 0.0
+    down = 0.0
+    for i in range(c.shape[0]):
+        up += max(-c[i] * elo[i], -c[i] * ehi[i])
+        down += min(-c[i] * elo[i], -c[i] * ehi[i])
+    return up, down
+
+
+@njit_inline
+def facet_sides(bp, bm, cw, up, down, h, hn, tol, axes, worst, radius, held, empty):
+    """One facet's two half-spaces of the accelerations, (M_t^T c) . a <= s, folded into the pose's
+    figures: its bounds ``bp``, ``bm`` on c . W t, ``cw`` = c . w_nom, the box's ``up`` and ``down``
+    (:func:`box_support`), ``h`` (d,) = M_t^T c of norm ``hn`` (a facet with |h| or a component at
+    or below ``tol`` bounds nothing that way: only its slack's sign counts), all for one scale of
+    c; lowers ``radius`` (its direction into ``worst``) and narrows ``axes`` (d, 2).  Returns
+    (radius, held, empty)."""
+    d = h.shape[0]
+    for side in range(2):
+        sign = 1.0 if side == 0 else -1.0
+        slack = (bp - cw - up) if side == 0 else (cw + down - bm)
+        if slack < 0.0:
+            held = False
+        if hn > tol:
+            if slack / hn < radius:
+                radius = slack / hn
+                for k in range(d):
+                    worst[k] = sign * h[k] / hn
+        elif slack < 0.0:
+            empty = True
+        for k in range(d):
+            hk = sign * h[k]
+            if abs(hk) > tol:
+                if hk > 0.0:
+                    axes[k, 1] = min(axes[k, 1], slack / hk)
+                else:
+                    axes[k, 0] = max(axes[k, 0], slack / hk)
+            elif slack < 0.0:
+                axes[k, 0] = np.nan
+                axes[k, 1] = np.nan
+    return radius, held, empty
+
+
 @njit
 def pose_capability(W, lo, hi, wnom, elo, ehi, Mt, combos, Q, c, axes, worst):
     """The acceleration capability at one pose; returns the radius [m/s^2].
@@ -195,12 +243,9 @@ def pose_capability(W, lo, hi, wnom, elo, ehi, Mt, combos, Q, c, axes, worst):
         facets += 1
         bp, bm = facet_bounds(W, lo, hi, c)
         cw = 0.0
-        up = 0.0
-        down = 0.0
         for i in range(n):
             cw += c[i] * wnom[i]
-            up += max(-c[i] * elo[i], -c[i] * ehi[i])
-            down += min(-c[i] * elo[i], -c[i] * ehi[i])
+        up, down = box_support(c, elo, ehi)
         hn = 0.0
         for k in range(d):
             s = 0.0
@@ -208,29 +253,8 @@ def pose_capability(W, lo, hi, wnom, elo, ehi, Mt, combos, Q, c, axes, worst):
                 s += Mt[i, k] * c[i]
             h[k] = s
             hn += s * s
-        hn = math.sqrt(hn)
-        for side in range(2):
-            sign = 1.0 if side == 0 else -1.0
-            slack = (bp - cw - up) if side == 0 else (cw + down - bm)
-            if slack < 0.0:
-                held = False
-            if hn > 1e-12 * mscale:
-                if slack / hn < radius:
-                    radius = slack / hn
-                    for k in range(d):
-                        worst[k] = sign * h[k] / hn
-            elif slack < 0.0:
-                empty = True
-            for k in range(d):
-                hk = sign * h[k]
-                if abs(hk) > 1e-12 * mscale:
-                    if hk > 0.0:
-                        axes[k, 1] = min(axes[k, 1], slack / hk)
-                    else:
-                        axes[k, 0] = max(axes[k, 0], slack / hk)
-                elif slack < 0.0:
-                    axes[k, 0] = np.nan
-                    axes[k, 1] = np.nan
+        radius, held, empty = facet_sides(bp, bm, cw, up, down, h, math.sqrt(hn), 1e-12 * mscale, axes, worst,
+                                          radius, held, empty)
     if facets == 0:
         for k in range(d):
             axes[k, 0] = np.nan
@@ -247,9 +271,30 @@ def pose_capability(W, lo, hi, wnom, elo, ehi, Mt, combos, Q, c, axes, worst):
 #: translational axes (:func:`make_work`): the tableau ``tab`` (n, m + n) = [G W | G], G = W_B^-1
 #: (:func:`~cdpr_design.kernels.hsm.basis_factor`), its ``slot`` (m,), ``nbc`` (max(m - n, 1),) and
 #: ``bcol`` (n,) int64, ``M`` = G G^T (n, n), ``Gw`` = G w_nom (n,), ``GM`` = G M_t (n, d), the
-#: null-vector system ``A`` and ``minor`` (n, n) and ``mu`` (n + 1,), the subsets ``Fr`` (n,) and
-#: ``Kc`` (max(m - n, 1),) int64, ``h`` (d,), and ``Q`` (n, n - 1), ``c`` (n,) of :func:`pose_capability`.
-Work = namedtuple("Work", "tab slot nbc bcol M Gw GM A minor mu Fr Kc h Q c")
+#: null-vector system ``A`` and ``minor`` (n, n) and ``mu`` (n + 1,), ``h`` (d,), and ``Q``
+#: (n, n - 1), ``c`` (n,) of :func:`pose_capability` (``c`` also a facet's normal G^T mu).
+Work = namedtuple("Work", "tab slot nbc bcol M Gw GM A minor mu h Q c")
+#: The facets of the factored W as positions, the same for every pose (:func:`facet_slots`): facet f
+#: holds ``k[f]`` non-basic columns, at positions ``K[f, :k[f]]`` of the non-basic list, and frees
+#: the basis slots ``F[f, :k[f] + 1]``; (C(m, n - 1),) and (C(m, n - 1), max(m - n, 1) or n) int64.
+Slots = namedtuple("Slots", "k K F")
+
+
+@functools.cache
+def facet_slots(n: int, m: int) -> Slots:
+    """The :class:`Slots` of n wrench rows and m >= n cables: every subset of n - 1 columns of
+    W P = W_B [I F] is k <= min(m - n, n - 1) non-basic columns and the basis columns outside k + 1
+    free slots (hyperplane shifting's enumeration, :func:`~cdpr_design.kernels.hsm.hsm_enumerate`)."""
+    r = m - n
+    rows = [(k, K, F) for k in range(min(r, n - 1) + 1) for K in itertools.combinations(range(r), k)
+            for F in itertools.combinations(range(n), k + 1)]
+    kk = np.array([k for k, _, _ in rows], dtype=np.int64)
+    Ks = np.zeros((len(rows), max(r, 1)), dtype=np.int64)
+    Fs = np.zeros((len(rows), n), dtype=np.int64)
+    for f, (k, K, F) in enumerate(rows):
+        Ks[f, :k] = K
+        Fs[f, :k + 1] = F
+    return Slots(kk, Ks, Fs)
 
 
 @jitable
@@ -258,21 +303,20 @@ def make_work(n, m, d):
     r = max(m - n, 1)
     return Work(np.empty((n, m + n)), np.empty(m, dtype=np.int64), np.empty(r, dtype=np.int64),
                 np.empty(n, dtype=np.int64), np.empty((n, n)), np.empty(n), np.empty((n, d)), np.empty((n, n)),
-                np.empty((n, n)), np.empty(n + 1), np.empty(n, dtype=np.int64), np.empty(r, dtype=np.int64),
-                np.empty(d), np.empty((n, max(n - 1, 1))), np.empty(n))
+                np.empty((n, n)), np.empty(n + 1), np.empty(d), np.empty((n, max(n - 1, 1))), np.empty(n))
 
 
 @njit
-def pose_capability_factored(W, lo, hi, wnom, elo, ehi, Mt, combos, axes, worst, S):
+def pose_capability_factored(W, lo, hi, wnom, elo, ehi, Mt, combos, slots, axes, worst, S):
     """:func:`pose_capability` (same arguments, results and conventions) with the facet normals of
     the basis factorisation W P = W_B [I F] instead of a Gram-Schmidt per facet: every subset of
     n - 1 columns is a set K of k non-basic columns and the basis columns outside k + 1 free slots
-    Fr, its normal nu = G^T mu with mu (on Fr) the null vector of F's rows Fr on K
-    (:func:`~cdpr_design.kernels.hsm.hsm_enumerate`'s enumeration).  Then c . W_j = mu . (G W)_j
-    (mu_f on the free slots' basis columns, zero on the subset's), c . w_nom = mu . G w_nom,
-    M_t^T c = (G M_t)^T mu, each up to the common factor 1 / |nu|, |nu|^2 = mu^T (G G^T) mu, which
-    every slack / |M_t^T c| and axis bound leaves out.  ``S`` the thread's :class:`Work`.  A pose
-    whose W is not finite or has rank < n (no basis) is :func:`pose_capability`'s."""
+    Fr (``slots``, :func:`facet_slots`), its normal nu = G^T mu with mu (on Fr) the null vector of
+    F's rows Fr on K.  Then c . W_j = mu . (G W)_j (mu_f on the free slots' basis columns, zero on
+    the subset's), c . w_nom = mu . G w_nom, M_t^T c = (G M_t)^T mu, each up to the common factor
+    1 / |nu|, |nu|^2 = mu^T (G G^T) mu, which every slack / |M_t^T c| and axis bound leaves out.
+    ``S`` the thread's :class:`Work`.  A pose whose W is not finite or has rank < n (no basis) is
+    :func:`pose_capability`'s."""
     n, m = W.shape
     d = Mt.shape[1]
     finite = True
@@ -282,7 +326,7 @@ def pose_capability_factored(W, lo, hi, wnom, elo, ehi, Mt, combos, axes, worst,
                 finite = False
     if not finite or m < n or not basis_factor(W, S.tab, S.slot, S.nbc, S.bcol):
         return pose_capability(W, lo, hi, wnom, elo, ehi, Mt, combos, S.Q, S.c, axes, worst)
-    tab, M, Gw, GM, A, minor, mu, Fr, Kc, h = S.tab, S.M, S.Gw, S.GM, S.A, S.minor, S.mu, S.Fr, S.Kc, S.h
+    tab, M, Gw, GM, A, minor, mu, h, nu = S.tab, S.M, S.Gw, S.GM, S.A, S.minor, S.mu, S.h, S.c
     nbc, bcol = S.nbc, S.bcol
     r = m - n
     gram_of_inverse(tab, n, m, M)
@@ -308,90 +352,63 @@ def pose_capability_factored(W, lo, hi, wnom, elo, ehi, Mt, combos, axes, worst,
     radius = np.inf
     held = True
     empty = False
-    for kk in range(min(r, n - 1) + 1):
+    for f in range(slots.k.shape[0]):
+        kk = slots.k[f]
+        Kc, Fr = slots.K[f], slots.F[f]
         nf = kk + 1
         for e in range(kk):
-            Kc[e] = e
-        more_k = True
-        while more_k:
-            for f in range(nf):
-                Fr[f] = f
-            more_f = True
-            while more_f:
-                for e in range(kk):
-                    col = nbc[Kc[e]]
-                    for f in range(nf):
-                        A[e, f] = tab[Fr[f], col]
-                if null_vector(A, kk, mu, minor):
-                    nrm2 = 0.0
-                    for f in range(nf):
-                        acc = 0.0
-                        for g in range(nf):
-                            acc += mu[g] * M[Fr[f], Fr[g]]
-                        nrm2 += mu[f] * acc
-                    if nrm2 > 0.0:
-                        tol = 1e-12 * mscale * math.sqrt(nrm2)  # pose_capability's, for a normal of |nu|
-                        bp = 0.0
-                        bm = 0.0
-                        for f in range(nf):  # the free slots' basis columns: l = mu_f
-                            j = bcol[Fr[f]]
-                            bp += max(mu[f] * lo[j], mu[f] * hi[j])
-                            bm += min(mu[f] * lo[j], mu[f] * hi[j])
-                        e = 0
-                        for q in range(r):  # the non-basic columns outside K (Kc is sorted)
-                            if e < kk and Kc[e] == q:
-                                e += 1
-                                continue
-                            j = nbc[q]
-                            lj = 0.0
-                            for f in range(nf):
-                                lj += mu[f] * tab[Fr[f], j]
-                            bp += max(lj * lo[j], lj * hi[j])
-                            bm += min(lj * lo[j], lj * hi[j])
-                        cw = 0.0
-                        for f in range(nf):
-                            cw += mu[f] * Gw[Fr[f]]
-                        up = 0.0
-                        down = 0.0
-                        if box:
-                            for i in range(n):
-                                nui = 0.0
-                                for f in range(nf):
-                                    nui += mu[f] * tab[Fr[f], m + i]
-                                up += max(-nui * elo[i], -nui * ehi[i])
-                                down += min(-nui * elo[i], -nui * ehi[i])
-                        hn = 0.0
-                        for k in range(d):
-                            sk = 0.0
-                            for f in range(nf):
-                                sk += mu[f] * GM[Fr[f], k]
-                            h[k] = sk
-                            hn += sk * sk
-                        hn = math.sqrt(hn)
-                        for side in range(2):
-                            sign = 1.0 if side == 0 else -1.0
-                            slack = (bp - cw - up) if side == 0 else (cw + down - bm)
-                            if slack < 0.0:
-                                held = False
-                            if hn > tol:
-                                if slack / hn < radius:
-                                    radius = slack / hn
-                                    for k in range(d):
-                                        worst[k] = sign * h[k] / hn
-                            elif slack < 0.0:
-                                empty = True
-                            for k in range(d):
-                                hk = sign * h[k]
-                                if abs(hk) > tol:
-                                    if hk > 0.0:
-                                        axes[k, 1] = min(axes[k, 1], slack / hk)
-                                    else:
-                                        axes[k, 0] = max(axes[k, 0], slack / hk)
-                                elif slack < 0.0:
-                                    axes[k, 0] = np.nan
-                                    axes[k, 1] = np.nan
-                more_f = next_comb(Fr, nf, n)
-            more_k = next_comb(Kc, kk, r)
+            col = nbc[Kc[e]]
+            for g in range(nf):
+                A[e, g] = tab[Fr[g], col]
+        if not null_vector(A, kk, mu, minor):
+            continue
+        nrm2 = 0.0
+        for g in range(nf):
+            acc = 0.0
+            for q in range(nf):
+                acc += mu[q] * M[Fr[g], Fr[q]]
+            nrm2 += mu[g] * acc
+        if not nrm2 > 0.0:
+            continue
+        bp = 0.0
+        bm = 0.0
+        for g in range(nf):  # the free slots' basis columns: l = mu_g
+            j = bcol[Fr[g]]
+            bp += max(mu[g] * lo[j], mu[g] * hi[j])
+            bm += min(mu[g] * lo[j], mu[g] * hi[j])
+        e = 0
+        for q in range(r):  # the non-basic columns outside K (K is sorted)
+            if e < kk and Kc[e] == q:
+                e += 1
+                continue
+            j = nbc[q]
+            lj = 0.0
+            for g in range(nf):
+                lj += mu[g] * tab[Fr[g], j]
+            bp += max(lj * lo[j], lj * hi[j])
+            bm += min(lj * lo[j], lj * hi[j])
+        cw = 0.0
+        for g in range(nf):
+            cw += mu[g] * Gw[Fr[g]]
+        up = 0.0
+        down = 0.0
+        if box:
+            for i in range(n):
+                s = 0.0
+                for g in range(nf):
+                    s += mu[g] * tab[Fr[g], m + i]
+                nu[i] = s
+            up, down = box_support(nu, elo, ehi)
+        hn = 0.0
+        for k in range(d):
+            s = 0.0
+            for g in range(nf):
+                s += mu[g] * GM[Fr[g], k]
+            h[k] = s
+            hn += s * s
+        # pose_capability's tolerance, for a normal of length |nu|
+        radius, held, empty = facet_sides(bp, bm, cw, up, down, h, math.sqrt(hn), 1e-12 * mscale * math.sqrt(nrm2),
+                                          axes, worst, radius, held, empty)
     close_axes(axes, empty)
     if not held:
         return 0.0
@@ -399,9 +416,10 @@ def pose_capability_factored(W, lo, hi, wnom, elo, ehi, Mt, combos, axes, worst,
 
 
 @njit
-def _capability_loop(k0, k1, W, lo, hi, wnom, elo, ehi, Mt, combos, radius, axes, worst, S):
+def _capability_loop(k0, k1, W, lo, hi, wnom, elo, ehi, Mt, combos, slots, radius, axes, worst, S):
     for p in range(k0, k1):
-        radius[p] = pose_capability_factored(W[p], lo[p], hi, wnom, elo, ehi, Mt, combos, axes[p], worst[p], S)
+        radius[p] = pose_capability_factored(W[p], lo[p], hi, wnom, elo, ehi, Mt, combos, slots, axes[p], worst[p],
+                                             S)
 
 
 def _capability_block(k0, k1, W, *args):
@@ -415,4 +433,8 @@ def capability_many(W, lo, hi, wnom, elo, ehi, Mt, combos, radius, axes, worst):
     (:func:`~cdpr_design.kernels.parallel.run_blocks`): ``W`` (k, n, m), ``lo`` (k, m) each pose's
     lower tension bounds [N], the rest as there; fills ``radius`` (k,) [m/s^2], ``axes`` (k, d, 2)
     [m/s^2] and ``worst`` (k, d)."""
-    run_blocks(_capability_block, radius.shape[0], W, lo, hi, wnom, elo, ehi, Mt, combos, radius, axes, worst)
+    n, m = W.shape[1], W.shape[2]
+    slots = facet_slots(n, m) if m >= n else Slots(np.zeros(0, dtype=np.int64), np.zeros((0, 1), dtype=np.int64),
+                                                   np.zeros((0, 1), dtype=np.int64))  # no basis: not read
+    run_blocks(_capability_block, radius.shape[0], W, lo, hi, wnom, elo, ehi, Mt, combos, slots, radius, axes,
+               worst)
