@@ -66,15 +66,13 @@ def workspace(design: Design, kind: str = "static", *, step: float | None = None
     ``tensions`` [N], ``lengths`` [m], ``poses``, ``shape`` (the grid's),
     ``summary()`` and ``to_dict()`` / ``to_arrow()`` (the ``workspace.csv`` columns).
     """
+    from cdpr_design.statics.robot import Analysis
     from cdpr_design.workspaces import table
 
-    options = dict(orientation=orientation, interference=interference, engine=engine, force=force)
-    if orientations is not None:
-        options["orientations"] = orientations
-    if max_tilt is not None:
-        options["max_tilt"] = max_tilt
-    return table.collect(design, kind, step=step, grid=grid,
-                         max_poses=table.MAX_COLLECT if max_poses is None else max_poses, **options)
+    analysis = Analysis(kind=kind, collisions=interference, orientations=orientations, max_tilt=max_tilt,
+                        engine=engine)
+    return table.collect(design, analysis, step=step, grid=grid, orientation=orientation, force=force,
+                         max_poses=table.MAX_COLLECT if max_poses is None else max_poses)
 
 
 def pose(design: Design, at, kind: str = "static", *, objective: str = "min-norm", weights=None):

@@ -15,13 +15,14 @@ import time
 
 from cdpr_design import workspaces as ws
 from cdpr_design.model import spec
+from cdpr_design.statics.robot import resolve
 from tests.reference_boundary import planar_area, spatial_volume
 from tests.test_boundary import box_top, planar2_exact, pod_data, twocable_data
 
 
 def run(design, step):
     g = ws.make_grid(design, step)
-    p = ws.plan(ws.robot_for(design), g, solid=True)
+    p = ws.plan(resolve(design), g, solid=True)
     c0 = time.process_time()
     r = p.run()
     return r, time.process_time() - c0

@@ -218,7 +218,7 @@ def test_dynamic_workspace_matches_the_lp_at_every_vertex(seed):
                                                 "upper": [0.3] * dim + [0.0] * (n - dim)}
     design = from_dict(data)
     rows = []
-    res = ws.run(design, kind="dynamic", on_chunk=rows.append, tilt=False)
+    res = ws.run(design, ws.Analysis(kind="dynamic"), on_chunk=rows.append, tilt=False)
     poses = np.vstack([c.poses for c in rows])
     feas = np.concatenate([c.feasible for c in rows]).astype(bool)
     margin = np.concatenate([c.margin for c in rows])
@@ -257,7 +257,7 @@ def test_the_sweeps_radius_is_every_poses_capability(seed, kind, box):
     design = spec.from_dict(data)
     dim = design.motion.dim
     chunks = []
-    ws.run(design, kind=kind, accelerations=True, tilt=False, on_chunk=chunks.append)
+    ws.run(design, ws.Analysis(kind=kind, accelerations=True), tilt=False, on_chunk=chunks.append)
     radius = np.concatenate([c.extra["acceleration_radius"] for c in chunks])
     margin = np.concatenate([c.margin for c in chunks])
     poses = np.vstack([c.poses for c in chunks])

@@ -14,15 +14,16 @@ import yaml
 from cdpr_design import workspaces as ws
 from cdpr_design.model import spec
 from cdpr_design.model.design import Grid
+from cdpr_design.statics.robot import Analysis, resolve
 from cdpr_design.workspaces import boundary as wb
 
 from .helpers import DESIGNS, PLANAR2, invoke, planar2_raw, read_csv, write_spec
 from .reference_boundary import planar_area, spatial_volume
 
 
-def solid(design, step=None, **kw):
+def solid(design, step=None):
     g = ws.make_grid(design, step)
-    return ws.plan(ws.robot_for(design, **kw), g, solid=True).run()
+    return ws.plan(resolve(design), g, solid=True).run()
 
 
 def planar2_exact(design, grid: Grid) -> float:
@@ -95,7 +96,7 @@ def test_refined_vertices_lie_on_the_boundary(planar2):
     """Every loop vertex off the box lies where feasibility changes: within the bisection's
     tolerance along its grid edge, one side feasible and the other not."""
     r = solid(planar2, 0.05)
-    test = ws.plan(ws.robot_for(planar2), r.grid).point_test()
+    test = ws.plan(resolve(planar2), r.grid).point_test()
     xy = np.concatenate(r.boundary.loops)
     g = r.grid
     top = np.array([box_top(g, 0), box_top(g, 1)])
@@ -338,7 +339,7 @@ def test_frame_carries_the_weight_with_sagging_cables(tmp_path):
     shapes: the total force is -(m + sum mu_i L0_i) g at every feasible pose."""
     d = spec.load(DESIGNS / "sagging40.yaml")
     g = ws.make_grid(d, 1.0)
-    rob = ws.robot_for(d)
+    rob = resolve(d)
     chunks = []
     r = ws.plan(rob, g, solid=True).run(on_chunk=chunks.append)
     assert r.feasible > 0
@@ -376,7 +377,7 @@ def test_compiled_frame_loads_equal_numpy_ones():
     designs += [spec.from_dict(random_planar_data(rng, m)) for m in (2, 3, 4)]
     for d in designs:
         g = ws.make_grid(d, None)
-        robot = ws.robot_for(d, engine="numba")
+        robot = resolve(d, Analysis(engine="numba"))
         p = ws.plan(robot, g)
         n = min(g.size, 20000)
         P = ws.grid.positions3(g, 0, n)
@@ -461,7 +462,7 @@ def test_a_hanging_effector_puts_its_weight_on_the_frame():
     the load's weight, straight down, whatever orientation it hangs in."""
     d = spec.load(DESIGNS / "crane4.yaml")
     g = ws.make_grid(d, 0.5)
-    robot = ws.robot_for(d)
+    robot = resolve(d)
     assert robot.orientation.free
     r = ws.plan(robot, g, solid=True).run()
     s = r.summary()["frame_loads"]

@@ -42,9 +42,9 @@ def _floor(design, pose) -> np.ndarray:
     return 4.0 * design.requirements.min_cable_frequency ** 2 * free ** 2 * mu
 
 
-def _rows(design, **kw):
-    """(poses, feasible bool, margin, tensions) of a whole workspace sweep."""
-    result, chunks = collect_chunks(ws.run, design, **kw)
+def _rows(design, grid, kind="static"):
+    """(poses, feasible bool, margin, tensions) of a whole workspace sweep of ``grid``."""
+    result, chunks = collect_chunks(ws.run, design, ws.Analysis(kind=kind), grid=grid)
     cat = lambda name: np.concatenate([getattr(c, name) for c in chunks])  # noqa: E731
     return result, cat("poses"), cat("feasible").astype(bool), cat("margin"), cat("tensions")
 
@@ -125,8 +125,8 @@ def test_orientation_set():
     base = spec.from_dict(raw)
     d = spec.from_dict(_with_frequency(raw, 6.0))
     grid = ws.make_grid(d, 1.2)
-    r0, c0 = collect_chunks(ws.run_orientations, base, grid=grid)
-    r1, c1 = collect_chunks(ws.run_orientations, d, grid=grid)
+    r0, c0 = collect_chunks(ws.run, base, ws.Analysis(orientations="total"), grid=grid)
+    r1, c1 = collect_chunks(ws.run, d, ws.Analysis(orientations="total"), grid=grid)
     a = np.concatenate([c.feasible for c in c0]).astype(bool)
     b = np.concatenate([c.feasible for c in c1]).astype(bool)
     assert b.sum() < a.sum() and not np.any(b & ~a)

@@ -28,7 +28,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from cdpr_design.errors import CdprError
-from cdpr_design.statics.robot import cable_model
+from cdpr_design.statics.robot import Analysis, cable_model
 
 from .fuzzing import EXTREME_NUMBERS, ODD_STRINGS, feature_spec_data, hostile_values, mutated_feature_data, \
     mutated_spec_data, mutated_yaml, option_floats, spec_data
@@ -276,7 +276,7 @@ def test_workspace_job(work, data, step, kind):
     design = load_design(data)
     assume(design is not None)
     out = fresh(work, "ws")
-    res, exc = outcome(job.workspace, design, out, step=step, kind=kind)
+    res, exc = outcome(job.workspace, design, job.WorkspaceSettings(Analysis(kind=kind), step=step), out)
     check_folder(out, exc is not None)
     if res is not None:
         strict_json(res[0].summary())
@@ -380,7 +380,8 @@ def test_simulate_job_options(work, data, name, delay, timestep, bandwidth):
     ok = name in design.trajectories and 0 <= delay <= 10 and 1e-6 <= timestep <= 0.01 and 1e-3 <= bandwidth <= 1e6
     assume(not ok)
     out = fresh(work, "sim")
-    res, exc = outcome(job.simulate, design, name, delay=delay, timestep=timestep, servo_bandwidth=bandwidth, out=out)
+    res, exc = outcome(job.simulate, design, name,
+                       job.SimulateSettings(delay=delay, timestep=timestep, servo_bandwidth=bandwidth), out)
     assert exc is not None
     check_folder(out, True)
 
@@ -572,7 +573,8 @@ def test_workspace_job_formats_html_and_tilt(work, data, step, kind, fmt, html, 
     design = load_design(data)
     assume(design is not None)
     out = fresh(work, "wsf")
-    res, exc = outcome(job.workspace, design, out, step=step, kind=kind, format=fmt, html=html, max_tilt=max_tilt)
+    res, exc = outcome(job.workspace, design, job.WorkspaceSettings(Analysis(kind=kind, max_tilt=max_tilt), step=step,
+                                                                   format=fmt, html=html), out)
     check_folder(out, exc is not None)
     if res is not None:
         assert fmt in ("csv", "parquet") and (max_tilt is None or 0 <= max_tilt <= 180)
@@ -643,12 +645,12 @@ def test_found_a_grid_of_one_row_draws_its_pictures(tmp_path, planar2, step):
     # a step larger than the frame leaves one pose (or one row): the outline contour raised a TypeError
     from cdpr_design.jobs import workspace as job
 
-    res, out = job.workspace(planar2, tmp_path / "o", step=step)
+    res, out = job.workspace(planar2, job.WorkspaceSettings(step=step), tmp_path / "o")
     assert res.poses == 1 and (tmp_path / "o" / "workspace.png").stat().st_size > 0
     d = planar2.replace(workspace=planar2.workspace.__class__(
         grid=planar2.workspace.grid.__class__((0.0, 0.5), (1.5, 0.5), (0.1, 0.1)), orientation=(),
         external_wrench=None, orientation_set=None, orientation_range=None))
-    res, out = job.workspace(d, tmp_path / "row")
+    res, out = job.workspace(d, out=tmp_path / "row")
     assert res.grid.shape == (16, 1) and (tmp_path / "row" / "tension_map.png").stat().st_size > 0
 
 
@@ -658,7 +660,7 @@ def test_found_a_refused_kind_leaves_no_folder(tmp_path, planar2):
     from cdpr_design.jobs import workspace as job
 
     with pytest.raises(SpecError, match="--kind"):
-        job.workspace(planar2, tmp_path / "o", kind="nope")
+        job.workspace(planar2, job.WorkspaceSettings(Analysis(kind="nope")), tmp_path / "o")
     assert not (tmp_path / "o").exists()
 
 
@@ -668,7 +670,7 @@ def test_found_a_table_format_outside_the_list_is_bad_input(tmp_path, planar2):
     from cdpr_design.jobs import workspace as job
 
     with pytest.raises(InputError, match="--format"):
-        job.workspace(planar2, tmp_path / "o", step=0.5, format="xls")
+        job.workspace(planar2, job.WorkspaceSettings(step=0.5, format="xls"), tmp_path / "o")
     assert not (tmp_path / "o").exists()
 
 
@@ -732,5 +734,5 @@ def test_found_cable_models_picture_skips_the_tilt(tmp_path):
                    {"name": "c4", "outlet": [1.04371, 2.92235, 0.160674], "attachment": [-1.17549e-38, 0.0, 1e-10]}],
         "workspace": {"grid": {"step": 0.640853}},
         "cable": {"model": "sagging", "axial_stiffness": 1015150.0, "mass_per_length": 0.436277}})
-    (res, _), exc = outcome(job.workspace, design, tmp_path / "o", step=0.11935492729705242)
+    (res, _), exc = outcome(job.workspace, design, job.WorkspaceSettings(step=0.11935492729705242), tmp_path / "o")
     assert exc is None and res.poses == 27720 and (tmp_path / "o" / "cable_models.png").stat().st_size > 0

@@ -24,7 +24,7 @@ from cdpr_design.model import spec
 from cdpr_design.statics import hanging as H
 from cdpr_design.statics import kinematics as kin
 from cdpr_design import api
-from cdpr_design.statics.robot import resolve
+from cdpr_design.statics.robot import Analysis, resolve
 from cdpr_design.workspaces.engine import StraightSweep
 from cdpr_design.workspaces.plan import Plan
 from tests.reference import hanging_kernel as K
@@ -32,7 +32,7 @@ from tests.reference import hanging_kernel as K
 
 def straight_sweep(design, kind, g, ori, on_chunk=None, chunk=1000):
     """The plain straight-cable sweep alone: the plan's base evaluator without any wrapper."""
-    robot = ws.robot_for(design, kind)
+    robot = resolve(design, Analysis(kind=kind))
     return Plan(robot, g, ori, StraightSweep(robot, ori, g)).run(on_chunk, chunk=chunk)
 from tests.helpers import DESIGNS, PLANAR2, collect_chunks, invoke, planar2_raw, planar4_cables, read_csv, write_spec
 

@@ -269,7 +269,7 @@ def test_sweep_collision_free_column_matches_pose_checks():
         "workspace": {"grid": {"step": 0.1}, "orientation": [0.1]},
     })
     chunks = []
-    res = ws.run(d, interference=True, on_chunk=chunks.append, chunk=97)
+    res = ws.run(d, ws.Analysis(collisions=True), on_chunk=chunks.append, chunk=97)
     plain = []
     ws.run(d, on_chunk=plain.append, chunk=97)
     n_free = n_stat = 0

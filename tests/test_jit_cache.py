@@ -124,7 +124,7 @@ for name, step, collisions in (("ipanema3", 0.5, False), ("pointmass3", 0.2, Fal
                                ("crane4", 0.5, False)):
     d = spec.load(f"designs/{name}.yaml")
     g = ws.make_grid(d, step, True)
-    run = lambda: ws.run(d, kind="static", grid=g, force=True, engine="numba", interference=collisions)
+    run = lambda: ws.run(d, ws.Analysis(engine="numba", collisions=collisions), grid=g, force=True)
     run()
     a = rtsys.get_allocation_stats()
     run()

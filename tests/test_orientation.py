@@ -51,7 +51,7 @@ def _collect(fn, *a, **kw):
 @pytest.mark.parametrize("interference", [False, True])
 def test_total_orientation_workspace_is_the_intersection(make, oset, kind, interference):
     d = make(orientation_set=oset)
-    res, tot = _collect(ws.run_orientations, d, "total", kind=kind, interference=interference, chunk=53)
+    res, tot = _collect(ws.run, d, ws.Analysis(orientations="total", kind=kind, collisions=interference), chunk=53)
     orients = hwm.orientation_set(d)
     # the set is the sampled box of the spec
     idx = [i - 3 for i in d.motion.pose_index[d.motion.dim:]]
@@ -64,7 +64,7 @@ def test_total_orientation_workspace_is_the_intersection(make, oset, kind, inter
     tmax = np.full(tot["tensions"].shape, -np.inf)
     cfree = np.ones(res.poses, dtype=bool)
     for o in orients:
-        _, one = _collect(ws.run, d, kind=kind, orientation=o, interference=interference)
+        _, one = _collect(ws.run, d, ws.Analysis(kind=kind, collisions=interference), orientation=o)
         ok = one["feasible"].astype(bool)
         allok &= ok
         count += ok
@@ -89,7 +89,7 @@ def test_total_orientation_workspace_is_the_intersection(make, oset, kind, inter
 def test_total_with_one_orientation_is_the_fixed_orientation_workspace():
     d = ipanema3()
     ori = np.array([0.05, -0.02, 0.1])
-    _, tot = _collect(ws.run_orientations, d, "total", orientations=[ori])
+    _, tot = _collect(ws.run, d, ws.Analysis(orientations="total"), orientations=[ori])
     _, one = _collect(ws.run, d, orientation=ori)
     np.testing.assert_array_equal(tot["feasible"], one["feasible"])
 
@@ -122,7 +122,7 @@ def brute_range(d, pose_pos, scale, levels, count, interference):
 @pytest.mark.parametrize("interference", [False, True])
 def test_orientation_range_against_brute_force_planar(interference):
     d = planar4(orientation_range={"max": 0.5, "levels": 5, "count": 3})
-    res, out = _collect(ws.run_orientations, d, "range", interference=interference)
+    res, out = _collect(ws.run, d, ws.Analysis(orientations="range", collisions=interference))
     rng = np.random.default_rng(0)
     for j in rng.choice(res.poses, 40, replace=False):
         ref = brute_range(d, np.pad(out["poses"][j, :2], (0, 1)), [0.5], 5, 3, interference)
@@ -139,7 +139,7 @@ def test_orientation_range_against_brute_force_planar(interference):
 @pytest.mark.slow
 def test_orientation_range_against_brute_force_spatial():
     d = ipanema3(orientation_range={"max": [0.2, 0.0, 0.4], "levels": 4, "count": 2})
-    res, out = _collect(ws.run_orientations, d, "range")
+    res, out = _collect(ws.run, d, ws.Analysis(orientations="range"))
     assert "range_ry" in out and np.all(out["range_ry"][np.isfinite(out["range_ry"])] == 0)
     rng = np.random.default_rng(1)
     for j in rng.choice(res.poses, 12, replace=False):

@@ -170,12 +170,13 @@ def test_the_references_hold_negative_zeros_and_scientific_cells():
 def test_workspace_table_of_every_design_matches_the_reference(name):
     """In-process: the writer's CSV of each shipped design's workspace equals the cell-by-cell text."""
     from cdpr_design.model import spec
+    from cdpr_design.statics.robot import Analysis
     from cdpr_design.workspaces.table import collect
 
     d = spec.load(DESIGNS / f"{name}.yaml")
     step = 0.1 if d.motion.planar else 0.8
     checks = not d.motion.planar and d.effector.orientation == "fixed"  # a free body: no interference sweep
-    table = collect(d, step=step, interference=checks)
+    table = collect(d, Analysis(collisions=checks), step=step)
     cols = table.columns()
     assert "collision_free" in cols or not checks
     arrays = [np.asarray(v) for v in cols.values()]
@@ -354,10 +355,11 @@ def test_every_file_a_workspace_run_writes_is_known_before_the_sweep(tmp_path, n
     from cdpr_design import workspaces as ws
     from cdpr_design.jobs.workspace import output_names
     from cdpr_design.model.spec import load
+    from cdpr_design.statics.robot import resolve
 
     design = load(DESIGNS / f"{name}.yaml")
     grid = ws.make_grid(design, 0.5)
-    plan = ws.plan(ws.robot_for(design), grid, solid=True)
+    plan = ws.plan(resolve(design), grid, solid=True)
     r = invoke("workspace", DESIGNS / f"{name}.yaml", "--step", "0.5", "--out", tmp_path, "--quiet")
     assert r.exit_code == 0, r.output
     written = sorted(p.name for p in tmp_path.iterdir())

@@ -13,6 +13,7 @@ import pytest
 from cdpr_design import workspaces as ws
 from cdpr_design.kernels import parallel
 from cdpr_design.model import spec
+from cdpr_design.statics.robot import resolve
 
 from .helpers import PLANAR2
 
@@ -42,13 +43,13 @@ def test_results_do_not_depend_on_the_thread_count(path, step):
     if "crane4" in str(path):  # its hanging search runs on the kernels' threads, in blocks
         from cdpr_design.workspaces.hanging import Hanger
 
-        robot = ws.robot_for(d)
+        robot = resolve(d)
         assert Hanger(robot, d.default_orientation_full()).threaded
     rows = []
     for n in (1, 2, 3, 8):
         got = []
         parallel.set_threads(n)
-        ws.run(d, step=step, engine="numba", on_chunk=got.append, chunk=2000)  # more than one chunk each
+        ws.run(d, ws.Analysis(engine="numba"), step=step, on_chunk=got.append, chunk=2000)  # more than one chunk each
         rows.append(got)
     ref = rows[0]
     assert sum(len(c.feasible) for c in ref) > 1000 and len(ref) > 1
@@ -157,7 +158,7 @@ def test_a_forked_child_runs_kernels_after_the_parent_used_the_pool():
     would wait forever for threads that are not there)."""
     d = spec.load("designs/ipanema3.yaml")
     parallel.set_threads(2)
-    ref = ws.run(d, step=0.3, engine="numba").summary()["feasible"]
+    ref = ws.run(d, ws.Analysis(engine="numba"), step=0.3).summary()["feasible"]
     pid = os.fork()
     if pid == 0:  # the child: a sweep on two threads, then out without running the parent's tests
         code = 1
@@ -168,7 +169,7 @@ def test_a_forked_child_runs_kernels_after_the_parent_used_the_pool():
                 out[k0:k1] = 1
 
             parallel.run_blocks(block, out.size, out, grain=10)
-            r = ws.run(d, step=0.3, engine="numba").summary()
+            r = ws.run(d, ws.Analysis(engine="numba"), step=0.3).summary()
             code = 0 if out.all() and r["feasible"] == ref else 1
         finally:
             os._exit(code)

@@ -88,7 +88,7 @@ def test_the_worker_warms_up_with_what_a_request_needs_and_without_numba(case, r
 
     if case == "orientations":
         d = spec.load(DESIGNS / "planar4.yaml")
-        result = ws.run_orientations(d, "total", grid=ws.make_grid(d, 0.25))
+        result = ws.run(d, ws.Analysis(orientations="total"), grid=ws.make_grid(d, 0.25))
     elif case == "hanging":
         result = ws.run(spec.load(DESIGNS / "crane4.yaml"), step=0.6)
     jobs = workspace_pictures(result)

@@ -91,7 +91,7 @@ def test_pose_is_the_sweeps_row_on_random_robots(seed):
     for kind in KINDS:
         chunks = []
         try:
-            ws.run(design, kind=kind, on_chunk=chunks.append, keep_maps=False, tilt=False)
+            ws.run(design, ws.Analysis(kind=kind), on_chunk=chunks.append, keep_maps=False, tilt=False)
         except Exception as e:  # a refused combination is not a disagreement
             assert "wrench-closure" in kind or "orientation: free" in str(e), e
             continue

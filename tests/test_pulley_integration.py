@@ -337,14 +337,14 @@ def test_orientation_summary_has_collision_counts(mode):
     pose at any of them; range: the nominal orientation's sweep)."""
     d = _orient_design(orientation_set={"lower": [-0.3], "upper": [0.3], "count": 3},
                        orientation_range={"max": [0.3], "levels": 3, "count": 3})
-    res = ws.run_orientations(d, mode, interference=True, keep_maps=False)
+    res = ws.run(d, ws.Analysis(orientations=mode, collisions=True), keep_maps=False)
     s = res.summary()
     oris = hwm.orientation_set(d) if mode == "total" else d.default_orientation_full()[None]
     free = stat = None
     kinds = {name: None for name in HIT_NAMES.values()}
     for o in oris:
         chunks = []
-        r = ws.run(d, "static", orientation=o, interference=True, on_chunk=chunks.append, keep_maps=False)
+        r = ws.run(d, ws.Analysis(collisions=True), orientation=o, on_chunk=chunks.append, keep_maps=False)
         cf = np.concatenate([c.collision_free for c in chunks]).astype(bool)
         poses = np.vstack([c.poses for c in chunks])
         st_ = np.zeros(len(poses), bool)

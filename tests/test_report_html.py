@@ -389,7 +389,7 @@ def test_map_pictures_fill_their_figure_and_label_units(design, step, orient):
     from cdpr_design.plots.hanging import tilt_figure
 
     d = spec.load(DESIGNS / f"{design}.yaml")
-    r = ws.run_orientations(d, orient, grid=ws.make_grid(d, step)) if orient else ws.run(d, step=step)
+    r = ws.run(d, ws.Analysis(orientations=orient), step=step)
     figures = [wsplots.workspace_figure(r), wsplots.tension_figure(r)]
     if orient:
         figures.append(wsplots.orientation_figure(r))

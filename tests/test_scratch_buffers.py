@@ -61,9 +61,9 @@ CHILD = textwrap.dedent(r'''
 
     out = {}
 
-    def sweep(tag, design, **kw):
+    def sweep(tag, design, step=None, **analysis):
         chunks = []
-        ws.run(design, on_chunk=chunks.append, keep_maps=False, **kw)
+        ws.run(design, ws.Analysis(**analysis), step=step, on_chunk=chunks.append, keep_maps=False)
         for k, c in enumerate(chunks):
             out[f"{tag}/{k}/feasible"] = numpy.asarray(c.feasible)
             out[f"{tag}/{k}/margin"] = numpy.asarray(c.margin)
@@ -88,7 +88,7 @@ CHILD = textwrap.dedent(r'''
         sweep(f"planar2/{model}", with_cable_model(planar2, model), step=0.25)
     sweep("sagging40", spec.load(D + "sagging40.yaml"), step=5.0)
     sweep("planar4", spec.load(D + "planar4.yaml"), kind="wrench-feasible", step=0.5)
-    sweep("ipanema3", spec.load(D + "ipanema3.yaml"), step=1.0, interference=True)
+    sweep("ipanema3", spec.load(D + "ipanema3.yaml"), step=1.0, collisions=True)
     sweep("cogiro", spec.load(D + "cogiro.yaml"), step=4.0)
     sweep("crane4", spec.load(D + "crane4.yaml"), step=1.0)
     # five and six cables in the plane (m - n = 3, 4: the Goldfarb-Idnani QP), with a wrench box

@@ -80,7 +80,7 @@ def test_check_reads_the_least_stiffness_and_frequency_over_the_task_box(tmp_pat
     """The figures are the least over the task box's feasible poses (the same sweep with
     --stiffness on the task grid); a limit above the figure fails, one below passes."""
     design = spec.load(PLANAR2)
-    task = ws.run(design, grid=task_grid(design), stiffness=True, tilt=False).summary()
+    task = ws.run(design, ws.Analysis(stiffness=True), grid=task_grid(design), tilt=False).summary()
     kmin, fmin = task["min_stiffness"], task["lowest_frequency"]
     passing = _with_requirements(tmp_path, min_stiffness=0.99 * kmin, min_frequency=0.99 * fmin)
     r = invoke("check", passing, "--json")
@@ -104,7 +104,7 @@ def test_both_figures_are_optimize_objectives():
     obj = make_objectives(design, ["task_min_stiffness", "task_lowest_frequency"], None)
     assert [o.direction for o in obj] == ["maximize", "maximize"]
     row = evaluate(design, figures={"task_min_stiffness", "task_lowest_frequency"})
-    task = ws.run(design, grid=task_grid(design), stiffness=True, tilt=False).summary()
+    task = ws.run(design, ws.Analysis(stiffness=True), grid=task_grid(design), tilt=False).summary()
     assert row["task_min_stiffness"] == task["min_stiffness"] > 0
     assert row["task_lowest_frequency"] == task["lowest_frequency"] > 0
     assert "task_min_stiffness" not in evaluate(design, figures={"fraction"})

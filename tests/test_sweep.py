@@ -250,7 +250,7 @@ def test_forked_workers_after_the_kernels_ran_here(small_plan, serial_records):
 
     with parallel.threads_kept():
         parallel.set_threads(2)  # the pool runs here even on a one-core machine
-        ws.run(spec.load("designs/ipanema3.yaml"), step=0.3, engine="numba")
+        ws.run(spec.load("designs/ipanema3.yaml"), ws.Analysis(engine="numba"), step=0.3)
     got = []
     sw.run(small_plan, sw.Options(step=0.05, engine="numba"), workers=2, start_method="fork", on_record=got.append)
     assert sorted(got, key=lambda r: r["variant"]) == serial_records

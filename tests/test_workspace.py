@@ -13,7 +13,7 @@ from cdpr_design.model import spec
 from cdpr_design import workspaces as ws
 from cdpr_design.workspaces import grid as wsg
 from cdpr_design.workspaces.grid import Rows, chunk_stats
-from cdpr_design.statics.robot import combinations
+from cdpr_design.statics.robot import combinations, resolve
 from cdpr_design.statics.wrenches import wrench_vertices
 from cdpr_design.errors import InputError
 from cdpr_design.model.design import Grid
@@ -51,7 +51,7 @@ COLUMNS = ("poses", "feasible", "margin", "tensions", "lengths")
 
 def sweep_columns(design, kind="static", **kw):
     """ws.run's result and its chunks' columns (poses, feasible, margin, tensions, lengths) joined."""
-    r, rows = collect_chunks(ws.run, design, kind=kind, **kw)
+    r, rows = collect_chunks(ws.run, design, ws.Analysis(kind=kind), **kw)
     return r, {name: np.concatenate([getattr(c, name) for c in rows]) for name in COLUMNS}
 
 
@@ -80,7 +80,7 @@ def test_planar_closed_form_matches_numpy_on_random_robots(seed):
     numpy reference agree."""
     rng = np.random.default_rng(seed)
     design = spec.from_dict(random_planar_data(rng, m=2))
-    assert ws.robot_for(design).engine == "numpy"
+    assert resolve(design).engine == "numpy"
     got = sweep_all(design)
     poses = got[0]
     wreq = wrench_vertices(design, "static")
@@ -170,7 +170,7 @@ def test_grid_and_positions():
 
 def test_unknown_kind_is_spec_error():
     with pytest.raises(spec.SpecError):
-        ws.run(spec.load(PLANAR2), kind="kinematic")
+        ws.run(spec.load(PLANAR2), ws.Analysis(kind="kinematic"))
 
 
 # ----------------------------------------------------------------------------
@@ -246,11 +246,11 @@ def test_engine_choice():
     assert resolve(design, Analysis(kind="wrench-closure")).engine == "numba"
     assert resolve(design, Analysis(collisions=True)).engine == "numba"
     with pytest.raises(InputError, match="engine: expected one of auto, numba, numpy"):
-        ws.run(design, engine="fortran")
+        ws.run(design, ws.Analysis(engine="fortran"))
     ipanema = spec.load(PLANAR2.parent / "ipanema3.yaml")
     assert resolve(ipanema, Analysis()).engine == "numba"
     with pytest.raises(InputError, match="engine=numpy: the numpy engine covers two cables"):
-        ws.run(ipanema, step=0.5, engine="numpy")
+        ws.run(ipanema, ws.Analysis(engine="numpy"), step=0.5)
 
 
 def test_engine_variable_is_read_by_the_command_line(tmp_path, monkeypatch):
@@ -369,7 +369,7 @@ def test_warm_up_runs_the_sweeps_first_pose_with_the_whole_grids_robot(monkeypat
     """The warm-up sweeps the plan's first pose alone with the robot resolved for the whole grid."""
     design = spec.load(PLANAR2)
     big = ws.make_grid(design, 0.004)
-    p = ws.plan(ws.robot_for(design), big)
+    p = ws.plan(resolve(design), big)
     one = p.on(ws.grid.first_pose(big))
     assert one.robot is p.robot and one.grid.size == 1 and tuple(one.grid.lower) == tuple(big.lower)
     assert one.columns == p.columns and one.pictures == p.pictures

@@ -139,11 +139,12 @@ def simulate(
     from cdpr_design.jobs import motion as job
 
     design = load_design(spec, cable_model)
-    result, s, samples, out_dir = job.simulate(
-        design, name, delay=delay, servo_bandwidth=servo_bandwidth, feedforward=feedforward,
-        compensate_stretch=compensate_stretch, cable_damping=cable_damping, timestep=timestep, hold=hold,
-        cycle_time=cycle_time, out=out, overwrite=overwrite, progress=bars(quiet or json_, min_total=2000),
+    settings = job.SimulateSettings(
+        delay=delay, servo_bandwidth=servo_bandwidth, feedforward=feedforward, compensate_stretch=compensate_stretch,
+        cable_damping=cable_damping, timestep=timestep, hold=hold, cycle_time=cycle_time,
         cable_segments=cable_segments, format=format.value, time_optimal=time_optimal)
+    result, s, samples, out_dir = job.simulate(design, name, settings, out, overwrite,
+                                               progress=bars(quiet or json_, min_total=2000))
     if json_:
         emit_json(s)
         return

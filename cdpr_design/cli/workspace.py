@@ -55,14 +55,16 @@ def workspace(
     from cdpr_design.cli import env
     from cdpr_design.jobs import workspace as job
     from cdpr_design.plots import worker as _picture_worker
+    from cdpr_design.statics.robot import Analysis
 
     with _picture_worker.take(enabled=env.picture_worker_enabled()) as pictures:  # matplotlib's import overlaps the spec and the sweep
         design = load_design(spec, cable_model)
-        result, out_dir = job.workspace(
-            design, out, overwrite, kind=kind.value, step=step, force=force, collisions=collisions,
-            orientations=orientations.value if orientations is not None else None, pictures=pictures,
-            engine=env.engine(), progress=bars(quiet or json_, min_total=500_000), format=format.value,
-            html=html, max_tilt=max_tilt, stiffness=stiffness, accelerations=accelerations)
+        analysis = Analysis(kind=kind.value, collisions=collisions,
+                            orientations=orientations.value if orientations is not None else None,
+                            max_tilt=max_tilt, engine=env.engine(), stiffness=stiffness, accelerations=accelerations)
+        settings = job.WorkspaceSettings(analysis, step=step, force=force, format=format.value, html=html)
+        result, out_dir = job.workspace(design, settings, out, overwrite, pictures=pictures,
+                                        progress=bars(quiet or json_, min_total=500_000))
     s = result.summary()
     if json_:
         emit_json(s)

@@ -289,7 +289,7 @@ def _task_positions(design: Design, step: float | None, positions, chunk: int,
         wsg.check_grid_size(g, False, "requirements.task_box")
         return "task_box", (wsg.grid_positions(g, s, min(chunk, g.size - s)) for s in range(0, g.size, chunk))
     feas: list[np.ndarray] = []
-    workspace.run(design, "static", step=step, keep_maps=False, engine=engine, tilt=False,
+    workspace.run(design, workspace.Analysis(engine=engine), step=step, keep_maps=False, tilt=False,
                   on_chunk=lambda c: feas.append(c.poses[c.feasible.astype(bool), :d]))
     return "feasible workspace", feas
 

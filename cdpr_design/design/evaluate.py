@@ -126,8 +126,8 @@ def task_sweep(design: Design, step: float | None = None, progress=None, engine:
         elif mg.size:
             least[0] = min(least[0], float(mg.min()))
 
-    res = ws.run(design, kind=_task_kind(design), grid=g, on_chunk=on_chunk, progress=progress,
-                 keep_maps=False, engine=engine, tilt=False, stiffness=stiffness, accelerations=accelerations)
+    analysis = ws.Analysis(kind=_task_kind(design), engine=engine, stiffness=stiffness, accelerations=accelerations)
+    res = ws.run(design, analysis, grid=g, on_chunk=on_chunk, progress=progress, keep_maps=False, tilt=False)
     return res, least[0]
 
 
@@ -193,7 +193,7 @@ def evaluate_full(design: Design, *, step: float | None = None, catalogue: Catal
         # the figures and checks use no hanging tilt of a held effector (report passes its own sweep)
         solid = (figures is None or bool(set(figures) & SOLID_FIGURES)
                  or design.requirements.max_frame_load is not None)
-        wres = ws.run(design, "static", step=step, keep_maps=keep_maps, progress=progress, engine=engine,
+        wres = ws.run(design, ws.Analysis(engine=engine), step=step, keep_maps=keep_maps, progress=progress,
                       tilt=False, solid=solid)
     stiffness = stiffness_asked(design, figures) and task_grid(design, step) is not None
     accelerations = design.requirements.min_acceleration is not None and task_grid(design, step) is not None

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
@@ -149,7 +150,7 @@ def path_map(design, engine: str = "auto"):
     ext = max(h - l for l, h in zip(g.lower, g.upper))
     step = max(max(g.step), ext / 200.0)
     try:
-        return ws.run(design, kind="static", step=step, engine=engine)
+        return ws.run(design, ws.Analysis(engine=engine), step=step)
     except Exception:  # noqa: BLE001 - the picture is drawn without the map
         return None
 
@@ -217,39 +218,58 @@ class SimulationRun(NamedTuple):
     out: OutputDir
 
 
-def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 300.0,
-             feedforward: bool = True, compensate_stretch: bool = True, cable_damping: float = 0.7,
-             timestep: float = 5e-4, hold: float | None = None, cycle_time: float | None = None,
-             out: str | Path | None = None, overwrite: bool = False,
-             progress: Progress | None = None, cable_segments: int | None = None,
-             format: str = "csv", time_optimal: bool = False) -> SimulationRun:
-    """The ``simulate`` command: run trajectory ``name`` on the MuJoCo model; write simulation.csv
-    (``format='parquet'``: ``.parquet``), simulation.json and simulation.png.  ``delay``,
-    ``timestep``, ``hold`` [s]; ``servo_bandwidth`` [rad/s]; ``hold`` default 0.5 s + the delay;
-    ``cable_segments``: segments of each sagging cable (2 to 200).  With elastic or sagging cables a
-    sample without set-points is an InputError.  ``time_optimal``: the path timed as fast as the
-    robot allows (:mod:`cdpr_design.motion.time_optimal`)."""
+@dataclass(frozen=True)
+class SimulateSettings:
+    """The options of a ``simulate`` run (docs/cli.md): the set-points' transport ``delay`` [s],
+    each axis' position-loop ``servo_bandwidth`` [rad/s], the velocity ``feedforward``,
+    ``compensate_stretch`` (each cable's expected stretch taken up in the command), the axial
+    cable mode's ``cable_damping`` ratio, the physics ``timestep`` [s], ``hold`` [s] the last
+    set-point kept at the end (default 0.5 s + the delay), the samples' ``cycle_time`` [s]
+    (default the spec's), ``cable_segments`` of each sagging cable (2 to 200), the table
+    ``format`` (``csv`` or ``parquet``) and ``time_optimal`` (the path timed as fast as the robot
+    allows, :mod:`cdpr_design.motion.time_optimal`)."""
+
+    delay: float = 0.0
+    servo_bandwidth: float = 300.0
+    feedforward: bool = True
+    compensate_stretch: bool = True
+    cable_damping: float = 0.7
+    timestep: float = 5e-4
+    hold: float | None = None
+    cycle_time: float | None = None
+    cable_segments: int | None = None
+    format: str = "csv"
+    time_optimal: bool = False
+
+
+def simulate(design, name: str, settings: SimulateSettings = SimulateSettings(), out: str | Path | None = None,
+             overwrite: bool = False, *, progress: Progress | None = None) -> SimulationRun:
+    """The ``simulate`` command: run trajectory ``name`` on the MuJoCo model with ``settings``
+    (:class:`SimulateSettings`); write simulation.csv (``format='parquet'``: ``.parquet``),
+    simulation.json and simulation.png into ``out`` (``overwrite``: replace foreign files).
+    With elastic or sagging cables a sample without set-points is an InputError."""
     from cdpr_design.motion import simulation as sim
     from cdpr_design.motion.run import simulate
 
+    o = settings
     timings = Timings()
-    settings = {"delay": delay, "servo_bandwidth": servo_bandwidth, "cable_damping": cable_damping,
-                "timestep": timestep}
-    _check_simulation(settings, hold)
-    if cable_segments is not None and not 2 <= cable_segments <= 200:
-        raise InputError(f"--cable-segments: expected 2 to 200, got {cable_segments}")
-    robot = motion_robot(design, time_optimal)
-    samples = sample_named(robot, name, cycle_time, hold_end=(0.5 + delay) if hold is None else hold,
-                           time_optimal=time_optimal)
-    if samples.cycle_time < timestep:
-        raise InputError(f"--timestep: {timestep} s is longer than the cycle time {samples.cycle_time} s")
+    physics = {"delay": o.delay, "servo_bandwidth": o.servo_bandwidth, "cable_damping": o.cable_damping,
+                "timestep": o.timestep}
+    _check_simulation(physics, o.hold)
+    if o.cable_segments is not None and not 2 <= o.cable_segments <= 200:
+        raise InputError(f"--cable-segments: expected 2 to 200, got {o.cable_segments}")
+    robot = motion_robot(design, o.time_optimal)
+    samples = sample_named(robot, name, o.cycle_time, hold_end=(0.5 + o.delay) if o.hold is None else o.hold,
+                           time_optimal=o.time_optimal)
+    if samples.cycle_time < o.timestep:
+        raise InputError(f"--timestep: {o.timestep} s is longer than the cycle time {samples.cycle_time} s")
     out_dir = output_dir(design, out, overwrite)
-    for f in (file_name("simulation", format), "simulation.json", "simulation.png"):
+    for f in (file_name("simulation", o.format), "simulation.json", "simulation.png"):
         out_dir.target(f)  # a foreign file (or a folder) of that name: refused before the simulation
     with stage(progress, f"simulate {name}") as cb, timings.phase("sweep_s"):
         try:
-            result = simulate(robot, samples, feedforward=feedforward, compensate_stretch=compensate_stretch,
-                              progress=cb, cable_segments=cable_segments, **settings)
+            result = simulate(robot, samples, feedforward=o.feedforward, compensate_stretch=o.compensate_stretch,
+                              progress=cb, cable_segments=o.cable_segments, **physics)
         except sim.SimulationError as exc:
             raise InputError(f"--timestep / --servo-bandwidth / --cable-damping: {exc}") from None
         except ValueError as exc:  # samples without set-points (the cable model has no solution there)
@@ -258,8 +278,8 @@ def simulate(design, name: str, *, delay: float = 0.0, servo_bandwidth: float = 
         pending = submit_pictures(out_dir, [("simulation.png", motion_plots.simulation_figure, (result,))],
                                   timings=timings)
         with timings.phase("write_s"):
-            write_table(out_dir, "simulation", result.columns(), format, design, trajectory=name,
-                        settings=settings)
+            write_table(out_dir, "simulation", result.columns(), o.format, design, trajectory=name,
+                        settings=physics)
         pending.wait()
         s = result.summary()
         s["trajectory_feasible"] = samples.all_feasible

@@ -12,9 +12,10 @@ from cdpr_design.io.files import OutputDir
 from cdpr_design.jobs.common import Progress, output_dir, stage, submit_pictures
 from cdpr_design.jobs.tables import Timings, write_table
 from cdpr_design.jobs.motion import design_samples, trajectory_samples
-from cdpr_design.jobs.workspace import finish_workspace, start_workspace
+from cdpr_design.jobs.workspace import WorkspaceSettings, finish_workspace, start_workspace
 from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
+from cdpr_design.statics.robot import Analysis, resolve
 from cdpr_design.workspaces.grid import check_step
 
 
@@ -52,7 +53,6 @@ def size_motors(design, catalogue: Path | None = None, trajectory: str | None = 
     fast as the robot allows (:mod:`cdpr_design.motion.time_optimal`)."""
     from cdpr_design.design import sizing as sz
     from cdpr_design.model import spec
-    from cdpr_design.statics.robot import Analysis, resolve
 
     timings = Timings()
     cat = spec.load_catalogue(catalogue)
@@ -75,7 +75,7 @@ def frame_loads(design, step: float | None = None, engine: str = "auto") -> dict
     ``frame_loads`` object and ``frame_loads_per_cable`` (``frame_loads.csv``'s rows as objects)."""
     from cdpr_design import workspaces as ws
 
-    r = ws.run(design, "static", step=step, keep_maps=False, engine=engine, tilt=False, frame_loads=True)
+    r = ws.run(design, ws.Analysis(engine=engine), step=step, keep_maps=False, tilt=False, frame_loads=True)
     cols = r.frame_loads.rows(design.cable_names)
     rows = [{k: (v[i] if k == "cable" or np.isfinite(v[i]) else None) for k, v in cols.items()}
             for i in range(design.m)]
@@ -147,8 +147,8 @@ def report(design, catalogue: Path | None = None, trajectory: str | None = None,
     for name in (file_name("motor_sizing", format), file_name("design_report", format), "report.html", "report.json"):
         out_dir.target(name)
     with out_dir:  # every file put in place together at the end
-        wres, drawing = start_workspace(design, out_dir, "static", step, force, pictures=pictures, engine=engine,
-                                        progress=progress, format=format, timings=timings)
+        settings = WorkspaceSettings(Analysis(engine=engine), step=step, force=force, format=format)
+        wres, drawing = start_workspace(design, out_dir, settings, pictures, progress, timings)
         with timings.phase("sweep_s"):  # while the workspace pictures are drawn
             e = evaluate(design, cat, samples, safety_factor, motor, step, wres, progress, engine)
             checks = ev.check_table(e.row)

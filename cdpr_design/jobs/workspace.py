@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -19,6 +20,7 @@ from cdpr_design.plots.acceleration import acceleration_figure
 from cdpr_design.plots.stiffness import stiffness_figure
 from cdpr_design.plots.report import report_html
 from cdpr_design.plots.worker import PictureWorker
+from cdpr_design.statics.robot import Analysis, resolve
 
 
 def workspace_columns(design, chunk) -> dict:
@@ -38,77 +40,82 @@ def workspace_columns(design, chunk) -> dict:
     return cols
 
 
-def workspace(design, out: str | Path | None = None, overwrite: bool = False, **options):
+@dataclass(frozen=True)
+class WorkspaceSettings:
+    """The options of a ``workspace`` run (docs/cli.md): the ``analysis``
+    (:class:`~cdpr_design.statics.robot.Analysis`: ``kind``, ``collisions``, ``orientations``,
+    ``max_tilt`` [deg], ``engine``, ``stiffness``, ``accelerations``; see
+    :func:`cdpr_design.workspaces.run`), the grid ``step`` [m] overriding the spec's, ``force``
+    grids past the size limit, the table ``format`` (``csv`` or ``parquet``) and ``html``
+    (``report.html`` too)."""
+
+    analysis: Analysis = Analysis()
+    step: float | None = None
+    force: bool = False
+    format: str = "csv"
+    html: bool = False
+
+
+def workspace(design, settings: WorkspaceSettings = WorkspaceSettings(), out: str | Path | None = None,
+              overwrite: bool = False, *, pictures: PictureWorker | None = None,
+              progress: Progress | None = None):
     """The ``workspace`` command: :func:`run_workspace` into the folder ``out``
     (default ``out/<design name>/``; ``overwrite``: replace foreign files).
     Returns (result, output folder).  The files are put in place together when all are written
     (:class:`~cdpr_design.io.files.OutputDir`): a failure leaves the folder's earlier files whole."""
     out_dir = output_dir(design, out, overwrite)
     with out_dir:
-        result = run_workspace(design, out_dir, **options)
+        result = run_workspace(design, out_dir, settings, pictures=pictures, progress=progress)
     return result, out_dir
 
 
-def run_workspace(design, out: OutputDir, kind: str = "static", step: float | None = None, force: bool = False,
-                  collisions: bool = False, orientations: str | None = None,
-                  pictures: PictureWorker | None = None, engine: str = "auto",
-                  progress: Progress | None = None, format: str = "csv", html: bool = False,
-                  timings: Timings | None = None, max_tilt: float | None = None, stiffness: bool = False,
-                  accelerations: bool = False):
-    """Sweep, stream ``workspace.csv`` (``format='parquet'``: ``workspace.parquet``), write the
-    pictures, ``summary.json`` and (``html``) ``report.html``; return the result.
+def run_workspace(design, out: OutputDir, settings: WorkspaceSettings = WorkspaceSettings(),
+                  pictures: PictureWorker | None = None, progress: Progress | None = None,
+                  timings: Timings | None = None):
+    """Sweep, stream ``workspace.csv`` (``settings.format='parquet'``: ``workspace.parquet``),
+    write the pictures, ``summary.json`` and (``settings.html``) ``report.html``; return the result.
 
-    ``step`` [m] overrides the spec's grid step; ``force`` allows grids past
-    the size limit.  ``collisions``: intersect feasibility with the
-    interference checks (column ``collision_free``); ``orientations``:
-    ``total`` or ``range`` orientation workspace (rotational motions; extra
-    columns, ``orientation_workspace.png``).  ``pictures``: the worker drawing
-    the PNGs (None: in-process); ``engine``: ``auto``, ``numba`` or ``numpy``.
-    The table is written by a thread while the sweep goes on and the pictures
-    are drawn; ``result.summary()['timings']`` gives the phases (``timings``:
-    a running :class:`~cdpr_design.jobs.tables.Timings` to add them to).
-    ``max_tilt`` [deg]: the tilt limit of an under-constrained design with
-    ``effector.orientation: free`` (its sweeps add ``tilt_map.png``).  With
-    sagging cables the grid is swept again with ideal cables for ``cable_models.png``.
-    ``stiffness``: the columns ``min_stiffness`` [N/m] and ``lowest_frequency`` [Hz] and
-    ``stiffness_map.png`` (:mod:`cdpr_design.workspaces.stiffness`).  ``accelerations``: the column
-    ``acceleration_radius`` [m/s^2] and ``acceleration_map.png`` (:mod:`cdpr_design.workspaces.acceleration`).
+    What is swept is ``settings`` (:class:`WorkspaceSettings`): its analysis decides the columns
+    (``collisions``: ``collision_free``; ``orientations``: the orientation workspace's columns
+    and ``orientation_workspace.png``; a free under-constrained effector: ``tilt_map.png``;
+    ``stiffness``: ``min_stiffness`` [N/m], ``lowest_frequency`` [Hz] and
+    ``stiffness_map.png``; ``accelerations``: ``acceleration_radius`` [m/s^2] and
+    ``acceleration_map.png``); with sagging cables the grid is swept again with ideal cables
+    for ``cable_models.png``.  ``pictures``: the worker drawing the PNGs (None: in-process).
+    The table is written by a thread while the sweep goes on and the pictures are drawn;
+    ``result.summary()['timings']`` gives the phases (``timings``: a running
+    :class:`~cdpr_design.jobs.tables.Timings` to add them to).
     """
     timings = timings or Timings()
-    result, pending = start_workspace(design, out, kind, step, force, collisions, orientations, pictures, engine,
-                                      progress, format, html, timings, max_tilt, stiffness, accelerations)
+    result, pending = start_workspace(design, out, settings, pictures, progress, timings)
     finish_workspace(out, result, pending, timings)
     return result
 
 
-def start_workspace(design, out: OutputDir, kind: str = "static", step: float | None = None, force: bool = False,
-                    collisions: bool = False, orientations: str | None = None,
-                    pictures: PictureWorker | None = None, engine: str = "auto",
-                    progress: Progress | None = None, format: str = "csv", html: bool = False,
-                    timings: Timings | None = None, max_tilt: float | None = None, stiffness: bool = False,
-                    accelerations: bool = False):
+def start_workspace(design, out: OutputDir, settings: WorkspaceSettings = WorkspaceSettings(),
+                    pictures: PictureWorker | None = None, progress: Progress | None = None,
+                    timings: Timings | None = None):
     """:func:`run_workspace` up to the pictures: the table is written and the pictures are being
     drawn.  Returns (result, pending pictures); :func:`finish_workspace` waits for them, so a
     caller can do more work (``report``'s evaluation) while they are drawn."""
     from cdpr_design import workspaces as ws
 
+    o = settings
     timings = timings if timings is not None else Timings()
-    grid = ws.make_grid(design, step, force)
-    p = ws.plan(ws.robot_for(design, kind, collisions, orientations, engine, max_tilt, stiffness,
-                             accelerations), grid,
-                solid=True)
-    meta = table_metadata(design, "workspace", p.columns, kind=kind, grid=grid_metadata(grid),
+    grid = ws.make_grid(design, o.step, o.force)
+    p = ws.plan(resolve(design, o.analysis), grid, solid=True)
+    meta = table_metadata(design, "workspace", p.columns, kind=o.analysis.kind, grid=grid_metadata(grid),
                           orientation=[float(v) for v in (design.workspace.orientation or [])])
-    files = output_names(p, html, format)
+    files = output_names(p, o.html, o.format)
     for name in files:
         out.target(name)  # a foreign file of that name: refused before any work
-    writer = out.table("workspace", format, metadata=meta, names=p.columns, background=True,
+    writer = out.table("workspace", o.format, metadata=meta, names=p.columns, background=True,
                        compiled=p.robot.engine == "numba")  # the kernels loaded: their formatter costs no start-up
     try:
         result = _sweep(p, progress, writer, timings)
         with timings.phase("write_s"):
-            write_solid(out, result, format)
-        pics = workspace_pictures(result, p.pictures) + ([("report.html", report_html, (result,))] if html else [])
+            write_solid(out, result, o.format)
+        pics = workspace_pictures(result, p.pictures) + ([("report.html", report_html, (result,))] if o.html else [])
         pending = submit_pictures(out, pics, pictures, timings)
         writer.close()
     except BaseException:
@@ -188,7 +195,7 @@ def cable_model_picture(result) -> tuple:
     collisions = bool(robot.analysis.collisions) if robot is not None else False
     engine = robot.engine if robot is not None else "auto"
     # only the feasible cells are compared: no hanging tilt of a held under-constrained effector
-    ideal = ws.run(with_cable_model(result.design, "ideal"), kind=result.kind, grid=result.grid,
-                   orientation=result.orientation, force=True, interference=collisions, engine=engine,
-                   tilt=False)
+    ideal = ws.run(with_cable_model(result.design, "ideal"), Analysis(kind=result.kind, collisions=collisions,
+                                                                     engine=engine),
+                   grid=result.grid, orientation=result.orientation, force=True, tilt=False)
     return ("cable_models.png", wsplots.cable_model_figure, (result, ideal))

@@ -124,7 +124,7 @@ class WorkspaceResult:
     map_axes: list
     map_stride: tuple
     extra: dict = field(default_factory=dict)
-    #: orientation sweeps only (:func:`run_orientations`): a hardware.OrientationMaps
+    #: orientation sweeps only (``Analysis.orientations``): a hardware.OrientationMaps
     orientation_maps: object = None
     #: under-constrained designs only: the hanging tilt map (a workspaces.hanging.HangingMaps)
     hanging: object = None

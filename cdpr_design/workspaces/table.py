@@ -16,6 +16,7 @@ import numpy as np
 from cdpr_design.errors import InputError
 from cdpr_design.io.tables import Table
 from cdpr_design.model.design import Design
+from cdpr_design.statics.robot import Analysis
 from cdpr_design.workspaces.grid import Chunk, WorkspaceResult, column_names, make_grid
 
 #: Default largest grid :func:`collect` keeps in memory (poses).
@@ -84,30 +85,24 @@ class WorkspaceTable(Table):
         return out
 
 
-def collect(design: Design, kind: str = "static", *, step: float | None = None, grid=None,
-            max_poses: int = MAX_COLLECT, **options) -> WorkspaceTable:
-    """Sweep like :func:`cdpr_design.workspaces.run` and keep every row.
+def collect(design: Design, analysis: Analysis | None = None, *, step: float | None = None, grid=None,
+            orientation=None, force: bool = False, max_poses: int = MAX_COLLECT) -> WorkspaceTable:
+    """Sweep like :func:`cdpr_design.workspaces.run` (``analysis``, ``step`` [m], ``grid``,
+    ``orientation`` [rad], ``force`` as there) and keep every row.
 
     The boundary between the grid points and the frame loads come with it (``boundary``,
     ``frame_loads``; summary keys ``boundary_measure``, ``boundary_surface``, ``frame_loads``).
-    ``options`` are those of :func:`~cdpr_design.workspaces.run` (``orientation``,
-    ``interference``, ``engine``, ``force``, ...); with ``orientations='total'``
-    or ``'range'`` the sweep is :func:`~cdpr_design.workspaces.run_orientations`.
     Raises :class:`InputError` when the grid holds more than ``max_poses``
     poses (raise it, or stream with ``on_chunk``, for larger grids).
     """
     from cdpr_design import workspaces as ws
 
-    g = grid if grid is not None else make_grid(design, step, options.get("force", False))
+    g = grid if grid is not None else make_grid(design, step, force)
     if g.size > max_poses:
         raise InputError(f"max_poses: the grid has {g.size:,} poses, more than the {max_poses:,} kept in "
                          "memory; raise max_poses, coarsen the step, or stream the rows with on_chunk")
     chunks: list[Chunk] = []
-    mode = options.pop("orientations", None)
-    if mode is not None:
-        res = ws.run_orientations(design, mode, kind, grid=g, on_chunk=chunks.append, solid=True, **options)
-    else:
-        res = ws.run(design, kind, grid=g, on_chunk=chunks.append, solid=True, **options)
+    res = ws.run(design, analysis, grid=g, orientation=orientation, force=force, on_chunk=chunks.append, solid=True)
     extra_names = list(chunks[0].extra) if chunks else []
     return WorkspaceTable(
         design=design,

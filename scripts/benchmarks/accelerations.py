@@ -48,14 +48,15 @@ def run(b: h.Bench) -> None:
         parallel.set_threads(b.opt["threads"])
         for d in designs.values():  # the plan's kernels compiled or loaded outside the timing
             one = ws.grid.first_pose(ws.make_grid(d))
-            ws.run(d, grid=one, accelerations=True, tilt=False)
+            ws.run(d, ws.Analysis(accelerations=True), grid=one, tilt=False)
             ws.run(d, grid=one, tilt=False)
         for n, d in designs.items():
             pairs = []
             for r in range(b.rounds):
                 pair = {}
                 for accelerations in ((False, True) if r % 2 == 0 else (True, False)):
-                    pair[accelerations], _ = h.timed(ws.run, d, accelerations=accelerations, tilt=False)
+                    pair[accelerations], _ = h.timed(ws.run, d, ws.Analysis(accelerations=accelerations),
+                                                          tilt=False)
                 pairs.append(pair)
             b.row(f"{n} ({d.workspace.grid.size:,} poses): the whole workspace sweep with --accelerations",
                   h.seconds(h.spread(p[True].cpu for p in pairs)) + " CPU",

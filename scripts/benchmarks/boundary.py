@@ -20,12 +20,13 @@ def run(b: h.Bench) -> None:
     from cdpr_design import workspaces as ws
     from cdpr_design.model import spec
     from cdpr_design.model.design import Grid
+    from cdpr_design.statics.robot import resolve
 
     for name in b.opt["designs"]:
         d = spec.load(h.ROOT / "designs" / f"{name}.yaml")
         g0 = d.workspace.grid
         g = Grid(g0.lower, g0.upper, tuple(float(s) for s in b.opt["steps"])[:len(g0.lower)])
-        robot = ws.robot_for(d)
+        robot = resolve(d)
         ws.plan(robot, Grid(g.lower, g.upper, tuple(4 * s for s in g.step)), solid=True).run()  # kernels, imports
         results = {}
 

@@ -25,12 +25,13 @@ def run(b: h.Bench) -> None:
     robot = check_certifiable(d)
     warm_up(robot)
     g0 = d.workspace.grid
-    ws.run(d, grid=Grid(g0.lower, g0.lower, g0.step), force=True, engine="numba", keep_maps=False, tilt=False)
+    ws.run(d, ws.Analysis(engine="numba"), grid=Grid(g0.lower, g0.lower, g0.step), force=True, keep_maps=False,
+           tilt=False)
     for res in b.opt["resolutions"]:
         g = Grid(g0.lower, g0.upper, (res,) * len(g0.lower))
         out = {}
         t = h.rounds({"certify": lambda: out.__setitem__("c", certify(robot, resolution=res, max_boxes=b.opt["max_boxes"])),
-                      "grid": lambda: out.__setitem__("g", ws.run(d, grid=g, force=True, engine="numba",
+                      "grid": lambda: out.__setitem__("g", ws.run(d, ws.Analysis(engine="numba"), grid=g, force=True,
                                                                   keep_maps=False, tilt=False))}, b.rounds)
         s, w = out["c"].summary(), out["g"]
         feas = w.feasible / w.poses * s["box_measure"]

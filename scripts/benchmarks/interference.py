@@ -71,8 +71,9 @@ def run(b: h.Bench) -> None:
     d = load_ipanema3(b.opt["diameter"])
     step = b.opt["step"]
     kind = "wrench-feasible" if d.workspace.external_wrench is not None else "static"
-    cold_plain, r_plain = h.timed(ws.run, d, kind=kind, step=step, keep_maps=False)
-    cold_int, r_int = h.timed(ws.run, d, kind=kind, step=step, keep_maps=False, interference=True)
+    cold_plain, r_plain = h.timed(ws.run, d, ws.Analysis(kind=kind), step=step, keep_maps=False)
+    cold_int, r_int = h.timed(ws.run, d, ws.Analysis(kind=kind, collisions=True), step=step,
+                                 keep_maps=False)
     assert r_int.extra["feasible_statics"] == r_plain.feasible
     g = ws.make_grid(d, step)
     ori = d.default_orientation_full()
@@ -80,11 +81,11 @@ def run(b: h.Bench) -> None:
     ev0, ev1 = evaluator(d, kind, False), evaluator(d, kind, True)
     ev0(P[:10], ori)
     ev1(P[:10], ori, full=False)
-    t = h.rounds({"plain": lambda: ws.run(d, kind=kind, step=step, keep_maps=False),
+    t = h.rounds({"plain": lambda: ws.run(d, ws.Analysis(kind=kind), step=step, keep_maps=False),
                   "points": lambda: ev0(P, ori),
                   "first hit": lambda: ev1(P, ori, full=False),
                   "full": lambda: ev1(P, ori, full=True),
-                  "run": lambda: ws.run(d, kind=kind, step=step, keep_maps=False, interference=True)}, b.rounds)
+                  "run": lambda: ws.run(d, ws.Analysis(kind=kind, collisions=True), step=step, keep_maps=False)}, b.rounds)
     poses, nfeas, surv, by_kind, only, no_eff = survival(d, kind, step)
     b.say(f"{kind}, step {step} m, cable diameter {d.cables[0].props.diameter} m: {poses:,} poses, feasible {nfeas:,} "
           f"({100 * nfeas / poses:.1f} %), interference free {surv:,} ({100 * surv / max(nfeas, 1):.1f} % survive; "
@@ -95,6 +96,6 @@ def run(b: h.Bench) -> None:
     label = f"IPAnema 3 {kind}, {poses:,} poses"
     against = "time ÷ the plain point-outlet sweep's"
     for what, key in (("explicit positions, no checks", "points"), ("interference, first-hit exit", "first hit"),
-                      ("interference, full masks", "full"), ("workspace.run(interference=True)", "run")):
+                      ("interference, full masks", "full"), ("workspace.run(Analysis(collisions=True))", "run")):
         b.row(f"{label}: {what}", h.seconds(h.spread(x.wall for x in t[key])), h.ratios(t[key], t["plain"]), against)
     b.say(f"first calls: plain {cold_plain.wall:.2f} s, with interference {cold_int.wall:.2f} s")

@@ -69,7 +69,7 @@ def sweep(name: str, model: str) -> dict:
     """The first static workspace sweep of this process: wall and CPU seconds, the poses."""
     from cdpr_design import workspaces
 
-    t, res = h.timed(workspaces.run, load(name, model), kind="static")
+    t, res = h.timed(workspaces.run, load(name, model))
     return {"wall": t.wall, "cpu": t.cpu, "poses": res.summary()["poses"]}
 
 
@@ -136,7 +136,7 @@ def run(b: h.Bench) -> None:
         cold = {m: h.call_in_child("benchmarks.sagging.sweep", name, m,
                                    cache=b.fresh_cache() if b.opt["fresh_cache"] else None) for m in designs}
         out = {}
-        t = h.rounds({m: (lambda m=m, d=d: out.__setitem__(m, workspaces.run(d, kind="static")))
+        t = h.rounds({m: (lambda m=m, d=d: out.__setitem__(m, workspaces.run(d)))
                       for m, d in designs.items()}, b.rounds)
         sag = out["sagging"]
         n = sag.summary()["poses"]

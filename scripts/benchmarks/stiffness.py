@@ -98,14 +98,14 @@ def run(b: h.Bench) -> None:
         parallel.set_threads(b.opt["threads"])
         for d in designs.values():  # the plan's other kernels loaded outside the timing
             one = ws.grid.first_pose(ws.make_grid(d))
-            ws.run(d, grid=one, stiffness=True, tilt=False)
+            ws.run(d, ws.Analysis(stiffness=True), grid=one, tilt=False)
             ws.run(d, grid=one, tilt=False)
         for n, d in designs.items():
             pairs = []
             for r in range(b.rounds):
                 pair = {}
                 for stiffness in ((False, True) if r % 2 == 0 else (True, False)):
-                    pair[stiffness], _ = h.timed(ws.run, d, stiffness=stiffness, tilt=False)
+                    pair[stiffness], _ = h.timed(ws.run, d, ws.Analysis(stiffness=stiffness), tilt=False)
                 pairs.append(pair)
             b.row(f"{n}: the whole workspace sweep with stiffness", h.seconds(h.spread(p[True].cpu for p in pairs))
                   + " CPU", h.ratios([p[True] for p in pairs], [p[False] for p in pairs], "cpu"),

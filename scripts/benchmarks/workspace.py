@@ -32,7 +32,7 @@ def rows_sweep(design, grid, engine):
         out["m"].append(c.margin)
         out["t"].append(c.tensions)
 
-    ws.run(design, grid=grid, on_chunk=keep, keep_maps=False, engine=engine)
+    ws.run(design, ws.Analysis(engine=engine), grid=grid, on_chunk=keep, keep_maps=False)
     return [np.concatenate(v) for v in out.values()]
 
 
@@ -48,13 +48,13 @@ def run(b: h.Bench) -> None:
 
     design = spec.load(h.ROOT / "designs" / "planar2.yaml")
     grid = ws.make_grid(design, b.opt["step"], force=True)
-    ws.run(design, step=0.1, engine="numba")  # the kernels loaded (or compiled) before timing
+    ws.run(design, ws.Analysis(engine="numba"), step=0.1)  # the kernels loaded (or compiled) before timing
     label = f"planar2, {grid.size:,} poses"
     kernel, numpy_ = rows_sweep(design, grid, "numba"), rows_sweep(design, grid, "numpy")
     for a, c, what in zip(kernel, numpy_, ("feasibility", "margins", "tensions")):
         assert np.array_equal(a.view(np.uint8), c.view(np.uint8)), f"{what} differ between the engines"
-    t = h.rounds({"numba": lambda: ws.run(design, grid=grid, keep_maps=False, engine="numba"),
-                  "numpy": lambda: ws.run(design, grid=grid, keep_maps=False, engine="numpy"),
+    t = h.rounds({"numba": lambda: ws.run(design, ws.Analysis(engine="numba"), grid=grid, keep_maps=False),
+                  "numpy": lambda: ws.run(design, ws.Analysis(engine="numpy"), grid=grid, keep_maps=False),
                   "numba rows": lambda: rows_sweep(design, grid, "numba"),
                   "numpy rows": lambda: rows_sweep(design, grid, "numpy")}, b.rounds)
     b.row(f"{label}: numba kernel, statistics only", f"{grid.size / h.best(t['numba']) / 1e6:.3g} M poses/s",

@@ -90,11 +90,11 @@ def run(b: h.Bench) -> None:
 
     d3 = cd.load(h.ROOT / "designs" / "ipanema3.yaml")
     grid = ws.make_grid(d3, step=b.opt["step"])
-    first, _ = h.timed(ws.run, d3, kind="static", grid=ws.make_grid(d3, step=2.0), keep_maps=False)
+    first, _ = h.timed(ws.run, d3, grid=ws.make_grid(d3, step=2.0), keep_maps=False)
     poses = sample_poses(d3, grid, b.opt["sample"], b.rng)
     per_pose_plain_hsm(d3, poses[:1])  # compiled or loaded
     out = {}
-    t = h.rounds({"kernels": lambda: out.__setitem__("res", ws.run(d3, kind="static", grid=grid, keep_maps=False)),
+    t = h.rounds({"kernels": lambda: out.__setitem__("res", ws.run(d3, grid=grid, keep_maps=False)),
                   "linprog": lambda: out.__setitem__("linprog", per_pose_linprog(d3, poses)),
                   "cvxpy": lambda: out.__setitem__("cvxpy", per_pose_cvxpy(d3, poses)),
                   "plain HSM": lambda: out.__setitem__("plain HSM", per_pose_plain_hsm(d3, poses))}, b.rounds)
@@ -112,7 +112,7 @@ def run(b: h.Bench) -> None:
 
     def caspr():
         d2 = cd.load(h.ROOT / "designs" / "ipanema2.yaml")
-        r2 = ws.run(d2, kind="wrench-closure")
+        r2 = ws.run(d2, ws.Analysis(kind="wrench-closure"))
         r2.summary()
         out["r2"] = r2
 
