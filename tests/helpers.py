@@ -103,6 +103,32 @@ def random_planar_data(rng: np.random.Generator, m: int = 2, motion: str = "2T")
     }
 
 
+def random_spatial_data(rng: np.random.Generator, m: int, motion: str, jitter: float = 0.0) -> dict:
+    """A random spatial robot (``motion`` 3T or 3R3T): outlets near the corners of a box frame, the
+    first four (every one for 3T) near its top and the others near its bottom; attachments at
+    the corners of a 0.2 m square, each of their horizontal coordinates moved by up to ``jitter``
+    [m]; no external wrench."""
+    w = rng.uniform(1.5, 3.0, 3)
+    corners = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    cables = []
+    for i in range(m):
+        cx, cy = corners[i % 4]
+        top = i < 4 or motion == "3T"
+        outlet = [float(cx * w[0] + rng.uniform(-0.1, 0.1)), float(cy * w[1] + rng.uniform(-0.1, 0.1)),
+                  float(w[2] * (rng.uniform(0.8, 1.0) if top else rng.uniform(0.0, 0.2)))]
+        shift = rng.uniform(-jitter, jitter, 2) if jitter else (0.0, 0.0)
+        cables.append({
+            "name": f"k{i}", "outlet": outlet,
+            "attachment": [float((cx - 0.5) * 0.2 + shift[0]), float((cy - 0.5) * 0.2 + shift[1]),
+                           float(0.05 if top else -0.05)],
+            "tension": [float(rng.uniform(0, 2)), float(rng.uniform(40, 200))],
+        })
+    return {"name": "random3d", "motion": motion,
+            "frame": {"lower": [0.0, 0.0, 0.0], "upper": [float(v) for v in w]},
+            "effector": {"mass": float(rng.uniform(0.2, 3.0)), "size": [0.2, 0.2, 0.1]},
+            "cables": cables, "workspace": {"grid": {"step": float(min(w) / 5)}}}
+
+
 def point_mass(outlets, mass=1.0, tension=(0.0, 100.0), motion="2T", gravity=None, attachments=None,
                size=None, inertia=None):
     """A robot of the given outlets on a 10 m frame around the origin; the effector is a point

@@ -14,32 +14,17 @@ from cdpr_design.model import spec
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.acceleration import capability
 from cdpr_design.statics.robot import Analysis, resolve
-from tests.helpers import invoke, planar2_raw, random_planar_data, write_spec
+from tests.helpers import invoke, planar2_raw, random_planar_data, random_spatial_data, write_spec
 
 HIGHS = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
 
 
 def _spatial_data(rng, m: int, motion: str) -> dict:
-    """A random spatial robot: outlets near the corners of a box frame, top and bottom."""
-    w = rng.uniform(1.5, 3.0, 3)
-    corners = [(0, 0), (1, 0), (1, 1), (0, 1)]
-    cables = []
-    for i in range(m):
-        cx, cy = corners[i % 4]
-        top = i < 4 or motion == "3T"
-        cables.append({
-            "name": f"k{i}",
-            "outlet": [float(cx * w[0] + rng.uniform(-0.1, 0.1)), float(cy * w[1] + rng.uniform(-0.1, 0.1)),
-                       float(w[2] * (rng.uniform(0.8, 1.0) if top else rng.uniform(0.0, 0.2)))],
-            "attachment": [float((cx - 0.5) * 0.2 + rng.uniform(-0.02, 0.02)),
-                           float((cy - 0.5) * 0.2 + rng.uniform(-0.02, 0.02)), float(0.05 if top else -0.05)],
-            "tension": [float(rng.uniform(0, 2)), float(rng.uniform(40, 200))],
-        })
-    return {"name": "random3d", "motion": motion,
-            "frame": {"lower": [0.0, 0.0, 0.0], "upper": [float(v) for v in w]},
-            "effector": {"mass": float(rng.uniform(0.2, 3.0)), "size": [0.2, 0.2, 0.1],
-                         "center_of_mass": [float(v) for v in rng.uniform(-0.03, 0.03, 3)]},
-            "cables": cables, "workspace": {"grid": {"step": float(min(w) / 5)}}}
+    """A random spatial robot (:func:`~tests.helpers.random_spatial_data`, attachments moved by up
+    to 2 cm) with its centre of mass off the effector's centre."""
+    data = random_spatial_data(rng, m, motion, jitter=0.02)
+    data["effector"]["center_of_mass"] = [float(v) for v in rng.uniform(-0.03, 0.03, 3)]
+    return data
 
 
 def random_robot(seed: int):

@@ -20,34 +20,17 @@ from cdpr_design import api
 from cdpr_design import workspaces as ws
 from cdpr_design.model import spec
 
-from .helpers import invoke, planar2_raw, random_planar_data, write_spec
+from .helpers import invoke, planar2_raw, random_planar_data, random_spatial_data, write_spec
 
 KINDS = ("static", "wrench-feasible", "wrench-closure")
 
 
 def _random_spatial_data(rng: np.random.Generator, m: int, motion: str) -> dict:
-    """A random spatial robot: outlets near the top corners of a box frame, small attachments."""
-    w = rng.uniform(1.5, 3.0, 3)
-    corners = [(0, 0), (1, 0), (1, 1), (0, 1)]
-    cables = []
-    for i in range(m):
-        cx, cy = corners[i % 4]
-        top = i < 4 or motion == "3T"
-        cables.append({
-            "name": f"k{i}",
-            "outlet": [float(cx * w[0] + rng.uniform(-0.1, 0.1)), float(cy * w[1] + rng.uniform(-0.1, 0.1)),
-                       float(w[2] * (rng.uniform(0.8, 1.0) if top else rng.uniform(0.0, 0.2)))],
-            "attachment": [float((cx - 0.5) * 0.2), float((cy - 0.5) * 0.2), float(0.05 if top else -0.05)],
-            "tension": [float(rng.uniform(0, 2)), float(rng.uniform(40, 200))],
-        })
-    return {
-        "name": "random3d", "motion": motion,
-        "frame": {"lower": [0.0, 0.0, 0.0], "upper": [float(v) for v in w]},
-        "effector": {"mass": float(rng.uniform(0.2, 3.0)), "size": [0.2, 0.2, 0.1]},
-        "cables": cables,
-        "workspace": {"grid": {"step": float(min(w) / 5)}, "external_wrench": {
-            "lower": [-1.0] * (3 if motion == "3T" else 6), "upper": [1.0] * (3 if motion == "3T" else 6)}},
-    }
+    """A random spatial robot (:func:`~tests.helpers.random_spatial_data`) with a unit external wrench box."""
+    data = random_spatial_data(rng, m, motion)
+    n = 3 if motion == "3T" else 6
+    data["workspace"]["external_wrench"] = {"lower": [-1.0] * n, "upper": [1.0] * n}
+    return data
 
 
 def _random_design(seed: int):

@@ -27,11 +27,8 @@ import numpy as np
 
 from cdpr_design.kernels._jit import jitable, njit, njit_inline
 from cdpr_design.kernels.hsm import basis_factor, null_vector
-from cdpr_design.kernels.linalg import gram_of_inverse
+from cdpr_design.kernels.linalg import RANK_TOL, gram_of_inverse, orthogonalize_column
 from cdpr_design.kernels.parallel import run_blocks
-
-#: Relative tolerance of the rank test of a facet's n - 1 columns.
-RANK_TOL = 1e-10
 
 
 @njit
@@ -50,17 +47,7 @@ def facet_normal(W, subset, Q, c):
         norm0 = math.sqrt(norm0)
         if not norm0 > 0.0:
             return False
-        for _ in range(2):
-            for p in range(j):
-                d = 0.0
-                for i in range(n):
-                    d += Q[i, p] * Q[i, j]
-                for i in range(n):
-                    Q[i, j] -= d * Q[i, p]
-        norm = 0.0
-        for i in range(n):
-            norm += Q[i, j] * Q[i, j]
-        norm = math.sqrt(norm)
+        norm = orthogonalize_column(Q, j, n)
         if not norm > RANK_TOL * norm0:
             return False
         for i in range(n):

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import njit, njit_inline
 
 #: Columns of the per-cable statistics ``cab``: largest |F| [N], least and largest F (x, y, z)
 #: [N], least and largest unit direction (x, y, z).
@@ -46,36 +46,29 @@ def frame_load_stats(P, ok, t, A, Rb, cab, tot):
             ti = t[k, i]
             gx, gy, gz = ti * ux, ti * uy, ti * uz
             cab[i, 0] = max(cab[i, 0], abs(ti))
-            cab[i, 1] = min(cab[i, 1], gx)
-            cab[i, 2] = min(cab[i, 2], gy)
-            cab[i, 3] = min(cab[i, 3], gz)
-            cab[i, 4] = max(cab[i, 4], gx)
-            cab[i, 5] = max(cab[i, 5], gy)
-            cab[i, 6] = max(cab[i, 6], gz)
-            cab[i, 7] = min(cab[i, 7], ux)
-            cab[i, 8] = min(cab[i, 8], uy)
-            cab[i, 9] = min(cab[i, 9], uz)
-            cab[i, 10] = max(cab[i, 10], ux)
-            cab[i, 11] = max(cab[i, 11], uy)
-            cab[i, 12] = max(cab[i, 12], uz)
+            _widen(cab, i, 1, i, 4, gx, gy, gz)
+            _widen(cab, i, 7, i, 10, ux, uy, uz)
             fx += gx
             fy += gy
             fz += gz
             mx += A[i, 1] * gz - A[i, 2] * gy
             my += A[i, 2] * gx - A[i, 0] * gz
             mz += A[i, 0] * gy - A[i, 1] * gx
-        tot[0, 0] = min(tot[0, 0], fx)
-        tot[0, 1] = min(tot[0, 1], fy)
-        tot[0, 2] = min(tot[0, 2], fz)
-        tot[1, 0] = max(tot[1, 0], fx)
-        tot[1, 1] = max(tot[1, 1], fy)
-        tot[1, 2] = max(tot[1, 2], fz)
-        tot[2, 0] = min(tot[2, 0], mx)
-        tot[2, 1] = min(tot[2, 1], my)
-        tot[2, 2] = min(tot[2, 2], mz)
-        tot[3, 0] = max(tot[3, 0], mx)
-        tot[3, 1] = max(tot[3, 1], my)
-        tot[3, 2] = max(tot[3, 2], mz)
+        _widen(tot, 0, 0, 1, 0, fx, fy, fz)
+        _widen(tot, 2, 0, 3, 0, mx, my, mz)
         tot[4, 0] = max(tot[4, 0], math.sqrt(fx * fx + fy * fy + fz * fz))
         tot[4, 1] = max(tot[4, 1], math.sqrt(mx * mx + my * my + mz * mz))
         tot[4, 2] += 1.0
+
+
+@njit_inline
+def _widen(M, r_lo, c_lo, r_hi, c_hi, x, y, z):
+    """Lower ``M[r_lo, c_lo:c_lo + 3]`` to (x, y, z) where they are smaller, and raise
+    ``M[r_hi, c_hi:c_hi + 3]`` to them where they are larger (an envelope's least and largest
+    vector, componentwise)."""
+    M[r_lo, c_lo] = min(M[r_lo, c_lo], x)
+    M[r_lo, c_lo + 1] = min(M[r_lo, c_lo + 1], y)
+    M[r_lo, c_lo + 2] = min(M[r_lo, c_lo + 2], z)
+    M[r_hi, c_hi] = max(M[r_hi, c_hi], x)
+    M[r_hi, c_hi + 1] = max(M[r_hi, c_hi + 1], y)
+    M[r_hi, c_hi + 2] = max(M[r_hi, c_hi + 2], z)

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_folded
+from cdpr_design.kernels._jit import njit, njit_folded, njit_inline
 
 
 #: Relative tolerance below which a facet normal or a pivot counts as zero.
@@ -14,6 +14,25 @@ RANK_TOL = 1e-10
 
 #: Relative tolerance of the wrench-closure sign test (|l_j| against |w_j|).
 CLOSURE_TOL = 1e-12
+
+
+@njit_inline
+def orthogonalize_column(A, k, rows):
+    """Column ``k`` of ``A`` made orthogonal, over its first ``rows`` entries, to columns 0..k-1
+    (orthonormal) by classical Gram-Schmidt, applied twice (the second pass restores the
+    orthogonality the first loses to rounding); returns the column's Euclidean norm after it
+    (the column is not normalised)."""
+    for _ in range(2):
+        for p in range(k):
+            d = 0.0
+            for i in range(rows):
+                d += A[i, p] * A[i, k]
+            for i in range(rows):
+                A[i, k] -= d * A[i, p]
+    s = 0.0
+    for i in range(rows):
+        s += A[i, k] * A[i, k]
+    return math.sqrt(s)
 
 
 @njit

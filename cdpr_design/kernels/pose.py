@@ -310,24 +310,20 @@ def rows_small(k0, k1, place, src, st, out, buf, facets, project):
 @njit_inline
 def rows_square(k0, k1, place, src, st, out, buf):
     """Rows k0..k1-1 for m = n (:func:`eval_square_into`, its work arrays from the scratch)."""
-    tmax, kind, feasible, margin, tensions = st.tmax, st.kind, out.feasible, out.margin, out.tensions
-    W, t, L, lo, w, S = buf.W, buf.t, buf.L, buf.lo, buf.w, buf.scr
-    Winv, rn, a = S.A, S.Gt, S.tab
-    for k in range(k0, k1):
-        status = place(k, src, st, W, L, lo, w, out)
-        if status == ROW_DONE:
-            continue
-        if status == ROW_EMPTY:
-            _empty_row(k, feasible, margin, tensions)
-        else:
-            f, mg = eval_square_into(W, w, lo, tmax, kind, t, Winv, rn, a)
-            _put_row(k, f, mg, t, feasible, margin, tensions)
+    _rows_each(k0, k1, place, src, st, out, buf, _square_pose)
 
 
 @njit_inline
 def rows_any(k0, k1, place, src, st, out, buf):
     """Rows k0..k1-1 for any m - n, by the general methods (:func:`pose_any`)."""
-    tmax, kind, combos, feasible, margin, tensions = st.tmax, st.kind, st.combos, out.feasible, out.margin, out.tensions
+    _rows_each(k0, k1, place, src, st, out, buf, _any_pose)
+
+
+@njit_inline
+def _rows_each(k0, k1, place, src, st, out, buf, pose):
+    """Rows k0..k1-1, each placed pose evaluated by ``pose(W, w, lo, st, t, scr)`` -> (feasible,
+    margin [N]) with its tensions [N] in ``t`` (inlined, as ``pose`` is: one loop per method)."""
+    feasible, margin, tensions = out.feasible, out.margin, out.tensions
     W, t, L, lo, w, scr = buf.W, buf.t, buf.L, buf.lo, buf.w, buf.scr
     for k in range(k0, k1):
         status = place(k, src, st, W, L, lo, w, out)
@@ -336,8 +332,20 @@ def rows_any(k0, k1, place, src, st, out, buf):
         if status == ROW_EMPTY:
             _empty_row(k, feasible, margin, tensions)
         else:
-            f, mg = pose_any(W, w, lo, tmax, combos, kind, t, scr)
+            f, mg = pose(W, w, lo, st, t, scr)
             _put_row(k, f, mg, t, feasible, margin, tensions)
+
+
+@njit_inline
+def _square_pose(W, w, lo, st, t, scr):
+    """A pose of :func:`rows_square`: :func:`eval_square_into` on the scratch's arrays."""
+    return eval_square_into(W, w, lo, st.tmax, st.kind, t, scr.A, scr.Gt, scr.tab)
+
+
+@njit_inline
+def _any_pose(W, w, lo, st, t, scr):
+    """A pose of :func:`rows_any`: :func:`pose_any`."""
+    return pose_any(W, w, lo, st.tmax, st.combos, st.kind, t, scr)
 
 
 @njit_inline

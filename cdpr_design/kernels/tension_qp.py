@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_folded
-from cdpr_design.kernels.linalg import householder_qr
+from cdpr_design.kernels.linalg import householder_qr, orthogonalize_column
 from cdpr_design.kernels.hsm import basis_factor
 
 
@@ -40,17 +40,7 @@ def null_space(n, m, w, tab, N, tp, tb, nbc, bcol):
         N[col, k] = 1.0
         for s in range(n):
             N[bcol[s], k] = -tab[s, col]
-        for _ in range(2):
-            for p in range(k):
-                d = 0.0
-                for j in range(m):
-                    d += N[j, p] * N[j, k]
-                for j in range(m):
-                    N[j, k] -= d * N[j, p]
-        s = 0.0
-        for j in range(m):
-            s += N[j, k] * N[j, k]
-        s = 1.0 / math.sqrt(s)
+        s = 1.0 / orthogonalize_column(N, k, m)
         for j in range(m):
             N[j, k] *= s
     for j in range(m):

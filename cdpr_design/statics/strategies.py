@@ -29,7 +29,8 @@ CLOSURE = "wrench-closure"
 class Strategy:
     """A named strategy (its ``name`` is what the outputs report)."""
 
-    name: str = ""
+    def __init__(self, name: str):
+        self.name = name
 
     def __str__(self) -> str:
         return self.name
@@ -45,8 +46,9 @@ class CableModel(Strategy):
     ``rigid``: inextensible and weightless (ideal): the length is the chord, and the cables
     have no state beside their tension."""
 
-    straight = True
-    rigid = True
+    def __init__(self, name: str, straight: bool = True, rigid: bool = True):
+        super().__init__(name)
+        self.straight, self.rigid = straight, rigid
 
     def sags(self, kind: str) -> bool:
         """Whether the statics of ``kind`` solve each cable's catenary (sagging cables, every kind
@@ -73,19 +75,8 @@ class CableModel(Strategy):
                 + [f"sag_{c}" for c in names])
 
 
-class _Ideal(CableModel):
-    name = "ideal"
-
-
-class _Elastic(CableModel):
-    name = "elastic"
-    rigid = False
-
-
 class _Sagging(CableModel):
-    name = "sagging"
-    straight = False
-    rigid = False
+    """Heavy elastic cables: each takes its catenary, but under wrench closure its chord."""
 
     def sags(self, kind: str) -> bool:
         return kind != CLOSURE
@@ -99,7 +90,8 @@ class _Sagging(CableModel):
         return super().state_columns(names) + ["cable_status"]
 
 
-IDEAL, ELASTIC, SAGGING = _Ideal(), _Elastic(), _Sagging()
+IDEAL, ELASTIC = CableModel("ideal"), CableModel("elastic", rigid=False)
+SAGGING = _Sagging("sagging", straight=False, rigid=False)
 #: Cable models, lightest first (docs/cable-models.md).
 CABLE_MODELS: tuple[CableModel, ...] = (IDEAL, ELASTIC, SAGGING)
 
@@ -154,15 +146,10 @@ class Outlets(Strategy):
         return L, L, u, Ld, Ldd
 
 
-class _Points(Outlets):
-    name = "points"
-
-
 class _Pulleys(Outlets):
     """Swivel pulleys: arc + free length, u along the free segment from the tangent point
     (:mod:`cdpr_design.statics.pulley`)."""
 
-    name = "pulleys"
     pulleys = True
 
     def structure(self, robot, full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -199,7 +186,7 @@ class _Pulleys(Outlets):
         return cp.lengths, cp.free_lengths, u, Ld, Ldd
 
 
-POINTS, PULLEYS = _Points(), _Pulleys()
+POINTS, PULLEYS = Outlets("points"), _Pulleys("pulleys")
 
 
 class Orientation(Strategy):
@@ -208,26 +195,15 @@ class Orientation(Strategy):
     ``commanded``: the command fixes it; ``held``: an under-constrained effector held at the
     commanded orientation, the tilt it would hang with reported beside (``tilt_beside``);
     ``hanging`` (``free``): ``effector.orientation: free``, it hangs where the cables and
-    gravity put it, within the tilt limit."""
+    gravity put it, within the tilt limit.  ``free``: the orientation is found by hanging (the
+    statics depend on it); ``tilt_beside``: the tilt the effector would hang with is reported
+    beside the commanded orientation."""
 
-    #: the orientation is found by hanging (the statics depend on it)
-    free = False
-    #: the tilt the effector would hang with is reported beside the commanded orientation
-    tilt_beside = False
-
-
-class _Commanded(Orientation):
-    name = "commanded"
+    def __init__(self, name: str, free: bool = False, tilt_beside: bool = False):
+        super().__init__(name)
+        self.free, self.tilt_beside = free, tilt_beside
 
 
-class _Held(Orientation):
-    name = "held"
-    tilt_beside = True
-
-
-class _Hanging(Orientation):
-    name = "hanging"
-    free = True
-
-
-COMMANDED, HELD, HANGING = _Commanded(), _Held(), _Hanging()
+COMMANDED = Orientation("commanded")
+HELD = Orientation("held", tilt_beside=True)
+HANGING = Orientation("hanging", free=True)
