@@ -132,6 +132,16 @@ def test_stl_is_closed_and_its_volume_is_boundary_measure(tmp_path, step):
     assert np.all(lo >= np.array(g["lower"]) - 1e-5) and np.all(hi <= np.array(tops) + 1e-5)  # clipped by the box
 
 
+def whole_field_boundary(grid, field, evaluator):
+    """The boundary of a whole signed margin ``field`` (the grid's shape) as the sweep's
+    :class:`~cdpr_design.workspaces.boundary.Slabs` find it from streamed rows, the field given at
+    once; ``evaluator()`` gives the feasibility test at positions (k, 3) [m]."""
+    slabs = wb.Slabs(grid, 1.0)
+    flat = np.ascontiguousarray(field, dtype=np.float32).reshape(-1)
+    slabs.add(0, flat > 0, np.abs(flat))
+    return slabs.boundary(evaluator)
+
+
 def test_random_fields_give_closed_meshes():
     """Noise fields (the hardest topology) with a random refinement: always closed, consistently
     wound, outward, and the volume trimesh finds."""
@@ -145,7 +155,7 @@ def test_random_fields_give_closed_meshes():
             ok = rng.random(len(P)) < 0.5
             return ok, np.where(ok, 1.0, -1.0) * rng.random(len(P))  # margins that agree, sometimes
 
-        b = wb.find_boundary(g, wb.signed_margin(f > 0, np.abs(f)), lambda: test)
+        b = whole_field_boundary(g, wb.signed_margin(f > 0, np.abs(f)), lambda: test)
         if len(b.faces):
             m = trimesh.Trimesh(b.vertices, b.faces, process=False)
             assert m.is_watertight and m.is_winding_consistent

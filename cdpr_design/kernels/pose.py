@@ -61,13 +61,6 @@ def pose_one(W, wreq, tmin, tmax, combos, kind, t_out, scr):
 
 
 @njit_inline
-def pose_square(W, wreq, tmin, tmax, combos, kind, t_out, scr):
-    """:func:`eval_square_into` for m = n, its work arrays from the scratch: (n, n), (n,) and
-    (n, m + n = 2n); the arguments of :func:`eval_general`'s other methods."""
-    return eval_square_into(W, wreq, tmin, tmax, kind, t_out, scr.A, scr.Gt, scr.tab)
-
-
-@njit_inline
 def pose_any(W, wreq, tmin, tmax, combos, kind, t_out, scr):
     """:func:`eval_general` by the general methods, for any m - n: the enumerated hyperplane
     shifting (:func:`~cdpr_design.kernels.hsm.hsm_enumerate`) and the Goldfarb-Idnani QP
@@ -349,23 +342,6 @@ def _any_pose(W, w, lo, st, t, scr):
 
 
 @njit_inline
-def eval_row(k, ok, W, wreq, tmin, tmax, combos, kind, t, scr, feasible, margin, tensions, pose):
-    """Row ``k`` of a sweep's outputs from the pose's structure matrix ``W`` (n, m), by ``pose``
-    (:func:`pose_square`, :func:`pose_one`, :func:`pose_two` or :func:`pose_any`, chosen by the
-    caller for its robot) with the block's scratch ``scr`` and tension buffer ``t`` (m,).
-
-    ``ok`` False (a zero-length cable): infeasible, margin and tensions NaN.  Written to
-    ``feasible[k]`` (uint8), ``margin[k]`` (-0.0 as 0.0: one zero in the CSV, whatever the
-    engine) [N] and ``tensions[k]`` [N].
-    """
-    if not ok:
-        _empty_row(k, feasible, margin, tensions)
-        return
-    f, mg = pose(W, wreq, tmin, tmax, combos, kind, t, scr)
-    _put_row(k, f, mg, t, feasible, margin, tensions)
-
-
-@njit_inline
 def _empty_row(k, feasible, margin, tensions):
     """Row ``k``: infeasible, margin and tensions NaN (a cable of zero length)."""
     feasible[k] = 0
@@ -384,18 +360,9 @@ def _put_row(k, f, mg, t, feasible, margin, tensions):
         tensions[k, i] = t[i]
 
 
-@jitable
-def row_buffers(n, m, nv):
-    """What :func:`eval_row` works in, for one block of poses: the structure matrix W (n, m),
-    tensions t (m,) [N], lengths L (m,) [m], the pose's lower tension bounds lo (m,) [N]
-    (:func:`raise_floor`) and the scratch (:func:`make_scratch`, ``nv`` required-wrench rows).
-    A plain function from Python, as :func:`make_scratch`."""
-    return np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m), make_scratch(n, m, nv)
-
-
 class RowBlock:
-    """Rows k0..k1-1 of a sweep: the block's buffers (``buffers(n, m, nv)``, by default the straight
-    cables' :func:`row_buffers`), then ``loop`` over its poses, called as
+    """Rows k0..k1-1 of a sweep: the block's buffers (``buffers(n, m, nv)``, a tuple of work arrays),
+    then ``loop`` over its poses, called as
     ``loop(k0, k1, *args, *buffers(n, m, nv), *extra(m))`` (``loop(k0, k1, *args, W, t, L, lo, scr)``).
 
     ``loop`` is the compiled loop the caller chose in Python for the robot's m - n (each compiled
@@ -406,9 +373,8 @@ class RowBlock:
     (docs/performance.md); from Python, the buffers and the call cost little a block.
     """
 
-    def __init__(self, loop, dims, extra=None, buffers=None):
-        self.loop, self.dims, self.extra = loop, dims, extra
-        self.buffers = row_buffers if buffers is None else buffers
+    def __init__(self, loop, dims, extra=None, *, buffers):
+        self.loop, self.dims, self.extra, self.buffers = loop, dims, extra, buffers
 
     @property
     def signatures(self) -> list:

@@ -139,16 +139,6 @@ def signed_margin(feasible: np.ndarray, margin: np.ndarray) -> np.ndarray:
     return np.where(np.asarray(feasible).astype(bool), mag, -mag).astype(np.float32)
 
 
-def find_boundary(grid: Grid, field: np.ndarray, evaluator, scale: float = 1.0) -> Boundary:
-    """The :class:`Boundary` of a whole signed margin ``field`` (the grid's shape,
-    :func:`signed_margin`) of a sweep over ``grid``, as :class:`BoundaryField` finds it from the
-    streamed rows; ``evaluator()`` gives the feasibility test at positions (k, 3) [m]."""
-    slabs = Slabs(grid, scale)
-    flat = np.ascontiguousarray(field, dtype=np.float32).reshape(-1)
-    slabs.add(0, flat > 0, np.abs(flat))
-    return slabs.boundary(evaluator)
-
-
 class Slabs:
     """The contouring of a streamed field, one slab of consecutive planes of the grid's first axis
     at a time: what it holds is the planes of one slab as float32 (at least two, about

@@ -16,6 +16,8 @@ In the same rounds on this machine:
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 
 from benchmarks import harness as h
@@ -68,18 +70,19 @@ def per_pose_cvxpy(design, poses):
 
 
 def per_pose_plain_hsm(design, poses):
-    from cdpr_design import kernels as K
+    sys.path.insert(0, str(h.ROOT))
     from cdpr_design.statics import kinematics as kin
     from cdpr_design.statics.robot import combinations
+    from tests.reference.hsm import hsm_margin
 
     combos = combinations(design.m, design.n)
     tmin, tmax = design.tension_min, design.tension_max
     Ws = [np.ascontiguousarray(kin.structure_matrix(design, p)) for p in poses]
     ws_ = [kin.required_wrench(design, p)[None, :] for p in poses]
-    K.hsm_margin(Ws[0], ws_[0], tmin, tmax, combos)  # compile / load
+    hsm_margin(Ws[0], ws_[0], tmin, tmax, combos)  # compile / load
     feas = 0
     for W, w in zip(Ws, ws_):
-        ok, mg = K.hsm_margin(W, w, tmin, tmax, combos)
+        ok, mg = hsm_margin(W, w, tmin, tmax, combos)
         feas += ok and mg >= 0
     return feas
 

