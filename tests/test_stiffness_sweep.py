@@ -59,7 +59,6 @@ def test_without_the_option_the_table_is_unchanged(tmp_path):
 
 
 @pytest.mark.parametrize("name, args, reason", [
-    ("sagging40", (), "--stiffness: sagging cables: the elastic catenary's stiffness is not modelled"),
     ("ipanema3", (), "--stiffness: ideal cables without cable.axial_stiffness"),
     ("planar4", ("--orientations", "total"), "--stiffness: an orientation workspace's rows"),
 ])

@@ -71,7 +71,9 @@ def pose(
         c = parse_weights(design, weights)
         result = evaluate_pose(robot, p, c)
         data = job.pose_data(design, result)
-        stiffness = job.stiffness_data(design, p, result.tensions, feasible=result.feasible)
+        state = result.cable_state
+        stiffness = job.stiffness_data(design, p, result.tensions, feasible=result.feasible,
+                                       unstretched=None if state is None else state.unstretched_lengths)
         accelerations = job.acceleration_data(robot, p)
         if robot.underconstrained and robot.cables.rigid and not robot.outlets.pulleys:
             data.update(hjob.hanging_fields(design, p[: design.motion.dim]))

@@ -59,9 +59,11 @@ CLOSURE_WITHOUT_TENSIONS = ("wrench closure holds here (it ignores the tension b
                             "the bounds balance the effector's load: no stiffness")
 
 
-def stiffness_data(design, pose=None, tensions=None, reason: str | None = None, feasible: bool | None = None) -> dict:
+def stiffness_data(design, pose=None, tensions=None, reason: str | None = None, feasible: bool | None = None,
+                   unstretched=None) -> dict:
     """The stiffness and vibration keys of ``pose --json`` (cli.md) at a pose held by ``tensions``
-    [N] (:func:`cdpr_design.statics.stiffness.pose_stiffness`); with ``pose`` None, every value
+    [N] with the cables' ``unstretched`` lengths [m] (needed for sagging cables;
+    :func:`cdpr_design.statics.stiffness.pose_stiffness`); with ``pose`` None, every value
     null and ``reason`` the stiffness_reason.  ``feasible``: the pose's feasibility for its kind;
     a feasible pose without tensions (wrench closure, which drops the bounds) is said to be so,
     not infeasible."""
@@ -74,7 +76,7 @@ def stiffness_data(design, pose=None, tensions=None, reason: str | None = None, 
         return {"stiffness_matrix": None, "translational_stiffness": None, "min_stiffness": None,
                 "natural_frequencies": None, "mode_shapes": None, "cable_frequencies": dict.fromkeys(names),
                 "stiffness_reason": reason}
-    s = pose_stiffness(design, pose, tensions)
+    s = pose_stiffness(design, pose, tensions, unstretched)
 
     def num(v):
         return float(v) if np.isfinite(v) else None

@@ -152,7 +152,7 @@ class RequirementsSpec(StrictModel):
                           "bound 4 f^2 L^2 mu per cable with a mass_per_length")
     min_stiffness: PosFloat | None = Field(
         None, description="Least stiffness [N/m] against a force at the reference point over the task box "
-                          "(check; elastic cables, or ideal ones with axial_stiffness)")
+                          "(check; elastic or sagging cables, or ideal ones with axial_stiffness)")
     min_frequency: PosFloat | None = Field(
         None, description="Lowest natural frequency [Hz] of the effector on its cables allowed over the task box")
     max_frame_load: PosFloat | None = Field(

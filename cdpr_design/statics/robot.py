@@ -431,11 +431,12 @@ def acceleration_reason(cables: CableModel, orientation: Orientation) -> str | N
 
 def stiffness_reason(design: Design, cables: CableModel, outlets: Outlets, orientation: Orientation) -> str | None:
     """Why the stiffness of the design's effector on its cables is not defined, or None (it is:
-    straight cables from point outlets, each with an axial stiffness, the orientation commanded
-    or held, :mod:`cdpr_design.statics.stiffness`; or a hanging effector on straight cables, rigid
-    or elastic, :mod:`cdpr_design.statics.hanging.compliance`)."""
-    if not cables.straight:
-        return "sagging cables: the elastic catenary's stiffness is not modelled (use --cable-model elastic)"
+    straight or sagging cables from point outlets, each with an axial stiffness, the orientation
+    commanded or held, :mod:`cdpr_design.statics.stiffness`; or a hanging effector on straight
+    cables, rigid or elastic, :mod:`cdpr_design.statics.hanging.compliance`)."""
+    if not cables.straight and orientation.free:
+        return ("sagging cables: a hanging effector's stiffness on catenaries is not modelled (use --cable-model "
+                "elastic)")
     if outlets.pulleys:
         return "swivel pulleys: the stiffness of a cable over a pulley is not modelled"
     if orientation.free:  # on rigid cables too: it swings on them (cdpr_design.statics.hanging.compliance)

@@ -1,43 +1,45 @@
-"""Stiffness and vibration of the effector on its cables (straight elastic cables).
+"""Stiffness and vibration of the effector on its cables (straight elastic and sagging cables).
 
 Conventions
 -----------
 The effector's displacement x = (dp, dtheta): dp [m] moves the reference point (the platform
 origin p), dtheta [rad] is a small rotation vector about frame axes through p
 (R -> exp([dtheta]x) R).  The wrench w = (f, m) [N, N m] is the total wrench on the effector --
-the cables' pulls t_i u_i and the weight m g at the centre of mass R c -- with moments about p:
-the frame and the reference point of the structure matrix W of
+the cables' forces F_i at the attachments and the weight m g at the centre of mass R c -- with
+moments about p: the frame and the reference point of the structure matrix W of
 :mod:`cdpr_design.statics.kinematics` (column i = [u_i; (R b_i) x u_i]).  The stiffness matrix is
 
-    K = -dw/dx  at fixed unstretched lengths L0_i,
+    K = -dw/dx  at fixed unstretched lengths L0_i.
 
-for a cable tension t_i = EA_i (L_i - L0_i) / L0_i.  With r_i = R b_i, F_i = t_i u_i and
-k_i = EA_i / L0_i (= (EA_i + t_i) / L_i), and the cable's stiffness at its attachment
-
-    H_i = k_i u_i u_i^T + (t_i / L_i) (I - u_i u_i^T)       (elastic + geometric part)
+With r_i = R b_i and H_i = -dF_i/db_i the cable's stiffness at its attachment,
 
     K_pp = sum H_i                        K_pr = -sum H_i [r_i]x
     K_rp = sum [r_i]x H_i                 K_rr = -sum ([r_i]x H_i [r_i]x + [F_i]x [r_i]x) - [m g]x [R c]x
 
 (Behzadipour & Khajepour, "Stiffness of cable-based parallel manipulators with application to
 stability analysis", ASME J. Mech. Des. 128(1), 2006; Pott, "Cable-Driven Parallel Robots",
-Springer 2018, the stiffness chapter).  The elastic part is sum k_i w_i w_i^T with w_i the
-columns of W; the rest grows with the tensions.  K is symmetric at an equilibrium (the net
-wrench zero) and not in general away from one.  A motion type keeps its coordinates' rows and
-columns (2T: x, y; 1R2T: x, y, phi; 3T: x, y, z; 3R3T all six), the others held.  For 1R2T the
-small rotation is d(phi) exactly; for 3R3T it is not the increment of the pose's xyz Euler
-angles: d(theta) = E(angles) d(angles) (:func:`cdpr_design.statics.kinematics.euler_rates_to_omega`),
-so the stiffness in Euler angles is E^T K_rr E (at an equilibrium).
+Springer 2018, the stiffness chapter).  A straight elastic cable of tension t_i = EA_i (L_i -
+L0_i) / L0_i along u_i has H_i = k_i u_i u_i^T + (t_i / L_i)(I - u_i u_i^T), k_i = EA_i / L0_i;
+a sagging cable (Irvine's elastic catenary) the inverse of its flexibility matrix d(X, Z)/d(H, VB)
+in its vertical plane and H / X across it (:mod:`cdpr_design.kernels.stiffness`, the one
+implementation; docs/algorithms.md).  K is symmetric at an equilibrium (the net wrench zero) and
+not in general away from one.  A motion type keeps its coordinates' rows and columns (2T: x, y;
+1R2T: x, y, phi; 3T: x, y, z; 3R3T all six), the others held.  For 1R2T the small rotation is
+d(phi) exactly; for 3R3T it is not the increment of the pose's xyz Euler angles:
+d(theta) = E(angles) d(angles) (:func:`cdpr_design.statics.kinematics.euler_rates_to_omega`), so
+the stiffness in Euler angles is E^T K_rr E (at an equilibrium).
 
 Vibration: K v = omega^2 M v with M the effector's rigid-body mass matrix at p (mass, centre of
-mass offset, inertia moved to p by the parallel-axis rule), restricted like K.  Cable mass is
-neglected (massless springs): the effector's modes are right while the cables weigh much less
-than the effector; their own transverse modes are :func:`string_frequencies`.
+mass offset, inertia moved to p by the parallel-axis rule), restricted like K.  Straight cables
+are massless (the elastic model); a sagging cable adds a third of its mass (mu L0_i / 3) as a
+point mass at its attachment (Rayleigh's lumping of a cable whose points follow its end in
+proportion to their distance from the outlet).  The cables' own transverse modes are
+:func:`string_frequencies`.
 
-Cables: ``elastic`` ones with their ``axial_stiffness``, and ``ideal`` ones when the spec gives
-an ``axial_stiffness`` (the tensions are the same).  An ideal cable without one is rigid along
-its length: the stiffness is infinite and not reported (:func:`axial_stiffnesses` says why);
-``sagging`` cables and swivel pulleys are not modelled here.
+Cables: ``elastic`` ones with their ``axial_stiffness``, ``sagging`` ones, and ``ideal`` ones when
+the spec gives an ``axial_stiffness`` (the tensions are the same).  An ideal cable without one is
+rigid along its length: the stiffness is infinite and not reported (:func:`axial_stiffnesses`
+says why); swivel pulleys are not modelled here.
 """
 
 from __future__ import annotations
@@ -48,7 +50,7 @@ import numpy as np
 
 from cdpr_design.model.design import Design
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.robot import facts
+from cdpr_design.statics.robot import cable_arrays, facts
 
 
 def skew(v) -> np.ndarray:
@@ -64,32 +66,6 @@ def axial_stiffnesses(design: Design) -> tuple[np.ndarray | None, str | None]:
     if reason is not None:
         return None, reason
     return np.array([float(c.props.axial_stiffness) for c in design.cables]), None
-
-
-def stiffness_matrix(vectors, Rb, tensions, EA, weight, com) -> np.ndarray:
-    """The full 6x6 K = -dw/dx [N/m, N/rad, N m/m, N m/rad] (module notes) at any configuration.
-
-    ``vectors`` (m, 3) l_i = a_i - (p + R b_i) [m]; ``Rb`` (m, 3) R b_i [m]; ``tensions`` (m,)
-    t_i = EA_i (L_i - L0_i) / L0_i [N]; ``EA`` (m,) [N]; ``weight`` (3,) m g [N]; ``com`` (3,)
-    R c [m].
-    """
-    l = np.asarray(vectors, float)
-    L = np.linalg.norm(l, axis=1)
-    u = l / L[:, None]
-    t = np.asarray(tensions, float)
-    k = (np.asarray(EA, float) + t) / L
-    K = np.zeros((6, 6))
-    eye = np.eye(3)
-    for i in range(l.shape[0]):
-        uu = np.outer(u[i], u[i])
-        H = k[i] * uu + t[i] / L[i] * (eye - uu)
-        r = skew(Rb[i])
-        K[:3, :3] += H
-        K[:3, 3:] -= H @ r
-        K[3:, :3] += r @ H
-        K[3:, 3:] -= r @ H @ r + skew(t[i] * u[i]) @ r
-    K[3:, 3:] += weight_term(weight, com)
-    return K
 
 
 def weight_term(weight, com) -> np.ndarray:
@@ -118,24 +94,6 @@ def restrict(design: Design, A: np.ndarray) -> np.ndarray:
     """A 6x6 matrix restricted to the motion's coordinates (rows and columns of ``pose_index``)."""
     sel = list(design.motion.pose_index)
     return A[np.ix_(sel, sel)]
-
-
-def min_stiffness(K: np.ndarray, d: int) -> float:
-    """The least stiffness [N/m] against a force at the reference point, the effector free to rotate.
-
-    ``K`` (n, n) restricted, its first ``d`` coordinates translations: the least eigenvalue of the
-    symmetric part of the Schur complement K_pp - K_pr K_rr^-1 K_rp (the inverse of the compliance's
-    translational block), of K_pp itself without rotations.  Negative: unstable; NaN where K_rr is
-    singular.
-    """
-    Ks = 0.5 * (K + K.T)
-    S = Ks[:d, :d]
-    if K.shape[0] > d:
-        try:
-            S = S - Ks[:d, d:] @ np.linalg.solve(Ks[d:, d:], Ks[d:, :d])
-        except np.linalg.LinAlgError:
-            return float("nan")
-    return float(np.linalg.eigvalsh(0.5 * (S + S.T))[0])
 
 
 def vibration(K: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -202,11 +160,15 @@ class PoseStiffness:
     frequency_floor: np.ndarray | None = None
 
 
-def pose_stiffness(design: Design, pose, tensions) -> PoseStiffness:
-    """:class:`PoseStiffness` at a pose (motion coordinates) held by ``tensions`` (m,) [N].
+def pose_stiffness(design: Design, pose, tensions, unstretched=None) -> PoseStiffness:
+    """:class:`PoseStiffness` at a pose (motion coordinates) held by ``tensions`` (m,) [N]
+    (effector-end tensions).
 
-    The unstretched lengths are those the tensions stretch to the pose's lengths (an equilibrium
-    when the tensions balance the pose's wrench, as :func:`cdpr_design.workspaces.pose.evaluate_pose`'s do).
+    Straight cables: the unstretched lengths are those the tensions stretch to the pose's lengths
+    (an equilibrium when the tensions balance the pose's wrench, as
+    :func:`cdpr_design.workspaces.pose.evaluate_pose`'s do).  Sagging cables: ``unstretched`` (m,)
+    [m] their unstretched lengths (the pose's cable state), which fix their shapes; their
+    tensions only start the catenaries' solves (NaN: the solver's own start).
     """
     g = kin.cable_geometry(design, pose)
     t = np.asarray(tensions, float)
@@ -214,20 +176,33 @@ def pose_stiffness(design: Design, pose, tensions) -> PoseStiffness:
     free = np.linalg.norm(g.vectors, axis=1)
     strings = string_frequencies(free, t, mu)
     floor = frequency_tension_floor(design, free)
-    EA, reason = axial_stiffnesses(design)
-    if reason is None and not np.all(np.isfinite(t)):
-        reason = "no tensions hold the effector at this pose (infeasible)"
+    full = design.full_pose(pose)
+    arrays = sweep_arrays(design, full[3:])
+    reason = arrays if isinstance(arrays, str) else None
+    L0 = np.full(design.m, np.nan) if unstretched is None else np.asarray(unstretched, float)
+    if reason is None:
+        sags = arrays.w > 0
+        if not np.all(np.isfinite(t[~sags])) or not np.all(np.isfinite(L0[sags]) | np.isfinite(t[sags])):
+            reason = "no tensions hold the effector at this pose (infeasible)"
+        elif not np.all(np.isfinite(L0[sags])):
+            reason = ("the sagging cables have no shapes at this pose (wrench closure takes their chords, "
+                      "with tensions but without unstretched lengths): no stiffness")
     if reason is None and not np.all(free > 1e-12):
         reason = "a cable has zero length at this pose"
+    K6, M6 = np.empty((6, 6)), np.empty((6, 6))
+    if reason is None:
+        from cdpr_design.kernels.stiffness import pose_matrices
+
+        if not pose_matrices(*full[:3], np.ascontiguousarray(t), np.ascontiguousarray(L0), arrays, K6, M6):
+            reason = "a cable's shape is not known at this pose (its catenary did not converge)"
     if reason is not None:
         return PoseStiffness(None, None, float("nan"), None, None, strings, reason, floor)
-    R = kin.pose_rotation(design, pose)
-    c = R @ np.asarray(design.effector.center_of_mass, float)
-    weight = design.effector.mass * np.asarray(design.gravity, float)
-    K = restrict(design, stiffness_matrix(g.vectors, g.attachments, t, EA, weight, c))
+    from cdpr_design.kernels.stiffness import least_stiffness
+
+    K = restrict(design, K6)
     d = design.motion.dim
-    kmin = min_stiffness(K, d)
-    vib = vibration(K, restrict(design, mass_matrix(design, R)))
+    kmin = float(least_stiffness(K6, arrays.sel, d))
+    vib = vibration(K, restrict(design, 0.5 * (M6 + M6.T)))
     if vib is None:
         return PoseStiffness(K, K[:d, :d], kmin, None, None, strings,
                              "the effector's mass matrix is singular (no mass, or no inertia about a rotation "
@@ -244,27 +219,13 @@ def pose_stiffness(design: Design, pose, tensions) -> PoseStiffness:
 # ----------------------------------------------------------------------------
 
 
-@dataclass(frozen=True)
-class SweepStiffness:
-    """What the kernel needs at one orientation, built once per sweep (:func:`sweep_arrays`).
+def sweep_arrays(design: Design, orientation=None):
+    """The stiffness kernel's :data:`~cdpr_design.kernels.stiffness.Arrays` of a design at a fixed
+    orientation (rx, ry, rz) [rad] (default the workspace's), or the reason the stiffness is not
+    defined (:func:`axial_stiffnesses`).  Sagging cables (``w`` > 0 [N/m]) lump a third of their
+    mass per unstretched length at their attachments (``lump`` [kg/m])."""
+    from cdpr_design.kernels.stiffness import Arrays
 
-    ``Rb`` (m, 3) R b_i [m]; ``A`` (m, 3) outlets [m]; ``EA`` (m,) [N]; ``Kg`` (3, 3) the weight's
-    term [N m/rad]; ``Linv`` (n, n) the inverse Cholesky factor of the restricted mass matrix (NaN
-    when it is singular); ``sel`` (n,) the motion's coordinates; ``d`` the translations among them.
-    """
-
-    Rb: np.ndarray
-    A: np.ndarray
-    EA: np.ndarray
-    Kg: np.ndarray
-    Linv: np.ndarray
-    sel: np.ndarray
-    d: int
-
-
-def sweep_arrays(design: Design, orientation=None) -> SweepStiffness | str:
-    """The :class:`SweepStiffness` of a design at a fixed orientation (rx, ry, rz) [rad] (default the
-    workspace's), or the reason the stiffness is not defined (:func:`axial_stiffnesses`)."""
     EA, reason = axial_stiffnesses(design)
     if reason is not None:
         return reason
@@ -272,40 +233,46 @@ def sweep_arrays(design: Design, orientation=None) -> SweepStiffness | str:
     R = kin.rotation_matrix(*ori)
     c = R @ np.asarray(design.effector.center_of_mass, float)
     weight = design.effector.mass * np.asarray(design.gravity, float)
-    M = restrict(design, mass_matrix(design, R))
+    M0 = mass_matrix(design, R)
     try:
-        Linv = np.linalg.inv(np.linalg.cholesky(M))
+        Linv = np.linalg.inv(np.linalg.cholesky(restrict(design, M0)))
     except np.linalg.LinAlgError:
-        Linv = np.full(M.shape, np.nan)
+        Linv = np.full((len(design.motion.pose_index),) * 2, np.nan)
+    cab = cable_arrays(design)
+    gn = float(np.linalg.norm(design.gravity))
+    lump = cab.w / (3.0 * gn) if gn > 0 else np.zeros(design.m)
     c64 = np.ascontiguousarray
-    return SweepStiffness(c64(design.attachments @ R.T), c64(design.outlets), c64(EA), c64(weight_term(weight, c)),
-                          c64(Linv), np.array(design.motion.pose_index, dtype=np.int64), design.motion.dim)
+    return Arrays(c64(design.attachments @ R.T), c64(design.outlets), c64(EA, dtype=float),
+                  c64(weight_term(weight, c)), c64(Linv), np.array(design.motion.pose_index, dtype=np.int64),
+                  design.motion.dim, c64(cab.w, dtype=float), c64(cab.up, dtype=float), c64(M0), c64(lump))
 
 
-def sweep_figures(arrays: SweepStiffness, positions, tensions) -> tuple[np.ndarray, np.ndarray]:
+def sweep_figures(arrays, positions, tensions, unstretched=None) -> tuple[np.ndarray, np.ndarray]:
     """(min_stiffness (k,) [N/m], lowest_frequency (k,) [Hz]) at ``positions`` (k, 3) [m] held by
-    ``tensions`` (k, m) [N] (NaN rows give NaN), by the kernel :mod:`cdpr_design.kernels.stiffness`."""
+    ``tensions`` (k, m) [N] with ``unstretched`` (k, m) [m] lengths (needed where a cable sags;
+    NaN rows give NaN), by the kernel :mod:`cdpr_design.kernels.stiffness`."""
     P = np.ascontiguousarray(positions, dtype=float)
-    return _figures(arrays, 0, np.zeros(3), np.ones(3), np.ones(3, dtype=np.int64), P, tensions,
+    return _figures(arrays, 0, np.zeros(3), np.ones(3), np.ones(3, dtype=np.int64), P, tensions, unstretched,
                     np.ones(P.shape[0], dtype=np.uint8))
 
 
-def grid_figures(arrays: SweepStiffness, grid3, start: int, tensions, feasible) -> tuple[np.ndarray, np.ndarray]:
+def grid_figures(arrays, grid3, start: int, tensions, feasible, unstretched=None) -> tuple[np.ndarray, np.ndarray]:
     """:func:`sweep_figures` at the grid poses ``start .. start + k - 1`` of ``grid3`` = (lower (3,)
     [m], step (3,) [m], shape (3,) int64) (:func:`cdpr_design.workspaces.grid.grid3`), without
     their positions: the kernel counts the grid's indices as the sweep's kernels do.  ``feasible``
-    (k,) the sweep's flags: NaN where 0, as for rows of NaN ``tensions`` (k, m) [N]."""
+    (k,) the sweep's flags: NaN where 0, as for rows of NaN ``tensions`` (k, m) [N] (or NaN
+    ``unstretched`` (k, m) [m] lengths of sagging cables)."""
     lower, step, shape = grid3
-    return _figures(arrays, start, lower, step, shape, np.empty((0, 3)), tensions,
+    return _figures(arrays, start, lower, step, shape, np.empty((0, 3)), tensions, unstretched,
                     np.ascontiguousarray(feasible, dtype=np.uint8))
 
 
-def _figures(a: SweepStiffness, start, lower, step, shape, P, tensions, feasible):
-    from cdpr_design.kernels.stiffness import Arrays, Poses, stiffness_rows
+def _figures(arrays, start, lower, step, shape, P, tensions, unstretched, feasible):
+    from cdpr_design.kernels.stiffness import Poses, stiffness_rows
 
     T = np.ascontiguousarray(tensions, dtype=float)
+    L0 = np.full(T.shape, np.nan) if unstretched is None else np.ascontiguousarray(unstretched, dtype=float)
     kmin = np.empty(T.shape[0])
     flow = np.empty(T.shape[0])
-    stiffness_rows(Poses(start, lower, step, shape, P), feasible, T, Arrays(a.Rb, a.A, a.EA, a.Kg, a.Linv, a.sel, a.d),
-                   kmin, flow)
+    stiffness_rows(Poses(start, lower, step, shape, P), feasible, T, L0, arrays, kmin, flow)
     return kmin, flow

@@ -2,13 +2,13 @@
 
 :class:`StiffnessColumns` is a wrapper of the sweep plan (:mod:`cdpr_design.workspaces.plan`):
 at each pose the base evaluator found feasible, the effector held by the minimum-norm tensions
-on its elastic cables (:mod:`cdpr_design.statics.stiffness`, the kernel
-:mod:`cdpr_design.kernels.stiffness`) gives
+on its elastic cables, or by its sagging cables of the sweep's unstretched lengths
+(:mod:`cdpr_design.statics.stiffness`, the kernel :mod:`cdpr_design.kernels.stiffness`) gives
 
 - ``min_stiffness`` [N/m]: the smallest stiffness against a force at the reference point, the
   effector free to rotate;
-- ``lowest_frequency`` [Hz]: the lowest natural frequency of the effector on its cables (cable
-  mass neglected);
+- ``lowest_frequency`` [Hz]: the lowest natural frequency of the effector on its cables
+  (straight cables massless, a third of each sagging cable's mass at its attachment);
 
 both empty where the pose is infeasible (no tensions hold it) or the equilibrium is unstable.
 The map of ``min_stiffness`` is drawn as ``stiffness_map.png``; the summary adds the least of
@@ -41,10 +41,14 @@ class StiffnessColumns(Wrapper):
     def __init__(self, robot: Robot, ori, g: Grid):
         self.arrays = sweep_arrays(robot.design, ori)
         self.grid3 = grid3(g)
+        #: the unstretched-length columns a sagging sweep writes (its cables' shapes), else None
+        self.L0 = (None if robot.cables.straight
+                   else tuple(f"unstretched_length_{c}" for c in robot.design.cable_names))
         self.least = {"min_stiffness": math.inf, "lowest_frequency": math.inf}
 
     def add(self, r: Rows, start: int, P: np.ndarray) -> None:
-        kmin, flow = grid_figures(self.arrays, self.grid3, start, r.tensions, r.feasible)
+        L0 = None if self.L0 is None else np.column_stack([r.extra[c] for c in self.L0])
+        kmin, flow = grid_figures(self.arrays, self.grid3, start, r.tensions, r.feasible, L0)
         for name, v in (("min_stiffness", kmin), ("lowest_frequency", flow)):
             r.extra[name] = v
             r.maps[name] = v

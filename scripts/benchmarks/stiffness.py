@@ -9,8 +9,10 @@ kernels compiled (or loaded) before timing: (sweep + stiffness) / sweep.  Then t
 sweep as a command runs it (``workspaces.run``: the plan, its wrappers, the maps; no files), with
 and without ``stiffness=True``, CPU on ``threads`` kernel threads, the two runs of a round back to
 back (each order in every other round: the first run after another design's pays for the memory
-that design's arrays left): the median and range of the rounds' own ratios.  A sagging design is
-measured as its straight elastic twin.
+that design's arrays left): the median and range of the rounds' own ratios.  ``sagging40`` is
+measured with its sagging cables (the catenary sweep, and the catenaries' stiffness from the
+unstretched lengths) and, as ``sagging40:elastic``, as its straight elastic twin, both on the grid
+of ``sagging_step`` [m].
 """
 
 from __future__ import annotations
@@ -21,20 +23,27 @@ import numpy as np
 
 from benchmarks import harness as h
 
-OPTIONS = {"designs": ("cogiro", "planar4", "pointmass3", "planar2", "sagging40"), "threads": 1}
-QUICK = {"designs": ("cogiro", "planar2")}
+OPTIONS = {"designs": ("cogiro", "planar4", "pointmass3", "planar2", "sagging40", "sagging40:elastic"), "threads": 1,
+           "sagging_step": 0.5}
+QUICK = {"designs": ("cogiro", "planar2", "sagging40", "sagging40:elastic")}
 
 CHUNK = 65536
 
 
-def design_of(name: str):
+def design_of(name: str, sagging_step: float):
+    """The shipped design ``name`` (``NAME:elastic``: its straight elastic twin); sagging40 and its
+    twin on the grid of ``sagging_step`` [m]."""
     from cdpr_design.model import spec
-    from cdpr_design.statics import stiffness as st
 
-    d = spec.load(h.ROOT / "designs" / f"{name}.yaml")
-    if st.axial_stiffnesses(d)[1] is not None:  # sagging: its straight elastic twin
-        d = spec.from_dict({**d.raw, "cable": {**d.raw.get("cable", {}), "model": "elastic"}})
-    return d
+    base, _, model = name.partition(":")
+    d = spec.load(h.ROOT / "designs" / f"{base}.yaml")
+    raw = dict(d.raw)
+    if model:
+        raw["cable"] = {**raw.get("cable", {}), "model": model}
+    if base == "sagging40":
+        ws = raw["workspace"]
+        raw["workspace"] = {**ws, "grid": {**ws["grid"], "step": sagging_step}}
+    return spec.from_dict(raw) if raw != d.raw else d
 
 
 def passes(design):
@@ -57,7 +66,15 @@ def passes(design):
     from cdpr_design.statics.robot import resolve
     from cdpr_design.workspaces.engine import StraightSweep
 
-    base = StraightSweep(resolve(design), ori, g)  # the closed form for two cables, else the kernels
+    robot = resolve(design)
+    if robot.cables.straight:
+        base = StraightSweep(robot, ori, g)  # the closed form for two cables, else the kernels
+        names = None
+    else:
+        from cdpr_design.workspaces.cables import SaggingSweep
+
+        base = SaggingSweep(robot, ori, g)
+        names = [f"unstretched_length_{c}" for c in design.cable_names]
     t_sweep = t_stiff = 0.0
     feasible = 0
     for start in range(0, g.size, CHUNK):
@@ -65,8 +82,9 @@ def passes(design):
         c0 = time.process_time()
         rows = base.rows(start, cnt, None)
         feas, ten = rows.feasible, rows.tensions
+        L0 = None if names is None else np.column_stack([rows.extra[c] for c in names])
         c1 = time.process_time()
-        kmin, flow = st.grid_figures(arrays, (lower, step, shape), start, ten, feas)
+        kmin, flow = st.grid_figures(arrays, (lower, step, shape), start, ten, feas, L0)
         c2 = time.process_time()
         t_sweep += c1 - c0
         t_stiff += c2 - c1
@@ -78,7 +96,7 @@ def run(b: h.Bench) -> None:
     from cdpr_design import workspaces as ws
     from cdpr_design.kernels import parallel
 
-    designs = {n: design_of(n) for n in b.opt["designs"]}
+    designs = {n: design_of(n, float(b.opt["sagging_step"])) for n in b.opt["designs"]}
     with parallel.threads_kept():
         parallel.set_threads(1)
         for d in designs.values():  # both kernels compiled or loaded outside the timing
