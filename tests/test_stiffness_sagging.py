@@ -83,6 +83,7 @@ def relative_error(K, K_ref):
     return float(np.max(np.abs(K - K_ref)) / np.max(np.abs(K_ref)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("motion", MOTIONS)
 def test_sagging_stiffness_is_minus_wrench_derivative(motion):
     """20 random robots of each motion type at random poses and random unstretched lengths (the
@@ -133,6 +134,7 @@ def test_light_cables_tend_to_the_elastic_stiffness(motion):
         assert errors[1] <= max(errors[0] / 50, 1e-12) and errors[2] <= max(errors[1] / 50, 1e-12), errors
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("motion", MOTIONS)
 def test_sweep_kernel_matches_numpy(motion):
     """The sweep kernel's least stiffness and lowest frequency (per-pose mass matrices with a
@@ -170,6 +172,7 @@ def test_sweep_kernel_matches_numpy(motion):
     assert compared == 15 * 5
 
 
+@pytest.mark.slow
 def test_workspace_stiffness_with_sagging_cables_is_the_pose_commands(tmp_path):
     """sagging40 (5 kg on 40 m spans of 4 mm steel rope): ``workspace --stiffness`` computes
     the sagging cables' stiffness (no refusal); at feasible rows the columns are ``pose --json``'s
