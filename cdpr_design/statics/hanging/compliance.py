@@ -28,7 +28,7 @@ cables).  The figures reported:
 
 - ``min_stiffness`` [N/m]: 1 / the largest eigenvalue of C's translational block, the least
   stiffness against a force at p with the effector free to turn (the Schur complement of
-  :func:`cdpr_design.statics.stiffness.min_stiffness` for a fixed effector);
+  :func:`cdpr_design.kernels.stiffness.least_stiffness` for a fixed effector);
 - ``min_rotational_stiffness`` [N m/rad]: 1 / the largest eigenvalue of C's rotational
   block, the least stiffness against a moment, the effector free to move;
 - ``lowest_frequency`` [Hz]: the lowest natural frequency of K v = omega^2 M v on the
