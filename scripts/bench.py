@@ -44,6 +44,7 @@ BENCHMARKS = {
     "hanging_cables": "a hanging effector's sweep on elastic cables, with --stiffness and --collisions, against ideal",
     "catenary": "the batched catenary inverse against per-cable scipy",
     "sagging": "sagging-cable workspaces against the ideal model and per-pose scipy",
+    "sag_analyses": "sagging cables' interference checks and orientation workspaces against straight cables'",
     "setpoints": "real-cable set-points along a path against a per-pose loop; the simulation",
     "certify": "the certified paving against a grid sweep",
     "sweep": "sweep backends: process pool and Dask against one process",

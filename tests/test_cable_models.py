@@ -78,13 +78,11 @@ def test_with_cable_model_keeps_the_override_in_raw(planar2):
 
 
 @pytest.mark.slow
-def test_sagging_refuses_pulleys_and_interference(tmp_path, planar2_data):
+def test_sagging_refuses_pulleys(tmp_path, planar2_data):
     planar2_data["cable"]["model"] = "sagging"
     planar2_data["cables"][0]["pulley"] = {"radius": 0.02, "axis": [0.0, 1.0, 0.0]}
     r = invoke("workspace", write_spec(tmp_path, planar2_data), "--out", tmp_path / "o", "-q")
     assert r.exit_code == 2 and "swivel pulleys" in r.output
-    r = invoke("workspace", SAG40, "--collisions", "--out", tmp_path / "o2", "-q")
-    assert r.exit_code == 2 and "interference" in r.output
     # every analysis that builds the catenaries from point outlets refuses the pulley, none ignores it
     spec_path = write_spec(tmp_path, planar2_data)
     r = invoke("size-motors", spec_path, "--out", tmp_path / "o3", "-q")
@@ -101,13 +99,10 @@ def test_sagging_refuses_pulleys_and_interference(tmp_path, planar2_data):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("mode", ["total", "range"])
-def test_orientation_workspaces_take_elastic_cables_and_refuse_sagging(tmp_path, mode):
+def test_orientation_workspaces_take_elastic_and_sagging_cables(tmp_path, mode):
     cogiro = DESIGNS / "cogiro.yaml"
-    r = invoke("workspace", cogiro, "--orientations", mode, "--cable-model", "sagging", "--step", "2",
-               "--out", tmp_path / "s", "-q")
-    assert r.exit_code == 2 and "orientation workspaces" in r.output, r.output
     runs = {}
-    for model in ("ideal", "elastic"):
+    for model in ("ideal", "elastic", "sagging"):
         r = invoke("workspace", cogiro, "--orientations", mode, "--cable-model", model, "--step", "2",
                    "--out", tmp_path / model, "-q")
         assert r.exit_code == 0, r.output
@@ -120,6 +115,12 @@ def test_orientation_workspaces_take_elastic_cables_and_refuse_sagging(tmp_path,
     assert el_sum["cable_model"] == "elastic" and "cable_model" not in ideal_sum
     assert el_sum["max_outlet_tension_per_cable"] == ideal_sum["max_tension_per_cable"]
     assert el_sum["feasible"] == ideal_sum["feasible"] > 0
+    # sagging cables: their own statics at every orientation, the same columns, the model's summary
+    (sag_rows, sag_sum) = runs["sagging"]
+    assert sag_rows[0] == ideal_rows[0] and sag_rows != ideal_rows
+    assert sag_sum["cable_model"] == "sagging" and sum(sag_sum["cable_status"].values()) == \
+        sag_sum["orientations_evaluated"]
+    assert 0 < sag_sum["feasible"] <= ideal_sum["feasible"]
 
 
 # ----------------------------------------------------------------------------

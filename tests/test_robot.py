@@ -82,8 +82,6 @@ def _cases(planar2, ipanema3, cogiro):
         ("--orientations: expected total or range", ipanema3, Analysis(orientations="half")),
         ("--cable-model: cable model 'sagging' assumes point outlets", _with(planar2, model="sagging", pulleys=True),
          Analysis()),
-        ("--collisions: cable model 'sagging'", _with(planar2, model="sagging"), Analysis(collisions=True)),
-        ("--orientations: cable model 'sagging'", _with(cogiro, model="sagging"), Analysis(orientations="total")),
         ("effector.orientation: free: the hanging solver models point outlets", _with(free, pulleys=True), Analysis()),
         ("--cable-model: cable model 'sagging': an effector with effector.orientation: free",
          _with(free, model="sagging"), Analysis()),
@@ -129,6 +127,31 @@ def test_every_row_of_the_table_is_reached_with_its_reason(planar2, ipanema3, co
         assert row is not None and msg == row.message(R.facts(design), analysis)
         reached.add(id(row))
     assert len(reached) == len(R.REFUSALS)  # each case reaches its own row
+
+
+def test_every_refusal_has_a_cause_and_a_line_in_the_docs(planar2, ipanema3, cogiro):
+    """Each row says why it refuses (missing data, meaningless, capability; the causes that depend on
+    the facts: the stiffness's missing axial stiffness against the models not built, a hanging
+    effector's closure against its wrench-feasible workspace), and docs/cli.md's table of
+    combinations has a line for each option a row names."""
+    causes = {}
+    for start, design, analysis in _cases(planar2, ipanema3, cogiro):
+        f = R.facts(design)
+        row = R.refusal(f, analysis)
+        causes[start] = row.cause_of(f, analysis)
+        assert causes[start] in R.CAUSES
+    assert causes["--stiffness: ideal cables without cable.axial_stiffness"] == R.MISSING_DATA
+    assert causes["--orientations: this motion has a fixed orientation"] == R.MEANINGLESS
+    assert causes["requirements.acceleration: --kind dynamic tests"] == R.MISSING_DATA
+    free = _with(planar2, orientation="free")
+    kind_row = R.refusal(R.facts(free), Analysis(kind="wrench-closure"))
+    assert kind_row.cause_of(R.facts(free), Analysis(kind="wrench-closure")) == R.MEANINGLESS
+    assert kind_row.cause_of(R.facts(free), Analysis(kind="wrench-feasible")) == R.CAPABILITY
+    table = (DESIGNS.parent / "docs" / "cli.md").read_text().split("**Combinations that are refused.**")[1]
+    table = table.split("\n\n**")[0]
+    for row in R.REFUSALS:
+        option = row.option.split(" ")[0]
+        assert any(line.startswith("| `") and f"`{option}`" in line.split("|")[1] for line in table.splitlines()), option
 
 
 def test_an_unknown_kind_names_the_option(planar2):

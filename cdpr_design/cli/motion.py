@@ -72,6 +72,10 @@ def trajectory_cmd(
     check: Annotated[bool, typer.Option(
         "--check", help="Exit 1 when a sample's tensions leave the cable bounds.")] = False,
     time_optimal: TimeOptimalOpt = False,
+    collisions: Annotated[bool, typer.Option(
+        "--collisions", help="Also check every sample for cable-cable, cable-effector and effector-frame "
+                             "interference; feasible = tensions within the bounds and collision free "
+                             "(column collision_free).")] = False,
     out: OutOpt = None,
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
@@ -85,7 +89,7 @@ def trajectory_cmd(
 
     design = load_design(spec, cable_model)
     samples, s, out_dir = job.trajectory(design, name, cycle_time, out, overwrite, engine=env.engine(),
-                                         format=format.value, time_optimal=time_optimal)
+                                         format=format.value, time_optimal=time_optimal, collisions=collisions)
     if json_:
         emit_json(s)
     else:
@@ -96,12 +100,14 @@ def trajectory_cmd(
              ("peak acceleration [m/s²]", s["max_acceleration"]),
              ("tension range [N]", tension_ranges(s, samples.cable_names)),
              ("feasible", "yes" if s["feasible"] else f"no ({s['infeasible_samples']} samples)"),
+             *([("colliding samples", f"{s['collision_samples']:,}")] if "collision_samples" in s else []),
              *setpoint_rows(s), *time_optimal_rows(s),
              ("files", str(out_dir.path))]))
         if s.get("time_optimal", {}).get("limits_note"):
             info(quiet, f"note: {s['time_optimal']['limits_note']}")
     if check and not s["feasible"]:
-        raise CheckFailed(f"trajectory {name}: {s['infeasible_samples']} samples with tensions outside the bounds")
+        raise CheckFailed(f"trajectory {name}: {s['infeasible_samples']} samples with tensions outside the bounds"
+                          + (f" or colliding ({s['collision_samples']})" if "collision_samples" in s else ""))
 
 
 @command

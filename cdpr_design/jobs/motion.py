@@ -112,13 +112,14 @@ def timed_named(robot, name: str, cycle_time: float | None = None, hold_end: flo
         raise InputError(msg if msg.startswith(("trajectories.", "--")) else f"trajectories.{name}: {msg}") from None
 
 
-def motion_robot(design, time_optimal: bool = False):
+def motion_robot(design, time_optimal: bool = False, collisions: bool = False):
     """The design resolved once for a motion command (``trajectory``, ``simulate``; ``time_optimal``:
-    the path timed as fast as the robot allows): a refused combination is an :class:`InputError` with
-    the reason (:data:`cdpr_design.statics.robot.REFUSALS`)."""
+    the path timed as fast as the robot allows; ``collisions``: every sample checked for
+    interference): a refused combination is an :class:`InputError` with the reason
+    (:data:`cdpr_design.statics.robot.REFUSALS`)."""
     from cdpr_design.statics.robot import Analysis, resolve
 
-    return resolve(design, Analysis(command="motion", time_optimal=time_optimal))
+    return resolve(design, Analysis(command="motion", time_optimal=time_optimal, collisions=collisions))
 
 
 def trajectory_samples(robot, name: str | None, time_optimal: bool = False):
@@ -163,14 +164,16 @@ class TrajectoryRun(NamedTuple):
 
 def trajectory(design, name: str, cycle_time: float | None = None, out: str | Path | None = None,
                overwrite: bool = False, engine: str = "auto", format: str = "csv",
-               time_optimal: bool = False) -> TrajectoryRun:
+               time_optimal: bool = False, collisions: bool = False) -> TrajectoryRun:
     """The ``trajectory`` command: sample ``name`` every ``cycle_time`` [s]; write trajectory.csv
     (``format='parquet'``: ``.parquet``), trajectory.json, trajectory.png and trajectory_axes.png
     into ``out`` (the pictures are drawn while the table is written).  ``time_optimal``: timed as
     fast as the robot allows (:mod:`cdpr_design.motion.time_optimal`), the JSON's ``time_optimal``
-    object and ``time_optimal.png`` added."""
+    object and ``time_optimal.png`` added.  ``collisions``: every sample checked for interference
+    (column ``collision_free``, ``feasible`` collision free too, JSON ``collision_samples`` and
+    ``collisions_by_kind``; sagging cables along their catenaries)."""
     timings = Timings()
-    robot = motion_robot(design, time_optimal)
+    robot = motion_robot(design, time_optimal, collisions)
     with timings.phase("sweep_s"):
         samples, timing = timed_named(robot, name, cycle_time, time_optimal=time_optimal)
     out_dir = output_dir(design, out, overwrite)

@@ -15,7 +15,7 @@ def pose_data(design, result) -> dict:
         "feasible": bool(result.feasible),
         "margin": float(result.margin) if np.isfinite(result.margin) else None,
         "structure_matrix": [[float(x) for x in row] for row in result.W],
-        "collisions": [list(p) for p in result.collisions],
+        "collisions": None if result.collisions is None else [list(p) for p in result.collisions],
     } | cable_model_data(design, result)
 
 

@@ -29,6 +29,7 @@ module             what
 ``sag_fixed``      the sagging cables' fixed point (tensions = minimum-norm tensions of their shapes)
 ``sagging``        statics of a pose with sagging cables; the sagging grid sweep
 ``sag_path``       sagging statics along a sampled trajectory
+``sag_clearance``  interference of sagging cables: the catenaries as polylines of bounded error
 ``stiffness``      the effector's least stiffness and lowest natural frequency at many poses
 ``cache``          where numba caches the kernels: a folder per version of their sources (no numba)
 ``acceleration``   the accelerations an effector at rest can reach; the available wrench set's facets
@@ -44,7 +45,8 @@ _EXPORTS = {
     **dict.fromkeys(("CLOSURE_TOL", "basis_factor", "facet_normal", "hsm_enumerate", "hsm_factored",
                      "make_scratch"), "hsm"),
     **dict.fromkeys(("hsm_one", "hsm_two"), "hsm_small"),
-    **dict.fromkeys(("HIT_CABLE_CABLE", "HIT_CABLE_EFFECTOR", "HIT_CABLE_FRAME", "HIT_EFFECTOR_FRAME"), "codes"),
+    **dict.fromkeys(("HIT_CABLE_CABLE", "HIT_CABLE_EFFECTOR", "HIT_CABLE_FRAME", "HIT_EFFECTOR_FRAME", "HIT_UNKNOWN"),
+                   "codes"),
     **dict.fromkeys(("cable_cable_dist", "cable_effector_chord", "interference_pose", "seg_seg_dist2",
                      "segment_box_chord"), "interference"),
     **dict.fromkeys(("RANK_TOL", "det_small", "householder_qr"), "linalg"),
@@ -58,7 +60,7 @@ _EXPORTS = {
 }
 
 _SUBMODULES = {"acceleration", "cable_shape", "cache", "catenary", "catenary_inv", "codes", "geometry", "hanging", "hsm",
-               "hsm_small", "interference", "linalg", "parallel", "pose", "sag_fixed", "sag_path", "sag_shapes",
+               "hsm_small", "interference", "linalg", "parallel", "pose", "sag_clearance", "sag_fixed", "sag_path", "sag_shapes",
                "sagging", "stiffness", "sweep", "tension_qp"}
 
 __all__ = sorted(_EXPORTS)

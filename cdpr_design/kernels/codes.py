@@ -7,3 +7,6 @@ HIT_CABLE_CABLE = 1
 HIT_CABLE_EFFECTOR = 2
 HIT_EFFECTOR_FRAME = 4
 HIT_CABLE_FRAME = 8
+#: The mask of a pose whose sagging cables' shapes did not converge: not checked, so not known to be
+#: collision free (:mod:`cdpr_design.kernels.sag_clearance`).
+HIT_UNKNOWN = 16

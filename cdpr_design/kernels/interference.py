@@ -159,6 +159,36 @@ def cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1):
     return segment_box_chord(s0, s1, half, dim, tol)
 
 
+
+@njit_folded
+def point_outside(x, y, z, flo, fhi, dim, tol):
+    """Whether the point (x, y, z) [m] lies outside the frame box [flo, fhi] by more than ``tol``
+    (on the first ``dim`` axes: a planar design's frame is checked in x and y only)."""
+    out = x < flo[0] - tol or x > fhi[0] + tol or y < flo[1] - tol or y > fhi[1] + tol
+    if dim == 3:
+        out = out or z < flo[2] - tol or z > fhi[2] + tol
+    return out
+
+
+@njit_folded
+def effector_outside(R, px, py, pz, half, flo, fhi, dim, tol):
+    """Whether a corner of the effector box (half extents ``half`` (3,) [m], rotation ``R``,
+    origin (px, py, pz) [m]) lies outside the frame box [flo, fhi] (:func:`point_outside`)."""
+    ncorner = 4 if dim == 2 else 8
+    for c in range(ncorner):
+        sx = half[0] if (c & 1) else -half[0]
+        sy = half[1] if (c & 2) else -half[1]
+        sz = half[2] if (c & 4) else -half[2]
+        if dim == 2:
+            sz = 0.0
+        vx = px + R[0, 0] * sx + R[0, 1] * sy + R[0, 2] * sz
+        vy = py + R[1, 0] * sx + R[1, 1] * sy + R[1, 2] * sz
+        vz = pz + R[2, 0] * sx + R[2, 1] * sy + R[2, 2] * sz
+        if point_outside(vx, vy, vz, flo, fhi, dim, tol):
+            return True
+    return False
+
+
 #: What the interference checks need of a robot besides its pose: ``Bp`` (m, 3) the attachments
 #: in platform coordinates [m], ``half`` (3,) the half extents of the effector box [m] (centred on
 #: the platform origin), ``rho`` (m,) the cable radii (diameter / 2) [m], ``flo``, ``fhi`` (3,)
@@ -199,35 +229,15 @@ def interference_pose(S0, S1, R, px, py, pz, cl, scr):
     hits, s0, s1, cp = scr
     m = S0.shape[0]
     mask = 0
-    # effector - frame: every box corner inside the frame box
-    ncorner = 4 if dim == 2 else 8
-    for c in range(ncorner):
-        sx = half[0] if (c & 1) else -half[0]
-        sy = half[1] if (c & 2) else -half[1]
-        sz = half[2] if (c & 4) else -half[2]
-        if dim == 2:
-            sz = 0.0
-        vx = px + R[0, 0] * sx + R[0, 1] * sy + R[0, 2] * sz
-        vy = py + R[1, 0] * sx + R[1, 1] * sy + R[1, 2] * sz
-        vz = pz + R[2, 0] * sx + R[2, 1] * sy + R[2, 2] * sz
-        out = vx < flo[0] - tol or vx > fhi[0] + tol or vy < flo[1] - tol or vy > fhi[1] + tol
-        if dim == 3:
-            out = out or vz < flo[2] - tol or vz > fhi[2] + tol
-        if out:
-            mask |= HIT_EFFECTOR_FRAME
-            if full:
-                hits[m, m + 1] = 1
-                hits[m + 1, m] = 1
-            else:
-                return mask
-            break
+    if effector_outside(R, px, py, pz, half, flo, fhi, dim, tol):
+        mask |= HIT_EFFECTOR_FRAME
+        if not full:
+            return mask
+        hits[m, m + 1] = 1
+        hits[m + 1, m] = 1
     for i in range(m):
         # cable - frame: the attachment point (the free segment's end) outside the frame
-        out = (S0[i, 0] < flo[0] - tol or S0[i, 0] > fhi[0] + tol
-               or S0[i, 1] < flo[1] - tol or S0[i, 1] > fhi[1] + tol)
-        if dim == 3:
-            out = out or S0[i, 2] < flo[2] - tol or S0[i, 2] > fhi[2] + tol
-        if out:
+        if point_outside(S0[i, 0], S0[i, 1], S0[i, 2], flo, fhi, dim, tol):
             mask |= HIT_CABLE_FRAME
             if not full:
                 return mask

@@ -115,6 +115,10 @@ class Samples:
         status per sample (:mod:`cdpr_design.motion.setpoints`); then
         ``tensions`` are at the effector end and ``feasible`` holds the bounds
         along the whole cable.  None for ideal cables.
+    interference : (k,) uint8 array or None
+        With the analysis's ``collisions``: each sample's interference bits
+        (:func:`cdpr_design.statics.interference.path_interference`; 0 collision free), and
+        ``feasible`` is then collision free too.  None without.
     """
 
     name: str
@@ -134,6 +138,7 @@ class Samples:
     segments: tuple[Segment, ...] = field(default_factory=tuple)
     cycle_time: float = DEFAULT_CYCLE_TIME
     cables: object = None
+    interference: np.ndarray | None = None
 
     def __len__(self) -> int:
         return int(self.time.size)
@@ -168,6 +173,8 @@ class Samples:
         out["segment"] = self.segment.astype(np.int64)
         if self.cables is not None:
             out.update(self.cables.columns(self.cable_names))
+        if self.interference is not None:
+            out["collision_free"] = (self.interference == 0).astype(np.int64)
         return out
 
     def summary(self) -> dict:
@@ -191,6 +198,12 @@ class Samples:
             }
         if self.cables is not None:
             out.update(self.cables.summary(self.cable_names))
+        if self.interference is not None:
+            from cdpr_design.statics.interference import HIT_NAMES
+
+            out["collision_samples"] = int(np.count_nonzero(self.interference))
+            out["collisions_by_kind"] = {name: int(np.count_nonzero(self.interference & bit))
+                                         for bit, name in HIT_NAMES.items()}
         return out
 
 
@@ -378,12 +391,19 @@ def sample(robot: Robot, trajectory: str | Trajectory, cycle_time: float | None 
     st = states(robot, pose, vel, acc, external=external)
     cs, tensions, feasible = setpoints.cable_samples(robot, st["positions"], st["attachments"], st["wrench"],
                                                      st["lengths"], st["tensions"], st["feasible"])
+    mask = None
+    if robot.analysis.collisions:
+        from cdpr_design.statics.interference import path_interference
+
+        mask = path_interference(robot, pose, None if cs is None else cs.unstretched)
+        feasible = feasible & (mask == 0)
     return Samples(
         name=traj.name, coords=tuple(design.motion.coords), cable_names=tuple(design.cable_names),
         time=time, pose=pose, velocity=vel, acceleration=acc, lengths=st["lengths"],
         cable_speed=st["cable_speed"], cable_accel=st["cable_accel"],
         motor_angle=motor_angles(design, st["lengths"]), tensions=tensions,
         feasible=feasible, segment=seg, segments=tuple(blocks.segments), cycle_time=dt, cables=cs,
+        interference=mask,
     )
 
 

@@ -14,10 +14,10 @@ line; docs/cable-models.md):
   (:mod:`cdpr_design.kernels.sagging`).
 
 A design's model is the heaviest of its cables' (``sagging`` if any cable
-sags: :func:`cdpr_design.statics.robot.cable_model`).  Swivel pulleys,
-interference checks and orientation sweeps take straight cables: with
-``sagging`` they are refused by the resolved robot's one table
-(:data:`cdpr_design.statics.robot.REFUSALS`).
+sags: :func:`cdpr_design.statics.robot.cable_model`).  Swivel pulleys take
+straight cables: with ``sagging`` they are refused by the resolved robot's one
+table (:data:`cdpr_design.statics.robot.REFUSALS`); interference is checked along
+the catenaries (:func:`cdpr_design.statics.interference.check_sagging_pose`).
 """
 
 from __future__ import annotations

@@ -34,6 +34,10 @@ never meet, and cables in one plane are checked as before.  The statics do not
 change (a cable's force stays parallel to the motion plane; the out-of-plane
 moments this makes are the planar guides' to take, as in every planar model).
 
+Sagging cables (:func:`check_sagging_pose`) are checked along their catenaries, each taken as
+a polyline within a stated distance of the curve (:mod:`cdpr_design.kernels.sag_clearance`):
+the same checks, and a cable whose catenary sags below the frame box leaves it.
+
 Pairs are named as ``cli.md`` says: two cable names, a cable name and
 ``effector`` or ``frame``, and ``("effector", "frame")``.
 """
@@ -114,16 +118,26 @@ class Interference:
         Distance between free segments [m] (shared-endpoint rule applied; 0 on the diagonal).
     effector_chords : (m,) array
         Length of each free segment inside the effector box, own attachment excepted [m].
+    curve_bounds : (m,) array or None
+        Sagging cables: the largest distance between each cable's polyline and its catenary [m]
+        (a pair's distance is within the sum of its two bounds of the curves'); None for straight
+        cables (exact).
     """
 
     pairs: list
     mask: int
     cable_distances: np.ndarray
     effector_chords: np.ndarray
+    curve_bounds: np.ndarray | None = None
 
     @property
     def collision_free(self) -> bool:
         return self.mask == 0
+
+    @property
+    def known(self) -> bool:
+        """False where the sagging cables' shapes did not converge: nothing was checked."""
+        return not self.mask & K.HIT_UNKNOWN
 
     @property
     def kinds(self) -> list[str]:
@@ -190,6 +204,13 @@ def _check(design: Design, p, R, anchors, exits) -> Interference:
         cpi = R.T @ (S1[i] - full[:3])
         chords[i] = K.cable_effector_chord(Bp, i, np.ascontiguousarray(cpi), hw.half, hw.dim,
                                            hw.tol, s0, s1)
+    return Interference(_pairs(design, hits), mask, dist, chords)
+
+
+def _pairs(design: Design, hits: np.ndarray) -> list[tuple[str, str]]:
+    """The colliding pairs flagged in ``hits`` (m + 2, m + 2) (index m the effector, m + 1 the
+    frame), named as cli.md says, cables in spec order first."""
+    m = design.m
     names = design.cable_names + ["effector", "frame"]
     pairs = []
     for i in range(m):
@@ -204,9 +225,100 @@ def _check(design: Design, p, R, anchors, exits) -> Interference:
             pairs.append((names[i], "frame"))
     if hits[m, m + 1]:
         pairs.append(("effector", "frame"))
-    return Interference(pairs, mask, dist, chords)
+    return pairs
 
 
 def collisions(design: Design, pose) -> list[tuple[str, str]]:
     """The colliding pairs at a pose (cli.md: two cable names, or a cable and ``effector``/``frame``)."""
     return check_pose(design, pose).pairs
+
+
+def sagging_clearance(robot, full: bool):
+    """The sagging interference kernels' :data:`~cdpr_design.kernels.sag_clearance.SagClearance`
+    of ``robot`` (a resolved :class:`~cdpr_design.statics.robot.Robot`): its effector box, cable
+    radii, frame box and cable planes (:func:`hardware_arrays`), the polylines' bound
+    :data:`~cdpr_design.kernels.sag_clearance.CURVE_TOL`; ``full``: every colliding pair flagged."""
+    from cdpr_design.kernels import interference as KI
+    from cdpr_design.kernels import sag_clearance as KC
+
+    hw = hardware_arrays(robot.design)
+    c = np.ascontiguousarray
+    Bp = c(in_cable_planes(robot.attachments, hw.zoff))
+    cl = KI.Clearance(Bp, c(hw.half), c(hw.rho), c(hw.frame_lower), c(hw.frame_upper), int(hw.dim), float(hw.tol),
+                      bool(full))
+    return KC.SagClearance(cl, c(hw.zoff, dtype=float), float(KC.CURVE_TOL), int(KC.MAX_SEGMENTS))
+
+
+def check_sagging_pose(robot, full_pose) -> Interference:
+    """:func:`check_pose` for ``robot``'s sagging cables (a resolved
+    :class:`~cdpr_design.statics.robot.Robot` whose cables sag under its kind) at the full pose
+    [x, y, z, rx, ry, rz] [m, rad]: the pose's sagging statics as the sweep's
+    (:func:`cdpr_design.kernels.sag_clearance.sag_rows_at`, the robot's kind and wrenches), then
+    the checks along the converged catenaries (:func:`cdpr_design.kernels.sag_clearance.pose_clearance`):
+    ``cable_distances`` between the cables' polylines, each within the sum of the two cables'
+    ``curve_bounds`` of the curves'.  Where the shapes did not converge nothing is checked: the
+    mask is ``HIT_UNKNOWN`` (:attr:`Interference.known` False), no pairs, NaN distances."""
+    from cdpr_design.kernels import sag_clearance as KC
+    from cdpr_design.statics.cables import sag_robot
+    from cdpr_design.statics.wrenches import wrench_vertices
+
+    design, m = robot.design, robot.m
+    full = np.asarray(full_pose, float)
+    R = np.ascontiguousarray(kin.rotation_matrix(*full[3:]))
+    Rb = np.ascontiguousarray(robot.attachments @ R.T)
+    srob = sag_robot(robot, wrench_vertices(design, robot.kind, full[3:]), robot.kcode)
+    scl = sagging_clearance(robot, True)
+    rows = KC.SagRows(np.zeros(1, np.uint8), np.zeros(1), *(np.zeros((1, m)) for _ in range(5)),
+                      np.zeros(1, np.int8), np.zeros(1, np.uint8), np.zeros((1, m, 3)))
+    KC.sag_rows_at(np.ascontiguousarray(full[None, :3]), Rb, R, srob, scl, rows)
+    nan = np.full(m, np.nan)
+    if int(rows.mask[0]) & K.HIT_UNKNOWN:
+        return Interference([], int(rows.mask[0]), np.full((m, m), np.nan), nan.copy(), nan.copy())
+    out = KC.PoseClearance(np.zeros((m, m)), np.zeros(m), np.zeros(m), np.zeros((m + 2, m + 2), np.uint8))
+    mask = int(KC.pose_clearance(full[0], full[1], full[2], R, Rb, srob.A, np.ascontiguousarray(rows.shapes[0]),
+                                 srob.cables, scl, out))
+    return Interference(_pairs(design, out.hits), mask, out.dist, out.chords, out.bound)
+
+
+def path_interference(robot, poses, unstretched=None) -> np.ndarray:
+    """Interference masks (k,) uint8 of ``robot`` (resolved for ``motion``) at k poses of a path
+    (``poses`` (k, ncoords), the motion's coordinates [m, rad]): the bits of :func:`check_pose`
+    (0: collision free).  Straight cables: :func:`check_pose` at each pose (swivel pulleys and
+    cable planes honoured).  Sagging cables: the catenary of each cable's unstretched length
+    ``unstretched`` (k, m) [m] (the path's set-points) at each pose
+    (:func:`cdpr_design.kernels.catenary_inv.catenary_inverse_batch`), checked along the curves
+    (:func:`cdpr_design.kernels.sag_clearance.samples_interference`); ``HIT_UNKNOWN`` where a
+    heavy cable has no set-point or no catenary there (not checked)."""
+    design = robot.design
+    poses = np.atleast_2d(np.asarray(poses, float))
+    k, m = poses.shape[0], design.m
+    if robot.cables.straight:
+        return np.array([check_pose(design, p).mask for p in poses], dtype=np.uint8)
+    from cdpr_design.kernels import sag_clearance as KC
+    from cdpr_design.kernels.catenary_inv import CAT_CONVERGED, catenary_inverse_batch
+    from cdpr_design.statics.cables import sag_cables
+
+    full = np.array([design.full_pose(p) for p in poses])
+    R = np.ascontiguousarray(np.array([kin.rotation_matrix(*f[3:]) for f in full]))
+    Rb = np.ascontiguousarray(np.einsum("kij,mj->kmi", R, robot.attachments))
+    B = full[:, None, :3] + Rb
+    d = robot.outlet_points[None] - B
+    up = robot.cable.up
+    Z = d @ up
+    X = np.linalg.norm(d - Z[..., None] * up, axis=2)
+    L0 = np.asarray(unstretched, float).reshape(k, m)
+    w = np.broadcast_to(robot.cable.w, (k, m))
+    EA = np.broadcast_to(robot.cable.EA, (k, m))
+    heavy = (w > 0) & np.isfinite(L0)
+    c = np.ascontiguousarray
+    H, VB, status, _ = catenary_inverse_batch(c(X[heavy]), c(Z[heavy]), c(L0[heavy]), c(w[heavy]), c(EA[heavy]),
+                                              np.full(heavy.sum(), np.nan), np.full(heavy.sum(), np.nan), 1e-13, 100)
+    shapes = np.full((k, m, 3), np.nan)
+    ok = status == CAT_CONVERGED
+    idx = np.argwhere(heavy)[ok]
+    shapes[idx[:, 0], idx[:, 1]] = np.column_stack([H[ok], VB[ok], L0[heavy][ok]])
+    mask = np.zeros(k, dtype=np.uint8)
+    cab = sag_cables(robot.cable, robot.rows, robot.tension_min, robot.tension_max)
+    KC.samples_interference(c(full[:, :3]), R, Rb, c(robot.outlet_points), shapes, cab, sagging_clearance(robot, False),
+                            mask)
+    return mask

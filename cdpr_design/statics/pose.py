@@ -40,8 +40,10 @@ class PoseResult(Table):
     margin: float
     W: np.ndarray
     wrench: np.ndarray
-    #: colliding pairs (cli.md names; :func:`cdpr_design.statics.interference.check_pose`)
-    collisions: list = field(default_factory=list)
+    #: colliding pairs (cli.md names; :func:`cdpr_design.statics.interference.check_pose`, sagging
+    #: cables :func:`~cdpr_design.statics.interference.check_sagging_pose`); None where the sagging
+    #: cables' shapes did not converge (not checked)
+    collisions: list | None = field(default_factory=list)
     cables: tuple = ()
     #: the design's cable model (:mod:`cdpr_design.statics.cables`)
     cable_model: str = "ideal"

@@ -152,19 +152,37 @@ class Facts:
     acceleration: str | None = None
 
 
+#: Why a combination is refused (:attr:`Refusal.cause`): the spec lacks data the analysis needs
+#: (the message names the key to give) ...
+MISSING_DATA = "missing data"
+#: ... the analysis has no meaning for this design or this option value (an orientation set for a
+#: translational motion, a tilt limit for a held effector, a value outside an option's domain) ...
+MEANINGLESS = "meaningless"
+#: ... or it has one, and the package does not compute it (yet).
+CAPABILITY = "capability"
+#: The causes of :data:`REFUSALS`' rows (docs/cli.md's table of combinations says which is which).
+CAUSES = (MISSING_DATA, MEANINGLESS, CAPABILITY)
+
+
 @dataclass(frozen=True)
 class Refusal:
     """One row of :data:`REFUSALS`: when ``applies(facts, analysis)``, the analysis is refused
     with ``option: reason`` (``option`` names the option or spec field the user changes, a
-    format string of the analysis ``a``)."""
+    format string of the analysis ``a``).  ``cause``: one of :data:`CAUSES`, or a function of the
+    facts and the analysis giving one (a row whose reason is the facts')."""
 
     option: str
     reason: str
     applies: Callable[[Facts, Analysis], bool]
+    cause: str | Callable[[Facts, Analysis], str]
 
     def message(self, facts: Facts, analysis: Analysis) -> str:
         """``option: reason``, formatted with the facts and the analysis (``{a.kind}``, ``{f.stiffness}``)."""
         return f"{self.option.format(a=analysis)}: {self.reason.format(f=facts)}"
+
+    def cause_of(self, facts: Facts, analysis: Analysis) -> str:
+        """Why this row refuses ``analysis`` of a design with ``facts``: one of :data:`CAUSES`."""
+        return self.cause(facts, analysis) if callable(self.cause) else self.cause
 
 
 def check_kind(kind: str) -> None:
@@ -177,88 +195,95 @@ def _free(f: Facts) -> bool:
     return f.orientation.free
 
 
+def _kind_cause(f: Facts, a: Analysis) -> str:
+    """A hanging effector under another kind than static: wrench closure asks the cables alone to
+    resist every wrench, which an effector whose orientation they leave free cannot (meaningless);
+    the hanging orientation under each external (or inertial) wrench is not computed (capability)."""
+    return MEANINGLESS if a.kind == "wrench-closure" else CAPABILITY
+
+
+def _stiffness_cause(f: Facts, a: Analysis) -> str:
+    """Missing data where the stiffness lacks the cables' ``axial_stiffness`` (the reason names the
+    key to give), a capability otherwise (:func:`stiffness_reason`)."""
+    return MISSING_DATA if "give axial_stiffness" in (f.stiffness or "") else CAPABILITY
+
+
 #: Every combination that is not computed, and why: the one table (see the module doc).
 REFUSALS: tuple[Refusal, ...] = (
-    Refusal("engine", "expected one of auto, numba, numpy", lambda f, a: a.engine not in ENGINES),
+    Refusal("engine", "expected one of auto, numba, numpy", lambda f, a: a.engine not in ENGINES, MEANINGLESS),
     Refusal("--orientations", "expected total or range",
-            lambda f, a: a.orientations is not None and a.orientations not in ("total", "range")),
+            lambda f, a: a.orientations is not None and a.orientations not in ("total", "range"), MEANINGLESS),
     Refusal("--cable-model", "cable model 'sagging' assumes point outlets, and this design has swivel pulleys "
                              "(cables[].pulley): the catenaries start at the outlet points; use --cable-model "
                              "elastic or ideal",
-            lambda f, a: not f.cables.straight and f.outlets.pulleys),
-    Refusal("--collisions", "cable model 'sagging': the interference checks assume straight cables; use "
-                            "--cable-model elastic or ideal for this analysis",
-            lambda f, a: not f.cables.straight and a.collisions),
-    Refusal("--orientations", "cable model 'sagging': orientation workspaces assume straight cables; use "
-                              "--cable-model elastic or ideal for this analysis",
-            lambda f, a: not f.cables.straight and a.orientations is not None),
+            lambda f, a: not f.cables.straight and f.outlets.pulleys, CAPABILITY),
     Refusal("effector.orientation", "free: the hanging solver models point outlets, and this design has swivel "
                                     "pulleys (cables[].pulley)",
-            lambda f, a: _free(f) and f.outlets.pulleys and "hanging-solver" in a.needs),
+            lambda f, a: _free(f) and f.outlets.pulleys and "hanging-solver" in a.needs, CAPABILITY),
     Refusal("--cable-model", "cable model 'sagging': an effector with effector.orientation: free hangs on "
                              "straight cables (ideal or elastic) in this analysis; use --cable-model elastic",
-            lambda f, a: _free(f) and not f.cables.straight and "hanging-statics" in a.needs),
+            lambda f, a: _free(f) and not f.cables.straight and "hanging-statics" in a.needs, CAPABILITY),
     Refusal("--orientations", "an under-constrained design with effector.orientation: free does not command "
                               "its orientation (it hangs); use effector.orientation: fixed to sweep commanded "
                               "orientations",
-            lambda f, a: _free(f) and a.orientations is not None),
+            lambda f, a: _free(f) and a.orientations is not None, MEANINGLESS),
     Refusal("--orientations", "this motion has a fixed orientation (orientation workspaces are for "
                               "1R2T and 3R3T)",
-            lambda f, a: a.orientations is not None and not f.rotational),
+            lambda f, a: a.orientations is not None and not f.rotational, MEANINGLESS),
     Refusal("--kind {a.kind}", "an under-constrained design with effector.orientation: free hangs under gravity alone "
                       "(static only)",
-            lambda f, a: _free(f) and a.kind != "static" and "hanging-statics" in a.needs),
+            lambda f, a: _free(f) and a.kind != "static" and "hanging-statics" in a.needs, _kind_cause),
     Refusal("--max-tilt", "a tilt limit applies to an under-constrained design with effector.orientation: free "
                           "(this one's orientation is commanded or held)",
-            lambda f, a: a.max_tilt is not None and not _free(f)),
+            lambda f, a: a.max_tilt is not None and not _free(f), MEANINGLESS),
     Refusal("--max-tilt", "expected an angle in [0, 180] degrees",
-            lambda f, a: a.max_tilt is not None and not (0.0 <= a.max_tilt <= 180.0)),
+            lambda f, a: a.max_tilt is not None and not (0.0 <= a.max_tilt <= 180.0), MEANINGLESS),
     Refusal("--weights", "a hanging effector's tensions are unique (they balance its weight, force and moment)",
-            lambda f, a: _free(f) and "tension-choice" in a.needs and a.weights),
+            lambda f, a: _free(f) and "tension-choice" in a.needs and a.weights, MEANINGLESS),
     Refusal("--objective", "a hanging effector's tensions are unique (they balance its weight, force and "
                            "moment)",
-            lambda f, a: _free(f) and "tension-choice" in a.needs and a.objective != "min-norm"),
+            lambda f, a: _free(f) and "tension-choice" in a.needs and a.objective != "min-norm", MEANINGLESS),
     Refusal("fk", "the forward kinematics of elastic and sagging cables takes point outlets, not swivel "
                   "pulleys; use --cable-model ideal for this design",
-            lambda f, a: "cable-fk" in a.needs and not f.cables.rigid and f.outlets.pulleys),
+            lambda f, a: "cable-fk" in a.needs and not f.cables.rigid and f.outlets.pulleys, CAPABILITY),
     Refusal("--stiffness", "{f.stiffness}",
-            lambda f, a: a.stiffness and f.stiffness is not None),
+            lambda f, a: a.stiffness and f.stiffness is not None, _stiffness_cause),
     Refusal("--stiffness", "an orientation workspace's rows stand for a set of orientations, not one pose "
                            "the cables hold: the stiffness is reported at one orientation (leave out "
                            "--orientations)",
-            lambda f, a: a.stiffness and a.orientations is not None),
+            lambda f, a: a.stiffness and a.orientations is not None, MEANINGLESS),
     Refusal("requirements.acceleration", "--kind dynamic tests the accelerations of this box from rest at every "
                                          "pose: give lower and upper, one value per motion coordinate "
                                          "[m/s^2, rad/s^2]",
-            lambda f, a: a.kind == "dynamic" and not f.acceleration_box),
+            lambda f, a: a.kind == "dynamic" and not f.acceleration_box, MISSING_DATA),
     Refusal("--accelerations", "{f.acceleration}",
-            lambda f, a: a.accelerations and f.acceleration is not None),
+            lambda f, a: a.accelerations and f.acceleration is not None, CAPABILITY),
     Refusal("--accelerations", "an orientation workspace's rows stand for a set of orientations: the "
                                "acceleration radius is reported at one orientation (leave out --orientations)",
-            lambda f, a: a.accelerations and a.orientations is not None),
+            lambda f, a: a.accelerations and a.orientations is not None, MEANINGLESS),
     Refusal("--time-optimal", "cable model 'sagging': the time-optimal constraints take the tensions of straight "
                               "cables (a catenary's wrench is not linear in its tension); use --cable-model "
                               "elastic or ideal",
-            lambda f, a: a.time_optimal and not f.cables.straight),
+            lambda f, a: a.time_optimal and not f.cables.straight, CAPABILITY),
     Refusal("engine=numpy", "the numpy engine covers two cables with two wrench rows (static or wrench-feasible) "
                             "from point outlets, at the workspace's orientation; use auto or numba for this design",
-            lambda f, a: a.engine == "numpy" and not _numpy_covers(f, a)),
+            lambda f, a: a.engine == "numpy" and not _numpy_covers(f, a), MEANINGLESS),
     Refusal("requirements.min_cable_frequency", "cable model 'sagging': the lower tension bound 4 f^2 L^2 mu "
                                                 "is a taut straight cable's, and a sagging cable's own modes are "
                                                 "not modelled; use --cable-model elastic or ideal",
-            lambda f, a: f.string_floor and not f.cables.straight and "tension-bounds" in a.needs),
+            lambda f, a: f.string_floor and not f.cables.straight and "tension-bounds" in a.needs, CAPABILITY),
     Refusal("requirements.min_cable_frequency", "certify: the interval tests hold constant tension bounds, and "
                                                 "this bound grows with the cable's length (4 f^2 L^2 mu); leave "
                                                 "it out to certify the workspace of the other bounds",
-            lambda f, a: f.string_floor and "interval-tests" in a.needs),
+            lambda f, a: f.string_floor and "interval-tests" in a.needs, CAPABILITY),
     Refusal("certify", "cable model 'sagging': the interval tests assume straight cables (ideal or elastic); "
                        "use --cable-model ideal or elastic",
-            lambda f, a: "interval-tests" in a.needs and not f.cables.straight),
+            lambda f, a: "interval-tests" in a.needs and not f.cables.straight, CAPABILITY),
     Refusal("certify", "swivel pulleys (cables[].pulley): the interval tests take point outlets",
-            lambda f, a: "interval-tests" in a.needs and f.outlets.pulleys),
+            lambda f, a: "interval-tests" in a.needs and f.outlets.pulleys, CAPABILITY),
     Refusal("certify", "effector.orientation: free: the hanging orientation changes with the position, and the "
                        "interval tests hold one fixed orientation",
-            lambda f, a: "interval-tests" in a.needs and _free(f)),
+            lambda f, a: "interval-tests" in a.needs and _free(f), CAPABILITY),
 )
 
 

@@ -5,7 +5,10 @@
 - ``sagging``: every pose solved with elastic catenaries by the batched
   kernel :func:`cdpr_design.kernels.sagging.sweep_grid_sagging`
   (the base evaluator :class:`SaggingSweep`); each chunk carries the outlet
-  tensions, unstretched lengths, sag and a ``cable_status`` per pose.
+  tensions, unstretched lengths, sag and a ``cable_status`` per pose; with interference
+  checks (``--collisions``) the poses go through
+  :func:`cdpr_design.kernels.sag_clearance.sag_rows_at` (:class:`SagPoints`), which checks
+  the converged catenaries, and the orientation workspaces evaluate each orientation with it.
 
 Extra ``workspace.csv`` columns, per cable c: ``outlet_tension_<c>`` [N],
 ``unstretched_length_<c>`` [m], ``sag_<c>`` [m]; sagging sweeps add
@@ -20,6 +23,7 @@ import numpy as np
 from cdpr_design.model.design import Grid
 from cdpr_design.statics import cables
 from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.interference import HIT_NAMES, sagging_clearance
 from cdpr_design.statics.wrenches import wrench_vertices
 from cdpr_design.statics.robot import Robot
 from cdpr_design.workspaces.grid import Rows, grid3
@@ -121,12 +125,74 @@ def cable_summary(robot: Robot, status_counts: np.ndarray | None, outlet_peak: n
     return out
 
 
+class SagPoints:
+    """Sagging statics at explicit positions, one orientation at a time, with (the analysis's
+    ``collisions``) the interference of the converged catenaries
+    (:func:`cdpr_design.kernels.sag_clearance.sag_rows_at`).  Called as the straight cables'
+    :class:`~cdpr_design.workspaces.hardware.Evaluator` is (the orientation workspaces), it also
+    keeps the cable model's summary figures: poses per status and the largest outlet tension of
+    a feasible pose (:meth:`summary`)."""
+
+    def __init__(self, robot: Robot):
+        self.robot, self.design = robot, robot.design
+        self.scl = sagging_clearance(robot, False) if robot.analysis.collisions else None
+        self._at: dict = {}
+        self.counts = np.zeros(len(cables.STATUS), dtype=np.int64)
+        self.opeak = np.full(robot.m, -np.inf)
+
+    def _statics(self, ori: np.ndarray) -> tuple:
+        """(R, Rb, the kernels' SagRobot) at orientation ``ori`` (3,) [rad], made once each."""
+        key = tuple(float(v) for v in ori)
+        if key not in self._at:
+            r = self.robot
+            R = np.ascontiguousarray(kin.rotation_matrix(*ori))
+            wreq = wrench_vertices(r.design, r.kind, np.asarray(ori, float))
+            self._at[key] = (R, np.ascontiguousarray(r.attachments @ R.T), cables.sag_robot(r, wreq, r.kcode))
+        return self._at[key]
+
+    def rows(self, P: np.ndarray, ori: np.ndarray):
+        """The kernel's :data:`~cdpr_design.kernels.sag_clearance.SagRows` at positions ``P`` (k, 3)
+        [m] and orientation ``ori`` (3,) [rad] (the cables' shapes not kept)."""
+        from cdpr_design.kernels import sag_clearance as KC
+
+        R, Rb, srob = self._statics(ori)
+        k, m = P.shape[0], self.robot.m
+        out = KC.SagRows(np.empty(k, dtype=np.uint8), np.empty(k), *(np.empty((k, m)) for _ in range(5)),
+                         np.empty(k, dtype=np.int8), np.empty(k, dtype=np.uint8), np.empty((0, m, 3)))
+        KC.sag_rows_at(np.ascontiguousarray(P, dtype=float), Rb, R, srob, self.scl, out)
+        return out
+
+    def __call__(self, P: np.ndarray, ori, full: bool = True):
+        """(feasible uint8, margin [N], tensions [N], lengths [m], mask uint8) at positions ``P``
+        (k, 3) [m] and orientation ``ori`` [rad], as
+        :class:`~cdpr_design.workspaces.hardware.Evaluator`: ``feasible`` the statics' alone,
+        ``mask`` the interference bits (zero when not checked)."""
+        o = self.rows(P, np.asarray(ori, float))
+        self.counts += np.bincount(o.status, minlength=len(cables.STATUS))
+        f = o.feasible.astype(bool)
+        if f.any():
+            np.fmax(self.opeak, o.outlet[f].max(axis=0), out=self.opeak)
+        return o.feasible, o.margin, o.tensions, o.lengths, o.mask
+
+    def summary(self) -> dict:
+        """``cable_model``, ``cable_status`` (evaluated poses per status) and
+        ``max_outlet_tension_per_cable`` (over the feasible ones)."""
+        opeak = self.opeak.copy()
+        opeak[~np.isfinite(opeak)] = np.nan
+        return cable_summary(self.robot, self.counts, opeak)
+
+
 class SaggingSweep(Base):
     """The base evaluator of sagging cables from point outlets at one orientation ``ori`` (3,)
     [rad] (not wrench closure, which takes the chords): every pose solved with elastic
-    catenaries by :func:`cdpr_design.kernels.sagging.sweep_grid_sagging`.  Rows are independent
-    of the chunking: every pose starts from its own straight solution.  Summary keys:
-    ``cable_model``, ``cable_status`` (poses per status), ``max_outlet_tension_per_cable``."""
+    catenaries by :func:`cdpr_design.kernels.sagging.sweep_grid_sagging`, or, with the
+    analysis's ``collisions``, at the chunk's positions by :class:`SagPoints`, which checks the
+    interference of the converged catenaries.  Rows are independent of the chunking: every pose
+    starts from its own straight solution.  Summary keys: ``cable_model``, ``cable_status``
+    (poses per status), ``max_outlet_tension_per_cable``; with interference as
+    :class:`~cdpr_design.workspaces.hardware.HardwareSweep`'s (``feasible`` statics-feasible and
+    collision free, tensions blanked where a pose collides, column ``collision_free``: 0 also
+    where the shapes did not converge, so nothing was checked)."""
 
     pictures = ("cable_models.png",)
     positions = False  # the kernel works from the grid's indices
@@ -135,33 +201,57 @@ class SaggingSweep(Base):
         from cdpr_design.kernels import sagging as KS
 
         self.robot, self.kind, self.kernel, self.outputs = robot, robot.kind, KS.sweep_grid_sagging, KS.GridOutputs
-        self.columns = tuple(cable_columns(robot))
+        self.ori = np.asarray(ori, float)
+        self.interference = bool(robot.analysis.collisions)
+        self.columns = tuple(cable_columns(robot)) + (("collision_free",) if self.interference else ())
         self.Rb = np.ascontiguousarray(robot.attachments @ kin.rotation_matrix(*ori).T)
         self.wreq = wrench_vertices(robot.design, robot.kind, ori)
         self.grid = KS.SagGrid(*grid3(g))
         self.sag_robot = cables.sag_robot(robot, self.wreq, robot.kcode)
         self.counts = np.zeros(len(cables.STATUS), dtype=np.int64)
         self.opeak = np.full(robot.m, -np.inf)
+        self.points = SagPoints(robot)
+        if self.interference:
+            self.positions = True  # the interference's rows are solved at the chunk's positions
+            self.n_free = self.n_stat = 0
+            self.hit_counts = {name: 0 for name in HIT_NAMES.values()}
 
     def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
         r, cnt, m = self.robot, count, self.robot.m
-        feas, marg = np.empty(cnt, dtype=np.uint8), np.empty(cnt)
-        ten, lens, outlet, L0, sag = (np.empty((cnt, m)) for _ in range(5))
-        status = np.empty(cnt, dtype=np.int8)
-        self.kernel(start, cnt, self.grid, self.Rb, self.sag_robot,
-                    self.outputs(feas, marg, ten, lens, outlet, L0, sag, status))
+        if self.interference:
+            o = self.points.rows(P, self.ori)
+            feas, marg, ten, lens, outlet, L0, sag, status = o[:8]
+        else:
+            feas, marg = np.empty(cnt, dtype=np.uint8), np.empty(cnt)
+            ten, lens, outlet, L0, sag = (np.empty((cnt, m)) for _ in range(5))
+            status = np.empty(cnt, dtype=np.int8)
+            self.kernel(start, cnt, self.grid, self.Rb, self.sag_robot,
+                        self.outputs(feas, marg, ten, lens, outlet, L0, sag, status))
         self.counts += np.bincount(status, minlength=len(cables.STATUS))
+        extra = _extra(r, outlet, L0, sag, status)
+        if self.interference:
+            self.n_stat += int(np.count_nonzero(feas))
+            cfree = (o.mask == 0).astype(np.uint8)
+            self.n_free += int(np.count_nonzero(cfree))
+            kind_counts(o.mask, self.hit_counts)
+            feas &= cfree
+            ten[cfree == 0] = np.nan
+            extra["collision_free"] = cfree
         f = feas.astype(bool)
         if f.any():
             np.fmax(self.opeak, outlet[f].max(axis=0), out=self.opeak)
-        return Rows(feas, marg, ten, lens, _extra(r, outlet, L0, sag, status))
+        return Rows(feas, marg, ten, lens, extra)
 
     def feasible_at(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Feasibility (k,) bool at positions ``P`` (k, 3) [m]: the same pose solve at explicit
-        positions (:func:`cdpr_design.kernels.sagging.sag_points`); no margins (NaN)."""
+        positions (:func:`cdpr_design.kernels.sagging.sag_points`; with interference
+        :class:`SagPoints`, collision free too); no margins (NaN)."""
         from cdpr_design.kernels.sagging import PointOutputs, sag_points
 
         r, k, m = self.robot, P.shape[0], self.robot.m
+        if self.interference:
+            o = self.points.rows(np.ascontiguousarray(P, dtype=float), self.ori)
+            return (o.feasible.astype(bool) & (o.mask == 0)), np.full(k, np.nan)
         out = PointOutputs(np.empty(k, dtype=np.uint8), np.empty((k, r.n, m)), np.empty((k, m)), np.empty((k, m)),
                            np.empty(k, dtype=np.int8))
         sag_points(np.ascontiguousarray(P, dtype=float), self.Rb, self.sag_robot, out)
@@ -170,4 +260,14 @@ class SaggingSweep(Base):
     def summary(self, maps) -> dict:
         opeak = self.opeak.copy()
         opeak[~np.isfinite(opeak)] = np.nan
-        return cable_summary(self.robot, self.counts, opeak)
+        extra = cable_summary(self.robot, self.counts, opeak)
+        if self.interference:
+            extra.update(pulleys=False, interference=True, collision_free=self.n_free, feasible_statics=self.n_stat,
+                         collisions_by_kind=self.hit_counts)
+        return extra
+
+
+def kind_counts(mask: np.ndarray, counts: dict) -> None:
+    """Add to ``counts`` (interference kind -> poses) the poses each kind's bit hits in ``mask``."""
+    for bit, name in HIT_NAMES.items():
+        counts[name] += int(np.count_nonzero(mask & bit))

@@ -18,6 +18,7 @@ from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.interference import HIT_NAMES, hardware_arrays, in_cable_planes
 from cdpr_design.statics.wrenches import wrench_vertices
 from cdpr_design.statics.robot import Robot
+from cdpr_design.workspaces.cables import kind_counts
 from cdpr_design.workspaces.grid import Rows
 from cdpr_design.workspaces.parts import Base
 
@@ -71,10 +72,6 @@ class Evaluator:
                                       hw.frame_upper, hw.dim, hw.tol, full, hw.zoff),
                        K.Outputs(feas, marg, ten, L), mask)
         return feas, marg, ten, L, mask
-
-def kind_counts(mask: np.ndarray, counts: dict) -> None:
-    for bit, name in HIT_NAMES.items():
-        counts[name] += int(np.count_nonzero(mask & bit))
 
 
 class HardwareSweep(Base):

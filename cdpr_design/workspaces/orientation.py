@@ -24,7 +24,8 @@ from cdpr_design.model.design import Design
 from cdpr_design.statics.interference import HIT_NAMES
 from cdpr_design.statics.robot import Robot
 from cdpr_design.workspaces.grid import Rows
-from cdpr_design.workspaces.hardware import Evaluator, kind_counts
+from cdpr_design.workspaces.cables import SagPoints, kind_counts
+from cdpr_design.workspaces.hardware import Evaluator
 from cdpr_design.workspaces.parts import Base
 
 #: Default total-orientation set: nominal +- 10 deg about the last rotation coordinate, 5 samples.
@@ -144,7 +145,11 @@ class OrientationSweep(Base):
     ``total`` or ``range``) about the nominal orientation ``nominal`` (3,) [rad].
 
     ``orientations`` (q, 3) [rad]: the ``total`` mode's set (default :func:`orientation_set`);
-    every orientation is evaluated with pulleys and (the analysis's ``collisions``) interference.
+    every orientation is evaluated with pulleys and (the analysis's ``collisions``) interference;
+    sagging cables (not under wrench closure, which takes the chords) with their catenaries at
+    each orientation: the attachments rotated, the moments of the end forces in the balance, the
+    interference along the curves (:class:`~cdpr_design.workspaces.cables.SagPoints`; the
+    summary adds its cable-model keys, over every evaluated orientation).
 
     Table rows (the contract columns at the nominal pose):
 
@@ -178,7 +183,7 @@ class OrientationSweep(Base):
         self.robot, self.kind, self.nominal = robot, robot.kind, nominal
         self.mode = robot.analysis.orientations
         self.interference = robot.analysis.collisions
-        self.ev = Evaluator(robot)
+        self.ev = SagPoints(robot) if robot.cables.sags(robot.kind) else Evaluator(robot)
         self.rot_names = design.motion.rotation_coords
         if self.mode == "total":
             self.oset = orientation_set(design) if orientations is None else np.atleast_2d(
@@ -203,8 +208,11 @@ class OrientationSweep(Base):
         return Rows(feas, marg, ten, L, extra, {"value": np.asarray(value, float)})
 
     def summary(self, maps) -> dict:
-        return _summary_extra(self.design, self.mode, self.oset, self.level_sets, self.scale, self.tally,
-                              self.interference, self.robot.outlets.pulleys)
+        extra = _summary_extra(self.design, self.mode, self.oset, self.level_sets, self.scale, self.tally,
+                               self.interference, self.robot.outlets.pulleys)
+        if isinstance(self.ev, SagPoints):
+            extra.update(self.ev.summary())
+        return extra
 
     def finish(self, result, maps) -> None:
         result.orientation_maps = OrientationMaps(self.mode, maps.xmaps["value"], self.oset, self.scale)
@@ -223,10 +231,10 @@ class _Tally:
     by_kind: dict = field(default_factory=lambda: {name: 0 for name in HIT_NAMES.values()})
 
 
-def _total_rows(ev: Evaluator, P, nominal, oset, tally: _Tally):
+def _total_rows(ev, P, nominal, oset, tally: _Tally):
     """One chunk of the total orientation workspace: feasible at every orientation of ``oset``."""
     cnt, m = P.shape[0], ev.design.m
-    L = ev(P, nominal)[3]
+    L = None  # the chords' lengths at the nominal orientation
     allok = np.ones(cnt, dtype=bool)
     nok = np.zeros(cnt, dtype=np.int64)
     cfree_all = np.ones(cnt, dtype=bool)
@@ -235,7 +243,9 @@ def _total_rows(ev: Evaluator, P, nominal, oset, tally: _Tally):
     marg = np.full(cnt, np.inf)
     ten = np.full((cnt, m), -np.inf)
     for o in oset:
-        f, mg, t, _, mask = ev(P, o)
+        f, mg, t, lengths, mask = ev(P, o)
+        if np.array_equal(o, nominal):
+            L = lengths
         tally.evaluated += cnt
         ok = f.astype(bool)
         if tally.interference:
@@ -248,6 +258,8 @@ def _total_rows(ev: Evaluator, P, nominal, oset, tally: _Tally):
         allok &= ok
         marg = np.fmin(marg, mg)
         ten = np.maximum(ten, t)  # an orientation without tensions (wrench closure) leaves none to report
+    if L is None:
+        L = ev(P, nominal)[3]
     marg[~np.isfinite(marg)] = np.nan
     ten[~allok] = np.nan
     cfree = None
@@ -259,7 +271,7 @@ def _total_rows(ev: Evaluator, P, nominal, oset, tally: _Tally):
     return allok.astype(np.uint8), marg, ten, L, cfree, nok / len(oset), {"orientations_feasible": nok}
 
 
-def _range_rows(ev: Evaluator, P, nominal, level_sets, scale, rot_names, tally: _Tally):
+def _range_rows(ev, P, nominal, level_sets, scale, rot_names, tally: _Tally):
     """One chunk of the orientation range: the largest level whose samples are all feasible."""
     cnt = P.shape[0]
     feas, marg, ten, L, mask = ev(P, nominal)

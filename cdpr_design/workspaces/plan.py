@@ -172,7 +172,7 @@ def _plan(robot: Robot, grid: Grid, orientation, tilt: bool, orientations) -> Pl
         from cdpr_design.workspaces.orientation import OrientationSweep  # the kernels' package, on first use
 
         base: Base = OrientationSweep(robot, ori, orientations)
-        if not robot.cables.rigid:  # elastic: straight, so the same statics
+        if not robot.cables.rigid and not robot.cables.sags(a.kind):  # straight: the same statics
             wrappers.append(cables.CableSummary(robot))
         return Plan(robot, grid, ori, base, tuple(wrappers), tilt, orientations)
     if robot.orientation.free:  # elastic cables: the unstretched lengths that hold it there

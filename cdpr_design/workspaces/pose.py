@@ -54,7 +54,6 @@ def evaluate_pose(robot: Robot, pose, weights=None) -> PoseResult:
     every cable straightens onto its chord; the cables then have no shapes, and their outlet
     tensions, unstretched lengths and sag are NaN, as in the sweep's columns).
     """
-    from cdpr_design.statics.interference import collisions
     from cdpr_design.statics.tension import tensions_for_objective
 
     design = robot.design
@@ -81,5 +80,19 @@ def evaluate_pose(robot: Robot, pose, weights=None) -> PoseResult:
         state = cable_state(robot, r, 0)
         if other and robot.cables.stretches:
             state = cables.straight_state(robot, L, t)  # at the objective's tensions
-    return PoseResult(np.asarray(pose, float), L, t, feasible, margin, W, wreq0, collisions(design, pose),
+    return PoseResult(np.asarray(pose, float), L, t, feasible, margin, W, wreq0, pose_collisions(robot, pose),
                       tuple(design.cable_names), robot.cables.name, state)
+
+
+def pose_collisions(robot: Robot, pose) -> list | None:
+    """The interfering pairs of ``robot`` at ``pose`` (the motion's coordinates [m, rad]): along the
+    catenaries where its cables sag under its kind
+    (:func:`cdpr_design.statics.interference.check_sagging_pose`; None where their shapes did not
+    converge: not checked), else along the straight cables
+    (:func:`cdpr_design.statics.interference.collisions`)."""
+    from cdpr_design.statics.interference import check_sagging_pose, collisions
+
+    if robot.cables.sags(robot.kind):
+        c = check_sagging_pose(robot, robot.design.full_pose(pose))
+        return c.pairs if c.known else None
+    return collisions(robot.design, pose)
