@@ -167,12 +167,18 @@ class SagPoints:
         (k, 3) [m] and orientation ``ori`` [rad], as
         :class:`~cdpr_design.workspaces.hardware.Evaluator`: ``feasible`` the statics' alone,
         ``mask`` the interference bits (zero when not checked)."""
-        o = self.rows(P, np.asarray(ori, float))
+        o = self.last = self.rows(P, np.asarray(ori, float))
         self.counts += np.bincount(o.status, minlength=len(cables.STATUS))
         f = o.feasible.astype(bool)
         if f.any():
             np.fmax(self.opeak, o.outlet[f].max(axis=0), out=self.opeak)
         return o.feasible, o.margin, o.tensions, o.lengths, o.mask
+
+    def nominal(self) -> tuple:
+        """The last call's statics as :attr:`~cdpr_design.workspaces.grid.Rows.nominal`: (effector
+        tensions (k, m) [N], the columns ``outlet_tension_<c>`` [N], ``unstretched_length_<c>`` [m])."""
+        o = self.last
+        return o.tensions.copy(), _extra(self.robot, o.outlet, o.L0, o.sag)
 
     def summary(self) -> dict:
         """``cable_model``, ``cable_status`` (evaluated poses per status) and

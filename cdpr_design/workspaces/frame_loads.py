@@ -23,6 +23,10 @@ origin (A_i the outlet, a pulley's swivel point).  The worst case the tension bo
 (``limit_`` columns) takes each cable at its upper bound t_max,i along every direction it takes
 over the feasible poses: t_max,i F_i / s_i, s_i the tension at the outlet (t_i; T_a sagging).
 The envelope is kept per chunk of rows (:class:`FrameLoadTable`): a few numbers a cable.
+An orientation workspace's rows stand for a set of orientations: straight cables take the
+rows' tensions (the largest over the set) at the nominal orientation, sagging cables the statics
+of the nominal orientation itself (:attr:`~cdpr_design.workspaces.grid.Rows.nominal`: a
+catenary's end forces come from its own tensions and length).
 """
 
 from __future__ import annotations
@@ -185,7 +189,8 @@ class FrameLoads(Wrapper):
             self.pulley_axes = axes * (radii > 0)[:, None]  # a point outlet among pulleys: no axle
 
     def add(self, r: Rows, start: int, P: np.ndarray | None) -> None:
-        ok = r.feasible.astype(bool) & np.isfinite(r.tensions).all(axis=1)
+        tensions, extra = (r.tensions, r.extra) if r.nominal is None else r.nominal  # sagging, a set: its nominal
+        ok = r.feasible.astype(bool) & np.isfinite(tensions).all(axis=1)
         if not ok.any():
             return
         if self.compiled:
@@ -194,8 +199,8 @@ class FrameLoads(Wrapper):
         feasible = np.flatnonzero(ok)
         for k in range(0, len(feasible), BLOCK):  # small temporaries: no page faults for each
             rows = feasible[k:k + BLOCK]
-            F, U, fmag, umag = outlet_forces(self.robot, P[rows], self._rotations(r, rows), r.tensions[rows],
-                                             {n: v[rows] for n, v in r.extra.items()},
+            F, U, fmag, umag = outlet_forces(self.robot, P[rows], self._rotations(r, rows), tensions[rows],
+                                             {n: v[rows] for n, v in extra.items()},
                                              getattr(self, "pulley_axes", None))
             self.table.add(F, U, self.robot.outlet_points, self.robot.tension_max, fmag, umag)
 

@@ -61,7 +61,10 @@ class Rows:
     add their columns: ``feasible`` uint8 (k,), ``margin`` (k,) [N], ``tensions`` (k, m) [N],
     ``lengths`` (k, m) [m] (None where the rows are not written), ``extra`` the declared
     columns (name -> (k,)), ``maps`` the declared maps' values (name -> (k,)), ``poses`` the
-    motion's pose coordinates where they are not the grid's at the sweep's orientation."""
+    motion's pose coordinates where they are not the grid's at the sweep's orientation,
+    ``nominal`` where rows stand for a set of orientations of sagging cables: the statics at the
+    nominal orientation, (effector tensions [N], extra columns ``outlet_tension_<c>`` [N] and
+    ``unstretched_length_<c>`` [m]) (the loads on the frame take them)."""
 
     feasible: np.ndarray
     margin: np.ndarray
@@ -70,6 +73,7 @@ class Rows:
     extra: dict = field(default_factory=dict)
     maps: dict = field(default_factory=dict)
     poses: np.ndarray | None = None
+    nominal: tuple | None = None
 
 
 def chunk_stats(r: Rows, tpeak: np.ndarray) -> tuple[int, float, float]:

@@ -202,10 +202,10 @@ class OrientationSweep(Base):
             r = _total_rows(self.ev, P, self.nominal, self.oset, self.tally)
         else:
             r = _range_rows(self.ev, P, self.nominal, self.level_sets, self.scale, self.rot_names, self.tally)
-        feas, marg, ten, L, cfree, value, extra = r
+        feas, marg, ten, L, cfree, value, extra, state = r
         if cfree is not None:
             extra = {"collision_free": cfree, **extra}
-        return Rows(feas, marg, ten, L, extra, {"value": np.asarray(value, float)})
+        return Rows(feas, marg, ten, L, extra, {"value": np.asarray(value, float)}, nominal=state)
 
     def summary(self, maps) -> dict:
         extra = _summary_extra(self.design, self.mode, self.oset, self.level_sets, self.scale, self.tally,
@@ -246,6 +246,7 @@ def _total_rows(ev, P, nominal, oset, tally: _Tally):
         f, mg, t, lengths, mask = ev(P, o)
         if np.array_equal(o, nominal):
             L = lengths
+            state = ev.nominal() if isinstance(ev, SagPoints) else None
         tally.evaluated += cnt
         ok = f.astype(bool)
         if tally.interference:
@@ -260,6 +261,7 @@ def _total_rows(ev, P, nominal, oset, tally: _Tally):
         ten = np.maximum(ten, t)  # an orientation without tensions (wrench closure) leaves none to report
     if L is None:
         L = ev(P, nominal)[3]
+        state = ev.nominal() if isinstance(ev, SagPoints) else None
     marg[~np.isfinite(marg)] = np.nan
     ten[~allok] = np.nan
     cfree = None
@@ -268,13 +270,14 @@ def _total_rows(ev, P, nominal, oset, tally: _Tally):
         tally.free += int(np.count_nonzero(cfree_all))
         tally.statics += int(np.count_nonzero(stat_all))
         kind_counts(hits, tally.by_kind)
-    return allok.astype(np.uint8), marg, ten, L, cfree, nok / len(oset), {"orientations_feasible": nok}
+    return allok.astype(np.uint8), marg, ten, L, cfree, nok / len(oset), {"orientations_feasible": nok}, state
 
 
 def _range_rows(ev, P, nominal, level_sets, scale, rot_names, tally: _Tally):
     """One chunk of the orientation range: the largest level whose samples are all feasible."""
     cnt = P.shape[0]
     feas, marg, ten, L, mask = ev(P, nominal)
+    state = ev.nominal() if isinstance(ev, SagPoints) else None
     tally.evaluated += cnt
     cfree = None
     if tally.interference:
@@ -304,7 +307,7 @@ def _range_rows(ev, P, nominal, level_sets, scale, rot_names, tally: _Tally):
     fin = np.isfinite(best)
     tally.range_sum += float(best[fin].sum())
     tally.range_n += int(fin.sum())
-    return feas, marg, ten, L, cfree, best, extra_cols
+    return feas, marg, ten, L, cfree, best, extra_cols, state
 
 
 def _summary_extra(design, mode, oset, level_sets, scale, tally: _Tally, interference: bool, pulleys: bool) -> dict:
