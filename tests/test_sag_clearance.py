@@ -331,8 +331,8 @@ def test_orientation_total_with_sagging_cables_is_every_orientations_pose():
         if motion == "1R2T":
             oset[:, :2] = 0.0
         res_rows = []
-        ws.run_orientations(design, "total", grid=g, orientation=nominal, orientations=oset,
-                            on_chunk=res_rows.append)
+        ws.run(design, Analysis(orientations="total"), grid=g, orientation=nominal, orientations=oset,
+               on_chunk=res_rows.append)
         robot = resolve(design, Analysis(command="pose"))
         for ch in res_rows:
             for r in range(len(ch.feasible)):

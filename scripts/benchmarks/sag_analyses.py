@@ -40,17 +40,16 @@ def _design(name: str, model: str):
 
 def _sweep(design, step, **options):
     from cdpr_design import workspaces as ws
+    from cdpr_design.statics.robot import Analysis
 
     def go():
-        if "orientations" in options:
-            return ws.run_orientations(design, options["orientations"], step=step, keep_maps=False)
-        return ws.run(design, step=step, keep_maps=False, tilt=False, **options)
+        return ws.run(design, Analysis(**options), step=step, keep_maps=False, tilt=False)
     return go
 
 
 def run(b: h.Bench) -> None:
     cases = {
-        "sagging40": (b.opt["sag40_step"], {"plain": {}, "collisions": {"interference": True}}),
+        "sagging40": (b.opt["sag40_step"], {"plain": {}, "collisions": {"collisions": True}}),
         "cogiro": (b.opt["cogiro_step"], {"plain": {}, "orientations total": {"orientations": "total"}}),
     }
     for name, (step, opts) in cases.items():
