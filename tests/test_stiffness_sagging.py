@@ -7,7 +7,8 @@ kernels' formulas (tests/reference/sagging_stiffness.py):
   robots at random poses: 1e-5 relative;
 - as the mass per length goes to zero, the elastic cables' stiffness and frequencies;
 - the sweep kernel's least stiffness and lowest frequency (lumped cable masses) against numpy/scipy;
-- through the commands: ``workspace --stiffness`` with sagging cables agrees with ``pose --json``.
+- through the commands: ``workspace --stiffness`` with sagging cables agrees with ``pose --json``,
+  ``check`` reads the task box's figures, and the README's sagging40 pendulum.
 """
 
 from __future__ import annotations
@@ -198,3 +199,59 @@ def test_workspace_stiffness_with_sagging_cables_is_the_pose_commands(tmp_path):
         assert p["stiffness_reason"] is None
         assert p["min_stiffness"] == pytest.approx(k[i], rel=1e-7)
         assert p["natural_frequencies"][0] == pytest.approx(f[i], rel=1e-7)
+
+
+@pytest.mark.slow
+def test_check_reads_the_sagging_cables_stiffness_over_the_task_box(tmp_path):
+    """``check`` with ``requirements.min_stiffness`` / ``min_frequency`` on sagging cables: the
+    figures are the least over the task box's feasible poses of the sagging sweep with the
+    stiffness (no refusal); a limit above the figure fails, one below passes."""
+    import copy
+
+    import yaml
+
+    from cdpr_design import workspaces as ws
+    from cdpr_design.design.envelope import task_grid
+
+    raw = copy.deepcopy(spec.load(DESIGNS / "sagging40.yaml").raw)
+    raw["requirements"] = {"task_box": {"lower": [18.0, 8.0], "upper": [22.0, 12.0]}}
+    raw["workspace"]["grid"]["step"] = 1.0
+    design = spec.from_dict(raw)
+    task = ws.run(design, ws.Analysis(stiffness=True), grid=task_grid(design), tilt=False).summary()
+    kmin, fmin = task["min_stiffness"], task["lowest_frequency"]
+    assert kmin > 0 and fmin > 0
+
+    def check(**req):
+        path = tmp_path / "s.yaml"
+        path.write_text(yaml.safe_dump({**raw, "requirements": {**raw["requirements"], **req}}))
+        r = invoke("check", path, "--json")
+        assert r.exit_code in (0, 1), r.output
+        return {c["requirement"]: c for c in json.loads(r.stdout)["checks"]}
+
+    checks = check(min_stiffness=0.99 * kmin, min_frequency=0.99 * fmin)
+    assert checks["min_stiffness"]["passed"] and checks["min_frequency"]["passed"]
+    checks = check(min_stiffness=1.01 * kmin, min_frequency=1.01 * fmin)
+    assert checks["min_stiffness"]["passed"] is False and checks["min_frequency"]["passed"] is False
+
+
+def test_the_readmes_sagging40_pendulum():
+    """README 'Stiffness and vibration': sagging40 at (4, 0.5) swings on its short, nearly vertical
+    left cable while the long right one hangs 8.4 m below its chord: 4.9 N/m and 0.14 Hz, against
+    21 kN/m with straight elastic cables.  The pendulum bounds it: above the left cable's lateral
+    string term T/L, and the frequency near a pendulum's sqrt(g/L)/2 pi."""
+    import re
+
+    from tests.helpers import ROOT
+
+    text = " ".join((ROOT / "README.md").read_text().split())
+    k, f, x, y, sag, k_el = re.search(r"and ([\d.]+) N/m and ([\d.]+) Hz at \(([\d.]+), ([\d.]+)\), where it swings "
+                                      r".* hangs ([\d.]+) m below .* gives (\d+) kN/m there", text).groups()
+    at = f"{x},{y}"
+    p = json.loads(invoke("pose", DESIGNS / "sagging40.yaml", "--at", at, "--json").stdout)
+    assert round(p["min_stiffness"], 1) == float(k) and round(p["natural_frequencies"][0], 2) == float(f)
+    assert round(p["sag"]["right"], 1) == float(sag)
+    el = json.loads(invoke("pose", DESIGNS / "sagging40.yaml", "--at", at, "--json", "--cable-model", "elastic").stdout)
+    assert round(el["min_stiffness"] / 1e3) == float(k_el)
+    L = np.hypot(0.0 - (float(x) - 0.15), 20.0 - (float(y) + 0.15))
+    assert p["tensions"]["left"] / L < p["min_stiffness"] < 2 * p["tensions"]["left"] / L
+    assert p["natural_frequencies"][0] == pytest.approx(np.sqrt(9.81 / L) / (2 * np.pi), rel=0.3)
