@@ -1,5 +1,5 @@
 """A hanging effector (``effector.orientation: free``) in ``workspace`` and ``pose`` with elastic
-cables, its stiffness and interference at the hanging pose.
+and sagging cables, its stiffness and interference at the hanging pose.
 
 The workspace of a hanging effector on elastic cables holds each grid position: the winches pay
 out the unstretched lengths that put it there (L / (1 + T / EA)).  Checked here against what a
@@ -152,3 +152,43 @@ def test_crane4_elastic_workspace_and_fk_agree(tmp_path):
         assert fk.tilt == pytest.approx(el["tilt"][k], abs=1e-6)
         np.testing.assert_allclose(fk.tensions, r.tensions[0], rtol=1e-6, atol=1e-6)
     assert se["min_stiffness"] > 0 and se["lowest_frequency"] > 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name,step,limit", [("sagging40", 4.0, None), ("crane4", 1.0, 90.0)])
+def test_sagging_rows_come_back_through_fk(tmp_path, name, step, limit):
+    """A hanging effector on sagging cables: ``workspace`` rows are ``pose --json``'s, and ``fk
+    --cable-model sagging`` (Levenberg-Marquardt on the catenaries' closure and the balance, from the
+    ideal cables' rest pose) with a feasible row's unstretched lengths puts the effector back at its
+    position and tilt, with its tensions."""
+    import yaml
+
+    from cdpr_design.model import spec
+    from cdpr_design.statics.cable_fk import forward
+    from cdpr_design.statics.robot import Analysis, resolve
+    from cdpr_design.workspaces.hanging import free_pose
+
+    raw = yaml.safe_load((DESIGNS / f"{name}.yaml").read_text())
+    raw["effector"]["orientation"] = "free"
+    if limit is not None:
+        raw.setdefault("requirements", {})["max_tilt"] = limit
+    path = write_spec(tmp_path, raw, f"{name}-free.yaml")
+    s, rows = sweep(path, tmp_path / "o", "--step", str(step), "--cable-model", "sagging", "--stiffness")
+    assert s["cable_model"] == "sagging" and s["feasible"] > 0
+    d = spec.with_cable_model(spec.load(path), "sagging")
+    robot, fk_robot = resolve(d, Analysis(command="pose")), resolve(d, Analysis(command="fk"))
+    coords = ["x", "y"] + (["z"] if "z" in rows else [])
+    feasible = np.flatnonzero(rows["feasible"] == 1)
+    for k in feasible[:: max(1, len(feasible) // 4)][:4]:
+        position = [rows[c][k] for c in coords]
+        p = pose_json(path, position, "--cable-model", "sagging")
+        assert p["feasible"] and p["tilt"] == pytest.approx(rows["tilt"][k], rel=1e-8, abs=1e-8)
+        for c in d.cable_names:
+            assert p["unstretched_lengths"][c] == pytest.approx(rows[f"unstretched_length_{c}"][k], rel=1e-8)
+            assert p["tensions"][c] == pytest.approx(rows[f"tension_{c}"][k], rel=1e-8)
+        assert p["min_stiffness"] == pytest.approx(rows["min_stiffness"][k], rel=1e-8)
+        r = free_pose(robot, position)
+        fk = forward(fk_robot, r.cables.unstretched[0])
+        np.testing.assert_allclose(fk.pose[: len(coords)], position, atol=1e-6)
+        assert fk.tilt == pytest.approx(rows["tilt"][k], abs=1e-5)
+        np.testing.assert_allclose(fk.tensions, r.tensions[0], rtol=1e-5)

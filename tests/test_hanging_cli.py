@@ -397,14 +397,16 @@ def test_pose_table_shows_the_tensions_an_infeasible_load_hangs_with():
 
 
 @pytest.mark.slow
-def test_free_needs_straight_cables(tmp_path):
-    """A free design hangs on ideal or elastic cables (tests/test_hanging_cables.py); sagging cables are
-    refused; under fixed the other models' outputs come without the tilt."""
+def test_free_on_sagging_cables_refuses_only_interference(tmp_path):
+    """A free design hangs on every cable model (tests/test_hanging_cables.py, test_hanging_sagging.py);
+    on sagging cables its interference is refused; under fixed the other models' outputs come
+    without the tilt."""
     path = free_planar2(tmp_path)
-    res = invoke("workspace", path, "--step", "0.1", "--out", tmp_path / "o", "--cable-model", "sagging")
-    assert res.exit_code == 2 and "straight cables" in res.output
-    res = invoke("pose", path, "--at", "0.3,0.5", "--cable-model", "sagging")
-    assert res.exit_code == 2 and "--cable-model" in res.output
+    res = invoke("workspace", path, "--step", "0.1", "--out", tmp_path / "o", "--cable-model", "sagging",
+                 "--collisions")
+    assert res.exit_code == 2 and "--collisions" in res.output and "catenaries" in res.output
+    res = invoke("pose", path, "--at", "0.3,0.5", "--cable-model", "sagging", "--json")
+    assert res.exit_code == 0 and json.loads(res.stdout)["cable_model"] == "sagging"
     res = invoke("workspace", PLANAR2, "--step", "0.1", "--out", tmp_path / "e", "--cable-model", "elastic")
     assert res.exit_code == 0 and "tilt" not in read_csv(tmp_path / "e" / "workspace.csv")[0]
 

@@ -97,19 +97,23 @@ def minimise(robot, L0, EA, p0, R0, x0):
     return sol.x
 
 
+def random_hangings(rng, per_kind, kinds=("planar2", "three", "four")):
+    """(robot, geo, positions, their ideal hanging orientations) of ``per_kind`` random robots a kind."""
+    for kind in kinds:
+        for _ in range(per_kind):
+            A, B, c, mass, g, planar, P = random_robot(rng, kind)
+            geo = hg.Geometry(A, B, c, mass, g)
+            yield (A, B, c, mass, g, planar), geo, P, hanging_orientations(geo, P, planar)
+
+
 def hanging_cases(seed, kinds=("planar2", "three", "four")):
     """(robot, p, R, t, EA) at random positions of random robots where the effector hangs."""
     rng = np.random.default_rng(seed)
     out = []
-    for kind in kinds:
-        for _ in range(3):
-            A, B, c, mass, g, planar, P = random_robot(rng, kind)
-            geo = hg.Geometry(A, B, c, mass, g)
-            h = hanging_orientations(geo, P, planar)
-            weight = geo.weight
-            for k in np.flatnonzero(h.feasible)[:2]:
-                EA = weight * 10.0 ** rng.uniform(2.0, 4.0, len(A))
-                out.append(((A, B, c, mass, g, planar), P[k], h.rotation[k], h.tensions[k], EA))
+    for robot, geo, P, h in random_hangings(rng, 3, kinds):
+        for k in np.flatnonzero(h.feasible)[:2]:
+            EA = geo.weight * 10.0 ** rng.uniform(2.0, 4.0, len(robot[0]))
+            out.append((robot, P[k], h.rotation[k], h.tensions[k], EA))
     return out
 
 

@@ -82,9 +82,9 @@ def _cases(planar2, ipanema3, cogiro):
         ("--orientations: expected total or range", ipanema3, Analysis(orientations="half")),
         ("--cable-model: cable model 'sagging' assumes point outlets", _with(planar2, model="sagging", pulleys=True),
          Analysis()),
+        ("--collisions: cable model 'sagging' with effector.orientation: free",
+         _with(planar2, model="sagging", orientation="free"), Analysis(collisions=True)),
         ("effector.orientation: free: the hanging solver models point outlets", _with(free, pulleys=True), Analysis()),
-        ("--cable-model: cable model 'sagging': an effector with effector.orientation: free",
-         _with(free, model="sagging"), Analysis()),
         ("--orientations: an under-constrained design with effector.orientation: free", free,
          Analysis(orientations="total")),
         ("--orientations: this motion has a fixed orientation", planar2, Analysis(orientations="range")),
@@ -172,7 +172,9 @@ def test_what_the_table_allows_resolves(planar2, cogiro):
     # stiffness (on rigid cables too: it swings on them)
     for model in ("ideal", "elastic"):
         resolve(_with(planar2, orientation="free", model=model), Analysis(collisions=True, stiffness=True))
+    for model in R.CABLE_MODELS:
         resolve(_with(planar2, orientation="free", model=model), Analysis(command="pose"))
+        resolve(_with(planar2, orientation="free", model=model), Analysis(stiffness=True))
     # the cable-frequency floor: straight cables compute it, fk does not use tension bounds
     r = resolve(_with(cogiro, cable_frequency=5.0), Analysis(kind="wrench-feasible", collisions=True))
     np.testing.assert_allclose(r.tension_floor, 4 * 5.0**2 * 0.061)  # 4 f^2 mu [N/m^2]

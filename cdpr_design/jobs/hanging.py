@@ -128,7 +128,9 @@ def free_pose_data(robot, position) -> dict:
         from cdpr_design.statics.pose import structure
 
         full = np.concatenate([np.pad(np.asarray(position, float), (0, 3 - len(position))), euler_xyz(h.rotation[0])])
-        W = [[float(x) for x in row] for row in structure(robot, full)[0]]
+        Wm = structure(robot, full)[0] if r.cables is None else _catenary_structure(robot, full[:3], h.rotation[0],
+                                                                                   r.cables)
+        W = [[float(x) for x in row] for row in Wm]
     if ok:
         pose = _motion_pose(design, position, ori)
     else:
@@ -138,9 +140,24 @@ def free_pose_data(robot, position) -> dict:
         "orientation": ori, "tilt": _num(h.tilt_deg[0]), "lengths": _by_cable(design, r.lengths[0]),
         "tensions": _by_cable(design, r.tensions[0]), "feasible": bool(r.feasible[0]), "reason": reason,
         "stable": bool(ok), "margin": _num(r.margin[0]), "structure_matrix": W,
-        "collisions": _collisions(design, position, h.rotation[0]) if ok else None,
+        "collisions": _collisions(design, position, h.rotation[0]) if ok and r.cables is None else None,
         "effector_orientation": "free", "hanging_tensions": _by_cable(design, h.tensions[0]),
     } | _cable_model_data(robot, r) | free_stiffness_data(robot, position, r)
+
+
+def _catenary_structure(robot, p, R, cables) -> np.ndarray:
+    """The structure matrix (n, m) of sagging cables at the hanging pose (platform origin ``p`` [m],
+    rotation ``R``): each column the unit end force at the attachment, (H u + VB up) / T, and its
+    moment about the platform origin, in the motion's wrench rows."""
+    design = robot.design
+    up = robot.cable.up
+    Rb = design.attachments @ R.T
+    l = design.outlets - p - Rb
+    hor = l - (l @ up)[:, None] * up
+    u = hor / np.maximum(np.linalg.norm(hor, axis=1), 1e-300)[:, None]
+    F = cables.H[0][:, None] * u + cables.VB[0][:, None] * up
+    d = F / np.linalg.norm(F, axis=1)[:, None]
+    return np.concatenate([d, np.cross(Rb, d)], axis=1).T[list(design.motion.wrench_rows)]
 
 
 def _collisions(design, position, R) -> list:
@@ -153,17 +170,26 @@ def _collisions(design, position, R) -> list:
 
 
 def _cable_model_data(robot, r) -> dict:
-    """The keys elastic cables add to a hanging robot's ``pose --json`` (as :func:`cdpr_design.jobs.pose.cable_model_data`):
-    the outlet tensions, the unstretched lengths that hold it there and the sag (0); none for ideal cables."""
-    from cdpr_design.statics.cables import straight_state
+    """The keys elastic and sagging cables add to a hanging robot's ``pose --json`` (as
+    :func:`cdpr_design.jobs.pose.cable_model_data`): the outlet tensions, the unstretched lengths that
+    hold it there and the sag (0 for elastic cables), empty where the pose is infeasible; none for
+    ideal cables."""
+    from cdpr_design.statics.cables import STATUS, straight_state
 
     if robot.cables.rigid:
         return {}
-    s = straight_state(robot, r.lengths, r.tensions)
     design = robot.design
-    return {"cable_model": robot.cables.name, "outlet_tensions": _by_cable(design, s.outlet_tensions[0]),
-            "unstretched_lengths": _by_cable(design, s.unstretched_lengths[0]), "sag": _by_cable(design, s.sag[0]),
-            "cable_status": "ok"}
+    if r.cables is None:
+        s = straight_state(robot, r.lengths, r.tensions)
+        outlet, L0, sag, status = s.outlet_tensions[0], s.unstretched_lengths[0], s.sag[0], 0
+    else:
+        ok = bool(r.feasible[0])
+        c = r.cables
+        outlet, L0, sag = (np.where(ok, v[0], np.nan) for v in (c.outlet_tensions, c.unstretched, c.sag))
+        status = int(r.cable_status[0])
+    return {"cable_model": robot.cables.name, "outlet_tensions": _by_cable(design, outlet),
+            "unstretched_lengths": _by_cable(design, L0), "sag": _by_cable(design, sag),
+            "cable_status": STATUS[status]}
 
 
 #: The names of the hanging stiffness's coordinates, by degrees of freedom (statics.hanging.geometry).

@@ -220,9 +220,10 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal("effector.orientation", "free: the hanging solver models point outlets, and this design has swivel "
                                     "pulleys (cables[].pulley)",
             lambda f, a: _free(f) and f.outlets.pulleys and "hanging-solver" in a.needs, CAPABILITY),
-    Refusal("--cable-model", "cable model 'sagging': an effector with effector.orientation: free hangs on "
-                             "straight cables (ideal or elastic) in this analysis; use --cable-model elastic",
-            lambda f, a: _free(f) and not f.cables.straight and "hanging-statics" in a.needs, CAPABILITY),
+    Refusal("--collisions", "cable model 'sagging' with effector.orientation: free: interference along the "
+                            "catenaries at the hanging pose is not modelled; use --cable-model elastic or ideal "
+                            "for this analysis",
+            lambda f, a: _free(f) and not f.cables.straight and a.collisions, CAPABILITY),
     Refusal("--orientations", "an under-constrained design with effector.orientation: free does not command "
                               "its orientation (it hangs); use effector.orientation: fixed to sweep commanded "
                               "orientations",
@@ -457,15 +458,13 @@ def acceleration_reason(cables: CableModel, orientation: Orientation) -> str | N
 def stiffness_reason(design: Design, cables: CableModel, outlets: Outlets, orientation: Orientation) -> str | None:
     """Why the stiffness of the design's effector on its cables is not defined, or None (it is:
     straight or sagging cables from point outlets, each with an axial stiffness, the orientation
-    commanded or held, :mod:`cdpr_design.statics.stiffness`; or a hanging effector on straight
-    cables, rigid or elastic, :mod:`cdpr_design.statics.hanging.compliance`)."""
-    if not cables.straight and orientation.free:
-        return ("sagging cables: a hanging effector's stiffness on catenaries is not modelled (use --cable-model "
-                "elastic)")
-    if outlets.pulleys:
-        return "swivel pulleys: the stiffness of a cable over a pulley is not modelled"
+    commanded or held, :mod:`cdpr_design.statics.stiffness`; or a hanging effector, whose pulleys
+    are refused before: :mod:`cdpr_design.statics.hanging.compliance` and
+    :mod:`cdpr_design.statics.hanging.sagging`)."""
     if orientation.free:  # on rigid cables too: it swings on them (cdpr_design.statics.hanging.compliance)
         return None
+    if outlets.pulleys:
+        return "swivel pulleys: the stiffness of a cable over a pulley is not modelled"
     missing = [c.name for c in design.cables if not c.props.axial_stiffness]
     if missing:
         return ("ideal cables without cable.axial_stiffness are inextensible, so the robot is rigid along "

@@ -43,8 +43,10 @@ from cdpr_design.statics.hanging.at_positions import hanging_orientations
 from cdpr_design.statics.hanging.compliance import HangingStiffness, hanging_stiffness
 from cdpr_design.statics.hanging.geometry import Geometry
 from cdpr_design.statics.hanging.results import UNSTABLE, HangingOrientations
+from cdpr_design.statics.hanging.sagging import SaggingCables
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.robot import Robot, tension_lower
+from cdpr_design.workspaces.cables import cable_summary
 from cdpr_design.workspaces.grid import Rows, chunk_poses
 from cdpr_design.workspaces.parts import Base, Wrapper
 
@@ -212,7 +214,10 @@ class FreeRows:
     :class:`~cdpr_design.statics.hanging.compliance.HangingStiffness` of the hanging poses on the
     robot's cables (None unless the cables stretch or the analysis asks for the stiffness);
     ``collisions`` (k,) uint8 the interference bits at the hanging pose (None unless the analysis
-    checks interference; 0 where it cannot hang).
+    checks interference; 0 where it cannot hang); on sagging cables ``cables`` the
+    :class:`~cdpr_design.statics.hanging.sagging.SaggingCables` (unstretched lengths, outlet
+    tensions, sag) and ``cable_status`` (k,) int8 (:data:`cdpr_design.statics.cables.STATUS`: 0, or
+    3 where the ideal cables hang but the catenaries' balance did not converge).
     """
 
     hanging: HangingOrientations
@@ -224,6 +229,8 @@ class FreeRows:
     within: np.ndarray
     stiffness: HangingStiffness | None = None
     collisions: np.ndarray | None = None
+    cables: SaggingCables | None = None
+    cable_status: np.ndarray | None = None
 
 
 def hanging_dofs(geo: Geometry, planar: bool) -> tuple[int, ...]:
@@ -254,6 +261,8 @@ def free_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
     design, limit = robot.design, robot.tilt_limit
     k, m = len(P), design.m
     h, extra = hanger(P)
+    if not robot.cables.straight:
+        return _sagging_rows(robot, P, hanger, h)
     stiff = None
     if not robot.cables.rigid or robot.analysis.stiffness:
         stiff = pose_stiffness(robot, hanger, P, h)
@@ -294,6 +303,35 @@ def free_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
                     stiff, hits)
 
 
+def _sagging_rows(robot: Robot, P, hanger: Hanger, ideal: HangingOrientations) -> FreeRows:
+    """:func:`free_rows` on sagging cables (:mod:`cdpr_design.statics.hanging.sagging`): the
+    orientation balanced by the catenaries' end forces, from the ideal cables' answer ``ideal``;
+    feasible where it hangs stably, every cable's tension within its bounds along the whole cable
+    (the least, at the effector or at the lowest point of a cable that dips, >= its lower bound;
+    the largest, at an end, <= its upper bound) and the tilt within the limit.  No capacity
+    margin (NaN): the catenaries' wrench is not linear in their tensions.  The lengths are the
+    chords."""
+    from cdpr_design.statics.hanging.sagging import hang_on_sagging_cables
+
+    design, geo = robot.design, hanger.geo
+    h, cab, stiff = hang_on_sagging_cables(geo, P, hanger.planar, ideal, robot.cable.w, robot.cable.EA,
+                                           hanging_dofs(geo, hanger.planar), design.effector.inertia_matrix)
+    extra = tilt_columns(design, h)
+    L = np.where(h.feasible[:, None], geo.cables_many(P, np.where(h.feasible[:, None, None], h.rotation,
+                                                                     np.eye(3)))[2], np.nan)
+    VA = cab.VB + robot.cable.w * cab.unstretched
+    dips = (cab.VB < 0.0) & (VA > 0.0)
+    least = np.where(dips, cab.H, np.minimum(cab.tensions, cab.outlet_tensions))
+    most = np.maximum(cab.tensions, cab.outlet_tensions)
+    tol = 1e-9 * max(1.0, geo.weight)
+    with np.errstate(invalid="ignore"):
+        within = h.feasible & np.all((least >= robot.tension_min - tol) & (most <= robot.tension_max + tol), axis=1)
+        upright = within if robot.tilt_limit is None else within & within_tilt(extra["tilt"], robot.tilt_limit)
+    status = np.where(ideal.feasible & ~h.feasible & (h.status != UNSTABLE), 3, 0).astype(np.int8)
+    return FreeRows(h, extra, upright.astype(np.uint8), np.full(len(P), np.nan),
+                    np.where(upright[:, None], cab.tensions, np.nan), L, within, stiff, None, cab, status)
+
+
 #: Tolerance [deg] of the tilt limit: a pose tilted by at most ``max_tilt + TILT_TOL_DEG`` is
 #: within it (1e-9 rad: a level effector's computed tilt is round-off, about 1e-15 deg).
 TILT_TOL_DEG = math.degrees(1e-9)
@@ -323,8 +361,12 @@ class FreeSweep(Base):
         self.robot, self.ori, self.kind = robot, ori, "static"
         self.hanger = Hanger(robot, ori)
         a = robot.analysis
+        self.sagging = not robot.cables.straight
         self.columns = tuple(columns(robot.design)) + (("collision_free",) if a.collisions else ()) \
-            + (self.STIFFNESS if a.stiffness else ())
+            + (self.STIFFNESS if a.stiffness else ()) \
+            + (tuple(robot.cables.state_columns(robot.design.cable_names)) if self.sagging else ())
+        self.outlet_peak = np.full(robot.design.m, -np.inf)
+        self.status_counts = np.zeros(5, np.int64)
         self.maps = ("tilt",) + (self.STIFFNESS[:2] if a.stiffness else ())
         self.pictures = ("tilt_map.png",) + (("stiffness_map.png",) if a.stiffness else ())
         self.tally = _Stats()
@@ -353,7 +395,26 @@ class FreeSweep(Base):
                 extra[name] = v
                 self.least[name] = min(self.least[name], float(np.fmin.reduce(v, initial=math.inf)))
             maps.update({name: extra[name] for name in self.STIFFNESS[:2]})
+        if self.sagging:
+            extra.update(self._cable_columns(r))
         return Rows(r.feasible, r.margin, r.tensions, r.lengths, extra, maps, poses)
+
+    def _cable_columns(self, r: FreeRows) -> dict:
+        """The sagging cables' columns (:func:`cdpr_design.workspaces.cables.cable_columns`), empty
+        where the row is infeasible (as its tensions), and their summary tallies."""
+        ok = r.feasible.astype(bool)[:, None]
+        c = r.cables
+        out = {}
+        names = self.robot.design.cable_names
+        for prefix, v in (("outlet_tension", c.outlet_tensions), ("unstretched_length", c.unstretched),
+                          ("sag", c.sag)):
+            v = np.where(ok, v, np.nan)
+            out.update({f"{prefix}_{n}": v[:, i] for i, n in enumerate(names)})
+        out["cable_status"] = r.cable_status
+        self.outlet_peak = np.fmax(self.outlet_peak, np.fmax.reduce(np.where(ok, c.outlet_tensions, np.nan), axis=0,
+                                                                     initial=-np.inf))
+        self.status_counts += np.bincount(r.cable_status, minlength=5)[:5]
+        return out
 
     def _count_collisions(self, r: FreeRows) -> None:
         from cdpr_design.statics.interference import HIT_NAMES
@@ -375,6 +436,9 @@ class FreeSweep(Base):
                        collisions_by_kind={name: self.counts.get(name, 0) for name in HIT_NAMES.values()})
         if a.stiffness:
             out.update({k: (v if math.isfinite(v) else None) for k, v in self.least.items()})
+        if self.sagging:
+            out.update(cable_summary(self.robot, self.status_counts,
+                                     np.where(np.isfinite(self.outlet_peak), self.outlet_peak, np.nan)))
         return out
 
     def finish(self, result, maps) -> None:

@@ -2,7 +2,7 @@
 
 For each design (``effector.orientation: free``): the whole workspace sweep as a command runs it
 (``workspaces.run``: the plan, its parts, the maps; no files, no boundary), on ideal cables (the
-baseline) and with each new combination: elastic cables, ``--stiffness`` (ideal and elastic) and
+baseline) and with each new combination: elastic and sagging cables, ``--stiffness`` and
 ``--collisions`` at the hanging orientation.  The variants of a round run back to back in an order
 rotated from round to round (:func:`benchmarks.harness.rounds`); CPU on ``threads`` kernel threads;
 the median and range of the rounds' own ratios.
@@ -24,6 +24,9 @@ VARIANTS = (
     ("ideal --stiffness", "ideal", {"stiffness": True}),
     ("elastic --stiffness", "elastic", {"stiffness": True}),
     ("ideal --collisions", "ideal", {"interference": True}),
+    ("elastic --collisions", "elastic", {"interference": True}),
+    ("sagging", "sagging", {}),
+    ("sagging --stiffness", "sagging", {"stiffness": True}),
 )
 
 
@@ -41,7 +44,7 @@ def run(b: h.Bench) -> None:
     with parallel.threads_kept():
         parallel.set_threads(b.opt["threads"])
         for n, d in designs.items():
-            models = {m: spec.with_cable_model(d, m) for m in ("ideal", "elastic")}
+            models = {m: spec.with_cable_model(d, m) for m in ("ideal", "elastic", "sagging")}
             one = ws.grid.first_pose(ws.make_grid(d))
             for _, m, kw in VARIANTS:  # the kernels compiled or loaded outside the timing
                 ws.run(models[m], grid=one, **kw)
