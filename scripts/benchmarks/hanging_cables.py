@@ -17,14 +17,14 @@ from benchmarks import harness as h
 OPTIONS = {"designs": ("crane4", "planar2"), "threads": 2, "step": None}
 QUICK = {"designs": ("crane4",), "step": 0.5}
 
-#: (label, cable model, options of workspaces.run) of each variant; the first is the baseline.
+#: (label, cable model, options of the Analysis) of each variant; the first is the baseline.
 VARIANTS = (
     ("ideal", "ideal", {}),
     ("elastic", "elastic", {}),
     ("ideal --stiffness", "ideal", {"stiffness": True}),
     ("elastic --stiffness", "elastic", {"stiffness": True}),
-    ("ideal --collisions", "ideal", {"interference": True}),
-    ("elastic --collisions", "elastic", {"interference": True}),
+    ("ideal --collisions", "ideal", {"collisions": True}),
+    ("elastic --collisions", "elastic", {"collisions": True}),
     ("sagging", "sagging", {}),
     ("sagging --stiffness", "sagging", {"stiffness": True}),
 )
@@ -38,6 +38,7 @@ def run(b: h.Bench) -> None:
     from cdpr_design import workspaces as ws
     from cdpr_design.kernels import parallel
     from cdpr_design.model import spec
+    from cdpr_design.statics.robot import Analysis
 
     designs = {n: free(spec.load(h.ROOT / "designs" / f"{n}.yaml")) for n in b.opt["designs"]}
     step = b.opt["step"]
@@ -47,8 +48,9 @@ def run(b: h.Bench) -> None:
             models = {m: spec.with_cable_model(d, m) for m in ("ideal", "elastic", "sagging")}
             one = ws.grid.first_pose(ws.make_grid(d))
             for _, m, kw in VARIANTS:  # the kernels compiled or loaded outside the timing
-                ws.run(models[m], grid=one, **kw)
-            variants = {label: (lambda m=m, kw=kw: ws.run(models[m], step=step, **kw)) for label, m, kw in VARIANTS}
+                ws.run(models[m], Analysis(**kw), grid=one)
+            variants = {label: (lambda m=m, kw=kw: ws.run(models[m], Analysis(**kw), step=step))
+                        for label, m, kw in VARIANTS}
             times = h.rounds(variants, b.rounds)
             poses = ws.make_grid(d, step).size if step else d.workspace.grid.size
             base = times[VARIANTS[0][0]]
