@@ -241,10 +241,11 @@ def _attachments(rng, G):
 
 @pytest.mark.parametrize("rows", [(0, 1, 2, 3, 4, 5), (0, 1, 5)])
 def test_mean_value_form_encloses_the_basis_tensions_at_every_pose_and_geometry(rows):
-    """The centred form in the position and in every outlet and attachment coordinate
-    (kernels/certify.py's mean_value): at random poses of random boxes, with random geometries
-    within random tolerances and random wrenches within the margin, the exact basis tensions (arb)
-    lie in the refined enclosure; and it is never wider than the first-order one it refines."""
+    """The centred forms in every outlet and attachment coordinate at the box's centre
+    (kernels/certify.py's centre_enclosure), then in the position (mean_value): at the centre and
+    at random poses of random boxes, with random geometries within random tolerances and random
+    wrenches within the margin, the exact basis tensions (arb) lie in the enclosures; and the
+    refined one is never wider than the first-order one it refines."""
     import itertools
 
     rng = np.random.default_rng(7 + len(rows))
@@ -265,24 +266,26 @@ def test_mean_value_form_encloses_the_basis_tensions_at_every_pose_and_geometry(
         if not KC.basis_enclosure(E.Wl, E.Wh, T, basis, t, T.wv[0], E.Al, E.Ah, E.bl, E.bh, scr.kr, E.Xl, E.Xh):
             continue
         first = (E.Xl.copy(), E.Xh.copy())
-        if not KC.mean_value(P, G, T, basis, t, T.wv[0], scr):
+        if not KC.centre_enclosure(P, G, T, basis, t, T.wv[0], scr):
+            continue
+        centre = (E.Tl.copy(), E.Th.copy())
+        if not KC.mean_value(P, G, T, basis, t, scr):
             continue
         refined += 1
         assert np.all(E.Xl >= first[0]) and np.all(E.Xh <= first[1])
         b = list(bases[basis])
         fixed = [j for j in range(m) if j not in b]
-        for _ in range(4):
-            p = _sample(rng, P.lo, P.hi)
-            A = _sample(rng, G.Alo, G.Ahi)
-            B = _attachments(rng, G)
+        for at_centre in (True, False, False, False, False):
+            p = P.c if at_centre else _sample(rng, P.lo, P.hi)
             e = rng.uniform(-T.mu, T.mu, n)
-            W = _arb_matrix(A, B, p, rows)
+            W = _arb_matrix(_sample(rng, G.Alo, G.Ahi), _attachments(rng, G), p, rows)
             rhs = [arb(float(T.wv[0, i])) + arb(float(e[i]))
                    - sum((W[i][j] * arb(float(min(max(t[j], 0.0), 1e3))) for j in fixed), arb(0))
                    for i in range(n)]
             x = flint.arb_mat([[W[i][j] for j in b] for i in range(n)]).solve(flint.arb_mat([[v] for v in rhs]))
+            lo, hi = centre if at_centre else (E.Xl, E.Xh)
             for q in range(n):
-                assert _holds(E.Xl[q], E.Xh[q], x[q, 0]), (q, E.Xl[q], E.Xh[q], x[q, 0])
+                assert _holds(lo[q], hi[q], x[q, 0]), (at_centre, q, lo[q], hi[q], x[q, 0])
             checked += 1
     assert refined > 40 and checked > 160
 

@@ -464,20 +464,20 @@ def outside_test(P, G, T, C, E):
 
 
 @njit
-def derivatives(G, E):
-    """Enclose dW/dp_k over the box (``E.U``, ``E.L`` filled) into ``E.Dl[k]``, ``E.Dh[k]`` (n, m),
-    k = 0, 1, 2 (:func:`structure_derivative`)."""
+def derivatives(G, U, L, E):
+    """Enclose dW/dp_k into ``E.Dl[k]``, ``E.Dh[k]`` (n, m), k = 0, 1, 2, from the unit vectors ``U``
+    (m, 3, 2) and lengths ``L`` (m, 2) enclosed over a box (:func:`structure_derivative`)."""
     for axis in range(3):
-        structure_derivative(axis, E.U, E.L, G.Blo, G.Bhi, G.rows, E.Dl[axis], E.Dh[axis], E.V)
+        structure_derivative(axis, U, L, G.Blo, G.Bhi, G.rows, E.Dl[axis], E.Dh[axis], E.V)
 
 
 @njit
-def cable_term(G, E, j, kind, axis):
+def cable_term(G, E, U, j, kind, axis):
     """One geometric variable of cable j, ``kind`` 0: coordinate ``axis`` of its outlet, 1: the
     error along effector axis ``axis`` of its attachment.  Writes into [E.cl, E.ch] (n,) the
-    derivative of column j of W over the box with respect to it (dw_j/da_k = -dw_j/dp_k;
+    derivative of column j of W over a box with respect to it (dw_j/da_k = -dw_j/dp_k;
     dw_j/de_k = sum_i Re_ik (dw_j/dp_i + [0 ; e_i x u_j]), d_j = a_j - R b_j - Re e - p), from
-    ``E.Dl``, ``E.Dh`` (:func:`derivatives`) and the unit vectors ``E.U`` over the box, and returns
+    ``E.Dl``, ``E.Dh`` (:func:`derivatives`) and the unit vectors ``U`` (m, 3, 2) over that box, and returns
     the interval of the variable minus its nominal value ((0, 0) when it has no extent: skip it)."""
     rows = G.rows
     n = rows.shape[0]
@@ -498,10 +498,10 @@ def cable_term(G, E, j, kind, axis):
                 c = r - 3
                 if c == (i + 1) % 3:
                     q = (i + 2) % 3
-                    dl, dh = isub(dl, dh, E.U[j, q, 0], E.U[j, q, 1])
+                    dl, dh = isub(dl, dh, U[j, q, 0], U[j, q, 1])
                 elif c == (i + 2) % 3:
                     q = (i + 1) % 3
-                    dl, dh = iadd(dl, dh, E.U[j, q, 0], E.U[j, q, 1])
+                    dl, dh = iadd(dl, dh, U[j, q, 0], U[j, q, 1])
             pl, ph = iscale(G.Re[i, axis], dl, dh)
             sl, sh = iadd(sl, sh, pl, ph)
         E.cl[k], E.ch[k] = sl, sh
@@ -558,7 +558,7 @@ def centred_gap(P, G, nu, tmid, rho, w, E):
         kl, kh = isub(rho[j] * sig[j], rho[j] * sig[j], sg * tmid[j], sg * tmid[j])
         pl, ph = imul(kl, kh, ll, lh)
         fl, fh = iadd(fl, fh, pl, ph)
-    derivatives(G, E)
+    derivatives(G, E.U, E.L, E)
     for j in range(m):
         kl, kh = isub(rho[j] * sig[j], rho[j] * sig[j], sg * tmid[j], sg * tmid[j])
         for v in range(9):  # the position's coordinates, then cable j's outlet's, then its attachment's
@@ -570,7 +570,7 @@ def centred_gap(P, G, nu, tmid, rho, w, E):
                     E.cl[i], E.ch[i] = E.Dl[axis, i, j], E.Dh[axis, i, j]
                 dl, dh = isub(P.lo[axis], P.hi[axis], P.c[axis], P.c[axis])
             else:
-                dl, dh = cable_term(G, E, j, v // 3 - 1, axis)
+                dl, dh = cable_term(G, E, E.U, j, v // 3 - 1, axis)
                 if dl == 0.0 and dh == 0.0:
                     continue
             al, ah = 0.0, 0.0
@@ -651,12 +651,12 @@ def within(bases, basis, Xl, Xh, tmin, tmax):
 
 
 @njit
-def basis_tension(T, basis, t, E, j):
-    """Cable j's tension over the box: its enclosure [E.Xl, E.Xh] in the basis ``T.bases[basis]``,
+def basis_tension(T, basis, t, Xl, Xh, j):
+    """Cable j's tension: its enclosure [Xl[q], Xh[q]] when it is basis cable q of ``T.bases[basis]``,
     else ``t[j]`` clipped to its bounds (held fixed)."""
     q = in_basis(T.bases, basis, j)
     if q >= 0:
-        return E.Xl[q], E.Xh[q]
+        return Xl[q], Xh[q]
     tj = min(max(t[j], T.tmin[j]), T.tmax[j])
     return tj, tj
 
@@ -676,55 +676,95 @@ def add_preconditioned(Y, cl, ch, dl, dh, hl, hh):
 
 
 @njit
-def mean_value(P, G, T, basis, t, w, scr):
-    """Refine the first-order enclosure of the basis tensions (``scr.box.Xl``, ``Xh``, with the
-    basis columns over the box in ``Al``, ``Ah``) by the centred (mean-value) form about the
-    box's centre and the nominal geometry (module docstring):
+def centre_enclosure(P, G, T, basis, t, w, scr):
+    """Enclose into [E.Tl, E.Th] (n,) (``E = scr.box``) the basis tensions at the box's centre for
+    every geometry within tolerance, by the centred form in the geometric variables about the
+    nominal geometry (module docstring):
 
-        t_B(v) in t_B(v_c) - y,   y = [W_B]^-1 sum_v g_v (v - v_c),   g_v = sum_j (dw_j/dv) t_j
+        t_B(c, v) in t_B(c, v_c) - y,   y = [W_B(c, .)]^-1 sum_v g_v (v - v_c),   g_v = (dw_j/dv) t_j
 
-    over v = the position coordinates and each cable's outlet and attachment coordinates, with
-    dw_j/dv and t_B (in [X]) enclosed over the whole box and the other cables at ``t`` clipped
-    to their bounds.  t_B(v_c) is the enclosure at one point (:func:`basis_enclosure`); y is
-    enclosed by :func:`krawczyk_box` about 0, its right-hand side sum_v (Y g_v)(v - v_c)
-    preconditioned term by term with the midpoint inverse Y of [W_B] (so each variable keeps its
-    own signs through Y).  The result is intersected into [Xl, Xh].  False when a step is not
-    proven."""
+    over each cable j's outlet coordinates and attachment errors v, with dw_j/dv, W_B and t_B
+    enclosed at the centre over the tolerance boxes (the other cables at ``t`` clipped to their
+    bounds); t_B(c, v_c) is enclosed at one point (:func:`basis_enclosure`); y by
+    :func:`krawczyk_box` about 0, its right-hand side sum_v (Y g_v)(v - v_c) preconditioned term by
+    term with the midpoint inverse Y of [W_B(c, .)] (so each variable keeps its own signs through
+    Y).  False when a step is not proven."""
     E, kr = scr.box, scr.kr
     n = G.rows.shape[0]
     m = G.Alo.shape[0]
+    for i in range(n):
+        E.yl[i] = 0.0
+        E.yh[i] = 0.0
+    tolerance = False
+    for j in range(m):
+        tolerance = tolerance or G.tb[j] > 0.0
+        for a in range(3):
+            tolerance = tolerance or G.Ahi[j, a] > G.Alo[j, a]
+    if tolerance:
+        interval_structure(P.c, P.c, G.Alo, G.Ahi, G.Blo, G.Bhi, G.rows, E.Wcl, E.Wch, E.Uc, E.Lc)
+        if not basis_enclosure(E.Wcl, E.Wch, T, basis, t, w, E.Acl, E.Ach, E.bl, E.bh, kr, E.Tl, E.Th):
+            return False
+        beta = preconditioner(E.Acl, E.Ach, kr.Am, kr.Y, kr.Cl, kr.Ch, kr.work)
+        derivatives(G, E.Uc, E.Lc, E)
+        for i in range(n):
+            E.hl[i] = 0.0
+            E.hh[i] = 0.0
+        for j in range(m):
+            tl, th = basis_tension(T, basis, t, E.Tl, E.Th, j)
+            for v in range(6):
+                dl, dh = cable_term(G, E, E.Uc, j, v // 3, v % 3)
+                if dl == 0.0 and dh == 0.0:
+                    continue
+                for i in range(n):
+                    E.cl[i], E.ch[i] = imul(E.cl[i], E.ch[i], tl, th)
+                add_preconditioned(kr.Y, E.cl, E.ch, dl, dh, E.hl, E.hh)
+        for i in range(n):
+            kr.xt[i] = 0.0
+        if not krawczyk_box(kr.xt, E.hl, E.hh, kr.Cl, kr.Ch, beta, E.yl, E.yh, kr.work):
+            return False
     interval_structure(P.c, P.c, G.Ac, G.Ac, G.Bc, G.Bc, G.rows, E.Wcl, E.Wch, E.Uc, E.Lc)
     if not basis_enclosure(E.Wcl, E.Wch, T, basis, t, w, E.Acl, E.Ach, E.bl, E.bh, kr, E.Tl, E.Th):
         return False
+    for q in range(n):
+        E.Tl[q], E.Th[q] = isub(E.Tl[q], E.Th[q], E.yl[q], E.yh[q])
+    return True
+
+
+@njit
+def mean_value(P, G, T, basis, t, scr):
+    """Refine the enclosure [Xl, Xh] of the basis tensions over the box (``scr.box``: the basis
+    columns over the box in ``Al``, ``Ah``; the centre's enclosure for every geometry in ``Tl``,
+    ``Th``, :func:`centre_enclosure`) by the centred (mean-value) form in the position:
+
+        t_B(p, v) in t_B(c, v) - y,   y = [W_B]^-1 sum_k g_k (p_k - c_k),   g_k = sum_j (dw_j/dp_k) t_j
+
+    with dw_j/dp_k, W_B and t_B (in [X]) enclosed over the whole box (positions and geometries),
+    the other cables at ``t`` clipped to their bounds; y by :func:`krawczyk_box` about 0 with the
+    right-hand side preconditioned term by term.  The result is intersected into [Xl, Xh].  False
+    when a step is not proven."""
+    E, kr = scr.box, scr.kr
+    n = G.rows.shape[0]
+    m = G.Alo.shape[0]
     beta = preconditioner(E.Al, E.Ah, kr.Am, kr.Y, kr.Cl, kr.Ch, kr.work)
     if not (beta < 1.0):
         return False
     for i in range(n):
         E.hl[i] = 0.0
         E.hh[i] = 0.0
-    derivatives(G, E)
-    for axis in range(3):  # the position: g_k = sum_j dw_j/dp_k t_j
+    derivatives(G, E.U, E.L, E)
+    for axis in range(3):
         if not (P.hi[axis] > P.lo[axis]):
             continue
         for i in range(n):
             E.gl[i] = 0.0
             E.gh[i] = 0.0
         for j in range(m):
-            tl, th = basis_tension(T, basis, t, E, j)
+            tl, th = basis_tension(T, basis, t, E.Xl, E.Xh, j)
             for i in range(n):
                 pl, ph = imul(E.Dl[axis, i, j], E.Dh[axis, i, j], tl, th)
                 E.gl[i], E.gh[i] = iadd(E.gl[i], E.gh[i], pl, ph)
         dl, dh = isub(P.lo[axis], P.hi[axis], P.c[axis], P.c[axis])
         add_preconditioned(kr.Y, E.gl, E.gh, dl, dh, E.hl, E.hh)
-    for j in range(m):  # each cable's outlet and attachment: g_v = dw_j/dv t_j
-        tl, th = basis_tension(T, basis, t, E, j)
-        for v in range(6):
-            dl, dh = cable_term(G, E, j, v // 3, v % 3)
-            if dl == 0.0 and dh == 0.0:
-                continue
-            for i in range(n):
-                E.cl[i], E.ch[i] = imul(E.cl[i], E.ch[i], tl, th)
-            add_preconditioned(kr.Y, E.cl, E.ch, dl, dh, E.hl, E.hh)
     for i in range(n):
         kr.xt[i] = 0.0
     if not krawczyk_box(kr.xt, E.hl, E.hh, kr.Cl, kr.Ch, beta, E.yl, E.yh, kr.work):
@@ -744,9 +784,7 @@ def square_outside(P, G, T, t, w, scr):
     E = scr.box
     if not basis_enclosure(E.Wl, E.Wh, T, 0, t, w, E.Al, E.Ah, E.bl, E.bh, scr.kr, E.Xl, E.Xh):
         return False
-    if not beyond(T.bases, E.Xl, E.Xh, T.tmin, T.tmax):
-        mean_value(P, G, T, 0, t, w, scr)
-    return beyond(T.bases, E.Xl, E.Xh, T.tmin, T.tmax)
+    return beyond(T.bases, E.Xl, E.Xh, T.tmin, T.tmax) or centred(P, G, T, 0, t, w, scr, True)
 
 
 @njit
@@ -797,24 +835,31 @@ def classify_box(P, G, T, scr):
             return UNDECIDED
         if within(T.bases, basis, E.Xl, E.Xh, T.tmin, T.tmax):
             continue
-        if not centred(P, G, T, basis, C.t, T.wv[k], scr):
+        if not centred(P, G, T, basis, C.t, T.wv[k], scr, False):
             return UNDECIDED
     return INSIDE
 
 
 @njit
-def centred(P, G, T, basis, t, w, scr):
-    """Whether the basis tensions are proven within their bounds by :func:`mean_value`, applied up
-    to :data:`MEAN_VALUE_PASSES` times: each pass encloses the derivatives with the basis tensions
-    of the last (so a pass that narrowed them narrows the next one's terms)."""
+def centred(P, G, T, basis, t, w, scr, outside):
+    """Whether the centred forms prove the basis tensions within their bounds (``outside`` False) or,
+    for the square case's basis 0, one of them wholly beyond its bounds (True):
+    :func:`centre_enclosure`, then :func:`mean_value` up to :data:`MEAN_VALUE_PASSES` times, each
+    pass enclosing the derivatives with the basis tensions of the last (a pass that narrowed them
+    narrows the next one's terms) while the enclosure's total width shrinks below
+    :data:`PASS_GAIN` of the last."""
     E = scr.box
+    if not centre_enclosure(P, G, T, basis, t, w, scr):
+        return False
     for _ in range(MEAN_VALUE_PASSES):
         before = 0.0
         for q in range(E.Xl.shape[0]):
             before += E.Xh[q] - E.Xl[q]
-        if not mean_value(P, G, T, basis, t, w, scr):
+        if not mean_value(P, G, T, basis, t, scr):
             return False
-        if within(T.bases, basis, E.Xl, E.Xh, T.tmin, T.tmax):
+        if outside and beyond(T.bases, E.Xl, E.Xh, T.tmin, T.tmax):
+            return True
+        if not outside and within(T.bases, basis, E.Xl, E.Xh, T.tmin, T.tmax):
             return True
         after = 0.0
         for q in range(E.Xl.shape[0]):
