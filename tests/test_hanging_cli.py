@@ -397,16 +397,23 @@ def test_pose_table_shows_the_tensions_an_infeasible_load_hangs_with():
 
 
 @pytest.mark.slow
-def test_free_on_sagging_cables_refuses_only_interference(tmp_path):
-    """A free design hangs on every cable model (tests/test_hanging_cables.py, test_hanging_sagging.py);
-    on sagging cables its interference is refused; under fixed the other models' outputs come
-    without the tilt."""
+def test_free_on_sagging_cables_checks_interference_along_the_catenaries(tmp_path):
+    """A free design hangs on every cable model (tests/test_hanging_cables.py, test_hanging_sagging.py),
+    with its interference along the catenaries at the hanging pose: a row is collision free where
+    ``pose`` lists no colliding pair; under fixed the other models' outputs come without the tilt."""
     path = free_planar2(tmp_path)
     res = invoke("workspace", path, "--step", "0.1", "--out", tmp_path / "o", "--cable-model", "sagging",
-                 "--collisions")
-    assert res.exit_code == 2 and "--collisions" in res.output and "catenaries" in res.output
-    res = invoke("pose", path, "--at", "0.3,0.5", "--cable-model", "sagging", "--json")
-    assert res.exit_code == 0 and json.loads(res.stdout)["cable_model"] == "sagging"
+                 "--collisions", "--json")
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["interference"] is True
+    header, rows = read_csv(tmp_path / "o" / "workspace.csv")
+    col = header.index("collision_free")
+    hanging = [r for r in rows if r[header.index("tilt")] != ""]
+    assert hanging
+    for r in hanging[:: max(1, len(hanging) // 8)]:
+        res = invoke("pose", path, "--at", f"{r[0]},{r[1]}", "--cable-model", "sagging", "--json")
+        assert res.exit_code == 0, res.output
+        assert (json.loads(res.stdout)["collisions"] == []) == (r[col] == "1")
     res = invoke("workspace", PLANAR2, "--step", "0.1", "--out", tmp_path / "e", "--cable-model", "elastic")
     assert res.exit_code == 0 and "tilt" not in read_csv(tmp_path / "e" / "workspace.csv")[0]
 

@@ -82,8 +82,6 @@ def _cases(planar2, ipanema3, cogiro):
         ("--orientations: expected total or range", ipanema3, Analysis(orientations="half")),
         ("--cable-model: cable model 'sagging' assumes point outlets", _with(planar2, model="sagging", pulleys=True),
          Analysis()),
-        ("--collisions: cable model 'sagging' with effector.orientation: free",
-         _with(planar2, model="sagging", orientation="free"), Analysis(collisions=True)),
         ("effector.orientation: free: the hanging solver models point outlets", _with(free, pulleys=True), Analysis()),
         ("--orientations: an under-constrained design with effector.orientation: free", free,
          Analysis(orientations="total")),
@@ -170,9 +168,8 @@ def test_what_the_table_allows_resolves(planar2, cogiro):
     resolve(_with(planar2, orientation="free", model="sagging"), Analysis(command="fk"))
     # a hanging effector on straight cables: its workspace with interference at the hanging pose and its
     # stiffness (on rigid cables too: it swings on them)
-    for model in ("ideal", "elastic"):
-        resolve(_with(planar2, orientation="free", model=model), Analysis(collisions=True, stiffness=True))
     for model in R.CABLE_MODELS:
+        resolve(_with(planar2, orientation="free", model=model), Analysis(collisions=True, stiffness=True))
         resolve(_with(planar2, orientation="free", model=model), Analysis(command="pose"))
         resolve(_with(planar2, orientation="free", model=model), Analysis(stiffness=True))
     # the cable-frequency floor: straight cables compute it, fk does not use tension bounds

@@ -140,7 +140,7 @@ def free_pose_data(robot, position) -> dict:
         "orientation": ori, "tilt": _num(h.tilt_deg[0]), "lengths": _by_cable(design, r.lengths[0]),
         "tensions": _by_cable(design, r.tensions[0]), "feasible": bool(r.feasible[0]), "reason": reason,
         "stable": bool(ok), "margin": _num(r.margin[0]), "structure_matrix": W,
-        "collisions": _collisions(design, position, h.rotation[0]) if ok and r.cables is None else None,
+        "collisions": _collisions(robot, position, h.rotation[0], r.cables) if ok else None,
         "effector_orientation": "free", "hanging_tensions": _by_cable(design, h.tensions[0]),
     } | _cable_model_data(robot, r) | free_stiffness_data(robot, position, r)
 
@@ -160,13 +160,18 @@ def _catenary_structure(robot, p, R, cables) -> np.ndarray:
     return np.concatenate([d, np.cross(Rb, d)], axis=1).T[list(design.motion.wrench_rows)]
 
 
-def _collisions(design, position, R) -> list:
-    """The colliding pairs at the hanging pose (cli.md names)."""
-    from cdpr_design.statics.interference import check_at
+def _collisions(robot, position, R, cables) -> list:
+    """The colliding pairs at the hanging pose (cli.md names): along the catenaries of sagging
+    ``cables`` (:class:`~cdpr_design.statics.hanging.sagging.SaggingCables` of the one position),
+    else the straight cables'."""
+    from cdpr_design.statics.interference import check_at, check_sagging_at
 
     p = np.zeros(3)
     p[: len(position)] = position
-    return [list(pair) for pair in check_at(design, p, R).pairs]
+    if cables is None:
+        return [list(pair) for pair in check_at(robot.design, p, R).pairs]
+    shapes = np.column_stack([cables.H[0], cables.VB[0], cables.unstretched[0]])
+    return [list(pair) for pair in check_sagging_at(robot, p, R, shapes).pairs]
 
 
 def _cable_model_data(robot, r) -> dict:

@@ -274,10 +274,45 @@ def check_sagging_pose(robot, full_pose) -> Interference:
     nan = np.full(m, np.nan)
     if int(rows.mask[0]) & K.HIT_UNKNOWN:
         return Interference([], int(rows.mask[0]), np.full((m, m), np.nan), nan.copy(), nan.copy())
+    return check_sagging_at(robot, full[:3], R, rows.shapes[0])
+
+
+def check_sagging_at(robot, position, R, shapes) -> Interference:
+    """:func:`check_sagging_pose` for given catenaries: platform origin ``position`` (3,) [m],
+    rotation ``R`` (3, 3) (a hanging effector's), each cable's ``shapes`` (m, 3) H, VB [N] and
+    unstretched length L0 [m] (:func:`sagging_masks`)."""
+    from cdpr_design.kernels import sag_clearance as KC
+    from cdpr_design.statics.cables import sag_cables
+
+    m = robot.m
+    p = np.asarray(position, float).reshape(3)
+    R = np.ascontiguousarray(R, dtype=float)
+    Rb = np.ascontiguousarray(robot.attachments @ R.T)
     out = KC.PoseClearance(np.zeros((m, m)), np.zeros(m), np.zeros(m), np.zeros((m + 2, m + 2), np.uint8))
-    mask = int(KC.pose_clearance(full[0], full[1], full[2], R, Rb, srob.A, np.ascontiguousarray(rows.shapes[0]),
-                                 srob.cables, scl, out))
-    return Interference(_pairs(design, out.hits), mask, out.dist, out.chords, out.bound)
+    mask = int(KC.pose_clearance(p[0], p[1], p[2], R, Rb, np.ascontiguousarray(robot.outlet_points),
+                                 np.ascontiguousarray(shapes, dtype=float),
+                                 sag_cables(robot.cable, robot.rows, robot.tension_min, robot.tension_max),
+                                 sagging_clearance(robot, True), out))
+    return Interference(_pairs(robot.design, out.hits), mask, out.dist, out.chords, out.bound)
+
+
+def sagging_masks(robot, P, R, shapes) -> np.ndarray:
+    """Interference bits (k,) uint8 of ``robot``'s sagging cables at platform origins ``P`` (k, 3)
+    [m] each with its rotation ``R`` (k, 3, 3), each cable's catenary given by ``shapes`` (k, m, 3):
+    H, VB [N] and L0 [m] (L0 NaN: a weightless cable, its chord), checked along the curves
+    (:func:`cdpr_design.kernels.sag_clearance.samples_interference`); ``HIT_UNKNOWN`` where a heavy
+    cable has no shape."""
+    from cdpr_design.kernels import sag_clearance as KC
+    from cdpr_design.statics.cables import sag_cables
+
+    c = np.ascontiguousarray
+    R = c(R, dtype=float)
+    Rb = c(np.einsum("kij,mj->kmi", R, robot.attachments))
+    mask = np.zeros(len(P), dtype=np.uint8)
+    cab = sag_cables(robot.cable, robot.rows, robot.tension_min, robot.tension_max)
+    KC.samples_interference(c(P, dtype=float), R, Rb, c(robot.outlet_points), c(shapes, dtype=float), cab,
+                            sagging_clearance(robot, False), mask)
+    return mask
 
 
 def path_interference(robot, poses, unstretched=None) -> np.ndarray:
@@ -294,9 +329,7 @@ def path_interference(robot, poses, unstretched=None) -> np.ndarray:
     k, m = poses.shape[0], design.m
     if robot.cables.straight:
         return np.array([check_pose(design, p).mask for p in poses], dtype=np.uint8)
-    from cdpr_design.kernels import sag_clearance as KC
     from cdpr_design.kernels.catenary_inv import CAT_CONVERGED, catenary_inverse_batch
-    from cdpr_design.statics.cables import sag_cables
 
     full = np.array([design.full_pose(p) for p in poses])
     R = np.ascontiguousarray(np.array([kin.rotation_matrix(*f[3:]) for f in full]))
@@ -317,8 +350,4 @@ def path_interference(robot, poses, unstretched=None) -> np.ndarray:
     ok = status == CAT_CONVERGED
     idx = np.argwhere(heavy)[ok]
     shapes[idx[:, 0], idx[:, 1]] = np.column_stack([H[ok], VB[ok], L0[heavy][ok]])
-    mask = np.zeros(k, dtype=np.uint8)
-    cab = sag_cables(robot.cable, robot.rows, robot.tension_min, robot.tension_max)
-    KC.samples_interference(c(full[:, :3]), R, Rb, c(robot.outlet_points), shapes, cab, sagging_clearance(robot, False),
-                            mask)
-    return mask
+    return sagging_masks(robot, full[:, :3], R, shapes)

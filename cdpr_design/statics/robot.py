@@ -220,10 +220,6 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal("effector.orientation", "free: the hanging solver models point outlets, and this design has swivel "
                                     "pulleys (cables[].pulley)",
             lambda f, a: _free(f) and f.outlets.pulleys and "hanging-solver" in a.needs, CAPABILITY),
-    Refusal("--collisions", "cable model 'sagging' with effector.orientation: free: interference along the "
-                            "catenaries at the hanging pose is not modelled; use --cable-model elastic or ideal "
-                            "for this analysis",
-            lambda f, a: _free(f) and not f.cables.straight and a.collisions, CAPABILITY),
     Refusal("--orientations", "an under-constrained design with effector.orientation: free does not command "
                               "its orientation (it hangs); use effector.orientation: fixed to sweep commanded "
                               "orientations",

@@ -308,7 +308,9 @@ def _sagging_rows(robot: Robot, P, hanger: Hanger, ideal: HangingOrientations) -
     orientation balanced by the catenaries' end forces, from the ideal cables' answer ``ideal``;
     feasible where it hangs stably, every cable's tension within its bounds along the whole cable
     (the least, at the effector or at the lowest point of a cable that dips, >= its lower bound;
-    the largest, at an end, <= its upper bound) and the tilt within the limit.  No capacity
+    the largest, at an end, <= its upper bound), the tilt within the limit and, with the analysis's
+    ``collisions``, no interference along the catenaries
+    (:func:`cdpr_design.statics.interference.sagging_masks`).  No capacity
     margin (NaN): the catenaries' wrench is not linear in their tensions.  The lengths are the
     chords."""
     from cdpr_design.statics.hanging.sagging import hang_on_sagging_cables
@@ -328,8 +330,18 @@ def _sagging_rows(robot: Robot, P, hanger: Hanger, ideal: HangingOrientations) -
         within = h.feasible & np.all((least >= robot.tension_min - tol) & (most <= robot.tension_max + tol), axis=1)
         upright = within if robot.tilt_limit is None else within & within_tilt(extra["tilt"], robot.tilt_limit)
     status = np.where(ideal.feasible & ~h.feasible & (h.status != UNSTABLE), 3, 0).astype(np.int8)
+    hits = None
+    if robot.analysis.collisions:  # along the catenaries (where it hangs: every heavy cable has its shape)
+        from cdpr_design.statics.interference import sagging_masks  # the kernels, on first use
+
+        hits = np.zeros(len(P), np.uint8)
+        ok = np.flatnonzero(h.feasible)
+        if ok.size:
+            shapes = np.stack([cab.H[ok], cab.VB[ok], cab.unstretched[ok]], axis=2)
+            hits[ok] = sagging_masks(robot, P[ok], h.rotation[ok], shapes)
+        upright = upright & (hits == 0)
     return FreeRows(h, extra, upright.astype(np.uint8), np.full(len(P), np.nan),
-                    np.where(upright[:, None], cab.tensions, np.nan), L, within, stiff, None, cab, status)
+                    np.where(upright[:, None], cab.tensions, np.nan), L, within, stiff, hits, cab, status)
 
 
 #: Tolerance [deg] of the tilt limit: a pose tilted by at most ``max_tilt + TILT_TOL_DEG`` is
