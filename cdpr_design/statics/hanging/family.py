@@ -27,6 +27,10 @@ from cdpr_design.statics.hanging.balance import Balance, newton_many, on_cables,
 MARCH_STEP = 0.1
 MARCH_STEPS = 40
 MARCH_REFINE = 16
+#: The least move of a refinement of the least tilted member [arc length] where the tilt is flat
+#: and the nominal rotation decides (:func:`_v_vertex`); elsewhere 1e-7 (a smaller step moves the
+#: tilt by ~1e-14 rad).
+TIE_STEP = 1e-10
 
 
 def _null_vector(J, prev):
@@ -83,7 +87,8 @@ def march_family(geo: hg.Geometry, P, R, t, direction, R0):
     Predictor-corrector continuation in steps of :data:`MARCH_STEP` until a tension
     turns negative (the pulling members end where one cable goes slack) or
     :data:`MARCH_STEPS`, then :data:`MARCH_REFINE` parabolas through the least tilted
-    step and its neighbours.  Returns candidates (R (N, 2, 3, 3), t (N, 2, 4) [N],
+    step and its neighbours (where the tilt is flat along the family and the distance to R0
+    decides, a V with its vertex at the nearest member: :func:`_v_vertex`).  Returns candidates (R (N, 2, 3, 3), t (N, 2, 4) [N],
     balanced (N, 2)): the least tilted member found (the start where no step improved on
     it), and where a cable went slack the orientation with it just slack
     (:func:`_slack_ends`; unbalanced where the march did not end so)."""
@@ -95,12 +100,14 @@ def march_family(geo: hg.Geometry, P, R, t, direction, R0):
     w0 = np.zeros((N, 3))
     tau = _null_vector(np.nan_to_num(bal.jacobian(P, R, t, w0)), direction)
     f = hg.tilt_rank(R, up, R0)
+    tl = hg.tilt_many(R, up)
     best = [R.copy(), t.copy(), f.copy(), tau.copy()]
-    # the bracket of the least tilted step: arc lengths and tilts of (previous, best, next)
+    # the bracket of the least tilted step: arc lengths, ranks and tilts of (previous, best, next)
     x = np.stack([np.full(N, -1.0), np.zeros(N), np.full(N, 1.0)], axis=1) * MARCH_STEP
     fx = np.stack([np.full(N, np.inf), f, np.full(N, np.inf)], axis=1)
+    tx = np.stack([np.full(N, np.inf), tl, np.full(N, np.inf)], axis=1)
     s = np.zeros(N)
-    f_prev = f.copy()
+    f_prev, tl_prev = f.copy(), tl.copy()
     after = np.ones(N, bool)  # the step after the best is still to be recorded
     last, cable = np.zeros(N, bool), np.zeros(N, int)  # marches ended by a cable going slack
     active = np.ones(N, bool)
@@ -114,43 +121,50 @@ def march_family(geo: hg.Geometry, P, R, t, direction, R0):
         ok_t = np.all(t1 >= -1e-9 * geo.weight, axis=1)
         ok = (res <= tol) & ok_t
         f1 = np.where(ok, f1, np.inf)
+        tl1 = np.where(ok, hg.tilt_many(R1, up), np.inf)
         s1 = s[idx] + MARCH_STEP
         rec = after[idx]
         j = idx[rec]
-        x[j, 2], fx[j, 2] = s1[rec], f1[rec]
+        x[j, 2], fx[j, 2], tx[j, 2] = s1[rec], f1[rec], tl1[rec]
         after[j] = False
         better = ok & (f1 < best[2][idx])
         g = idx[better]
         x[g] = np.stack([s[g], s1[better], np.full(g.size, np.inf)], axis=1)
         fx[g] = np.stack([f_prev[g], f1[better], np.full(g.size, np.inf)], axis=1)
+        tx[g] = np.stack([tl_prev[g], tl1[better], np.full(g.size, np.inf)], axis=1)
         after[g] = True
         live = idx[ok]
         tau_new = _tangent(J1[ok], tau[live])
         best[0][g], best[1][g], best[2][g] = R1[better], t1[better], f1[better]
         R[live], t[live], tau[live], s[live], f_prev[live] = R1[ok], t1[ok], tau_new, s1[ok], f1[ok]
+        tl_prev[live] = tl1[ok]
         best[3][g] = tau[g]
         # a tension turned negative: the pulling members end between the last step and this one
         end = (res <= tol) & ~ok_t
         e = idx[end]
         last[e], cable[e] = True, np.argmin(t1[end], axis=1)
         active[idx[~ok]] = False
-    # successive parabolas about the least tilted step (from it, along its tangent)
+    # successive parabolas (or Vs) about the least tilted step (from it, along its tangent)
     x[:, 2] = np.where(np.isfinite(x[:, 2]), x[:, 2], x[:, 1] + MARCH_STEP)
     todo = np.flatnonzero(np.isfinite(fx[:, 0]) | np.isfinite(fx[:, 2]))
     xb = x[:, 1].copy()
     for _ in range(MARCH_REFINE):
         if not todo.size:
             break
-        xn = _parabola_vertex(x[todo], fx[todo])
-        moved = np.abs(xn - x[todo, 1]) > 1e-7  # a smaller step moves the tilt by ~1e-14 rad
+        tie = _tie_decides(fx[todo], tx[todo])
+        xn = np.where(tie, _v_vertex(x[todo], fx[todo]), _parabola_vertex(x[todo], fx[todo]))
+        least = np.where(tie, TIE_STEP, 1e-7)  # 1e-7: a smaller step moves the tilt by ~1e-14 rad
+        moved = np.abs(xn - x[todo, 1]) > least
         Rn, tn, res, _ = _advance(bal, P[todo], best[0][todo], best[1][todo], best[3][todo], xn - xb[todo], tol)
-        fn = np.where((res <= tol) & np.all(tn >= -1e-9 * geo.weight, axis=1), hg.tilt_rank(Rn, up, R0), np.inf)
-        x[todo], fx[todo] = _bracket(x[todo], fx[todo], xn, fn)
+        ok = (res <= tol) & np.all(tn >= -1e-9 * geo.weight, axis=1)
+        fn = np.where(ok, hg.tilt_rank(Rn, up, R0), np.inf)
+        tln = np.where(ok, hg.tilt_many(Rn, up), np.inf)
+        x[todo], fx[todo], tx[todo] = _bracket(x[todo], fx[todo], tx[todo], xn, fn, tln)
         better = fn < best[2][todo]
         g = todo[better]
         best[0][g], best[1][g], best[2][g] = Rn[better], tn[better], fn[better]
         xb[g] = xn[better]
-        todo = todo[moved & ((x[todo, 2] - x[todo, 0]) > 1e-7)]
+        todo = todo[moved & ((x[todo, 2] - x[todo, 0]) > least)]
     res = np.abs(np.nan_to_num(bal.residual(P, best[0], best[1]), nan=np.inf) * bal.scale).max(axis=1)
     Re, te, oke = _slack_ends(geo, P, R, last, cable)
     return (np.stack([best[0], Re], axis=1), np.stack([best[1], te], axis=1),
@@ -188,20 +202,44 @@ def _parabola_vertex(x, f):
     return np.where(good, v, wide)
 
 
-def _bracket(x, f, xn, fn):
-    """The new bracket (a, b, c) around the least value after evaluating fn at xn."""
-    a, b, c = x.T.copy()
-    fa, fb, fc = f.T.copy()
-    left = xn < b
-    win = fn < fb
-    # xn better: it becomes the middle, b the side it came from; else xn replaces that side
-    na = np.where(win, np.where(left, a, b), np.where(left, xn, a))
-    nb = np.where(win, xn, b)
-    nc = np.where(win, np.where(left, b, c), np.where(left, c, xn))
-    nfa = np.where(win, np.where(left, fa, fb), np.where(left, fn, fa))
-    nfb = np.where(win, fn, fb)
-    nfc = np.where(win, np.where(left, fb, fc), np.where(left, fc, fn))
-    return np.stack([na, nb, nc], axis=1), np.stack([nfa, nfb, nfc], axis=1)
+def _v_vertex(x, f):
+    """The vertex of the symmetric V through (x, f) (k, 3), x ascending, f[:, 1] the least: both
+    sides take the steeper side's slope s, the one whose two points lie on the same side of the
+    vertex (exact for f = s |x - x*| + f0: the rank where the tilt is flat and the angle to the
+    nominal rotation decides, :func:`~cdpr_design.statics.hanging.geometry.tilt_rank`); the
+    midpoint of the wider side where that is not inside the bracket (x's units)."""
+    a, b, c = x.T
+    fa, fb, fc = f.T
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        sl, sr = (fa - fb) / (b - a), (fc - fb) / (c - b)
+        s = np.maximum(sl, sr)
+        v = np.where(sr >= sl, 0.5 * (a + b) + 0.5 * (fa - fb) / s, 0.5 * (b + c) - 0.5 * (fc - fb) / s)
+    wide = np.where(b - a > c - b, 0.5 * (a + b), 0.5 * (b + c))
+    return np.where(np.isfinite(v) & (v > a) & (v < c), v, wide)
+
+
+def _tie_decides(f, tilt):
+    """Rows (k,) of brackets (k, 3) whose ranks ``f`` vary by the tie term (the angle to the
+    nominal rotation) at least a hundred times as much as by their ``tilt`` [deg]: there the rank
+    is a V about the nearest member, which parabolas approach only slowly."""
+    with np.errstate(invalid="ignore"):
+        return (np.all(np.isfinite(f), axis=1)
+                & (np.ptp(tilt, axis=1) <= 0.01 * np.ptp(f - tilt, axis=1)))
+
+
+def _bracket(x, f, tilt, xn, fn, tn):
+    """The new bracket (a, b, c) around the least value after evaluating fn (its tilt tn) at xn:
+    (x, f, tilt) (k, 3) each."""
+    left = xn < x[:, 1]
+    win = fn < f[:, 1]
+    out = []
+    for v, vn in ((x, xn), (f, fn), (tilt, tn)):
+        a, b, c = v.T
+        # xn better: it becomes the middle, b the side it came from; else xn replaces that side
+        out.append(np.stack([np.where(win, np.where(left, a, b), np.where(left, vn, a)),
+                             np.where(win, vn, b),
+                             np.where(win, np.where(left, b, c), np.where(left, c, vn))], axis=1))
+    return tuple(out)
 
 
 def with_marches(geo, P, Rs, ts, balanced, R0):
