@@ -149,38 +149,57 @@ def _box_gap2(alo0, alo1, alo2, ahi0, ahi1, ahi2, blo0, blo1, blo2, bhi0, bhi1, 
     return g + d * d
 
 
+#: Segments of a polyline bounded together by :func:`curve_distance` before their own boxes.
+CHUNK = 16
+
+
+@njit_folded
+def _chunk_box(pts, i, k0, k1):
+    """The bounding box (lo0, lo1, lo2, hi0, hi1, hi2) [m] of vertices k0..k1 of cable i."""
+    lo0 = lo1 = lo2 = math.inf
+    hi0 = hi1 = hi2 = -math.inf
+    for k in range(k0, k1 + 1):
+        lo0, hi0 = min(lo0, pts[i, k, 0]), max(hi0, pts[i, k, 0])
+        lo1, hi1 = min(lo1, pts[i, k, 1]), max(hi1, pts[i, k, 1])
+        lo2, hi2 = min(lo2, pts[i, k, 2]), max(hi2, pts[i, k, 2])
+    return lo0, lo1, lo2, hi0, hi1, hi2
+
+
 @njit
 def curve_distance(pts, nseg, i, j, stop):
     """Least distance [m] between the polylines of cables i and j (:data:`Curves`' ``pts``,
     ``nseg``); it returns as soon as a distance at or below ``stop`` [m] is found (that distance:
-    pass -1 for the least one).  Segment pairs whose bounding boxes are farther apart than the
-    best distance so far are skipped."""
-    lo0 = lo1 = lo2 = math.inf
-    hi0 = hi1 = hi2 = -math.inf
-    for b in range(nseg[j] + 1):
-        lo0, hi0 = min(lo0, pts[j, b, 0]), max(hi0, pts[j, b, 0])
-        lo1, hi1 = min(lo1, pts[j, b, 1]), max(hi1, pts[j, b, 1])
-        lo2, hi2 = min(lo2, pts[j, b, 2]), max(hi2, pts[j, b, 2])
+    pass -1 for the least one).  Runs of :data:`CHUNK` segments whose bounding boxes are farther
+    apart than the best distance so far are skipped, then single segments the same way, so that
+    two long cables that meet only near one end cost little more than their near ends."""
     best = math.inf
-    for a in range(nseg[i]):
-        p0x, p0y, p0z = pts[i, a, 0], pts[i, a, 1], pts[i, a, 2]
-        p1x, p1y, p1z = pts[i, a + 1, 0], pts[i, a + 1, 1], pts[i, a + 1, 2]
-        ax0, ax1 = min(p0x, p1x), max(p0x, p1x)
-        ay0, ay1 = min(p0y, p1y), max(p0y, p1y)
-        az0, az1 = min(p0z, p1z), max(p0z, p1z)
-        if _box_gap2(ax0, ay0, az0, ax1, ay1, az1, lo0, lo1, lo2, hi0, hi1, hi2) >= best:
-            continue
-        for b in range(nseg[j]):
-            q0x, q0y, q0z = pts[j, b, 0], pts[j, b, 1], pts[j, b, 2]
-            q1x, q1y, q1z = pts[j, b + 1, 0], pts[j, b + 1, 1], pts[j, b + 1, 2]
-            if _box_gap2(ax0, ay0, az0, ax1, ay1, az1, min(q0x, q1x), min(q0y, q1y), min(q0z, q1z),
-                         max(q0x, q1x), max(q0y, q1y), max(q0z, q1z)) >= best:
+    for a0 in range(0, nseg[i], CHUNK):
+        a1 = min(a0 + CHUNK, nseg[i])
+        A0, A1, A2, A3, A4, A5 = _chunk_box(pts, i, a0, a1)
+        for b0 in range(0, nseg[j], CHUNK):
+            b1 = min(b0 + CHUNK, nseg[j])
+            B0, B1, B2, B3, B4, B5 = _chunk_box(pts, j, b0, b1)
+            if _box_gap2(A0, A1, A2, A3, A4, A5, B0, B1, B2, B3, B4, B5) >= best:
                 continue
-            d2 = seg_seg_dist2(p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z)
-            if d2 < best:
-                best = d2
-                if math.sqrt(best) <= stop:
-                    return math.sqrt(best)
+            for a in range(a0, a1):
+                p0x, p0y, p0z = pts[i, a, 0], pts[i, a, 1], pts[i, a, 2]
+                p1x, p1y, p1z = pts[i, a + 1, 0], pts[i, a + 1, 1], pts[i, a + 1, 2]
+                ax0, ax1 = min(p0x, p1x), max(p0x, p1x)
+                ay0, ay1 = min(p0y, p1y), max(p0y, p1y)
+                az0, az1 = min(p0z, p1z), max(p0z, p1z)
+                if _box_gap2(ax0, ay0, az0, ax1, ay1, az1, B0, B1, B2, B3, B4, B5) >= best:
+                    continue
+                for b in range(b0, b1):
+                    q0x, q0y, q0z = pts[j, b, 0], pts[j, b, 1], pts[j, b, 2]
+                    q1x, q1y, q1z = pts[j, b + 1, 0], pts[j, b + 1, 1], pts[j, b + 1, 2]
+                    if _box_gap2(ax0, ay0, az0, ax1, ay1, az1, min(q0x, q1x), min(q0y, q1y), min(q0z, q1z),
+                                 max(q0x, q1x), max(q0y, q1y), max(q0z, q1z)) >= best:
+                        continue
+                    d2 = seg_seg_dist2(p0x, p0y, p0z, p1x, p1y, p1z, q0x, q0y, q0z, q1x, q1y, q1z)
+                    if d2 < best:
+                        best = d2
+                        if math.sqrt(best) <= stop:
+                            return math.sqrt(best)
     return math.sqrt(best)
 
 
