@@ -164,7 +164,9 @@ class Slabs:
         self.plane = 0
         self.any_feasible = False
         self.keys, self.lower, self.axis, self.lo_in, self.pieces = [], [], [], [], []
-        self.ends_margin: list = []  # per vertex: the margins [N] at its edge's feasible and other end
+        #: per vertex: the margins [N] at its edge's feasible end, at its other end (<= 0), and signed
+        #: one step before the feasible end and one beyond the other (NaN where unknown)
+        self.ends_margin: list = []
         self.thin = self.ends = 0
         self.last_cross = np.full(self.plane_size, -(1 << 40), dtype=np.int64)
         self.busy_s = 0.0
@@ -250,8 +252,12 @@ class Slabs:
         upper[np.arange(len(lower)), axis] += 1
         f_lo, f_hi = f[tuple(lower.T)], f[tuple(upper.T)]
         lo_in = f_lo > 0
+        e = np.eye(self.dim, dtype=np.int64)[axis]
+        f_before, f_after = _field_at(f, lower - e), _field_at(f, upper + e)
         self.ends_margin.append(np.stack([_unscaled(np.where(lo_in, f_lo, f_hi), self.scale),
-                                          -_unscaled(np.where(lo_in, f_hi, f_lo), self.scale)], axis=1))
+                                          -_unscaled(np.where(lo_in, f_hi, f_lo), self.scale),
+                                          _signed(np.where(lo_in, f_before, f_after), self.scale),
+                                          _signed(np.where(lo_in, f_after, f_before), self.scale)], axis=1))
         lower[:, 0] += i  # padded plane index of the slab's first plane
         key = np.ravel_multi_index(tuple(lower.T), self.pshape).astype(np.int64) * self.dim + axis
         self.pieces.append(faces + sum(len(k) for k in self.keys))  # into the vertices of every slab so far
@@ -316,6 +322,22 @@ def _unscaled(v: np.ndarray, scale: float) -> np.ndarray:
     return np.where(x > 1e-6, out, np.nan)
 
 
+def _field_at(f: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """The values of the slab ``f`` at the integer indices ``idx`` (V, d), NaN where one is outside it."""
+    inside = np.all((idx >= 0) & (idx < np.asarray(f.shape)), axis=1)
+    out = np.full(len(idx), np.nan, dtype=np.float32)
+    out[inside] = f[tuple(idx[inside].T)]
+    return out
+
+
+def _signed(v: np.ndarray, scale: float) -> np.ndarray:
+    """The signed margins [N] of contoured values ``v`` (NaN: a pad value outside the grid, a pose
+    without a margin, or unknown)."""
+    with np.errstate(invalid="ignore"):
+        known = np.abs(v) < 1.0  # the field's magnitudes are below 1; the pad's is 1
+    return np.where(known, np.sign(v) * _unscaled(v, scale), np.nan)
+
+
 def _edge_ends(idx: np.ndarray):
     """For vertices ``idx`` (V, d) in padded index coordinates, each on one grid edge: the
     integer index of the edge's lower end (V, d) and the edge's axis (V,)."""
@@ -342,20 +364,54 @@ def _positions(lower, axis, lo_in, ends, grid: Grid, evaluator):
     out = a.copy()
     todo = np.flatnonzero(~leaves)
     if todo.size:
-        t = crossings(a[todo], b[todo], ends[todo, 0], ends[todo, 1], evaluator())
+        t = crossings(a[todo], b[todo], ends[todo, 0], ends[todo, 1], evaluator(), ends[todo, 2], ends[todo, 3])
         out[todo] = a[todo] + t[:, None] * (b[todo] - a[todo])
     return out, leaves
 
 
-def crossings(a: np.ndarray, b: np.ndarray, m_a: np.ndarray, m_b: np.ndarray, test) -> np.ndarray:
+def first_guess(m_a, m_b, m_before=None, m_after=None) -> np.ndarray:
+    """The first estimate (V,) of where the margin vanishes on edges from t = 0 to 1, from its
+    values at t = 0 (``m_a`` > 0) and 1 (``m_b`` < 0) and, where known (not NaN), at t = -1
+    (``m_before``) and t = 2 (``m_after``, one grid step on either side): the root in (0, 1) of the
+    polynomial through every known value (a cubic through four), by Newton's method from the
+    secant's root, which is the estimate where that fails or leaves (0, 1)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        secant = m_a / (m_a - m_b)
+    if m_before is None:
+        return secant
+    xs = np.array([-1.0, 0.0, 1.0, 2.0])
+    ys = np.stack([m_before, m_a, m_b, m_after], axis=1)
+    use = np.isfinite(ys)
+    x = secant.copy()
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for _ in range(8):  # Newton on the Lagrange polynomial of the known points
+            v, dv = np.zeros_like(x), np.zeros_like(x)
+            for i in range(4):
+                li, dli = np.ones_like(x), np.zeros_like(x)
+                for j in range(4):
+                    if j != i:
+                        w = np.where(use[:, j], 1.0 / (xs[i] - xs[j]), 0.0)
+                        dli = dli * np.where(use[:, j], (x - xs[j]) * w, 1.0) + li * w
+                        li = li * np.where(use[:, j], (x - xs[j]) * w, 1.0)
+                v += np.where(use[:, i], ys[:, i] * li, 0.0)
+                dv += np.where(use[:, i], ys[:, i] * dli, 0.0)
+            x = x - v / dv
+    good = np.isfinite(x) & (x > 0.0) & (x < 1.0) & (use[:, 0] | use[:, 3])
+    return np.where(good, x, secant)
+
+
+def crossings(a: np.ndarray, b: np.ndarray, m_a: np.ndarray, m_b: np.ndarray, test, m_before=None,
+              m_after=None) -> np.ndarray:
     """Where feasibility changes on the segments a -> b (V, d) [m], ``a`` feasible and ``b`` not:
     the fraction t (V,) of the way, within 2**-BISECTIONS of a change (the middle of a bracket
     [lo, hi] with ``a + lo (b - a)`` feasible, ``a + hi (b - a)`` not, hi - lo <= 2**-BISECTIONS).
 
-    ``m_a`` >= 0 and ``m_b`` <= 0 [N] the capacity margins at the ends (NaN where unknown);
-    ``test(P)`` gives feasibility and margins at positions (k, 3) [m].  Where the bracket's two
-    margins are known and agree with feasibility, the next guess is their secant (regula falsi,
-    the margin being a continuous function that changes sign with feasibility) and the test is
+    ``m_a`` >= 0 and ``m_b`` <= 0 [N] the capacity margins at the ends (NaN where unknown),
+    ``m_before`` and ``m_after`` (signed, NaN where unknown) one grid step before ``a`` and beyond
+    ``b``; ``test(P)`` gives feasibility and margins at positions (k, 3) [m].  Where the bracket's
+    two margins are known and agree with feasibility, the first guess is the root of the polynomial
+    through the known margins (:func:`first_guess`; the margin being a continuous function that
+    changes sign with feasibility), later ones the bracket's secant (regula falsi), and the test is
     made just either side of it, which closes the bracket when the guess is within half the
     tolerance.  When both tests land on one side, their two margins, a tolerance apart, give the
     margin's slope there, and the next guess is the root of that line (a Newton step), tested the
@@ -368,6 +424,9 @@ def crossings(a: np.ndarray, b: np.ndarray, m_a: np.ndarray, m_b: np.ndarray, te
     mhi = np.where(m_b < 0, m_b, np.nan)
     halve = np.zeros(n, dtype=bool)
     step = np.full(n, np.nan)  # the next guess of a Newton step (NaN: none)
+    if m_before is not None:  # the first guess from the margins along the grid line
+        known = np.isfinite(mlo) & np.isfinite(mhi)
+        step[known] = first_guess(mlo[known], mhi[known], m_before[known], m_after[known])
     for _ in range(3 * BISECTIONS):
         act = np.flatnonzero(hi - lo > tol)
         if act.size == 0:
