@@ -8,13 +8,14 @@ import json
 
 import numpy as np
 import pytest
+import yaml
 from scipy.optimize import linprog
 
 from cdpr_design.model import spec
 from cdpr_design.statics import kinematics as kin
 from cdpr_design.statics.acceleration import capability
 from cdpr_design.statics.robot import Analysis, resolve
-from tests.helpers import invoke, planar2_raw, random_planar_data, random_spatial_data, write_spec
+from tests.helpers import DESIGNS, invoke, planar2_raw, random_planar_data, random_spatial_data, write_spec
 
 HIGHS = {"primal_feasibility_tolerance": 1e-10, "dual_feasibility_tolerance": 1e-10}
 
@@ -302,6 +303,24 @@ def test_accelerations_column_is_the_pose_and_the_margin_over_the_mass(tmp_path)
         at = f"{rows[i]['x']},{rows[i]['y']}"
         p = json.loads(invoke("pose", "designs/planar2.yaml", "--at", at, "--json").stdout)
         assert p["acceleration_radius"] == pytest.approx(radius[i], rel=1e-9, abs=1e-9)  # the CSV has 10 digits
+
+
+def test_check_on_sagging_cables_names_the_requirement(tmp_path):
+    """A design whose accelerations are not modelled (sagging cables) and asks for them by
+    requirements.min_acceleration: check refuses naming the requirement, not workspace's
+    --accelerations option; the workspace command names its option."""
+    raw = yaml.safe_load((DESIGNS / "sagging40.yaml").read_text())
+    raw["requirements"] = {"task_box": {"lower": [15.0, 5.0], "upper": [25.0, 10.0]}, "min_acceleration": 1.0}
+    spec_path = write_spec(tmp_path, raw)
+    r = invoke("check", spec_path)
+    assert r.exit_code == 2 and "Traceback" not in r.stderr, r.output
+    assert r.stderr.startswith("error: requirements.min_acceleration: sagging cables"), r.stderr
+    assert "--accelerations" not in r.stderr
+    r = invoke("workspace", spec_path, "--accelerations", "--out", tmp_path / "w")
+    assert r.exit_code == 2 and r.stderr.startswith("error: --accelerations: sagging cables"), r.stderr
+    # with straight cables the requirement is checked
+    r = invoke("check", spec_path, "--cable-model", "elastic", "--json")
+    assert r.exit_code in (0, 1) and json.loads(r.stdout)["figures"]["task_min_acceleration"] is not None, r.output
 
 
 def test_check_min_acceleration(tmp_path):

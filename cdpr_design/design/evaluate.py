@@ -108,7 +108,8 @@ def task_sweep(design: Design, step: float | None = None, progress=None, engine:
                stiffness: bool = False, accelerations: bool = False):
     """Sweep the task box: (result, least margin over every task pose); ``stiffness`` adds the
     least stiffness and the lowest natural frequency over its feasible poses to the result's summary,
-    ``accelerations`` the least and greatest acceleration radius.
+    ``accelerations`` the least and greatest acceleration radius (asked for by
+    ``requirements.min_acceleration``: a refusal names it).
 
     The least margin counts infeasible poses (negative margins) and is -inf
     when a task pose has no margin (a rank-deficient structure matrix, or a
@@ -126,7 +127,8 @@ def task_sweep(design: Design, step: float | None = None, progress=None, engine:
         elif mg.size:
             least[0] = min(least[0], float(mg.min()))
 
-    analysis = ws.Analysis(kind=_task_kind(design), engine=engine, stiffness=stiffness, accelerations=accelerations)
+    analysis = ws.Analysis(kind=_task_kind(design), engine=engine, stiffness=stiffness, accelerations=accelerations,
+                           accelerations_by="requirements.min_acceleration")
     res = ws.run(design, analysis, grid=g, on_chunk=on_chunk, progress=progress, keep_maps=False, tilt=False)
     return res, least[0]
 

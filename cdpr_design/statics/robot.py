@@ -98,7 +98,8 @@ class Analysis:
     ``weights`` the tension distribution of ``pose``; ``engine`` one of :data:`ENGINES`;
     ``stiffness`` the sweep adds the least stiffness and the lowest natural frequency of every
     feasible pose; ``accelerations`` the sweep adds the acceleration radius of every pose
-    (:mod:`cdpr_design.statics.acceleration`); ``time_optimal`` a path is timed as fast as the robot
+    (:mod:`cdpr_design.statics.acceleration`), asked for by ``accelerations_by`` (an option or a
+    spec key: what a refusal of them names); ``time_optimal`` a path is timed as fast as the robot
     allows (:mod:`cdpr_design.motion.time_optimal`); ``hold`` the orientation is commanded at every pose, also of a free effector
     (one pose's statics, :meth:`one_pose`).
     """
@@ -115,6 +116,9 @@ class Analysis:
     hold: bool = False
     accelerations: bool = False
     time_optimal: bool = False
+    #: what asks for the accelerations, the name a refusal gives: the option ``--accelerations``,
+    #: or the spec's ``requirements.min_acceleration`` (``check``, ``report``, ``sweep``, ``optimize``)
+    accelerations_by: str = "--accelerations"
 
     @property
     def needs(self) -> frozenset[str]:
@@ -253,7 +257,7 @@ REFUSALS: tuple[Refusal, ...] = (
                                          "pose: give lower and upper, one value per motion coordinate "
                                          "[m/s^2, rad/s^2]",
             lambda f, a: a.kind == "dynamic" and not f.acceleration_box, MISSING_DATA),
-    Refusal("--accelerations", "{f.acceleration}",
+    Refusal("{a.accelerations_by}", "{f.acceleration}",
             lambda f, a: a.accelerations and f.acceleration is not None, CAPABILITY),
     Refusal("--accelerations", "an orientation workspace's rows stand for a set of orientations: the "
                                "acceleration radius is reported at one orientation (leave out --orientations)",
