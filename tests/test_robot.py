@@ -97,6 +97,8 @@ def _cases(planar2, ipanema3, cogiro):
         ("--stiffness: an orientation workspace's rows", cogiro, Analysis(stiffness=True, orientations="total")),
         ("requirements.acceleration: --kind dynamic tests", planar2, Analysis(kind="dynamic")),
         ("--accelerations: sagging cables", _with(planar2, model="sagging"), Analysis(accelerations=True)),
+        ("requirements.min_acceleration: sagging cables", _with(planar2, model="sagging"),
+         Analysis(accelerations=True, accelerations_by="requirements.min_acceleration")),
         ("--accelerations: an orientation workspace's rows", cogiro, Analysis(accelerations=True,
                                                                               orientations="total")),
         ("--time-optimal: cable model 'sagging'", _with(planar2, model="sagging"),

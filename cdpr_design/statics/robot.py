@@ -257,7 +257,10 @@ REFUSALS: tuple[Refusal, ...] = (
                                          "pose: give lower and upper, one value per motion coordinate "
                                          "[m/s^2, rad/s^2]",
             lambda f, a: a.kind == "dynamic" and not f.acceleration_box, MISSING_DATA),
-    Refusal("{a.accelerations_by}", "{f.acceleration}",
+    Refusal("requirements.min_acceleration", "{f.acceleration}",
+            lambda f, a: a.accelerations and a.accelerations_by == "requirements.min_acceleration"
+            and f.acceleration is not None, CAPABILITY),
+    Refusal("--accelerations", "{f.acceleration}",
             lambda f, a: a.accelerations and f.acceleration is not None, CAPABILITY),
     Refusal("--accelerations", "an orientation workspace's rows stand for a set of orientations: the "
                                "acceleration radius is reported at one orientation (leave out --orientations)",
