@@ -22,6 +22,7 @@ from cdpr_design.model import spec
 from cdpr_design.model.design import Grid
 from cdpr_design.statics import interference as itf
 from cdpr_design.statics import kinematics as kin
+from cdpr_design.statics.hardware import hardware_arrays
 from cdpr_design.statics.cables import sag_robot
 from cdpr_design.statics.robot import Analysis, resolve
 from cdpr_design.statics.wrenches import wrench_vertices
@@ -147,7 +148,7 @@ def test_distances_agree_with_dense_catenaries_within_the_stated_bound(seed):
     checked = 0
     for design, robot, full, shapes, _ in random_robots(seed, 6):
         c = itf.check_sagging_pose(robot, full)
-        zoff = itf.hardware_arrays(design).zoff
+        zoff = hardware_arrays(design).zoff
         dense = dense_cables(robot, full, shapes, zoff)
         assert np.all(c.curve_bounds <= KC.CURVE_TOL)
         for i in range(robot.m):

@@ -155,7 +155,7 @@ class _Pulleys(Outlets):
     def structure(self, robot, full: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         from cdpr_design import kernels as K  # numba, on first use
         from cdpr_design.statics import kinematics as kin
-        from cdpr_design.statics.interference import hardware_arrays
+        from cdpr_design.statics.hardware import hardware_arrays
 
         Rb = np.ascontiguousarray(robot.attachments @ kin.rotation_matrix(*full[3:]).T)
         W, L = np.empty((robot.n, robot.m)), np.empty(robot.m)

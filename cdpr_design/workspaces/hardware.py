@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from cdpr_design.statics import kinematics as kin
-from cdpr_design.statics.interference import HIT_NAMES, hardware_arrays, in_cable_planes
+from cdpr_design.statics.hardware import hardware_arrays, in_cable_planes
+from cdpr_design.statics.interference import HIT_NAMES
 from cdpr_design.statics.wrenches import wrench_vertices
 from cdpr_design.statics.robot import Robot
 from cdpr_design.workspaces.cables import kind_counts
