@@ -143,12 +143,17 @@ def sagging_orientations(geo: hg.Geometry, P, planar: bool, ideal: HangingOrient
         Hg, Vg = np.full((n, m), np.nan), np.full((n, m), np.nan)
         done = np.zeros(n, bool)
         act = np.arange(n)
+
+        def balance(rows, yv, guess):
+            """:func:`_wrench` of the rows ``rows`` at the scaled unknowns ``yv``."""
+            return _wrench(geo, Pt[rows], _rotate(R0[rows], yv[:, :nv], planar), start[rows] + scale[rows] * yv[:, nv:],
+                           w, EA, up, guess)
+
         for _ in range(MAXIT):  # the rows not yet converged (a row whose catenary has no solution stops)
             if not act.size:
                 break
             guess = (Hg[act], Vg[act])
-            r, H, VB, ok = _wrench(geo, Pt[act], _rotate(R0[act], y[act, :nv], planar),
-                                   start[act] + scale[act] * y[act, nv:], w, EA, up, guess)
+            r, H, VB, ok = balance(act, y[act], guess)
             Hg[act], Vg[act] = H, VB
             r = r[:, rows_bal] / W
             conv = ok & (np.abs(r).max(axis=1) <= TOL)
@@ -162,8 +167,7 @@ def sagging_orientations(geo: hg.Geometry, P, planar: bool, ideal: HangingOrient
             for j in range(nv + m):  # forward differences of the scaled unknowns
                 yj = ya.copy()
                 yj[:, j] += 1e-7
-                rj, *_ = _wrench(geo, Pt[act], _rotate(R0[act], yj[:, :nv], planar),
-                                 start[act] + scale[act] * yj[:, nv:], w, EA, up, guess)
+                rj, *_ = balance(act, yj, guess)
                 J[:, :, j] = (rj[:, rows_bal] / W - r) / 1e-7
             rhs = np.einsum("kij,kj->ki", J, ya) - r
             JJ = J @ J.transpose(0, 2, 1)
@@ -173,8 +177,8 @@ def sagging_orientations(geo: hg.Geometry, P, planar: bool, ideal: HangingOrient
                 lam = np.stack([np.linalg.lstsq(np.nan_to_num(JJ[i]), np.nan_to_num(rhs[i]), rcond=None)[0]
                                 for i in range(len(JJ))])
             step = np.einsum("kji,kj->ki", J, lam) - ya
-            y[act] = _damped(geo, Pt[act], R0[act], start[act], scale[act], ya, step, np.abs(r).max(axis=1),
-                             np.ones(act.size, bool), w, EA, up, guess, planar, nv, rows_bal)
+            y[act] = _damped(lambda yt, rows=act, g=guess: balance(rows, yt, g), ya, step, np.abs(r).max(axis=1),
+                             np.ones(act.size, bool), W, rows_bal)
         Rk = _rotate(R0, y[:, :nv], planar)
         Lk = start + scale * y[:, nv:]
         good = done & np.isfinite(y).all(axis=1)
@@ -189,9 +193,10 @@ def sagging_orientations(geo: hg.Geometry, P, planar: bool, ideal: HangingOrient
     return out, cables
 
 
-def _damped(geo, Pt, R0, start, scale, y, step, res, active, w, EA, up, guess, planar, nv, rows_bal):
-    """y + a step, halved (up to 10 times) where the balance's largest residual does not fall."""
-    W = geo.weight
+def _damped(balance, y, step, res, active, W, rows_bal):
+    """y + a step, halved (up to 10 times) where the balance's largest residual does not fall;
+    ``balance(yt)`` is the wrench, forces and success at the scaled unknowns ``yt`` (:func:`_wrench`),
+    ``W`` the effector's weight [N] the residual is scaled by."""
     alpha = np.where(active, 1.0, 0.0)
     out = y.copy()
     pending = active.copy()
@@ -199,7 +204,7 @@ def _damped(geo, Pt, R0, start, scale, y, step, res, active, w, EA, up, guess, p
         if not pending.any():
             break
         yt = y + alpha[:, None] * step
-        r, _, _, ok = _wrench(geo, Pt, _rotate(R0, yt[:, :nv], planar), start + scale * yt[:, nv:], w, EA, up, guess)
+        r, _, _, ok = balance(yt)
         better = ok & (np.abs(r[:, rows_bal] / W).max(axis=1) < res)
         take = pending & (better | (alpha < 2e-3))
         out[take] = yt[take]
