@@ -332,9 +332,12 @@ def _sagging_rows(robot: Robot, P, hanger: Hanger, ideal: HangingOrientations) -
     status = np.where(ideal.feasible & ~h.feasible & (h.status != UNSTABLE), 3, 0).astype(np.int8)
     hits = None
     if robot.analysis.collisions:  # along the catenaries (where it hangs: every heavy cable has its shape)
+        from cdpr_design.kernels.codes import HIT_UNKNOWN
         from cdpr_design.statics.interference import sagging_masks  # the kernels, on first use
 
-        hits = np.zeros(len(P), np.uint8)
+        # where it does not hang there are no catenaries to check: not known to be collision free
+        # (as pose says, collisions null)
+        hits = np.full(len(P), HIT_UNKNOWN, np.uint8)
         ok = np.flatnonzero(h.feasible)
         if ok.size:
             shapes = np.stack([cab.H[ok], cab.VB[ok], cab.unstretched[ok]], axis=2)
