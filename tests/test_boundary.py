@@ -16,6 +16,8 @@ from cdpr_design.model import spec
 from cdpr_design.model.design import Grid
 from cdpr_design.statics.robot import Analysis, resolve
 from cdpr_design.workspaces import boundary as wb
+from cdpr_design.workspaces.frame_loads import rotations
+from cdpr_design.workspaces.orientation import orientation_set
 
 from .helpers import DESIGNS, PLANAR2, invoke, planar2_raw, read_csv, write_spec
 from .reference_boundary import planar_area, spatial_volume
@@ -170,6 +172,10 @@ def test_a_broken_mesh_is_refused():
         wb.check_closed(verts, faces[:3])
     with pytest.raises(RuntimeError, match="not closed"):
         wb.check_closed(verts, np.vstack([faces[:3], faces[3:, ::-1]]))
+    with pytest.raises(RuntimeError, match="not closed"):  # every edge twice each way
+        wb.check_closed(verts, np.vstack([faces, faces]))
+    with pytest.raises(RuntimeError, match="not closed"):  # a triangle with a repeated vertex
+        wb.check_closed(verts, np.vstack([faces, [[0, 0, 1], [1, 0, 0]]]))
 
 
 # ---------------------------------------------------------------- bad inputs
@@ -249,6 +255,46 @@ def test_frame_loads_match_workspace_csv(tmp_path, name, step):
             assert got[k] == pytest.approx(v, rel=1e-6, abs=1e-6), (r[0], k)
     s = json.loads(res.stdout)["frame_loads"]
     assert s["max_force"] == pytest.approx(max(w["max_force"] for w in want.values()), rel=1e-6)
+
+
+@pytest.mark.parametrize("name,step", [("planar4.yaml", 0.1), ("ipanema3.yaml", 0.5)])
+def test_total_orientation_frame_loads_cover_every_orientation(name, step):
+    """--orientations total: the loads are the envelope over the positions feasible at every
+    orientation of the set and over every orientation, each with its own tensions: recomputed here
+    from a plain sweep at each orientation (its tensions along t_i (B_i - A_i) / |B_i - A_i|,
+    B_i = P + R b_i) over the total sweep's feasible positions."""
+    d = spec.load(DESIGNS / name)
+    g = ws.make_grid(d, step)
+    oset = orientation_set(d)
+    assert len(oset) > 1
+    chunks = []
+    r = ws.plan(resolve(d, Analysis(orientations="total")), g, frame_loads=True).run(on_chunk=chunks.append)
+    feasible = np.concatenate([c.feasible for c in chunks]).astype(bool)
+    assert 0 < feasible.sum() < g.size
+    P = ws.grid.positions3(g, 0, g.size)[feasible]
+    F_all, n = [], 0
+    for o in oset:
+        one = []
+        ws.plan(resolve(d), g, o, tilt=False).run(on_chunk=one.append)
+        t = np.concatenate([c.tensions for c in one])[feasible]
+        ok = np.isfinite(t).all(axis=1)
+        n += int(ok.sum())
+        R = rotations(np.asarray(o, float)[None])[0]
+        D = P[ok][:, None, :] + (d.attachments @ R.T)[None] - d.outlets[None]
+        F_all.append(t[ok][:, :, None] * D / np.linalg.norm(D, axis=2, keepdims=True))
+    F = np.concatenate(F_all)  # (poses, m, 3)
+    planar = d.motion.planar
+    axes = "xy" if planar else "xyz"
+    got = r.frame_loads.rows(d.cable_names)
+    for i, c in enumerate(d.cable_names):
+        assert got["max_force"][i] == pytest.approx(np.linalg.norm(F[:, i], axis=1).max(), rel=1e-9)
+        for j, a in enumerate(axes):
+            assert got[f"min_f{a}"][i] == pytest.approx(F[:, i, j].min(), rel=1e-9, abs=1e-9), (c, a)
+            assert got[f"max_f{a}"][i] == pytest.approx(F[:, i, j].max(), rel=1e-9, abs=1e-9), (c, a)
+    s = r.summary()["frame_loads"]
+    assert s["poses"] == n
+    total = F.sum(axis=1)[:, :len(axes)]
+    assert s["total_force"]["max_magnitude"] == pytest.approx(np.linalg.norm(total, axis=1).max(), rel=1e-9)
 
 
 def _axle_forces(design, P, t, axes, radii):
@@ -375,7 +421,9 @@ def test_frame_carries_the_weight_with_sagging_cables(tmp_path):
 @pytest.mark.slow
 def test_compiled_frame_loads_equal_numpy_ones():
     """The one-pass kernel (straight cables from point outlets) gives numpy's envelope, on random
-    spatial and planar robots and IPAnema 3."""
+    spatial and planar robots and IPAnema 3; the grid sweep's own (the envelope raised pose by pose
+    on its threads, the plan's with the frame loads) gives the one-pass kernel's, bit for bit (0.0
+    and -0.0 as they come)."""
     import dataclasses
 
     from cdpr_design.workspaces.frame_loads import FrameLoads
@@ -401,6 +449,15 @@ def test_compiled_frame_loads_equal_numpy_ones():
         b.add(r, 0, P)
         names = d.cable_names
         ra, rb = a.table.rows(names), b.table.rows(names)
+        pl = ws.plan(robot, g, frame_loads=True)
+        inline = next(w for w in pl.wrappers if isinstance(w, FrameLoads))
+        assert inline.inline == (robot.engine == "numba")
+        if inline.inline:
+            pl.rows(0, n, P)  # the plan's rows raise its wrappers' tallies
+            rc = inline.table.rows(names)
+            assert ({k: [repr(v) for v in vs] for k, vs in rc.items()}
+                    == {k: [repr(v) for v in vs] for k, vs in ra.items()}), d.name
+            assert inline.table.summary(names) == a.table.summary(names)
         for k in ra:
             if k != "cable":
                 np.testing.assert_allclose(ra[k], rb[k], rtol=1e-9, atol=1e-9, err_msg=f"{d.name} {k}")

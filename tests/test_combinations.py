@@ -17,7 +17,9 @@ The axes:
 Every computed combination also has its boundary and frame loads: the summary's keys, a positive
 ``boundary_measure`` exactly when a pose is feasible, ``boundary.csv`` (planar) or a closed,
 consistently wound ``workspace.stl`` enclosing ``boundary_measure`` (spatial, read back with numpy:
-an independent reading of the binary STL), one ``frame_loads.csv`` row per cable.
+an independent reading of the binary STL), one ``frame_loads.csv`` (``.parquet``) row per cable, the
+frame loads over as many poses as the table has feasible rows with tensions.  The second matrix's
+computed cells are held to the same.
 
 Every variant gets an explicit ``workspace.orientation_set`` on rotational motions (the nominal
 orientation and +-0.1 rad about its last rotation coordinate: 3 orientations) so that a row of
@@ -302,9 +304,24 @@ def _solid_problems(out: Path, raw: dict, rows: list[dict]) -> list[str]:
             if abs(volume - s["boundary_measure"]) > 1e-4 * max(1.0, abs(volume)):
                 problems.append(f"workspace.stl encloses {volume}, boundary_measure {s['boundary_measure']}")
     if ext == "csv":
-        text = (out / "frame_loads.csv").read_text().splitlines()
-        if [line.split(",")[0] for line in text[1:]] != [c["name"] for c in raw["cables"]]:
-            problems.append("frame_loads.csv has not one row per cable")
+        cables = [line.split(",")[0] for line in (out / "frame_loads.csv").read_text().splitlines()[1:]]
+    else:
+        import pyarrow.parquet as pq
+
+        cables = pq.read_table(out / "frame_loads.parquet").column("cable").to_pylist()
+    names = [c["name"] for c in raw["cables"]]
+    if cables != names:
+        problems.append(f"frame_loads.{ext} has not one row per cable")
+    # the loads cover every feasible row with tensions (the table's own count, read independently); a
+    # row of the total orientation workspace stands for each orientation of the set, its tensions for
+    # the largest over them: empty where one has none, so between that count and every feasible row
+    with_tensions = sum(r["feasible"] == 1.0 and all(r[f"tension_{c}"] is not None for c in names) for r in rows)
+    feasible_rows = sum(r["feasible"] == 1.0 for r in rows)
+    q = s.get("orientation_count", 1) if s.get("orientation_mode") == "total" else 1
+    poses = s["frame_loads"]["poses"]
+    if not (q * with_tensions <= poses <= q * (feasible_rows if q > 1 else with_tensions)):
+        problems.append(f"frame loads over {poses} poses, the table has {with_tensions} feasible rows with tensions "
+                        f"({feasible_rows} feasible) at {q} orientations")
     return problems
 
 
@@ -434,14 +451,18 @@ def _matrix_step(raw: dict) -> float:
 
 def matrix_cell(folder: Path, design: Path, kind: str, model: str, option: str) -> Outcome:
     """``workspace`` of one cell of the refusal matrix, run as a user would (the shipped spec, a coarse
-    grid), judged: computed; refused for missing data or meaningless (the table's row, or the spec
-    loader naming the keys to give); anything else (a capability refused, a crash) fails."""
+    grid), judged: computed (with its boundary and frame loads, :func:`_solid_problems`); refused for
+    missing data or meaningless (the table's row, or the spec loader naming the keys to give);
+    anything else (a capability refused, a crash) fails."""
     key = (design.stem, kind, model, option)
     raw = yaml.safe_load(design.read_text())
     out = folder / "out"
     args = ["workspace", design, "--kind", kind, "--cable-model", model, "--step", repr(_matrix_step(raw)),
             "--out", out, "--json", "--quiet", *MATRIX_OPTIONS[option]]
     status, reason, detail = _classify(_invoke(args))
+    if status == "computed":
+        problems = _solid_problems(out, raw, _read_table(out)[1])
+        return Outcome(key, "failed", "no boundary or frame loads", problems) if problems else Outcome(key, status)
     if status != "refused":
         return Outcome(key, status, reason, detail)
     f, row = _matrix_refusal(design, kind, model, option)

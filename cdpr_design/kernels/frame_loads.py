@@ -1,6 +1,9 @@
-"""The envelope of the forces straight cables from point outlets put on the frame, over a chunk
-of poses at one orientation, in one pass (the numpy formulation of
-:mod:`cdpr_design.workspaces.frame_loads` makes a dozen passes over (m, 3, k) temporaries).
+"""The envelope of the forces straight cables from point outlets put on the frame, over poses at
+one orientation, in one pass (the numpy formulation of :mod:`cdpr_design.workspaces.frame_loads`
+makes a dozen passes over (m, 3, k) temporaries): over a chunk of rows (:func:`frame_load_stats`),
+or pose by pose inside a sweep's own loop (:func:`add_pose`, the grid sweep's blocks:
+:func:`cdpr_design.kernels.sweep.sweep_grid`), each block into its own envelope, merged after
+(:func:`merge_envelope`).
 
 Compiled with :data:`~cdpr_design.kernels._jit.njit` (cached, nogil, numpy's error model).
 """
@@ -9,11 +12,51 @@ from __future__ import annotations
 
 import math
 
-from cdpr_design.kernels._jit import njit, njit_inline
+import numpy as np
+
+from cdpr_design.kernels._jit import njit, njit_folded, njit_inline
 
 #: Columns of the per-cable statistics ``cab``: largest |F| [N], least and largest F (x, y, z)
 #: [N], least and largest unit direction (x, y, z).
 CAB_COLUMNS = 13
+#: The columns of ``cab`` that hold a largest value (the others a least one).
+CAB_MAX = np.array([0, 4, 5, 6, 10, 11, 12])
+CAB_MIN = np.array([1, 2, 3, 7, 8, 9])
+
+
+def empty_envelope(m: int) -> tuple[np.ndarray, np.ndarray]:
+    """(``cab`` (m, 13), ``tot`` (5, 3)): the envelope of no pose (:func:`frame_load_stats`'s
+    arrays before the first: least values +inf, largest -inf, the count 0)."""
+    cab = np.empty((m, CAB_COLUMNS))
+    cab[:, CAB_MAX] = -np.inf
+    cab[:, CAB_MIN] = np.inf
+    tot = np.empty((5, 3))
+    tot[[0, 2]], tot[[1, 3]], tot[4] = np.inf, -np.inf, (-np.inf, -np.inf, 0.0)
+    return cab, tot
+
+
+def merge_envelope(cab: np.ndarray, tot: np.ndarray, cab2: np.ndarray, tot2: np.ndarray) -> None:
+    """Widen the envelope ``cab``, ``tot`` in place by another one, ``cab2``, ``tot2``, of the poses
+    after its own: the least of the least values, the largest of the largest (of two equal ones,
+    such as 0.0 and -0.0, the first, as :func:`frame_load_stats` keeps it), the sum of the counts.
+    Exact: the envelope of consecutive blocks merged in their order is that of one pass."""
+    cab[:, CAB_MAX] = _larger(cab[:, CAB_MAX], cab2[:, CAB_MAX])
+    cab[:, CAB_MIN] = _smaller(cab[:, CAB_MIN], cab2[:, CAB_MIN])
+    tot[[0, 2]] = _smaller(tot[[0, 2]], tot2[[0, 2]])
+    tot[[1, 3]] = _larger(tot[[1, 3]], tot2[[1, 3]])
+    tot[4, :2] = _larger(tot[4, :2], tot2[4, :2])
+    tot[4, 2] += tot2[4, 2]
+
+
+def _larger(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """b where it is larger than a, else a (the first of two equal values, as the kernels' ``max``;
+    numpy's ``fmax`` on arrays may take either)."""
+    return np.where(b > a, b, a)
+
+
+def _smaller(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """b where it is smaller than a, else a (the first of two equal values, as the kernels' ``min``)."""
+    return np.where(b < a, b, a)
 
 
 @njit
@@ -29,36 +72,43 @@ def frame_load_stats(P, ok, t, A, Rb, cab, tot):
     largest |total force|, the largest |moment| and the count of poses added.  A cable of zero
     length contributes nothing at that pose.
     """
-    m = A.shape[0]
     for k in range(P.shape[0]):
-        if ok[k] == 0:
+        if ok[k] != 0:
+            add_pose(P[k, 0], P[k, 1], P[k, 2], k, t, A, Rb, cab, tot)
+
+
+@njit_folded
+def add_pose(x, y, z, k, t, A, Rb, cab, tot):
+    """Raise the envelope ``cab``, ``tot`` (:func:`frame_load_stats`) by the pose at (x, y, z) [m]
+    with the tensions of row ``k`` of ``t`` (k, m) [N] (inlined into its callers, with their
+    options: the same arithmetic in every one)."""
+    m = A.shape[0]
+    fx = fy = fz = 0.0
+    mx = my = mz = 0.0
+    for i in range(m):
+        dx = x + Rb[i, 0] - A[i, 0]
+        dy = y + Rb[i, 1] - A[i, 1]
+        dz = z + Rb[i, 2] - A[i, 2]
+        L = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if L <= 0.0:
             continue
-        fx = fy = fz = 0.0
-        mx = my = mz = 0.0
-        for i in range(m):
-            dx = P[k, 0] + Rb[i, 0] - A[i, 0]
-            dy = P[k, 1] + Rb[i, 1] - A[i, 1]
-            dz = P[k, 2] + Rb[i, 2] - A[i, 2]
-            L = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if L <= 0.0:
-                continue
-            ux, uy, uz = dx / L, dy / L, dz / L
-            ti = t[k, i]
-            gx, gy, gz = ti * ux, ti * uy, ti * uz
-            cab[i, 0] = max(cab[i, 0], abs(ti))
-            _widen(cab, i, 1, i, 4, gx, gy, gz)
-            _widen(cab, i, 7, i, 10, ux, uy, uz)
-            fx += gx
-            fy += gy
-            fz += gz
-            mx += A[i, 1] * gz - A[i, 2] * gy
-            my += A[i, 2] * gx - A[i, 0] * gz
-            mz += A[i, 0] * gy - A[i, 1] * gx
-        _widen(tot, 0, 0, 1, 0, fx, fy, fz)
-        _widen(tot, 2, 0, 3, 0, mx, my, mz)
-        tot[4, 0] = max(tot[4, 0], math.sqrt(fx * fx + fy * fy + fz * fz))
-        tot[4, 1] = max(tot[4, 1], math.sqrt(mx * mx + my * my + mz * mz))
-        tot[4, 2] += 1.0
+        ux, uy, uz = dx / L, dy / L, dz / L
+        ti = t[k, i]
+        gx, gy, gz = ti * ux, ti * uy, ti * uz
+        cab[i, 0] = max(cab[i, 0], abs(ti))
+        _widen(cab, i, 1, i, 4, gx, gy, gz)
+        _widen(cab, i, 7, i, 10, ux, uy, uz)
+        fx += gx
+        fy += gy
+        fz += gz
+        mx += A[i, 1] * gz - A[i, 2] * gy
+        my += A[i, 2] * gx - A[i, 0] * gz
+        mz += A[i, 0] * gy - A[i, 1] * gx
+    _widen(tot, 0, 0, 1, 0, fx, fy, fz)
+    _widen(tot, 2, 0, 3, 0, mx, my, mz)
+    tot[4, 0] = max(tot[4, 0], math.sqrt(fx * fx + fy * fy + fz * fz))
+    tot[4, 1] = max(tot[4, 1], math.sqrt(mx * mx + my * my + mz * mz))
+    tot[4, 2] += 1.0
 
 
 @njit_inline

@@ -7,7 +7,8 @@ from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit
+from cdpr_design.kernels._jit import njit, njit_folded
+from cdpr_design.kernels.frame_loads import add_pose, empty_envelope, merge_envelope
 from cdpr_design.kernels.geometry import grid_index, next_grid_index, structure_matrix, structure_matrix_pulley
 from cdpr_design.kernels.hsm_small import facets_one, facets_two
 from cdpr_design.kernels.pose import (ROW_EMPTY, ROW_POSE, PoseBlock, raise_floor, rows_any, rows_small,
@@ -22,8 +23,11 @@ from cdpr_design.kernels.parallel import run_blocks
 #: ``P`` (k, 3) [m]: explicit positions at the same orientation instead of the grid's (row j is
 #: ``P[j]``; ``start``, ``lower``, ``step`` and ``shape`` unused), or (0, 3), the default, for the
 #: grid.  One compiled loop serves both: the grid sweep and the evaluation of points between grid
-#: points (the workspace's boundary).
-GridPoses = namedtuple("GridPoses", "start lower step shape Rb P", defaults=(np.empty((0, 3)),))
+#: points (the workspace's boundary).  ``cab`` (m, 13), ``tot`` (5, 3): the envelope of the forces
+#: on the frame (:func:`cdpr_design.kernels.frame_loads.frame_load_stats`'s arrays) the sweep raises
+#: by its feasible rows, or (0, 13), (0, 3), the default, for none.
+GridPoses = namedtuple("GridPoses", "start lower step shape Rb P cab tot",
+                       defaults=(np.empty((0, 3)), np.empty((0, 13)), np.empty((0, 3))))
 
 
 def sweep_grid(poses, statics, wreq, out):
@@ -39,10 +43,16 @@ def sweep_grid(poses, statics, wreq, out):
     to rows 0..count-1 of ``feasible`` (uint8), ``margin`` [N], ``tensions`` (count, m) [N] and
     ``lengths`` (count, m) [m].  The orientation is fixed: ``poses.Rb`` holds R b_i.  Work is split
     into blocks (:func:`grid_block`) run on threads, each with its own buffers, so no allocation
-    happens per pose.
+    happens per pose.  Where ``poses.cab`` has rows, the envelope of the forces on the frame at the
+    outlets ``statics.A`` is raised in place by every feasible row with tensions
+    (:func:`~cdpr_design.kernels.frame_loads.frame_load_stats`'s forces and arrays, the same values
+    as that pass over the rows would give), each block into its own envelope, merged into
+    ``poses.cab``, ``poses.tot`` in the rows' order.
     """
-    run_blocks(grid_block(statics.A.shape[0] - statics.rows.shape[0]), out.feasible.shape[0], poses, statics, out,
-               wreq)
+    block = grid_block(statics.A.shape[0] - statics.rows.shape[0])
+    run_blocks(block, out.feasible.shape[0], poses, statics, out, wreq)
+    for _, cab, tot in sorted(block.envelopes, key=lambda e: e[0]):  # in the rows' order: the same
+        merge_envelope(poses.cab, poses.tot, cab, tot)  # ties (0.0 and -0.0) kept as one pass would
 
 
 def grid_block(r: int):
@@ -56,7 +66,54 @@ def grid_block(r: int):
     (:class:`~cdpr_design.kernels.pose.PoseBlock`) allocates the block's buffers; nothing is
     allocated per pose.
     """
-    return PoseBlock(_GRID_LOOPS.get(r, _grid_loop_any))
+    return _GridBlock(_GRID_LOOPS.get(r, _grid_loop_any))
+
+
+class _GridBlock(PoseBlock):
+    """A :class:`~cdpr_design.kernels.pose.PoseBlock` of :func:`sweep_grid`: where the sweep raises
+    a frame-load envelope, each block raises its own (no two threads write one), kept in
+    ``envelopes`` as (k0, cab, tot) for :func:`sweep_grid` to merge in the rows' order."""
+
+    def __init__(self, loop):
+        super().__init__(loop)
+        self.envelopes: list = []
+
+    def __call__(self, k0, k1, src, st, out, w):
+        if src.cab.shape[0] == 0:
+            super().__call__(k0, k1, src, st, out, w)
+            return
+        own = src._replace(**dict(zip(("cab", "tot"), empty_envelope(src.cab.shape[0]))))
+        super().__call__(k0, k1, own, st, out, w)
+        self.envelopes.append((k0, own.cab, own.tot))
+
+
+@njit_folded
+def _grid_position(k, src):
+    """(x, y, z) [m] of row ``k``: ``src.P[k]`` where ``src.P`` has rows, else grid index ``src.start + k``."""
+    P = src.P
+    if P.shape[0] > 0:
+        return P[k, 0], P[k, 1], P[k, 2]
+    shape, lower, step = src.shape, src.lower, src.step
+    ix, iy, iz = grid_index(src.start + k, shape[1], shape[2])
+    return lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2]
+
+
+@njit_folded
+def _block_loads(k0, k1, src, st, out):
+    """Raise ``src.cab``, ``src.tot`` (where they have rows) by the frame loads of rows k0..k1-1 that
+    are feasible and have tensions (:func:`~cdpr_design.kernels.frame_loads.add_pose`)."""
+    if src.cab.shape[0] == 0:
+        return
+    feasible, tensions = out.feasible, out.tensions
+    for k in range(k0, k1):
+        if feasible[k] == 0:
+            continue
+        finite = True
+        for i in range(tensions.shape[1]):
+            finite = finite and math.isfinite(tensions[k, i])
+        if finite:
+            x, y, z = _grid_position(k, src)
+            add_pose(x, y, z, k, tensions, st.A, src.Rb, src.cab, src.tot)
 
 
 @njit
@@ -65,13 +122,7 @@ def _place_grid(k, src, st, W, L, lo, w, out):
     structure matrix into ``W``, its cable lengths into ``L`` and ``out.lengths[k]`` [m], its lower
     tension bounds into ``lo`` [N] (:func:`~cdpr_design.kernels.pose.raise_floor`).  ROW_EMPTY for a
     cable of zero length."""
-    P = src.P
-    if P.shape[0] > 0:
-        x, y, z = P[k, 0], P[k, 1], P[k, 2]
-    else:
-        shape, lower, step = src.shape, src.lower, src.step
-        ix, iy, iz = grid_index(src.start + k, shape[1], shape[2])
-        x, y, z = lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2]
+    x, y, z = _grid_position(k, src)
     ok = structure_matrix(x, y, z, src.Rb, st.A, st.rows, W, L)
     lengths = out.lengths
     for i in range(L.shape[0]):
@@ -84,24 +135,28 @@ def _place_grid(k, src, st, W, L, lo, w, out):
 def _grid_loop_0(k0, k1, src, st, out, buf):
     """Rows k0..k1-1 of :func:`sweep_grid` for m = n."""
     rows_square(k0, k1, _place_grid, src, st, out, buf)
+    _block_loads(k0, k1, src, st, out)
 
 
 @njit
 def _grid_loop_1(k0, k1, src, st, out, buf):
     """Rows k0..k1-1 of :func:`sweep_grid` for m - n = 1."""
     rows_small(k0, k1, _place_grid, src, st, out, buf, facets_one, line_projection)
+    _block_loads(k0, k1, src, st, out)
 
 
 @njit
 def _grid_loop_2(k0, k1, src, st, out, buf):
     """Rows k0..k1-1 of :func:`sweep_grid` for m - n = 2."""
     rows_small(k0, k1, _place_grid, src, st, out, buf, facets_two, plane_projection)
+    _block_loads(k0, k1, src, st, out)
 
 
 @njit
 def _grid_loop_any(k0, k1, src, st, out, buf):
     """Rows k0..k1-1 of :func:`sweep_grid` for any other m - n (the general margin and QP)."""
     rows_any(k0, k1, _place_grid, src, st, out, buf)
+    _block_loads(k0, k1, src, st, out)
 
 
 #: the grid loop of each redundancy m - n that has its own (:func:`grid_block`)

@@ -246,7 +246,10 @@ class Slabs:
             seg = seg[~np.isin(seg, first + sizes - 1)]  # consecutive points of one piece
             faces = np.stack([seg, seg + 1], axis=1)
         else:
-            verts, faces, _, _ = measure.marching_cubes(f, 0.0, method="lewiner", allow_degenerate=True)
+            # "ascent": the field rises into the feasible set, so the triangles come wound with their
+            # normals outwards (the measure is formed once, :func:`_weld`)
+            verts, faces, _, _ = measure.marching_cubes(f, 0.0, method="lewiner", allow_degenerate=True,
+                                                        gradient_direction="ascent")
         lower, axis = _edge_ends(verts.astype(float))
         upper = lower.copy()
         upper[np.arange(len(lower)), axis] += 1
@@ -550,9 +553,13 @@ def check_closed(verts: np.ndarray, faces: np.ndarray) -> None:
         return
     e = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2).astype(np.int64)
     n = int(len(verts))
-    key = np.sort(e[:, 0] * n + e[:, 1])
-    back = np.sort(e[:, 1] * n + e[:, 0])
-    if not (np.all(key[1:] != key[:-1]) and np.array_equal(key, back)):
+    # each edge once (its ends in order, times two) plus its direction: every edge must come as a
+    # pair, the key 2 k once and 2 k + 1 once, and no key twice (one sort instead of two)
+    lo, hi = np.minimum(e[:, 0], e[:, 1]), np.maximum(e[:, 0], e[:, 1])
+    key = np.sort((lo * n + hi) * 2 + (e[:, 0] > e[:, 1]))
+    first, second = key[0::2], key[1::2]
+    if not (len(key) % 2 == 0 and np.all(lo != hi) and np.all(first % 2 == 0) and np.array_equal(second, first + 1)
+            and np.all(first[1:] != first[:-1])):
         raise RuntimeError("the workspace's boundary mesh is not closed and consistently wound "
                            f"({len(faces)} triangles): a bug, please report it with the spec")
 

@@ -50,6 +50,13 @@ class StraightSweep(Base):
         self.K = None if self.numpy else kernels()
         self.wreq_used = self.wreq if robot.every_vertex else self.wreq[:1].copy()
         self.lower, self.step, self.shape = grid3(g)
+        self.loads = False  # the frame-load envelope with the rows (keep_frame_loads)
+
+    def keep_frame_loads(self) -> bool:
+        """The kernels raise the envelope of the frame loads as they sweep (pose by pose, on their
+        threads: :func:`~cdpr_design.kernels.sweep.sweep_grid`); numpy's closed form does not."""
+        self.loads = not self.numpy
+        return self.loads
 
     def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
         r, cnt, m = self.robot, count, self.robot.m
@@ -58,9 +65,11 @@ class StraightSweep(Base):
         if self.numpy:
             _planar2_numpy(grid_positions(self.g, start, cnt), self.Rb, r.outlet_points, self.wreq_used, r.tension_min,
                            r.tension_max, r.tension_floor, feas, marg, ten, lens)
-        else:
-            self._sweep(self.K.GridPoses(start, self.lower, self.step, self.shape, self.Rb), Rows(feas, marg, ten, lens))
-        return Rows(feas, marg, ten, lens)
+            return Rows(feas, marg, ten, lens)
+        loads = self.K.frame_loads.empty_envelope(m) if self.loads else (np.empty((0, 13)), np.empty((0, 3)))
+        self._sweep(self.K.GridPoses(start, self.lower, self.step, self.shape, self.Rb, np.empty((0, 3)), *loads),
+                    Rows(feas, marg, ten, lens))
+        return Rows(feas, marg, ten, lens, loads=loads if self.loads else None)
 
     def _sweep(self, poses, rows: Rows) -> None:
         """The kernels' grid sweep of ``poses`` (:class:`~cdpr_design.kernels.sweep.GridPoses`) into ``rows``."""

@@ -23,10 +23,13 @@ origin (A_i the outlet, a pulley's swivel point).  The worst case the tension bo
 (``limit_`` columns) takes each cable at its upper bound t_max,i along every direction it takes
 over the feasible poses: t_max,i F_i / s_i, s_i the tension at the outlet (t_i; T_a sagging).
 The envelope is kept per chunk of rows (:class:`FrameLoadTable`): a few numbers a cable.
-An orientation workspace's rows stand for a set of orientations: straight cables take the
-rows' tensions (the largest over the set) at the nominal orientation, sagging cables the statics
-of the nominal orientation itself (:attr:`~cdpr_design.workspaces.grid.Rows.nominal`: a
-catenary's end forces come from its own tensions and length).
+The total orientation workspace's rows stand for every orientation of its set: the loads are
+the envelope over the positions feasible at every orientation and over every orientation, each
+with its own tension distribution (its own statics, sagging cables' included:
+:attr:`~cdpr_design.workspaces.grid.Rows.sets`).  The orientation range's rows are the nominal
+orientation's, and so are its loads (sagging cables: the nominal's statics,
+:attr:`~cdpr_design.workspaces.grid.Rows.nominal`: a catenary's end forces come from its own
+tensions and length).
 """
 
 from __future__ import annotations
@@ -173,8 +176,11 @@ class FrameLoads(Wrapper):
 
     pictures = ("frame_loads.png",)
 
-    def __init__(self, robot: Robot, ori: np.ndarray):
+    def __init__(self, robot: Robot, ori: np.ndarray, inline: bool = False):
         super().__init__(robot)
+        #: the base evaluator hands each chunk's envelope over with its rows (:attr:`Rows.loads`)
+        self.inline = inline
+        self.positions = not inline
         self.ori = np.asarray(ori, float)
         self.table = FrameLoadTable(robot.m, 2 if robot.planar else 3)
         self.R = kin.rotation_matrix(*self.ori)
@@ -189,35 +195,37 @@ class FrameLoads(Wrapper):
             self.pulley_axes = axes * (radii > 0)[:, None]  # a point outlet among pulleys: no axle
 
     def add(self, r: Rows, start: int, P: np.ndarray | None) -> None:
-        tensions, extra = (r.tensions, r.extra) if r.nominal is None else r.nominal  # sagging, a set: its nominal
+        if self.inline:
+            self.table.add_envelope(*r.loads, self.robot.tension_max)
+        elif r.sets is not None:  # every orientation of a set, each with its own statics
+            for ori, tensions, extra in r.sets:
+                self._add(r, P, tensions, extra, kin.rotation_matrix(*ori))
+        else:
+            tensions, extra = (r.tensions, r.extra) if r.nominal is None else r.nominal  # sagging: the nominal's
+            self._add(r, P, tensions, extra, None)
+
+    def _add(self, r: Rows, P: np.ndarray, tensions: np.ndarray, extra: dict, R: np.ndarray | None) -> None:
+        """The loads of the rows of ``r`` that are feasible with ``tensions`` (k, m) [N] (and the
+        ``extra`` columns) at the rotation ``R`` (3, 3) (None: the sweep's or the rows' own)."""
         ok = r.feasible.astype(bool) & np.isfinite(tensions).all(axis=1)
         if not ok.any():
             return
         if self.compiled:
-            self._add_compiled(ok, P, r)
+            from cdpr_design.kernels.frame_loads import empty_envelope, frame_load_stats
+
+            Rb = self.Rb if R is None else np.ascontiguousarray(self.robot.attachments @ R.T)
+            cab, tot = empty_envelope(self.robot.m)
+            frame_load_stats(np.ascontiguousarray(P, dtype=float), ok.astype(np.uint8), np.ascontiguousarray(tensions),
+                             self.robot.outlet_points, Rb, cab, tot)
+            self.table.add_envelope(cab, tot, self.robot.tension_max)
             return
         feasible = np.flatnonzero(ok)
         for k in range(0, len(feasible), BLOCK):  # small temporaries: no page faults for each
             rows = feasible[k:k + BLOCK]
-            F, U, fmag, umag = outlet_forces(self.robot, P[rows], self._rotations(r, rows), tensions[rows],
-                                             {n: v[rows] for n, v in extra.items()},
+            F, U, fmag, umag = outlet_forces(self.robot, P[rows], self._rotations(r, rows) if R is None else R,
+                                             tensions[rows], {n: v[rows] for n, v in extra.items()},
                                              getattr(self, "pulley_axes", None))
             self.table.add(F, U, self.robot.outlet_points, self.robot.tension_max, fmag, umag)
-
-    def _add_compiled(self, ok: np.ndarray, P: np.ndarray, r: Rows) -> None:
-        """The chunk's envelope in one compiled pass (straight cables from point outlets at one
-        orientation, the kernels loaded)."""
-        from cdpr_design.kernels.frame_loads import CAB_COLUMNS, frame_load_stats
-
-        m = self.robot.m
-        cab = np.empty((m, CAB_COLUMNS))
-        cab[:, [0, 4, 5, 6, 10, 11, 12]] = -np.inf
-        cab[:, [1, 2, 3, 7, 8, 9]] = np.inf
-        tot = np.empty((5, 3))
-        tot[[0, 2]], tot[[1, 3]], tot[4] = np.inf, -np.inf, (-np.inf, -np.inf, 0.0)
-        frame_load_stats(np.ascontiguousarray(P, dtype=float), ok.astype(np.uint8), np.ascontiguousarray(r.tensions),
-                         self.robot.outlet_points, self.Rb, cab, tot)
-        self.table.add_envelope(cab, tot, self.robot.tension_max)
 
     def _rotations(self, r: Rows, rows: np.ndarray) -> np.ndarray:
         """Rotation matrices (k, 3, 3) of the rows where the effector hangs (its orientation in the

@@ -64,7 +64,14 @@ class Rows:
     motion's pose coordinates where they are not the grid's at the sweep's orientation,
     ``nominal`` where rows stand for a set of orientations of sagging cables: the statics at the
     nominal orientation, (effector tensions [N], extra columns ``outlet_tension_<c>`` [N] and
-    ``unstretched_length_<c>`` [m]) (the loads on the frame take them)."""
+    ``unstretched_length_<c>`` [m]) (the loads on the frame take them); ``loads`` the envelope of
+    the loads on the frame of the feasible rows where the base evaluator computed it with them
+    (:meth:`~cdpr_design.workspaces.parts.Base.keep_frame_loads`: ``cab`` (m, 13), ``tot`` (5, 3)
+    as :func:`cdpr_design.kernels.frame_loads.frame_load_stats` leaves them); ``sets`` where rows
+    stand for every orientation of a set (the total orientation workspace): the statics at each, a
+    list of (angles (3,) [rad], effector tensions (k, m) [N], extra columns (sagging cables:
+    ``outlet_tension_<c>`` [N], ``unstretched_length_<c>`` [m]; else none)) (the loads on the frame
+    take them)."""
 
     feasible: np.ndarray
     margin: np.ndarray
@@ -74,6 +81,8 @@ class Rows:
     maps: dict = field(default_factory=dict)
     poses: np.ndarray | None = None
     nominal: tuple | None = None
+    loads: tuple | None = None
+    sets: list | None = None
 
 
 def chunk_stats(r: Rows, tpeak: np.ndarray) -> tuple[int, float, float]:

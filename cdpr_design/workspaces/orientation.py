@@ -35,6 +35,9 @@ DEFAULT_SET_COUNT = 5
 DEFAULT_RANGE_MAX = math.radians(30.0)
 DEFAULT_RANGE_LEVELS = 10
 DEFAULT_RANGE_COUNT = 3
+#: Bytes a chunk of the total orientation workspace may hold in the statics of every orientation
+#: of its set (the loads on the frame take them): its rows are limited to fit.
+SET_BYTES = 64 << 20
 
 
 # ----------------------------------------------------------------------------
@@ -170,6 +173,10 @@ class OrientationSweep(Base):
       ``collision_free``, ``feasible_statics`` and ``collisions_by_kind``
       count the nominal orientation's poses.
 
+    ``total`` rows also carry the statics at every orientation of the set
+    (:attr:`~cdpr_design.workspaces.grid.Rows.sets`: the loads on the frame take them), so that a
+    chunk holds at most :attr:`max_rows` rows (:data:`SET_BYTES` of them).
+
     The result gets ``orientation_maps`` (an :class:`OrientationMaps`) and summary extras
     ``orientation_mode``, ``orientation_count`` and (range) ``mean_range``, ``range_levels``.
     (Orientation workspaces: Pott 2018, ch. 6; Gouttefarde, Merlet & Daney, ICRA 2007.)
@@ -189,6 +196,8 @@ class OrientationSweep(Base):
             self.oset = orientation_set(design) if orientations is None else np.atleast_2d(
                 np.asarray(orientations, float))
             self.level_sets, self.scale = None, np.zeros(len(self.rot_names))
+            columns = 4 if isinstance(self.ev, SagPoints) else 1  # a cable's kept columns an orientation
+            self.max_rows = max(1024, SET_BYTES // (8 * len(self.oset) * robot.m * columns))
         else:
             self.scale, _, _, self.level_sets = range_levels(design)
             self.oset = self.level_sets[-1]
@@ -205,6 +214,8 @@ class OrientationSweep(Base):
         feas, marg, ten, L, cfree, value, extra, state = r
         if cfree is not None:
             extra = {"collision_free": cfree, **extra}
+        if self.mode == "total":
+            return Rows(feas, marg, ten, L, extra, {"value": np.asarray(value, float)}, sets=state)
         return Rows(feas, marg, ten, L, extra, {"value": np.asarray(value, float)}, nominal=state)
 
     def summary(self, maps) -> dict:
@@ -232,7 +243,8 @@ class _Tally:
 
 
 def _total_rows(ev, P, nominal, oset, tally: _Tally):
-    """One chunk of the total orientation workspace: feasible at every orientation of ``oset``."""
+    """One chunk of the total orientation workspace: feasible at every orientation of ``oset``; its
+    last item the statics at each (:attr:`~cdpr_design.workspaces.grid.Rows.sets`)."""
     cnt, m = P.shape[0], ev.design.m
     L = None  # the chords' lengths at the nominal orientation
     allok = np.ones(cnt, dtype=bool)
@@ -242,11 +254,12 @@ def _total_rows(ev, P, nominal, oset, tally: _Tally):
     hits = np.zeros(cnt, dtype=np.uint8)
     marg = np.full(cnt, np.inf)
     ten = np.full((cnt, m), -np.inf)
+    sets = []
     for o in oset:
         f, mg, t, lengths, mask = ev(P, o)
+        sets.append((o, *ev.nominal()) if isinstance(ev, SagPoints) else (o, t, {}))
         if np.array_equal(o, nominal):
             L = lengths
-            state = ev.nominal() if isinstance(ev, SagPoints) else None
         tally.evaluated += cnt
         ok = f.astype(bool)
         if tally.interference:
@@ -261,7 +274,6 @@ def _total_rows(ev, P, nominal, oset, tally: _Tally):
         ten = np.maximum(ten, t)  # an orientation without tensions (wrench closure) leaves none to report
     if L is None:
         L = ev(P, nominal)[3]
-        state = ev.nominal() if isinstance(ev, SagPoints) else None
     marg[~np.isfinite(marg)] = np.nan
     ten[~allok] = np.nan
     cfree = None
@@ -270,7 +282,7 @@ def _total_rows(ev, P, nominal, oset, tally: _Tally):
         tally.free += int(np.count_nonzero(cfree_all))
         tally.statics += int(np.count_nonzero(stat_all))
         kind_counts(hits, tally.by_kind)
-    return allok.astype(np.uint8), marg, ten, L, cfree, nok / len(oset), {"orientations_feasible": nok}, state
+    return allok.astype(np.uint8), marg, ten, L, cfree, nok / len(oset), {"orientations_feasible": nok}, sets
 
 
 def _range_rows(ev, P, nominal, level_sets, scale, rot_names, tally: _Tally):

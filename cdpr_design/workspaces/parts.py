@@ -35,6 +35,8 @@ class Base(Part):
     """A base evaluator: the rows of chunks of grid positions; ``kind`` the result's kind."""
 
     kind: str = "static"
+    #: the most rows a chunk of this evaluator holds (None: the plan's chunk, whatever it is)
+    max_rows: int | None = None
 
     def rows(self, start: int, count: int, P: np.ndarray | None) -> Rows:
         """The rows of grid positions ``start .. start + count``, at ``P`` (count, 3) [m] (None
@@ -47,6 +49,13 @@ class Base(Part):
         :meth:`rows`; the others say how)."""
         r = self.rows(0, P.shape[0], P)
         return r.feasible.astype(bool), np.asarray(r.margin, float)
+
+    def keep_frame_loads(self) -> bool:
+        """Have this evaluator compute, with each chunk's rows, the envelope of the loads on the
+        frame of its feasible rows (:attr:`~cdpr_design.workspaces.grid.Rows.loads`); returns
+        whether it will (by default not: the loads are computed from the rows,
+        :class:`~cdpr_design.workspaces.frame_loads.FrameLoads`)."""
+        return False
 
     def stats(self, r: Rows, tpeak: np.ndarray) -> tuple:
         """(feasible count, least margin [N], largest margin [N]) of ``r``; raises ``tpeak`` [N]

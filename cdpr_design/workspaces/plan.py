@@ -117,7 +117,7 @@ class Plan:
         names = self.extra_columns
         wants_positions = on_chunk is not None or self.reads_positions
         total = g.size
-        chunk = max(1, min(chunk, total))
+        chunk = max(1, min(chunk, total, self.base.max_rows or chunk))
         done = 0
         while done < total:
             cnt = min(chunk, total - done)
@@ -156,7 +156,7 @@ def plan(robot: Robot, grid: Grid, orientation=None, *, tilt: bool = True, orien
     p = _plan(robot, grid, orientation, tilt, orientations)
     if not (solid or frame_loads):
         return p
-    parts: tuple = (FrameLoads(robot, p.orientation),)
+    parts: tuple = (FrameLoads(robot, p.orientation, inline=p.base.keep_frame_loads()),)
     if solid:
         parts += (BoundaryField(robot, grid, p.point_test),)
     return dataclasses.replace(p, wrappers=p.wrappers + parts, solid=solid, frame_loads=frame_loads)

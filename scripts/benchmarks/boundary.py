@@ -2,13 +2,16 @@
 
 For each design, on the grid of ``steps`` [m] per axis (IPAnema 3's default: (0.1, 0.1, 0.05),
 838,201 poses), warm (the kernels compiled or loaded outside the timing), in interleaved
-rounds in this process: the plain sweep (the baseline) and the sweep with the boundary between
-the grid points and the frame loads, CPU of this process (threads included); the ratio of each
-round, the boundary's own wall time (contouring, refinement with the exact test, welding) and
-its vertices and triangles.
+rounds in this process: the plain sweep (the baseline), the sweep with the frame loads alone,
+and the sweep with the boundary between the grid points and the frame loads, CPU of this process
+(threads included); the ratio of each round to the plain sweep of the same round, the machine's
+load average over the rounds, the boundary's own wall time (contouring, refinement with the exact
+test, welding) and its vertices and triangles.
 """
 
 from __future__ import annotations
+
+import os
 
 from benchmarks import harness as h
 
@@ -28,17 +31,25 @@ def run(b: h.Bench) -> None:
         g = Grid(g0.lower, g0.upper, tuple(float(s) for s in b.opt["steps"])[:len(g0.lower)])
         robot = resolve(d)
         ws.plan(robot, Grid(g.lower, g.upper, tuple(4 * s for s in g.step)), solid=True).run()  # kernels, imports
-        results = {}
+        results, loads = {}, []
 
-        def sweep(solid: bool):
-            t, r = h.timed(ws.plan(robot, g, solid=solid).run)
-            results[solid] = r
+        def sweep(**parts):
+            t, r = h.timed(ws.plan(robot, g, **parts).run)
+            results[tuple(parts.items())] = r
+            loads.append(os.getloadavg()[0])
             return t
 
-        got = h.rounds({"plain": lambda: sweep(False), "solid": lambda: sweep(True)}, b.rounds)
-        bnd = results[True].boundary
+        got = h.rounds({"plain": lambda: sweep(), "frame loads": lambda: sweep(frame_loads=True),
+                        "solid": lambda: sweep(solid=True)}, b.rounds)
+        bnd = results[(("solid", True),)].boundary
+        load = f"load average {h.spread(loads).text('.1f')}"
+        b.row(f"{name}, {g.size:,} poses: the plain sweep", h.seconds(h.spread(t.cpu for t in got["plain"])) + " CPU",
+              note=load)
+        b.row(f"{name}, {g.size:,} poses: the sweep with the frame loads",
+              h.seconds(h.spread(t.cpu for t in got["frame loads"])) + " CPU",
+              h.ratios(got["frame loads"], got["plain"], "cpu"), "the plain sweep (CPU)", load)
         b.row(f"{name}, {g.size:,} poses: the sweep with the boundary and the frame loads",
               h.seconds(h.spread(t.cpu for t in got["solid"])) + " CPU",
               h.ratios(got["solid"], got["plain"], "cpu"), "the plain sweep (CPU)",
-              f"boundary {bnd.elapsed_s:.3g} s wall, {len(bnd.vertices) or sum(map(len, bnd.loops)):,} vertices, "
-              f"{len(bnd.faces):,} triangles")
+              f"{load}; boundary {bnd.elapsed_s:.3g} s wall, {len(bnd.vertices) or sum(map(len, bnd.loops)):,} "
+              f"vertices, {len(bnd.faces):,} triangles")
