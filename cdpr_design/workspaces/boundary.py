@@ -186,22 +186,33 @@ class Slabs:
         v = _scaled(signed_margin(feasible, margin), self.scale)
         self.any_feasible |= bool((v > 0).any())
         k = 0
-        while k < len(v):
-            take = min(len(v) - k, self.plane_size - self.filled)
-            self.cur[self.filled:self.filled + take] = v[k:k + take]
+        if self.filled:  # the rest of a plane begun by the last rows
+            take = min(len(v), self.plane_size - self.filled)
+            self.cur[self.filled:self.filled + take] = v[:take]
             self.filled += take
-            k += take
+            k = take
             if self.filled == self.plane_size:
-                self._plane_done()
+                self._planes(self.cur[None])
+        while len(v) - k >= self.plane_size:  # whole planes, as many at once as the slab takes
+            room = max(1, -(-SLAB_VALUES // self.prev.size) - len(self.held))
+            n = min((len(v) - k) // self.plane_size, room)
+            self._planes(v[k:k + n * self.plane_size].reshape(n, self.plane_size))
+            k += n * self.plane_size
+        if k < len(v):  # the beginning of the next plane
+            self.filled = len(v) - k
+            self.cur[:self.filled] = v[k:]
         self.busy_s += time.perf_counter() - t0
 
-    def _plane_done(self) -> None:
-        plane = self._pad_plane(self.cur)
-        self._count_runs(plane)
-        self.held.append(plane)
-        self.plane += 1
+    def _planes(self, values: np.ndarray) -> None:
+        """The next planes of the grid, their values (p, plane size) (at most the slab's room)."""
+        p = values.shape[0]
+        block = np.full((p,) + self.pshape[1:], -1.0, dtype=np.float32)
+        block[(slice(None),) + (slice(1, -1),) * (self.dim - 1)] = values.reshape((p,) + self.shape[1:])
+        self._count_runs(block)
+        self.held.extend(block)
+        self.plane += p
         self.filled = 0
-        if len(self.held) * plane.size >= SLAB_VALUES:
+        if len(self.held) * self.prev.size >= SLAB_VALUES:
             self._flush()
 
     def _flush(self) -> None:
@@ -210,18 +221,30 @@ class Slabs:
             self._slab(np.stack([self.prev] + self.held), self.plane - len(self.held))
             self.prev, self.held = self.held[-1], []
 
-    def _count_runs(self, plane: np.ndarray) -> None:
-        """The coarse-grid tally (:func:`coarse_warning`'s rule) of one more plane: runs within it
-        and along the first axis up to it."""
-        inner = plane[(slice(1, -1),) * (self.dim - 1)] > 0
-        if self.plane > 0:
-            last = self.held[-1] if self.held else self.prev
-            prev = (last[(slice(1, -1),) * (self.dim - 1)] > 0).reshape(-1)
-            change = np.flatnonzero(prev != inner.reshape(-1))
-            self.ends += len(change)
-            self.thin += int(np.count_nonzero(self.plane - self.last_cross[change] < MIN_STEPS))
-            self.last_cross[change] = self.plane
-        for ax in range(inner.ndim):
+    def _count_runs(self, block: np.ndarray) -> None:
+        """The coarse-grid tally (:func:`coarse_warning`'s rule) of the next padded planes ``block``
+        (p, ...): runs within each and along the first axis up to each, in order."""
+        inner = block[(slice(None),) + (slice(1, -1),) * (self.dim - 1)] > 0
+        p = inner.shape[0]
+        lines = inner.reshape(p, -1)
+        last = self.held[-1] if self.held else self.prev
+        before = (last[(slice(1, -1),) * (self.dim - 1)] > 0).reshape(1, -1)
+        change = np.concatenate([before, lines])
+        change = change[1:] != change[:-1]  # (p, lines): plane self.plane + j differs from the one before
+        if self.plane == 0:
+            change[0] = False  # the first plane has none before it
+        col, j = np.nonzero(change.T)  # by grid line, then plane
+        if len(col):
+            at = self.plane + j
+            new_line = np.ones(len(col), dtype=bool)
+            new_line[1:] = col[1:] != col[:-1]
+            before_at = np.where(new_line, self.last_cross[col], np.roll(at, 1))
+            self.ends += len(col)
+            self.thin += int(np.count_nonzero(at - before_at < MIN_STEPS))
+            last = np.ones(len(col), dtype=bool)
+            last[:-1] = new_line[1:]
+            self.last_cross[col[last]] = at[last]  # each line's last crossing
+        for ax in range(1, inner.ndim):
             if inner.shape[ax] < 2:
                 continue
             f = np.moveaxis(inner, ax, -1).reshape(-1, inner.shape[ax])
