@@ -134,9 +134,14 @@ class BoundaryField(Wrapper):
 def signed_margin(feasible: np.ndarray, margin: np.ndarray) -> np.ndarray:
     """float32 (k,): |margin| [N] positive where ``feasible``, negative elsewhere; a pose
     without a finite margin (or a zero one) keeps its sign with the magnitude 1e-30."""
+    mag = _magnitude(margin)
+    return np.where(np.asarray(feasible).astype(bool), mag, -mag)
+
+
+def _magnitude(margin: np.ndarray) -> np.ndarray:
+    """float32 |margin| [N], 1e-30 where it is not finite or smaller."""
     mag = np.abs(np.asarray(margin, dtype=np.float32))
-    mag = np.where(np.isfinite(mag) & (mag > 1e-30), mag, np.float32(1e-30))
-    return np.where(np.asarray(feasible).astype(bool), mag, -mag).astype(np.float32)
+    return np.where(np.isfinite(mag) & (mag > 1e-30), mag, np.float32(1e-30))
 
 
 class Slabs:
@@ -183,7 +188,7 @@ class Slabs:
         t0 = time.perf_counter()
         if start != self.plane * self.plane_size + self.filled:
             raise ValueError(f"rows from {start}: the boundary takes the grid's rows in order, each once")
-        v = _scaled(signed_margin(feasible, margin), self.scale)
+        v = _scaled(feasible, margin, self.scale)
         self.any_feasible |= bool((v > 0).any())
         k = 0
         if self.filled:  # the rest of a plane begun by the last rows
@@ -328,16 +333,18 @@ class Slabs:
             perimeter = sum(float(np.linalg.norm(np.diff(np.vstack([lp, lp[:1]]), axis=0), axis=1).sum())
                             for lp in loops)
             return Boundary(2, float(area), perimeter, loops=loops, warning=warning)
-        verts, faces, volume = _weld(pts, snapped, faces)
-        return Boundary(3, volume, mesh_area(verts, faces), vertices=verts, faces=faces, warning=warning)
+        verts, faces, volume, area = _weld(pts, snapped, faces)
+        return Boundary(3, volume, area, vertices=verts, faces=faces, warning=warning)
 
 
-def _scaled(v: np.ndarray, scale: float) -> np.ndarray:
-    """The contoured field of signed margins ``v`` [N]: the same signs, the magnitudes mapped
-    monotonically into [FLOOR, 1) (|m| = ``scale`` to the middle), one map for every slab so
-    that two slabs decide a shared face alike."""
-    mag = np.abs(v)
-    return np.sign(v) * (FLOOR + (1.0 - FLOOR) * mag / (mag + np.float32(scale))).astype(np.float32)
+def _scaled(feasible: np.ndarray, margin: np.ndarray, scale: float) -> np.ndarray:
+    """The contoured field (float32) of the poses' feasibility and margins [N] (their
+    :func:`signed_margin`): the same signs, the magnitudes mapped monotonically into [FLOOR, 1)
+    (|m| = ``scale`` to the middle), one map for every slab so that two slabs decide a shared face
+    alike."""
+    mag = _magnitude(margin)
+    v = FLOOR + (1.0 - FLOOR) * mag / (mag + np.float32(scale))
+    return np.where(np.asarray(feasible).astype(bool), v, -v)
 
 
 def _unscaled(v: np.ndarray, scale: float) -> np.ndarray:
@@ -406,23 +413,26 @@ def first_guess(m_a, m_b, m_before=None, m_after=None) -> np.ndarray:
     if m_before is None:
         return secant
     xs = np.array([-1.0, 0.0, 1.0, 2.0])
-    ys = np.stack([m_before, m_a, m_b, m_after], axis=1)
-    use = np.isfinite(ys)
+    ys = [m_before, m_a, m_b, m_after]
+    use = [np.isfinite(y) for y in ys]
+    # the weights 1 / (x_i - x_j) of the known points j (0 for an unknown one), per pair i != j
+    w = {(i, j): np.where(use[j], 1.0 / (xs[i] - xs[j]), 0.0) for i in range(4) for j in range(4) if i != j}
     x = secant.copy()
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for _ in range(8):  # Newton on the Lagrange polynomial of the known points
             v, dv = np.zeros_like(x), np.zeros_like(x)
+            d = [x - xs[j] for j in range(4)]
             for i in range(4):
                 li, dli = np.ones_like(x), np.zeros_like(x)
                 for j in range(4):
                     if j != i:
-                        w = np.where(use[:, j], 1.0 / (xs[i] - xs[j]), 0.0)
-                        dli = dli * np.where(use[:, j], (x - xs[j]) * w, 1.0) + li * w
-                        li = li * np.where(use[:, j], (x - xs[j]) * w, 1.0)
-                v += np.where(use[:, i], ys[:, i] * li, 0.0)
-                dv += np.where(use[:, i], ys[:, i] * dli, 0.0)
+                        factor = np.where(use[j], d[j] * w[i, j], 1.0)
+                        dli = dli * factor + li * w[i, j]
+                        li = li * factor
+                v += np.where(use[i], ys[i] * li, 0.0)
+                dv += np.where(use[i], ys[i] * dli, 0.0)
             x = x - v / dv
-    good = np.isfinite(x) & (x > 0.0) & (x < 1.0) & (use[:, 0] | use[:, 3])
+    good = np.isfinite(x) & (x > 0.0) & (x < 1.0) & (use[0] | use[3])
     return np.where(good, x, secant)
 
 
@@ -538,7 +548,7 @@ def _loops(segments, pts, snapped, lower, axis, lo_in, grid: Grid) -> list:
 
 
 def _weld(pts, snapped, faces):
-    """(vertices, faces, volume [m^3]): the mesh with the vertices at one position merged, its
+    """(vertices, faces, volume [m^3], area [m^2]): the mesh with the vertices at one position merged, its
     degenerate triangles dropped, checked closed (:func:`check_closed`), normals outwards.  Only
     vertices put on the box (``snapped``: a box edge or corner takes several) can share a position:
     the others lie strictly inside distinct grid edges."""
@@ -555,11 +565,11 @@ def _weld(pts, snapped, faces):
     remap = np.cumsum(used) - 1
     verts, faces = pts[used], remap[faces]
     check_closed(verts, faces)
-    volume = mesh_volume(verts, faces)
+    volume, area = mesh_measures(verts, faces)
     if volume < 0:
         faces = faces[:, ::-1].copy()
-        volume = mesh_volume(verts, faces)
-    return verts, faces, volume
+        volume, area = mesh_measures(verts, faces)
+    return verts, faces, volume, area
 
 
 def _shoelace(loop: np.ndarray) -> float:
@@ -587,17 +597,11 @@ def check_closed(verts: np.ndarray, faces: np.ndarray) -> None:
                            f"({len(faces)} triangles): a bug, please report it with the spec")
 
 
-def mesh_volume(verts: np.ndarray, faces: np.ndarray) -> float:
-    """Signed volume [m^3] enclosed by a closed triangle mesh (positive with outward normals)."""
+def mesh_measures(verts: np.ndarray, faces: np.ndarray) -> tuple[float, float]:
+    """(signed volume [m^3] enclosed by a closed triangle mesh, positive with outward normals;
+    its surface area [m^2])."""
     if len(faces) == 0:
-        return 0.0
+        return 0.0, 0.0
     a, b, c = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
-    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
-
-
-def mesh_area(verts: np.ndarray, faces: np.ndarray) -> float:
-    """Surface area [m^2] of a triangle mesh."""
-    if len(faces) == 0:
-        return 0.0
-    a, b, c = verts[faces[:, 0]], verts[faces[:, 1]], verts[faces[:, 2]]
-    return float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum())
+    return (float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0),
+            float(0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum()))
