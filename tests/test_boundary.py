@@ -204,11 +204,52 @@ def test_a_too_coarse_grid_says_so(tmp_path):
     path = write_spec(tmp_path, planar2_raw())
     res = invoke("workspace", path, "--out", tmp_path / "o", "--step", 0.5, "--json")
     assert res.exit_code == 0, res.output
-    assert "too coarse" in json.loads(res.stdout)["boundary_warning"]
+    warning = json.loads(res.stdout)["boundary_warning"]
+    assert "too coarse" in warning
+    d = spec.load(path)
+    r = ws.run(d, step=0.5, solid=True)
+    short, crossings = _short_runs(r.feasible_map > 0)
+    assert short > wb.THIN_SHARE * crossings and f": {short} runs of poses" in warning
     res = invoke("workspace", path, "--out", tmp_path / "o", "--step", 0.5)
     assert res.exit_code == 0 and "too coarse" in res.stderr  # a note beside the table
     res = invoke("workspace", path, "--out", tmp_path / "f", "--step", 0.05, "--json")
     assert "boundary_warning" not in json.loads(res.stdout) and "too coarse" not in res.stderr
+
+
+def _short_runs(feasible: np.ndarray) -> tuple[int, int]:
+    """(short runs, crossings) of a feasibility array (the grid's shape), line by line along each
+    axis: a crossing where two neighbours differ, a short run between two crossings of one line
+    fewer than MIN_STEPS steps apart (the coarse-grid warning's rule, counted the slow way)."""
+    short = crossings = 0
+    for ax in range(feasible.ndim):
+        lines = np.moveaxis(feasible, ax, -1).reshape(-1, feasible.shape[ax])
+        for line in lines:
+            at = [i for i in range(len(line) - 1) if line[i] != line[i + 1]]
+            crossings += len(at)
+            short += sum(b - a < wb.MIN_STEPS for a, b in zip(at, at[1:]))
+    return short, crossings
+
+
+@pytest.mark.parametrize("name,step", [("pointmass3.yaml", 1.0), ("ipanema3.yaml", 0.5)])
+def test_the_boundary_does_not_depend_on_the_chunks(name, step):
+    """Rows streamed in chunks of any size (parts of a plane of the grid's first axis, several
+    planes) give the same boundary, bit for bit, and the coarse-grid count of the slow rule."""
+    d = spec.load(DESIGNS / name)
+    g = ws.make_grid(d, step)
+    robot = resolve(d)
+    plane = int(np.prod(g.shape[1:]))
+    results = [ws.plan(robot, g, solid=True).run(chunk=c) for c in (g.size, plane // 3 + 1, 2 * plane + 5)]
+    for r in results[1:]:
+        assert r.boundary.measure == results[0].boundary.measure
+        np.testing.assert_array_equal(r.boundary.vertices, results[0].boundary.vertices)
+        np.testing.assert_array_equal(r.boundary.faces, results[0].boundary.faces)
+        assert r.boundary.warning == results[0].boundary.warning
+    short, crossings = _short_runs(results[0].feasible_map > 0)
+    assert crossings > 0
+    warning = results[0].boundary.warning
+    assert (warning is not None) == (short > wb.THIN_SHARE * crossings)
+    if warning is not None:
+        assert f": {short} runs of poses" in warning
 
 
 # ---------------------------------------------------------------- frame loads
