@@ -147,9 +147,9 @@ def _magnitude(margin: np.ndarray) -> np.ndarray:
 class Slabs:
     """The contouring of a streamed field, one slab of consecutive planes of the grid's first axis
     at a time: what it holds is the planes of one slab as float32 (at least two, about
-    :data:`SLAB_VALUES` values: 4 MB), the boundary's vertices and faces found so far, and per grid line of the first axis the
-    last crossing (the coarse-grid warning).  Rows arrive in grid order (C order, first axis
-    slowest), each once.
+    :data:`SLAB_VALUES` values: 4 MB), the boundary's vertices and faces found so far, and per grid
+    line of the first axis the last crossing (the coarse-grid warning).  Rows arrive in grid order
+    (C order, first axis slowest), each once, whole planes taken together.
 
     Vertices are named by their grid edge (its lower end's index in the padded grid, times the
     dimension, plus the edge's axis), so that the pieces of two slabs sharing a plane weld
