@@ -399,11 +399,7 @@ MATRIX = [(d, k, m, opt) for d in DESIGNS for k in MATRIX_KINDS for m in MODELS 
 #: Capabilities still refused, by the cells they refuse: a predicate on (design's facts, kind, model,
 #: option) and why.  A cell in one of them is expected to fail (strictly) while the table refuses it
 #: for a capability; once the capability lands the cell is a plain cell, which must compute.
-PENDING = (
-    (lambda f, kind, model, option: f.orientation.free and kind == "wrench-feasible",
-     "a hanging effector under external wrenches (its hanging orientation under each wrench vertex) is not "
-     "computed"),
-)
+PENDING: tuple = ()
 
 
 def _matrix_refusal(design: Path, kind: str, model: str, option: str):

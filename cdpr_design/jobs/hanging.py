@@ -117,10 +117,8 @@ def free_pose_data(robot, position) -> dict:
     h = r.hanging
     ok = h.status[0] == OK
     reason = REASONS[h.status[0]]
-    if ok and not r.within[0]:
-        reason = "the hanging tensions are outside their bounds"
-    elif ok and not r.feasible[0]:
-        reason = f"it hangs tilted by {h.tilt_deg[0]:.4g} deg, more than max_tilt"
+    if ok and not r.feasible[0]:
+        reason = _infeasible_reason(r)
     ori = _orientation(h.orientation[0]) if ok else None
     W = None
     if ok:
@@ -140,9 +138,47 @@ def free_pose_data(robot, position) -> dict:
         "orientation": ori, "tilt": _num(h.tilt_deg[0]), "lengths": _by_cable(design, r.lengths[0]),
         "tensions": _by_cable(design, r.tensions[0]), "feasible": bool(r.feasible[0]), "reason": reason,
         "stable": bool(ok), "margin": _num(r.margin[0]), "structure_matrix": W,
-        "collisions": _collisions(robot, position, h.rotation[0], r.cables) if ok else None,
+        "collisions": _loaded_collisions(robot, position, r) if ok else None,
         "effector_orientation": "free", "hanging_tensions": _by_cable(design, h.tensions[0]),
-    } | _cable_model_data(robot, r) | free_stiffness_data(robot, position, r)
+    } | ({"tilt_loaded": _num(r.extra["tilt_loaded"][0])} if "tilt_loaded" in r.extra else {}) \
+        | _cable_model_data(robot, r) | free_stiffness_data(robot, position, r)
+
+
+def _infeasible_reason(r) -> str:
+    """Why a hanging pose whose effector hangs under gravity alone is infeasible: under gravity
+    alone, else under the first vertex of the external wrench that fails (``pose``'s reason)."""
+    from cdpr_design.statics.hanging.results import OK, REASONS
+
+    for j, v in enumerate(r.vertices or [r]):
+        if v.feasible[0]:
+            continue
+        h = v.hanging
+        if h.status[0] != OK:
+            why = REASONS[h.status[0]]
+        elif not v.within[0]:
+            why = "the hanging tensions are outside their bounds"
+        elif v.collisions is not None and v.collisions[0] != 0:
+            why = "it interferes"
+        else:
+            why = f"it hangs tilted by {h.tilt_deg[0]:.4g} deg, more than max_tilt"
+        return why if j == 0 else f"under vertex {j} of workspace.external_wrench: {why}"
+    return "it interferes"
+
+
+def _loaded_collisions(robot, position, r) -> list | None:
+    """The colliding pairs at the hanging pose of gravity alone and of every vertex of the external
+    wrench where it hangs (:func:`_collisions`); None where a vertex does not hang on sagging
+    cables (its catenaries unknown: not known to be collision free)."""
+    from cdpr_design.statics.hanging.results import OK
+
+    pairs = []
+    for v in r.vertices or [r]:
+        if v.hanging.status[0] != OK:
+            if v.cables is not None:
+                return None
+            continue
+        pairs += [p for p in _collisions(robot, position, v.hanging.rotation[0], v.cables) if p not in pairs]
+    return pairs
 
 
 def _catenary_structure(robot, p, R, cables) -> np.ndarray:

@@ -132,15 +132,24 @@ def segment_box_chord(s0, s1, half, dim, shrink):
 
 
 @njit
-def cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1):
-    """Length [m] of cable i's free segment inside the effector box, its own attachment excepted.
+def effector_frame_hit(R, px, py, pz, cl, hits, m):
+    """HIT_EFFECTOR_FRAME where a corner of the effector box (rotation ``R``, origin (px, py, pz)
+    [m]; ``cl`` a :data:`Clearance`) is outside the frame box, else 0; with ``cl.full`` the pair
+    (effector m, frame m + 1) is set in ``hits``."""
+    Bp, half, rho, flo, fhi, dim, tol, full = cl
+    if not effector_outside(R, px, py, pz, half, flo, fhi, dim, tol):
+        return 0
+    if full:
+        hits[m, m + 1] = 1
+        hits[m + 1, m] = 1
+    return HIT_EFFECTOR_FRAME
 
-    ``Bp`` (m, 3) attachments in platform coordinates, ``cp`` (3,) the outlet
-    point in platform coordinates.  An attachment inside the box (or on its
-    surface within ``tol``) is first moved to the nearest face: the cable
-    leaves from the surface there, and collides when it then runs through
-    the box's interior (shrunk by ``tol``).  ``s0``, ``s1`` are scratch (3,).
-    """
+
+@njit
+def leaving_point(Bp, i, half, dim, tol, s0):
+    """Write into ``s0`` (3,) [m] where cable i leaves the effector box (half sizes ``half``), in
+    platform coordinates: its attachment ``Bp[i]``, or, for an attachment inside the box (or on its
+    surface within ``tol``), the nearest point of the nearest face."""
     inside = True
     best = np.inf
     bk = 0
@@ -153,9 +162,23 @@ def cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1):
             bk = ax
     for ax in range(3):
         s0[ax] = Bp[i, ax]
-        s1[ax] = cp[ax]
     if inside:
         s0[bk] = half[bk] if Bp[i, bk] >= 0.0 else -half[bk]
+
+
+@njit
+def cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1):
+    """Length [m] of cable i's free segment inside the effector box, its own attachment excepted.
+
+    ``Bp`` (m, 3) attachments in platform coordinates, ``cp`` (3,) the outlet
+    point in platform coordinates.  An attachment inside the box (or on its
+    surface within ``tol``) is first moved to the nearest face (:func:`leaving_point`): the cable
+    leaves from the surface there, and collides when it then runs through
+    the box's interior (shrunk by ``tol``).  ``s0``, ``s1`` are scratch (3,).
+    """
+    leaving_point(Bp, i, half, dim, tol, s0)
+    for ax in range(3):
+        s1[ax] = cp[ax]
     return segment_box_chord(s0, s1, half, dim, tol)
 
 
@@ -228,13 +251,9 @@ def interference_pose(S0, S1, R, px, py, pz, cl, scr):
     Bp, half, rho, flo, fhi, dim, tol, full = cl
     hits, s0, s1, cp = scr
     m = S0.shape[0]
-    mask = 0
-    if effector_outside(R, px, py, pz, half, flo, fhi, dim, tol):
-        mask |= HIT_EFFECTOR_FRAME
-        if not full:
-            return mask
-        hits[m, m + 1] = 1
-        hits[m + 1, m] = 1
+    mask = effector_frame_hit(R, px, py, pz, cl, hits, m)
+    if mask and not full:
+        return mask
     for i in range(m):
         # cable - frame: the attachment point (the free segment's end) outside the frame
         if point_outside(S0[i, 0], S0[i, 1], S0[i, 2], flo, fhi, dim, tol):

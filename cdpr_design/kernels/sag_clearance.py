@@ -45,14 +45,15 @@ import numpy as np
 
 from cdpr_design.kernels._jit import jitable, njit, njit_folded
 from cdpr_design.kernels.catenary import catenary_ends
-from cdpr_design.kernels.codes import (HIT_CABLE_CABLE, HIT_CABLE_EFFECTOR, HIT_CABLE_FRAME, HIT_EFFECTOR_FRAME,
+from cdpr_design.kernels.codes import (HIT_CABLE_CABLE, HIT_CABLE_EFFECTOR, HIT_CABLE_FRAME,
                                       HIT_UNKNOWN)
-from cdpr_design.kernels.interference import (Clearance, ClearanceScratch, clearance_scratch, effector_outside,
-                                              point_outside, seg_seg_dist2, segment_box_chord)
+from cdpr_design.kernels.interference import (Clearance, ClearanceScratch, clearance_scratch, effector_frame_hit,
+                                              leaving_point, point_outside, seg_seg_dist2,
+                                              segment_box_chord)
 from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.pose import RowBlock
 from cdpr_design.kernels.sag_shapes import CW_H, CW_L0, CW_VB
-from cdpr_design.kernels.sagging import SAG_OK, redundancy, sag_buffers, sag_pose
+from cdpr_design.kernels.sagging import SAG_OK, redundancy, sag_buffers, sag_pose, store_row
 
 #: The largest distance [m] allowed between a cable's polyline and its catenary (0.1 mm).
 CURVE_TOL = 1e-4
@@ -249,24 +250,10 @@ def curve_effector_chord(curves, i, Bp, R, px, py, pz, half, dim, tol, s0, s1):
     segment, in platform coordinates (``Bp`` (m, 3) attachments there [m], ``R``, (px, py, pz) the
     platform's rotation and origin).  ``s0``, ``s1`` are scratch (3,)."""
     pts, nseg = curves.pts, curves.nseg
-    inside = True
-    best = math.inf
-    bk = 0
-    for ax in range(dim):
-        dep = half[ax] - abs(Bp[i, ax])
-        if dep < -tol:
-            inside = False
-        if dep < best:
-            best = dep
-            bk = ax
+    leaving_point(Bp, i, half, dim, tol, s0)
     total = 0.0
     for k in range(nseg[i]):
-        if k == 0:
-            for r in range(3):
-                s0[r] = Bp[i, r]
-            if inside:
-                s0[bk] = half[bk] if Bp[i, bk] >= 0.0 else -half[bk]
-        else:
+        if k > 0:
             for r in range(3):
                 s0[r] = s1[r]
         dx, dy, dz = pts[i, k + 1, 0] - px, pts[i, k + 1, 1] - py, pts[i, k + 1, 2] - pz
@@ -286,13 +273,9 @@ def curves_interference(curves, R, px, py, pz, scl, scr):
     hits, s0, s1 = scr.hits, scr.s0, scr.s1
     pts, nseg, dip = curves.pts, curves.nseg, curves.dip
     m = nseg.shape[0]
-    mask = 0
-    if effector_outside(R, px, py, pz, half, flo, fhi, dim, tol):
-        mask |= HIT_EFFECTOR_FRAME
-        if not full:
-            return mask
-        hits[m, m + 1] = 1
-        hits[m + 1, m] = 1
+    mask = effector_frame_hit(R, px, py, pz, scl.cl, hits, m)
+    if mask and not full:
+        return mask
     for i in range(m):
         out = point_outside(pts[i, 0, 0], pts[i, 0, 1], pts[i, 0, 2], flo, fhi, dim, tol)
         if not math.isnan(dip[i, 0]):
@@ -366,16 +349,9 @@ def _rows_loop(k0, k1, P, Rb, R, robot, scl, out, redundant, po, sc, curves, csc
     for k in range(k0, k1):
         px, py, pz = P[k, 0], P[k, 1], P[k, 2]
         st, f, mg = sag_pose(px, py, pz, Rb, robot, po, sc, redundant)
-        out.status[k] = st
-        out.feasible[k] = 1 if f else 0
-        out.margin[k] = mg
+        store_row(out, k, st, f, mg, po, m)
+        ok = st == SAG_OK
         for i in range(m):
-            out.tensions[k, i] = po.t[i]
-            out.lengths[k, i] = po.lengths[i]
-            out.outlet[k, i] = po.outlet[i]
-            out.L0[k, i] = po.L0[i]
-            out.sag[k, i] = po.sag[i]
-            ok = st == SAG_OK
             shp[i, 0] = cw[i, CW_H] if ok else math.nan
             shp[i, 1] = cw[i, CW_VB] if ok else math.nan
             shp[i, 2] = cw[i, CW_L0] if ok else math.nan

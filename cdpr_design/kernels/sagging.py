@@ -191,15 +191,23 @@ def _grid_loop(k0, k1, start, grid, Rb, robot, out, redundant, po, sc):
         ix, iy, iz = grid_index(start + k, ny, nz)
         st, f, mg = sag_pose(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2],
                                 Rb, robot, po, sc, redundant)
-        out.status[k] = st
-        out.feasible[k] = 1 if f else 0
-        out.margin[k] = mg
-        for i in range(m):
-            out.tensions[k, i] = po.t[i]
-            out.lengths[k, i] = po.lengths[i]
-            out.outlet[k, i] = po.outlet[i]
-            out.L0[k, i] = po.L0[i]
-            out.sag[k, i] = po.sag[i]
+        store_row(out, k, st, f, mg, po, m)
+
+
+@njit
+def store_row(out, k, st, f, mg, po, m):
+    """Write row ``k`` of ``out`` (:data:`GridOutputs`, or the rows of the sagging interference checks):
+    the pose's status ``st``, feasibility ``f``, margin ``mg`` [N] and its :data:`PoseOutputs` ``po``
+    (tensions, lengths, outlet tensions, unstretched lengths, sag) of its ``m`` cables."""
+    out.status[k] = st
+    out.feasible[k] = 1 if f else 0
+    out.margin[k] = mg
+    for i in range(m):
+        out.tensions[k, i] = po.t[i]
+        out.lengths[k, i] = po.lengths[i]
+        out.outlet[k, i] = po.outlet[i]
+        out.L0[k, i] = po.L0[i]
+        out.sag[k, i] = po.sag[i]
 
 
 _GRID_BLOCK = RowBlock(_grid_loop, lambda start, grid, Rb, robot, *rest: _robot_dims(robot), buffers=sag_buffers)

@@ -39,7 +39,7 @@ from typing import Callable
 import numpy as np
 
 from cdpr_design.errors import InputError, SpecError
-from cdpr_design.model.design import Design, has_weight, is_underconstrained
+from cdpr_design.model.design import Design, has_weight, is_point_mass, is_underconstrained
 from cdpr_design.statics.pulley import has_pulleys
 from cdpr_design.statics import strategies as S
 from cdpr_design.statics.strategies import CableModel, Orientation, Outlets
@@ -154,6 +154,9 @@ class Facts:
     acceleration_box: bool = False
     #: why the acceleration capability is not computed (None: it is; :func:`acceleration_reason`)
     acceleration: str | None = None
+    #: why a hanging effector's statics under ``workspace.external_wrench`` are not computed (None:
+    #: they are, or nothing hangs; :func:`hanging_load_reason`)
+    hanging_load: str | None = None
 
 
 #: Why a combination is refused (:attr:`Refusal.cause`): the spec lacks data the analysis needs
@@ -200,9 +203,10 @@ def _free(f: Facts) -> bool:
 
 
 def _kind_cause(f: Facts, a: Analysis) -> str:
-    """A hanging effector under another kind than static: wrench closure asks the cables alone to
-    resist every wrench, which an effector whose orientation they leave free cannot (meaningless);
-    the hanging orientation under each external (or inertial) wrench is not computed (capability)."""
+    """A hanging effector under a kind other than static or wrench-feasible: wrench closure asks
+    the cables alone to resist every wrench, which an effector whose orientation they leave free
+    cannot (meaningless); the hanging orientation under each inertial wrench is not computed
+    (capability)."""
     return MEANINGLESS if a.kind == "wrench-closure" else CAPABILITY
 
 
@@ -231,9 +235,13 @@ REFUSALS: tuple[Refusal, ...] = (
     Refusal("--orientations", "this motion has a fixed orientation (orientation workspaces are for "
                               "1R2T and 3R3T)",
             lambda f, a: a.orientations is not None and not f.rotational, MEANINGLESS),
-    Refusal("--kind {a.kind}", "an under-constrained design with effector.orientation: free hangs under gravity alone "
-                      "(static only)",
-            lambda f, a: _free(f) and a.kind != "static" and "hanging-statics" in a.needs, _kind_cause),
+    Refusal("--kind {a.kind}", "an under-constrained design with effector.orientation: free hangs under gravity and "
+                               "the external wrenches (static or wrench-feasible)",
+            lambda f, a: _free(f) and a.kind not in ("static", "wrench-feasible") and "hanging-statics" in a.needs,
+            _kind_cause),
+    Refusal("workspace.external_wrench", "{f.hanging_load}",
+            lambda f, a: _free(f) and a.kind == "wrench-feasible" and f.hanging_load is not None
+            and "hanging-statics" in a.needs, CAPABILITY),
     Refusal("--max-tilt", "a tilt limit applies to an under-constrained design with effector.orientation: free "
                           "(this one's orientation is commanded or held)",
             lambda f, a: a.max_tilt is not None and not _free(f), MEANINGLESS),
@@ -444,7 +452,30 @@ def facts(design: Design, hold: bool = False) -> Facts:
     return Facts(cables, outlets, orientation, under, weight, design.motion.rotational,
                  design.m == 2 and design.n == 2, design.motion.name,
                  stiffness_reason(design, cables, outlets, orientation), bool(np.any(design.string_floor > 0)),
-                 design.requirements.acceleration is not None, acceleration_reason(cables, orientation))
+                 design.requirements.acceleration is not None, acceleration_reason(cables, orientation),
+                 hanging_load_reason(design, orientation))
+
+
+def hanging_load_reason(design: Design, orientation: Orientation) -> str | None:
+    """Why a hanging effector's statics under the vertices of ``workspace.external_wrench`` are not
+    computed, or None (they are: forces at the reference point; or the effector does not hang).
+    A moment is not: a constant moment about a tilting axis has no potential, so the hanging pose's
+    stability is not a minimum of energy, and a planar body's moment is refused with it (its
+    balance is not the closed form's).  Nor a force on a spatial point mass attached away from its
+    reference point (:func:`cdpr_design.statics.hanging.at_positions.unit_geometry`)."""
+    box = design.workspace.external_wrench
+    if not orientation.free or box is None:
+        return None
+    rows = np.asarray(design.rows)
+    moment = rows >= 3
+    if np.any(np.asarray(box.lower)[moment] != 0) or np.any(np.asarray(box.upper)[moment] != 0):
+        return ("a moment on a hanging effector (effector.orientation: free) is not modelled: give its moment "
+                "rows 0 (the forces act at the platform origin)")
+    A = np.asarray(design.attachments, float)
+    if not design.motion.planar and is_point_mass(A) and np.any(A[0]):
+        return ("a force on a spatial point-mass effector attached away from the platform origin is not modelled "
+                "(effector.orientation: free): attach it at the origin")
+    return None
 
 
 def acceleration_reason(cables: CableModel, orientation: Orientation) -> str | None:

@@ -56,3 +56,18 @@ def box_vertices(lower, upper) -> list[np.ndarray]:
     lo, hi = np.asarray(lower, float), np.asarray(upper, float)
     choices = [(lo[i],) if lo[i] == hi[i] else (lo[i], hi[i]) for i in range(lo.size)]
     return [np.asarray(v) for v in itertools.product(*choices)]
+
+
+def external_loads(design: Design) -> np.ndarray:
+    """The vertices of ``workspace.external_wrench`` as full wrenches (nv, 6) [N, N m] on the
+    effector: force at the reference point (the platform origin) and moment, each vertex's values
+    on the motion's wrench rows (``design.rows``), zeros on the others; (0, 6) without the box."""
+    box = design.workspace.external_wrench
+    if box is None:
+        return np.zeros((0, 6))
+    out = np.zeros((0, 6))
+    for v in box_vertices(box.lower, box.upper):
+        w = np.zeros(6)
+        w[np.asarray(design.rows)] = v
+        out = np.vstack([out, w])
+    return out

@@ -31,8 +31,9 @@ grid is never held in memory.
 
 from __future__ import annotations
 
+import copy
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -92,6 +93,14 @@ class Hanger:
         # on the kernels' threads where the sweep runs the kernels anyway (their thread setting
         # and pool are then there; a hanging effector's statics always do)
         self.threaded = robot.engine == "numba"
+
+    def loaded(self, force) -> Hanger:
+        """This hanger with a constant external force ``force`` (3,) [N] on the effector at its
+        reference point (:class:`~cdpr_design.statics.hanging.geometry.Geometry`)."""
+        out = copy.copy(self)
+        g = self.geo
+        out.geo = Geometry(g.A, g.B, g.c, g.mass, g.g, force)
+        return out
 
     def __call__(self, P3):
         if self.threaded:
@@ -231,6 +240,16 @@ class FreeRows:
     collisions: np.ndarray | None = None
     cables: SaggingCables | None = None
     cable_status: np.ndarray | None = None
+    #: under a ``wrench-feasible`` analysis, the :class:`FreeRows` of gravity alone, then of each
+    #: vertex of the external wrench (gravity plus the vertex, at the orientation it hangs in then;
+    #: :func:`free_rows`); empty otherwise
+    vertices: list = field(default_factory=list)
+
+    @property
+    def judged_tilt(self) -> np.ndarray:
+        """The tilt [deg] the tilt limit judges: the largest over the external wrench's vertices
+        (``tilt_loaded``) where they are judged, else the hanging ``tilt``."""
+        return self.extra.get("tilt_loaded", self.extra["tilt"])
 
 
 def hanging_dofs(geo: Geometry, planar: bool) -> tuple[int, ...]:
@@ -254,7 +273,46 @@ def free_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
     robot's tension bounds (its per-pose floor included) and tilt limit.  On elastic cables a
     hanging pose must also be stable with the cables' stretch (:func:`pose_stiffness`): one that
     is not is reported unable to hang there (``UNSTABLE``), never as a result.  With the
-    analysis's ``collisions``, a pose that interferes is infeasible and its tensions empty."""
+    analysis's ``collisions``, a pose that interferes is infeasible and its tensions empty.
+
+    Under ``wrench-feasible`` the effector is also hung under gravity plus each vertex of
+    ``workspace.external_wrench`` (a force at its reference point;
+    :func:`~cdpr_design.statics.wrenches.external_loads`), each at the orientation it then hangs
+    in: a row is feasible when it is feasible under every vertex (the tilt limit and the
+    interference checks at each vertex's orientation), its margin the least of the vertices'; its
+    orientation, tilt, tensions, lengths, cables and stiffness are those of gravity alone (the
+    nominal wrench's, as a straight-cable ``wrench-feasible`` row reports), and the column
+    ``tilt_loaded`` [deg] is the largest tilt over the vertices.  The vertices are tested, not
+    the box between them: the orientation moves nonlinearly with the load.
+    """
+    from cdpr_design.statics.wrenches import external_loads
+
+    r = _load_rows(robot, P, hanger)
+    if not robot.every_vertex:
+        return r
+    loaded = [_load_rows(robot, P, hanger.loaded(v[:3])) for v in external_loads(robot.design)]
+    return _with_loads([r] + loaded)
+
+
+def _with_loads(rows: list[FreeRows]) -> FreeRows:
+    """The rows of gravity alone, ``rows[0]``, judged under every vertex's rows ``rows[1:]`` too
+    (:func:`free_rows`)."""
+    r = rows[0]
+    feasible = np.logical_and.reduce([x.feasible.astype(bool) for x in rows])
+    M = np.stack([x.margin for x in rows])
+    with np.errstate(invalid="ignore"):
+        least = np.fmin.reduce(M, axis=0)
+        negative = np.fmin.reduce(np.where(M < 0, M, np.nan), axis=0)
+    extra = dict(r.extra, tilt_loaded=np.max(np.stack([x.extra["tilt"] for x in rows]), axis=0))
+    hits = None if r.collisions is None else np.bitwise_or.reduce(np.stack([x.collisions for x in rows]), axis=0)
+    status = None if r.cable_status is None else np.max(np.stack([x.cable_status for x in rows]), axis=0)
+    return FreeRows(r.hanging, extra, feasible.astype(np.uint8), np.where(feasible, least, negative),
+                    np.where(feasible[:, None], r.tensions, np.nan), r.lengths,
+                    np.logical_and.reduce([x.within for x in rows]), r.stiffness, hits, r.cables, status, rows)
+
+
+def _load_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
+    """:func:`free_rows` under the loads of ``hanger``'s effector (its weight and external force) alone."""
     from cdpr_design.kernels import hanging as K  # numba, on first use
     from cdpr_design.kernels.pose import Outputs, Statics
 
@@ -273,9 +331,7 @@ def free_rows(robot: Robot, P, hanger: Hanger) -> FreeRows:
             extra = tilt_columns(design, h)
         h.hessian_min[h.feasible] = stiff.hessian_min[h.feasible]
     R = np.ascontiguousarray(h.rotation)
-    f = design.effector.mass * np.asarray(design.gravity, float)
-    wg = np.concatenate([np.broadcast_to(f, (k, 3)), np.cross(R @ design.effector.center_of_mass, f)], axis=1)
-    wreq = np.ascontiguousarray(-wg[:, design.rows][:, None, :])
+    wreq = np.ascontiguousarray(-hanger.geo.loads_many(R)[:, design.rows][:, None, :])
     feas, marg = np.empty(k, np.uint8), np.empty(k)
     ten, L = np.empty((k, m)), np.empty((k, m))
     K.eval_rotated(np.ascontiguousarray(P, dtype=float), R, robot.attachments,
@@ -377,7 +433,8 @@ class FreeSweep(Base):
         self.hanger = Hanger(robot, ori)
         a = robot.analysis
         self.sagging = not robot.cables.straight
-        self.columns = tuple(columns(robot.design)) + (("collision_free",) if a.collisions else ()) \
+        self.columns = tuple(columns(robot.design)) + (("tilt_loaded",) if robot.every_vertex else ()) \
+            + (("collision_free",) if a.collisions else ()) \
             + (self.STIFFNESS if a.stiffness else ()) \
             + (tuple(robot.cables.state_columns(robot.design.cable_names)) if self.sagging else ())
         self.outlet_peak = np.full(robot.design.m, -np.inf)
@@ -394,7 +451,7 @@ class FreeSweep(Base):
         r = free_rows(self.robot, P, self.hanger)
         limit = self.robot.tilt_limit
         if limit is not None:
-            self.tally.limited += int(np.count_nonzero(r.within & ~within_tilt(r.extra["tilt"], limit)))
+            self.tally.limited += int(np.count_nonzero(r.within & ~within_tilt(r.judged_tilt, limit)))
         self.tally.add(r.extra["tilt"], r.feasible)
         poses = chunk_poses(design, P, self.ori)
         if design.motion.rotational:  # the orientation columns hold the hanging orientation
@@ -435,7 +492,7 @@ class FreeSweep(Base):
         from cdpr_design.statics.interference import HIT_NAMES
 
         upright = r.within if self.robot.tilt_limit is None else \
-            r.within & within_tilt(r.extra["tilt"], self.robot.tilt_limit)
+            r.within & within_tilt(r.judged_tilt, self.robot.tilt_limit)
         self.n_stat += int(np.count_nonzero(upright))
         self.n_free += int(np.count_nonzero(r.collisions == 0))
         for bit, name in HIT_NAMES.items():

@@ -54,6 +54,7 @@ import math
 
 import numpy as np
 
+from cdpr_design.errors import InputError
 from cdpr_design.model.design import is_point_mass, is_underconstrained
 from cdpr_design.statics.hanging import geometry as hg
 from cdpr_design.statics.hanging import planar2
@@ -108,10 +109,14 @@ def hanging_orientations(geo: hg.Geometry, P, planar: bool, *, nominal=None,
     # weight, its tolerances in N; its answers agree over masses to about 1e-9 deg (the tests).
     point = is_point_mass(geo.B)
     if point or (planar and geo.m == 2):
-        w = geo.weight
-        unit = hg.Geometry(geo.A, geo.B, geo.c, 1.0, -up)
-        out = (_hang_point(unit, P3, planar, nominal, alternatives) if point
-               else _hang_planar2(unit, P3, alternatives))
+        unit, w = unit_geometry(geo, planar, point)
+        if unit is None:  # the external force cancels the weight: nothing pulls it anywhere
+            k = len(P3)
+            out = (np.full((k, 3, 3), np.nan), np.full((k, geo.m), np.nan), np.full(k, NO_BALANCE, np.int8),
+                   np.full(k, np.nan), [[] for _ in range(k)] if alternatives else [])
+        else:
+            out = (_hang_point(unit, P3, planar, nominal, alternatives) if point
+                   else _hang_planar2(unit, P3, alternatives))
     else:
         w = 1.0
         out = _hang_general(geo, P3, planar, nominal, alternatives)
@@ -120,6 +125,41 @@ def hanging_orientations(geo: hg.Geometry, P, planar: bool, *, nominal=None,
     R[bad], t[bad], hmin[bad] = np.nan, np.nan, np.nan
     alts = [[(Ra, ta * w, st) for Ra, ta, st in per] for per in alts]
     return HangingOrientations(R, t * w, status, hmin * w, planar, up, alts)
+
+
+def unit_geometry(geo: hg.Geometry, planar: bool, point: bool) -> tuple[hg.Geometry | None, float]:
+    """The closed forms' effector of unit weight and the weight W [N] that scales its tensions and
+    reduced Hessian back: the same body (mass 1, |g| = 1) where no external force acts.
+
+    Under an external force F at the platform origin a planar body's loads, m g at R c and F at
+    the origin, have the potential -(m g + F) . p - m g . R c, which equals -T . (p + R q) for
+    every rotation about z with T = m g + F and, as complex numbers in the plane,
+    q = conj(m g) c / conj(T): the body hangs as one of weight |T| along T with its centre of mass
+    at q, exactly (balance, energy and Hessian alike).  A spatial point mass attached at the
+    platform origin turns its centre of mass below the attachment whatever force acts there: its
+    weight stays, the force is added to the balance.  (None, W) where T = 0 in the plane.
+
+    Raises
+    ------
+    InputError
+        For a spatial point mass attached away from the platform origin under an external force
+        (its rotation is then not a closed form).
+    """
+    up = -geo.g / np.linalg.norm(geo.g)
+    F = geo.force
+    if not np.any(F):
+        return hg.Geometry(geo.A, geo.B, geo.c, 1.0, -up), geo.weight
+    if not planar:
+        if point and np.any(geo.B[0]):
+            raise InputError("an external force on a spatial point mass attached away from the platform origin "
+                             "is not modelled")
+        return hg.Geometry(geo.A, geo.B, geo.c, 1.0, -up, F / geo.weight), geo.weight
+    G = complex(*(geo.mass * geo.g[:2]))
+    T = G + complex(*F[:2])
+    if abs(T) <= 1e-12 * max(geo.weight, float(np.linalg.norm(F))):
+        return None, geo.weight
+    q = G.conjugate() * complex(*geo.c[:2]) / T.conjugate()
+    return hg.Geometry(geo.A, geo.B, (q.real, q.imag, 0.0), 1.0, (T.real / abs(T), T.imag / abs(T), 0.0)), abs(T)
 
 
 def _statuses(found, pull, balanced):

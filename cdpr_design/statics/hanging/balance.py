@@ -39,14 +39,12 @@ class Balance:
 
     def wrenches(self, P, R):
         """At N configurations (P (N, 3) [m], R (N, 3, 3)): the cables' unit wrenches W (N, 6, m)
-        [1, m], the weight's wrench (N, 6) [N, N m], and the cables' R b (N, m, 3) [m], lengths
+        [1, m], the weight's and external force's wrench (N, 6) [N, N m], and the cables' R b (N, m, 3) [m], lengths
         L (N, m) [m] and directions u (N, m, 3)."""
         geo = self.geo
         Rb, _, L, u = geo.cables_many(P, R)
         W = np.concatenate([u, _cross(Rb, u)], axis=2).transpose(0, 2, 1)
-        f = geo.mass * geo.g
-        wg = np.concatenate([np.broadcast_to(f, (len(P), 3)), _cross(R @ geo.c, f)], axis=1)
-        return W, wg, Rb, L, u
+        return W, geo.loads_many(R), Rb, L, u
 
     def residual(self, P, R, t):
         W, wg, *_ = self.wrenches(P, R)
@@ -146,5 +144,5 @@ def newton_many(geo: hg.Geometry, P, planar: bool, R0, starts, iterations: int =
 
 
 def on_cables(geo: hg.Geometry, S) -> hg.Geometry:
-    """The effector on the cables S (indices) only."""
-    return hg.Geometry(geo.A[list(S)], geo.B[list(S)], geo.c, geo.mass, geo.g)
+    """The effector, with its loads, on the cables S (indices) only (:meth:`Geometry.on_cables`)."""
+    return geo.on_cables(S)

@@ -245,14 +245,21 @@ def lowest_points(C, rho, down, tol):
 # ----------------------------------------------------------------------------
 
 class Geometry:
-    """One effector and its cables (plain arrays, 3-D form; see the module doc)."""
+    """One effector and its cables (plain arrays, 3-D form; see the module doc).
 
-    def __init__(self, A, B, c, mass, g):
+    ``force`` (3,) [N]: a constant external force on the effector at its reference point (the
+    platform origin), besides its weight (default none).  Its potential -F . p is linear in the
+    position and does not depend on the rotation, so it enters the balance and the energy and
+    leaves every Hessian as it is.
+    """
+
+    def __init__(self, A, B, c, mass, g, force=None):
         self.A = np.ascontiguousarray(A, dtype=float)
         self.B = np.ascontiguousarray(B, dtype=float)
         self.c = np.asarray(c, float).reshape(3)
         self.mass = float(mass)
         self.g = np.asarray(g, float).reshape(3)
+        self.force = np.zeros(3) if force is None else np.asarray(force, float).reshape(3)
         self.m = self.A.shape[0]
         self.weight = self.mass * float(np.linalg.norm(self.g))
         size = max(float(np.max(np.linalg.norm(self.B - self.B.mean(0), axis=1), initial=0.0)),
@@ -260,22 +267,35 @@ class Geometry:
         self.size = size  # a length scale of the effector [m]
 
     def energy(self, p, R) -> float:
-        """U = -m g . (p + R c) [J]."""
-        return float(-self.mass * self.g @ (p + R @ self.c))
+        """U = -m g . (p + R c) - F . p [J] (F the external :attr:`force`)."""
+        return float(-self.mass * self.g @ (p + R @ self.c) - self.force @ p)
+
+    def loads_many(self, R) -> np.ndarray:
+        """The wrench (k, 6) [N, N m] of the weight and the external :attr:`force` on the effector
+        at rotations ``R`` (k, 3, 3): force m g + F, moment (R c) x m g about the platform origin."""
+        R = np.asarray(R, float).reshape(-1, 3, 3)
+        f = self.mass * self.g
+        out = np.empty((len(R), 6))
+        out[:, :3] = f + self.force
+        out[:, 3:] = np.cross(R @ self.c, f)
+        return out
+
+    def on_cables(self, S) -> Geometry:
+        """This effector, with its loads, on the cables ``S`` (indices) only."""
+        return Geometry(self.A[list(S)], self.B[list(S)], self.c, self.mass, self.g, self.force)
 
     def cables(self, p, R):
         """(Rb (m, 3), l (m, 3), L (m,), u (m, 3)) at a configuration."""
         return tuple(x[0] for x in self.cables_many(np.reshape(p, (1, 3)), np.reshape(R, (1, 3, 3))))
 
     def wrenches(self, p, R):
-        """Cable wrenches (6, m) [u_i; R b_i x u_i] and the weight's (6,) [N, N m]."""
+        """Cable wrenches (6, m) [u_i; R b_i x u_i] and the loads' (6,) [N, N m] (:meth:`loads_many`)."""
         Rb, _, _, u = self.cables(p, R)
         W = np.vstack([u.T, np.cross(Rb, u).T])
-        f = self.mass * self.g
-        return W, np.concatenate([f, np.cross(R @ self.c, f)])
+        return W, self.loads_many(R)[0]
 
     def balance(self, p, R, t) -> np.ndarray:
-        """W t + w_gravity (6,): force [N] and moment about the origin [N m]."""
+        """W t + w_loads (6,): force [N] and moment about the origin [N m]."""
         W, wg = self.wrenches(p, R)
         return W @ t + wg
 

@@ -21,8 +21,8 @@ make on a straight cable, per weight).  The ideal answer is the least tilted mem
 family; the sagging one is that member moved by the cables' weight, the tilt to first order in
 the cables' weight over the tensions (to second where the ideal one is inside its family).
 
-Stability and stiffness at fixed unstretched lengths: K = -dw/dx by central differences of the
-wrench on the effector (steps of 1e-6 m and 1e-6 rad; every cable solved again), then the
+Stability and stiffness at fixed unstretched lengths: K = -dw/dx from each cable's analytic
+tangent stiffness (the stiffness kernel's elastic catenary, :func:`sagging_stiffness`), then the
 compliance and figures of :func:`~cdpr_design.statics.hanging.compliance.stiffness_of`.
 
 A position where the ideal cables do not hang, where a catenary has no solution or the Newton
@@ -47,8 +47,6 @@ from cdpr_design.statics.hanging.results import NO_BALANCE, OK, UNSTABLE, Hangin
 #: family's member nearest the start converge linearly where it is far: crane4 takes up to about 100).
 TOL = 1e-9
 MAXIT = 200
-#: Central-difference step of the stiffness [m, rad].
-STEP = 1e-6
 
 
 @dataclass
@@ -99,9 +97,7 @@ def _wrench(geo, P, R, L0, w, EA, up, guess=None):
     """The wrench on the effector (k, 6) [N, N m] (moments about the platform origin), the forces
     (H, VB) and whether every catenary was solved."""
     H, VB, ok, F, Rb = _forces(geo, P, R, L0, w, EA, up, guess)
-    f = geo.mass * geo.g
-    Rc = np.einsum("kij,j->ki", R, geo.c)
-    out = np.concatenate([F.sum(1) + f, np.cross(Rb, F).sum(1) + np.cross(Rc, f)], axis=1)
+    out = np.concatenate([F.sum(1), np.cross(Rb, F).sum(1)], axis=1) + geo.loads_many(R)
     return out, H, VB, ok
 
 
@@ -226,30 +222,31 @@ def _sag(geo, P, R, L0, H, VB, w, EA, up):
 def sagging_stiffness(geo: hg.Geometry, P, planar: bool, h: HangingOrientations, cables: SaggingCables, w, EA,
                       dofs, inertia=None) -> HangingStiffness:
     """The stiffness of the hanging poses ``h`` on sagging cables at their unstretched lengths
-    (module doc): K by central differences of the wrench, then
-    :func:`~cdpr_design.statics.hanging.compliance.stiffness_of` (no rigid constraints)."""
+    (module doc): K = -dw/dx of each pose by the stiffness kernel's analytic elastic catenary
+    (:func:`cdpr_design.kernels.stiffness.pose_matrices`: each cable's tangent stiffness, the inverse
+    of Irvine's flexibility in its vertical plane, H / X across it, assembled with the geometric and
+    weight terms at the pose's rotation), over ``dofs``, then
+    :func:`~cdpr_design.statics.hanging.compliance.stiffness_of` (no rigid constraints).  A pose
+    whose catenaries do not converge there is not stable (NaN)."""
+    from cdpr_design.kernels.stiffness import Arrays, pose_matrices
+
     P = np.asarray(P, float).reshape(-1, 3)
-    k = len(P)
-    d = len(dofs)
+    k, d = len(P), len(dofs)
     up = -geo.g / np.linalg.norm(geo.g)
     K = np.full((k, d, d), np.nan)
     ok = h.status == OK
-    rows = np.flatnonzero(ok)
-    if rows.size:
-        Pr, Rr, L0 = P[rows], h.rotation[rows], cables.unstretched[rows]
-        guess = (cables.H[rows], cables.VB[rows])
-        for a, j in enumerate(dofs):
-            wr = []
-            for sgn in (1.0, -1.0):
-                dp = np.zeros((rows.size, 3))
-                v = np.zeros((rows.size, 3))
-                if j < 3:
-                    dp[:, j] = sgn * STEP
-                else:
-                    v[:, j - 3] = sgn * STEP
-                wr.append(_wrench(geo, Pr + dp, hg.rotvec(v) @ Rr, L0, w, EA, up, guess)[0][:, list(dofs)])
-            K[rows, :, a] = -(wr[0] - wr[1]) / (2 * STEP)
-    K = 0.5 * (K + K.transpose(0, 2, 1))
+    c64 = np.ascontiguousarray
+    K6, M6 = np.empty((6, 6)), np.empty((6, 6))
+    sel, f = np.arange(6, dtype=np.int64), geo.mass * geo.g
+    fixed = dict(A=geo.A, EA=c64(EA, dtype=float), Linv=np.eye(6), sel=sel, d=3, w=c64(w, dtype=float),
+                 up=c64(up), M0=np.zeros((6, 6)), lump=np.zeros(geo.m))
+    for r in np.flatnonzero(ok):
+        R = h.rotation[r]
+        ar = Arrays(Rb=c64(geo.B @ R.T), Kg=c64(-hg.skew(f) @ hg.skew(R @ geo.c)), **fixed)
+        if pose_matrices(P[r, 0], P[r, 1], P[r, 2], c64(cables.tensions[r]), c64(cables.unstretched[r]), ar, K6, M6):
+            K[r] = 0.5 * (K6 + K6.T)[np.ix_(dofs, dofs)]
+        else:
+            ok[r] = False
     G = np.zeros((k, 0, d))
     return stiffness_of(geo, K, G, ok, dofs, h.rotation, inertia)
 
