@@ -266,7 +266,7 @@ def test_max_tilt_makes_larger_tilts_infeasible(free_rows, tmp_path):
     # to 0" or "is not in the range 0<=x<=180")
     (["--max-tilt", "-1"], r"'--max-tilt'.*(greater than or equal to 0\b|\b0<=x)"),
     (["--max-tilt", "200"], r"'--max-tilt'.*(less than or equal to 180|x<=180)"),
-    (["--kind", "wrench-feasible"], "--kind wrench-feasible"),
+    (["--kind", "wrench-closure"], "--kind wrench-closure"),
     (["--orientations", "total"], "--orientations: an under-constrained design with effector.orientation: free"),
 ])
 def test_free_workspace_bad_options_exit_2(tmp_path, args, message):

@@ -202,8 +202,13 @@ def forward(robot: Robot, unstretched, guess=None) -> CableFK:
             nxt = taut & ~((arr.w == 0) & (chord < L0))
         if nxt.tobytes() in tried:
             break
-        H0[nxt & ~taut] = 1e-3 * X[nxt & ~taut] / np.maximum(chord[nxt & ~taut], 1e-300)
-        V0[nxt & ~taut] = 1e-3 * Z[nxt & ~taut] / np.maximum(chord[nxt & ~taut], 1e-300)
+        new = nxt & ~taut
+        # a cable that joins starts at the tension its stretch there gives (a small one where it is
+        # not stretched): from 1e-3 N a just taut stiff cable's balance stalled off its root
+        with np.errstate(invalid="ignore"):
+            t_new = np.maximum(np.nan_to_num(arr.EA * (chord - L0) / L0, posinf=1e-3), 1e-3)
+        H0[new] = (t_new * X / np.maximum(chord, 1e-300))[new]
+        V0[new] = (t_new * Z / np.maximum(chord, 1e-300))[new]
         taut = nxt
     return _result(design, sol.fun, p0, H0[taut], V0[taut], L0, arr, taut, wscale, unk)
 

@@ -79,14 +79,10 @@ def mass_matrix(design: Design, R) -> np.ndarray:
     [[m I, -m [R c]x], [m [R c]x, R I_c R^T - m [R c]x [R c]x]] (inertia about the centre of
     mass moved to p by the parallel-axis rule).
     """
+    from cdpr_design.statics.hanging.compliance import mass_matrix_many
+
     eff = design.effector
-    m = float(eff.mass)
-    c = skew(R @ np.asarray(eff.center_of_mass, float))
-    M = np.zeros((6, 6))
-    M[:3, :3] = m * np.eye(3)
-    M[:3, 3:] = -m * c
-    M[3:, :3] = m * c
-    M[3:, 3:] = R @ eff.inertia_matrix @ R.T - m * c @ c
+    M = mass_matrix_many(float(eff.mass), eff.center_of_mass, eff.inertia_matrix, R, range(6))[0]
     return 0.5 * (M + M.T)
 
 

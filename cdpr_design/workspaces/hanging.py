@@ -429,7 +429,7 @@ class FreeSweep(Base):
     STIFFNESS = ("min_stiffness", "lowest_frequency", "min_rotational_stiffness")
 
     def __init__(self, robot: Robot, ori, g):
-        self.robot, self.ori, self.kind = robot, ori, "static"
+        self.robot, self.ori, self.kind = robot, ori, robot.kind
         self.hanger = Hanger(robot, ori)
         a = robot.analysis
         self.sagging = not robot.cables.straight
