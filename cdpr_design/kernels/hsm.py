@@ -212,10 +212,11 @@ def basis_factor(W, tab, slot, nbc, bcol):
             tab[i, m + j] = 1.0 if i == j else 0.0
     for j in range(m):
         slot[j] = -1
-    # one return, at the end: numba then counts no reference to the arrays (an early return kept
-    # a count per array per call)
+    # one return, at the end, and loops with one exit each: numba then counts no reference to the
+    # arrays (an early return or a ``break`` kept a count per array per call)
     ok = scale != 0.0 and m >= n
-    for c in range(n if ok else 0):
+    c = 0
+    while ok and c < n:
         best = -1.0
         pr = -1
         pc = -1
@@ -225,9 +226,9 @@ def basis_factor(W, tab, slot, nbc, bcol):
                     best = abs(tab[i, j])
                     pr = i
                     pc = j
-        if best <= RANK_TOL * scale:
-            ok = False
-            break
+        ok = best > RANK_TOL * scale
+        if not ok:
+            continue
         if pr != c:
             for j in range(m + n):
                 tmp = tab[c, j]
@@ -246,6 +247,7 @@ def basis_factor(W, tab, slot, nbc, bcol):
                     for j in range(m + n):
                         tab[i, j] -= f * tab[c, j]
                     tab[i, pc] = 0.0
+        c += 1
     k = 0
     for j in range(m if ok else 0):
         if slot[j] < 0:

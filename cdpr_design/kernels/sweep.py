@@ -90,12 +90,14 @@ class _GridBlock(PoseBlock):
 @njit_folded
 def _grid_position(k, src):
     """(x, y, z) [m] of row ``k``: ``src.P[k]`` where ``src.P`` has rows, else grid index ``src.start + k``."""
-    P = src.P
-    if P.shape[0] > 0:
-        return P[k, 0], P[k, 1], P[k, 2]
-    shape, lower, step = src.shape, src.lower, src.step
-    ix, iy, iz = grid_index(src.start + k, shape[1], shape[2])
-    return lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2]
+    # the bundle's arrays read where they are used, none bound to a name in one branch only, one
+    # return: every array's last use is then on the one path out, and numba counts no reference per pose
+    if src.P.shape[0] > 0:
+        x, y, z = src.P[k, 0], src.P[k, 1], src.P[k, 2]
+    else:
+        ix, iy, iz = grid_index(src.start + k, src.shape[1], src.shape[2])
+        x, y, z = src.lower[0] + ix * src.step[0], src.lower[1] + iy * src.step[1], src.lower[2] + iz * src.step[2]
+    return x, y, z
 
 
 @njit_folded
@@ -124,9 +126,8 @@ def _place_grid(k, src, st, W, L, lo, w, out):
     cable of zero length."""
     x, y, z = _grid_position(k, src)
     ok = structure_matrix(x, y, z, src.Rb, st.A, st.rows, W, L)
-    lengths = out.lengths
     for i in range(L.shape[0]):
-        lengths[k, i] = L[i]
+        out.lengths[k, i] = L[i]
     raise_floor(st.tmin, st.floor, L, lo)
     return ROW_POSE if ok else ROW_EMPTY
 

@@ -167,18 +167,22 @@ def line_projection(m, tmin, tmax, t, N, tp, H):
 def _half_plane(N, tp, tmin, tmax, m, c):
     """Bound ``c`` (c < m: t_c >= t_min; else t_(c-m) <= t_max) as g . z <= h: (g0, g1, h)."""
     if c < m:
-        return -N[c, 0], -N[c, 1], tp[c] - tmin[c]
-    j = c - m
-    return N[j, 0], N[j, 1], tmax[j] - tp[j]
+        g0, g1, h = -N[c, 0], -N[c, 1], tp[c] - tmin[c]
+    else:
+        j = c - m
+        g0, g1, h = N[j, 0], N[j, 1], tmax[j] - tp[j]
+    return g0, g1, h
 
 
 @njit_folded
 def _inside(H, k, z0, z1, tol):
     """Whether z meets the first ``k`` half-planes ``H`` (rows g0, g1, h) to ``tol``."""
-    for a in range(k):
-        if H[a, 0] * z0 + H[a, 1] * z1 - H[a, 2] > tol:
-            return False
-    return True
+    inside = True
+    a = 0
+    while inside and a < k:
+        inside = not H[a, 0] * z0 + H[a, 1] * z1 - H[a, 2] > tol
+        a += 1
+    return inside
 
 
 @njit
@@ -257,8 +261,11 @@ def plane_projection(m, tmin, tmax, t, N, tp, H):
         if new0 < 0:  # the half-planes have no common point: neither has the polygon
             break
         z0, z1, act0, act1 = z0n, z1n, new0, new1
-    # no bound violated (p < 0): t at z; else none exist (as in :func:`line_projection`)
-    return _finish(m, 2, tmin, tmax, t, N, tp, z0, z1, p < 0)
+    # no bound violated (p < 0): t at z; else none exist (as in :func:`line_projection`).  ``H`` read
+    # last (it always has rows), so that every array's last use is in the one exit block: numba then
+    # counts no reference to them per call
+    ok = _finish(m, 2, tmin, tmax, t, N, tp, z0, z1, p < 0)
+    return ok & (H.shape[0] > 0)
 
 
 @njit
