@@ -26,7 +26,7 @@ from collections import namedtuple
 import numpy as np
 
 from cdpr_design.kernels._jit import jitable, njit, njit_inline
-from cdpr_design.kernels.hsm import basis_factor, null_vector
+from cdpr_design.kernels.hsm import basis_factor, facet_norm2, null_vector, slot_dot
 from cdpr_design.kernels.linalg import RANK_TOL, gram_of_inverse, orthogonalize_column
 from cdpr_design.kernels.parallel import run_blocks
 
@@ -34,7 +34,7 @@ from cdpr_design.kernels.parallel import run_blocks
 @njit
 def facet_normal(W, subset, Q, c):
     """Unit normal ``c`` (n,) of the hyperplane spanned by the columns ``subset`` (n-1,) of ``W``
-    (n, m), by Gram-Schmidt (twice) into ``Q`` (n, n-1); returns False when those columns have
+    (n, m), by Gram-Schmidt (twice) in ``Q`` (n, n) work; returns False when those columns have
     rank < n - 1 (no facet)."""
     n = W.shape[0]
     k1 = n - 1
@@ -60,21 +60,11 @@ def facet_normal(W, subset, Q, c):
             s -= Q[r, j] * Q[r, j]
         if s > best:
             best, best_r = s, r
+    for i in range(n):  # orthogonalised in Q's last column
+        Q[i, k1] = 1.0 if i == best_r else 0.0
+    norm = orthogonalize_column(Q, k1, n)
     for i in range(n):
-        c[i] = 1.0 if i == best_r else 0.0
-    for _ in range(2):
-        for j in range(k1):
-            d = 0.0
-            for i in range(n):
-                d += Q[i, j] * c[i]
-            for i in range(n):
-                c[i] -= d * Q[i, j]
-    norm = 0.0
-    for i in range(n):
-        norm += c[i] * c[i]
-    norm = math.sqrt(norm)
-    for i in range(n):
-        c[i] /= norm
+        c[i] = Q[i, k1] / norm
     return True
 
 
@@ -101,7 +91,7 @@ def facets_many(W, lo, hi, combos, normals, bp, bm):
     ``bm`` (k, F) [N] (:func:`facet_bounds`), and zeros for a subset of rank < n - 1 (no facet) or a
     pose whose W is not finite, so that 0 <= 0 stands for it."""
     k, n, m = W.shape
-    Q = np.empty((n, max(n - 1, 1)))
+    Q = np.empty((n, n))
     c = np.empty(n)
     for p in range(k):
         finite = True
@@ -195,7 +185,7 @@ def pose_capability(W, lo, hi, wnom, elo, ehi, Mt, combos, Q, c, axes, worst):
     ``W`` (n, m) structure matrix, ``lo``, ``hi`` (m,) tension bounds [N], ``wnom`` (n,) the
     wrench the cables supply at rest without external load (-w_g) [N, N m], ``elo``, ``ehi`` (n,)
     the external wrench box [N, N m] (zeros: none), ``Mt`` (n, d) the mass matrix's translational
-    columns [kg, kg m], ``combos`` the (C(m, n-1), n-1) cable subsets, ``Q`` (n, n-1) and ``c``
+    columns [kg, kg m], ``combos`` the (C(m, n-1), n-1) cable subsets, ``Q`` (n, n) and ``c``
     (n,) work.  Fills ``axes`` (d, 2): the least and greatest acceleration [m/s^2] along each axis
     (-inf / inf where unbounded, NaN both where no acceleration along it is reachable), and
     ``worst`` (d,): the unit direction in which the radius is reached (NaN where unbounded).
@@ -259,7 +249,7 @@ def pose_capability(W, lo, hi, wnom, elo, ehi, Mt, combos, Q, c, axes, worst):
 #: (:func:`~cdpr_design.kernels.hsm.basis_factor`), its ``slot`` (m,), ``nbc`` (max(m - n, 1),) and
 #: ``bcol`` (n,) int64, ``M`` = G G^T (n, n), ``Gw`` = G w_nom (n,), ``GM`` = G M_t (n, d), the
 #: null-vector system ``A`` and ``minor`` (n, n) and ``mu`` (n + 1,), ``h`` (d,), and ``Q``
-#: (n, n - 1), ``c`` (n,) of :func:`pose_capability` (``c`` also a facet's normal G^T mu).
+#: (n, n), ``c`` (n,) of :func:`pose_capability` (``c`` also a facet's normal G^T mu).
 Work = namedtuple("Work", "tab slot nbc bcol M Gw GM A minor mu h Q c")
 #: The facets of the factored W as positions, the same for every pose (:func:`facet_slots`): facet f
 #: holds ``k[f]`` non-basic columns, at positions ``K[f, :k[f]]`` of the non-basic list, and frees
@@ -290,7 +280,7 @@ def make_work(n, m, d):
     r = max(m - n, 1)
     return Work(np.empty((n, m + n)), np.empty(m, dtype=np.int64), np.empty(r, dtype=np.int64),
                 np.empty(n, dtype=np.int64), np.empty((n, n)), np.empty(n), np.empty((n, d)), np.empty((n, n)),
-                np.empty((n, n)), np.empty(n + 1), np.empty(d), np.empty((n, max(n - 1, 1))), np.empty(n))
+                np.empty((n, n)), np.empty(n + 1), np.empty(d), np.empty((n, n)), np.empty(n))
 
 
 @njit
@@ -349,12 +339,7 @@ def pose_capability_factored(W, lo, hi, wnom, elo, ehi, Mt, combos, slots, axes,
                 A[e, g] = tab[Fr[g], col]
         if not null_vector(A, kk, mu, minor):
             continue
-        nrm2 = 0.0
-        for g in range(nf):
-            acc = 0.0
-            for q in range(nf):
-                acc += mu[q] * M[Fr[g], Fr[q]]
-            nrm2 += mu[g] * acc
+        nrm2 = facet_norm2(mu, M, Fr, nf)
         if not nrm2 > 0.0:
             continue
         bp = 0.0
@@ -369,9 +354,7 @@ def pose_capability_factored(W, lo, hi, wnom, elo, ehi, Mt, combos, slots, axes,
                 e += 1
                 continue
             j = nbc[q]
-            lj = 0.0
-            for g in range(nf):
-                lj += mu[g] * tab[Fr[g], j]
+            lj = slot_dot(mu, tab, Fr, nf, j)
             bp += max(lj * lo[j], lj * hi[j])
             bm += min(lj * lo[j], lj * hi[j])
         cw = 0.0
@@ -381,16 +364,11 @@ def pose_capability_factored(W, lo, hi, wnom, elo, ehi, Mt, combos, slots, axes,
         down = 0.0
         if box:
             for i in range(n):
-                s = 0.0
-                for g in range(nf):
-                    s += mu[g] * tab[Fr[g], m + i]
-                nu[i] = s
+                nu[i] = slot_dot(mu, tab, Fr, nf, m + i)
             up, down = box_support(nu, elo, ehi)
         hn = 0.0
         for k in range(d):
-            s = 0.0
-            for g in range(nf):
-                s += mu[g] * GM[Fr[g], k]
+            s = slot_dot(mu, GM, Fr, nf, k)
             h[k] = s
             hn += s * s
         # pose_capability's tolerance, for a normal of length |nu|

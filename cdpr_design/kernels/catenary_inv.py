@@ -158,47 +158,33 @@ def _fallback(X, Z, L0, w, EA, H0, VB0, scale_f, floor, maxit):
     resolution of Z, so the span cannot be closed below that)."""
     ln4 = 1.3862943611198906
     it = 0
-    ylo = math.log(H0)
-    yhi = ylo
     vb, ok, _ = _solve_vb(H0, Z, L0, w, EA, VB0, scale_f)
     if not ok:
         return math.nan, math.nan, False, it
-    vlo = vb
-    vhi = vb
     gx, _ = catenary_ends(H0, vb, L0, w, EA)
     g = gx - X
     if g == 0.0:
         return H0, vb, True, it
-    # bracket the root in y
+    # bracket the root in y: one end moves by ln 4 a step (down while the span is too long, up
+    # while too short), the end it leaves is the bracket's other end
     down = g > 0.0
-    while down and g > 0.0:
-        if it >= maxit or ylo < -700.0:
+    y, v = math.log(H0), vb  # the moving end
+    yp, vp = y, v  # the end it left
+    while g > 0.0 if down else g < 0.0:
+        if it >= maxit or (y < -700.0 if down else y > 700.0):
             return math.nan, math.nan, False, it
         it += 1
-        yhi = ylo
-        vhi = vlo
-        ylo -= ln4
-        vb, ok, _ = _solve_vb(math.exp(ylo), Z, L0, w, EA, vlo, scale_f)
+        yp, vp = y, v
+        y += -ln4 if down else ln4
+        vb, ok, _ = _solve_vb(math.exp(y), Z, L0, w, EA, v, scale_f)
         if not ok:
             return math.nan, math.nan, False, it
-        vlo = vb
-        gx, _ = catenary_ends(math.exp(ylo), vb, L0, w, EA)
-        g = gx - X
-    while not down and g < 0.0:
-        if it >= maxit or yhi > 700.0:
-            return math.nan, math.nan, False, it
-        it += 1
-        ylo = yhi
-        vlo = vhi
-        yhi += ln4
-        vb, ok, _ = _solve_vb(math.exp(yhi), Z, L0, w, EA, vhi, scale_f)
-        if not ok:
-            return math.nan, math.nan, False, it
-        vhi = vb
-        gx, _ = catenary_ends(math.exp(yhi), vb, L0, w, EA)
+        v = vb
+        gx, _ = catenary_ends(math.exp(y), vb, L0, w, EA)
         g = gx - X
     if g == 0.0:
-        return (math.exp(ylo), vlo, True, it) if down else (math.exp(yhi), vhi, True, it)
+        return math.exp(y), v, True, it
+    ylo, vlo, yhi, vhi = (y, v, yp, vp) if down else (yp, vp, y, v)
     # safeguarded Newton in y
     y = 0.5 * (ylo + yhi)
     vb = 0.5 * (vlo + vhi)

@@ -61,6 +61,17 @@ def rotate_attachments(R, B, Rb):
 
 
 @njit_folded
+def cable_vector(A, Rb, i, px, py, pz):
+    """(lx, ly, lz, L): cable i's vector l_i = a_i - (p + R b_i) [m] and its length |l_i| [m] at the
+    effector position p = (px, py, pz) [m], from the outlets ``A`` (m, 3) and the rotated
+    attachments ``Rb`` (m, 3) [m]."""
+    lx = A[i, 0] - px - Rb[i, 0]
+    ly = A[i, 1] - py - Rb[i, 1]
+    lz = A[i, 2] - pz - Rb[i, 2]
+    return lx, ly, lz, math.sqrt(lx * lx + ly * ly + lz * lz)
+
+
+@njit_folded
 def structure_matrix(px, py, pz, Rb, A, rows, W, L):
     """Fill the structure matrix ``W`` (n, m) and lengths ``L`` (m) at one pose.
 
@@ -72,10 +83,7 @@ def structure_matrix(px, py, pz, Rb, A, rows, W, L):
     n = rows.shape[0]
     ok = True
     for i in range(m):
-        lx = A[i, 0] - px - Rb[i, 0]
-        ly = A[i, 1] - py - Rb[i, 1]
-        lz = A[i, 2] - pz - Rb[i, 2]
-        li = math.sqrt(lx * lx + ly * ly + lz * lz)
+        lx, ly, lz, li = cable_vector(A, Rb, i, px, py, pz)
         L[i] = li
         if li <= 1e-12:
             ok = False

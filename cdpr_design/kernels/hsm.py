@@ -333,6 +333,30 @@ def hsm_factored(W, wreq, nv, tmin, tmax, scr, want_closure):
     return hsm_enumerate(W, wreq, nv, tmin, tmax, scr)
 
 
+@njit_folded
+def slot_dot(mu, X, Fr, nf, j):
+    """sum_f mu[f] X[Fr[f], j] over a facet's ``nf`` free slots ``Fr`` (:func:`hsm_enumerate`):
+    nu . x for column j of X = G x, e.g. l_j = nu . w_j for X the tableau's G W."""
+    s = 0.0
+    for f in range(nf):
+        s += mu[f] * X[Fr[f], j]
+    return s
+
+
+@njit_folded
+def facet_norm2(mu, M, Fr, nf):
+    """||nu||^2 = mu^T M mu of a facet normal nu = G^T mu supported on the ``nf`` free slots ``Fr``,
+    M = G G^T (:func:`hsm_enumerate`)."""
+    nrm2 = 0.0
+    for f in range(nf):
+        sf = Fr[f]
+        acc = 0.0
+        for g in range(nf):
+            acc += mu[g] * M[sf, Fr[g]]
+        nrm2 += mu[f] * acc
+    return nrm2
+
+
 @njit_fast
 def hsm_enumerate(W, wreq, nv, tmin, tmax, scr):
     """Hyperplane shifting on the factored W: capacity margins and wrench closure.
@@ -396,13 +420,7 @@ def hsm_enumerate(W, wreq, nv, tmin, tmax, scr):
                     for f in range(nf):
                         A[e, f] = tab[Fr[f], c]
                 if null_vector(A, k, mu, minor):
-                    nrm2 = 0.0
-                    for f in range(nf):
-                        sf = Fr[f]
-                        acc = 0.0
-                        for g in range(nf):
-                            acc += mu[g] * M[sf, Fr[g]]
-                        nrm2 += mu[f] * acc
+                    nrm2 = facet_norm2(mu, M, Fr, nf)
                     if nrm2 > 0.0:
                         nrm = math.sqrt(nrm2)
                         half = 0.0
@@ -422,9 +440,7 @@ def hsm_enumerate(W, wreq, nv, tmin, tmax, scr):
                                 e += 1
                                 continue
                             j = nbc[q]
-                            lj = 0.0
-                            for f in range(nf):
-                                lj += mu[f] * tab[Fr[f], j]
+                            lj = slot_dot(mu, tab, Fr, nf, j)
                             half += abs(lj) * dt[j]
                             lpos = max(lpos, lj - ctol[j] * nrm)
                             lneg = min(lneg, lj + ctol[j] * nrm)

@@ -59,25 +59,35 @@ def det_small(M, k):
     return det_in_place(a, k)
 
 
+@njit_folded
+def pivot_rows(a, c, k, width):
+    """Partial pivoting in column ``c`` of the leading ``k`` rows of ``a``: the row r >= c with the
+    largest |a[r, c]| (the first of equals) swapped with row c over the first ``width`` columns.
+    Returns (that largest |a[r, c]|, whether rows were swapped)."""
+    piv = c
+    best = abs(a[c, c])
+    for r in range(c + 1, k):
+        if abs(a[r, c]) > best:
+            best = abs(a[r, c])
+            piv = r
+    if piv != c:
+        for j in range(width):
+            tmp = a[c, j]
+            a[c, j] = a[piv, j]
+            a[piv, j] = tmp
+    return best, piv != c
+
+
 @njit
 def det_in_place(a, k):
     """Determinant of the leading k x k block of ``a``, which it overwrites (partial pivoting;
     allocates nothing)."""
     d = 1.0
     for c in range(k):
-        piv = c
-        best = abs(a[c, c])
-        for r in range(c + 1, k):
-            if abs(a[r, c]) > best:
-                best = abs(a[r, c])
-                piv = r
+        best, swapped = pivot_rows(a, c, k, k)
         if best == 0.0:
             return 0.0
-        if piv != c:
-            for j in range(k):
-                tmp = a[c, j]
-                a[c, j] = a[piv, j]
-                a[piv, j] = tmp
+        if swapped:
             d = -d
         d *= a[c, c]
         for r in range(c + 1, k):
@@ -103,19 +113,9 @@ def inverse_into(W, Winv, a):
     if scale == 0.0:
         return False
     for c in range(n):
-        piv = c
-        best = abs(a[c, c])
-        for r in range(c + 1, n):
-            if abs(a[r, c]) > best:
-                best = abs(a[r, c])
-                piv = r
+        best, _ = pivot_rows(a, c, n, 2 * n)
         if best <= RANK_TOL * scale:
             return False
-        if piv != c:
-            for j in range(2 * n):
-                tmp = a[c, j]
-                a[c, j] = a[piv, j]
-                a[piv, j] = tmp
         inv = 1.0 / a[c, c]
         for j in range(2 * n):
             a[c, j] *= inv

@@ -17,7 +17,7 @@ from collections import namedtuple
 
 from cdpr_design.kernels._jit import njit, njit_folded
 from cdpr_design.kernels.cable_shape import cable_for_tension, least_tension
-from cdpr_design.kernels.geometry import fill_column
+from cdpr_design.kernels.geometry import cable_vector, fill_column
 
 #: The cables as the sagging kernels see them: ``rows`` the motion's wrench rows (int64),
 #: ``up`` (3,) the unit vector against gravity, ``w`` (m,) weight per length [N/m] (0: a
@@ -53,10 +53,7 @@ def span(px, py, pz, Rb, A, up, cw, lengths):
     Returns False if a length is 0."""
     ok = True
     for i in range(A.shape[0]):
-        lx = A[i, 0] - px - Rb[i, 0]
-        ly = A[i, 1] - py - Rb[i, 1]
-        lz = A[i, 2] - pz - Rb[i, 2]
-        li = math.sqrt(lx * lx + ly * ly + lz * lz)
+        lx, ly, lz, li = cable_vector(A, Rb, i, px, py, pz)
         lengths[i] = li
         if li <= 1e-12:
             ok = False
@@ -215,8 +212,5 @@ def straight_columns(Rb, A, px, py, pz, rows, W):
     """The structure matrix ``W`` (n, m) of straight cables at (px, py, pz) [m] (``Rb`` (m, 3)
     rotated attachments, ``A`` (m, 3) outlets [m]); every chord must have a length."""
     for i in range(A.shape[0]):
-        lx = A[i, 0] - px - Rb[i, 0]
-        ly = A[i, 1] - py - Rb[i, 1]
-        lz = A[i, 2] - pz - Rb[i, 2]
-        li = math.sqrt(lx * lx + ly * ly + lz * lz)
+        lx, ly, lz, li = cable_vector(A, Rb, i, px, py, pz)
         fill_column(W, i, rows, lx / li, ly / li, lz / li, Rb[i, 0], Rb[i, 1], Rb[i, 2])

@@ -49,7 +49,7 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_inline
 from cdpr_design.kernels.catenary import closure_jac
 from cdpr_design.kernels.catenary_inv import CAT_CONVERGED, catenary_inverse
-from cdpr_design.kernels.geometry import grid_index, next_grid_index
+from cdpr_design.kernels.geometry import cable_vector, grid_index, next_grid_index
 from cdpr_design.kernels.parallel import run_blocks
 
 #: The least eigenvalue's Newton steps stop below this fraction of the matrix's Gershgorin norm
@@ -159,9 +159,7 @@ def cable_term(i, px, py, pz, Rb, A, ti, L0i, EA, w, up):
     that did not converge.
     """
     nan = math.nan
-    rx, ry, rz = Rb[i, 0], Rb[i, 1], Rb[i, 2]
-    lx, ly, lz = A[i, 0] - px - rx, A[i, 1] - py - ry, A[i, 2] - pz - rz
-    L = math.sqrt(lx * lx + ly * ly + lz * lz)
+    lx, ly, lz, L = cable_vector(A, Rb, i, px, py, pz)
     if not L > 0.0:
         return False, nan, nan, nan, nan, nan, nan, nan, nan, nan
     wi = w[i]
@@ -435,8 +433,7 @@ def planar_figures(px, py, pz, A, Rb, t, EA, Linv):
         ti = t[i]
         if not math.isfinite(ti):
             return np.nan, np.nan
-        lx, ly, lz = A[i, 0] - px - Rb[i, 0], A[i, 1] - py - Rb[i, 1], A[i, 2] - pz - Rb[i, 2]
-        L = math.sqrt(lx * lx + ly * ly + lz * lz)
+        lx, ly, lz, L = cable_vector(A, Rb, i, px, py, pz)
         if not L > 0.0:
             return np.nan, np.nan
         u0, u1 = lx / L, ly / L

@@ -39,29 +39,14 @@ def kernel_pass(design) -> float:
 
 
 def run(b: h.Bench) -> None:
-    from cdpr_design import workspaces as ws
     from cdpr_design.kernels import parallel
     from cdpr_design.model import spec
 
     designs = {n: spec.load(h.ROOT / "designs" / f"{n}.yaml") for n in b.opt["designs"]}
     with parallel.threads_kept():
         parallel.set_threads(b.opt["threads"])
-        for d in designs.values():  # the plan's kernels compiled or loaded outside the timing
-            one = ws.grid.first_pose(ws.make_grid(d))
-            ws.run(d, ws.Analysis(accelerations=True), grid=one, tilt=False)
-            ws.run(d, grid=one, tilt=False)
+        h.option_cost(b, designs, "accelerations", "--accelerations", b.opt["threads"])
         for n, d in designs.items():
-            pairs = []
-            for r in range(b.rounds):
-                pair = {}
-                for accelerations in ((False, True) if r % 2 == 0 else (True, False)):
-                    pair[accelerations], _ = h.timed(ws.run, d, ws.Analysis(accelerations=accelerations),
-                                                          tilt=False)
-                pairs.append(pair)
-            b.row(f"{n} ({d.workspace.grid.size:,} poses): the whole workspace sweep with --accelerations",
-                  h.seconds(h.spread(p[True].cpu for p in pairs)) + " CPU",
-                  h.ratios([p[True] for p in pairs], [p[False] for p in pairs], "cpu"),
-                  f"time ÷ without (CPU, {b.opt['threads']} thread(s))")
             cpu = min(kernel_pass(d) for _ in range(b.rounds))
             b.row(f"{n}: the acceleration capability alone (structure matrices and kernel, CPU)",
                   h.per_pose(cpu, d.workspace.grid.size))

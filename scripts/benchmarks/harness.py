@@ -265,6 +265,31 @@ class Bench:
         print(f"  {text}", flush=True)
 
 
+def option_cost(b: Bench, designs: dict, option: str, what: str, threads: int) -> None:
+    """A row per design: the whole workspace sweep as a command runs it (``workspaces.run``: the
+    plan, its wrappers, the maps; no files) with ``Analysis(option=True)`` against without, the
+    two runs of a round back to back (each order in every other round), CPU on ``threads`` kernel
+    threads (the caller's setting): the median and range of the rounds' own ratios.  ``designs``:
+    name -> Design; ``what`` names the option in the rows."""
+    from cdpr_design import workspaces as ws
+
+    for d in designs.values():  # the plan's kernels compiled or loaded outside the timing
+        one = ws.grid.first_pose(ws.make_grid(d))
+        ws.run(d, ws.Analysis(**{option: True}), grid=one, tilt=False)
+        ws.run(d, grid=one, tilt=False)
+    for n, d in designs.items():
+        pairs = []
+        for r in range(b.rounds):
+            pair = {}
+            for on in ((False, True) if r % 2 == 0 else (True, False)):
+                pair[on], _ = timed(ws.run, d, ws.Analysis(**{option: on}), tilt=False)
+            pairs.append(pair)
+        b.row(f"{n} ({d.workspace.grid.size:,} poses): the whole workspace sweep with {what}",
+              seconds(spread(p[True].cpu for p in pairs)) + " CPU",
+              ratios([p[True] for p in pairs], [p[False] for p in pairs], "cpu"),
+              f"time ÷ without {what} (CPU, {threads} thread(s))")
+
+
 def seconds(t: Spread | float) -> str:
     v = t.text(".3g") if isinstance(t, Spread) else format(t, ".3g")
     return f"{v} s"

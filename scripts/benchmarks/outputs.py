@@ -5,7 +5,8 @@ For IPAnema 3 on a fine grid (by default 0.1, 0.1, 0.05 m) and for planar2:
 1. the baseline: per-pose scipy ``linprog`` (HiGHS) feasibility of a fixed random sample of the
    grid's poses, in this process, scaled to the whole grid (feasibility only: no tensions, no
    margin, no file); timed before and after each round, each ratio taken within its round;
-2. the kernels in this process: ``workspaces.run`` without maps or rows, warm;
+2. the kernels in this process: ``workspaces.run`` without maps or rows, warm; with ``--baseline``,
+   also each checkout's kernels in a child process in the same rounds (:data:`KERNEL_CHILD`);
 3. the whole command, ``python -m cdpr_design workspace SPEC --json`` in a new process (start-up,
    spec, numba's start-up -- ``load_s`` --, sweep, ``workspace.csv``, pictures, summary, exit),
    with ``--format csv`` and ``parquet``, warm, and once from an empty numba cache; with
@@ -91,6 +92,28 @@ def grid_of(design, step):
     return Grid(g.lower, g.upper, tuple(float(s) for s in step))
 
 
+#: The kernels of a checkout in a child process: ``workspaces.run`` without maps or rows on the
+#: grid of the spec ``argv[1]`` (``argv[2]`` a ``--step``, or empty: the spec's own grid), once
+#: untimed (numba's cache loaded), then timed; prints {"cpu": CPU-s, "wall": s} as JSON.
+KERNEL_CHILD = """
+import json, sys, time
+from cdpr_design import workspaces as ws
+from cdpr_design.model import spec
+d = spec.load(sys.argv[1])
+g = ws.make_grid(d, float(sys.argv[2]) if sys.argv[2] else None, force=True)
+ws.run(d, grid=g, keep_maps=False)
+t0, c0 = time.perf_counter(), time.process_time()
+ws.run(d, grid=g, keep_maps=False)
+print(json.dumps({"cpu": time.process_time() - c0, "wall": time.perf_counter() - t0}))
+"""
+
+
+def kernels_in_child(root, spec: str, extra: list[str]) -> h.Timing:
+    """:data:`KERNEL_CHILD` on the checkout ``root``: the kernels' warm sweep, in a new process."""
+    got = h.child_json(KERNEL_CHILD, spec, extra[1] if extra else "", root=root)
+    return h.Timing(got["wall"], got["cpu"])
+
+
 def workspace_command(b: h.Bench, root, spec: str, extra: list[str], fmt: str, cache=None):
     args = ["workspace", spec, *extra, "--out", str(b.folder("out")), "--overwrite", "--format", fmt]
     return h.command(args, root=root, cache=cache)
@@ -125,10 +148,13 @@ def bench_design(b: h.Bench, name: str, step) -> None:
         for fmt in b.opt["formats"]:
             workspace_command(b, roots[k], path, extra, fmt)  # numba's cache and the bytecode warm
     b.row(f"{label}: kernels in-process, first call", f"{first.wall:.3f} s")
-    lp_wall, lp_cpu, kern, cmds, sweeps = [], [], [], {}, {}
+    lp_wall, lp_cpu, kern, cmds, sweeps, child = [], [], [], {}, {}, {}
     for _ in range(b.rounds):
         before = lp()
         kt, _ = h.timed(ws.run, d, grid=g, keep_maps=False)
+        if "baseline" in roots:  # each checkout's kernels in a child, one after the other
+            for k in roots:
+                child.setdefault(k, []).append(kernels_in_child(roots[k], *specs[k]))
         runs = {(k, fmt): workspace_command(b, roots[k], *specs[k], fmt)
                 for k in roots for fmt in b.opt["formats"]}
         after = lp()
@@ -144,6 +170,11 @@ def bench_design(b: h.Bench, name: str, step) -> None:
           h.ratios(lp_wall, kern, scale=scale), "per-pose linprog (wall)")
     b.row(f"{label}: kernels in-process, warm, CPU", h.seconds(h.spread(t.cpu for t in kern)),
           h.ratios(lp_cpu, kern, "cpu", scale=scale), "per-pose linprog (CPU)")
+    if child:
+        for what in ("wall", "cpu"):
+            b.row(f"{label}: kernels in a child process, warm, {what}, this checkout",
+                  h.seconds(h.spread(t.get(what) for t in child["this"])), h.ratios(child["baseline"], child["this"], what),
+                  "the baseline checkout's kernels (the same rounds)")
     for (k, fmt), times in cmds.items():
         who = "" if k == "this" else " [baseline checkout]"
         b.row(f"{label}: whole command, warm ({fmt}){who}", h.seconds(h.spread(t.wall for t in times)),

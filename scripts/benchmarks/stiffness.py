@@ -93,7 +93,6 @@ def passes(design):
 
 
 def run(b: h.Bench) -> None:
-    from cdpr_design import workspaces as ws
     from cdpr_design.kernels import parallel
 
     designs = {n: design_of(n, float(b.opt["sagging_step"])) for n in b.opt["designs"]}
@@ -114,17 +113,4 @@ def run(b: h.Bench) -> None:
                   f"{h.per_pose(min(r[1] for r in runs), poses)} (sweep {h.per_pose(min(r[0] for r in runs), poses)})",
                   h.spread((r[0] + r[1]) / r[0] for r in runs), "(sweep + stiffness) ÷ sweep, CPU, one thread")
         parallel.set_threads(b.opt["threads"])
-        for d in designs.values():  # the plan's other kernels loaded outside the timing
-            one = ws.grid.first_pose(ws.make_grid(d))
-            ws.run(d, ws.Analysis(stiffness=True), grid=one, tilt=False)
-            ws.run(d, grid=one, tilt=False)
-        for n, d in designs.items():
-            pairs = []
-            for r in range(b.rounds):
-                pair = {}
-                for stiffness in ((False, True) if r % 2 == 0 else (True, False)):
-                    pair[stiffness], _ = h.timed(ws.run, d, ws.Analysis(stiffness=stiffness), tilt=False)
-                pairs.append(pair)
-            b.row(f"{n}: the whole workspace sweep with stiffness", h.seconds(h.spread(p[True].cpu for p in pairs))
-                  + " CPU", h.ratios([p[True] for p in pairs], [p[False] for p in pairs], "cpu"),
-                  f"time ÷ without stiffness (CPU, {b.opt['threads']} thread(s))")
+        h.option_cost(b, designs, "stiffness", "stiffness", b.opt["threads"])
