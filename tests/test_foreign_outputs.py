@@ -24,8 +24,10 @@ COMMANDS = {
     "certify-parquet": ["certify", PLANAR2, "--resolution", "0.25", "--format", "parquet"],
     "sweep": ["sweep", PLANAR2, "--vary", "effector.mass=0.5,1", "--step", "0.25", "--workers", "1"],
     "trajectory": ["trajectory", PLANAR2, "square_fast"],
-    "optimize": ["optimize", "light", "--vary", "cables.0.outlet.0=-0.5:0.5", "--maximize", "task_min_margin",
-                 "--trials", "2", "--workers", "1", "--step", "0.25"],
+    # outlets where every trial is feasible (past about 0.35 m the task box is not), and a seed: the
+    # first run must succeed to say what it writes (unseeded, both trials fell past 0.35 m in 2 %)
+    "optimize": ["optimize", "light", "--vary", "cables.0.outlet.0=-0.5:0.2", "--maximize", "task_min_margin",
+                 "--trials", "2", "--workers", "1", "--step", "0.25", "--seed", "0"],
 }
 
 
