@@ -63,11 +63,8 @@ def external_loads(design: Design) -> np.ndarray:
     effector: force at the reference point (the platform origin) and moment, each vertex's values
     on the motion's wrench rows (``design.rows``), zeros on the others; (0, 6) without the box."""
     box = design.workspace.external_wrench
-    if box is None:
-        return np.zeros((0, 6))
-    out = np.zeros((0, 6))
-    for v in box_vertices(box.lower, box.upper):
-        w = np.zeros(6)
-        w[np.asarray(design.rows)] = v
-        out = np.vstack([out, w])
+    vertices = [] if box is None else box_vertices(box.lower, box.upper)
+    out = np.zeros((len(vertices), 6))
+    if vertices:
+        out[:, np.asarray(design.rows)] = vertices
     return out
