@@ -6,7 +6,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import jitable, njit, njit_inline
+from cdpr_design.kernels._jit import njit, njit_inline
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
 from cdpr_design.kernels.hsm_small import facet_setup, facets_one, facets_two
 from cdpr_design.kernels.linalg import gram_of_inverse
@@ -232,12 +232,22 @@ ROW_EMPTY = 1
 ROW_DONE = 2
 
 
-@jitable
+#: The scratch arrays :func:`rows_small` reads (:class:`~cdpr_design.kernels.hsm.Scratch`'s fields of
+#: the same names; the others serve the general methods): a block for m - n = 1 or 2 gets only these,
+#: so that its compiled loop takes 12 arrays from Python instead of 31 (each one unpacked at the
+#: loop's entry and counted where the loop binds it: less code to compile; docs/performance.md).
+SmallScratch = namedtuple("SmallScratch", "tab M Gw N tp slot nbc bcol tb ranges minors half")
+
+
 def buffers(n, m, w):
     """The :class:`Buffers` of a block of poses of ``n`` wrench rows and ``m`` cables; ``w`` (nv, n)
-    is copied (each block its own: the sweep's place may rewrite it per pose)."""
-    return Buffers(np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m), w.copy(),
-                   make_scratch(n, m, w.shape[0]))
+    is copied (each block its own: the sweep's place may rewrite it per pose).  Its ``scr`` is a
+    :class:`SmallScratch` for m - n = 1 or 2 (:func:`rows_small`), the whole
+    :func:`~cdpr_design.kernels.hsm.make_scratch` otherwise."""
+    scr = make_scratch(n, m, w.shape[0])
+    if m - n in (1, 2):
+        scr = SmallScratch(*(getattr(scr, f) for f in SmallScratch._fields))
+    return Buffers(np.empty((n, m)), np.empty(m), np.empty(m), np.empty(m), w.copy(), scr)
 
 
 class PoseBlock:

@@ -118,7 +118,7 @@ def _block_loads(k0, k1, src, st, out):
             add_pose(x, y, z, k, tensions, st.A, src.Rb, src.cab, src.tot)
 
 
-@njit
+@njit_folded
 def _place_grid(k, src, st, W, L, lo, w, out):
     """Row ``k``'s pose (grid index ``src.start + k``, or ``src.P[k]`` where ``src.P`` has rows): its
     structure matrix into ``W``, its cable lengths into ``L`` and ``out.lengths[k]`` [m], its lower
