@@ -6,6 +6,8 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from cdpr_design import kernels as K
 from cdpr_design.statics import kinematics as kin
@@ -354,6 +356,59 @@ def test_chunk_stats_matches_the_obvious_reduction(count):
     assert got == ref and got[0] == int(feas[:count].sum())
     assert not np.signbit(got[1]) or got[1] < 0
     np.testing.assert_array_equal(tp_k, tp_r)
+
+
+def _chunk_stats_boolean_rows(feas, marg, ten, tpeak):
+    """The reduction over the boolean-indexed feasible rows (the formulation the blocked one
+    replaced): fmax/fmin along the rows, NaN passed over, a margin of -0.0 reported as 0.0."""
+    f = np.asarray(feas).astype(bool)
+    nf = int(np.count_nonzero(f))
+    if not nf:
+        return 0, np.inf, -np.inf
+    mm = np.asarray(marg)[f]
+    np.fmax(tpeak, np.fmax.reduce(np.asarray(ten)[f], axis=0), out=tpeak)
+    return nf, float(np.fmin.reduce(mm, initial=np.inf)) + 0.0, float(np.fmax.reduce(mm, initial=-np.inf)) + 0.0
+
+
+_SPECIAL = [np.nan, 0.0, -0.0, 1.0, -1.0, np.inf, -np.inf, 5e-324, -5e-324]
+
+
+@st.composite
+def _chunks(draw):
+    """A chunk of rows: k rows (0 .. 300, across whole blocks and the rows left), m cables
+    (1 .. 9); feasibility all, none, one row or mixed (uint8 or bool); margins and tensions drawn
+    from NaN, +-0.0, +-inf, subnormals and ordinary numbers; a peak already raised by earlier
+    chunks."""
+    k = draw(st.integers(0, 300))
+    m = draw(st.integers(1, 9))
+    rng = np.random.default_rng(draw(st.integers(0, 2 ** 32 - 1)))
+    p = draw(st.sampled_from([0.0, 1.0, 1.0 / max(k, 1), 0.5, 0.95]))
+    feas = (rng.random(k) < p).astype(draw(st.sampled_from([np.uint8, np.bool_])))
+
+    def column(shape):
+        x = rng.normal(scale=draw(st.sampled_from([1.0, 1e3])), size=shape)
+        special = rng.random(shape) < draw(st.sampled_from([0.0, 0.1, 0.5, 1.0]))
+        x[special] = rng.choice(_SPECIAL, size=int(special.sum()))
+        return x
+
+    tpeak = rng.choice([-np.inf, 0.0, 0.5], size=m)  # as a sweep leaves it: never NaN nor -0.0
+    return feas, column(k), column((k, m)), tpeak
+
+
+@settings(max_examples=400, deadline=None)
+@given(_chunks())
+def test_chunk_stats_is_the_boolean_rows_reduction_bit_for_bit(chunk):
+    """A chunk's blocked reduction gives, bit for bit, the boolean-indexed rows' one -- except that
+    a largest tension of zero is always 0.0 (fmax keeps either of two equal zeros, so the sign of
+    the boolean rows' zero peak depends on the order of reduction)."""
+    feas, marg, ten, tpeak = chunk
+    got_peak, ref_peak = tpeak.copy(), tpeak.copy()
+    got = chunk_stats(Rows(feas, marg, ten, None), got_peak)
+    ref = _chunk_stats_boolean_rows(feas, marg, ten, ref_peak)
+    assert np.array(got).view(np.int64).tolist() == np.array(ref).view(np.int64).tolist()
+    assert got[0] == int(np.count_nonzero(feas))
+    expect = np.where(ref_peak == 0, 0.0, ref_peak)  # NaN stays NaN, the zeros without sign
+    np.testing.assert_array_equal(got_peak.view(np.int64), expect.view(np.int64))
 
 
 def test_chunk_stats_reports_a_zero_margin_without_its_sign():

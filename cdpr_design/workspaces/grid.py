@@ -85,18 +85,40 @@ class Rows:
     sets: list | None = None
 
 
+#: Rows per block of :func:`chunk_stats`'s reduction of the tensions (a block's cells are one
+#: contiguous run, reduced element by element against the other blocks').
+STATS_BLOCK = 64
+
+
 def chunk_stats(r: Rows, tpeak: np.ndarray) -> tuple[int, float, float]:
     """(feasible count, least margin [N], largest margin [N]) over the feasible rows of ``r`` (a
     margin of -0.0 reported as 0.0; (0, inf, -inf) when none is feasible); raises ``tpeak`` (m,)
-    [N] in place to each cable's largest feasible tension.  NaN margins and tensions (a feasible
-    pose without tensions) are passed over."""
-    f = np.asarray(r.feasible).astype(bool)
-    nf = int(np.count_nonzero(f))
+    [N] in place to each cable's largest feasible tension (a largest tension of zero as 0.0).
+    NaN margins and tensions (a feasible pose without tensions) are passed over."""
+    feas = np.asarray(r.feasible)
+    nf = int(np.count_nonzero(feas))
     if not nf:
         return 0, np.inf, -np.inf
-    mm = np.asarray(r.margin)[f]
-    np.fmax(tpeak, np.fmax.reduce(np.asarray(r.tensions)[f], axis=0), out=tpeak)
-    return nf, float(np.fmin.reduce(mm, initial=np.inf)) + 0.0, float(np.fmax.reduce(mm, initial=-np.inf)) + 0.0
+    f = feas.astype(bool)
+    np.fmax(tpeak, _feasible_peak(np.asarray(r.tensions), f) + 0.0, out=tpeak)
+    marg = np.asarray(r.margin)
+    return (nf, float(np.fmin.reduce(marg, where=f, initial=np.inf)) + 0.0,
+            float(np.fmax.reduce(marg, where=f, initial=-np.inf)) + 0.0)
+
+
+def _feasible_peak(ten: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Per column, the largest value of the rows of ``ten`` (k, m) where ``f`` (k,) bool, NaN passed
+    over (-inf where there is none): the whole blocks of :data:`STATS_BLOCK` rows reduced as one
+    (nb, STATS_BLOCK * m) array along its first axis, then the blocks' peaks and the rows left."""
+    k, m = ten.shape
+    whole = k // STATS_BLOCK * STATS_BLOCK
+    peak = np.fmax.reduce(ten[whole:], axis=0, where=f[whole:, None], initial=-np.inf)
+    if whole:
+        cells = ten[:whole].reshape(-1, STATS_BLOCK * m)
+        mask = np.repeat(f[:whole], m).reshape(cells.shape)
+        blocks = np.fmax.reduce(cells, axis=0, where=mask, initial=-np.inf)
+        np.fmax(peak, np.fmax.reduce(blocks.reshape(STATS_BLOCK, m), axis=0), out=peak)
+    return peak
 
 
 @dataclass
