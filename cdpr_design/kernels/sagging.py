@@ -50,7 +50,7 @@ from cdpr_design.kernels.sag_fixed import (SAG_NO_CATENARY, SAG_NO_TENSIONS, SAG
 from cdpr_design.kernels.sag_shapes import CW_H, CW_HI, CW_L0, CW_LO, CW_TA, CW_VB, span, straight_columns
 
 __all__ = ["SAG_NO_CATENARY", "SAG_NO_TENSIONS", "SAG_NOT_CONVERGED", "SAG_OK", "SAG_SINGULAR", "GridOutputs",
-           "PointOutputs", "PoseOutputs", "SagGrid", "SagRobot", "make_pose_outputs", "redundancy", "sag_points",
+           "PoseOutputs", "SagGrid", "SagRobot", "make_pose_outputs", "redundancy", "sag_points",
            "sag_pose", "sag_robot", "sweep_grid_sagging"]
 
 #: The robot's statics as a sagging pose needs them: ``A`` (m, 3) outlets [m], ``cables``
@@ -59,19 +59,21 @@ __all__ = ["SAG_NO_CATENARY", "SAG_NO_TENSIONS", "SAG_NOT_CONVERGED", "SAG_OK", 
 #: and ``kind`` as for :func:`cdpr_design.kernels.sweep.sweep_grid`, ``maxit`` the fixed point's
 #: iterations allowed.
 SagRobot = namedtuple("SagRobot", "A cables wreq combos kind maxit")
-#: A grid of positions: ``lower`` (3,) [m], ``step`` (3,) [m], ``shape`` (3,) int64, C order over x, y, z.
-SagGrid = namedtuple("SagGrid", "lower step shape")
+#: The positions of a sagging sweep: a grid, ``lower`` (3,) [m], ``step`` (3,) [m], ``shape`` (3,)
+#: int64, C order over x, y, z; or, where ``P`` (k, 3) [m] has rows, those explicit positions (row j is
+#: ``P[j]``; the grid's fields unused).  One compiled loop serves both (:func:`sweep_grid_sagging`,
+#: :func:`sag_points`).
+SagGrid = namedtuple("SagGrid", "lower step shape P", defaults=(np.empty((0, 3)),))
 #: One pose's per-cable results, each (m,): effector-end tensions ``t`` [N], ``outlet`` tensions
 #: [N], unstretched lengths ``L0`` [m], ``sag`` [m] (largest distance from the chord), chord
 #: ``lengths`` [m].
 PoseOutputs = namedtuple("PoseOutputs", "t outlet L0 sag lengths")
-#: Rows of :func:`sweep_grid_sagging`: ``feasible`` (count,) uint8, ``margin`` (count,),
-#: ``tensions``, ``lengths``, ``outlet``, ``L0``, ``sag`` (count, m) as :data:`PoseOutputs`,
-#: ``status`` (count,) int8.
-GridOutputs = namedtuple("GridOutputs", "feasible margin tensions lengths outlet L0 sag status")
-#: Rows of :func:`sag_points`: ``feasible`` (k,) uint8, ``Ws`` (k, n, m) the converged structure
-#: matrices, ``tensions`` and ``outlet`` (k, m) [N], ``status`` (k,) int8.
-PointOutputs = namedtuple("PointOutputs", "feasible Ws tensions outlet status")
+#: Rows of :func:`sweep_grid_sagging` and :func:`sag_points`: ``feasible`` (count,) uint8, ``margin``
+#: (count,) [N], ``tensions``, ``lengths``, ``outlet``, ``L0``, ``sag`` (count, m) as
+#: :data:`PoseOutputs`, ``status`` (count,) int8, and ``Ws`` (count, n, m) the converged structure
+#: matrices (NaN where the shapes are not known), or (0, n, m), the default, for none.
+GridOutputs = namedtuple("GridOutputs", "feasible margin tensions lengths outlet L0 sag status Ws",
+                         defaults=(np.empty((0, 0, 0)),))
 
 
 def sag_robot(A, cables, wreq, combos, kind, maxit) -> SagRobot:
@@ -179,19 +181,33 @@ def sweep_grid_sagging(start, count, grid, Rb, robot, out):
     run_blocks(_GRID_BLOCK, count, start, grid, Rb, robot, out, redundant, grain=16)
 
 
+@njit_folded
+def _sag_position(k, start, grid):
+    """(x, y, z) [m] of row ``k``: ``grid.P[k]`` where ``grid.P`` has rows, else grid index ``start + k``."""
+    # the bundle's arrays read where they are used, none bound to a name in one branch only, one
+    # return (as the straight sweep's grid position): numba counts no reference per pose
+    if grid.P.shape[0] > 0:
+        x, y, z = grid.P[k, 0], grid.P[k, 1], grid.P[k, 2]
+    else:
+        ix, iy, iz = grid_index(start + k, grid.shape[1], grid.shape[2])
+        x, y, z = (grid.lower[0] + ix * grid.step[0], grid.lower[1] + iy * grid.step[1],
+                   grid.lower[2] + iz * grid.step[2])
+    return x, y, z
+
+
 @njit
 def _grid_loop(k0, k1, start, grid, Rb, robot, out, redundant, po, sc):
-    """Rows k0..k1-1 of :func:`sweep_grid_sagging` (``redundant``: :func:`redundancy`), with the
-    block's buffers (:func:`sag_buffers`)."""
+    """Rows k0..k1-1 of :func:`sweep_grid_sagging` or :func:`sag_points` (``redundant``:
+    :func:`redundancy`), with the block's buffers (:func:`sag_buffers`)."""
     m = robot.A.shape[0]
-    lower, step = grid.lower, grid.step
-    ny = grid.shape[1]
-    nz = grid.shape[2]
     for k in range(k0, k1):
-        ix, iy, iz = grid_index(start + k, ny, nz)
-        st, f, mg = sag_pose(lower[0] + ix * step[0], lower[1] + iy * step[1], lower[2] + iz * step[2],
-                                Rb, robot, po, sc, redundant)
+        x, y, z = _sag_position(k, start, grid)
+        st, f, mg = sag_pose(x, y, z, Rb, robot, po, sc, redundant)
         store_row(out, k, st, f, mg, po, m)
+        if out.Ws.shape[0] > 0:
+            for r in range(sc.W.shape[0]):
+                for i in range(m):
+                    out.Ws[k, r, i] = sc.W[r, i]
 
 
 @njit
@@ -213,30 +229,16 @@ def store_row(out, k, st, f, mg, po, m):
 _GRID_BLOCK = RowBlock(_grid_loop, lambda start, grid, Rb, robot, *rest: _robot_dims(robot), buffers=sag_buffers)
 
 
-def sag_points(P, Rb, robot, out):
+def sag_points(P, Rb, robot, structures: bool = True):
     """:func:`sag_pose` at positions ``P`` (k, 3) [m] (one orientation, in ``Rb`` (m, 3) [m]) for
-    ``robot`` (:data:`SagRobot`), into ``out`` (:data:`PointOutputs`): for the sizing, which needs
-    the structure matrix of each task pose."""
-    redundant = redundancy(robot.cables.rows.shape[0], robot.A.shape[0])
-    run_blocks(_POINTS_BLOCK, P.shape[0], P, Rb, robot, out, redundant, grain=16)
-
-
-@njit
-def _points_loop(k0, k1, P, Rb, robot, out, redundant, po, sc):
-    """Rows k0..k1-1 of :func:`sag_points` (``redundant``: :func:`redundancy`), with the block's
-    buffers (:func:`sag_buffers`)."""
-    W = sc.W
-    n, m = W.shape
-    for j in range(k0, k1):
-        st, f, mg = sag_pose(P[j, 0], P[j, 1], P[j, 2], Rb, robot, po, sc, redundant)
-        out.status[j] = st
-        out.feasible[j] = 1 if f else 0
-        for r in range(n):
-            for i in range(m):
-                out.Ws[j, r, i] = W[r, i]
-        for i in range(m):
-            out.tensions[j, i] = po.t[i]
-            out.outlet[j, i] = po.outlet[i]
-
-
-_POINTS_BLOCK = RowBlock(_points_loop, lambda P, Rb, robot, *rest: _robot_dims(robot), buffers=sag_buffers)
+    ``robot`` (:data:`SagRobot`): the rows as :func:`sweep_grid_sagging` writes them, a new
+    :data:`GridOutputs`, with the converged structure matrices ``Ws`` (k, n, m) where
+    ``structures`` (for the sizing, which needs them at each task pose).  The same compiled loop
+    as the grid's."""
+    n, m = robot.cables.rows.shape[0], robot.A.shape[0]
+    k = P.shape[0]
+    out = GridOutputs(np.empty(k, dtype=np.uint8), np.empty(k), *(np.empty((k, m)) for _ in range(5)),
+                      np.empty(k, dtype=np.int8), np.empty((k if structures else 0, n, m)))
+    grid = SagGrid(np.zeros(3), np.zeros(3), np.ones(3, dtype=np.int64), np.ascontiguousarray(P, dtype=float))
+    run_blocks(_GRID_BLOCK, k, 0, grid, Rb, robot, out, redundancy(n, m), grain=16)
+    return out

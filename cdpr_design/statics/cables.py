@@ -92,14 +92,9 @@ def sagging_structure(robot: Robot, full: np.ndarray) -> np.ndarray:
     from cdpr_design.statics import kinematics as kin
     from cdpr_design.statics.wrenches import wrench_vertices
 
-    m, n = robot.m, robot.n
     Rb = np.ascontiguousarray(robot.attachments @ kin.rotation_matrix(*full[3:]).T)
     wreq = wrench_vertices(robot.design, robot.kind, full[3:])
-    Ws = np.full((1, n, m), np.nan)
-    out = KS.PointOutputs(np.zeros(1, dtype=np.uint8), Ws, np.full((1, m), np.nan), np.full((1, m), np.nan),
-                          np.zeros(1, dtype=np.int8))
-    KS.sag_points(np.ascontiguousarray(full[None, :3], dtype=float), Rb, sag_robot(robot, wreq, robot.kcode), out)
-    return Ws[0]
+    return KS.sag_points(full[None, :3], Rb, sag_robot(robot, wreq, robot.kcode)).Ws[0]
 
 
 def sagging_structures(robot: Robot, positions3: np.ndarray, orientation) -> tuple:
@@ -116,12 +111,9 @@ def sagging_structures(robot: Robot, positions3: np.ndarray, orientation) -> tup
     from cdpr_design.statics.wrenches import wrench_vertices
 
     design = robot.design
-    k, m, n = positions3.shape[0], design.m, design.n
     Rb = np.ascontiguousarray(design.attachments @ kin.rotation_matrix(*orientation).T)
     wreq = wrench_vertices(design, "static", orientation)
-    out = KS.PointOutputs(np.zeros(k, dtype=np.uint8), np.full((k, n, m), np.nan), np.full((k, m), np.nan),
-                          np.full((k, m), np.nan), np.zeros(k, dtype=np.int8))
-    KS.sag_points(np.ascontiguousarray(positions3, dtype=float), Rb, sag_robot(robot, wreq, KINDS["static"]), out)
+    out = KS.sag_points(positions3, Rb, sag_robot(robot, wreq, KINDS["static"]))
     return out.feasible.astype(bool), out.Ws, out.tensions, out.outlet
 
 

@@ -252,15 +252,13 @@ class SaggingSweep(Base):
         """Feasibility (k,) bool at positions ``P`` (k, 3) [m]: the same pose solve at explicit
         positions (:func:`cdpr_design.kernels.sagging.sag_points`; with interference
         :class:`SagPoints`, collision free too); no margins (NaN)."""
-        from cdpr_design.kernels.sagging import PointOutputs, sag_points
+        from cdpr_design.kernels.sagging import sag_points
 
-        r, k, m = self.robot, P.shape[0], self.robot.m
+        k = P.shape[0]
         if self.interference:
             o = self.points.rows(np.ascontiguousarray(P, dtype=float), self.ori)
             return (o.feasible.astype(bool) & (o.mask == 0)), np.full(k, np.nan)
-        out = PointOutputs(np.empty(k, dtype=np.uint8), np.empty((k, r.n, m)), np.empty((k, m)), np.empty((k, m)),
-                           np.empty(k, dtype=np.int8))
-        sag_points(np.ascontiguousarray(P, dtype=float), self.Rb, self.sag_robot, out)
+        out = sag_points(P, self.Rb, self.sag_robot, structures=False)
         return out.feasible.astype(bool), np.full(k, np.nan)
 
     def summary(self, maps) -> dict:
