@@ -6,7 +6,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_inline
+from cdpr_design.kernels._jit import njit, njit_folded, njit_inline
 from cdpr_design.kernels.hsm import basis_factor, hsm_enumerate, make_scratch, square_eval_into, square_work
 from cdpr_design.kernels.hsm_small import facet_setup, facets_one, facets_two
 from cdpr_design.kernels.linalg import gram_of_inverse
@@ -188,7 +188,7 @@ def eval_square(W, wreq, tmin, tmax, kind, t_out):
     return eval_square_into(W, wreq, tmin, tmax, kind, t_out, Winv, rn, a)
 
 
-@njit
+@njit_folded
 def eval_square_into(W, wreq, tmin, tmax, kind, t_out, Winv, rn, a):
     """:func:`eval_square` with the work arrays of
     :func:`~cdpr_design.kernels.hsm.square_eval_into` given (allocates nothing)."""
