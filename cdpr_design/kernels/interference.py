@@ -66,7 +66,7 @@ def _pt_seg_dist2(x, y, z, ax, ay, az, bx, by, bz):
     return seg_seg_dist2(x, y, z, x, y, z, ax, ay, az, bx, by, bz)
 
 
-@njit
+@njit_folded
 def cable_cable_dist(S0, S1, i, j, tol, dim):
     """Distance [m] between the free segments of cables i and j (S0 attachments, S1 exits).
 
@@ -94,7 +94,7 @@ def cable_cable_dist(S0, S1, i, j, tol, dim):
                                    S0[j, 0], S0[j, 1], S0[j, 2], S1[j, 0], S1[j, 1], S1[j, 2]))
 
 
-@njit
+@njit_folded
 def segment_box_chord(s0, s1, half, dim, shrink):
     """Length [m] of the part of segment [s0, s1] inside the open box |x_k| < half_k - shrink.
 
@@ -131,7 +131,7 @@ def segment_box_chord(s0, s1, half, dim, shrink):
     return (t1 - t0) * math.sqrt(seg2)
 
 
-@njit
+@njit_folded
 def effector_frame_hit(R, px, py, pz, cl, hits, m):
     """HIT_EFFECTOR_FRAME where a corner of the effector box (rotation ``R``, origin (px, py, pz)
     [m]; ``cl`` a :data:`Clearance`) is outside the frame box, else 0; with ``cl.full`` the pair
@@ -145,7 +145,7 @@ def effector_frame_hit(R, px, py, pz, cl, hits, m):
     return HIT_EFFECTOR_FRAME
 
 
-@njit
+@njit_folded
 def leaving_point(Bp, i, half, dim, tol, s0):
     """Write into ``s0`` (3,) [m] where cable i leaves the effector box (half sizes ``half``), in
     platform coordinates: its attachment ``Bp[i]``, or, for an attachment inside the box (or on its
@@ -166,7 +166,7 @@ def leaving_point(Bp, i, half, dim, tol, s0):
         s0[bk] = half[bk] if Bp[i, bk] >= 0.0 else -half[bk]
 
 
-@njit
+@njit_folded
 def cable_effector_chord(Bp, i, cp, half, dim, tol, s0, s1):
     """Length [m] of cable i's free segment inside the effector box, its own attachment excepted.
 
