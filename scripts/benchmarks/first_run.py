@@ -1,6 +1,7 @@
 """The first ``workspace`` run of every shipped design, cold and warm.
 
-For each design, ``python -m cdpr_design workspace DESIGN --json`` in a new process (wall time, and
+For each design, ``cdpr-design workspace DESIGN --json`` in a new process (as the installed
+command runs it, on any checkout: :data:`~benchmarks.harness.ENTRY_POINT`) (wall time, and
 CPU of the command's process and of the processes it waits for; the picture process, which it does
 not wait for, is not in it):
 

@@ -182,9 +182,18 @@ def call_in_child(function: str, *args, cache=None, **extra):
     return child_json(code, json.dumps(list(args)), cache=cache, **extra)
 
 
+#: What the installed ``cdpr-design`` command runs (the entry point pip writes for
+#: ``[project.scripts]``), run on any checkout with ``-c``.  Not ``python -m cdpr_design``: that
+#: starts the command two frames deeper (runpy's), and a cold first run's system time depends on
+#: how deep the stack is where numba compiles (docs/performance.md, "Where a first run's system
+#: time goes").
+ENTRY_POINT = "import sys\nfrom cdpr_design.__main__ import main\nsys.exit(main())"
+
+
 def command(args: Sequence[str], root: Path = ROOT, cache=None, **extra):
-    """(:class:`Timing`, parsed ``--json`` output) of ``python -m cdpr_design ARGS --json`` on ``root``."""
-    t, r = process([sys.executable, "-m", "cdpr_design", *args, "--json"], env_for(root, cache, **extra), cwd=root)
+    """(:class:`Timing`, parsed ``--json`` output) of ``cdpr-design ARGS --json`` on ``root``
+    (:data:`ENTRY_POINT`)."""
+    t, r = process([sys.executable, "-c", ENTRY_POINT, *args, "--json"], env_for(root, cache, **extra), cwd=root)
     return t, json.loads(r.stdout)
 
 

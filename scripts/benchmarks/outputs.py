@@ -7,7 +7,7 @@ For IPAnema 3 on a fine grid (by default 0.1, 0.1, 0.05 m) and for planar2:
    margin, no file); timed before and after each round, each ratio taken within its round;
 2. the kernels in this process: ``workspaces.run`` without maps or rows, warm; with ``--baseline``,
    also each checkout's kernels in a child process in the same rounds (:data:`KERNEL_CHILD`);
-3. the whole command, ``python -m cdpr_design workspace SPEC --json`` in a new process (start-up,
+3. the whole command, ``cdpr-design workspace SPEC --json`` in a new process (start-up,
    spec, numba's start-up -- ``load_s`` --, sweep, ``workspace.csv``, pictures, summary, exit),
    with ``--format csv`` and ``parquet``, warm, and once from an empty numba cache; with
    ``--baseline``, the baseline checkout's command in the same rounds;
