@@ -18,9 +18,12 @@ Usage::
     python3 scripts/lowest_versions.py -- tests/test_spec.py -n 0 -q
     python3 scripts/lowest_versions.py --keep --venv /tmp/lowest   # keep (and reuse) the environment
     python3 scripts/lowest_versions.py --print         # only print the constraints
+    python3 scripts/lowest_versions.py --make-only --venv /tmp/lowest   # make and check it, run nothing
 
 Exit status: pytest's (0: passed), or 1 when the environment could not be made
-(pip's output is in ``<venv>/install.log``, kept with ``--keep``).
+(pip's output is in ``<venv>/install.log``, kept with ``--keep``); with
+``--make-only``, 0 once the environment is made and checked (it is kept: a
+later run with ``--keep --venv`` the same folder reuses it).
 """
 
 from __future__ import annotations
@@ -138,9 +141,14 @@ def main(argv=None) -> int:
     ap.add_argument("--venv", type=Path, help="where to make the environment (default: a new temporary folder)")
     ap.add_argument("--keep", action="store_true", help="keep the environment; an existing --venv is reused")
     ap.add_argument("--print", action="store_true", help="print the constraints and stop")
+    ap.add_argument("--make-only", action="store_true", help="make and check the environment at --venv, keep "
+                    "it and stop (no tests): a later run with --keep and that --venv reuses it")
     ap.add_argument("pytest_args", nargs="*", help="after --: pytest's arguments (default: the fast tier, "
                     f"{' '.join(DEFAULT_SELECTION)})")
     args = ap.parse_args(argv)
+    if args.make_only and args.venv is None:
+        ap.error("--make-only needs --venv: the folder a later run with --keep reuses")
+    keep = args.keep or args.make_only
 
     bounds = lower_bounds(requirements())
     text = constraints_text(bounds)
@@ -150,7 +158,7 @@ def main(argv=None) -> int:
     venv = args.venv or Path(tempfile.mkdtemp(prefix="cdpr-lowest-")) / "venv"
     try:
         print(f"lower bounds:\n{text}", flush=True)
-        if not (args.keep and (venv / "bin" / "python").exists()) and not make_venv(venv, args.python, text):
+        if not (keep and (venv / "bin" / "python").exists()) and not make_venv(venv, args.python, text):
             return 1
         py = venv / "bin" / "python"
         env = isolated_env(venv)
@@ -159,10 +167,12 @@ def main(argv=None) -> int:
         print(f"installed ({venv}):\n{freeze.stdout}", flush=True)
         if run([py, "-c", CHECK, json.dumps(bounds)], cwd=venv, env=env) != 0:
             return 1
+        if args.make_only:
+            return 0
         env["NUMBA_CACHE_DIR"] = str(venv / "numba-cache")  # not the usual environment's cache
         return run([py, "-m", "pytest", *(args.pytest_args or DEFAULT_SELECTION)], cwd=ROOT, env=env)
     finally:
-        if not args.keep:
+        if not keep:
             shutil.rmtree(venv if args.venv else venv.parent, ignore_errors=True)
 
 if __name__ == "__main__":
