@@ -1,8 +1,8 @@
 """The first ``workspace`` run of every shipped design, cold and warm.
 
-For each design, ``cdpr-design workspace DESIGN --json`` in a new process (as the installed
-command runs it, on any checkout: :data:`~benchmarks.harness.ENTRY_POINT`) (wall time, and
-CPU of the command's process and of the processes it waits for; the picture process, which it does
+For each design, ``cdpr-design workspace DESIGN --json`` in a new process, started as the installed
+command starts (:data:`~benchmarks.harness.ENTRY_POINT`, on any checkout); the wall time, and the
+CPU of the command's process and of the processes it waits for (the picture process, which it does
 not wait for, is not in it):
 
 1. cold: numba's cache a new, empty folder (every kernel the design uses compiled);
