@@ -141,5 +141,5 @@ def sagging_pose(design: Design, full: np.ndarray, wreq: np.ndarray, combos: np.
     robot = KS.sag_robot(design.outlets, sag_cables(arr, design.rows, design.tension_min, design.tension_max), wreq,
                          combos, kcode, MAX_ITERATIONS)
     st, feas, margin = KS.sag_pose(full[0], full[1], full[2], Rb, robot, out, sc, KS.redundancy(n, m))
-    t, ta, l0, sg, L, W = out.t, out.outlet, out.L0, out.sag, out.lengths, sc.W
+    t, ta, l0, sg, L, W = out.t, out.outlet, out.L0, out.sag, out.lengths, sc.fixed.W
     return bool(feas), float(margin), t, L, W, CableState(ta, l0, sg, STATUS[st])

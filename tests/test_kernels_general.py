@@ -348,9 +348,10 @@ def reduced(n, m, W, w):
     """The scratch holding the null-space reduction of W t = w (basis factorisation, null basis,
     t_p) that the projections read; None where W is rank deficient."""
     scr = K.make_scratch(n, m, 1)
-    if not K.basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+    red = K.reduction(scr)
+    if not K.basis_factor(W, red.tab, red.slot, red.nbc, red.bcol):
         return None
-    K.null_space_setup(n, m, w, scr)
+    K.null_space(n, m, w, red.tab, red.N, red.tp, red.tb, red.nbc, red.bcol)
     return scr
 
 
@@ -422,7 +423,7 @@ def test_square_tensions_equal_the_active_set_method():
         ok_ref = K.goldfarb_idnani(m, 0, tmin, tmax, t_ref, scr)
         ok = K.project_null(m, 0, tmin, tmax, t, scr)
         assert ok == ok_ref and np.array_equal(t, t_ref, equal_nan=True), trial
-        ok_sq = K.min_norm_tensions_square(W, w, tmin, tmax, t_sq, K.make_scratch(n, m, 1))
+        ok_sq = K.min_norm_tensions_square(W, w, tmin, tmax, t_sq, K.reduction(K.make_scratch(n, m, 1)))
         ok_any = K.min_norm_tensions(W, w, tmin, tmax, t_any, K.make_scratch(n, m, 1))
         assert ok_sq == ok_any == ok_ref, trial
         assert np.array_equal(t_sq, t_ref, equal_nan=True) and np.array_equal(t_any, t_ref, equal_nan=True), trial

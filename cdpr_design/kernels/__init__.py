@@ -54,8 +54,8 @@ _EXPORTS = {
                      "eval_pose", "eval_square"), "pose"),
     **dict.fromkeys(("GridPoses", "Interference", "Pulleys", "sweep_grid", "sweep_points"),
                     "sweep"),
-    **dict.fromkeys(("QP_TOL", "goldfarb_idnani", "min_norm_tensions", "min_norm_tensions_square",
-                     "null_space_setup", "project_null", "project_one", "project_two", "qp_tolerance",
+    **dict.fromkeys(("QP_TOL", "Reduction", "goldfarb_idnani", "min_norm_tensions", "min_norm_tensions_square",
+                     "null_space", "project_null", "project_one", "project_two", "qp_tolerance", "reduction",
                      "square_projection"), "tension_qp"),
 }
 

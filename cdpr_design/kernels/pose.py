@@ -86,7 +86,7 @@ def pose_any(W, wreq, tmin, tmax, combos, kind, t_out, scr):
                 acc += tab[s, m + i] * wreq[0, i]
             t_out[bcol[s]] = min(max(acc, tmin[bcol[s]]), tmax[bcol[s]])
     else:  # writes t_out, NaN where no tensions exist
-        # (tension_qp's null_space_setup on the scratch's arrays, then the general QP)
+        # (tension_qp's null-space reduction on the scratch's arrays, then the general QP)
         null_space(n, m, wreq[0], scr.tab, scr.N, scr.tp, scr.tb, scr.nbc, scr.bcol)
         qp_ok = goldfarb_idnani(m, r, tmin, tmax, t_out, scr)
     return _verdict(kind, closure, margin, qp_ok, r)

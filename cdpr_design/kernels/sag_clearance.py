@@ -345,7 +345,7 @@ def _rows_loop(k0, k1, P, Rb, R, robot, scl, out, redundant, po, sc, curves, csc
     """Rows k0..k1-1 of :func:`sag_rows_at`, with the block's buffers (:func:`_rows_buffers`)."""
     m = robot.A.shape[0]
     keep = out.shapes.shape[0] == P.shape[0]
-    cw = sc.cw
+    cw = sc.fixed.cw
     for k in range(k0, k1):
         px, py, pz = P[k, 0], P[k, 1], P[k, 2]
         st, f, mg = sag_pose(px, py, pz, Rb, robot, po, sc, redundant)

@@ -10,8 +10,8 @@ to heavy ones where the straight start is too far from it.  The map
 contracts with a factor of about w L / (2 T) (a cable's weight over twice its tension), so a
 few iterations suffice for taut cables.
 
-Everything works in a pose's scratch (:data:`SagScratch`, :func:`make_sag_scratch`, allocated
-once per block of poses): nothing here allocates.
+Everything works in a pose's scratch (:data:`FixedScratch` in a :data:`SagScratch`, :func:`make_sag_scratch`,
+allocated once per block of poses): nothing here allocates.
 """
 
 from __future__ import annotations
@@ -21,11 +21,11 @@ from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import jitable, njit, njit_folded
+from cdpr_design.kernels._jit import njit, njit_folded
 from cdpr_design.kernels.hsm import make_scratch
 from cdpr_design.kernels.sag_shapes import (CW_HI, CW_L0, CW_LO, CW_TAU, CW_TH, CW_TM, CW_TP, CW_X, CW_Z, NCW,
                                             SagCables, shapes_for)
-from cdpr_design.kernels.tension_qp import min_norm_tensions, min_norm_tensions_square
+from cdpr_design.kernels.tension_qp import min_norm_tensions, min_norm_tensions_square, reduction
 
 #: Status of a pose (``status`` column of a sagging sweep).
 #: Converged: feasible or not by its margin and tensions.
@@ -46,21 +46,30 @@ MIN_WEIGHT_STEP = 1.0 / 256.0
 #: Equilibrium tolerance of the fixed point: |W t - w| <= SAG_TOL (1 + |w| + max t) [N].
 SAG_TOL = 1e-13
 
-#: A pose's scratch: ``W`` (n, m) the structure matrix, ``cw`` (m, NCW) the cables' work columns
-#: (:mod:`~cdpr_design.kernels.sag_shapes`), ``lo``/``hi`` (m,) the shifted bounds [N], ``inf_hi``
-#: (m,) all inf, ``tq`` (m,) the tensions being solved for [N], ``scr`` the tension QP's and
-#: margin's scratch (:func:`~cdpr_design.kernels.hsm.make_scratch`), ``work`` (6 + m, m):
-#: :func:`iterate`'s rows (the map's tensions at t and at a trial t, the straight start, the
-#: continuation's weights, the Newton step's right-hand side and trial t, then its m x m Jacobian).
-SagScratch = namedtuple("SagScratch", "W cw lo hi inf_hi tq scr work")
+#: The fixed point's scratch: ``W`` (n, m) the structure matrix, ``cw`` (m, NCW) the cables' work
+#: columns (:mod:`~cdpr_design.kernels.sag_shapes`), ``lo``/``hi`` (m,) the shifted bounds [N],
+#: ``inf_hi`` (m,) all inf, ``qp`` the tension QP's arrays (a
+#: :data:`~cdpr_design.kernels.tension_qp.Reduction` for m = n, else the whole
+#: :func:`~cdpr_design.kernels.hsm.make_scratch`), ``work`` (6 + m, m): :func:`iterate`'s rows (the
+#: map's tensions at t and at a trial t, the straight start, the continuation's weights, the Newton
+#: step's right-hand side and trial t, then its m x m Jacobian).  Only what the fixed point reads:
+#: its functions are called many times a pose, and a compiled function counts a reference to every
+#: array it is handed on every call.
+FixedScratch = namedtuple("FixedScratch", "W cw lo hi inf_hi qp work")
+#: A sagging pose's scratch: ``fixed`` (:data:`FixedScratch`), ``tq`` (m,) the tensions being
+#: solved for [N], ``scr`` the margin's (:func:`~cdpr_design.kernels.hsm.make_scratch`; ``fixed.qp``
+#: works in its arrays).
+SagScratch = namedtuple("SagScratch", "fixed tq scr")
 
 
-@jitable
 def make_sag_scratch(n, m, nv):
-    """A :data:`SagScratch` for ``n`` wrench rows, ``m`` cables and ``nv`` required wrenches."""
-    inf_hi = np.full(m, np.inf)
-    return SagScratch(np.empty((n, m)), np.empty((m, NCW)), np.empty(m), np.empty(m), inf_hi, np.empty(m),
-                      make_scratch(n, m, nv), np.empty((6 + m, m)))
+    """A :data:`SagScratch` for ``n`` wrench rows, ``m`` cables and ``nv`` required wrenches (numpy,
+    called from Python: the blocks' loops allocate nothing)."""
+    scr = make_scratch(n, m, nv)
+    qp = reduction(scr) if m == n else scr
+    fixed = FixedScratch(np.empty((n, m)), np.empty((m, NCW)), np.empty(m), np.empty(m), np.full(m, np.inf), qp,
+                         np.empty((6 + m, m)))
+    return SagScratch(fixed, np.empty(m), scr)
 
 
 @njit_folded
@@ -92,24 +101,24 @@ def no_tensions(cw, lo):
 
 
 @njit_folded
-def distribute(W, w0, lo, hi, inf_hi, t, scr, redundant):
+def distribute(W, w0, lo, hi, inf_hi, t, qp, redundant):
     """Minimum-norm tensions ``t`` [N] of ``W`` for the wrench ``w0`` under (lo, hi); failing that
-    under (lo, ``inf_hi``).  Returns 2, 1 or 0 (none).  ``redundant``: None where m = n (the
-    square case alone), else m - n."""
-    if _min_norm(W, w0, lo, hi, t, scr, redundant):
+    under (lo, ``inf_hi``), in the QP's arrays ``qp`` (:data:`FixedScratch`).  Returns 2, 1 or 0
+    (none).  ``redundant``: None where m = n (the square case alone), else m - n."""
+    if _min_norm(W, w0, lo, hi, t, qp, redundant):
         return 2
-    if _min_norm(W, w0, lo, inf_hi, t, scr, redundant):
+    if _min_norm(W, w0, lo, inf_hi, t, qp, redundant):
         return 1
     return 0
 
 
 @njit_folded
-def _min_norm(W, w, lo, hi, t, scr, redundant):
-    """:func:`~cdpr_design.kernels.tension_qp.min_norm_tensions`, its square case alone where
-    ``redundant`` is None."""
+def _min_norm(W, w, lo, hi, t, qp, redundant):
+    """:func:`~cdpr_design.kernels.tension_qp.min_norm_tensions`, its square case alone (in the
+    :data:`~cdpr_design.kernels.tension_qp.Reduction` ``qp``) where ``redundant`` is None."""
     if redundant is None:
-        return min_norm_tensions_square(W, w, lo, hi, t, scr)
-    return min_norm_tensions(W, w, lo, hi, t, scr)
+        return min_norm_tensions_square(W, w, lo, hi, t, qp)
+    return min_norm_tensions(W, w, lo, hi, t, qp)
 
 
 @njit
@@ -128,7 +137,7 @@ def _fixed_map(t, q, Rb, w0, cab, sc, redundant):
         for i in range(t.shape[0]):
             lo[i] = cw[i, CW_LO]
             hi[i] = cw[i, CW_HI]
-        code = distribute(sc.W, w0, lo, hi, sc.inf_hi, q, sc.scr, redundant)
+        code = distribute(sc.W, w0, lo, hi, sc.inf_hi, q, sc.qp, redundant)
     return code, fit
 
 
@@ -177,7 +186,7 @@ def _newton_step(t, q, Rb, w0, cab, sc, redundant):
     """One damped Newton step on G(t) = Q(t) - t (finite-difference Jacobian, one column
     per cable); t is updated in place.  Returns the map's (code, fit) at the new t (code -2: no step).
     The map's tensions at a trial t, the Jacobian, the right-hand side and the trial tensions
-    are rows of ``sc.work`` (:data:`SagScratch`)."""
+    are rows of ``sc.work`` (:data:`FixedScratch`)."""
     m = t.shape[0]
     work = sc.work
     qh = work[1]
@@ -224,7 +233,7 @@ def _newton_step(t, q, Rb, w0, cab, sc, redundant):
 def iterate(t, Rb, w0, cab, sc, maxit, redundant):
     """Solve t = Q(t) from the straight tensions ``t`` (m,) [N] (in place) for the cables ``cab``
     (:data:`~cdpr_design.kernels.sag_shapes.SagCables`) attached at ``Rb`` (m, 3) [m] and the
-    required wrench ``w0`` (n,) [N, N m], in the scratch ``sc`` (:data:`SagScratch`, its ``cw``
+    required wrench ``w0`` (n,) [N, N m], in the scratch ``sc`` (:data:`FixedScratch`, its ``cw``
     holding the spans): fixed-point steps while they contract by half or better, damped Newton
     steps otherwise, at most ``maxit`` iterations.  Returns (status, code, iterations); on
     SAG_OK, W, cw, lo, hi hold the shapes of the final t and code is the map's (2 or 1)."""

@@ -54,7 +54,7 @@ def _samples_loop(k0, k1, P, Rb, robot, out, redundant, po, sc, zero, wj):
     cab = robot.cables
     # a sample's robot (its required wrench in wj), and the same under [0, inf)
     one = SagRobot(robot.A, cab, wj, robot.combos, robot.kind, robot.maxit)
-    free = SagRobot(robot.A, SagCables(cab.rows, cab.up, cab.w, cab.EA, zero, sc.inf_hi), wj, robot.combos,
+    free = SagRobot(robot.A, SagCables(cab.rows, cab.up, cab.w, cab.EA, zero, sc.fixed.inf_hi), wj, robot.combos,
                     robot.kind, robot.maxit)
     for j in range(k0, k1):
         for r in range(n):

@@ -113,7 +113,8 @@ def sag_pose(px, py, pz, Rb, robot, out, sc, redundant):
     the shifted bounds (NaN unless the status is :data:`SAG_OK`).
     """
     A, cab, wreq = robot.A, robot.cables, robot.wreq
-    W, cw, lo, hi, tq = sc.W, sc.cw, sc.lo, sc.hi, sc.tq
+    fx, tq = sc.fixed, sc.tq
+    W, cw, lo, hi = fx.W, fx.cw, fx.lo, fx.hi
     t = out.t
     m = A.shape[0]
     for i in range(m):
@@ -125,10 +126,10 @@ def sag_pose(px, py, pz, Rb, robot, out, sc, redundant):
         W[:, :] = math.nan  # no direction to pull in, and no shapes
         return SAG_SINGULAR, False, math.nan
     straight_columns(Rb, A, px, py, pz, cab.rows, W)
-    if distribute(W, wreq[0], cab.tmin, cab.tmax, sc.inf_hi, tq, sc.scr, redundant) == 0:
+    if distribute(W, wreq[0], cab.tmin, cab.tmax, fx.inf_hi, tq, fx.qp, redundant) == 0:
         W[:, :] = math.nan
         return SAG_NO_TENSIONS, False, math.nan
-    status, bounded, _ = solve(tq, Rb, wreq[0], cab, sc, robot.maxit, redundant)
+    status, bounded, _ = solve(tq, Rb, wreq[0], cab, fx, robot.maxit, redundant)
     if status != SAG_OK:
         W[:, :] = math.nan  # the shapes are not known
         return status, False, math.nan
@@ -205,9 +206,9 @@ def _grid_loop(k0, k1, start, grid, Rb, robot, out, redundant, po, sc):
         st, f, mg = sag_pose(x, y, z, Rb, robot, po, sc, redundant)
         store_row(out, k, st, f, mg, po, m)
         if out.Ws.shape[0] > 0:
-            for r in range(sc.W.shape[0]):
+            for r in range(sc.fixed.W.shape[0]):
                 for i in range(m):
-                    out.Ws[k, r, i] = sc.W[r, i]
+                    out.Ws[k, r, i] = sc.fixed.W[r, i]
 
 
 @njit

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 
-from cdpr_design.kernels._jit import njit, njit_folded
+from cdpr_design.kernels._jit import jitable, njit, njit_folded
 from cdpr_design.kernels.linalg import householder_qr, orthogonalize_column
 from cdpr_design.kernels.hsm import basis_factor
 
@@ -14,24 +15,32 @@ from cdpr_design.kernels.hsm import basis_factor
 #: Relative tolerance (to the largest tension bound) of the QP's bound checks.
 QP_TOL = 1e-11
 
+#: The arrays of the null-space reduction W t = w -> t = t_p + N z (:func:`reduction` of a
+#: :func:`~cdpr_design.kernels.hsm.make_scratch`): ``tab`` (n, m + n) the basis factorisation,
+#: ``slot`` (m,), ``nbc`` (max(m - n, 1),), ``bcol`` (n,) its basis bookkeeping (int64), ``N``
+#: (m, r) the orthonormal null basis, ``tp`` (m,) t_p [N], ``tb`` (m,) the basic solution [N].
+#: The square case's whole scratch: a compiled function counts a reference to every array it is
+#: handed on every call, so the square tensions (:func:`min_norm_tensions_square`, called many times
+#: a pose by the sagging cables' fixed point) are handed these 7, not the scratch's 31.
+Reduction = namedtuple("Reduction", "tab slot nbc bcol N tp tb")
 
-@njit
-def null_space_setup(n, m, w, scr):
-    """Orthonormal null basis N (m, r) and t_p = W^+ w from the basis factorisation.
 
-    The columns of P [-F; I] span the null space of W; two passes of
-    classical Gram-Schmidt make them orthonormal (``scr[8]``).  The basic
-    solution t_b (t_B = G w, t_N = 0) projected off the null space is the
-    minimum-norm solution t_p = t_b - N N^T t_b (``scr[9]``).
-    """
-    null_space(n, m, w, scr[0], scr[8], scr[9], scr[25], scr[19], scr[20])
+@jitable
+def reduction(scr):
+    """The :data:`Reduction` arrays of the scratch ``scr`` (:func:`~cdpr_design.kernels.hsm.make_scratch`),
+    the same arrays (not copies)."""
+    return Reduction(scr[0], scr[18], scr[19], scr[20], scr[8], scr[9], scr[25])
 
 
 @njit
 def null_space(n, m, w, tab, N, tp, tb, nbc, bcol):
-    """:func:`null_space_setup` on the scratch's arrays themselves (``tab`` scr[0], ``N`` scr[8],
-    ``tp`` scr[9], ``tb`` scr[25], ``nbc`` scr[19], ``bcol`` scr[20]): a compiled function that
-    takes the scratch tuple unpacks its 31 arrays, which costs compile time in every such function."""
+    """Orthonormal null basis ``N`` (m, r) and ``tp`` (m,) t_p = W^+ w [N] from the basis
+    factorisation ``tab``, ``nbc``, ``bcol`` (:func:`~cdpr_design.kernels.hsm.basis_factor`).
+
+    The columns of P [-F; I] span the null space of W; two passes of classical Gram-Schmidt make
+    them orthonormal.  The basic solution ``tb`` (t_B = G w, t_N = 0) projected off the null space
+    is the minimum-norm solution t_p = t_b - N N^T t_b.  The arrays of a :data:`Reduction`.
+    """
     r = m - n
     for k in range(r):
         col = nbc[k]
@@ -413,24 +422,34 @@ def min_norm_tensions(W, w, tmin, tmax, t, scr):
     from :func:`make_scratch`.
     """
     n, m = W.shape
-    return _reduced(W, w, t, scr) and project_null(m, m - n, tmin, tmax, t, scr)
+    red = reduction(scr)
+    return (_reduced(W, w, t, red.tab, red.slot, red.nbc, red.bcol, red.N, red.tp, red.tb)
+            and project_null(m, m - n, tmin, tmax, t, scr))
+
+
+@njit_folded
+def min_norm_tensions_square(W, w, tmin, tmax, t, red):
+    """:func:`min_norm_tensions` for m = n (the same numbers) in the :data:`Reduction` ``red``,
+    compiling only the square case (:func:`square_projection`) and none of the redundant methods:
+    the tensions are unique."""
+    return _square(W, w, tmin, tmax, t, red.tab, red.slot, red.nbc, red.bcol, red.N, red.tp, red.tb)
 
 
 @njit
-def min_norm_tensions_square(W, w, tmin, tmax, t, scr):
-    """:func:`min_norm_tensions` for m = n (the same numbers), compiling only the square case
-    (:func:`square_projection`) and none of the redundant methods: the tensions are unique."""
-    return _reduced(W, w, t, scr) and square_projection(W.shape[1], tmin, tmax, t, scr[9])
+def _square(W, w, tmin, tmax, t, tab, slot, nbc, bcol, N, tp, tb):
+    """:func:`min_norm_tensions_square` on the :data:`Reduction`'s arrays themselves."""
+    return (_reduced(W, w, t, tab, slot, nbc, bcol, N, tp, tb)
+            and square_projection(W.shape[1], tmin, tmax, t, tp))
 
 
-@njit
-def _reduced(W, w, t, scr):
-    """``t`` NaN, then the null-space reduction of W t = w into ``scr`` (the basis factorisation,
-    the null basis N and t_p: :func:`null_space_setup`); False when rank W < n."""
+@njit_folded
+def _reduced(W, w, t, tab, slot, nbc, bcol, N, tp, tb):
+    """``t`` NaN, then the null-space reduction of W t = w into the :data:`Reduction`'s arrays (the
+    basis factorisation, the null basis N and t_p: :func:`null_space`); False when rank W < n."""
     n, m = W.shape
     for j in range(m):
         t[j] = np.nan
-    if not basis_factor(W, scr[0], scr[18], scr[19], scr[20]):
+    if not basis_factor(W, tab, slot, nbc, bcol):
         return False
-    null_space_setup(n, m, w, scr)
+    null_space(n, m, w, tab, N, tp, tb, nbc, bcol)
     return True
