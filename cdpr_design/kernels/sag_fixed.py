@@ -130,14 +130,14 @@ def _fixed_map(t, q, Rb, w0, cab, sc, redundant):
     its tension); fit is :func:`~cdpr_design.kernels.sag_shapes.shapes_for`'s (2: a cable was
     raised to its least tension, so t is not yet consistent with W).
     """
-    cw, lo, hi = sc.cw, sc.lo, sc.hi
-    fit = shapes_for(t, Rb, cab, cw, sc.W, 60)
+    W, cw, lo, hi = sc.W, sc.cw, sc.lo, sc.hi
+    fit = shapes_for(t, Rb, cab, cw, W, 60)
     code = -1
     if fit != 0:
         for i in range(t.shape[0]):
             lo[i] = cw[i, CW_LO]
             hi[i] = cw[i, CW_HI]
-        code = distribute(sc.W, w0, lo, hi, sc.inf_hi, q, sc.qp, redundant)
+        code = distribute(W, w0, lo, hi, sc.inf_hi, q, sc.qp, redundant)
     return code, fit
 
 

@@ -102,7 +102,7 @@ def _secant_start(i, tau, cw):
 
 
 @njit_folded
-def _slack_column(i, X, Z, cab, Rb, cw, W):
+def _slack_column(i, X, Z, rows, up, tmin, tmax, Rb, cw, W):
     """A slack cable: no force, shape and length undetermined; column along the chord."""
     cw[i, CW_TH] = math.nan
     cw[i, CW_L0] = math.nan
@@ -110,9 +110,8 @@ def _slack_column(i, X, Z, cab, Rb, cw, W):
     cw[i, CW_H] = 0.0
     cw[i, CW_VB] = 0.0
     cw[i, CW_TA] = math.nan
-    cw[i, CW_LO] = cab.tmin[i]
-    cw[i, CW_HI] = cab.tmax[i]
-    up = cab.up
+    cw[i, CW_LO] = tmin[i]
+    cw[i, CW_HI] = tmax[i]
     c = math.hypot(X, Z)
     if X > 0.0:
         dx = (X * cw[i, CW_UX] + Z * up[0]) / c
@@ -121,15 +120,14 @@ def _slack_column(i, X, Z, cab, Rb, cw, W):
     else:
         s = 1.0 if Z > 0.0 else -1.0
         dx, dy, dz = s * up[0], s * up[1], s * up[2]
-    fill_column(W, i, cab.rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
+    fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
 
 
 @njit_folded
-def _shape_column(i, tau, H, VB, L0, cab, Rb, cw, W):
+def _shape_column(i, tau, H, VB, L0, rows, up, w, tmin, tmax, Rb, cw, W):
     """Cable i's shape (H, VB [N], L0 [m]) at effector-end tension tau [N] into ``cw`` (the
     bounds shifted to hold along the whole cable, the outlet tension), and its column of ``W``
     along the end force."""
-    w, up = cab.w, cab.up
     X = cw[i, CW_X]
     th = math.atan2(VB, H)
     cw[i, CW_TH] = th
@@ -141,10 +139,10 @@ def _shape_column(i, tau, H, VB, L0, cab, Rb, cw, W):
     tmax_along = max(TA, tau)
     tmin_along = H if (VB < 0.0 < VA) else min(TA, tau)
     cw[i, CW_TA] = TA
-    cw[i, CW_LO] = cab.tmin[i] + (tau - tmin_along)
+    cw[i, CW_LO] = tmin[i] + (tau - tmin_along)
     if not math.isnan(cw[i, CW_TM]):
         cw[i, CW_LO] = max(cw[i, CW_LO], cw[i, CW_TM])
-    cw[i, CW_HI] = cab.tmax[i] - (tmax_along - tau)
+    cw[i, CW_HI] = tmax[i] - (tmax_along - tau)
     if X > 0.0:
         ch = H / tau
         sv = VB / tau
@@ -154,7 +152,7 @@ def _shape_column(i, tau, H, VB, L0, cab, Rb, cw, W):
     else:
         s = 1.0 if VB > 0.0 else -1.0
         dx, dy, dz = s * up[0], s * up[1], s * up[2]
-    fill_column(W, i, cab.rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
+    fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
 
 
 @njit
@@ -173,7 +171,8 @@ def shapes_for(t, Rb, cab, cw, W, maxit):
     Returns 1; 2 when a cable was raised to its least tension (``t`` is then not
     consistent with ``W``); 0 when a cable has no shape.
     """
-    w, EA = cab.w, cab.EA
+    # the bundle's arrays bound once: each read of a field in the loop would count a reference
+    rows, up, w, EA, tmin, tmax = cab.rows, cab.up, cab.w, cab.EA, cab.tmin, cab.tmax
     tscale = 1.0
     for i in range(t.shape[0]):
         tscale = max(tscale, abs(t[i]))
@@ -183,7 +182,7 @@ def shapes_for(t, Rb, cab, cw, W, maxit):
         Z = cw[i, CW_Z]
         can_slack = w[i] == 0.0 or (X <= 0.0 and Z > 0.0)
         if t[i] <= SLACK * tscale and can_slack:
-            _slack_column(i, X, Z, cab, Rb, cw, W)
+            _slack_column(i, X, Z, rows, up, tmin, tmax, Rb, cw, W)
             continue
         tau = t[i]
         ok = False
@@ -203,7 +202,7 @@ def shapes_for(t, Rb, cab, cw, W, maxit):
             if tau < tm * (1.0 - 1e-12):
                 out = 2
             tau, H, VB, L0 = tm, cw[i, CW_HM], cw[i, CW_VM], cw[i, CW_LM]
-        _shape_column(i, tau, H, VB, L0, cab, Rb, cw, W)
+        _shape_column(i, tau, H, VB, L0, rows, up, w, tmin, tmax, Rb, cw, W)
     return out
 
 
