@@ -81,7 +81,7 @@ def qp_tolerance(m, tmin, tmax):
     return QP_TOL * scale
 
 
-@njit
+@njit_folded
 def project_null(m, r, tmin, tmax, t, scr):
     """The projection of :func:`goldfarb_idnani` (same inputs in ``scr``, same result): in closed
     form for one or two redundant cables (:func:`project_one`, :func:`project_two`), by the dual
@@ -127,7 +127,7 @@ def _finish(m, r, tmin, tmax, t, N, tp, z0, z1, ok):
     return ok
 
 
-@njit
+@njit_folded
 def project_one(m, tmin, tmax, t, scr):
     """:func:`goldfarb_idnani` for r = 1: the balancing tensions are t_p + z n, z on a line.
 
@@ -194,7 +194,7 @@ def _inside(H, k, z0, z1, tol):
     return inside
 
 
-@njit
+@njit_folded
 def project_two(m, tmin, tmax, t, scr):
     """:func:`goldfarb_idnani` for r = 2: the point nearest the origin of a polygon, in closed form.
 
