@@ -103,7 +103,7 @@ def no_tensions(cw, lo):
 @njit_folded
 def distribute(W, w0, lo, hi, inf_hi, t, qp, redundant):
     """Minimum-norm tensions ``t`` [N] of ``W`` for the wrench ``w0`` under (lo, hi); failing that
-    under (lo, ``inf_hi``), in the QP's arrays ``qp`` (:data:`FixedScratch`).  Returns 2, 1 or 0
+    under (lo, ``inf_hi``), in the QP's arrays ``qp`` (a :data:`FixedScratch`'s).  Returns 2, 1 or 0
     (none).  ``redundant``: None where m = n (the square case alone), else m - n."""
     if _min_norm(W, w0, lo, hi, t, qp, redundant):
         return 2
