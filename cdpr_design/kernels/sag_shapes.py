@@ -155,7 +155,7 @@ def _shape_column(i, tau, H, VB, L0, rows, up, w, tmin, tmax, Rb, cw, W):
     fill_column(W, i, rows, dx, dy, dz, Rb[i, 0], Rb[i, 1], Rb[i, 2])
 
 
-@njit
+@njit_folded
 def shapes_for(t, Rb, cab, cw, W, maxit):
     """Cable shapes for effector-end tensions ``t`` (m) [N] of the cables ``cab``
     (:data:`SagCables`) attached at ``Rb`` (m, 3) [m]: the structure matrix ``W`` (n, m)

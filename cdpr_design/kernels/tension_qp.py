@@ -435,7 +435,7 @@ def min_norm_tensions_square(W, w, tmin, tmax, t, red):
     return _square(W, w, tmin, tmax, t, red.tab, red.slot, red.nbc, red.bcol, red.N, red.tp, red.tb)
 
 
-@njit
+@njit_folded
 def _square(W, w, tmin, tmax, t, tab, slot, nbc, bcol, N, tp, tb):
     """:func:`min_norm_tensions_square` on the :data:`Reduction`'s arrays themselves."""
     return (_reduced(W, w, t, tab, slot, nbc, bcol, N, tp, tb)
