@@ -432,14 +432,8 @@ def min_norm_tensions_square(W, w, tmin, tmax, t, red):
     """:func:`min_norm_tensions` for m = n (the same numbers) in the :data:`Reduction` ``red``,
     compiling only the square case (:func:`square_projection`) and none of the redundant methods:
     the tensions are unique."""
-    return _square(W, w, tmin, tmax, t, red.tab, red.slot, red.nbc, red.bcol, red.N, red.tp, red.tb)
-
-
-@njit_folded
-def _square(W, w, tmin, tmax, t, tab, slot, nbc, bcol, N, tp, tb):
-    """:func:`min_norm_tensions_square` on the :data:`Reduction`'s arrays themselves."""
-    return (_reduced(W, w, t, tab, slot, nbc, bcol, N, tp, tb)
-            and square_projection(W.shape[1], tmin, tmax, t, tp))
+    return (_reduced(W, w, t, red.tab, red.slot, red.nbc, red.bcol, red.N, red.tp, red.tb)
+            and square_projection(W.shape[1], tmin, tmax, t, red.tp))
 
 
 @njit_folded
