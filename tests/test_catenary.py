@@ -758,3 +758,24 @@ def test_effector_force_is_not_along_the_chord():
     assert tangent_B < chord < tangent_A
     T = math.hypot(h, v)
     assert chord - tangent_B == pytest.approx(w * L0 * math.cos(chord) / (2 * T), rel=0.05)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.floats(-1e300, 1e300, allow_nan=False, allow_infinity=False),
+       st.floats(-1e300, 1e300, allow_nan=False, allow_infinity=False))
+def test_fast_hypot_within_one_ulp_of_math_hypot(x, y):
+    # the catenary kernels' hypot (sum of squares in its safe range) against the correctly rounded one
+    from cdpr_design.kernels.scalar import hypot
+
+    want = math.hypot(x, y)
+    got = hypot(x, y)
+    assert abs(got - want) <= math.ulp(want), (x, y, got, want)
+
+
+@pytest.mark.parametrize("x, y", [(0.0, 0.0), (3e-200, 4e-200), (3e200, 4e200), (-5.0, 12.0), (1e-320, 0.0),
+                                  (math.inf, 1.0), (1.0, -math.inf), (math.nan, 1.0), (math.inf, math.nan)])
+def test_fast_hypot_edges(x, y):
+    from cdpr_design.kernels.scalar import hypot
+
+    got, want = hypot(x, y), math.hypot(x, y)
+    assert (math.isnan(got) and math.isnan(want)) or got == want, (x, y, got, want)

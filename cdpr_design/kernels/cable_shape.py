@@ -14,6 +14,7 @@ import math
 from cdpr_design.kernels._jit import njit, njit_folded
 from cdpr_design.kernels.catenary import closure_jac
 from cdpr_design.kernels.catenary_inv import CAT_CONVERGED, catenary_inverse
+from cdpr_design.kernels.scalar import hypot
 
 
 @njit_folded
@@ -66,7 +67,7 @@ def least_tension(X, Z, w, EA):
     Z > 0) returns 0 (it may be slack); NaN when the bracket is not found.
     """
     nan = math.nan
-    c = math.hypot(X, Z)
+    c = hypot(X, Z)
     if X <= 1e-14 * c:
         if Z > 0.0:
             return 0.0, 0.0, 0.0, nan
@@ -112,9 +113,9 @@ def least_tension(X, Z, w, EA):
                 ga *= 0.5
             side = -1
         else:
-            return math.hypot(h, v), h, v, math.exp(x)
-    ta = math.hypot(ha, va)
-    tb = math.hypot(hb, vb)
+            return hypot(h, v), h, v, math.exp(x)
+    ta = hypot(ha, va)
+    tb = hypot(hb, vb)
     if ta <= tb:
         return ta, ha, va, math.exp(xa)
     return tb, hb, vb, math.exp(xb)
@@ -134,7 +135,7 @@ def cable_for_tension(X, Z, tau, w, EA, th0, L00, maxit):
     that tends to the straight cable as w -> 0.  Returns (H, VB, L0, ok).
     """
     nan = math.nan
-    c = math.hypot(X, Z)
+    c = hypot(X, Z)
     if not (tau > 0.0) or not (c > 0.0):
         return nan, nan, nan, False
     if w == 0.0:
@@ -165,7 +166,7 @@ def cable_for_tension(X, Z, tau, w, EA, th0, L00, maxit):
         if phi <= floor:
             return H, VB, L0, True
         VA = VB + w * L0
-        k = 1.0 / math.hypot(H, VA) + 1.0 / EA
+        k = 1.0 / hypot(H, VA) + 1.0 / EA
         j11 = -VB * a + H * b
         j21 = -VB * cc + H * d
         j12 = H * k
@@ -198,12 +199,12 @@ def cable_for_tension(X, Z, tau, w, EA, th0, L00, maxit):
             H = tau * math.cos(th)
             VB = tau * math.sin(th)
             Xc, Zc = closure_jac(H, VB, L0, w, EA)[:2]
-            if math.hypot(Xc - X, Zc - Z) <= 1e-11 * c:
+            if hypot(Xc - X, Zc - Z) <= 1e-11 * c:
                 return H, VB, L0, True
             break
     H = tau * math.cos(th)
     VB = tau * math.sin(th)
     Xc, Zc = closure_jac(H, VB, L0, w, EA)[:2]
-    if math.hypot(Xc - X, Zc - Z) <= 1e-11 * c:
+    if hypot(Xc - X, Zc - Z) <= 1e-11 * c:
         return H, VB, L0, True
     return nan, nan, nan, False

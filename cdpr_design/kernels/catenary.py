@@ -46,6 +46,7 @@ import numpy as np
 
 from cdpr_design.kernels._jit import njit, njit_folded
 from cdpr_design.kernels.parallel import run_blocks
+from cdpr_design.kernels.scalar import hypot
 
 # 12-point Gauss-Legendre rule on [-1, 1] (for the short-interval mean in the Jacobian).
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(12)
@@ -79,8 +80,8 @@ def _closure(H, VB, L0, w, EA):
     """
     wl = w * L0
     VA = VB + wl
-    TA = math.hypot(H, VA)
-    TB = math.hypot(H, VB)
+    TA = hypot(H, VA)
+    TB = hypot(H, VB)
     Xel = H * L0 / EA
     Zel = L0 * (VA + VB) / (2.0 * EA)
     if TA + TB <= 0.0:
@@ -126,7 +127,7 @@ def _gprime_mean(a, b):
     acc = 0.0
     for k in range(_GL_X.shape[0]):
         t = m + h * _GL_X[k]
-        r = 1.0 / math.hypot(1.0, t)
+        r = 1.0 / hypot(1.0, t)
         tr = t * r
         acc += _GL_W[k] * tr * tr * r
     return 0.5 * acc
@@ -138,8 +139,8 @@ def closure_jac(H, VB, L0, w, EA):
     (:func:`catenary_ends`) and the flexibility (:func:`catenary_jacobian`) together."""
     wl = w * L0
     VA = VB + wl
-    TA = math.hypot(H, VA)
-    TB = math.hypot(H, VB)
+    TA = hypot(H, VA)
+    TB = hypot(H, VB)
     Xcat, Zcat, Xel, Zel = _closure(H, VB, L0, w, EA)
     X = Xcat + Xel
     Z = Zcat + Zel
@@ -202,7 +203,7 @@ def catenary_end_tensions(H, VB, L0, w):
     The tension along the cable is sqrt(H^2 + V(s)^2) with V increasing from
     VB to VA, so its largest value is max(T_A, T_B).
     """
-    return math.hypot(H, VB + w * L0), math.hypot(H, VB)
+    return hypot(H, VB + w * L0), hypot(H, VB)
 
 
 # ---------------------------------------------------------------------------
@@ -244,7 +245,7 @@ def catenary_sag(H, VB, L0, w, EA):
     if w <= 0.0 or H <= 0.0:
         return 0.0, 0.0
     X, Z = catenary_ends(H, VB, L0, w, EA)
-    c = math.hypot(X, Z)
+    c = hypot(X, Z)
     if not (c > 0.0) or not (X > 0.0):
         return 0.0, 0.0
     sstar = (H * (Z / X) - VB) / w
@@ -286,7 +287,7 @@ def span_height(ax, ay, az, bx, by, bz):
     """
     dx = ax - bx
     dy = ay - by
-    X = math.hypot(dx, dy)
+    X = hypot(dx, dy)
     if X > 0.0:
         return X, az - bz, dx / X, dy / X
     return 0.0, az - bz, 0.0, 0.0

@@ -21,6 +21,7 @@ import numpy as np
 from cdpr_design.kernels._jit import njit, njit_folded
 from cdpr_design.kernels.catenary import catenary_ends, closure_jac
 from cdpr_design.kernels.parallel import run_blocks
+from cdpr_design.kernels.scalar import hypot
 
 #: Status codes of :func:`catenary_inverse`.
 CAT_CONVERGED = 0
@@ -86,7 +87,7 @@ def _start_catenary(X, Z, L0, w, EA, c):
         lam = _shape_parameter(rho)
         H = w * X / (2.0 * lam)
         VB = 0.5 * (w * Z / math.tanh(lam) - w * L0)
-        Tm = 0.5 * (math.hypot(H, VB) + math.hypot(H, VB + w * L0))
+        Tm = 0.5 * (hypot(H, VB) + hypot(H, VB + w * L0))
         Lnew = L0 * (1.0 + Tm / EA)
         if abs(Lnew - Leff) <= 1e-9 * Leff:
             break
@@ -276,7 +277,7 @@ def catenary_inverse(X, Z, L0, w, EA, H0, VB0, tol, maxit):
         return nan, nan, CAT_NO_SOLUTION, 0
     if not tol > 0.0:
         tol = 1e-12
-    c = math.hypot(X, Z)
+    c = hypot(X, Z)
     inextensible = math.isinf(EA)
     # weightless: straight elastic cable (or slack)
     if w == 0.0:
@@ -376,7 +377,7 @@ def catenary_inverse(X, Z, L0, w, EA, H0, VB0, tol, maxit):
         VB = vn
     if converged:
         rx, rz = _residual(H, VB, X, Z, L0, w, EA)
-        if math.hypot(rx, rz) <= 1e-8 * scale_l:
+        if hypot(rx, rz) <= 1e-8 * scale_l:
             return H, VB, CAT_CONVERGED, it
     # fallback: nested bracketed solve from the best point so far
     if not (H > 0.0 and math.isfinite(H) and math.isfinite(VB)):
@@ -386,7 +387,7 @@ def catenary_inverse(X, Z, L0, w, EA, H0, VB0, tol, maxit):
     it += k
     if ok and h > 0.0:
         rx, rz = _residual(h, v, X, Z, L0, w, EA)
-        if math.hypot(rx, rz) <= 1e-8 * scale_l:
+        if hypot(rx, rz) <= 1e-8 * scale_l:
             return h, v, CAT_CONVERGED, it
     return nan, nan, CAT_NOT_CONVERGED, it
 

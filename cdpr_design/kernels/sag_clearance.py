@@ -54,6 +54,7 @@ from cdpr_design.kernels.parallel import run_blocks
 from cdpr_design.kernels.pose import RowBlock
 from cdpr_design.kernels.sag_shapes import CW_H, CW_L0, CW_VB
 from cdpr_design.kernels.sagging import SAG_OK, redundancy, sag_buffers, sag_pose, store_row
+from cdpr_design.kernels.scalar import hypot
 
 #: The largest distance [m] allowed between a cable's polyline and its catenary (0.1 mm).
 CURVE_TOL = 1e-4
@@ -116,7 +117,7 @@ def cable_curve(i, B, A, H, VB, L0, w, EA, up, zoff, delta, nmax, curves):
         if X > 1e-14 * math.sqrt(lx * lx + ly * ly + lz * lz):
             ux, uy, uz = hx / X, hy / X, hz / X
         VA = VB + w * L0
-        TA, TB = math.hypot(H, VA), math.hypot(H, VB)
+        TA, TB = hypot(H, VA), hypot(H, VB)
         dips = VB < 0.0 < VA
         tmin = H if dips else min(TA, TB)
         kappa = w * H / (tmin * tmin) if tmin > 0.0 else math.inf

@@ -25,6 +25,7 @@ from cdpr_design.kernels._jit import njit, njit_folded
 from cdpr_design.kernels.hsm import make_scratch
 from cdpr_design.kernels.sag_shapes import (CW_HI, CW_L0, CW_LO, CW_TAU, CW_TH, CW_TM, CW_TP, CW_X, CW_Z, NCW,
                                             SagCables, shapes_for)
+from cdpr_design.kernels.scalar import hypot
 from cdpr_design.kernels.tension_qp import min_norm_tensions, min_norm_tensions_square, reduction
 
 #: Status of a pose (``status`` column of a sagging sweep).
@@ -245,7 +246,7 @@ def iterate(t, Rb, w0, cab, sc, maxit, redundant):
     while r == -1 and bump < 8:
         # a cable has no shape at its starting tension: start higher
         for i in range(m):
-            t[i] = 1.5 * t[i] + 0.5 * cab.w[i] * math.hypot(cw[i, CW_X], cw[i, CW_Z])
+            t[i] = 1.5 * t[i] + 0.5 * cab.w[i] * hypot(cw[i, CW_X], cw[i, CW_Z])
             cw[i, CW_TH] = math.nan
             cw[i, CW_L0] = math.nan
         r, fit = _fixed_map(t, q, Rb, w0, cab, sc, redundant)

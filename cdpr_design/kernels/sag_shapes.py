@@ -18,6 +18,7 @@ from collections import namedtuple
 from cdpr_design.kernels._jit import njit, njit_folded
 from cdpr_design.kernels.cable_shape import cable_for_tension, least_tension
 from cdpr_design.kernels.geometry import cable_vector, fill_column
+from cdpr_design.kernels.scalar import hypot
 
 #: The cables as the sagging kernels see them: ``rows`` the motion's wrench rows (int64),
 #: ``up`` (3,) the unit vector against gravity, ``w`` (m,) weight per length [N/m] (0: a
@@ -112,7 +113,7 @@ def _slack_column(i, X, Z, rows, up, tmin, tmax, Rb, cw, W):
     cw[i, CW_TA] = math.nan
     cw[i, CW_LO] = tmin[i]
     cw[i, CW_HI] = tmax[i]
-    c = math.hypot(X, Z)
+    c = hypot(X, Z)
     if X > 0.0:
         dx = (X * cw[i, CW_UX] + Z * up[0]) / c
         dy = (X * cw[i, CW_UY] + Z * up[1]) / c
@@ -135,7 +136,7 @@ def _shape_column(i, tau, H, VB, L0, rows, up, w, tmin, tmax, Rb, cw, W):
     cw[i, CW_H] = H
     cw[i, CW_VB] = VB
     VA = VB + w[i] * L0
-    TA = math.hypot(H, VA)
+    TA = hypot(H, VA)
     tmax_along = max(TA, tau)
     tmin_along = H if (VB < 0.0 < VA) else min(TA, tau)
     cw[i, CW_TA] = TA
