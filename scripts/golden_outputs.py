@@ -48,6 +48,14 @@ code is normalised out (and nothing else):
 - CSV, Parquet and PNG files are hashed as written (the PNGs carry no date:
   matplotlib writes only a ``Software`` text chunk into a PNG).
 
+numba's cache is a new, empty folder for every run (``ROOT/.numba-cache``), not the
+user's: the machine code numba caches for a kernel can differ with what the cache
+already held when it was compiled (the same signatures, objects of other sizes), and
+with it the last bits of results (IPAnema 3's ``acceleration_direction`` by one in its
+17th digit, on a long-used cache against empty ones), so a run starting from whatever
+earlier runs left behind can differ from another of the same code.  With the default
+``--jobs 1`` the commands run, and compile, in the same order every time.
+
 ``--compare OLD.json`` compares this run's manifest with OLD's: every file that
 differs, is missing or is new, every case whose exit status or error changed;
 for CSV and HTML the first differing line, for JSON the first differing key
@@ -196,7 +204,8 @@ def _run_case(code: Path, root: Path, design: str, case: str, args: list[str], e
 def run(root: Path, code: Path, only: str | None, jobs: int) -> dict:
     root = root.resolve()
     code = code.resolve()
-    env = dict(os.environ, PYTHONPATH=str(code) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env = dict(os.environ, PYTHONPATH=str(code) + os.pathsep + os.environ.get("PYTHONPATH", ""),
+               NUMBA_CACHE_DIR=str(root / ".numba-cache"))
     plan = []
     for spec_path in sorted((code / "designs").glob("*.yaml")):
         design = spec_path.stem
@@ -215,7 +224,8 @@ def run(root: Path, code: Path, only: str | None, jobs: int) -> dict:
     c1 = os.times()
     files = {}
     for p in sorted(root.rglob("*")):
-        if p.is_file() and not p.name.startswith(".") and p.name != "manifest.json":
+        hidden = any(part.startswith(".") for part in p.relative_to(root).parts)
+        if p.is_file() and not hidden and p.name != "manifest.json":
             files[p.relative_to(root).as_posix()] = sha256(p)
     commit = subprocess.run(["git", "-C", str(code), "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
     return {"root": str(root), "code": str(code), "commit": commit,
