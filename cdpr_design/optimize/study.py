@@ -48,7 +48,7 @@ from pathlib import Path
 from typing import Callable
 
 from cdpr_design.batch.local import prepare_worker
-from cdpr_design.batch.processes import end as end_workers, pool, stop_raises
+from cdpr_design.batch.processes import EXIT_INTERRUPTED, end as end_workers, pool, stop_raises
 from cdpr_design.kernels import parallel
 from cdpr_design.errors import InputError, WriteError
 from cdpr_design.io.locks import flock, one_run, signals_held
@@ -293,8 +293,13 @@ def _worker_main(problem: Problem, folder: str, total: int, seed: int | None, de
     """A worker process: holds a shared lock on ``.optimize.workers`` while it works (a later run
     waits for it, :func:`_wait_for_orphans`); a stop signal interrupts its trial (which is recorded
     so), one before or after that ends the process quietly (:mod:`cdpr_design.batch.processes`)."""
-    with stop_raises(), flock(Path(folder) / WORKERS_LOCK, shared=True), _db_errors(Path(folder)):
-        done = work(problem, Path(folder), total, seed, deadline, worker, single_thread=True, parent=parent)
+    try:
+        with stop_raises(), flock(Path(folder) / WORKERS_LOCK, shared=True), _db_errors(Path(folder)):
+            done = work(problem, Path(folder), total, seed, deadline, worker, single_thread=True, parent=parent)
+    except KeyboardInterrupt:
+        # the trial is recorded interrupted and the lock released: the run that stops this worker
+        # waits for it to be gone (:func:`_stop`), not for a pool worker idle after its one task
+        os._exit(EXIT_INTERRUPTED)
     if os.getppid() != parent:
         os._exit(0)  # the run was killed: nobody will hand this pool worker more work or collect it
     return done
@@ -493,9 +498,11 @@ def _run_pool(problem, folder, total, workers, seed, deadline, study, store, pro
         ex.shutdown(wait=True)
         return here + sum(f.result() for f in futures)
     except BaseException:
-        children = [p for p in mp.active_children() if p not in before]
-        ex.shutdown(wait=False, cancel_futures=True)  # first: a worker done with its trial then ends
-        _stop(children)
+        # the workers first, the pool after: until it is shut down the pool holds the queues whose
+        # semaphores a worker still starting rebuilds (a worker started just before the interrupt
+        # is known to no other part of the pool yet)
+        _stop([p for p in mp.active_children() if p not in before])
+        ex.shutdown(wait=False, cancel_futures=True)
         raise
 
 
