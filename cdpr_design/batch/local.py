@@ -226,8 +226,10 @@ def pool_session(job, w: int, start_method: str = "spawn"):
     try:
         yield lambda parts, emit: _submit_bounded(ex, parts, 4 * w, emit)
     except BaseException:
-        ex.shutdown(wait=False, cancel_futures=True)
+        # the workers first, the pool after: until it is shut down the pool holds the queues whose
+        # semaphores a worker still starting rebuilds
         _terminate([p for p in mp.active_children() if p not in before])
+        ex.shutdown(wait=False, cancel_futures=True)
         raise
     # every row is in: the workers' exit (interpreter teardown with
     # numba loaded) overlaps the caller's next steps; wait_closed() joins it
