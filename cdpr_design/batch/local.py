@@ -219,17 +219,14 @@ def pool_session(job, w: int, start_method: str = "spawn"):
     block ends the workers at once; otherwise they exit in the background (:func:`wait_closed`)."""
     import multiprocessing as mp
 
-    from cdpr_design.batch.processes import pool
+    from cdpr_design.batch.processes import end_pool, pool
 
     before = set(mp.active_children())
     ex = pool(w, start_method, _init_worker, (job,))  # workers a Ctrl-C does not catch half-started
     try:
         yield lambda parts, emit: _submit_bounded(ex, parts, 4 * w, emit)
     except BaseException:
-        # the workers first, the pool after: until it is shut down the pool holds the queues whose
-        # semaphores a worker still starting rebuilds
-        _terminate([p for p in mp.active_children() if p not in before])
-        ex.shutdown(wait=False, cancel_futures=True)
+        end_pool(ex, before)
         raise
     # every row is in: the workers' exit (interpreter teardown with
     # numba loaded) overlaps the caller's next steps; wait_closed() joins it
@@ -275,11 +272,3 @@ def wait_closed() -> None:
     """
     while _CLOSING:
         _CLOSING.pop(0).join()
-
-
-def _terminate(processes) -> None:
-    """End worker processes and wait for them (an interrupted sweep must not leave them running, nor
-    exit before they are gone: :func:`cdpr_design.batch.processes.end`)."""
-    from cdpr_design.batch.processes import end
-
-    end(processes)

@@ -33,7 +33,8 @@ things would still let a worker speak after the run's own ``interrupted``:
 - a worker still starting when the run exits: it rebuilt the run's
   semaphores after the run had removed them (``FileNotFoundError``).  So an
   interrupted run ends its workers with :func:`end` -- killed (a starting
-  worker holds every catchable signal) and waited for -- before it exits.
+  worker holds every catchable signal) and waited for -- before it shuts its
+  pool down and exits (:func:`end_pool`).
 """
 
 from __future__ import annotations
@@ -107,6 +108,17 @@ def end(processes, timeout_s: float = 10.0) -> None:
     for p in processes:
         with contextlib.suppress(Exception):
             p.join(timeout_s)
+
+
+def end_pool(ex: ProcessPoolExecutor, before, stop: Callable = end) -> None:
+    """End the pool ``ex`` of an interrupted run: its worker processes first (the children not in
+    ``before``, the set of ``multiprocessing.active_children()`` from before the pool, handed to
+    ``stop``: :func:`end`, or a gentler stop that ends with it), then the pool shut down without
+    waiting.  In this order because until it is shut down the pool holds the queues whose
+    semaphores a worker still starting rebuilds: a worker started just before the interrupt is
+    known to no other part of the pool yet."""
+    stop([p for p in mp.active_children() if p not in before])
+    ex.shutdown(wait=False, cancel_futures=True)
 
 
 class _Stop:

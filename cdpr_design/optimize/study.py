@@ -48,7 +48,7 @@ from pathlib import Path
 from typing import Callable
 
 from cdpr_design.batch.local import prepare_worker
-from cdpr_design.batch.processes import EXIT_INTERRUPTED, end as end_workers, pool, stop_raises
+from cdpr_design.batch.processes import EXIT_INTERRUPTED, end as end_workers, end_pool, pool, stop_raises
 from cdpr_design.kernels import parallel
 from cdpr_design.errors import InputError, WriteError
 from cdpr_design.io.locks import flock, one_run, signals_held
@@ -498,11 +498,7 @@ def _run_pool(problem, folder, total, workers, seed, deadline, study, store, pro
         ex.shutdown(wait=True)
         return here + sum(f.result() for f in futures)
     except BaseException:
-        # the workers first, the pool after: until it is shut down the pool holds the queues whose
-        # semaphores a worker still starting rebuilds (a worker started just before the interrupt
-        # is known to no other part of the pool yet)
-        _stop([p for p in mp.active_children() if p not in before])
-        ex.shutdown(wait=False, cancel_futures=True)
+        end_pool(ex, before, _stop)
         raise
 
 
